@@ -1,0 +1,194 @@
+//! Calibrations: servo angle -> pulse, amplifier volts -> duty, ADC counts -> newtons.
+
+/// Period of the servo's 50 Hz PWM frame, µs.
+pub const SERVO_FRAME_US: f32 = 20_000.0;
+
+/// Servo angle to pulse width, linear between two calibration points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct ServoMap {
+    /// Pulse at 0 deg, µs (default 1000).
+    pub pulse_at_min_us: f32,
+    /// Pulse at `max_deg`, µs (default 2000).
+    pub pulse_at_max_us: f32,
+    /// Angle reached with `pulse_at_max_us`, deg (default 180).
+    pub max_deg: f32,
+}
+
+impl Default for ServoMap {
+    fn default() -> Self {
+        ServoMap {
+            pulse_at_min_us: 1_000.0,
+            pulse_at_max_us: 2_000.0,
+            max_deg: 180.0,
+        }
+    }
+}
+
+impl ServoMap {
+    /// Pulse width for an angle, µs (angle clamped to 0..=max).
+    pub fn pulse_us(&self, angle_deg: f32) -> f32 {
+        let a = angle_deg.clamp(0.0, self.max_deg);
+        self.pulse_at_min_us + (self.pulse_at_max_us - self.pulse_at_min_us) * a / self.max_deg
+    }
+
+    /// Angle commanded by a pulse width, deg (inverse of [`ServoMap::pulse_us`]).
+    pub fn angle_deg(&self, pulse_us: f32) -> f32 {
+        (pulse_us - self.pulse_at_min_us) / (self.pulse_at_max_us - self.pulse_at_min_us)
+            * self.max_deg
+    }
+
+    /// Duty (of `max_duty`) for an angle on a 50 Hz PWM.
+    pub fn duty(&self, angle_deg: f32, max_duty: u16) -> u16 {
+        fraction_to_duty(self.pulse_us(angle_deg) / SERVO_FRAME_US, max_duty)
+    }
+}
+
+/// Amplifier control voltage to PWM duty: an RC-filtered PWM pin swinging 0..`full_scale_v`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct AmpMap {
+    /// Filtered output at 100 % duty, V (the pin's supply: 3.3 V).
+    pub full_scale_v: f32,
+    /// Power amplifier gain, drive volts per control volt (for the log: drive V = gain × control V).
+    pub amp_gain: f32,
+}
+
+impl Default for AmpMap {
+    fn default() -> Self {
+        AmpMap {
+            full_scale_v: 3.3,
+            amp_gain: 4.0,
+        }
+    }
+}
+
+impl AmpMap {
+    /// Duty for a control voltage (clamped to 0..=full scale).
+    pub fn duty(&self, control_v: f32, max_duty: u16) -> u16 {
+        fraction_to_duty(control_v / self.full_scale_v, max_duty)
+    }
+
+    /// Drive-motor voltage the amplifier makes from a control voltage, V.
+    pub fn drive_v(&self, control_v: f32) -> f32 {
+        control_v * self.amp_gain
+    }
+}
+
+fn fraction_to_duty(fraction: f32, max_duty: u16) -> u16 {
+    let f = if fraction.is_nan() {
+        0.0
+    } else {
+        fraction.clamp(0.0, 1.0)
+    };
+    libm::roundf(f * max_duty as f32) as u16
+}
+
+/// One force channel: newtons = (counts − zero) × newtons per count.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct ChannelCal {
+    /// Counts at zero force.
+    pub zero_counts: f32,
+    /// Sensitivity, N per count.
+    pub n_per_count: f32,
+}
+
+impl ChannelCal {
+    /// Force for a (possibly averaged) count value, N.
+    pub fn newtons(&self, counts: f32) -> f32 {
+        (counts - self.zero_counts) * self.n_per_count
+    }
+
+    /// Counts that read `force_n` (inverse of [`ChannelCal::newtons`]).
+    pub fn counts(&self, force_n: f32) -> f32 {
+        force_n / self.n_per_count + self.zero_counts
+    }
+
+    /// Re-zero from the mean counts seen while the true force was `reference_n`.
+    pub fn tare(&mut self, mean_counts: f32, reference_n: f32) {
+        self.zero_counts = mean_counts - reference_n / self.n_per_count;
+    }
+}
+
+/// Everything calibrated on the rig.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct Calibration {
+    /// T1 (servo-side) force channel.
+    pub t1: ChannelCal,
+    /// T2 (fixed-side) force channel.
+    pub t2: ChannelCal,
+    /// Force both channels carry during the tare: the cord's preload with the capstan stopped
+    /// (the tension bolt's ~0.1 N), N.
+    pub tare_reference_n: f32,
+    /// Servo angle map.
+    pub servo: ServoMap,
+    /// Amplifier map.
+    pub amp: AmpMap,
+}
+
+impl Default for Calibration {
+    /// A 50 N sensor on a 12-bit ADC: zero at 400 counts, 0.015 N per count (−6 N .. +55 N).
+    fn default() -> Self {
+        let ch = ChannelCal {
+            zero_counts: 400.0,
+            n_per_count: 0.015,
+        };
+        Calibration {
+            t1: ch,
+            t2: ch,
+            tare_reference_n: 0.1,
+            servo: ServoMap::default(),
+            amp: AmpMap::default(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn servo_map_spans_one_to_two_ms_on_a_50hz_frame() {
+        let m = ServoMap::default();
+        assert_eq!(m.pulse_us(0.0), 1000.0);
+        assert_eq!(m.pulse_us(90.0), 1500.0);
+        assert_eq!(m.pulse_us(180.0), 2000.0);
+        assert_eq!(m.pulse_us(200.0), 2000.0);
+        // RP2040 at 125 MHz, divider 40: top = 62499 -> 1.5 ms is 7.5 % of the frame.
+        assert_eq!(m.duty(90.0, 62_499), 4687);
+        assert!((m.angle_deg(m.pulse_us(125.0)) - 125.0).abs() < 1e-4);
+        let custom = ServoMap {
+            pulse_at_min_us: 500.0,
+            pulse_at_max_us: 2500.0,
+            max_deg: 180.0,
+        };
+        assert_eq!(custom.pulse_us(90.0), 1500.0);
+    }
+
+    #[test]
+    fn amp_map_and_clamps() {
+        let m = AmpMap::default();
+        assert_eq!(m.duty(3.3, 1000), 1000);
+        assert_eq!(m.duty(1.65, 1000), 500);
+        assert_eq!(m.duty(-1.0, 1000), 0);
+        assert_eq!(m.duty(f32::NAN, 1000), 0);
+        assert_eq!(m.drive_v(2.5), 10.0);
+    }
+
+    #[test]
+    fn channel_calibration_and_tare() {
+        let mut ch = ChannelCal {
+            zero_counts: 400.0,
+            n_per_count: 0.015,
+        };
+        assert!((ch.newtons(1066.667) - 10.0).abs() < 1e-3);
+        assert!((ch.newtons(ch.counts(7.3)) - 7.3).abs() < 1e-4);
+        // The sensor drifted by +20 counts; a tare with the 0.1 N preload on the cord restores it.
+        let preload_counts = 420.0 + 0.1 / 0.015;
+        ch.tare(preload_counts, 0.1);
+        assert!((ch.zero_counts - 420.0).abs() < 1e-3);
+        assert!((ch.newtons(420.0 + 10.0 / 0.015) - 10.0).abs() < 1e-4);
+    }
+}

@@ -1,0 +1,86 @@
+//! The bare-metal log sink: each record becomes one defmt frame with a fixed, flat format
+//! string (`capstan log` on the host matches on the leading word and reads the typed
+//! arguments in order). Changing a format string here means changing the decoder too.
+
+use crate::record::{LogSink, Record};
+
+/// Sends records as defmt frames on whatever global logger the binary links (RTT on the
+/// Pico, semihosting on QEMU).
+pub struct DefmtSink;
+
+/// Wire value for "no channel" / "no fault".
+pub const NONE_CODE: u8 = 0xff;
+
+impl LogSink for DefmtSink {
+    fn emit(&mut self, seq: u32, record: &Record) {
+        match record {
+            Record::RunStart(s) => {
+                let p = &s.protocol;
+                let c = &s.calibration;
+                defmt::info!(
+                    "run_start seq={=u32} run={=u32} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32} pre_trigger_ms={=u32} trigger_ms={=u32} tare_ms={=u32} amp_control_v={=f32} sample_hz={=u32} raw_log_hz={=u32} window_after_ms={=u32} window_before_ms={=u32} diameter_mm={=f32} wrap_deg={=f32} amp_gain={=f32} t1_zero={=f32} t1_n_per_count={=f32} t2_zero={=f32} t2_n_per_count={=f32}",
+                    seq,
+                    s.run,
+                    p.order.code(),
+                    p.rest_deg,
+                    p.step_deg,
+                    p.final_deg,
+                    p.dwell_ms,
+                    p.pre_trigger_ms,
+                    p.trigger_ms,
+                    p.tare_ms,
+                    p.amp_control_v,
+                    p.sample_hz,
+                    p.raw_log_hz,
+                    p.window_after_change_ms,
+                    p.window_before_next_ms,
+                    p.capstan_diameter_mm,
+                    p.wrap_deg,
+                    c.amp.amp_gain,
+                    c.t1.zero_counts,
+                    c.t1.n_per_count,
+                    c.t2.zero_counts,
+                    c.t2.n_per_count
+                );
+            }
+            Record::Raw(r) => defmt::info!(
+                "raw seq={=u32} t_us={=i64} c1={=u16} c2={=u16} t1_n={=f32} t2_n={=f32}",
+                seq,
+                r.t_us,
+                r.counts[0],
+                r.counts[1],
+                r.force_n[0],
+                r.force_n[1]
+            ),
+            Record::Pair(p) => defmt::info!(
+                "pair seq={=u32} step={=u32} level={=u32} angle_deg={=f32} t_mid_ms={=u32} t1_mean_n={=f32} t1_std_n={=f32} t1_count={=u32} t2_mean_n={=f32} t2_std_n={=f32} t2_count={=u32}",
+                seq,
+                p.step,
+                p.level,
+                p.angle_deg,
+                p.t_mid_ms,
+                p.t1.mean_n,
+                p.t1.std_n,
+                p.t1.count,
+                p.t2.mean_n,
+                p.t2.std_n,
+                p.t2.count
+            ),
+            Record::Fault(f) => defmt::warn!(
+                "fault seq={=u32} kind={=u8} channel={=u8} value={=f32} t_us={=i64}",
+                seq,
+                f.kind.code(),
+                f.channel.map_or(NONE_CODE, |c| c as u8),
+                f.value,
+                f.t_us
+            ),
+            Record::RunEnd(e) => defmt::info!(
+                "run_end seq={=u32} t_us={=i64} pairs={=u32} fault={=u8}",
+                seq,
+                e.t_us,
+                e.pairs,
+                e.fault.map_or(NONE_CODE, |k| k.code())
+            ),
+        }
+    }
+}

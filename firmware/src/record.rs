@@ -1,0 +1,172 @@
+//! The log records a run produces, and the sink they go to.
+//!
+//! Every record is emitted with a sequence number (consecutive from 0 since boot, wrapping), so
+//! a host can tell exactly which records it lost. On the board the sink is defmt over RTT
+//! (`defmt_sink`); in the simulator it is a `Vec`.
+//!
+//! Times: `t_us` are µs since the trigger's rising edge (negative before it), the timebase of
+//! the thesis's logger.
+
+use crate::calib::Calibration;
+use crate::condition::ChannelStats;
+use crate::hal::Channel;
+use crate::protocol::Protocol;
+
+/// Why a run was stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub enum FaultKind {
+    /// A channel read above the force limit.
+    OverForce,
+    /// T2 collapsed while T1 was held: the cord broke.
+    CordBreak,
+    /// A channel sat at an ADC rail (unplugged or shorted sensor) or failed to convert.
+    SensorRail,
+    /// The button was pressed during the run.
+    Abort,
+    /// The sample loop missed its deadline.
+    Watchdog,
+}
+
+impl FaultKind {
+    /// Every fault.
+    pub const ALL: [FaultKind; 5] = [
+        FaultKind::OverForce,
+        FaultKind::CordBreak,
+        FaultKind::SensorRail,
+        FaultKind::Abort,
+        FaultKind::Watchdog,
+    ];
+
+    /// Stable name, as used by the CLI (`--fault NAME@SECONDS`) and in CSV/JSON.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FaultKind::OverForce => "over_force",
+            FaultKind::CordBreak => "cord_break",
+            FaultKind::SensorRail => "sensor_unplugged",
+            FaultKind::Abort => "abort",
+            FaultKind::Watchdog => "watchdog",
+        }
+    }
+
+    /// Wire code used in the defmt record.
+    pub const fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// Inverse of [`FaultKind::code`].
+    pub fn from_code(code: u8) -> Option<FaultKind> {
+        FaultKind::ALL.into_iter().find(|k| k.code() == code)
+    }
+}
+
+/// The run begins (emitted once the tare is done, with the calibration the run will use).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct RunStart {
+    /// Runs started since boot, from 1.
+    pub run: u32,
+    /// The protocol being run.
+    pub protocol: Protocol,
+    /// The calibration in force (after the tare).
+    pub calibration: Calibration,
+}
+
+/// A decimated raw sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct RawSample {
+    /// µs since the trigger.
+    pub t_us: i64,
+    /// ADC counts, T1 then T2.
+    pub counts: [u16; 2],
+    /// Calibrated forces, N, T1 then T2.
+    pub force_n: [f32; 2],
+}
+
+/// The conditioned pair of one step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct StepPair {
+    /// Step in time order, 1..=N.
+    pub step: u32,
+    /// Tension level held (1..=N; equals `step` for the monotone order).
+    pub level: u32,
+    /// Servo angle commanded, deg.
+    pub angle_deg: f32,
+    /// Middle of the conditioning window, ms since the trigger.
+    pub t_mid_ms: u32,
+    /// T1 statistics over the window.
+    pub t1: ChannelStats,
+    /// T2 statistics over the window.
+    pub t2: ChannelStats,
+}
+
+/// A safety fault: the rig went to its safe state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct Fault {
+    /// What happened.
+    pub kind: FaultKind,
+    /// The channel concerned, if any.
+    pub channel: Option<Channel>,
+    /// The offending value: N for force faults, counts for rail faults, ms for the watchdog.
+    pub value: f32,
+    /// µs since the trigger when it was detected (and the safe state commanded).
+    pub t_us: i64,
+}
+
+/// The run is over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct RunEnd {
+    /// µs since the trigger.
+    pub t_us: i64,
+    /// Pairs emitted in this run.
+    pub pairs: u32,
+    /// The fault that ended it, if one did.
+    pub fault: Option<FaultKind>,
+}
+
+/// One log record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub enum Record {
+    /// Run start (protocol, calibration).
+    RunStart(RunStart),
+    /// Decimated raw sample.
+    Raw(RawSample),
+    /// Conditioned step pair.
+    Pair(StepPair),
+    /// Safety fault.
+    Fault(Fault),
+    /// Run end.
+    RunEnd(RunEnd),
+}
+
+/// Where records go.
+pub trait LogSink {
+    /// Send one record with its sequence number.
+    fn emit(&mut self, seq: u32, record: &Record);
+}
+
+impl<T: LogSink + ?Sized> LogSink for &mut T {
+    fn emit(&mut self, seq: u32, record: &Record) {
+        (**self).emit(seq, record)
+    }
+}
+
+/// Numbers records consecutively (wrapping).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sequencer {
+    next: u32,
+}
+
+impl Sequencer {
+    /// The next sequence number.
+    pub fn next_seq(&mut self) -> u32 {
+        let seq = self.next;
+        self.next = self.next.wrapping_add(1);
+        seq
+    }
+}

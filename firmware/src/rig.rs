@@ -1,0 +1,328 @@
+//! The rig as a pure state machine: one call per sample period, inputs in, actuator commands
+//! out, records to a sink. No hardware, no clock, no async: `runner.rs` does that.
+
+use crate::button::Debouncer;
+use crate::calib::Calibration;
+use crate::condition::Window;
+use crate::hal::AdcError;
+use crate::protocol::{Protocol, ProtocolError};
+use crate::record::{
+    Fault, FaultKind, LogSink, RawSample, Record, RunEnd, RunStart, Sequencer, StepPair,
+};
+use crate::safety::{SafetyInput, SafetyLimits, Supervisor};
+
+/// Debounce time of the button, ms.
+pub const DEBOUNCE_MS: u32 = 20;
+
+/// What the rig reads each sample period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inputs {
+    /// Monotonic time, µs (any origin).
+    pub now_us: u64,
+    /// Both force channels, raw counts (T1, T2).
+    pub counts: [Result<u16, AdcError>; 2],
+    /// The button's raw level: true = pressed.
+    pub button_pressed: bool,
+}
+
+/// What the rig commands each sample period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outputs {
+    /// Servo angle, deg.
+    pub servo_deg: f32,
+    /// Power amplifier control voltage, V.
+    pub amp_control_v: f32,
+    /// Logger trigger line.
+    pub trigger: bool,
+    /// Status LED.
+    pub led: bool,
+    /// Set on the sample the run ended (normally or by a fault).
+    pub finished: Option<RunEnd>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Phase {
+    /// Waiting for the button (LED blinks slowly; fast after a fault).
+    Idle { last_fault: Option<FaultKind> },
+    /// Sampling the preloaded cord with the capstan stopped.
+    Tare { sum: [u64; 2], n: u32 },
+    /// Running the protocol; `step` is the step being held, `window` its conditioning.
+    Run {
+        step: u32,
+        window: Window,
+        pair_done: bool,
+    },
+}
+
+/// The rig: protocol, calibration and the state of the current run.
+#[derive(Clone, Debug)]
+pub struct Rig {
+    protocol: Protocol,
+    cal: Calibration,
+    limits: SafetyLimits,
+    phase: Phase,
+    button: Debouncer,
+    seq: Sequencer,
+    supervisor: Supervisor,
+    runs: u32,
+    pairs: u32,
+    press_us: u64,
+    samples: u32,
+}
+
+impl Rig {
+    /// A rig ready to run `protocol`; refused if the protocol is invalid.
+    pub fn new(
+        protocol: Protocol,
+        cal: Calibration,
+        limits: SafetyLimits,
+    ) -> Result<Self, ProtocolError> {
+        protocol.validate()?;
+        let debounce = (DEBOUNCE_MS * protocol.sample_hz / 1000) as u16;
+        Ok(Rig {
+            protocol,
+            cal,
+            limits,
+            phase: Phase::Idle { last_fault: None },
+            button: Debouncer::new(debounce),
+            seq: Sequencer::default(),
+            supervisor: Supervisor::new(limits),
+            runs: 0,
+            pairs: 0,
+            press_us: 0,
+            samples: 0,
+        })
+    }
+
+    /// The protocol in force.
+    pub fn protocol(&self) -> &Protocol {
+        &self.protocol
+    }
+
+    /// The calibration in force (changed by each tare).
+    pub fn calibration(&self) -> &Calibration {
+        &self.cal
+    }
+
+    /// True while a run is in progress (tare included).
+    pub fn is_running(&self) -> bool {
+        !matches!(self.phase, Phase::Idle { .. })
+    }
+
+    /// The state outputs hold when nothing runs: servo at rest, amplifier off, trigger low.
+    pub fn safe_outputs(&self) -> Outputs {
+        Outputs {
+            servo_deg: self.protocol.rest_deg,
+            amp_control_v: 0.0,
+            trigger: false,
+            led: false,
+            finished: None,
+        }
+    }
+
+    /// One sample period.
+    pub fn step(&mut self, inp: &Inputs, sink: &mut impl LogSink) -> Outputs {
+        let pressed = self.button.step(inp.button_pressed);
+        match self.phase {
+            Phase::Idle { last_fault } => {
+                if pressed {
+                    self.start(inp.now_us);
+                    return self.step_running(inp, false, sink);
+                }
+                let blink_ms = if last_fault.is_some() { 100 } else { 500 };
+                let mut out = self.safe_outputs();
+                out.led = (inp.now_us / 1000 / blink_ms) % 2 == 0;
+                out
+            }
+            _ => self.step_running(inp, pressed, sink),
+        }
+    }
+
+    fn start(&mut self, now_us: u64) {
+        self.press_us = now_us;
+        self.runs += 1;
+        self.pairs = 0;
+        self.samples = 0;
+        self.supervisor = Supervisor::new(self.limits);
+        self.phase = Phase::Tare { sum: [0; 2], n: 0 };
+        info!("run {=u32}: button pressed, taring", self.runs);
+        if self.protocol.tare_ms == 0 {
+            self.phase = self.begin_run(None);
+        }
+    }
+
+    fn emit(&mut self, sink: &mut impl LogSink, record: Record) {
+        sink.emit(self.seq.next_seq(), &record);
+    }
+
+    /// µs since the trigger's rising edge.
+    fn since_trigger_us(&self, elapsed_us: u64) -> i64 {
+        elapsed_us as i64 - self.protocol.trigger_at_ms() as i64 * 1000
+    }
+
+    fn begin_run(&mut self, tare: Option<([u64; 2], u32)>) -> Phase {
+        if let Some((sum, n)) = tare.filter(|&(_, n)| n > 0) {
+            let r = self.cal.tare_reference_n;
+            self.cal.t1.tare(sum[0] as f32 / n as f32, r);
+            self.cal.t2.tare(sum[1] as f32 / n as f32, r);
+        }
+        Phase::Run {
+            step: 0,
+            window: Window::new(0, 0),
+            pair_done: true,
+        }
+    }
+
+    fn step_running(&mut self, inp: &Inputs, pressed: bool, sink: &mut impl LogSink) -> Outputs {
+        let p = self.protocol;
+        let elapsed_us = inp.now_us.saturating_sub(self.press_us);
+        let elapsed_ms = (elapsed_us / 1000) as u32;
+        let t_us = self.since_trigger_us(elapsed_us);
+        let force_n = [
+            inp.counts[0].map_or(f32::NAN, |c| self.cal.t1.newtons(c as f32)),
+            inp.counts[1].map_or(f32::NAN, |c| self.cal.t2.newtons(c as f32)),
+        ];
+        let counts_ok = match inp.counts {
+            [Ok(a), Ok(b)] => Some([a, b]),
+            _ => None,
+        };
+
+        // Tare, then announce the run with the calibration it will use.
+        if let Phase::Tare { mut sum, mut n } = self.phase {
+            if let Some(c) = counts_ok {
+                sum[0] += c[0] as u64;
+                sum[1] += c[1] as u64;
+                n += 1;
+            }
+            self.phase = Phase::Tare { sum, n };
+            if elapsed_us + p.sample_period_us() as u64 >= p.tare_ms as u64 * 1000 {
+                self.phase = self.begin_run(Some((sum, n)));
+                let rec = RunStart {
+                    run: self.runs,
+                    protocol: p,
+                    calibration: self.cal,
+                };
+                self.emit(sink, Record::RunStart(rec));
+            }
+        }
+
+        // Safety first: a fault ends the run in this very sample.
+        let fault = if pressed {
+            Some(Fault {
+                kind: FaultKind::Abort,
+                channel: None,
+                value: 0.0,
+                t_us,
+            })
+        } else {
+            self.supervisor.check(&SafetyInput {
+                t_us,
+                counts: inp.counts,
+                force_n,
+                cord_check_armed: elapsed_ms >= p.trigger_at_ms(),
+            })
+        };
+        if let Some(f) = fault {
+            warn!("fault {}", f.kind);
+            self.emit(sink, Record::Fault(f));
+            return self.finish(t_us, Some(f.kind), sink);
+        }
+
+        // Decimated raw samples for the log, from the run start on.
+        let decimation = p.sample_hz / p.raw_log_hz;
+        let taring = matches!(self.phase, Phase::Tare { .. });
+        if !taring && self.samples % decimation == 0 {
+            let raw = RawSample {
+                t_us,
+                counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
+                force_n,
+            };
+            self.emit(sink, Record::Raw(raw));
+        }
+        if !taring {
+            self.samples = self.samples.wrapping_add(1);
+        }
+
+        if let Phase::Run {
+            mut step,
+            mut window,
+            mut pair_done,
+        } = self.phase
+        {
+            // Which step is being held: steps start at step_start_ms(k).
+            let first_ms = p.step_start_ms(0);
+            let k = if elapsed_ms < first_ms {
+                None
+            } else {
+                Some(((elapsed_ms - first_ms) / p.dwell_ms).min(p.levels() + 1))
+            };
+            if let Some(k) = k {
+                if k != step {
+                    step = k;
+                    let (a, b) = p.window_ms(k);
+                    window = Window::new(a as u64 * 1000, b as u64 * 1000);
+                    pair_done = k == 0 || k > p.levels();
+                }
+                if let Some(c) = counts_ok {
+                    window.push(elapsed_us, c);
+                }
+                let (_, win_end_ms) = p.window_ms(step);
+                if !pair_done
+                    && elapsed_us + p.sample_period_us() as u64 >= win_end_ms as u64 * 1000
+                {
+                    pair_done = true;
+                    let [t1, t2] = window.stats(&self.cal);
+                    let (a, b) = p.window_ms(step);
+                    let pair = StepPair {
+                        step,
+                        level: p.level(step),
+                        angle_deg: p.angle_deg(step),
+                        t_mid_ms: (a + b) / 2 - p.trigger_at_ms(),
+                        t1,
+                        t2,
+                    };
+                    self.pairs += 1;
+                    self.emit(sink, Record::Pair(pair));
+                }
+            }
+            self.phase = Phase::Run {
+                step,
+                window,
+                pair_done,
+            };
+            if elapsed_ms >= p.end_ms() {
+                return self.finish(t_us, None, sink);
+            }
+            let servo_deg = match k {
+                Some(k) => p.angle_deg(k),
+                None => p.rest_deg,
+            };
+            let trigger_ms = elapsed_ms.wrapping_sub(p.trigger_at_ms());
+            return Outputs {
+                servo_deg,
+                amp_control_v: p.amp_control_v,
+                trigger: elapsed_ms >= p.trigger_at_ms() && trigger_ms < p.trigger_ms,
+                led: true,
+                finished: None,
+            };
+        }
+        // Taring: capstan stopped, servo at rest.
+        let mut out = self.safe_outputs();
+        out.led = true;
+        out
+    }
+
+    fn finish(&mut self, t_us: i64, fault: Option<FaultKind>, sink: &mut impl LogSink) -> Outputs {
+        let end = RunEnd {
+            t_us,
+            pairs: self.pairs,
+            fault,
+        };
+        self.emit(sink, Record::RunEnd(end));
+        info!("run {=u32} ended: {=u32} pairs", self.runs, self.pairs);
+        self.phase = Phase::Idle { last_fault: fault };
+        let mut out = self.safe_outputs();
+        out.finished = Some(end);
+        out
+    }
+}

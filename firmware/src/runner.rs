@@ -1,0 +1,146 @@
+//! The thin async runner: ticks the pure [`Rig`] at the sample rate on embassy-time and moves
+//! values between it and the hardware. The RP2040 binary, the emulated-ARM build and the host
+//! simulator all run this very function; only the `RigIo` they hand it differs.
+
+use crate::hal::{Channel, ForceAdc, Watchdog};
+use crate::record::{LogSink, RunEnd};
+use crate::rig::{Inputs, Outputs, Rig};
+use embassy_time::{Duration, Instant, Ticker};
+use embedded_hal::digital::{InputPin, OutputPin};
+use embedded_hal::pwm::SetDutyCycle;
+
+/// The rig's hardware, as traits.
+pub struct RigIo<Servo, Amp, Trigger, Led, Button, Adc, Dog> {
+    /// Servo PWM at 50 Hz.
+    pub servo: Servo,
+    /// Amplifier control voltage: PWM into an RC filter.
+    pub amp: Amp,
+    /// Logger trigger line (high = trigger).
+    pub trigger: Trigger,
+    /// Status LED.
+    pub led: Led,
+    /// Start/abort button, active low (pull-up, switch to ground).
+    pub button: Button,
+    /// Both force channels.
+    pub adc: Adc,
+    /// Watchdog fed every sample period.
+    pub watchdog: Dog,
+}
+
+/// A hardware operation failed (a pin or PWM returned an error).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub enum RunError {
+    /// Setting a PWM duty failed.
+    Pwm,
+    /// Driving or reading a pin failed.
+    Pin,
+}
+
+/// Last duty written to each PWM, so unchanged commands cost no register (or plant) writes.
+#[derive(Default)]
+struct Written {
+    servo: Option<u16>,
+    amp: Option<u16>,
+    trigger: Option<bool>,
+    led: Option<bool>,
+}
+
+impl<S, A, T, L, B, D, W> RigIo<S, A, T, L, B, D, W>
+where
+    S: SetDutyCycle,
+    A: SetDutyCycle,
+    T: OutputPin,
+    L: OutputPin,
+    B: InputPin,
+    D: ForceAdc,
+    W: Watchdog,
+{
+    fn read(&mut self, now_us: u64) -> Result<Inputs, RunError> {
+        Ok(Inputs {
+            now_us,
+            counts: [
+                self.adc.read_counts(Channel::T1),
+                self.adc.read_counts(Channel::T2),
+            ],
+            button_pressed: self.button.is_low().map_err(|_| RunError::Pin)?,
+        })
+    }
+
+    fn apply(&mut self, rig: &Rig, out: &Outputs, written: &mut Written) -> Result<(), RunError> {
+        let cal = rig.calibration();
+        let servo = cal.servo.duty(out.servo_deg, self.servo.max_duty_cycle());
+        if written.servo != Some(servo) {
+            self.servo
+                .set_duty_cycle(servo)
+                .map_err(|_| RunError::Pwm)?;
+            written.servo = Some(servo);
+        }
+        let amp = cal.amp.duty(out.amp_control_v, self.amp.max_duty_cycle());
+        if written.amp != Some(amp) {
+            self.amp.set_duty_cycle(amp).map_err(|_| RunError::Pwm)?;
+            written.amp = Some(amp);
+        }
+        if written.trigger != Some(out.trigger) {
+            self.trigger
+                .set_state(out.trigger.into())
+                .map_err(|_| RunError::Pin)?;
+            written.trigger = Some(out.trigger);
+        }
+        if written.led != Some(out.led) {
+            self.led
+                .set_state(out.led.into())
+                .map_err(|_| RunError::Pin)?;
+            written.led = Some(out.led);
+        }
+        Ok(())
+    }
+
+    /// Put the hardware in its safe state: servo at rest, amplifier 0 V, trigger low.
+    pub fn make_safe(&mut self, rig: &Rig) -> Result<(), RunError> {
+        self.apply(rig, &rig.safe_outputs(), &mut Written::default())
+    }
+}
+
+/// Wait for the button, run the protocol once, return how it ended.
+///
+/// Samples both channels every `1/sample_hz` on an embassy-time [`Ticker`] (a late tick is
+/// caught by the supervisor's watchdog check). On a hardware error the rig is made safe
+/// (best effort) and the error returned.
+pub async fn run_once<S, A, T, L, B, D, W>(
+    io: &mut RigIo<S, A, T, L, B, D, W>,
+    rig: &mut Rig,
+    sink: &mut impl LogSink,
+) -> Result<RunEnd, RunError>
+where
+    S: SetDutyCycle,
+    A: SetDutyCycle,
+    T: OutputPin,
+    L: OutputPin,
+    B: InputPin,
+    D: ForceAdc,
+    W: Watchdog,
+{
+    let period = Duration::from_micros(rig.protocol().sample_period_us() as u64);
+    let mut ticker = Ticker::every(period);
+    let mut written = Written::default();
+    let result = loop {
+        ticker.next().await;
+        io.watchdog.feed();
+        let inputs = match io.read(Instant::now().as_micros()) {
+            Ok(i) => i,
+            Err(e) => break Err(e),
+        };
+        let out = rig.step(&inputs, sink);
+        if let Err(e) = io.apply(rig, &out, &mut written) {
+            break Err(e);
+        }
+        if let Some(end) = out.finished {
+            break Ok(end);
+        }
+    };
+    if result.is_err() {
+        let _ = io.make_safe(rig);
+    }
+    result
+}
