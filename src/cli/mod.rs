@@ -1,0 +1,40 @@
+//! The command line: one module per subcommand, each with its `Args` and `run`.
+
+use clap::{Parser, Subcommand};
+
+pub mod analyze;
+pub mod diagnose;
+pub mod log;
+pub mod simulate;
+
+/// Capstan-friction rig: simulate, analyse, diagnose and log.
+#[derive(Parser, Debug)]
+#[command(name = "capstan", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Run the firmware against the simulated plant (a whole campaign in virtual time).
+    Simulate(simulate::Args),
+    /// Analyse measured pairs against the models and write the report.
+    Analyze(analyze::Args),
+    /// Say which single effect makes a data set depart from Euler-Eytelwein.
+    Diagnose(diagnose::Args),
+    /// Record a real run from the board over defmt/RTT (or decode a saved stream).
+    Log(log::Args),
+}
+
+/// Run a parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Simulate(a) => simulate::run(a),
+        Command::Analyze(a) => analyze::run(a),
+        Command::Diagnose(a) => diagnose::run(a),
+        Command::Log(a) => log::run(a),
+    }
+}

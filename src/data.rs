@@ -1,0 +1,394 @@
+//! Conditioned pairs on disk: the CSV schema shared by `simulate`, `log`, `analyze` and
+//! `diagnose`, read with errors that name the file, line and column.
+//!
+//! Schema: `capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n`. Reading needs
+//! only `wrap_deg,t1_n,t2_n`; the other known columns are optional, and any further column
+//! must be numeric and is kept (by name) for the analysis.
+
+use serde::Serialize;
+use std::fmt;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+/// The columns `simulate` and `log` write, in order.
+pub const PAIRS_HEADER: [&str; 8] = [
+    "capstan_diameter_mm",
+    "wrap_deg",
+    "drive_v",
+    "run",
+    "step",
+    "time_s",
+    "t1_n",
+    "t2_n",
+];
+
+/// One conditioned pair.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Pair {
+    /// Capstan diameter, mm.
+    pub capstan_diameter_mm: Option<f64>,
+    /// Wrap angle, deg.
+    pub wrap_deg: f64,
+    /// Drive voltage, V.
+    pub drive_v: Option<f64>,
+    /// Repeat run, 1-based.
+    pub run: Option<f64>,
+    /// Step within the run (time order).
+    pub step: Option<f64>,
+    /// Middle of the conditioning window, s since the trigger.
+    pub time_s: Option<f64>,
+    /// Low-side tension, N.
+    pub t1_n: f64,
+    /// High-side tension, N.
+    pub t2_n: f64,
+    /// Further numeric columns, in the order of [`Dataset::extra_columns`].
+    #[serde(skip)]
+    pub extra: Vec<f64>,
+}
+
+impl Pair {
+    /// Wrap angle, rad.
+    pub fn wrap_rad(&self) -> f64 {
+        self.wrap_deg.to_radians()
+    }
+
+    /// Amplification T2/T1.
+    pub fn amplification(&self) -> f64 {
+        self.t2_n / self.t1_n
+    }
+}
+
+/// A loaded CSV of pairs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Dataset {
+    /// Where it came from (for messages).
+    pub source: String,
+    /// The header as read.
+    pub header: Vec<String>,
+    /// Names of the extra numeric columns.
+    pub extra_columns: Vec<String>,
+    /// The rows, in file order.
+    pub pairs: Vec<Pair>,
+}
+
+impl Dataset {
+    /// True if every row has the optional column `name`.
+    pub fn has_column(&self, name: &str) -> bool {
+        self.header.iter().any(|h| h == name)
+    }
+}
+
+/// Why a CSV could not be read. Lines and columns are 1-based, as an editor shows them.
+#[derive(Debug)]
+pub enum DataError {
+    /// The file could not be opened or read.
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    /// The CSV is malformed at a place.
+    Csv {
+        path: String,
+        line: u64,
+        message: String,
+    },
+    /// A required column is missing from the header.
+    MissingColumn { path: String, column: &'static str },
+    /// A header names a column twice.
+    DuplicateColumn { path: String, column: String },
+    /// A cell is not what its column needs.
+    BadCell {
+        path: String,
+        line: u64,
+        column: usize,
+        name: String,
+        value: String,
+        reason: &'static str,
+    },
+    /// The file has a header but no rows.
+    Empty { path: String },
+}
+
+impl fmt::Display for DataError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DataError::Io { path, source } => write!(f, "{path}: {source}"),
+            DataError::Csv {
+                path,
+                line,
+                message,
+            } => write!(f, "{path}:{line}: {message}"),
+            DataError::MissingColumn { path, column } => {
+                write!(f, "{path}:1: missing required column `{column}`")
+            }
+            DataError::DuplicateColumn { path, column } => {
+                write!(f, "{path}:1: column `{column}` appears twice")
+            }
+            DataError::BadCell {
+                path,
+                line,
+                column,
+                name,
+                value,
+                reason,
+            } => write!(
+                f,
+                "{path}:{line}:{column}: column `{name}`: {reason} (found `{value}`)"
+            ),
+            DataError::Empty { path } => write!(f, "{path}: no data rows"),
+        }
+    }
+}
+
+impl std::error::Error for DataError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            DataError::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
+/// Read a pairs CSV from a file.
+pub fn load_pairs(path: &Path) -> Result<Dataset, DataError> {
+    let name = path.display().to_string();
+    let file = std::fs::File::open(path).map_err(|source| DataError::Io {
+        path: name.clone(),
+        source,
+    })?;
+    read_pairs(file, &name)
+}
+
+/// Read a pairs CSV from any reader; `source` names it in errors.
+pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError> {
+    let path = source.to_string();
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(reader);
+    let csv_err = |e: csv::Error| DataError::Csv {
+        path: path.clone(),
+        line: e.position().map_or(0, |p| p.line()),
+        message: e.to_string(),
+    };
+    let header: Vec<String> = rdr
+        .headers()
+        .map_err(csv_err)?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    for (i, h) in header.iter().enumerate() {
+        if header[..i].contains(h) {
+            return Err(DataError::DuplicateColumn {
+                path,
+                column: h.clone(),
+            });
+        }
+    }
+    let find = |name: &str| header.iter().position(|h| h == name);
+    let required = |column: &'static str| {
+        find(column).ok_or(DataError::MissingColumn {
+            path: path.clone(),
+            column,
+        })
+    };
+    let (wrap, t1, t2) = (required("wrap_deg")?, required("t1_n")?, required("t2_n")?);
+    let optional = ["capstan_diameter_mm", "drive_v", "run", "step", "time_s"].map(find);
+    let extra_idx: Vec<usize> = (0..header.len())
+        .filter(|i| !PAIRS_HEADER.contains(&header[*i].as_str()))
+        .collect();
+    let mut pairs = Vec::new();
+    for record in rdr.records() {
+        let record = record.map_err(csv_err)?;
+        let line = record.position().map_or(0, |p| p.line());
+        let cell = |i: usize, rule: Rule| -> Result<f64, DataError> {
+            let raw = record.get(i).unwrap_or("");
+            parse_cell(raw, rule).map_err(|reason| DataError::BadCell {
+                path: path.clone(),
+                line,
+                column: i + 1,
+                name: header[i].clone(),
+                value: raw.to_string(),
+                reason,
+            })
+        };
+        let opt = |i: Option<usize>, rule: Rule| i.map(|i| cell(i, rule)).transpose();
+        pairs.push(Pair {
+            capstan_diameter_mm: opt(optional[0], Rule::Positive)?,
+            wrap_deg: cell(wrap, Rule::Positive)?,
+            drive_v: opt(optional[1], Rule::Finite)?,
+            run: opt(optional[2], Rule::Finite)?,
+            step: opt(optional[3], Rule::Finite)?,
+            time_s: opt(optional[4], Rule::Finite)?,
+            t1_n: cell(t1, Rule::Positive)?,
+            t2_n: cell(t2, Rule::Finite)?,
+            extra: extra_idx
+                .iter()
+                .map(|&i| cell(i, Rule::Finite))
+                .collect::<Result<_, _>>()?,
+        });
+    }
+    if pairs.is_empty() {
+        return Err(DataError::Empty { path });
+    }
+    Ok(Dataset {
+        source: path,
+        extra_columns: extra_idx.iter().map(|&i| header[i].clone()).collect(),
+        header,
+        pairs,
+    })
+}
+
+#[derive(Clone, Copy)]
+enum Rule {
+    Finite,
+    Positive,
+}
+
+fn parse_cell(raw: &str, rule: Rule) -> Result<f64, &'static str> {
+    if raw.is_empty() {
+        return Err("empty cell");
+    }
+    let v: f64 = raw.parse().map_err(|_| "not a number")?;
+    if !v.is_finite() {
+        return Err("not a finite number");
+    }
+    match rule {
+        Rule::Positive if v <= 0.0 => Err("must be greater than zero"),
+        _ => Ok(v),
+    }
+}
+
+/// Write pairs to a file (see [`write_pairs_to`]).
+pub fn write_pairs(path: &Path, pairs: &[Pair]) -> anyhow::Result<()> {
+    let file =
+        std::fs::File::create(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    write_pairs_to(&mut w, pairs)?;
+    w.flush()?;
+    Ok(())
+}
+
+/// Write pairs to any writer: the standard header ([`PAIRS_HEADER`]) minus any optional column
+/// that the pairs do not all carry (so what is written reads back as it was).
+pub fn write_pairs_to(w: &mut impl Write, pairs: &[Pair]) -> std::io::Result<()> {
+    let all = |f: fn(&Pair) -> Option<f64>| pairs.iter().all(|p| f(p).is_some());
+    let optional: [(usize, fn(&Pair) -> Option<f64>); 5] = [
+        (0, |p| p.capstan_diameter_mm),
+        (2, |p| p.drive_v),
+        (3, |p| p.run),
+        (4, |p| p.step),
+        (5, |p| p.time_s),
+    ];
+    let keep: Vec<(usize, fn(&Pair) -> Option<f64>)> =
+        optional.into_iter().filter(|(_, f)| all(*f)).collect();
+    let mut columns: Vec<usize> = keep.iter().map(|(i, _)| *i).chain([1, 6, 7]).collect();
+    columns.sort();
+    let names: Vec<&str> = columns.iter().map(|&i| PAIRS_HEADER[i]).collect();
+    writeln!(w, "{}", names.join(","))?;
+    for p in pairs {
+        let cells: Vec<String> = columns
+            .iter()
+            .map(|&i| match i {
+                1 => p.wrap_deg.to_string(),
+                6 => p.t1_n.to_string(),
+                7 => p.t2_n.to_string(),
+                _ => keep
+                    .iter()
+                    .find(|(j, _)| *j == i)
+                    .and_then(|(_, f)| f(p))
+                    .map_or(String::new(), |v| v.to_string()),
+            })
+            .collect();
+        writeln!(w, "{}", cells.join(","))?;
+    }
+    Ok(())
+}
+
+/// The bundled thesis data (720 pairs), compiled into the binary so no path is needed.
+pub const THESIS_CSV: &str = include_str!("../data/thesis-conditioned.csv");
+
+/// The bundled thesis data, parsed.
+pub fn thesis_dataset() -> Dataset {
+    read_pairs(THESIS_CSV.as_bytes(), "thesis-conditioned.csv (bundled)")
+        .expect("bundled data is valid")
+}
+
+/// A path for messages about the bundled data set.
+pub fn bundled_path() -> PathBuf {
+    PathBuf::from("data/thesis-conditioned.csv")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bundled_thesis_data_has_720_rows_and_the_time_column_is_absent() {
+        let d = thesis_dataset();
+        assert_eq!(d.pairs.len(), 720);
+        assert!(!d.has_column("time_s"));
+        assert_eq!(d.pairs[1].t1_n, 1.157991);
+        assert_eq!(d.pairs[1].run, Some(1.0));
+    }
+
+    fn err(csv: &str) -> String {
+        read_pairs(csv.as_bytes(), "x.csv").unwrap_err().to_string()
+    }
+
+    #[test]
+    fn bad_input_names_file_line_and_column() {
+        assert_eq!(
+            err("wrap_deg,t1_n\n270,1\n"),
+            "x.csv:1: missing required column `t2_n`"
+        );
+        assert_eq!(
+            err("wrap_deg,t1_n,t2_n\n270,1,2\n270,abc,2\n"),
+            "x.csv:3:2: column `t1_n`: not a number (found `abc`)"
+        );
+        assert_eq!(
+            err("wrap_deg,t1_n,t2_n\n270,0,2\n"),
+            "x.csv:2:2: column `t1_n`: must be greater than zero (found `0`)"
+        );
+        assert_eq!(
+            err("wrap_deg,t1_n,t2_n\n270,1,NaN\n"),
+            "x.csv:2:3: column `t2_n`: not a finite number (found `NaN`)"
+        );
+        assert_eq!(
+            err("wrap_deg,t1_n,t2_n\n270,1,\n"),
+            "x.csv:2:3: column `t2_n`: empty cell (found ``)"
+        );
+        assert!(
+            err("wrap_deg,t1_n,t2_n\n270,1\n").starts_with("x.csv:2:"),
+            "{}",
+            err("wrap_deg,t1_n,t2_n\n270,1\n")
+        );
+        assert_eq!(err("wrap_deg,t1_n,t2_n\n"), "x.csv: no data rows");
+        assert_eq!(
+            err("wrap_deg,t1_n,t1_n,t2_n\n"),
+            "x.csv:1: column `t1_n` appears twice"
+        );
+        assert_eq!(
+            err("wrap_deg,t1_n,t2_n,humidity\n270,1,2,wet\n"),
+            "x.csv:2:4: column `humidity`: not a number (found `wet`)"
+        );
+    }
+
+    #[test]
+    fn columns_in_any_order_extras_kept_and_round_trip() {
+        let d = read_pairs(
+            "t2_n,humidity,t1_n,wrap_deg\n3.5,40,1.5,360\n".as_bytes(),
+            "y",
+        )
+        .unwrap();
+        assert_eq!(d.extra_columns, ["humidity"]);
+        assert_eq!(
+            (d.pairs[0].t1_n, d.pairs[0].t2_n, d.pairs[0].extra[0]),
+            (1.5, 3.5, 40.0)
+        );
+        let mut out = Vec::new();
+        write_pairs_to(&mut out, &d.pairs).unwrap();
+        let back = read_pairs(out.as_slice(), "z").unwrap();
+        assert_eq!(back.pairs[0].t1_n, 1.5);
+        assert_eq!(back.pairs[0].run, None);
+    }
+}
