@@ -1,6 +1,6 @@
 //! The friction law of a cord on a rotating capstan.
 
-use crate::{Operating, REF_DIAMETER_MM, REF_DRIVE_V, REF_TENSION_N};
+use crate::{Operating, REF_DIAMETER_MM, REF_DRIVE_V, REF_TENSION_N, REF_WRAP_RAD};
 use libm::{exp, log, pow, sqrt};
 
 /// How tension grows around the capstan, with every effect of the catalogue as a parameter.
@@ -16,7 +16,9 @@ use libm::{exp, log, pow, sqrt};
 /// end, so β_eff = β − (√(B/T1) + √(B/T2))/r (r the capstan radius), never below zero.
 ///
 /// mu_eff scales `mu` by (1 + a·t/100 s)(1 + w·(run−1))(1 + c·(d − 12.7 mm))(1 + s·(V − 10 V)):
-/// capstan heating, wear between runs, a diameter and a speed dependence.
+/// a drift with time in the run, wear between runs, a diameter and a speed dependence; and by
+/// exp(q·(β − 3π)) · exp(−h·H): a wrap dependence, and contact heating, where H (N s) is the
+/// friction load (T2 − T1) remembered over `heat_tau_s` (see [`LoadMemory`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrictionLaw {
     /// Friction coefficient at the reference tension, conditions and time zero.
@@ -33,6 +35,12 @@ pub struct FrictionLaw {
     pub mu_change_per_mm: f64,
     /// Fractional change of mu per volt of drive above 10 V (speed).
     pub mu_change_per_v: f64,
+    /// Logarithmic change of mu per radian of wrap beyond 3π (540°).
+    pub mu_log_slope_per_rad: f64,
+    /// Contact heating: mu falls by exp(−h·H) with the load memory H in N s; h in 1/(N s).
+    pub heat_per_ns: f64,
+    /// Time constant of the load memory, s (how long the contact remembers its friction load).
+    pub heat_tau_s: f64,
 }
 
 impl FrictionLaw {
@@ -46,6 +54,9 @@ impl FrictionLaw {
             mu_change_per_run: 0.0,
             mu_change_per_mm: 0.0,
             mu_change_per_v: 0.0,
+            mu_log_slope_per_rad: 0.0,
+            heat_per_ns: 0.0,
+            heat_tau_s: 10.0,
         }
     }
 
@@ -55,7 +66,9 @@ impl FrictionLaw {
             * (1.0 + self.mu_change_per_100s * op.time_s / 100.0)
             * (1.0 + self.mu_change_per_run * (op.run - 1.0))
             * (1.0 + self.mu_change_per_mm * (op.diameter_mm - REF_DIAMETER_MM))
-            * (1.0 + self.mu_change_per_v * (op.drive_v - REF_DRIVE_V));
+            * (1.0 + self.mu_change_per_v * (op.drive_v - REF_DRIVE_V))
+            * exp(self.mu_log_slope_per_rad * (op.wrap_rad - REF_WRAP_RAD)
+                - self.heat_per_ns * op.load_memory_ns);
         mu.max(0.0)
     }
 
@@ -102,6 +115,26 @@ impl FrictionLaw {
             return f64::INFINITY;
         }
         exp(log(base) / one_minus_n)
+    }
+}
+
+/// The contact's memory of its friction load: dH/dt = (T2 − T1) − H/τ, so H settles at
+/// τ·(T2 − T1) under a steady load and decays with τ when it goes. Integrated exactly for a
+/// load held constant over each interval, so any step size gives the same answer.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LoadMemory {
+    /// H, N s.
+    pub h_ns: f64,
+}
+
+impl LoadMemory {
+    /// Advance by `dt_s` under a friction load `load_n` = T2 − T1 (negative loads count as zero).
+    pub fn advance(&mut self, dt_s: f64, load_n: f64, tau_s: f64) {
+        if dt_s <= 0.0 || tau_s <= 0.0 {
+            return;
+        }
+        let decay = exp(-dt_s / tau_s);
+        self.h_ns = self.h_ns * decay + load_n.max(0.0) * tau_s * (1.0 - decay);
     }
 }
 
@@ -188,9 +221,38 @@ mod tests {
             drive_v: 20.0,
             run: 3.0,
             time_s: 50.0,
+            load_memory_ns: 0.0,
         };
         let want = 0.1 * 1.05 * 0.96 * (1.0 + 0.127) * 1.05;
         assert!((law.effective_mu(&o) - want).abs() < 1e-12);
+    }
+
+    #[test]
+    fn load_memory_settles_at_tau_times_load_whatever_the_step() {
+        let (mut fine, mut coarse) = (LoadMemory::default(), LoadMemory::default());
+        for _ in 0..10_000 {
+            fine.advance(0.001, 20.0, 7.0);
+        }
+        coarse.advance(10.0, 20.0, 7.0);
+        assert!((fine.h_ns - coarse.h_ns).abs() < 1e-9);
+        assert!((coarse.h_ns - 140.0 * (1.0 - exp(-10.0 / 7.0))).abs() < 1e-9);
+        // Heated contact: mu falls by exp(−h H).
+        let law = FrictionLaw {
+            heat_per_ns: 0.00128,
+            ..FrictionLaw::euler_eytelwein(0.14)
+        };
+        let hot = Operating {
+            load_memory_ns: 7.0 * 40.0,
+            ..op(540.0)
+        };
+        assert!((law.effective_mu(&hot) - 0.14 * exp(-0.00128 * 280.0)).abs() < 1e-12);
+        // The wrap slope is anchored at 540°.
+        let law = FrictionLaw {
+            mu_log_slope_per_rad: 0.015,
+            ..FrictionLaw::euler_eytelwein(0.14)
+        };
+        assert!((law.effective_mu(&op(540.0)) - 0.14).abs() < 1e-12);
+        assert!(law.effective_mu(&op(720.0)) > law.effective_mu(&op(270.0)));
     }
 
     #[test]

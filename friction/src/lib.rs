@@ -15,13 +15,15 @@ mod law;
 mod sensor;
 
 pub use effect::{Effect, EffectKind, ParseEffectError};
-pub use law::FrictionLaw;
+pub use law::{FrictionLaw, LoadMemory};
 pub use sensor::SensorArtefacts;
 
 /// Reference capstan diameter for [`FrictionLaw::mu_change_per_mm`] (0.5 in), mm.
 pub const REF_DIAMETER_MM: f64 = 12.7;
 /// Reference drive voltage for [`FrictionLaw::mu_change_per_v`] (the thesis's runs), V.
 pub const REF_DRIVE_V: f64 = 10.0;
+/// Reference wrap for [`FrictionLaw::mu_log_slope_per_rad`]: 3π rad (540°, 1.5 turns).
+pub const REF_WRAP_RAD: f64 = 3.0 * core::f64::consts::PI;
 /// Reference tension of the power law: `k` in dT/dθ = k·Tⁿ equals mu at this tension, N.
 pub const REF_TENSION_N: f64 = 1.0;
 
@@ -38,6 +40,8 @@ pub struct Operating {
     pub run: f64,
     /// Time since the logger trigger, s.
     pub time_s: f64,
+    /// The contact's friction-load memory H at this moment, N s (see [`LoadMemory`]).
+    pub load_memory_ns: f64,
 }
 
 impl Operating {
@@ -49,6 +53,7 @@ impl Operating {
             drive_v: REF_DRIVE_V,
             run: 1.0,
             time_s: 0.0,
+            load_memory_ns: 0.0,
         }
     }
 }
