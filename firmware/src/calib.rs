@@ -28,7 +28,15 @@ impl Default for ServoMap {
 impl ServoMap {
     /// Pulse width for an angle, µs (angle clamped to 0..=max).
     pub fn pulse_us(&self, angle_deg: f32) -> f32 {
-        let a = angle_deg.clamp(0.0, self.max_deg);
+        // Not `f32::clamp`: its `min <= max` assertion formats floats on panic, which links
+        // ~20 KiB of float formatting into the board image. Same result (NaN stays NaN).
+        let a = if angle_deg < 0.0 {
+            0.0
+        } else if angle_deg > self.max_deg {
+            self.max_deg
+        } else {
+            angle_deg
+        };
         self.pulse_at_min_us + (self.pulse_at_max_us - self.pulse_at_min_us) * a / self.max_deg
     }
 

@@ -1,9 +1,161 @@
-//! RP2040 (Raspberry Pi Pico) board binary: wires pins to the rig core. Placeholder until the
-//! board wiring lands; on the host this compiles to a stub.
+//! RP2040 (Raspberry Pi Pico) board binary: wires the Pico's pins to the rig core and serves
+//! runs forever. All behaviour (protocol, tare, conditioning, safety, records) is in the
+//! library; this file only builds the drivers, adapts the two things embedded-hal has no trait
+//! for (the ADC and the watchdog) and calls [`firmware::run_once`] in a loop. The pins, PWM
+//! timing, protocol and calibration are in `board.rs`.
+//!
+//! Build and flash from the workspace root:
+//! `cargo run --release -p firmware --target thumbv6m-none-eabi` (see docs/README-board.md).
+//!
+//! On the host this compiles to a stub `main` that says what it is, so that `cargo test` at
+//! the root can build the whole workspace.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
+#[cfg(target_os = "none")]
+mod board;
+
 #[cfg(not(target_os = "none"))]
 fn main() {
-    eprintln!("this is the RP2040 firmware; build it with --target thumbv6m-none-eabi");
+    eprintln!(
+        "this is the RP2040 (Raspberry Pi Pico) firmware of the capstan rig; build and flash it \
+         with `cargo run --release -p firmware --target thumbv6m-none-eabi` \
+         (see docs/README-board.md)"
+    );
+}
+
+#[cfg(target_os = "none")]
+mod pico {
+    use crate::board::{self, Pins};
+    use defmt_rtt as _;
+    use embassy_executor::Spawner;
+    use embassy_rp::adc::{self, Adc, Blocking};
+    use embassy_rp::gpio::{Input, Level, Output, Pull};
+    use embassy_rp::pwm::{self, Pwm};
+    use embassy_rp::watchdog::{ResetReason, Watchdog};
+    use embassy_time::Duration;
+    use firmware::defmt_sink::DefmtSink;
+    use firmware::hal::{AdcError, Channel, ForceAdc};
+    use firmware::{run_once, RigIo};
+    use panic_probe as _;
+
+    /// Both force sensors on the RP2040's ADC, read by blocking conversions (2 µs each at
+    /// 500 ksps: nothing to gain from the async driver at 1 kHz).
+    struct ForceSensors {
+        adc: Adc<'static, Blocking>,
+        t1: adc::Channel<'static>,
+        t2: adc::Channel<'static>,
+    }
+
+    impl ForceAdc for ForceSensors {
+        fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError> {
+            let input = match channel {
+                Channel::T1 => &mut self.t1,
+                Channel::T2 => &mut self.t2,
+            };
+            // A conversion error (the ADC's ERR flag) becomes AdcError; the supervisor counts
+            // it like a reading at the rail.
+            self.adc.blocking_read(input).map_err(|_| AdcError)
+        }
+    }
+
+    /// The RP2040's hardware watchdog, reloaded with the same timeout at every feed.
+    struct HardwareWatchdog {
+        dog: Watchdog,
+        timeout: Duration,
+    }
+
+    impl firmware::hal::Watchdog for HardwareWatchdog {
+        fn feed(&mut self) {
+            self.dog.feed(self.timeout);
+        }
+    }
+
+    fn pwm_config(divider: u8, top: u16) -> pwm::Config {
+        let mut c = pwm::Config::default();
+        c.divider = divider.into();
+        c.top = top;
+        // Output low until the rig's first command (make_safe, below).
+        c.compare_a = 0;
+        c
+    }
+
+    #[embassy_executor::main]
+    async fn main(_spawner: Spawner) {
+        let p = embassy_rp::init(Default::default());
+        let clk = embassy_rp::clocks::clk_sys_freq();
+        defmt::assert_eq!(
+            clk,
+            board::CLK_SYS_HZ,
+            "PWM timing assumes a 125 MHz clk_sys"
+        );
+        let pins = Pins::take(p);
+
+        // Quieter 3V3/ADC_VREF for the force sensors; kept for the whole program (dropping an
+        // Output would release the pin).
+        let _smps_pwm_mode = Output::new(pins.smps_mode, Level::High);
+        let dog = Watchdog::new(pins.watchdog);
+        if let Some(ResetReason::TimedOut) = dog.reset_reason() {
+            defmt::warn!("the hardware watchdog reset the chip (loop hung or panicked)");
+        }
+
+        let mut rig = defmt::unwrap!(firmware::Rig::new(
+            board::protocol(),
+            board::calibration(),
+            board::safety_limits(),
+        ));
+
+        let servo = Pwm::new_output_a(
+            pins.servo_slice,
+            pins.servo,
+            pwm_config(board::SERVO_PWM_DIVIDER, board::SERVO_PWM_TOP),
+        );
+        let amp = Pwm::new_output_a(
+            pins.amp_slice,
+            pins.amp,
+            pwm_config(board::AMP_PWM_DIVIDER, board::AMP_PWM_TOP),
+        );
+        let adc = ForceSensors {
+            adc: Adc::new_blocking(pins.adc, adc::Config::default()),
+            // No pad pulls: they would load the sensor's divider.
+            t1: adc::Channel::new_pin(pins.t1, Pull::None),
+            t2: adc::Channel::new_pin(pins.t2, Pull::None),
+        };
+        let mut io = RigIo {
+            servo,
+            amp,
+            trigger: Output::new(pins.trigger, Level::Low),
+            led: Output::new(pins.led, Level::Low),
+            button: Input::new(pins.button, Pull::Up),
+            adc,
+            watchdog: HardwareWatchdog {
+                dog,
+                timeout: board::WATCHDOG_TIMEOUT,
+            },
+        };
+        // Servo to its rest angle, amplifier to 0 V, trigger low, before anything runs.
+        defmt::unwrap!(io.make_safe(&rig));
+
+        // Paused while a debugger halts the core (the reset value, made explicit).
+        io.watchdog.dog.pause_on_debug(true);
+        io.watchdog.dog.start(board::WATCHDOG_TIMEOUT);
+        defmt::info!(
+            "capstan rig ready: {=u32} Hz sampling, watchdog {=u64} ms; press the button to run",
+            rig.protocol().sample_hz,
+            board::WATCHDOG_TIMEOUT.as_millis()
+        );
+
+        let mut sink = DefmtSink;
+        loop {
+            // Waits for the press (LED blinking), runs the protocol, returns when it ends.
+            match run_once(&mut io, &mut rig, &mut sink).await {
+                // The rig has logged `run_end` and is back to idle: wait for the next press.
+                Ok(_) => {}
+                // Cannot happen with this HAL (its pins are infallible, duties are clamped to
+                // top). The runner has already commanded the safe state; a panic stops the
+                // loop, the watchdog then resets the chip and every output pin with it.
+                Err(e) => defmt::panic!("hardware error {}: outputs made safe", e),
+            }
+        }
+    }
 }

@@ -51,6 +51,7 @@ impl StepOrder {
 
 /// Everything the rig does in a run. `Protocol::default()` is the thesis's protocol.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub struct Protocol {
     /// Servo angle at rest and for step 0, deg (thesis: 125).
     pub rest_deg: f32,

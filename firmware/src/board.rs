@@ -1,0 +1,141 @@
+//! The rig's configuration on the Raspberry Pi Pico: pins, PWM timing, watchdog, protocol and
+//! calibration. Compiled into the RP2040 binary only (`main.rs` declares it for
+//! `target_os = "none"`); the rig core (`lib.rs`) never sees it. Everything an operator may
+//! want to change before flashing is in this file. The wiring itself is in
+//! `docs/README-board.md`.
+//!
+//! Pin map (Pico header pin in brackets; every signal is 3.3 V logic):
+//!
+//! | signal                          | GPIO | peripheral        | Pico pin |
+//! |---------------------------------|------|-------------------|----------|
+//! | servo signal, 50 Hz PWM         | GP16 | PWM slice 0, A    | 21       |
+//! | amplifier control, PWM into RC  | GP18 | PWM slice 1, A    | 24       |
+//! | logger trigger (high = trigger) | GP20 | SIO output        | 26       |
+//! | start/abort button (to GND)     | GP21 | SIO input pull-up | 27       |
+//! | status LED (onboard)            | GP25 | SIO output        | —        |
+//! | T1 force sensor (servo side)    | GP26 | ADC0              | 31       |
+//! | T2 force sensor (fixed side)    | GP27 | ADC1              | 32       |
+//! | SMPS mode (inside the Pico)     | GP23 | SIO output, high  | —        |
+//!
+//! GP23 is the Pico's own regulator "power save" pin, not on the header: driving it high puts
+//! the RT6150 buck-boost into PWM mode, which the Pico datasheet recommends for ADC work (much
+//! less ripple on 3V3 and ADC_VREF at light load, at some efficiency cost).
+//!
+//! The two PWM outputs sit on different slices (0 and 1) because both channels of a slice share
+//! one counter, so one frequency: the servo's 50 Hz and the amplifier's 30.5 kHz could not
+//! share a slice. GP17 (slice 0 B) and GP19 (slice 1 B) must therefore not be used for another
+//! PWM of a different frequency. GP25's slice (4) and GP26/GP27's slice (5) are not used as PWM.
+//! GP24 and GP29 are wired inside the Pico (VBUS sense, VSYS/3) and GP0/GP1 are the usual
+//! UART0 console: all avoided. (On a Pico W, GP23/GP24/GP25/GP29 belong to the wireless chip:
+//! this binary is for the plain Pico.)
+//!
+//! To move a signal, change its line in [`Pins`] (type and `take`) and the table above; for a
+//! PWM pin, the slice must be the one that pin belongs to (the compiler checks that).
+
+use embassy_rp::peripherals::{
+    ADC, PIN_16, PIN_18, PIN_20, PIN_21, PIN_23, PIN_25, PIN_26, PIN_27, PWM_SLICE0, PWM_SLICE1,
+    WATCHDOG,
+};
+use embassy_rp::{Peri, Peripherals};
+use embassy_time::Duration;
+use firmware::safety::SafetyLimits;
+use firmware::{Calibration, Protocol};
+
+/// The peripherals the rig uses, taken out of embassy-rp's singletons in one place.
+pub struct Pins {
+    /// PWM slice of the servo signal.
+    pub servo_slice: Peri<'static, PWM_SLICE0>,
+    /// Servo signal (slice 0, channel A).
+    pub servo: Peri<'static, PIN_16>,
+    /// PWM slice of the amplifier's control voltage.
+    pub amp_slice: Peri<'static, PWM_SLICE1>,
+    /// Amplifier control PWM (slice 1, channel A) into the RC filter.
+    pub amp: Peri<'static, PIN_18>,
+    /// Logger trigger line.
+    pub trigger: Peri<'static, PIN_20>,
+    /// Start/abort button, active low.
+    pub button: Peri<'static, PIN_21>,
+    /// Onboard LED of the Pico (not the Pico W, whose LED hangs off the wireless chip).
+    pub led: Peri<'static, PIN_25>,
+    /// The ADC block.
+    pub adc: Peri<'static, ADC>,
+    /// T1 (servo side) force sensor, ADC0.
+    pub t1: Peri<'static, PIN_26>,
+    /// T2 (fixed side) force sensor, ADC1.
+    pub t2: Peri<'static, PIN_27>,
+    /// The hardware watchdog.
+    pub watchdog: Peri<'static, WATCHDOG>,
+    /// The Pico's SMPS power-save pin (driven high: PWM mode, quieter ADC reference).
+    pub smps_mode: Peri<'static, PIN_23>,
+}
+
+impl Pins {
+    /// Take the rig's peripherals.
+    pub fn take(p: Peripherals) -> Self {
+        Pins {
+            servo_slice: p.PWM_SLICE0,
+            servo: p.PIN_16,
+            amp_slice: p.PWM_SLICE1,
+            amp: p.PIN_18,
+            trigger: p.PIN_20,
+            button: p.PIN_21,
+            led: p.PIN_25,
+            adc: p.ADC,
+            t1: p.PIN_26,
+            t2: p.PIN_27,
+            watchdog: p.WATCHDOG,
+            smps_mode: p.PIN_23,
+        }
+    }
+}
+
+/// clk_sys that the PWM settings below assume: embassy-rp's default clocks (12 MHz crystal,
+/// PLL to 125 MHz). `main` checks it at boot.
+pub const CLK_SYS_HZ: u32 = 125_000_000;
+
+/// Servo PWM clock divider: 125 MHz / 40 = 3.125 MHz, 0.32 µs per count.
+pub const SERVO_PWM_DIVIDER: u8 = 40;
+/// Servo PWM top: (62 499 + 1) counts × 0.32 µs = 20 ms, a 50 Hz frame. The rig core's duty is
+/// a fraction of `max_duty_cycle()`, which is this `top`.
+pub const SERVO_PWM_TOP: u16 = 62_499;
+
+/// Amplifier PWM clock divider: the full 125 MHz.
+pub const AMP_PWM_DIVIDER: u8 = 1;
+/// Amplifier PWM top: 4096 counts per period → 125 MHz / 4096 = 30.5 kHz, 12-bit resolution
+/// (0.8 mV steps of the 3.3 V swing). The RC filter is sized for this frequency (see the README).
+pub const AMP_PWM_TOP: u16 = 4_095;
+
+/// Hardware watchdog timeout. The runner feeds it every sample (1 ms), so only a hung loop
+/// (a blocked RTT write, a panic, a HardFault) lets it run out; the chip then resets and every
+/// output pin falls back to an input (servo pulses stop, amplifier control and trigger are
+/// pulled low by their resistors). The software supervisor's 10 ms sample-gap fault catches a
+/// merely slow loop long before this.
+pub const WATCHDOG_TIMEOUT: Duration = Duration::from_millis(250);
+
+/// The test protocol: the thesis's protocol (`Protocol::default()`).
+///
+/// The capstan diameter and wrap angle are metadata only (they go into every `run_start`
+/// record so the log says what was on the rig): set them to the current setup before
+/// flashing, e.g. `capstan_diameter_mm: 25.4, wrap_deg: 360.0`. 0 means "not given". Any other
+/// field (angles, dwell, sample rate, step order, ...) can be overridden the same way;
+/// `Rig::new` refuses an invalid protocol at boot.
+pub fn protocol() -> Protocol {
+    Protocol {
+        capstan_diameter_mm: 0.0,
+        wrap_deg: 0.0,
+        ..Protocol::default()
+    }
+}
+
+/// The calibration: the defaults (50 N sensors, zero at 400 counts, 0.015 N/count; servo
+/// 1000-2000 µs over 0-180°; amplifier 3.3 V full scale, gain 4). Each run re-zeroes both
+/// channels during its tare, so only the sensitivities (`n_per_count`, measured through the
+/// divider in front of the ADC) need to be right.
+pub fn calibration() -> Calibration {
+    Calibration::default()
+}
+
+/// The safety supervisor's thresholds (45 N over-force, rails, cord break, 10 ms sample gap).
+pub fn safety_limits() -> SafetyLimits {
+    SafetyLimits::default()
+}
