@@ -146,9 +146,6 @@ impl Rig {
         self.supervisor = Supervisor::new(self.limits);
         self.phase = Phase::Tare { sum: [0; 2], n: 0 };
         info!("run {=u32}: button pressed, taring", self.runs);
-        if self.protocol.tare_ms == 0 {
-            self.phase = self.begin_run(None);
-        }
     }
 
     fn emit(&mut self, sink: &mut impl LogSink, record: Record) {
@@ -196,7 +193,9 @@ impl Rig {
             }
             self.phase = Phase::Tare { sum, n };
             if elapsed_us + p.sample_period_us() as u64 >= p.tare_ms as u64 * 1000 {
-                self.phase = self.begin_run(Some((sum, n)));
+                // tare_ms = 0 keeps the stored zero (the one sample taken is not a tare).
+                let tare = (p.tare_ms > 0).then_some((sum, n));
+                self.phase = self.begin_run(tare);
                 let rec = RunStart {
                     run: self.runs,
                     protocol: p,

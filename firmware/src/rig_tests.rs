@@ -215,6 +215,10 @@ fn tare_removes_a_zero_drift_of_both_channels() {
         &move |_, o| (plant_counts(o, &cal, 37.0), false),
         None,
     );
+    assert!(
+        matches!(tr.sink.0[0].1, Record::RunStart(_)),
+        "a run start even without a tare"
+    );
     let bias = tr.sink.pairs()[0].t1.mean_n - (0.1 + 0.3 * 5.0);
     assert!((bias - 0.555).abs() < 0.01, "{bias}");
 }
