@@ -1,10 +1,321 @@
-//! `capstan log` (being built).
+//! `capstan log`: record runs from the board over defmt/RTT, or decode a saved defmt stream.
+
+use crate::log::output::{LogOptions, Logger, SetupFlags, Stop, Summary};
+use crate::log::Firmware;
+use anyhow::{bail, Context};
+use std::io::Read;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::time::Duration;
+
+const AFTER_HELP: &str = "\
+LOGGING A RUN ON THE PICO
+  1. Wire a debug probe (the Raspberry Pi Debug Probe, or a second Pico running debugprobe)
+     to the rig Pico's SWD pins (SWCLK, GND, SWDIO) and plug both into USB. On Linux, install
+     the probe-rs udev rules once so the probe can be opened without root.
+  2. Build the firmware: cargo build --release -p firmware --target thumbv6m-none-eabi
+  3. Flash it and log:
+       capstan log --chip RP2040 \\
+         --elf target/thumbv6m-none-eabi/release/firmware --out runs/2026-06-01-a \\
+         --wrap-deg 360 --diameter-mm 12.7
+     then press the rig's button for each run. Each record is written as it arrives:
+       raw.csv       time, T1/T2 in ADC counts and newtons
+       pairs.csv     capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n
+       faults.csv    safety faults
+       messages.txt  the firmware's other log lines
+       stream.defmt  the received bytes (decode again with --from)
+       summary.json  runs, counts, lost records (sequence gaps), bad frames, why it stopped
+  4. Stop with Ctrl-C (or --runs N / --duration S). Everything received is kept, files
+     flushed; a lost probe (cable pulled) also keeps everything and exits with an error.
+
+  Records are numbered by the firmware; a jump in the numbers is reported (how many records,
+  after which one, at which byte), on stderr as it happens and in summary.json. --strict
+  turns any loss into a failing exit status.
+
+  --no-flash attaches to the firmware already running (it is not reset; a frame cut by the
+  attach counts as one bad frame). The ELF must be the exact build that is running: its
+  defmt table is what decodes the stream.
+
+DECODING A SAVED STREAM
+  capstan log --elf FIRMWARE_ELF --from stream.defmt --out DIR
+  capstan log --elf FIRMWARE_ELF --from - --out DIR      (stdin, e.g. piped from QEMU)";
 
 /// Arguments of `capstan log`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+#[command(
+    long_about = "Record the rig's runs from the board (flash through a debug probe, read the \
+                  defmt log over RTT) into CSV files as they arrive, or decode a saved defmt \
+                  stream the same way.",
+    after_long_help = AFTER_HELP
+)]
+pub struct Args {
+    /// The firmware ELF (the build running on the board): its defmt table decodes the stream.
+    #[arg(long, value_name = "FIRMWARE_ELF")]
+    pub elf: PathBuf,
+
+    /// Output directory (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+
+    /// Board: the probe-rs chip name (RP2040 for the Pico). Flashes the ELF, resets, logs.
+    #[arg(long, value_name = "CHIP", required_unless_present = "from")]
+    pub chip: Option<String>,
+
+    /// Decode a saved defmt byte stream instead of a board (`-`: stdin).
+    #[arg(long, value_name = "FILE|-", conflicts_with_all = ["chip", "probe", "no_flash", "connect_under_reset", "speed"])]
+    pub from: Option<String>,
+
+    /// Board: which probe, as VID:PID[:SERIAL] (needed when several are plugged in).
+    #[arg(long, value_name = "VID:PID[:SERIAL]")]
+    pub probe: Option<String>,
+
+    /// Board: do not flash or reset; attach to the firmware already running.
+    #[arg(long)]
+    pub no_flash: bool,
+
+    /// Board: hold the chip in reset while attaching.
+    #[arg(long)]
+    pub connect_under_reset: bool,
+
+    /// Board: SWD clock, kHz.
+    #[arg(long, value_name = "KHZ")]
+    pub speed: Option<u32>,
+
+    /// Capstan diameter for pairs.csv, mm (default: the run-start record's, if set there).
+    #[arg(long, value_name = "MM")]
+    pub diameter_mm: Option<f64>,
+
+    /// Wrap angle for pairs.csv, deg (default: the run-start record's, if set there).
+    #[arg(long, value_name = "DEG")]
+    pub wrap_deg: Option<f64>,
+
+    /// Drive-motor voltage for pairs.csv, V (default: amplifier gain × control voltage).
+    #[arg(long, value_name = "V")]
+    pub drive_v: Option<f64>,
+
+    /// Stop after this many complete runs.
+    #[arg(long, value_name = "N")]
+    pub runs: Option<usize>,
+
+    /// Stop after this many seconds.
+    #[arg(long, value_name = "S")]
+    pub duration: Option<f64>,
+
+    /// Replace the files of an earlier session in DIR.
+    #[arg(long)]
+    pub overwrite: bool,
+
+    /// Fail (exit status 1) if any record was lost or any frame did not decode.
+    #[arg(long)]
+    pub strict: bool,
+
+    /// Only the final summary on stderr (no line per run, pair, fault and gap).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+static STOP: AtomicBool = AtomicBool::new(false);
+
+fn install_ctrl_c() {
+    // A second call in the same process (tests) fails harmlessly: the handler is already set.
+    let _ = ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("capstan log: second Ctrl-C, exiting now");
+            std::process::exit(130);
+        }
+        eprintln!("capstan log: Ctrl-C: finishing (flushing files, writing summary.json)");
+    });
+}
 
 /// Run `capstan log`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`capstan log` is not built yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(d) = args.duration {
+        if !(d.is_finite() && d > 0.0) {
+            bail!("--duration must be a positive number of seconds (got {d})");
+        }
+    }
+    for (name, v) in [
+        ("--diameter-mm", args.diameter_mm),
+        ("--wrap-deg", args.wrap_deg),
+    ] {
+        if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+            bail!("{name} must be a positive number");
+        }
+    }
+    if args.drive_v.is_some_and(|v| !v.is_finite()) {
+        bail!("--drive-v must be a number");
+    }
+    let fw = Firmware::load(&args.elf)?;
+    let opts = LogOptions {
+        out_dir: args.out.clone(),
+        overwrite: args.overwrite,
+        save_stream: args.from.as_deref().is_none_or(|f| f == "-"),
+        setup: SetupFlags {
+            capstan_diameter_mm: args.diameter_mm,
+            wrap_deg: args.wrap_deg,
+            drive_v: args.drive_v,
+        },
+        progress: !args.quiet,
+    };
+    STOP.store(false, Ordering::SeqCst);
+    install_ctrl_c();
+    let (summary, stop) = match &args.from {
+        Some(from) => from_stream(&fw, opts, from, &args)?,
+        None => from_board(&fw, opts, &args)?,
+    };
+    eprintln!("{}", summary.human(&args.out));
+    verdict(&summary, &stop, &args)
+}
+
+fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Result<()> {
+    let dir = args.out.display();
+    if let Stop::ProbeLost(e) = stop {
+        bail!("lost the probe while logging ({e}); everything received until then is in {dir}");
+    }
+    let records = summary.records.run_start
+        + summary.records.raw
+        + summary.records.pair
+        + summary.records.fault
+        + summary.records.run_end;
+    if records == 0 && summary.bytes > 0 {
+        bail!(
+            "no rig records in {} bytes ({} frames, {} did not decode): is the stream from the \
+             firmware built as {}?",
+            summary.bytes,
+            summary.frames,
+            summary.bad_frames,
+            args.elf.display()
+        );
+    }
+    if args.strict && !summary.is_clean() {
+        bail!(
+            "--strict: {} record(s) lost, {} bad frame(s){} (see {dir}/summary.json)",
+            summary.missing_records,
+            summary.bad_frames,
+            if summary.truncated_tail.is_some() {
+                ", stream truncated"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
+}
+
+fn limit_reached(logger: &Logger, args: &Args, started: std::time::Instant) -> Option<Stop> {
+    if let Some(n) = args.runs.filter(|&n| logger.completed_runs() >= n) {
+        return Some(Stop::Limit(format!("{n} run(s) logged (--runs)")));
+    }
+    if let Some(d) = args
+        .duration
+        .filter(|&d| started.elapsed().as_secs_f64() >= d)
+    {
+        return Some(Stop::Limit(format!("{d} s (--duration)")));
+    }
+    None
+}
+
+/// Decode a file or stdin. The reading happens on its own thread so that Ctrl-C and the
+/// limits are honoured even while a read blocks.
+fn from_stream(
+    fw: &Firmware,
+    opts: LogOptions,
+    from: &str,
+    args: &Args,
+) -> anyhow::Result<(Summary, Stop)> {
+    let (source, reader): (String, Box<dyn Read + Send>) = if from == "-" {
+        ("stdin".to_string(), Box::new(std::io::stdin()))
+    } else {
+        let file =
+            std::fs::File::open(from).with_context(|| format!("cannot open the stream {from}"))?;
+        (from.to_string(), Box::new(file))
+    };
+    let mut logger = Logger::create(fw, opts, &source)?;
+    let (tx, rx) = mpsc::sync_channel::<std::io::Result<Vec<u8>>>(16);
+    std::thread::spawn(move || {
+        let mut reader = reader;
+        let mut buf = vec![0u8; 64 * 1024];
+        loop {
+            let r = match reader.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => Ok(buf[..n].to_vec()),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => Err(e),
+            };
+            let failed = r.is_err();
+            if tx.send(r).is_err() || failed {
+                break;
+            }
+        }
+    });
+    let started = std::time::Instant::now();
+    let stop = loop {
+        if STOP.load(Ordering::SeqCst) {
+            break Stop::Interrupted;
+        }
+        if let Some(s) = limit_reached(&logger, args, started) {
+            break s;
+        }
+        match rx.recv_timeout(Duration::from_millis(100)) {
+            Ok(Ok(chunk)) => logger.feed(&chunk)?,
+            Ok(Err(e)) => {
+                let at = logger.bytes_seen();
+                let summary = logger.finish(&Stop::EndOfStream)?;
+                eprintln!("{}", summary.human(&args.out));
+                return Err(e).with_context(|| format!("reading {source} failed at byte {at}"));
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            Err(mpsc::RecvTimeoutError::Disconnected) => break Stop::EndOfStream,
+        }
+    };
+    let summary = logger.finish(&stop)?;
+    Ok((summary, stop))
+}
+
+#[cfg(feature = "probe")]
+fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(Summary, Stop)> {
+    use crate::log::probe::{stream, Limits, ProbeOptions};
+    let chip = args
+        .chip
+        .clone()
+        .expect("clap requires --chip without --from");
+    let popts = ProbeOptions {
+        chip: chip.clone(),
+        probe: args.probe.clone(),
+        flash: !args.no_flash,
+        connect_under_reset: args.connect_under_reset,
+        speed_khz: args.speed,
+        rtt_channel: 0,
+        rtt_timeout: Duration::from_secs(5),
+    };
+    let limits = Limits {
+        runs: args.runs,
+        duration: args.duration.map(Duration::from_secs_f64),
+    };
+    let source = format!(
+        "{chip} over RTT{}",
+        args.probe
+            .as_ref()
+            .map_or(String::new(), |p| format!(" (probe {p})"))
+    );
+    let mut logger = Logger::create(fw, opts, &source)?;
+    let stop = match stream(&args.elf, &popts, limits, &mut logger, &STOP) {
+        Ok(stop) => stop,
+        Err(e) => {
+            // Nothing was streamed (or writing failed): still leave a summary behind.
+            let _ = logger.finish(&Stop::ProbeLost(format!("{e:#}")));
+            return Err(e);
+        }
+    };
+    let summary = logger.finish(&stop)?;
+    Ok((summary, stop))
+}
+
+#[cfg(not(feature = "probe"))]
+fn from_board(_fw: &Firmware, _opts: LogOptions, _args: &Args) -> anyhow::Result<(Summary, Stop)> {
+    bail!(
+        "this `capstan` was built without the `probe` feature: it can only decode saved streams \
+         (--from). Rebuild with default features to log from a board."
+    )
 }

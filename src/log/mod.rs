@@ -1,0 +1,21 @@
+//! `capstan log`: the host end of the rig's log. The firmware sends each record as one defmt
+//! frame (`firmware/src/defmt_sink.rs`); this module cuts the byte stream into frames, decodes
+//! them with the firmware ELF's defmt table (defmt-decoder), checks the sequence numbers, and
+//! writes the run's files as the records arrive.
+//!
+//! The bytes come from a debug probe reading RTT ([`probe`], feature `probe`), from a saved
+//! stream, or from a pipe (QEMU's semihosting output in the end-to-end test); the decoding is
+//! the same.
+
+pub mod decoder;
+pub mod elf;
+pub mod output;
+#[cfg(feature = "probe")]
+pub mod probe;
+pub mod seq;
+pub mod stream;
+
+pub use decoder::{decode_all, BadFrame, Decoder, Located};
+pub use elf::Firmware;
+pub use output::{LogOptions, Logger, SetupFlags, Stop, Summary};
+pub use stream::Event;

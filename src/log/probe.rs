@@ -1,0 +1,175 @@
+//! The real board: flash (or attach to) the chip through a debug probe with the probe-rs
+//! library, find the firmware's RTT control block, and feed the defmt up-channel to a
+//! [`Logger`] until Ctrl-C, a limit, or the probe goes away.
+//!
+//! The RTT channel stays in the firmware's mode (defmt-rtt's default: never block, drop what
+//! does not fit). The rig's sample loop must not stall on a slow host; a record that is dropped
+//! instead shows up as a sequence gap in the summary.
+
+use super::output::{Logger, Stop};
+use anyhow::{anyhow, bail, Context};
+use probe_rs::flashing::{DownloadOptions, ElfLoader, ElfOptions};
+use probe_rs::probe::list::Lister;
+use probe_rs::probe::DebugProbeSelector;
+use probe_rs::rtt::{find_rtt_control_block_in_raw_file, try_attach_to_rtt, ScanRegion};
+use probe_rs::{Permissions, Session};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How to reach the board.
+#[derive(Clone, Debug)]
+pub struct ProbeOptions {
+    /// probe-rs chip name (`RP2040`).
+    pub chip: String,
+    /// `VID:PID[:SERIAL]` of the probe, if more than one is plugged in.
+    pub probe: Option<String>,
+    /// Flash the ELF and reset before logging (otherwise attach to what is running).
+    pub flash: bool,
+    /// Attach with the reset line held (for a chip that does not answer otherwise).
+    pub connect_under_reset: bool,
+    /// SWD clock, kHz.
+    pub speed_khz: Option<u32>,
+    /// RTT up-channel carrying defmt.
+    pub rtt_channel: usize,
+    /// How long to wait for the firmware to set up RTT.
+    pub rtt_timeout: Duration,
+}
+
+/// When to stop on one's own.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Limits {
+    /// After this many complete runs.
+    pub runs: Option<usize>,
+    /// After this long.
+    pub duration: Option<Duration>,
+}
+
+fn open_session(opts: &ProbeOptions) -> anyhow::Result<(Session, String)> {
+    let lister = Lister::new();
+    let probes = lister.list_all();
+    let probe = match &opts.probe {
+        Some(sel) => {
+            let selector: DebugProbeSelector = sel
+                .parse()
+                .map_err(|e| anyhow!("--probe {sel}: expected VID:PID[:SERIAL] ({e})"))?;
+            lister
+                .open(selector)
+                .with_context(|| format!("cannot open the debug probe {sel}"))?
+        }
+        None => match probes.as_slice() {
+            [] => bail!(
+                "no debug probe found. Plug in the Pico's debug probe (or a second Pico running \
+                 debugprobe) and check USB permissions (Linux: the probe-rs udev rules, see \
+                 docs/README-log.md)"
+            ),
+            [one] => one
+                .open()
+                .with_context(|| format!("cannot open the debug probe {one}"))?,
+            many => {
+                let list: Vec<String> = many.iter().map(|p| format!("  {p}")).collect();
+                bail!(
+                    "{} debug probes found; choose one with --probe VID:PID[:SERIAL]:\n{}",
+                    many.len(),
+                    list.join("\n")
+                )
+            }
+        },
+    };
+    let name = probe.get_name();
+    let mut probe = probe;
+    if let Some(khz) = opts.speed_khz {
+        probe
+            .set_speed(khz)
+            .with_context(|| format!("cannot set the SWD clock of {name} to {khz} kHz"))?;
+    }
+    let session = if opts.connect_under_reset {
+        probe.attach_under_reset(opts.chip.as_str(), Permissions::default())
+    } else {
+        probe.attach(opts.chip.as_str(), Permissions::default())
+    }
+    .with_context(|| format!("cannot attach to the {} through {name}", opts.chip))?;
+    Ok((session, name))
+}
+
+/// Log from the board until stopped. Returns why it stopped; every error before the stream
+/// starts (no probe, no chip, flashing, no RTT) is an error, a failure while streaming is a
+/// [`Stop::ProbeLost`] (the logger keeps what it has).
+pub fn stream(
+    elf_path: &Path,
+    opts: &ProbeOptions,
+    limits: Limits,
+    logger: &mut Logger,
+    stop: &AtomicBool,
+) -> anyhow::Result<Stop> {
+    let elf = std::fs::read(elf_path)
+        .with_context(|| format!("cannot read the firmware ELF {}", elf_path.display()))?;
+    let (mut session, probe_name) = open_session(opts)?;
+    if opts.flash {
+        eprintln!(
+            "capstan log: flashing {} to the {} through {probe_name}...",
+            elf_path.display(),
+            opts.chip
+        );
+        let t = Instant::now();
+        let mut dl = DownloadOptions::default();
+        dl.verify = true;
+        let loader = ElfLoader(ElfOptions::default());
+        probe_rs::flashing::download_file_with_options(&mut session, elf_path, loader, dl)
+            .with_context(|| format!("flashing {} failed", elf_path.display()))?;
+        eprintln!("capstan log: flashed in {:.1} s", t.elapsed().as_secs_f64());
+    }
+    let region = match find_rtt_control_block_in_raw_file(&elf) {
+        Ok(Some(addr)) => ScanRegion::Exact(addr),
+        Ok(None) => bail!(
+            "{} has no `_SEGGER_RTT` symbol: the firmware does not log over RTT (link defmt-rtt)",
+            elf_path.display()
+        ),
+        Err(e) => bail!("{}: {e}", elf_path.display()),
+    };
+    let mut core = session
+        .core(0)
+        .with_context(|| format!("cannot reach core 0 of the {}", opts.chip))?;
+    if opts.flash {
+        core.reset()
+            .with_context(|| format!("cannot reset the {} after flashing", opts.chip))?;
+    }
+    let mut rtt = try_attach_to_rtt(&mut core, opts.rtt_timeout, &region).with_context(|| {
+        format!(
+            "no RTT control block on the {} after {:.0} s: is the firmware running, and is it \
+             the ELF given?",
+            opts.chip,
+            opts.rtt_timeout.as_secs_f64()
+        )
+    })?;
+    let channel = rtt.up_channel(opts.rtt_channel).ok_or_else(|| {
+        anyhow!(
+            "the firmware has no RTT up-channel {} (defmt-rtt uses 0)",
+            opts.rtt_channel
+        )
+    })?;
+    eprintln!(
+        "capstan log: reading defmt from RTT channel {} ({} bytes buffer); Ctrl-C stops and keeps \
+         everything",
+        opts.rtt_channel,
+        channel.buffer_size()
+    );
+    let started = Instant::now();
+    let mut buf = vec![0u8; 16 * 1024];
+    loop {
+        if stop.load(Ordering::SeqCst) {
+            return Ok(Stop::Interrupted);
+        }
+        if let Some(n) = limits.runs.filter(|&n| logger.completed_runs() >= n) {
+            return Ok(Stop::Limit(format!("{n} run(s) logged (--runs)")));
+        }
+        if let Some(d) = limits.duration.filter(|&d| started.elapsed() >= d) {
+            return Ok(Stop::Limit(format!("{} s (--duration)", d.as_secs_f64())));
+        }
+        match channel.read(&mut core, &mut buf) {
+            Ok(0) => std::thread::sleep(Duration::from_millis(5)),
+            Ok(n) => logger.feed(&buf[..n])?,
+            Err(e) => return Ok(Stop::ProbeLost(format!("{e}"))),
+        }
+    }
+}
