@@ -1,0 +1,193 @@
+//! The simulated HAL: the very traits the board implements (embedded-hal 1.0 `SetDutyCycle`,
+//! `OutputPin`, `InputPin`, and the rig core's `ForceAdc` and `Watchdog`), over a shared
+//! `&RefCell<Plant>`. Every call reads `embassy_time::Instant::now()` and first brings the plant
+//! to that instant, so the plant sees only what a real rig would: duty cycles and pin levels out
+//! of the firmware, ADC counts and the button level into it.
+
+use crate::plant::Plant;
+use core::cell::RefCell;
+use core::convert::Infallible;
+use embedded_hal::digital::{ErrorType as PinErrorType, InputPin, OutputPin};
+use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
+use firmware::hal::{AdcError, Channel, ForceAdc, Watchdog};
+use firmware::RigIo;
+
+/// `max_duty_cycle()` of the simulated servo PWM: the RP2040's 50 Hz `top` (125 MHz / 40).
+pub const SERVO_MAX_DUTY: u16 = 62_499;
+/// `max_duty_cycle()` of the simulated amplifier PWM: 1 mV of control voltage per count.
+pub const AMP_MAX_DUTY: u16 = 3_300;
+
+fn now_us() -> u64 {
+    embassy_time::Instant::now().as_micros()
+}
+
+/// A handle on one cord of a shared plant: what every adapter holds.
+#[derive(Clone, Copy)]
+pub struct CordRef<'a> {
+    plant: &'a RefCell<Plant>,
+    cord: usize,
+}
+
+impl<'a> CordRef<'a> {
+    /// Cord `cord` (0-based) of `plant`. Panics if the plant has no such cord.
+    pub fn new(plant: &'a RefCell<Plant>, cord: usize) -> Self {
+        assert!(cord < plant.borrow().cord_count(), "no cord {cord}");
+        CordRef { plant, cord }
+    }
+
+    fn with<R>(&self, f: impl FnOnce(&mut Plant, usize) -> R) -> R {
+        let mut p = self.plant.borrow_mut();
+        p.advance_to(now_us());
+        f(&mut p, self.cord)
+    }
+}
+
+macro_rules! adapter {
+    ($(#[$doc:meta])* $name:ident) => {
+        $(#[$doc])*
+        pub struct $name<'a>(pub CordRef<'a>);
+    };
+}
+
+adapter!(
+    /// Servo PWM (50 Hz, [`SERVO_MAX_DUTY`]).
+    ServoPwm
+);
+adapter!(
+    /// Amplifier control PWM into the RC filter ([`AMP_MAX_DUTY`] = 3.3 V).
+    AmpPwm
+);
+adapter!(
+    /// Logger trigger line.
+    TriggerPin
+);
+adapter!(
+    /// Status LED.
+    LedPin
+);
+adapter!(
+    /// Start/abort button, active low: `is_low()` while pressed.
+    ButtonPin
+);
+adapter!(
+    /// The 12-bit ADC with both force sensors.
+    SimAdc
+);
+adapter!(
+    /// Watchdog (the plant records the longest gap between feeds).
+    SimWatchdog
+);
+
+impl PwmErrorType for ServoPwm<'_> {
+    type Error = Infallible;
+}
+
+impl SetDutyCycle for ServoPwm<'_> {
+    fn max_duty_cycle(&self) -> u16 {
+        SERVO_MAX_DUTY
+    }
+
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
+        self.0
+            .with(|p, i| p.set_servo_duty(i, duty, SERVO_MAX_DUTY));
+        Ok(())
+    }
+}
+
+impl PwmErrorType for AmpPwm<'_> {
+    type Error = Infallible;
+}
+
+impl SetDutyCycle for AmpPwm<'_> {
+    fn max_duty_cycle(&self) -> u16 {
+        AMP_MAX_DUTY
+    }
+
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
+        self.0.with(|p, i| p.set_amp_duty(i, duty, AMP_MAX_DUTY));
+        Ok(())
+    }
+}
+
+impl PinErrorType for TriggerPin<'_> {
+    type Error = Infallible;
+}
+
+impl OutputPin for TriggerPin<'_> {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.0.with(|p, i| p.set_trigger(i, false));
+        Ok(())
+    }
+
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.0.with(|p, i| p.set_trigger(i, true));
+        Ok(())
+    }
+}
+
+impl PinErrorType for LedPin<'_> {
+    type Error = Infallible;
+}
+
+impl OutputPin for LedPin<'_> {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.0.with(|p, i| p.set_led(i, false));
+        Ok(())
+    }
+
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.0.with(|p, i| p.set_led(i, true));
+        Ok(())
+    }
+}
+
+impl PinErrorType for ButtonPin<'_> {
+    type Error = Infallible;
+}
+
+impl InputPin for ButtonPin<'_> {
+    fn is_high(&mut self) -> Result<bool, Infallible> {
+        Ok(!self.0.with(|p, i| p.button_pressed(i)))
+    }
+
+    fn is_low(&mut self) -> Result<bool, Infallible> {
+        Ok(self.0.with(|p, i| p.button_pressed(i)))
+    }
+}
+
+impl ForceAdc for SimAdc<'_> {
+    fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError> {
+        self.0.with(|p, i| p.read_counts(i, channel))
+    }
+}
+
+impl Watchdog for SimWatchdog<'_> {
+    fn feed(&mut self) {
+        self.0.with(|p, i| p.feed_watchdog(i));
+    }
+}
+
+/// The rig's hardware for cord `cord` of a simulated plant.
+pub type SimRigIo<'a> = RigIo<
+    ServoPwm<'a>,
+    AmpPwm<'a>,
+    TriggerPin<'a>,
+    LedPin<'a>,
+    ButtonPin<'a>,
+    SimAdc<'a>,
+    SimWatchdog<'a>,
+>;
+
+/// Everything `firmware::run_once` needs for cord `cord` (0-based) of `plant`.
+pub fn rig_io(plant: &RefCell<Plant>, cord: usize) -> SimRigIo<'_> {
+    let c = CordRef::new(plant, cord);
+    RigIo {
+        servo: ServoPwm(c),
+        amp: AmpPwm(c),
+        trigger: TriggerPin(c),
+        led: LedPin(c),
+        button: ButtonPin(c),
+        adc: SimAdc(c),
+        watchdog: SimWatchdog(c),
+    }
+}

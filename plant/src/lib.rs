@@ -1,0 +1,50 @@
+//! The simulated capstan rig, `no_std`: what the firmware drives when there is no rig.
+//!
+//! ```text
+//! servo PWM ─► HS-322HD (50 Hz frames, slew- and torque-limited) ─► 6.35 mm lever
+//!          ─► cord (hardening spring, 0.1 N preload at 125°) ─► T1 sensor
+//!          ─► capstan friction (capstan_friction::Model, the shared law) ─► T2 sensor
+//! amp PWM ─► power amplifier (×4) ─► Pittman gearmotor (19.7:1) ─► capstan speed, current
+//!             ▲ friction torque Σ(T2 − T1)·r of every cord, through the gearbox
+//! sensors: zero, gain, Gaussian noise, 12-bit ADC (nominal = firmware's default calibration)
+//! ```
+//!
+//! [`Plant`] holds the physics; [`hal`] has the adapters that implement the board's traits
+//! (`SetDutyCycle`, `OutputPin`, `InputPin`, `ForceAdc`, `Watchdog`) over a
+//! `&RefCell<Plant>`, reading the time with `embassy_time::Instant::now()`: the plant sees
+//! duty cycles and pin levels, the firmware sees ADC counts and the button (SITL style). The
+//! host simulator and the emulated-ARM firmware run the same plant.
+//!
+//! Friction: with the capstan turning, T2 = `model.law.t2_n(T1, op)` (the catalogue's physical
+//! effects live there); stopped, T2 = T1; stalled (the drive cannot supply the friction
+//! torque), T2 − T1 is what the stalled motor can push. The model's sensor artefacts are applied
+//! by the sensors: the gain to T2's sensitivity, and the offsets as a shift that rides on the
+//! drive (a ground shift from the power amplifier's current) — present whenever the capstan is
+//! driven, absent during the firmware's tare (capstan stopped), so the tare cannot remove them
+//! and the data show `T1 + t1_offset`, `t2_gain·T2 + t2_offset` as the catalogue means.
+//!
+//! Determinism: all physics is f64 with `libm` and the noise comes from [`rng::Rng`]
+//! (xoshiro256++ and a polar normal); the same seed and the same calls give bit-identical
+//! counts, on the host and on a Cortex-M.
+#![no_std]
+#![deny(missing_docs)]
+
+pub mod config;
+pub mod hal;
+mod plant;
+pub mod rng;
+
+pub use config::{
+    CordConfig, CordSetup, FaultConfig, MotorConfig, PlantConfig, SensorConfig, ServoConfig,
+};
+pub use hal::{rig_io, SimRigIo, AMP_MAX_DUTY, SERVO_MAX_DUTY};
+pub use plant::{
+    CordTruth, DriveState, Injection, InjectionKind, InjectionReport, Plant, PlantError,
+    ServoEvent, MAX_CORDS, MAX_INJECTIONS, MAX_SERVO_EVENTS, MAX_TRIGGER_EDGES,
+};
+
+/// The thesis's friction coefficient for its plain exponential fit (Table 1).
+pub const THESIS_MU: f64 = 0.115;
+
+#[cfg(test)]
+mod tests;
