@@ -4,4 +4,5 @@
 
 pub mod cli;
 pub mod data;
+pub mod fit;
 pub mod log;
