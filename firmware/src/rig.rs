@@ -14,6 +14,10 @@ use crate::safety::{SafetyInput, SafetyLimits, Supervisor};
 /// Debounce time of the button, ms.
 pub const DEBOUNCE_MS: u32 = 20;
 
+/// The cord-break checks arm this long after each step to a tension level, ms (the servo has
+/// moved and the tensions settled by then).
+pub const CORD_CHECK_SETTLE_MS: u32 = 200;
+
 /// What the rig reads each sample period.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inputs {
@@ -148,6 +152,19 @@ impl Rig {
         info!("run {=u32}: button pressed, taring", self.runs);
     }
 
+    /// A tension level (≥ 1) has been held for `CORD_CHECK_SETTLE_MS`: the cord is loaded.
+    fn level_held(&self, elapsed_ms: u32) -> bool {
+        let p = &self.protocol;
+        let first = p.step_start_ms(1);
+        if !matches!(self.phase, Phase::Run { .. }) || elapsed_ms < first {
+            return false;
+        }
+        let k = 1 + (elapsed_ms - first) / p.dwell_ms;
+        k <= p.levels()
+            && p.level(k) >= 1
+            && elapsed_ms - p.step_start_ms(k) >= CORD_CHECK_SETTLE_MS
+    }
+
     fn emit(&mut self, sink: &mut impl LogSink, record: Record) {
         sink.emit(self.seq.next_seq(), &record);
     }
@@ -218,7 +235,7 @@ impl Rig {
                 t_us,
                 counts: inp.counts,
                 force_n,
-                cord_check_armed: elapsed_ms >= p.trigger_at_ms(),
+                cord_check_armed: self.level_held(elapsed_ms),
             })
         };
         if let Some(f) = fault {

@@ -26,8 +26,13 @@ pub struct SafetyLimits {
     pub cord_break_ratio: f32,
     /// ... while T1 is at least this, N ...
     pub cord_break_min_t1_n: f32,
-    /// ... for this many consecutive samples.
+    /// ... for this many consecutive samples. A cord that parted also shows as both channels
+    /// below `cord_slack_n` (a free end carries nothing, and the turning capstan feeds the loose
+    /// cord towards the servo, so T1 collapses with T2) for as many samples.
     pub cord_break_samples: u16,
+    /// Both channels below this while a tension level is held: the cord parted, N (default
+    /// 0.05; the lowest level holds T1 ≥ ~0.3 N and T2 above it).
+    pub cord_slack_n: f32,
     /// Largest gap between two samples before the watchdog fault, µs (default 10 ms).
     pub max_sample_gap_us: u32,
 }
@@ -43,6 +48,7 @@ impl Default for SafetyLimits {
             cord_break_ratio: 0.3,
             cord_break_min_t1_n: 0.5,
             cord_break_samples: 5,
+            cord_slack_n: 0.05,
             max_sample_gap_us: 10_000,
         }
     }
@@ -57,7 +63,7 @@ pub struct SafetyInput {
     pub counts: [Result<u16, AdcError>; 2],
     /// Calibrated forces, N (meaningless where the conversion failed).
     pub force_n: [f32; 2],
-    /// The capstan is driven and the cord tensioned: the cord-break check is armed.
+    /// The capstan is driven and a tension level is held: the cord-break checks are armed.
     pub cord_check_armed: bool,
 }
 
@@ -121,8 +127,8 @@ impl Supervisor {
         let [t1, t2] = input.force_n;
         let collapsed = input.cord_check_armed
             && input.counts.iter().all(|c| c.is_ok())
-            && t1 >= l.cord_break_min_t1_n
-            && t2 < l.cord_break_ratio * t1;
+            && ((t1 >= l.cord_break_min_t1_n && t2 < l.cord_break_ratio * t1)
+                || (t1 < l.cord_slack_n && t2 < l.cord_slack_n));
         self.cord = if collapsed { self.cord + 1 } else { 0 };
         if self.cord >= l.cord_break_samples {
             return fault(FaultKind::CordBreak, Some(Channel::T2), t2);
@@ -204,6 +210,25 @@ mod tests {
         // Low tension with amplification near one is not a break.
         let mut s = Supervisor::new(SafetyLimits::default());
         assert_eq!(feed(&mut s, 100, [Ok(430), Ok(428)], [0.45, 0.42]), None);
+    }
+
+    #[test]
+    fn cord_break_when_both_sides_go_slack_under_a_held_level() {
+        // The cord parted: neither side carries anything (± noise).
+        let mut s = Supervisor::new(SafetyLimits::default());
+        let got = feed(&mut s, 10, [Ok(401), Ok(399)], [0.01, -0.02]).unwrap();
+        assert_eq!((got.0, got.1.kind), (4, FaultKind::CordBreak));
+        // Not while no level is held (rest, tare, between runs).
+        let mut s = Supervisor::new(SafetyLimits::default());
+        let mut i = input(0, [Ok(401), Ok(399)], [0.01, -0.02]);
+        i.cord_check_armed = false;
+        for t in 0..10 {
+            i.t_us = t * 1000;
+            assert_eq!(s.check(&i), None);
+        }
+        // The lowest level at the smallest wrap is well clear of it.
+        let mut s = Supervisor::new(SafetyLimits::default());
+        assert_eq!(feed(&mut s, 100, [Ok(420), Ok(435)], [0.3, 0.52]), None);
     }
 
     #[test]
