@@ -153,16 +153,16 @@ impl Rig {
     }
 
     /// A tension level (≥ 1) has been held for `CORD_CHECK_SETTLE_MS`: the cord is loaded.
+    /// (The step is the one of the previous sample: at most one sample late at a change.)
     fn level_held(&self, elapsed_ms: u32) -> bool {
-        let p = &self.protocol;
-        let first = p.step_start_ms(1);
-        if !matches!(self.phase, Phase::Run { .. }) || elapsed_ms < first {
-            return false;
+        match self.phase {
+            Phase::Run { step, .. } => {
+                step >= 1
+                    && elapsed_ms >= self.protocol.step_start_ms(step) + CORD_CHECK_SETTLE_MS
+                    && self.protocol.level(step) >= 1
+            }
+            _ => false,
         }
-        let k = 1 + (elapsed_ms - first) / p.dwell_ms;
-        k <= p.levels()
-            && p.level(k) >= 1
-            && elapsed_ms - p.step_start_ms(k) >= CORD_CHECK_SETTLE_MS
     }
 
     fn emit(&mut self, sink: &mut impl LogSink, record: Record) {

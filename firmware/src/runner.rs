@@ -37,11 +37,14 @@ pub enum RunError {
     Pin,
 }
 
-/// Last duty written to each PWM, so unchanged commands cost no register (or plant) writes.
+/// Last duty written to each PWM, so unchanged commands cost no register (or plant) writes,
+/// and the command it was made from, so an unchanged command costs no conversion either.
 #[derive(Default)]
 struct Written {
     servo: Option<u16>,
     amp: Option<u16>,
+    servo_deg: Option<f32>,
+    amp_control_v: Option<f32>,
     trigger: Option<bool>,
     led: Option<bool>,
 }
@@ -68,18 +71,26 @@ where
     }
 
     fn apply(&mut self, rig: &Rig, out: &Outputs, written: &mut Written) -> Result<(), RunError> {
+        // The servo and amplifier maps do not change during a run (the tare only re-zeroes the
+        // force channels), so a command equal to the last one maps to the same duty.
         let cal = rig.calibration();
-        let servo = cal.servo.duty(out.servo_deg, self.servo.max_duty_cycle());
-        if written.servo != Some(servo) {
-            self.servo
-                .set_duty_cycle(servo)
-                .map_err(|_| RunError::Pwm)?;
-            written.servo = Some(servo);
+        if written.servo_deg != Some(out.servo_deg) {
+            let servo = cal.servo.duty(out.servo_deg, self.servo.max_duty_cycle());
+            if written.servo != Some(servo) {
+                self.servo
+                    .set_duty_cycle(servo)
+                    .map_err(|_| RunError::Pwm)?;
+                written.servo = Some(servo);
+            }
+            written.servo_deg = Some(out.servo_deg);
         }
-        let amp = cal.amp.duty(out.amp_control_v, self.amp.max_duty_cycle());
-        if written.amp != Some(amp) {
-            self.amp.set_duty_cycle(amp).map_err(|_| RunError::Pwm)?;
-            written.amp = Some(amp);
+        if written.amp_control_v != Some(out.amp_control_v) {
+            let amp = cal.amp.duty(out.amp_control_v, self.amp.max_duty_cycle());
+            if written.amp != Some(amp) {
+                self.amp.set_duty_cycle(amp).map_err(|_| RunError::Pwm)?;
+                written.amp = Some(amp);
+            }
+            written.amp_control_v = Some(out.amp_control_v);
         }
         if written.trigger != Some(out.trigger) {
             self.trigger
