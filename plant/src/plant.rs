@@ -191,6 +191,7 @@ struct CordState {
     servo_events_dropped: u32,
     last_feed_us: Option<u64>,
     max_feed_gap_us: u64,
+    safe_since_us: Option<u64>,
 }
 
 /// Why a plant cannot be made.
@@ -401,6 +402,7 @@ impl Plant {
                 servo_events_dropped: 0,
                 last_feed_us: None,
                 max_feed_gap_us: 0,
+                safe_since_us: Some(origin_us),
             };
             let _ = states.push(st);
         }
@@ -716,10 +718,14 @@ impl Plant {
     }
 
     fn note_safe(&mut self, i: usize) {
+        let now = self.t_us;
         if !self.is_safe(i) {
+            self.cords[i].safe_since_us = None;
             return;
         }
-        let now = self.t_us;
+        if self.cords[i].safe_since_us.is_none() {
+            self.cords[i].safe_since_us = Some(now);
+        }
         for r in self.injections.iter_mut() {
             if r.injection.cord as usize == i && r.at_us.is_some() && r.safe_at_us.is_none() {
                 r.safe_at_us = Some(now);
@@ -826,13 +832,14 @@ impl Plant {
         if self.noise_sd_counts > 0.0 {
             counts += self.noise_sd_counts * self.rng.normal();
         }
-        let q = libm::floor(counts + 0.5);
-        Ok(if q <= 0.0 {
+        // Round half up and clamp to the ADC's range (`as` truncates: floor, as x ≥ 1).
+        let x = counts + 0.5;
+        Ok(if x < 1.0 {
             0
-        } else if q >= ADC_MAX_COUNTS as f64 {
+        } else if x >= ADC_MAX_COUNTS as f64 {
             ADC_MAX_COUNTS
         } else {
-            q as u16
+            x as u16
         })
     }
 
@@ -898,6 +905,12 @@ impl Plant {
     /// Cord `i`'s LED.
     pub fn led(&self, i: usize) -> bool {
         self.cords[i].led
+    }
+
+    /// Since when cord `i`'s rig has been commanding the safe state (servo at rest, amplifier
+    /// 0 V), plant µs; `None` while it is not.
+    pub fn safe_since_us(&self, i: usize) -> Option<u64> {
+        self.cords[i].safe_since_us
     }
 
     /// Longest gap between two watchdog feeds of cord `i`, µs.
