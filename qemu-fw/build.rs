@@ -4,14 +4,17 @@
 //! current directory (the workspace root, where cargo runs rustc) before any `-L` path. The
 //! root holds the RP2040's `memory.x`, so `link.x` would lay this image out for the Pico
 //! (checked: the link fails on the vector table's alignment). This crate therefore has its own
-//! startup (src/rt.rs) and a script with a name nothing else uses, `qemu-lm3s6965.x`, which
-//! `.cargo/config.toml` passes to the linker (with `defmt.x`).
+//! startup (src/rt.rs) and a script with a name nothing else uses, `qemu-mps2-an385.x`.
+//!
+//! The link arguments (that script and defmt's `defmt.x`) are given here, for this binary
+//! only, rather than as `rustflags` in `.cargo/config.toml`: a `RUSTFLAGS` in the environment
+//! (common in CI) replaces config rustflags and would silently drop them.
 
 use std::env;
 use std::fs;
 use std::path::PathBuf;
 
-const SCRIPT: &str = "qemu-lm3s6965.x";
+const SCRIPT: &str = "qemu-mps2-an385.x";
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
@@ -24,4 +27,6 @@ fn main() {
     let script = fs::read(dir.join(SCRIPT)).expect("qemu-fw: cannot read the linker script");
     fs::write(out.join(SCRIPT), script).expect("qemu-fw: cannot write to OUT_DIR");
     println!("cargo:rustc-link-search={}", out.display());
+    println!("cargo:rustc-link-arg-bins=-T{SCRIPT}");
+    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
 }

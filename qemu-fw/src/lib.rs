@@ -1,18 +1,34 @@
-//! The run the emulated-ARM firmware makes, as data: protocol, calibration, safety limits,
-//! plant and seed. The firmware image (`src/main.rs`, thumbv7m-none-eabi under QEMU) runs it
-//! on the rig core; the host test `tests/log_qemu.rs` runs the very same thing through
-//! host-sim and compares the decoded pairs. One definition, so the two cannot drift.
+//! What the emulated-ARM firmware does, as one async function over the rig core and the
+//! simulated plant: [`scenario`]. The firmware image (`src/main.rs`, thumbv7m-none-eabi under
+//! QEMU) runs it with the defmt sink; the host test `tests/log_qemu.rs` runs the very same
+//! function in host-sim's virtual time with a `Vec` sink and compares the records with what
+//! `capstan log` decoded from QEMU. One definition, so the two cannot drift.
 //!
-//! QEMU runs in real time, so the protocol is short: three levels of 600 ms (2.8 s).
+//! QEMU runs in real time, so the protocol is short: three levels of 600 ms. Two runs: a clean
+//! one (2.8 s) and one that an injected snag ends with an over-force fault (1.7 s).
+//!
+//! Timing contract (what makes the two executions sample the plant at the same instants): each
+//! plant's clock starts at a timer deadline [`SETUP_MS`] ahead, and `firmware::run_once` is
+//! entered when that deadline wakes the task, with nothing awaited in between, so the rig
+//! samples at plant origin + k ms, k = 1, 2, ... on both.
 #![no_std]
 
-pub mod placeholder;
-
+use capstan_friction::Model;
+use capstan_plant::THESIS_MU;
+use capstan_plant::{rig_io, CordSetup, Injection, InjectionKind, Plant, PlantConfig, PlantError};
+use core::cell::RefCell;
+use firmware::record::{LogSink, RunEnd};
 use firmware::safety::SafetyLimits;
-use firmware::{Calibration, Protocol, StepOrder};
+use firmware::{run_once, Calibration, Protocol, ProtocolError, Rig, RunError, StepOrder};
 
-/// Seed of the simulated plant's noise.
+/// Seed of the simulated plant's noise (run 1; run 2's plant uses `SEED + 1`).
 pub const SEED: u64 = 0x6361_7073_7461_6e06;
+
+/// Time allowed for making a plant before its clock starts, ms.
+pub const SETUP_MS: u64 = 20;
+
+/// When the snag of run 2 happens, µs after its trigger (during step 2).
+pub const SNAG_AFTER_TRIGGER_US: u64 = 1_300_000;
 
 /// The QEMU end-to-end protocol: the thesis's, scaled down to 2.8 s (three levels).
 pub fn protocol() -> Protocol {
@@ -35,6 +51,17 @@ pub fn protocol() -> Protocol {
     }
 }
 
+/// The simulated rig: the thesis's (0.5 in capstan, default cord, motor and sensors).
+pub fn plant_config() -> PlantConfig {
+    PlantConfig::default()
+}
+
+/// One cord at 360° with Euler-Eytelwein at the thesis's mu; the operator presses the button
+/// 10 ms after the plant is made, for 200 ms.
+pub fn cords() -> [CordSetup; 1] {
+    [CordSetup::new(360.0, Model::euler_eytelwein(THESIS_MU))]
+}
+
 /// The calibration the rig starts from (the tare then re-zeroes both channels).
 pub fn calibration() -> Calibration {
     Calibration::default()
@@ -43,4 +70,77 @@ pub fn calibration() -> Calibration {
 /// The safety limits in force.
 pub fn limits() -> SafetyLimits {
     SafetyLimits::default()
+}
+
+/// Why the scenario could not run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ScenarioError {
+    /// The plant refused its configuration.
+    Plant(PlantError),
+    /// The rig refused the protocol.
+    Protocol(ProtocolError),
+    /// A run failed on a hardware error.
+    Run(RunError),
+}
+
+/// One run of the scenario: the plant's seed and the fault injected into it, if any.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunPlan {
+    /// Seed of this run's plant.
+    pub seed: u64,
+    /// A fault the plant suffers during the run.
+    pub injection: Option<Injection>,
+}
+
+/// The scenario's runs, in order:
+///
+/// 1. a clean run of [`protocol`] on a fresh plant (seed [`SEED`]);
+/// 2. a run on a fresh plant (seed `SEED + 1`: a new cord) in which the cord snags
+///    [`SNAG_AFTER_TRIGGER_US`] after the trigger: T2 jumps over the force limit and the rig
+///    stops with an over-force fault.
+pub const RUNS: [RunPlan; 2] = [
+    RunPlan {
+        seed: SEED,
+        injection: None,
+    },
+    RunPlan {
+        seed: SEED + 1,
+        injection: Some(Injection {
+            kind: InjectionKind::OverForce,
+            cord: 0,
+            after_trigger_us: SNAG_AFTER_TRIGGER_US,
+        }),
+    },
+];
+
+/// The whole scenario: every run of [`RUNS`] on one rig (so run numbers and sequence numbers
+/// continue), each on its own fresh plant whose operator presses the button 10 ms after the
+/// plant's clock starts. Returns each run's end.
+pub async fn scenario(sink: &mut impl LogSink) -> Result<[RunEnd; 2], ScenarioError> {
+    let mut rig = Rig::new(protocol(), calibration(), limits()).map_err(ScenarioError::Protocol)?;
+    let first = one_run(&mut rig, &RUNS[0], sink).await?;
+    let second = one_run(&mut rig, &RUNS[1], sink).await?;
+    Ok([first, second])
+}
+
+async fn one_run(
+    rig: &mut Rig,
+    plan: &RunPlan,
+    sink: &mut impl LogSink,
+) -> Result<RunEnd, ScenarioError> {
+    // The plant's clock starts at a tick boundary a little ahead; the rig starts right when
+    // that tick wakes it, however long making the plant took (the first plant builds its
+    // random-number tables, and QEMU translates all that code on its first run).
+    let origin = embassy_time::Instant::now() + embassy_time::Duration::from_millis(SETUP_MS);
+    let mut plant = Plant::new_at(plant_config(), &cords(), plan.seed, origin.as_micros())
+        .map_err(ScenarioError::Plant)?;
+    if let Some(i) = plan.injection {
+        plant.inject(i).map_err(ScenarioError::Plant)?;
+    }
+    embassy_time::Timer::at(origin).await;
+    let plant = RefCell::new(plant);
+    let mut io = rig_io(&plant, 0);
+    run_once(&mut io, rig, sink)
+        .await
+        .map_err(ScenarioError::Run)
 }

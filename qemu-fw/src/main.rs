@@ -1,6 +1,12 @@
-//! The rig firmware on QEMU's lm3s6965evb (Cortex-M3): the same rig core as the Pico, on a
-//! SysTick time driver, with the simulated plant compiled in and defmt over semihosting. It
-//! presses its own button, makes one run of `qemu_fw::protocol()`, and exits QEMU.
+//! The rig firmware on an emulated Cortex-M3 (QEMU's MPS2 AN385 board): the same rig core as
+//! the Pico, on a SysTick time driver, with the simulated plant compiled in and defmt over
+//! semihosting. It runs `qemu_fw::scenario` (two runs; the plant presses the button) and exits
+//! QEMU.
+//!
+//! Why not the Stellaris lm3s6965evb, the usual QEMU Cortex-M3: its 64 KiB of RAM. The plant
+//! is ~12.5 KiB, `Plant::new_at` alone needs ~25 KiB of stack, and the task's future holds the
+//! plant again (Rust moves it, it cannot build it in place): that overflowed the 64 KiB (a
+//! lockup in QEMU). The AN385 is a Cortex-M3 too (same thumbv7m code), with 4 MiB of RAM.
 //!
 //! `cargo run --release -p qemu-fw --target thumbv7m-none-eabi` runs it (the runner is in
 //! `.cargo/config.toml`); its stdout is the defmt stream `capstan log --from -` decodes.
@@ -46,52 +52,63 @@ fn defmt_panic() -> ! {
     exit(2)
 }
 
+/// Set by the executor's pender when a task was woken.
+#[cfg(target_os = "none")]
+static WOKEN: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(true);
+
+#[cfg(target_os = "none")]
+#[export_name = "__pender"]
+fn pender(_context: *mut ()) {
+    WOKEN.store(true, core::sync::atomic::Ordering::SeqCst);
+}
+
+/// Thread-mode executor that sleeps with WFI (embassy's own uses WFE, which QEMU treats as a
+/// spin): an idle core then lets QEMU's `-icount ...,sleep=off` jump straight to the next
+/// SysTick, so the emulated run is deterministic and faster than real time.
 #[cfg(target_os = "none")]
 #[no_mangle]
 extern "C" fn qemu_fw_main() -> ! {
-    use embassy_executor::Executor;
+    use core::sync::atomic::Ordering;
+    use embassy_executor::raw::Executor;
     let peripherals = cortex_m::Peripherals::take().unwrap();
     time_driver::init(peripherals.SYST);
     static mut EXECUTOR: core::mem::MaybeUninit<Executor> = core::mem::MaybeUninit::uninit();
     // SAFETY: `qemu_fw_main` runs once; nothing else touches EXECUTOR.
-    let executor: &'static mut Executor =
-        unsafe { (*core::ptr::addr_of_mut!(EXECUTOR)).write(Executor::new()) };
-    executor.run(|spawner| spawner.spawn(rig().unwrap()))
+    let executor: &'static Executor =
+        unsafe { (*core::ptr::addr_of_mut!(EXECUTOR)).write(Executor::new(core::ptr::null_mut())) };
+    executor.spawner().spawn(rig().unwrap());
+    loop {
+        if WOKEN.swap(false, Ordering::SeqCst) {
+            // SAFETY: not reentrant: only this loop polls.
+            unsafe { executor.poll() };
+            continue;
+        }
+        // With interrupts masked, an interrupt that arrives after the check still ends the WFI.
+        cortex_m::interrupt::free(|_| {
+            if !WOKEN.load(Ordering::SeqCst) {
+                cortex_m::asm::wfi();
+            }
+        });
+    }
 }
 
 #[cfg(target_os = "none")]
 #[embassy_executor::task]
 async fn rig() {
-    use core::cell::RefCell;
     use firmware::defmt_sink::DefmtSink;
-    use firmware::{run_once, Rig, RigIo};
-    use qemu_fw::placeholder::{Adc, Amp, Button, Dog, Pin, Plant, Servo};
+    use qemu_fw::ScenarioError;
 
-    let plant = RefCell::new(Plant::new(qemu_fw::SEED));
-    let mut io = RigIo {
-        servo: Servo(&plant),
-        amp: Amp,
-        trigger: Pin,
-        led: Pin,
-        button: Button(&plant),
-        adc: Adc(&plant),
-        watchdog: Dog,
-    };
-    let mut rig = match Rig::new(
-        qemu_fw::protocol(),
-        qemu_fw::calibration(),
-        qemu_fw::limits(),
-    ) {
-        Ok(rig) => rig,
-        Err(e) => {
-            defmt::error!("qemu-fw: protocol refused: {}", e);
-            exit(4)
-        }
-    };
-    let code = match run_once(&mut io, &mut rig, &mut DefmtSink).await {
-        Ok(end) if end.fault.is_none() => 0,
+    let code = match qemu_fw::scenario(&mut DefmtSink).await {
         Ok(_) => 0,
-        Err(e) => {
+        Err(ScenarioError::Plant(_)) => {
+            defmt::error!("qemu-fw: the plant refused its configuration");
+            4
+        }
+        Err(ScenarioError::Protocol(e)) => {
+            defmt::error!("qemu-fw: protocol refused: {}", e);
+            4
+        }
+        Err(ScenarioError::Run(e)) => {
             defmt::error!("qemu-fw: hardware error {}", e);
             1
         }

@@ -1,6 +1,6 @@
 //! Startup without cortex-m-rt (see build.rs for why): the exception vector table and a reset
 //! handler that zeroes `.bss`, copies `.data` from flash and calls `qemu_fw_main`. The symbols
-//! come from `qemu-lm3s6965.x`.
+//! come from `qemu-mps2-an385.x`.
 
 core::arch::global_asm!(
     ".section .text.qemu_fw_reset,\"ax\",%progbits",

@@ -17,8 +17,8 @@ use embassy_time_queue_utils::Queue;
 /// Ticks (µs) per SysTick interrupt.
 const TICK_US: u64 = 1_000;
 
-/// Core clock of QEMU's lm3s6965evb model, Hz.
-pub const CORE_HZ: u32 = 12_000_000;
+/// Core clock of QEMU's MPS2 AN385 model (its FPGA's 25 MHz system clock), Hz.
+pub const CORE_HZ: u32 = 25_000_000;
 
 struct SysTickDriver {
     ms: Mutex<Cell<u64>>,
