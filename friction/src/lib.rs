@@ -16,7 +16,7 @@ mod sensor;
 
 pub use effect::{Effect, EffectKind, ParseEffectError};
 pub use law::{FrictionLaw, LoadMemory};
-pub use sensor::SensorArtefacts;
+pub use sensor::{SensorArtefacts, SLACK_T1_N};
 
 /// Reference capstan diameter for [`FrictionLaw::mu_change_per_mm`] (0.5 in), mm.
 pub const REF_DIAMETER_MM: f64 = 12.7;

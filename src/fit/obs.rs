@@ -235,7 +235,9 @@ impl Observations {
 
     /// Row indices of the given runs, in run order.
     pub fn rows_of(&self, runs: &[usize]) -> Vec<usize> {
-        runs.iter().flat_map(|&r| self.runs[r].iter().copied()).collect()
+        runs.iter()
+            .flat_map(|&r| self.runs[r].iter().copied())
+            .collect()
     }
 
     /// Group of every row.

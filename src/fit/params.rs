@@ -335,6 +335,26 @@ impl ModelSpec {
         self
     }
 
+    /// Fix `param` at `value` (removing it from the free list if it was free).
+    pub fn fix(mut self, param: Param, value: f64) -> Self {
+        if let Some(i) = self.free.iter().position(|f| f.param == param) {
+            self.free.remove(i);
+            self.random = match self.random {
+                Some(r) if r == i => None,
+                Some(r) if r > i => Some(r - 1),
+                r => r,
+            };
+        }
+        param.set(&mut self.base, value);
+        self
+    }
+
+    /// The same spec starting from `model`'s values (e.g. a previous fit).
+    pub fn starting_from(mut self, model: capstan_friction::Model) -> Self {
+        self.base = model;
+        self
+    }
+
     /// The same spec without the random effect.
     pub fn without_random(mut self) -> Self {
         self.random = None;
@@ -422,10 +442,8 @@ mod tests {
         }
         for kind in EffectKind::ALL.into_iter().skip(1) {
             let p = Param::from_effect(kind).unwrap();
-            let m = Model::euler_eytelwein(0.1).with_effect(capstan_friction::Effect {
-                kind,
-                value: 0.77,
-            });
+            let m = Model::euler_eytelwein(0.1)
+                .with_effect(capstan_friction::Effect { kind, value: 0.77 });
             assert_eq!(p.get(&m), 0.77, "{kind}");
         }
     }

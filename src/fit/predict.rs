@@ -54,7 +54,11 @@ pub fn evaluate(
     let mut ev = Evaluation {
         t2_n: vec![f64::NAN; n],
         load_memory_ns: vec![0.0; n],
-        d_theta: if jacobian { vec![0.0; n * nf] } else { Vec::new() },
+        d_theta: if jacobian {
+            vec![0.0; n * nf]
+        } else {
+            Vec::new()
+        },
         n_free: nf,
     };
     for &r in runs {
@@ -245,7 +249,16 @@ fn run_one(
             let denom = 1.0 - f_h * b_c * ind;
             for (j, f) in spec.free.iter().enumerate() {
                 dx[j] = if f.param.role() == Role::T1Offset {
-                    -dvalue[j]
+                    let off = sensors.t1_offset_n;
+                    let s = 1e-7;
+                    let at = |o: f64| {
+                        capstan_friction::SensorArtefacts {
+                            t1_offset_n: o,
+                            ..*sensors
+                        }
+                        .true_t1_n(row.t1_n)
+                    };
+                    (at(off + s) - at(off - s)) / (2.0 * s) * dvalue[j]
                 } else {
                     0.0
                 };

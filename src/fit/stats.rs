@@ -251,7 +251,11 @@ pub fn welch(a: &[f64], b: &[f64]) -> (f64, f64, f64) {
     let mv = |v: &[f64]| {
         let n = v.len() as f64;
         let m = v.iter().sum::<f64>() / n;
-        (m, v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0), n)
+        (
+            m,
+            v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0),
+            n,
+        )
     };
     let (ma, va, na) = mv(a);
     let (mb, vb, nb) = mv(b);
