@@ -4,5 +4,7 @@
 
 pub mod cli;
 pub mod data;
+pub mod analysis;
 pub mod fit;
+pub mod report;
 pub mod log;
