@@ -1,0 +1,48 @@
+//! `capstan analyze` on bad input: an error naming file, line and column, never a panic.
+
+use capstan::cli::{analyze, run, Cli, Command};
+
+fn analyze_csv(name: &str, body: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("capstan-bad-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, body).unwrap();
+    let r = run(Cli {
+        command: Command::Analyze(analyze::Args {
+            data: Some(path),
+            out: dir.join("out"),
+            json: false,
+            threads: Some(1),
+        }),
+    });
+    format!("{:#}", r.expect_err("bad input must fail"))
+}
+
+#[test]
+fn bad_cells_and_columns_are_located() {
+    let h = "capstan_diameter_mm,wrap_deg,drive_v,run,step,t1_n,t2_n\n";
+    let e = analyze_csv("missing.csv", "wrap_deg,t1_n\n270,1\n");
+    assert!(e.contains("missing.csv:1:") && e.contains("t2_n"), "{e}");
+    let e = analyze_csv(
+        "text.csv",
+        &format!("{h}12.7,270,10,1,1,1.0,2.0\n12.7,270,10,1,2,abc,2.0\n"),
+    );
+    assert!(e.contains("text.csv:3:6") && e.contains("t1_n"), "{e}");
+    let e = analyze_csv("zero.csv", &format!("{h}12.7,270,10,1,1,0,2.0\n"));
+    assert!(
+        e.contains("zero.csv:2:6") && e.contains("greater than zero"),
+        "{e}"
+    );
+    let e = analyze_csv("neg.csv", &format!("{h}12.7,270,10,1,1,-1,2.0\n"));
+    assert!(e.contains("neg.csv:2:6"), "{e}");
+    let e = analyze_csv("nan.csv", &format!("{h}12.7,270,10,1,1,1.0,NaN\n"));
+    assert!(e.contains("nan.csv:2:7") && e.contains("finite"), "{e}");
+    let e = analyze_csv("nofile.csv", "");
+    assert!(e.contains("nofile.csv"), "{e}");
+}
+
+#[test]
+fn too_little_data_is_an_error_not_a_panic() {
+    let e = analyze_csv("tiny.csv", "wrap_deg,t1_n,t2_n\n270,1,2\n270,2,4\n");
+    assert!(e.contains("too few"), "{e}");
+}
