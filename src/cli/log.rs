@@ -275,7 +275,7 @@ fn from_stream(
 
 #[cfg(feature = "probe")]
 fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(Summary, Stop)> {
-    use crate::log::probe::{stream, Limits, ProbeOptions};
+    use crate::log::probe::{connect, Limits, ProbeOptions};
     let chip = args
         .chip
         .clone()
@@ -293,21 +293,11 @@ fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(S
         runs: args.runs,
         duration: args.duration.map(Duration::from_secs_f64),
     };
-    let source = format!(
-        "{chip} over RTT{}",
-        args.probe
-            .as_ref()
-            .map_or(String::new(), |p| format!(" (probe {p})"))
-    );
+    // The board first: a missing probe or chip leaves no half-made session directory behind.
+    let mut board = connect(&args.elf, &popts)?;
+    let source = format!("{chip} over RTT (probe: {})", board.probe_name);
     let mut logger = Logger::create(fw, opts, &source)?;
-    let stop = match stream(&args.elf, &popts, limits, &mut logger, &STOP) {
-        Ok(stop) => stop,
-        Err(e) => {
-            // Nothing was streamed (or writing failed): still leave a summary behind.
-            let _ = logger.finish(&Stop::ProbeLost(format!("{e:#}")));
-            return Err(e);
-        }
-    };
+    let stop = board.stream(limits, &mut logger, &STOP)?;
     let summary = logger.finish(&stop)?;
     Ok((summary, stop))
 }

@@ -11,7 +11,7 @@ use anyhow::{anyhow, bail, Context};
 use probe_rs::flashing::{DownloadOptions, ElfLoader, ElfOptions};
 use probe_rs::probe::list::Lister;
 use probe_rs::probe::DebugProbeSelector;
-use probe_rs::rtt::{find_rtt_control_block_in_raw_file, try_attach_to_rtt, ScanRegion};
+use probe_rs::rtt::{find_rtt_control_block_in_raw_file, try_attach_to_rtt, Rtt, ScanRegion};
 use probe_rs::{Permissions, Session};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -92,18 +92,29 @@ fn open_session(opts: &ProbeOptions) -> anyhow::Result<(Session, String)> {
     Ok((session, name))
 }
 
-/// Log from the board until stopped. Returns why it stopped; every error before the stream
-/// starts (no probe, no chip, flashing, no RTT) is an error, a failure while streaming is a
-/// [`Stop::ProbeLost`] (the logger keeps what it has).
-pub fn stream(
-    elf_path: &Path,
-    opts: &ProbeOptions,
-    limits: Limits,
-    logger: &mut Logger,
-    stop: &AtomicBool,
-) -> anyhow::Result<Stop> {
+/// A board with the firmware running and its RTT control block found.
+pub struct Connection {
+    session: Session,
+    rtt: Rtt,
+    channel: usize,
+    /// The probe's name (for messages).
+    pub probe_name: String,
+}
+
+/// Reach the board: open the probe, attach to the chip, flash the ELF and reset (unless
+/// `opts.flash` is off), and find the RTT control block. Every failure here is an error that
+/// says what is missing; nothing has been logged yet.
+pub fn connect(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connection> {
     let elf = std::fs::read(elf_path)
         .with_context(|| format!("cannot read the firmware ELF {}", elf_path.display()))?;
+    let region = match find_rtt_control_block_in_raw_file(&elf) {
+        Ok(Some(addr)) => ScanRegion::Exact(addr),
+        Ok(None) => bail!(
+            "{} has no `_SEGGER_RTT` symbol: the firmware does not log over RTT (link defmt-rtt)",
+            elf_path.display()
+        ),
+        Err(e) => bail!("{}: {e}", elf_path.display()),
+    };
     let (mut session, probe_name) = open_session(opts)?;
     if opts.flash {
         eprintln!(
@@ -119,57 +130,85 @@ pub fn stream(
             .with_context(|| format!("flashing {} failed", elf_path.display()))?;
         eprintln!("capstan log: flashed in {:.1} s", t.elapsed().as_secs_f64());
     }
-    let region = match find_rtt_control_block_in_raw_file(&elf) {
-        Ok(Some(addr)) => ScanRegion::Exact(addr),
-        Ok(None) => bail!(
-            "{} has no `_SEGGER_RTT` symbol: the firmware does not log over RTT (link defmt-rtt)",
-            elf_path.display()
-        ),
-        Err(e) => bail!("{}: {e}", elf_path.display()),
+    let rtt = {
+        let mut core = session
+            .core(0)
+            .with_context(|| format!("cannot reach core 0 of the {}", opts.chip))?;
+        if opts.flash {
+            core.reset()
+                .with_context(|| format!("cannot reset the {} after flashing", opts.chip))?;
+        }
+        try_attach_to_rtt(&mut core, opts.rtt_timeout, &region).with_context(|| {
+            format!(
+                "no RTT control block on the {} after {:.0} s: is the firmware running, and is \
+                 it the ELF given?",
+                opts.chip,
+                opts.rtt_timeout.as_secs_f64()
+            )
+        })?
     };
-    let mut core = session
-        .core(0)
-        .with_context(|| format!("cannot reach core 0 of the {}", opts.chip))?;
-    if opts.flash {
-        core.reset()
-            .with_context(|| format!("cannot reset the {} after flashing", opts.chip))?;
-    }
-    let mut rtt = try_attach_to_rtt(&mut core, opts.rtt_timeout, &region).with_context(|| {
-        format!(
-            "no RTT control block on the {} after {:.0} s: is the firmware running, and is it \
-             the ELF given?",
-            opts.chip,
-            opts.rtt_timeout.as_secs_f64()
-        )
-    })?;
-    let channel = rtt.up_channel(opts.rtt_channel).ok_or_else(|| {
-        anyhow!(
-            "the firmware has no RTT up-channel {} (defmt-rtt uses 0)",
-            opts.rtt_channel
-        )
-    })?;
+    let mut conn = Connection {
+        session,
+        rtt,
+        channel: opts.rtt_channel,
+        probe_name,
+    };
+    let size = conn
+        .rtt
+        .up_channel(conn.channel)
+        .ok_or_else(|| {
+            anyhow!(
+                "the firmware has no RTT up-channel {} (defmt-rtt uses 0)",
+                opts.rtt_channel
+            )
+        })?
+        .buffer_size();
     eprintln!(
-        "capstan log: reading defmt from RTT channel {} ({} bytes buffer); Ctrl-C stops and keeps \
-         everything",
-        opts.rtt_channel,
-        channel.buffer_size()
+        "capstan log: reading defmt from RTT channel {} ({size} bytes buffer); Ctrl-C stops and \
+         keeps everything",
+        conn.channel
     );
-    let started = Instant::now();
-    let mut buf = vec![0u8; 16 * 1024];
-    loop {
-        if stop.load(Ordering::SeqCst) {
-            return Ok(Stop::Interrupted);
-        }
-        if let Some(n) = limits.runs.filter(|&n| logger.completed_runs() >= n) {
-            return Ok(Stop::Limit(format!("{n} run(s) logged (--runs)")));
-        }
-        if let Some(d) = limits.duration.filter(|&d| started.elapsed() >= d) {
-            return Ok(Stop::Limit(format!("{} s (--duration)", d.as_secs_f64())));
-        }
-        match channel.read(&mut core, &mut buf) {
-            Ok(0) => std::thread::sleep(Duration::from_millis(5)),
-            Ok(n) => logger.feed(&buf[..n])?,
-            Err(e) => return Ok(Stop::ProbeLost(format!("{e}"))),
+    Ok(conn)
+}
+
+impl Connection {
+    /// Feed the defmt up-channel to `logger` until Ctrl-C (`stop`), a limit, or a probe
+    /// failure, which ends the stream as [`Stop::ProbeLost`] (the logger keeps what it has).
+    /// Only a failure to write the files is an error.
+    pub fn stream(
+        &mut self,
+        limits: Limits,
+        logger: &mut Logger,
+        stop: &AtomicBool,
+    ) -> anyhow::Result<Stop> {
+        let started = Instant::now();
+        let mut buf = vec![0u8; 16 * 1024];
+        loop {
+            if stop.load(Ordering::SeqCst) {
+                return Ok(Stop::Interrupted);
+            }
+            if let Some(n) = limits.runs.filter(|&n| logger.completed_runs() >= n) {
+                return Ok(Stop::Limit(format!("{n} run(s) logged (--runs)")));
+            }
+            if let Some(d) = limits.duration.filter(|&d| started.elapsed() >= d) {
+                return Ok(Stop::Limit(format!("{} s (--duration)", d.as_secs_f64())));
+            }
+            let read = self
+                .session
+                .core(0)
+                .map_err(|e| e.to_string())
+                .and_then(|mut core| {
+                    let channel = self
+                        .rtt
+                        .up_channel(self.channel)
+                        .expect("checked in connect");
+                    channel.read(&mut core, &mut buf).map_err(|e| e.to_string())
+                });
+            match read {
+                Ok(0) => std::thread::sleep(Duration::from_millis(5)),
+                Ok(n) => logger.feed(&buf[..n])?,
+                Err(e) => return Ok(Stop::ProbeLost(e)),
+            }
         }
     }
 }
