@@ -1,1 +1,19 @@
-//! host-sim: placeholder.
+//! host-sim: the rig firmware's own code (`firmware::run_once` driving a `firmware::Rig`)
+//! against the simulated plant (`capstan-plant`), in virtual time.
+//!
+//! * [`time`]: the embassy-time driver (thread-local virtual clock) and `block_on`.
+//! * [`run`]: one run: plant + firmware + `Vec` sink.
+//! * [`campaign`]: many runs over diameters, wraps and voltages, in parallel threads.
+//! * [`two_control`]: several cords, each with its own servo and firmware, on one capstan and
+//!   one drive motor (the thesis's two-control, single-drive rig).
+//!
+//! This crate provides the one embassy-time driver of any host binary it is linked into.
+#![deny(missing_docs)]
+
+pub mod campaign;
+pub mod run;
+pub mod time;
+pub mod two_control;
+
+pub use campaign::{run_campaign, CampaignConfig, CampaignResult, FaultSpec, PairRow};
+pub use capstan_plant as plant;
