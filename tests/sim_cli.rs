@@ -1,0 +1,184 @@
+//! `capstan simulate` as a user meets it: files, JSON, faults, bad arguments.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn capstan(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_capstan"))
+        .args(args)
+        .output()
+        .expect("capstan runs")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("capstan-sim-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// A short campaign: 3 s steps.
+const SHORT: [&str; 6] = [
+    "--dwell-ms",
+    "3000",
+    "--window-after-ms",
+    "1000",
+    "--window-before-ms",
+    "500",
+];
+
+#[test]
+fn simulate_writes_pairs_raw_logs_and_one_json_object() {
+    let out = tmp("json");
+    let o = out.to_str().unwrap();
+    let mut args = vec![
+        "simulate",
+        "--out",
+        o,
+        "--diameters",
+        "12.7",
+        "--wraps",
+        "270,720",
+    ];
+    args.extend(["--runs", "2", "--json"]);
+    args.extend(SHORT);
+    let r = capstan(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let stdout = String::from_utf8(r.stdout).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(stdout.trim()).expect("exactly one JSON object");
+    assert_eq!(v["runs"], 4);
+    assert_eq!(v["pairs"], 48);
+    assert!(v["simulated_s"].as_f64().unwrap() > 4.0 * 40.0);
+    assert!(v["realtime_factor"].as_f64().unwrap() > 100.0);
+    assert!(v["wall_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["faults"], serde_json::json!([]));
+    // No progress bar when not on a terminal.
+    assert!(
+        r.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let text = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
+    assert_eq!(
+        text.lines().next().unwrap(),
+        "capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n"
+    );
+    let d = capstan::data::load_pairs(&out.join("pairs.csv")).unwrap();
+    assert_eq!(d.pairs.len(), 48);
+    let p = &d.pairs[0];
+    assert_eq!(
+        (p.capstan_diameter_mm, p.wrap_deg, p.drive_v),
+        (Some(12.7), 270.0, Some(10.0))
+    );
+    assert_eq!(
+        (p.run, p.step, p.time_s),
+        (Some(1.0), Some(1.0), Some(5.25))
+    );
+    let raw = std::fs::read_to_string(out.join("raw/d12.7_w720_v10_run2.csv")).unwrap();
+    assert_eq!(
+        raw.lines().next().unwrap(),
+        "t_s,t1_counts,t2_counts,t1_n,t2_n"
+    );
+    assert!(raw.lines().count() > 4_000);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn injected_faults_are_reported_in_json_and_faults_csv() {
+    let out = tmp("faults");
+    let o = out.to_str().unwrap();
+    let mut args = vec![
+        "simulate",
+        "--out",
+        o,
+        "--diameters",
+        "12.7",
+        "--wraps",
+        "360",
+    ];
+    args.extend(["--runs", "4", "--json", "--no-raw"]);
+    args.extend([
+        "--fault",
+        "cord_break@20.2#1",
+        "--fault",
+        "sensor_unplugged@20.2#2",
+    ]);
+    args.extend(["--fault", "over_force@20.2#3", "--fault", "abort@20.2#4"]);
+    args.extend(SHORT);
+    let r = capstan(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let faults = v["faults"].as_array().unwrap();
+    let names: Vec<&str> = faults
+        .iter()
+        .map(|f| f["fault"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["cord_break", "sensor_unplugged", "over_force", "abort"]
+    );
+    for (k, f) in faults.iter().enumerate() {
+        assert_eq!(f["run"], k as u64 + 1);
+        assert_eq!(f["at_s"], 20.2);
+        let safe = f["safe_after_ms"].as_f64().unwrap();
+        assert!(safe <= 20.0, "{f}");
+        assert_eq!(f["pairs_kept"], 5, "{f}"); // windows end at 6, 9, 12, 15, 18 s
+    }
+    assert_eq!(v["pairs"], 20);
+    let csv = std::fs::read_to_string(out.join("faults.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 5);
+    assert!(csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .starts_with("1,12.7,360,10,1,cord_break,cord_break,20.2,"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn two_control_writes_the_drive_series_and_the_crosstalk() {
+    let out = tmp("two");
+    let o = out.to_str().unwrap();
+    let mut args = vec!["simulate", "--out", o, "--two-control", "--json"];
+    args.extend(SHORT);
+    args.extend(["--delays-ms", "0,1500"]);
+    let r = capstan(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(v["channels"], 2);
+    assert_eq!(v["pairs"], 24);
+    assert!(v["crosstalk_events"].as_u64().unwrap() > 10);
+    assert!(v["worst_t2_crosstalk_rel"].as_f64().unwrap() < 1e-9);
+    let series = std::fs::read_to_string(out.join("two_control.csv")).unwrap();
+    assert!(series.starts_with("t_s,drive_v,capstan_rpm,current_a,power_w"));
+    assert!(out.join("crosstalk.csv").exists() && out.join("pairs_ch2.csv").exists());
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn bad_arguments_are_clear_errors_not_panics() {
+    let out = tmp("bad");
+    let o = out.to_str().unwrap();
+    for (args, want) in [
+        (vec!["--effect", "heat=1"], "unknown effect"),
+        (vec!["--fault", "melt@3"], "unknown fault"),
+        (vec!["--fault", "abort"], "NAME@SECONDS"),
+        (vec!["--drive-v", "24"], "13.2"),
+        (vec!["--runs", "0"], "runs"),
+        (vec!["--wraps", "-5"], "wrap"),
+        (vec!["--dwell-ms", "100"], "protocol"),
+        (vec!["--scatter", "-3"], "scatter"),
+        (
+            vec!["--two-control", "--wraps", "720,720,720,720,720"],
+            "1 to 4",
+        ),
+    ] {
+        let mut a = vec!["simulate", "--out", o];
+        a.extend(&args);
+        let r = capstan(&a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{args:?} succeeded");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
