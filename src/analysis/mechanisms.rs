@@ -715,6 +715,18 @@ pub fn run(
             evidence: tests.iter().find(|t| t.name == "t1_path_loss").map(|t| t.evidence.clone()).unwrap_or(Value::Null),
         });
     }
+    for t in tests.iter().filter(|t| {
+        t.verdict == "ruled_in" && t.name != "contact_heating" && t.name != "t1_path_loss"
+    }) {
+        causes.push(Cause {
+            name: t.name.clone(),
+            description: format!(
+                "also ruled in by its test, not part of the extended model: {}",
+                t.summary
+            ),
+            evidence: t.evidence.clone(),
+        });
+    }
     causes.push(Cause {
         name: "cord_and_run_variation".into(),
         description: "each cord has its own mu (random log-mu offset) and runs on one cord differ; not predictable from the columns".into(),

@@ -58,6 +58,8 @@ fn levels(v: &[f64]) -> Vec<usize> {
         .collect()
 }
 
+type Getter = fn(&crate::data::Pair) -> Option<f64>;
+
 /// The columns to test: every known column present plus the extra ones.
 fn columns(ds: &Dataset, obs: &Observations) -> Vec<(String, Vec<f64>)> {
     let mut cols: Vec<(String, Vec<f64>)> = vec![
@@ -71,7 +73,7 @@ fn columns(ds: &Dataset, obs: &Observations) -> Vec<(String, Vec<f64>)> {
                 .collect(),
         ),
     ];
-    let opt: [(&str, fn(&crate::data::Pair) -> Option<f64>); 5] = [
+    let opt: [(&str, Getter); 5] = [
         ("capstan_diameter_mm", |p| p.capstan_diameter_mm),
         ("drive_v", |p| p.drive_v),
         ("run", |p| p.run),

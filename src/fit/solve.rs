@@ -511,7 +511,8 @@ where
     F: Fn(&[usize]) -> Fit + Sync,
 {
     let n_groups = obs.groups.len();
-    let mut results: Vec<Option<(Vec<f64>, Vec<(&'static str, f64)>)>> = vec![None; n_groups];
+    type Fold = (Vec<f64>, Vec<(&'static str, f64)>);
+    let mut results: Vec<Option<Fold>> = vec![None; n_groups];
     let threads = threads.clamp(1, n_groups.max(1));
     std::thread::scope(|s| {
         let chunks: Vec<Vec<usize>> = (0..threads)

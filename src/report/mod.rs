@@ -3,6 +3,9 @@
 
 pub mod plot;
 
+/// A simulated amplification curve of one cord: (cord index, (T1, T2/T1) points).
+pub type SimCurve = (usize, Vec<(f64, f64)>);
+
 use crate::analysis::{Analysis, ModelMetrics};
 use crate::data::Dataset;
 use plot::{grid, Panel, Series, COLORS};
@@ -166,10 +169,7 @@ struct Figure {
     caption: String,
 }
 
-fn figures(
-    a: &Analysis,
-    closed_loop: Option<&[(usize, Vec<(f64, f64)>)]>,
-) -> anyhow::Result<Vec<Figure>> {
+fn figures(a: &Analysis, closed_loop: Option<&[SimCurve]>) -> anyhow::Result<Vec<Figure>> {
     let mut figs = Vec::new();
     let obs = &a.obs;
     let mu = a.baseline_fit.model(None).law.mu;
@@ -212,7 +212,7 @@ fn figures(
                 label: String::new(),
                 width: 1,
             });
-            if let Some(_) = crate::analysis::thesis::thesis_amp(grp.wrap_deg, 1.0) {
+            if crate::analysis::thesis::thesis_amp(grp.wrap_deg, 1.0).is_some() {
                 series.push(Series::Line {
                     xy: grid_t1
                         .iter()
@@ -563,7 +563,7 @@ fn model_row(m: &ModelMetrics) -> String {
 /// The self-contained HTML report.
 pub fn report_html(
     a: &Analysis,
-    closed_loop: Option<&[(usize, Vec<(f64, f64)>)]>,
+    closed_loop: Option<&[SimCurve]>,
     closed_loop_note: &str,
 ) -> anyhow::Result<String> {
     let figs = figures(a, closed_loop)?;
