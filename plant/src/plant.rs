@@ -17,9 +17,9 @@ use heapless::Vec;
 /// Most cords (servos) one plant can carry on its capstan.
 pub const MAX_CORDS: usize = 4;
 /// Servo command changes remembered per cord (a thesis run makes 14).
-pub const MAX_SERVO_EVENTS: usize = 80;
+pub const MAX_SERVO_EVENTS: usize = 40;
 /// Trigger edges remembered per cord.
-pub const MAX_TRIGGER_EDGES: usize = 16;
+pub const MAX_TRIGGER_EDGES: usize = 8;
 /// Fault injections one plant can carry.
 pub const MAX_INJECTIONS: usize = 8;
 

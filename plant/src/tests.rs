@@ -330,3 +330,10 @@ fn bad_constants_are_refused_by_name() {
         PlantError::CordCount
     );
 }
+
+#[test]
+fn the_plant_fits_a_small_microcontroller() {
+    // The QEMU build keeps one in RAM (lm3s6965: 64 KiB).
+    let size = core::mem::size_of::<Plant>();
+    assert!(size < 6 * 1024, "{size} bytes");
+}
