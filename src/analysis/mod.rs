@@ -4,6 +4,7 @@
 //! Every number here is computed from the data by [`run`]; the only typed-in numbers are the
 //! thesis's published Table 3 constants ([`thesis::TABLE3`]).
 
+pub mod closed_loop;
 pub mod mechanisms;
 pub mod models;
 pub mod residuals;

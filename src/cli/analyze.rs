@@ -36,11 +36,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     eprintln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     let mut a = crate::analysis::run(&ds, opts)?;
     let t_report = Instant::now();
-    let closed = serde_json::Value::Null;
-    let note = "Not run in this build: the closed-loop overlay needs the host simulator's campaign runner.";
+    let t_cl = Instant::now();
+    let (curves, closed, note) = match crate::analysis::closed_loop::run(&a) {
+        Ok((c, v)) => (Some(c), v, "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor, contact heating, T1-path loss), on the thesis campaign: one run per cord, sensor noise off.".to_string()),
+        Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
+    };
+    a.elapsed.closed_loop_s = t_cl.elapsed().as_secs_f64();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
-    let html = crate::report::report_html(&a, None, note)?;
+    let html = crate::report::report_html(&a, curves.as_deref(), &note)?;
     let csv = crate::report::predictions_csv(&ds, &a);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
