@@ -187,7 +187,10 @@ impl Protocol {
 
     /// Number of tension levels N (steps 1..=N). Meaningful once validated.
     pub fn levels(&self) -> u32 {
-        libm::roundf((self.rest_deg - self.final_deg) / self.step_deg) as u32
+        // Called several times per sample: a validated span is within 1e-3 of a whole number,
+        // so adding ½ and truncating rounds it as `roundf` would, without the libm call.
+        let span = (self.rest_deg - self.final_deg) / self.step_deg;
+        (span + 0.5) as u32
     }
 
     /// Level held during step `k` (0 = rest, 1..=N the levels in this protocol's order).
