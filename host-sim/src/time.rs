@@ -8,66 +8,55 @@
 //! This crate is the only embassy-time driver of any host binary it is linked into.
 
 use std::cell::{Cell, RefCell};
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::future::Future;
 use std::pin::pin;
 use std::task::{Context, Poll, RawWaker, RawWakerVTable, Waker};
 
+/// A timer: wake `waker` at `at`.
 struct Entry {
     at: u64,
-    seq: u64,
     waker: Waker,
 }
 
-impl PartialEq for Entry {
-    fn eq(&self, other: &Self) -> bool {
-        (self.at, self.seq) == (other.at, other.seq)
-    }
-}
-
-impl Eq for Entry {}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Entry {
-    /// Reversed: `BinaryHeap` is a max-heap and we want the earliest (then oldest) first.
-    fn cmp(&self, other: &Self) -> Ordering {
-        (other.at, other.seq).cmp(&(self.at, self.seq))
-    }
+/// One thread's clock. The queue is a short vector kept sorted by deadline, latest first
+/// (a rig has one ticker pending, two-control a handful): pushing is a scan from the end,
+/// popping the earliest is `Vec::pop`.
+struct Clock {
+    now: Cell<u64>,
+    woken: Cell<bool>,
+    queue: RefCell<Vec<Entry>>,
 }
 
 thread_local! {
-    static NOW: Cell<u64> = const { Cell::new(0) };
-    static SEQ: Cell<u64> = const { Cell::new(0) };
-    static WOKEN: Cell<bool> = const { Cell::new(false) };
-    static QUEUE: RefCell<BinaryHeap<Entry>> = const { RefCell::new(BinaryHeap::new()) };
+    static CLOCK: Clock = const {
+        Clock {
+            now: Cell::new(0),
+            woken: Cell::new(false),
+            queue: RefCell::new(Vec::new()),
+        }
+    };
 }
 
 struct VirtualTime;
 
 impl embassy_time_driver::Driver for VirtualTime {
     fn now(&self) -> u64 {
-        NOW.with(Cell::get)
+        CLOCK.with(|c| c.now.get())
     }
 
     fn schedule_wake(&self, at: u64, waker: &Waker) {
-        let seq = SEQ.with(|s| {
-            let v = s.get();
-            s.set(v + 1);
-            v
-        });
-        QUEUE.with(|q| {
-            q.borrow_mut().push(Entry {
-                at,
-                seq,
-                waker: waker.clone(),
-            })
-        });
+        CLOCK.with(|c| {
+            let mut q = c.queue.borrow_mut();
+            // After the later deadlines, ahead of equal ones: equal deadlines pop in FIFO order.
+            let pos = q.iter().rposition(|e| e.at > at).map_or(0, |p| p + 1);
+            q.insert(
+                pos,
+                Entry {
+                    at,
+                    waker: waker.clone(),
+                },
+            );
+        })
     }
 }
 
@@ -75,14 +64,16 @@ embassy_time_driver::time_driver_impl!(static DRIVER: VirtualTime = VirtualTime)
 
 /// This thread's virtual time, µs (embassy-time ticks at 1 MHz).
 pub fn now_us() -> u64 {
-    NOW.with(Cell::get)
+    CLOCK.with(|c| c.now.get())
 }
 
 /// Start this thread's clock afresh at `now_us` with an empty timer queue.
 pub fn reset(now_us: u64) {
-    NOW.with(|n| n.set(now_us));
-    WOKEN.with(|w| w.set(false));
-    QUEUE.with(|q| q.borrow_mut().clear());
+    CLOCK.with(|c| {
+        c.now.set(now_us);
+        c.woken.set(false);
+        c.queue.borrow_mut().clear();
+    });
 }
 
 // The waker of `block_on`: it only raises this thread's "poll again" flag.
@@ -93,7 +84,7 @@ fn clone_raw(_: *const ()) -> RawWaker {
 }
 
 fn wake_raw(_: *const ()) {
-    WOKEN.with(|w| w.set(true));
+    CLOCK.with(|c| c.woken.set(true));
 }
 
 fn drop_raw(_: *const ()) {}
@@ -118,33 +109,30 @@ pub fn block_on_until<F: Future>(fut: F, limit_us: u64) -> Result<F::Output, Sta
     let waker = flag_waker();
     let mut cx = Context::from_waker(&waker);
     let mut fut = pin!(fut);
-    loop {
-        WOKEN.with(|w| w.set(false));
+    CLOCK.with(|clock| loop {
+        clock.woken.set(false);
         if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
             return Ok(v);
         }
-        if WOKEN.with(Cell::get) {
+        if clock.woken.get() {
             continue;
         }
-        QUEUE.with(|q| {
-            let mut q = q.borrow_mut();
-            let Some(first) = q.pop() else {
-                return Err(Stalled::Deadlock);
-            };
-            let now = NOW.with(Cell::get);
-            if first.at > limit_us {
-                q.push(first);
-                return Err(Stalled::Limit);
-            }
-            let now = now.max(first.at);
-            NOW.with(|n| n.set(now));
-            first.waker.wake();
-            while q.peek().is_some_and(|e| e.at <= now) {
-                q.pop().unwrap().waker.wake();
-            }
-            Ok(())
-        })?;
-    }
+        let mut q = clock.queue.borrow_mut();
+        let Some(first) = q.pop() else {
+            return Err(Stalled::Deadlock);
+        };
+        if first.at > limit_us {
+            q.push(first);
+            return Err(Stalled::Limit);
+        }
+        let now = clock.now.get().max(first.at);
+        clock.now.set(now);
+        // Our wakers only raise `woken`: waking with the queue borrowed is fine.
+        first.waker.wake();
+        while q.last().is_some_and(|e| e.at <= now) {
+            q.pop().unwrap().waker.wake();
+        }
+    })
 }
 
 /// Run `fut` to completion in virtual time. Panics if it can never complete.

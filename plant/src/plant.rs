@@ -230,6 +230,11 @@ pub struct Plant {
     radius_m: f64,
     noise_sd_counts: f64,
     motor_damping: f64,
+    inv_damping: f64,
+    /// Motor torque at standstill minus Coulomb friction at the present drive voltage, N m.
+    stall_m: f64,
+    /// Kinetic friction load of all cords at the motor shaft, N m (updated with the tensions).
+    demand_m: f64,
     decay_dt_us: u32,
     decay: f64,
     // time
@@ -415,6 +420,9 @@ impl Plant {
             radius_m: cfg.capstan_diameter_mm * 0.5e-3,
             noise_sd_counts: n.noise_sd_n / n.n_per_count,
             motor_damping: m.kt_nm_per_a * m.kt_nm_per_a / m.resistance_ohm + m.viscous_nms,
+            inv_damping: 1.0 / (m.kt_nm_per_a * m.kt_nm_per_a / m.resistance_ohm + m.viscous_nms),
+            stall_m: -m.coulomb_nm,
+            demand_m: 0.0,
             decay_dt_us: 0,
             decay: 1.0,
             origin_us,
@@ -433,6 +441,7 @@ impl Plant {
         for i in 0..plant.cords.len() {
             plant.solve(i);
         }
+        plant.demand_m = plant.kinetic_demand_nm() / m.gear_ratio;
         Ok(plant)
     }
 
@@ -523,10 +532,15 @@ impl Plant {
             self.next_refresh_us = t_end + self.cfg.refresh_us as u64;
         }
         self.t_us = t_end;
+        let mut solved = false;
         for i in 0..self.cords.len() {
             if self.cords[i].dirty {
                 self.solve(i);
+                solved = true;
             }
+        }
+        if solved {
+            self.demand_m = self.kinetic_demand_nm() / self.cfg.motor.gear_ratio;
         }
     }
 
@@ -605,18 +619,21 @@ impl Plant {
 
     fn move_drive(&mut self, dt_us: u32) {
         let m = self.cfg.motor;
-        let demand_m = self.kinetic_demand_nm() / m.gear_ratio;
-        let stall_m = m.kt_nm_per_a * self.drive_v / m.resistance_ohm - m.coulomb_nm;
+        let (demand_m, stall_m) = (self.demand_m, self.stall_m);
         if self.omega > 0.0 || stall_m > demand_m {
-            if self.decay_dt_us != dt_us {
-                self.decay_dt_us = dt_us;
-                self.decay =
-                    libm::exp(-self.motor_damping * dt_us as f64 * 1e-6 / m.rotor_inertia_kg_m2);
-            }
-            let w_ss = (stall_m - demand_m) / self.motor_damping;
-            self.omega = w_ss + (self.omega - w_ss) * self.decay;
-            if self.omega <= 0.0 {
-                self.omega = 0.0;
+            // Exact for a load held over the step: ω → ω_ss with the mechanical time constant.
+            let w_ss = (stall_m - demand_m) * self.inv_damping;
+            if self.omega != w_ss {
+                if self.decay_dt_us != dt_us {
+                    self.decay_dt_us = dt_us;
+                    self.decay = libm::exp(
+                        -self.motor_damping * dt_us as f64 * 1e-6 / m.rotor_inertia_kg_m2,
+                    );
+                }
+                self.omega = w_ss + (self.omega - w_ss) * self.decay;
+                if self.omega <= 0.0 {
+                    self.omega = 0.0;
+                }
             }
         }
         let transmission = if self.omega > 0.0 {
@@ -779,6 +796,7 @@ impl Plant {
         let drive = (control * m.amp_gain).min(m.amp_supply_v);
         if drive != self.drive_v {
             self.drive_v = drive;
+            self.stall_m = m.kt_nm_per_a * drive / m.resistance_ohm - m.coulomb_nm;
             for c in self.cords.iter_mut() {
                 c.dirty = true;
             }
