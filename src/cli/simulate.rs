@@ -243,6 +243,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     write_faults(&args.out.join("faults.csv"), &result)?;
 
+    // An injection after its run had ended never happened: say so rather than list it.
+    for r in &result.runs {
+        for inj in r.injections.iter().filter(|i| i.at_us.is_none()) {
+            eprintln!(
+                "warning: run {}: {}@{} s never took effect (the run ended {:.1} s after its \
+                 trigger)",
+                r.index,
+                inj.injection.kind.name(),
+                inj.injection.after_trigger_us as f64 / 1e6,
+                r.log.end.map_or(f64::NAN, |e| e.t_us as f64 / 1e6)
+            );
+        }
+    }
     if args.json {
         println!("{}", campaign_json(&result));
     } else {
