@@ -55,7 +55,10 @@ fn help_documents_the_board_flow() {
         "--no-flash",
         "--strict",
     ] {
-        assert!(help.contains(needle), "`capstan log --help` lacks {needle:?}:\n{help}");
+        assert!(
+            help.contains(needle),
+            "`capstan log --help` lacks {needle:?}:\n{help}"
+        );
     }
 }
 
@@ -64,7 +67,15 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
     let dir = out_dir("file");
     let stream_path = log_support::data("qemu-run.defmt");
     let o = capstan(
-        &["log", "--elf", s(&elf_path()), "--from", s(&stream_path), "--out", s(&dir)],
+        &[
+            "log",
+            "--elf",
+            s(&elf_path()),
+            "--from",
+            s(&stream_path),
+            "--out",
+            s(&dir),
+        ],
         None,
     );
     let err = stderr(&o);
@@ -75,17 +86,34 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
         err.contains("2 run(s) (2 complete), 4 pairs, 202 raw samples, 1 faults"),
         "{err}"
     );
-    for f in ["raw.csv", "pairs.csv", "faults.csv", "messages.txt", "summary.json"] {
+    for f in [
+        "raw.csv",
+        "pairs.csv",
+        "faults.csv",
+        "messages.txt",
+        "summary.json",
+    ] {
         assert!(dir.join(f).exists(), "{f}");
     }
     // Read from a file, the stream is not copied.
     assert!(!dir.join("stream.defmt").exists());
     let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
-    assert_eq!(pairs.header.join(","), capstan::data::PAIRS_HEADER.join(","));
+    assert_eq!(
+        pairs.header.join(","),
+        capstan::data::PAIRS_HEADER.join(",")
+    );
     assert_eq!(pairs.pairs.len(), 4);
     // Running again into the same directory is refused unless --overwrite.
     let again = capstan(
-        &["log", "--elf", s(&elf_path()), "--from", s(&stream_path), "--out", s(&dir)],
+        &[
+            "log",
+            "--elf",
+            s(&elf_path()),
+            "--from",
+            s(&stream_path),
+            "--out",
+            s(&dir),
+        ],
         None,
     );
     assert!(!again.status.success());
@@ -97,8 +125,18 @@ fn stdin_works_and_flags_override_the_run_start_set_up() {
     let dir = out_dir("stdin");
     let o = capstan(
         &[
-            "log", "--quiet", "--elf", s(&elf_path()), "--from", "-", "--out", s(&dir),
-            "--wrap-deg", "450", "--diameter-mm", "25.4",
+            "log",
+            "--quiet",
+            "--elf",
+            s(&elf_path()),
+            "--from",
+            "-",
+            "--out",
+            s(&dir),
+            "--wrap-deg",
+            "450",
+            "--diameter-mm",
+            "25.4",
         ],
         Some(&stream()),
     );
@@ -106,7 +144,10 @@ fn stdin_works_and_flags_override_the_run_start_set_up() {
     assert!(!stderr(&o).contains("step 1"), "--quiet: {}", stderr(&o));
     let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert!(pairs.pairs.iter().all(|p| p.wrap_deg == 450.0));
-    assert!(pairs.pairs.iter().all(|p| p.capstan_diameter_mm == Some(25.4)));
+    assert!(pairs
+        .pairs
+        .iter()
+        .all(|p| p.capstan_diameter_mm == Some(25.4)));
     assert!(pairs.pairs.iter().all(|p| p.drive_v == Some(10.0)));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
@@ -132,7 +173,16 @@ fn lost_records_are_reported_and_strict_makes_them_fail() {
     );
     let dir2 = out_dir("strict2");
     let o = capstan(
-        &["log", "--strict", "--elf", s(&elf_path()), "--from", "-", "--out", s(&dir2)],
+        &[
+            "log",
+            "--strict",
+            "--elf",
+            s(&elf_path()),
+            "--from",
+            "-",
+            "--out",
+            s(&dir2),
+        ],
         Some(&damaged),
     );
     assert!(!o.status.success());
@@ -163,7 +213,15 @@ fn a_wrong_elf_or_a_foreign_stream_fails_with_a_message() {
         junk.push((x >> 24) as u8);
     }
     let o = capstan(
-        &["log", "--elf", s(&elf_path()), "--from", "-", "--out", s(&dir)],
+        &[
+            "log",
+            "--elf",
+            s(&elf_path()),
+            "--from",
+            "-",
+            "--out",
+            s(&dir),
+        ],
         Some(&junk),
     );
     assert!(!o.status.success());
@@ -178,7 +236,15 @@ fn the_board_flow_says_what_is_missing() {
     // and no session directory is left behind.
     let dir = out_dir("board");
     let o = capstan(
-        &["log", "--chip", "RP2040", "--elf", s(&elf_path()), "--out", s(&dir)],
+        &[
+            "log",
+            "--chip",
+            "RP2040",
+            "--elf",
+            s(&elf_path()),
+            "--out",
+            s(&dir),
+        ],
         None,
     );
     assert!(!o.status.success());
@@ -204,7 +270,15 @@ fn ctrl_c_keeps_everything_received_and_says_so() {
     let dir = out_dir("ctrlc");
     let bytes = stream();
     let mut child = Command::new(env!("CARGO_BIN_EXE_capstan"))
-        .args(["log", "--elf", s(&elf_path()), "--from", "-", "--out", s(&dir)])
+        .args([
+            "log",
+            "--elf",
+            s(&elf_path()),
+            "--from",
+            "-",
+            "--out",
+            s(&dir),
+        ])
         .stdin(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

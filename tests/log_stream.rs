@@ -77,7 +77,11 @@ fn re_encoding_the_decoded_frames_gives_back_the_recorded_bytes() {
     let frames = split(&stream());
     for (offset, f) in &frames.frames {
         let body = &f[..f.len() - 1];
-        assert_eq!(rzcobs_encode(&rzcobs_decode(body)), body, "frame at byte {offset}");
+        assert_eq!(
+            rzcobs_encode(&rzcobs_decode(body)),
+            body,
+            "frame at byte {offset}"
+        );
     }
 }
 
@@ -152,7 +156,15 @@ fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not(
     let (events, _) = decode_all(&fw, &stream());
     let pair = events
         .iter()
-        .find(|e| matches!(e.event, Event::Record { record: Record::Pair(_), .. }))
+        .find(|e| {
+            matches!(
+                e.event,
+                Event::Record {
+                    record: Record::Pair(_),
+                    ..
+                }
+            )
+        })
         .unwrap();
     let damaged = frames.without(&[pair.frame as usize]);
     let dir = tempdir("gap-files");
@@ -185,7 +197,10 @@ fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not(
     assert_eq!(summary.runs[0].pairs_reported, Some(3));
     let human = summary.human(&dir);
     assert!(
-        human.contains(&format!("LOST 1 record(s) in 1 gap(s): 1 after seq {}", pair_seq(pair) - 1)),
+        human.contains(&format!(
+            "LOST 1 record(s) in 1 gap(s): 1 after seq {}",
+            pair_seq(pair) - 1
+        )),
         "{human}"
     );
     let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
@@ -197,7 +212,10 @@ fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not(
     let raw = std::fs::read_to_string(dir.join("raw.csv")).unwrap();
     assert_eq!(raw.lines().count(), 1 + 202);
     let faults = std::fs::read_to_string(dir.join("faults.csv")).unwrap();
-    assert_eq!(faults.lines().nth(1).unwrap().split(',').nth(3), Some("over_force"));
+    assert_eq!(
+        faults.lines().nth(1).unwrap().split(',').nth(3),
+        Some("over_force")
+    );
     assert_eq!(std::fs::read(dir.join("stream.defmt")).unwrap(), damaged);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
@@ -249,7 +267,11 @@ fn a_truncated_stream_keeps_every_whole_frame_and_reports_the_rest() {
             .frames
             .iter()
             .find(|(o, f)| cut > *o && cut < o + f.len());
-        assert_eq!(tail, inside.map(|(o, _)| (*o as u64, (cut - o) as u64)), "cut {cut}");
+        assert_eq!(
+            tail,
+            inside.map(|(o, _)| (*o as u64, (cut - o) as u64)),
+            "cut {cut}"
+        );
     }
     assert_eq!(last, 211);
 }
@@ -288,7 +310,10 @@ fn corrupted_bytes_cost_frames_not_the_stream() {
                 let lost = base.saturating_sub(d.records);
                 worst = worst.max(lost);
                 cases += 1;
-                assert!(lost <= 2, "frame {k}, byte {i} := {v:#x}: {lost} records lost");
+                assert!(
+                    lost <= 2,
+                    "frame {k}, byte {i} := {v:#x}: {lost} records lost"
+                );
                 if lost > 0 {
                     assert!(
                         d.bad_frames > 0 || d.seq.missing_records > 0,
@@ -317,7 +342,10 @@ fn a_wrong_elf_is_refused_with_the_reason() {
             .err()
             .unwrap()
     );
-    assert!(e.contains("cannot read the firmware ELF /nonexistent/fw.elf"), "{e}");
+    assert!(
+        e.contains("cannot read the firmware ELF /nonexistent/fw.elf"),
+        "{e}"
+    );
     // A truncated ELF: every cut of the first 4 KiB is refused (or loads), never a panic.
     let elf = std::fs::read(log_support::elf_path()).unwrap();
     for cut in (0..4096).step_by(7) {

@@ -309,3 +309,74 @@ fn from_board(_fw: &Firmware, _opts: LogOptions, _args: &Args) -> anyhow::Result
          (--from). Rebuild with default features to log from a board."
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::log::output::RecordCounts;
+    use clap::Parser;
+
+    fn summary(records: RecordCounts, bytes: u64, missing: u64) -> Summary {
+        Summary {
+            source: "test".into(),
+            elf: "fw.elf".into(),
+            stopped: "end of stream".into(),
+            bytes,
+            frames: 3,
+            records,
+            messages: 0,
+            first_seq: Some(0),
+            last_seq: Some(9),
+            missing_records: missing,
+            gaps: Vec::new(),
+            restarts: Vec::new(),
+            backwards: Vec::new(),
+            bad_frames: 0,
+            bad_frame_examples: Vec::new(),
+            truncated_tail: None,
+            runs: Vec::new(),
+            pairs_without_run: 0,
+        }
+    }
+
+    fn args(extra: &[&str]) -> Args {
+        let mut argv = vec![
+            "capstan", "log", "--elf", "fw.elf", "--out", "d", "--from", "-",
+        ];
+        argv.extend(extra);
+        match crate::cli::Cli::parse_from(argv).command {
+            crate::cli::Command::Log(a) => a,
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn exit_status_says_what_went_wrong() {
+        let some = RecordCounts {
+            raw: 10,
+            ..RecordCounts::default()
+        };
+        let ok = summary(some.clone(), 100, 0);
+        assert!(verdict(&ok, &Stop::EndOfStream, &args(&[])).is_ok());
+        assert!(verdict(&ok, &Stop::Interrupted, &args(&[])).is_ok());
+        let lost = verdict(&ok, &Stop::ProbeLost("USB gone".into()), &args(&[]));
+        assert!(lost
+            .unwrap_err()
+            .to_string()
+            .contains("lost the probe while logging (USB gone)"));
+        let gaps = summary(some, 100, 2);
+        assert!(verdict(&gaps, &Stop::EndOfStream, &args(&[])).is_ok());
+        let strict = verdict(&gaps, &Stop::EndOfStream, &args(&["--strict"]));
+        assert!(strict.unwrap_err().to_string().contains("2 record(s) lost"));
+        let none = summary(RecordCounts::default(), 100, 0);
+        let e = verdict(&none, &Stop::EndOfStream, &args(&[])).unwrap_err();
+        assert!(e.to_string().contains("no rig records in 100 bytes"));
+        // An empty stream is not an error (nothing was sent).
+        assert!(verdict(
+            &summary(RecordCounts::default(), 0, 0),
+            &Stop::EndOfStream,
+            &args(&[])
+        )
+        .is_ok());
+    }
+}

@@ -44,7 +44,11 @@ pub fn split(stream: &[u8]) -> Frames {
             start = i + 1;
         }
     }
-    assert_eq!(start, stream.len(), "the recorded stream ends with a separator");
+    assert_eq!(
+        start,
+        stream.len(),
+        "the recorded stream ends with a separator"
+    );
     Frames {
         lead: stream[..lead_len].to_vec(),
         frames,
@@ -73,11 +77,7 @@ pub fn rzcobs_encode(data: &[u8]) -> Vec<u8> {
     while i < data.len() {
         let group = &data[i..(i + 7).min(data.len())];
         if group.len() == 7 && !group.contains(&0) {
-            let run: usize = data[i..]
-                .iter()
-                .take(134)
-                .take_while(|&&b| b != 0)
-                .count();
+            let run: usize = data[i..].iter().take(134).take_while(|&&b| b != 0).count();
             out.extend_from_slice(&data[i..i + run]);
             i += run;
             if run == 134 {

@@ -1,0 +1,34 @@
+//! Any bytes through a whole `capstan log` session (decoder, run bookkeeping, the CSV files,
+//! the summary): it must never panic, and what it writes must read back.
+#![no_main]
+
+use capstan::log::output::{LogOptions, Logger, SetupFlags, Stop};
+use capstan::log::Firmware;
+use libfuzzer_sys::fuzz_target;
+use std::sync::OnceLock;
+
+static FW: OnceLock<Firmware> = OnceLock::new();
+
+fuzz_target!(|data: &[u8]| {
+    let fw = FW.get_or_init(|| {
+        Firmware::from_elf_bytes(include_bytes!("../../tests/data/qemu-fw.elf"), "qemu-fw.elf")
+            .expect("the recorded ELF loads")
+    });
+    let dir = std::env::temp_dir().join(format!("capstan-fuzz-{}", std::process::id()));
+    let opts = LogOptions {
+        out_dir: dir.clone(),
+        overwrite: true,
+        save_stream: false,
+        setup: SetupFlags::default(),
+        progress: false,
+    };
+    let mut logger = Logger::create(fw, opts, "fuzz").expect("temp dir is writable");
+    logger.feed(data).expect("files are writable");
+    let summary = logger.finish(&Stop::EndOfStream).expect("summary is written");
+    let _ = summary.human(&dir);
+    // Whatever pairs were written read back as the analysis reads them (or the file is
+    // empty of rows).
+    if let Err(e) = capstan::data::load_pairs(&dir.join("pairs.csv")) {
+        assert!(e.to_string().contains("no data rows") || e.to_string().contains("must be"), "{e}");
+    }
+});
