@@ -245,6 +245,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     // An injection after its run had ended never happened: say so rather than list it.
     for r in &result.runs {
+        if let Err(e) = r.end {
+            eprintln!(
+                "warning: run {} ({} run {}) did not end: {e:?}",
+                r.index,
+                r.cord.label(),
+                r.run
+            );
+        }
         for inj in r.injections.iter().filter(|i| i.at_us.is_none()) {
             eprintln!(
                 "warning: run {}: {}@{} s never took effect (the run ended {:.1} s after its \
