@@ -4,6 +4,7 @@
 
 pub mod cli;
 pub mod data;
+pub mod diagnose;
 pub mod analysis;
 pub mod fit;
 pub mod report;
