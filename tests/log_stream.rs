@@ -28,8 +28,8 @@ fn the_recorded_stream_decodes_completely() {
     let bytes = stream();
     let (events, d) = decode_all(&fw, &bytes);
     assert_eq!(d.bad_frames, 0, "{:?}", d.bad_examples);
-    assert_eq!(d.frames_seen, 216);
-    assert_eq!((d.records, d.messages), (211, 5));
+    assert_eq!(d.frames_seen, 217);
+    assert_eq!((d.records, d.messages), (211, 6));
     assert!(d.seq.gaps.is_empty() && d.seq.restarts.is_empty());
     assert_eq!((d.seq.first_seq, d.seq.last_seq), (Some(0), Some(210)));
     let mut kinds = [0; 5];
@@ -68,7 +68,16 @@ fn the_recorded_stream_decodes_completely() {
             _ => None,
         })
         .collect();
-    assert_eq!(messages[0], "run 1: button pressed, taring");
+    // The banner: a byte string, a slice and a nested struct, as defmt-decoder renders them.
+    assert!(
+        messages[0].starts_with(
+            "qemu-fw b\"capstan\": 2 runs, plant seeds [7161128523671891462, \
+             7161128523671891463], protocol Protocol { rest_deg: 125.0,"
+        ),
+        "{}",
+        messages[0]
+    );
+    assert_eq!(messages[1], "run 1: button pressed, taring");
 }
 
 #[test]

@@ -10,8 +10,11 @@ static FW: OnceLock<Firmware> = OnceLock::new();
 
 fuzz_target!(|data: &[u8]| {
     let fw = FW.get_or_init(|| {
-        Firmware::from_elf_bytes(include_bytes!("../../tests/data/qemu-fw.elf"), "qemu-fw.elf")
-            .expect("the recorded ELF loads")
+        Firmware::from_elf_bytes(
+            include_bytes!("../../tests/data/qemu-fw.elf"),
+            "qemu-fw.elf",
+        )
+        .expect("the recorded ELF loads")
     });
     // The first byte sets the chunk size: a stream arrives in pieces of any size.
     let Some((&c, stream)) = data.split_first() else {

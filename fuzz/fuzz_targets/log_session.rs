@@ -11,24 +11,39 @@ static FW: OnceLock<Firmware> = OnceLock::new();
 
 fuzz_target!(|data: &[u8]| {
     let fw = FW.get_or_init(|| {
-        Firmware::from_elf_bytes(include_bytes!("../../tests/data/qemu-fw.elf"), "qemu-fw.elf")
-            .expect("the recorded ELF loads")
+        Firmware::from_elf_bytes(
+            include_bytes!("../../tests/data/qemu-fw.elf"),
+            "qemu-fw.elf",
+        )
+        .expect("the recorded ELF loads")
     });
     let dir = std::env::temp_dir().join(format!("capstan-fuzz-{}", std::process::id()));
     let opts = LogOptions {
         out_dir: dir.clone(),
         overwrite: true,
         save_stream: false,
-        setup: SetupFlags::default(),
+        // A wrap angle from the command line, so every pair row is complete even when the
+        // run-start record is lost.
+        setup: SetupFlags {
+            wrap_deg: Some(360.0),
+            ..SetupFlags::default()
+        },
         progress: false,
     };
     let mut logger = Logger::create(fw, opts, "fuzz").expect("temp dir is writable");
     logger.feed(data).expect("files are writable");
-    let summary = logger.finish(&Stop::EndOfStream).expect("summary is written");
+    let summary = logger
+        .finish(&Stop::EndOfStream)
+        .expect("summary is written");
     let _ = summary.human(&dir);
-    // Whatever pairs were written read back as the analysis reads them (or the file is
-    // empty of rows).
+    // Whatever pairs were written read back as the analysis reads them. The only refusals
+    // allowed: no rows, or a T1 that is not positive (the analysis's own rule; a measured
+    // value, so it is written as measured).
     if let Err(e) = capstan::data::load_pairs(&dir.join("pairs.csv")) {
-        assert!(e.to_string().contains("no data rows") || e.to_string().contains("must be"), "{e}");
+        let e = e.to_string();
+        assert!(
+            e.contains("no data rows") || e.contains("`t1_n`: must be greater than zero"),
+            "{e}"
+        );
     }
 });

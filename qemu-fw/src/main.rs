@@ -98,6 +98,16 @@ async fn rig() {
     use firmware::defmt_sink::DefmtSink;
     use qemu_fw::ScenarioError;
 
+    // A banner with nested and slice formats: besides saying what runs, it gives the decoder
+    // tests' recorded stream (and the fuzzer) frames of every shape, not only flat records.
+    let seeds = [qemu_fw::RUNS[0].seed, qemu_fw::RUNS[1].seed];
+    defmt::info!(
+        "qemu-fw {=[u8]:a}: {=usize} runs, plant seeds {=[?]}, protocol {}",
+        &b"capstan"[..],
+        qemu_fw::RUNS.len(),
+        &seeds[..],
+        qemu_fw::protocol()
+    );
     let code = match qemu_fw::scenario(&mut DefmtSink).await {
         Ok(_) => 0,
         Err(ScenarioError::Plant(_)) => {

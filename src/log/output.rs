@@ -502,7 +502,8 @@ impl<'f> Logger<'f> {
                 self.counts.run_start += 1;
                 let flags = self.opts.setup;
                 let p = &s.protocol;
-                let given = |v: f32| (v > 0.0).then_some(decimal(v));
+                // 0 (or garbage) in the record means "not given".
+                let given = |v: f32| (v.is_finite() && v > 0.0).then_some(decimal(v));
                 let drive = s.calibration.amp.drive_v(p.amp_control_v);
                 let summary = RunSummary {
                     run: Some(s.run),
@@ -520,7 +521,10 @@ impl<'f> Logger<'f> {
                         given(p.capstan_diameter_mm),
                     ),
                     wrap_deg: sourced(flags.wrap_deg, given(p.wrap_deg)),
-                    drive_v: sourced(flags.drive_v, Some(decimal(drive))),
+                    drive_v: sourced(
+                        flags.drive_v,
+                        Some(decimal(drive)).filter(|v| v.is_finite()),
+                    ),
                 };
                 self.current = Some(Current {
                     index: self.runs.len(),

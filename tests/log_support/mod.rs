@@ -22,7 +22,8 @@ pub fn firmware() -> Firmware {
     Firmware::load(&elf_path()).expect("the recorded ELF loads")
 }
 
-/// A recorded QEMU run: two runs (the second ended by an over-force fault), 216 frames.
+/// A recorded QEMU run: a banner, two runs (the second ended by an over-force fault); 217
+/// frames.
 pub fn stream() -> Vec<u8> {
     std::fs::read(data("qemu-run.defmt")).expect("recorded stream")
 }
