@@ -427,8 +427,15 @@ fn joining_mid_run_keeps_the_records_without_their_run_start() {
     assert!(summary.first_seq.unwrap() > 0);
     assert_eq!(summary.runs[0].run, None);
     assert!(summary.human(&dir).contains("joins the board at seq"));
-    assert!(summary.pairs_without_run > 0);
-    let pairs = std::fs::read_to_string(dir.join("pairs.csv")).unwrap();
-    let first = pairs.lines().nth(1).unwrap();
+    // Run 1's pairs have no run number (nor the record's diameter and drive voltage): they are
+    // kept apart; run 2's are complete and go to pairs.csv, which `capstan analyze` reads.
+    assert_eq!(summary.pairs_incomplete, summary.runs[0].pairs);
+    assert!(summary.pairs_incomplete > 0);
+    assert!(summary.human(&dir).contains("pairs-incomplete.csv"));
+    let incomplete = std::fs::read_to_string(dir.join("pairs-incomplete.csv")).unwrap();
+    let first = incomplete.lines().nth(1).unwrap();
     assert!(first.starts_with(",360,,,"), "{first}");
+    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    assert!(pairs.pairs.iter().all(|p| p.run == Some(2.0)));
+    assert_eq!(pairs.pairs.len(), summary.runs[1].pairs as usize);
 }

@@ -22,12 +22,7 @@ fuzz_target!(|data: &[u8]| {
         out_dir: dir.clone(),
         overwrite: true,
         save_stream: false,
-        // A wrap angle from the command line, so every pair row is complete even when the
-        // run-start record is lost.
-        setup: SetupFlags {
-            wrap_deg: Some(360.0),
-            ..SetupFlags::default()
-        },
+        setup: SetupFlags::default(),
         progress: false,
     };
     let mut logger = Logger::create(fw, opts, "fuzz").expect("temp dir is writable");
@@ -36,9 +31,9 @@ fuzz_target!(|data: &[u8]| {
         .finish(&Stop::EndOfStream)
         .expect("summary is written");
     let _ = summary.human(&dir);
-    // Whatever pairs were written read back as the analysis reads them. The only refusals
-    // allowed: no rows, or a T1 that is not positive (the analysis's own rule; a measured
-    // value, so it is written as measured).
+    // pairs.csv always reads back as the analysis reads it (incomplete rows go to
+    // pairs-incomplete.csv). The only refusals allowed: no rows, or a T1 that is not positive
+    // (the analysis's own rule; a measured value, so it is written as measured).
     if let Err(e) = capstan::data::load_pairs(&dir.join("pairs.csv")) {
         let e = e.to_string();
         assert!(

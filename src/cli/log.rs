@@ -335,7 +335,7 @@ mod tests {
             bad_frame_examples: Vec::new(),
             truncated_tail: None,
             runs: Vec::new(),
-            pairs_without_run: 0,
+            pairs_incomplete: 0,
         }
     }
 

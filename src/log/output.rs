@@ -5,6 +5,7 @@
 //! |---|---|
 //! | `raw.csv` | `run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n`: the decimated raw samples |
 //! | `pairs.csv` | the conditioned pairs, in the schema of `data.rs` (`analyze` reads it) |
+//! | `pairs-incomplete.csv` | only if needed: pairs whose set-up (wrap, diameter, drive voltage) or run number is unknown, same schema with those cells empty |
 //! | `faults.csv` | `run,seq,time_s,kind,channel,value` |
 //! | `messages.txt` | the firmware's other log lines (`LEVEL text`) |
 //! | `stream.defmt` | the bytes as received (for `capstan log --from`), unless read from a file |
@@ -29,6 +30,8 @@ use std::path::{Path, PathBuf};
 pub const RAW_CSV: &str = "raw.csv";
 /// Conditioned pairs.
 pub const PAIRS_CSV: &str = "pairs.csv";
+/// Pairs that lack a set-up value or their run number (created only when one arrives).
+pub const PAIRS_INCOMPLETE_CSV: &str = "pairs-incomplete.csv";
 /// Faults.
 pub const FAULTS_CSV: &str = "faults.csv";
 /// Other log lines.
@@ -115,8 +118,10 @@ pub struct RunSummary {
     pub raw: u64,
     /// Pairs received.
     pub pairs: u64,
-    /// Pairs not written to pairs.csv (a window without samples: mean is NaN).
+    /// Pairs not written anywhere (a window without samples: mean is NaN).
     pub pairs_not_written: u64,
+    /// Pairs written to pairs-incomplete.csv instead of pairs.csv.
+    pub pairs_incomplete: u64,
     /// Pairs the run-end record says the rig made.
     pub pairs_reported: Option<u32>,
     /// Faults received.
@@ -185,8 +190,8 @@ pub struct Summary {
     pub truncated_tail: Option<TruncatedTail>,
     /// The runs.
     pub runs: Vec<RunSummary>,
-    /// Pairs whose run-start record was lost, so their run column is empty.
-    pub pairs_without_run: u64,
+    /// Pairs written to pairs-incomplete.csv (unknown wrap, diameter, drive voltage or run).
+    pub pairs_incomplete: u64,
 }
 
 /// An unfinished frame at the end of the stream.
@@ -277,11 +282,13 @@ impl Summary {
                  sent before logging began"
             );
         }
-        if self.pairs_without_run > 0 {
+        if self.pairs_incomplete > 0 {
             s += &format!(
-                "\ncapstan log: {} pair(s) arrived without their run's run_start record: their \
-                 run column is empty",
-                self.pairs_without_run
+                "\ncapstan log: {} pair(s) lack a set-up value or their run number and are in \
+                 {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; decode the stream again with \
+                 --wrap-deg/--diameter-mm/--drive-v (capstan log --from {}/{STREAM_FILE} ...)",
+                self.pairs_incomplete,
+                dir.display()
             );
         }
         s
@@ -308,7 +315,8 @@ pub struct Logger<'f> {
     counts: RecordCounts,
     runs: Vec<RunSummary>,
     current: Option<Current>,
-    pairs_without_run: u64,
+    pairs_incomplete: u64,
+    incomplete: Option<BufWriter<File>>,
     events: Vec<Located>,
     bad: Vec<BadFrame>,
 }
@@ -347,6 +355,7 @@ impl<'f> Logger<'f> {
             let existing: Vec<&str> = [
                 RAW_CSV,
                 PAIRS_CSV,
+                PAIRS_INCOMPLETE_CSV,
                 FAULTS_CSV,
                 SUMMARY_JSON,
                 STREAM_FILE,
@@ -362,6 +371,20 @@ impl<'f> Logger<'f> {
                     dir.display(),
                     existing.join(", ")
                 );
+            }
+        }
+        if opts.overwrite {
+            // Files of the earlier session that this one may not write again.
+            let stale = [
+                Some(PAIRS_INCOMPLETE_CSV),
+                (!opts.save_stream).then_some(STREAM_FILE),
+            ];
+            for name in stale.into_iter().flatten() {
+                let path = dir.join(name);
+                if path.exists() {
+                    std::fs::remove_file(&path)
+                        .with_context(|| format!("cannot remove {}", path.display()))?;
+                }
             }
         }
         Ok(Logger {
@@ -380,7 +403,8 @@ impl<'f> Logger<'f> {
             counts: RecordCounts::default(),
             runs: Vec::new(),
             current: None,
-            pairs_without_run: 0,
+            pairs_incomplete: 0,
+            incomplete: None,
             events: Vec::new(),
             bad: Vec::new(),
         })
@@ -435,6 +459,10 @@ impl<'f> Logger<'f> {
             s.flush()
                 .with_context(|| format!("cannot write {dir}/{STREAM_FILE}"))?;
         }
+        if let Some(w) = &mut self.incomplete {
+            w.flush()
+                .with_context(|| format!("cannot write {dir}/{PAIRS_INCOMPLETE_CSV}"))?;
+        }
         Ok(())
     }
 
@@ -449,6 +477,7 @@ impl<'f> Logger<'f> {
                 raw: 0,
                 pairs: 0,
                 pairs_not_written: 0,
+                pairs_incomplete: 0,
                 pairs_reported: None,
                 faults: 0,
                 ended_by_fault: None,
@@ -512,6 +541,7 @@ impl<'f> Logger<'f> {
                     raw: 0,
                     pairs: 0,
                     pairs_not_written: 0,
+                    pairs_incomplete: 0,
                     pairs_reported: None,
                     faults: 0,
                     ended_by_fault: None,
@@ -532,6 +562,15 @@ impl<'f> Logger<'f> {
                     wrap: summary.wrap_deg.value,
                     drive: summary.drive_v.value,
                 });
+                let missing: Vec<&str> = [
+                    ("--wrap-deg", summary.wrap_deg.value),
+                    ("--diameter-mm", summary.capstan_diameter_mm.value),
+                    ("--drive-v", summary.drive_v.value),
+                ]
+                .iter()
+                .filter(|(_, v)| v.is_none())
+                .map(|(flag, _)| *flag)
+                .collect();
                 self.runs.push(summary);
                 if progress {
                     eprintln!(
@@ -539,6 +578,15 @@ impl<'f> Logger<'f> {
                         s.run,
                         p.levels(),
                         p.dwell_ms
+                    );
+                }
+                if !missing.is_empty() {
+                    // Said at once: the operator can still stop and restart with the flags.
+                    eprintln!(
+                        "capstan log: WARNING: run {}'s run_start record does not give {} and \
+                         no flag does: its pairs go to {PAIRS_INCOMPLETE_CSV}",
+                        s.run,
+                        missing.join(", ")
                     );
                 }
             }
@@ -568,24 +616,45 @@ impl<'f> Logger<'f> {
                 let c = self.current.as_ref().expect("set");
                 let rs = &mut self.runs[c.index];
                 rs.pairs += 1;
-                if rs.run.is_none() {
-                    self.pairs_without_run += 1;
-                }
-                if p.t1.mean_n.is_finite() && p.t2.mean_n.is_finite() {
-                    writeln!(
-                        self.pairs,
-                        "{},{},{},{run},{},{},{},{}",
-                        opt(c.diameter),
-                        opt(c.wrap),
-                        opt(c.drive),
-                        p.step,
-                        p.t_mid_ms as f64 / 1000.0,
-                        f(p.t1.mean_n),
-                        f(p.t2.mean_n)
-                    )
-                    .context("cannot write pairs.csv")?;
-                } else {
+                let row = format!(
+                    "{},{},{},{run},{},{},{},{}",
+                    opt(c.diameter),
+                    opt(c.wrap),
+                    opt(c.drive),
+                    p.step,
+                    p.t_mid_ms as f64 / 1000.0,
+                    f(p.t1.mean_n),
+                    f(p.t2.mean_n)
+                );
+                let complete = c.diameter.is_some()
+                    && c.wrap.is_some()
+                    && c.drive.is_some()
+                    && rs.run.is_some();
+                if !(p.t1.mean_n.is_finite() && p.t2.mean_n.is_finite()) {
                     rs.pairs_not_written += 1;
+                } else if complete {
+                    writeln!(self.pairs, "{row}").context("cannot write pairs.csv")?;
+                } else {
+                    // Every row of pairs.csv is complete, so `capstan analyze` reads it; the
+                    // others are kept apart, with the cells that are unknown left empty.
+                    rs.pairs_incomplete += 1;
+                    self.pairs_incomplete += 1;
+                    if self.incomplete.is_none() {
+                        self.incomplete = Some(create(
+                            &self.opts.out_dir,
+                            PAIRS_INCOMPLETE_CSV,
+                            Some(&PAIRS_HEADER.join(",")),
+                        )?);
+                        if rs.run.is_none() {
+                            eprintln!(
+                                "capstan log: WARNING: pairs without their run's run_start \
+                                 record (lost, or logging began mid-run): their run is unknown; \
+                                 they go to {PAIRS_INCOMPLETE_CSV}"
+                            );
+                        }
+                    }
+                    let w = self.incomplete.as_mut().expect("just created");
+                    writeln!(w, "{row}").context("cannot write pairs-incomplete.csv")?;
                 }
                 if progress {
                     eprintln!(
@@ -673,7 +742,7 @@ impl<'f> Logger<'f> {
             bad_frame_examples: d.bad_examples.clone(),
             truncated_tail: tail.map(|(byte_offset, bytes)| TruncatedTail { byte_offset, bytes }),
             runs: self.runs.clone(),
-            pairs_without_run: self.pairs_without_run,
+            pairs_incomplete: self.pairs_incomplete,
         };
         let path = self.opts.out_dir.join(SUMMARY_JSON);
         let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
