@@ -580,7 +580,7 @@ impl<'f> Logger<'f> {
                         p.dwell_ms
                     );
                 }
-                if !missing.is_empty() {
+                if progress && !missing.is_empty() {
                     // Said at once: the operator can still stop and restart with the flags.
                     eprintln!(
                         "capstan log: WARNING: run {}'s run_start record does not give {} and \
@@ -645,7 +645,7 @@ impl<'f> Logger<'f> {
                             PAIRS_INCOMPLETE_CSV,
                             Some(&PAIRS_HEADER.join(",")),
                         )?);
-                        if rs.run.is_none() {
+                        if progress && rs.run.is_none() {
                             eprintln!(
                                 "capstan log: WARNING: pairs without their run's run_start \
                                  record (lost, or logging began mid-run): their run is unknown; \
