@@ -12,7 +12,8 @@ use crate::record::{
 use crate::safety::{SafetyInput, SafetyLimits, Supervisor};
 
 /// Debounce time of the button, ms.
-pub const DEBOUNCE_MS: u32 = 20;
+/// (10 ms: longer than contact bounce, short enough that an abort is safe well inside 20 ms.)
+pub const DEBOUNCE_MS: u32 = 10;
 
 /// The cord-break checks arm this long after each step to a tension level, ms (the servo has
 /// moved and the tensions settled by then).

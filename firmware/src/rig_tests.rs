@@ -103,8 +103,8 @@ fn thesis_rig() -> Rig {
     .unwrap()
 }
 
-/// The debounced press lands 20 samples after the raw press at 100 ms.
-const PRESS_US: u64 = 100_000 + 19_000;
+/// The debounced press lands 10 samples after the raw press at 100 ms.
+const PRESS_US: u64 = 100_000 + 9_000;
 
 #[test]
 fn every_servo_step_and_the_trigger_are_on_time() {

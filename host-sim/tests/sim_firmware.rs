@@ -8,8 +8,8 @@ use firmware::{FaultKind, Protocol, StepOrder};
 use host_sim::run::{run, RunOutput, RunSpec, TraceSample};
 
 const MS: u64 = 1_000;
-/// The plant presses the button at 10 ms; the debouncer accepts it 20 samples later.
-const PRESS_US: u64 = 10 * MS + 19 * MS;
+/// The plant presses the button at 10 ms; the debouncer accepts it 10 samples later.
+const PRESS_US: u64 = 10 * MS + 9 * MS;
 
 fn spec(wrap_deg: f64) -> RunSpec {
     RunSpec {
