@@ -268,19 +268,21 @@ pub fn write_pairs(path: &Path, pairs: &[Pair]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Reads one optional column of a pair.
+type Getter = fn(&Pair) -> Option<f64>;
+
 /// Write pairs to any writer: the standard header ([`PAIRS_HEADER`]) minus any optional column
 /// that the pairs do not all carry (so what is written reads back as it was).
 pub fn write_pairs_to(w: &mut impl Write, pairs: &[Pair]) -> std::io::Result<()> {
     let all = |f: fn(&Pair) -> Option<f64>| pairs.iter().all(|p| f(p).is_some());
-    let optional: [(usize, fn(&Pair) -> Option<f64>); 5] = [
+    let optional: [(usize, Getter); 5] = [
         (0, |p| p.capstan_diameter_mm),
         (2, |p| p.drive_v),
         (3, |p| p.run),
         (4, |p| p.step),
         (5, |p| p.time_s),
     ];
-    let keep: Vec<(usize, fn(&Pair) -> Option<f64>)> =
-        optional.into_iter().filter(|(_, f)| all(*f)).collect();
+    let keep: Vec<(usize, Getter)> = optional.into_iter().filter(|(_, f)| all(*f)).collect();
     let mut columns: Vec<usize> = keep.iter().map(|(i, _)| *i).chain([1, 6, 7]).collect();
     columns.sort();
     let names: Vec<&str> = columns.iter().map(|&i| PAIRS_HEADER[i]).collect();

@@ -2,10 +2,10 @@
 //!
 //! The library behind the `capstan` binary; the integration tests in `tests/` use it directly.
 
+pub mod analysis;
 pub mod cli;
 pub mod data;
 pub mod diagnose;
-pub mod analysis;
 pub mod fit;
-pub mod report;
 pub mod log;
+pub mod report;
