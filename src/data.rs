@@ -140,14 +140,9 @@ impl fmt::Display for DataError {
     }
 }
 
-impl std::error::Error for DataError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            DataError::Io { source, .. } => Some(source),
-            _ => None,
-        }
-    }
-}
+// The I/O error's text is already part of the message (`path: error`), so it is not repeated
+// as a `source()` (which `{:#}` would print a second time).
+impl std::error::Error for DataError {}
 
 /// Read a pairs CSV from a file.
 pub fn load_pairs(path: &Path) -> Result<Dataset, DataError> {
