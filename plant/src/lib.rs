@@ -18,10 +18,13 @@
 //! Friction: with the capstan turning, T2 = `model.law.t2_n(T1, op)` (the catalogue's physical
 //! effects live there); stopped, T2 = T1; stalled (the drive cannot supply the friction
 //! torque), T2 − T1 is what the stalled motor can push. The model's sensor artefacts are applied
-//! by the sensors: the gain to T2's sensitivity, and the offsets as a shift that rides on the
-//! drive (a ground shift from the power amplifier's current) — present whenever the capstan is
-//! driven, absent during the firmware's tare (capstan stopped), so the tare cannot remove them
-//! and the data show `T1 + t1_offset`, `t2_gain·T2 + t2_offset` as the catalogue means.
+//! by the sensors, and all three ride on the drive (the power amplifier's current shifts the
+//! sensor amplifiers' ground and loads their supply): present whenever the capstan is driven,
+//! absent during the firmware's tare (capstan stopped, cord at its preload). So the tare
+//! neither removes the offsets nor sees the gain, and the data show `T1 + t1_offset` and
+//! `t2_gain·T2 + t2_offset`, exactly as the catalogue defines them. (A gain present at the tare
+//! too would be calibrated against the 0.1 N preload and leave `t2_gain·T2 − (t2_gain − 1)·0.1
+//! N`: a gain plus a T2 offset, i.e. not the catalogue's single effect.)
 //!
 //! Determinism: all physics is f64 with `libm` and the noise comes from [`rng::Rng`]
 //! (xoshiro256++ and a polar normal); the same seed and the same calls give bit-identical

@@ -840,11 +840,13 @@ impl Plant {
             return Ok(0);
         }
         let art = c.setup.model.sensors;
+        // The catalogue artefacts ride on the drive (see the crate docs): the tare, done with
+        // the capstan stopped, neither removes the offsets nor sees the gain.
         let reading = match ch {
-            // Catalogue offsets ride on the drive (see the crate docs): the tare, done with the
-            // capstan stopped, cannot remove them.
-            Channel::T1 => c.t1 + if drive_on { art.t1_offset_n } else { 0.0 },
-            Channel::T2 => art.t2_gain * c.t2 + if drive_on { art.t2_offset_n } else { 0.0 },
+            Channel::T1 if drive_on => c.t1 + art.t1_offset_n,
+            Channel::T2 if drive_on => art.t2_gain * c.t2 + art.t2_offset_n,
+            Channel::T1 => c.t1,
+            Channel::T2 => c.t2,
         };
         let mut counts = c.zero[k] + reading * c.counts_per_n[k];
         if self.noise_sd_counts > 0.0 {

@@ -203,7 +203,7 @@ fn same_seed_same_counts_and_noise_has_the_configured_spread() {
 }
 
 #[test]
-fn catalogue_offsets_ride_on_the_drive_and_gain_scales_t2() {
+fn catalogue_artefacts_ride_on_the_drive() {
     let noiseless = |model: Model| {
         let mut cfg = PlantConfig::default();
         cfg.sensor.noise_sd_n = 0.0;
@@ -224,10 +224,18 @@ fn catalogue_offsets_ride_on_the_drive_and_gain_scales_t2() {
         });
     let mut p = noiseless(m);
     p.advance_to(100 * MS);
-    // Stopped: no offset, T2 reads 1.1 × 0.1 N.
+    // Stopped (the tare's conditions): no offset, no gain; both read the 0.1 N preload.
     let c1 = p.read_counts(0, Channel::T1).unwrap();
     let c2 = p.read_counts(0, Channel::T2).unwrap();
-    assert_eq!((c1, c2), (407, 407)); // 400 + 0.1/0.015 = 406.7, 400 + 0.11/0.015 = 407.3
+    assert_eq!((c1, c2), (407, 407)); // 400 + 0.1/0.015 = 406.7
+    let m = base.with_effect(Effect {
+        kind: EffectKind::SensorGain,
+        value: 1.5,
+    });
+    let mut p2 = noiseless(m);
+    p2.advance_to(100 * MS);
+    // Were the gain applied here, T2 would read 400 + 0.15/0.015 = 410.
+    assert_eq!(p2.read_counts(0, Channel::T2).unwrap(), 407);
     hold(&mut p, 85.0, 10.0);
     let t = p.truth(0);
     let c1 = p.read_counts(0, Channel::T1).unwrap() as f64;

@@ -219,15 +219,7 @@ pub fn draw_case(master_seed: u64, kind: EffectKind, index: u64) -> Case {
     } else {
         Effect { kind, value }
     };
-    let mut model = Model::euler_eytelwein(mu);
-    if kind == EffectKind::SensorGain {
-        // The plant applies the gain to the T2 channel also during the firmware's tare, which
-        // is taken at the cord's preload (`tare_reference_n`, 0.1 N): the data would show
-        // g·T2 − (g − 1)·0.1 N, a gain *and* a small T2 offset. The catalogue's gain is g·T2
-        // alone, so cancel the offset (it rides on the drive, i.e. is absent at the tare).
-        let r = firmware::Calibration::default().tare_reference_n as f64;
-        model.sensors.t2_offset_n = (value - 1.0) * r;
-    }
+    let model = Model::euler_eytelwein(mu);
     let config = CampaignConfig {
         diameters_mm: diameters,
         wraps_deg: wraps,
