@@ -34,6 +34,7 @@
 
 pub mod config;
 pub mod hal;
+mod injection;
 mod plant;
 pub mod rng;
 
@@ -41,9 +42,10 @@ pub use config::{
     CordConfig, CordSetup, FaultConfig, MotorConfig, PlantConfig, SensorConfig, ServoConfig,
 };
 pub use hal::{rig_io, SimRigIo, AMP_MAX_DUTY, SERVO_MAX_DUTY};
+pub use injection::{Injection, InjectionKind, InjectionReport};
 pub use plant::{
-    CordTruth, DriveState, Injection, InjectionKind, InjectionReport, Plant, PlantError,
-    ServoEvent, MAX_CORDS, MAX_INJECTIONS, MAX_SERVO_EVENTS, MAX_TRIGGER_EDGES,
+    CordTruth, DriveState, Plant, PlantError, ServoEvent, MAX_CORDS, MAX_INJECTIONS,
+    MAX_SERVO_EVENTS, MAX_TRIGGER_EDGES,
 };
 
 /// The thesis's friction coefficient for its plain exponential fit (Table 1).

@@ -1,0 +1,213 @@
+//! Making a plant: every constant checked against its physical range, then the plant at rest
+//! (servo at its rest angle, capstan stopped, cords at their preload, sensor zeros drawn).
+
+use super::{pulse_us, CordState, Plant, MAX_CORDS, MAX_INJECTIONS};
+use crate::config::{CordSetup, PlantConfig};
+use crate::rng::Rng;
+use capstan_friction::{LoadMemory, Operating};
+use heapless::Vec;
+
+/// Why a plant cannot be made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlantError {
+    /// No cord, or more than [`MAX_CORDS`].
+    CordCount,
+    /// A constant is out of its physical range; the name of the field.
+    BadConstant(&'static str),
+    /// More than [`MAX_INJECTIONS`] injections, or one on a cord that does not exist.
+    BadInjection,
+}
+
+impl core::fmt::Display for PlantError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            PlantError::CordCount => write!(f, "a plant carries 1 to {MAX_CORDS} cords"),
+            PlantError::BadConstant(name) => write!(f, "plant constant `{name}` is out of range"),
+            PlantError::BadInjection => write!(
+                f,
+                "at most {MAX_INJECTIONS} fault injections, each on an existing cord"
+            ),
+        }
+    }
+}
+
+fn check(ok: bool, name: &'static str) -> Result<(), PlantError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(PlantError::BadConstant(name))
+    }
+}
+
+fn positive(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+impl Plant {
+    /// A plant at rest (servo at its rest angle, capstan stopped, cords at their preload),
+    /// whose clock starts at `Instant::now()`.
+    pub fn new(cfg: PlantConfig, cords: &[CordSetup], seed: u64) -> Result<Plant, PlantError> {
+        Plant::new_at(cfg, cords, seed, embassy_time::Instant::now().as_micros())
+    }
+
+    /// As [`Plant::new`], with the clock starting at `origin_us`.
+    pub fn new_at(
+        cfg: PlantConfig,
+        cords: &[CordSetup],
+        seed: u64,
+        origin_us: u64,
+    ) -> Result<Plant, PlantError> {
+        if cords.is_empty() || cords.len() > MAX_CORDS {
+            return Err(PlantError::CordCount);
+        }
+        let (s, c, m, n) = (cfg.servo, cfg.cord, cfg.motor, cfg.sensor);
+        check(positive(cfg.capstan_diameter_mm), "capstan_diameter_mm")?;
+        check(positive(s.lever_m), "servo.lever_m")?;
+        check(positive(s.no_load_deg_per_s), "servo.no_load_deg_per_s")?;
+        check(positive(s.stall_torque_nm), "servo.stall_torque_nm")?;
+        check(s.frame_us > 0, "servo.frame_us")?;
+        check(
+            s.rest_deg.is_finite() && (0.0..=180.0).contains(&s.rest_deg),
+            "servo.rest_deg",
+        )?;
+        check(positive(c.preload_n), "cord.preload_n")?;
+        check(positive(c.stiffness), "cord.stiffness")?;
+        check(positive(c.hardening), "cord.hardening")?;
+        check(
+            c.far_side_ratio.is_finite() && c.far_side_ratio >= 0.0,
+            "cord.far_side_ratio",
+        )?;
+        check(positive(m.kt_nm_per_a), "motor.kt_nm_per_a")?;
+        check(positive(m.resistance_ohm), "motor.resistance_ohm")?;
+        check(positive(m.gear_ratio), "motor.gear_ratio")?;
+        check(positive(m.rotor_inertia_kg_m2), "motor.rotor_inertia_kg_m2")?;
+        check(
+            m.viscous_nms.is_finite() && m.viscous_nms >= 0.0,
+            "motor.viscous_nms",
+        )?;
+        check(
+            m.coulomb_nm.is_finite() && m.coulomb_nm >= 0.0,
+            "motor.coulomb_nm",
+        )?;
+        check(positive(m.amp_full_scale_v), "motor.amp_full_scale_v")?;
+        check(
+            m.amp_gain.is_finite() && m.amp_gain >= 0.0,
+            "motor.amp_gain",
+        )?;
+        check(
+            m.amp_supply_v.is_finite() && m.amp_supply_v >= 0.0,
+            "motor.amp_supply_v",
+        )?;
+        check(positive(n.n_per_count), "sensor.n_per_count")?;
+        check(positive(n.gain), "sensor.gain")?;
+        check(n.zero_counts.is_finite(), "sensor.zero_counts")?;
+        check(
+            n.zero_spread_counts.is_finite() && n.zero_spread_counts >= 0.0,
+            "sensor.zero_spread_counts",
+        )?;
+        check(
+            n.noise_sd_n.is_finite() && n.noise_sd_n >= 0.0,
+            "sensor.noise_sd_n",
+        )?;
+        check(cfg.max_step_us > 0, "max_step_us")?;
+        check(cfg.refresh_us > 0, "refresh_us")?;
+        for cs in cords {
+            check(
+                cs.wrap_deg.is_finite() && cs.wrap_deg >= 0.0,
+                "cord wrap_deg",
+            )?;
+            check(cs.run >= 1, "cord run")?;
+        }
+
+        let mut rng = Rng::new(seed);
+        let inv_hardening = 1.0 / c.hardening;
+        let e_pre_mm =
+            (1.0 + c.far_side_ratio) * libm::pow(c.preload_n / c.stiffness, inv_hardening);
+        let rest_pulse = pulse_us(&s.map, s.rest_deg);
+        let mut states: Vec<CordState, MAX_CORDS> = Vec::new();
+        for cs in cords {
+            let op = Operating {
+                wrap_rad: cs.wrap_deg.to_radians(),
+                diameter_mm: cfg.capstan_diameter_mm,
+                drive_v: 0.0,
+                run: cs.run as f64,
+                time_s: 0.0,
+                ..Operating::from_wrap_deg(cs.wrap_deg)
+            };
+            let law = &cs.model.law;
+            let heats = law.heat_per_ns != 0.0;
+            let mut zero = [0.0; 2];
+            for z in zero.iter_mut() {
+                *z = n.zero_counts + n.zero_spread_counts * rng.normal();
+            }
+            let cpn = n.gain / n.n_per_count;
+            let st = CordState {
+                setup: *cs,
+                op,
+                time_dependent: heats || law.mu_change_per_100s != 0.0,
+                heats,
+                pending_pulse_us: rest_pulse,
+                target_deg: s.rest_deg,
+                angle_deg: s.rest_deg,
+                commanded_deg: s.rest_deg,
+                amp_control_v: 0.0,
+                t1: c.preload_n,
+                t2: c.preload_n,
+                a_kin: 1.0,
+                dirty: true,
+                memory: LoadMemory::default(),
+                broken: false,
+                snag: false,
+                unplugged: [false; 2],
+                zero,
+                counts_per_n: [cpn, cpn],
+                trigger: false,
+                trigger_rise_us: None,
+                trigger_edges: Vec::new(),
+                led: false,
+                press: cs
+                    .press_at_us
+                    .map(|at| (origin_us + at, origin_us + at + cs.press_us)),
+                abort: None,
+                servo_events: Vec::new(),
+                servo_events_dropped: 0,
+                last_feed_us: None,
+                max_feed_gap_us: 0,
+                safe_since_us: Some(origin_us),
+            };
+            let _ = states.push(st);
+        }
+        let any_time_dependent = states.iter().any(|c| c.time_dependent);
+        let mut plant = Plant {
+            cfg,
+            lever_mm_per_deg: s.lever_m * 1e3 * core::f64::consts::PI / 180.0,
+            e_pre_mm,
+            inv_hardening,
+            radius_m: cfg.capstan_diameter_mm * 0.5e-3,
+            noise_sd_counts: n.noise_sd_n / n.n_per_count,
+            motor_damping: m.kt_nm_per_a * m.kt_nm_per_a / m.resistance_ohm + m.viscous_nms,
+            inv_damping: 1.0 / (m.kt_nm_per_a * m.kt_nm_per_a / m.resistance_ohm + m.viscous_nms),
+            stall_m: -m.coulomb_nm,
+            demand_m: 0.0,
+            decay_dt_us: 0,
+            decay: 1.0,
+            origin_us,
+            t_us: origin_us,
+            next_frame_us: origin_us + s.frame_us as u64,
+            next_refresh_us: origin_us,
+            any_time_dependent,
+            drive_v: 0.0,
+            omega: 0.0,
+            transmission: 0.0,
+            load_nm: 0.0,
+            rng,
+            cords: states,
+            injections: Vec::new(),
+        };
+        for i in 0..plant.cords.len() {
+            plant.solve(i);
+        }
+        plant.demand_m = plant.kinetic_demand_nm() / m.gear_ratio;
+        Ok(plant)
+    }
+}

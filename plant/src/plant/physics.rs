@@ -1,0 +1,234 @@
+//! Advancing time: the servo takes the pulse at each PWM frame and slews against T1, the drive
+//! follows its load exactly over a step, injections take effect, and the tensions of every
+//! cord whose inputs changed are re-solved through the shared friction law.
+
+use super::{angle_deg, Plant};
+use crate::injection::InjectionKind;
+
+impl Plant {
+    pub(super) fn step(&mut self, dt_us: u32) {
+        let t_end = self.t_us + dt_us as u64;
+        let frame = self.cfg.servo.frame_us as u64;
+        // The servo takes the pulse width present at each frame.
+        if t_end >= self.next_frame_us {
+            let map = self.cfg.servo.map;
+            for c in self.cords.iter_mut() {
+                c.target_deg = angle_deg(&map, c.pending_pulse_us);
+            }
+            while self.next_frame_us <= t_end {
+                self.next_frame_us += frame;
+            }
+        }
+        self.activate_injections(t_end);
+        self.move_servos(dt_us);
+        self.move_drive(dt_us);
+        let dt_s = dt_us as f64 * 1e-6;
+        for c in self.cords.iter_mut() {
+            if c.heats {
+                c.memory
+                    .advance(dt_s, c.t2 - c.t1, c.setup.model.law.heat_tau_s);
+            }
+        }
+        if self.any_time_dependent && t_end >= self.next_refresh_us {
+            for c in self.cords.iter_mut() {
+                c.dirty |= c.time_dependent;
+            }
+            self.next_refresh_us = t_end + self.cfg.refresh_us as u64;
+        }
+        self.t_us = t_end;
+        let mut solved = false;
+        for i in 0..self.cords.len() {
+            if self.cords[i].dirty {
+                self.solve(i);
+                solved = true;
+            }
+        }
+        if solved {
+            self.demand_m = self.kinetic_demand_nm() / self.cfg.motor.gear_ratio;
+        }
+    }
+
+    fn activate_injections(&mut self, t_end: u64) {
+        for k in 0..self.injections.len() {
+            let rep = self.injections[k];
+            if rep.at_us.is_some() {
+                continue;
+            }
+            let i = rep.injection.cord as usize;
+            let Some(rise) = self.cords[i].trigger_rise_us else {
+                continue;
+            };
+            let at = rise + rep.injection.after_trigger_us;
+            if at > t_end {
+                continue;
+            }
+            self.injections[k].at_us = Some(at);
+            let press_ms = self.cfg.faults.abort_press_ms as u64;
+            let c = &mut self.cords[i];
+            match rep.injection.kind {
+                InjectionKind::CordBreak => c.broken = true,
+                InjectionKind::SensorUnplugged(ch) => c.unplugged[ch as usize] = true,
+                InjectionKind::OverForce => c.snag = true,
+                InjectionKind::Abort => c.abort = Some((at, at + press_ms * 1000)),
+            }
+            c.dirty = true;
+            // Already safe (e.g. injected while idle)?
+            if self.is_safe(i) {
+                self.injections[k].safe_at_us = Some(at);
+            }
+        }
+    }
+
+    fn move_servos(&mut self, dt_us: u32) {
+        let s = self.cfg.servo;
+        let dt_s = dt_us as f64 * 1e-6;
+        for c in self.cords.iter_mut() {
+            let gap = c.target_deg - c.angle_deg;
+            if gap == 0.0 {
+                continue;
+            }
+            // Pulling (angle falling) works against T1 on the lever; releasing does not.
+            let rate = if gap < 0.0 {
+                let load = c.t1.max(0.0) * s.lever_m / s.stall_torque_nm;
+                s.no_load_deg_per_s * (1.0 - load).max(0.0)
+            } else {
+                s.no_load_deg_per_s
+            };
+            let travel = rate * dt_s;
+            if travel <= 0.0 {
+                continue;
+            }
+            c.angle_deg = if gap.abs() <= travel {
+                c.target_deg
+            } else {
+                c.angle_deg + travel.copysign(gap)
+            };
+            c.dirty = true;
+        }
+    }
+
+    /// Kinetic friction load the cords ask of the capstan, N m at the capstan.
+    pub(super) fn kinetic_demand_nm(&self) -> f64 {
+        let snag_n = self.cfg.faults.snag_n;
+        let mut sum = 0.0;
+        for c in self.cords.iter() {
+            if c.broken {
+                continue;
+            }
+            let t2 = if c.snag { snag_n } else { c.t1 * c.a_kin };
+            sum += (t2 - c.t1).max(0.0);
+        }
+        sum * self.radius_m
+    }
+
+    fn move_drive(&mut self, dt_us: u32) {
+        let m = self.cfg.motor;
+        let (demand_m, stall_m) = (self.demand_m, self.stall_m);
+        if self.omega > 0.0 || stall_m > demand_m {
+            // Exact for a load held over the step: ω → ω_ss with the mechanical time constant.
+            let w_ss = (stall_m - demand_m) * self.inv_damping;
+            if self.omega != w_ss {
+                if self.decay_dt_us != dt_us {
+                    self.decay_dt_us = dt_us;
+                    self.decay = libm::exp(
+                        -self.motor_damping * dt_us as f64 * 1e-6 / m.rotor_inertia_kg_m2,
+                    );
+                }
+                self.omega = w_ss + (self.omega - w_ss) * self.decay;
+                if self.omega <= 0.0 {
+                    self.omega = 0.0;
+                }
+            }
+        }
+        let transmission = if self.omega > 0.0 {
+            1.0
+        } else if stall_m <= 0.0 {
+            0.0
+        } else if demand_m <= stall_m {
+            1.0
+        } else {
+            stall_m / demand_m
+        };
+        if transmission != self.transmission {
+            self.transmission = transmission;
+            for c in self.cords.iter_mut() {
+                c.dirty = true;
+            }
+        }
+        self.load_nm = if self.omega > 0.0 || demand_m <= stall_m.max(0.0) {
+            demand_m * m.gear_ratio
+        } else {
+            stall_m.max(0.0) * m.gear_ratio
+        };
+    }
+
+    /// Re-solve cord `i`'s tensions for the present lever angle, drive regime and law.
+    pub(super) fn solve(&mut self, i: usize) {
+        let cfg = self.cfg.cord;
+        let snag_n = self.cfg.faults.snag_n;
+        let rest = self.cfg.servo.rest_deg;
+        let lever = self.lever_mm_per_deg;
+        let e_pre = self.e_pre_mm;
+        let inv_p = self.inv_hardening;
+        let s = self.transmission;
+        let t_us = self.t_us;
+        let drive_v = self.drive_v;
+        let c = &mut self.cords[i];
+        c.dirty = false;
+        c.op.drive_v = drive_v;
+        c.op.time_s = match c.trigger_rise_us {
+            Some(r) if t_us > r => (t_us - r) as f64 * 1e-6,
+            _ => 0.0,
+        };
+        c.op.load_memory_ns = c.memory.h_ns;
+        if c.broken {
+            c.t1 = 0.0;
+            c.t2 = 0.0;
+            return;
+        }
+        let e = e_pre + lever * (rest - c.angle_deg);
+        if e <= 0.0 {
+            c.t1 = 0.0;
+            c.t2 = if c.snag { snag_n } else { 0.0 };
+            return;
+        }
+        let law = c.setup.model.law;
+        let op = c.op;
+        let kinetic = |t1: f64| -> f64 {
+            if t1 <= 0.0 {
+                return 1.0;
+            }
+            let a = law.t2_n(t1, &op) / t1;
+            if a.is_finite() {
+                a.clamp(1e-6, 1e6)
+            } else {
+                1e6
+            }
+        };
+        let t1_of = |a_kin: f64| -> f64 {
+            let a_eff = 1.0 + s * (a_kin - 1.0);
+            let den = 1.0 + cfg.far_side_ratio * libm::pow(a_eff, inv_p);
+            cfg.stiffness * libm::pow(e / den, cfg.hardening)
+        };
+        // Fixed point a -> T1(a) -> a(T1); contracting for the laws of the catalogue, damped
+        // after a few rounds in case a law is steep at low tension.
+        let mut a = c.a_kin.max(1e-6);
+        let mut t1 = t1_of(a);
+        for round in 0..60 {
+            let a_new = kinetic(t1);
+            let converged = (a_new - a).abs() <= 1e-13 * a;
+            a = if round < 8 { a_new } else { 0.5 * (a + a_new) };
+            t1 = t1_of(a);
+            if converged {
+                break;
+            }
+        }
+        c.a_kin = a;
+        c.t1 = t1;
+        c.t2 = if c.snag {
+            snag_n
+        } else {
+            t1 * (1.0 + s * (a - 1.0))
+        };
+    }
+}
