@@ -6,8 +6,20 @@ use super::Analysis;
 use host_sim::campaign::{run_campaign, CampaignConfig};
 use serde_json::{json, Value};
 
-/// Simulated amplification curves (cord index, (T1, T2/T1)) and a summary.
-pub fn run(a: &Analysis) -> anyhow::Result<(Vec<(usize, Vec<(f64, f64)>)>, Value)> {
+/// A simulated amplification curve of one cord: (cord index, (T1, T2/T1) points by T1).
+pub type SimCurve = (usize, Vec<(f64, f64)>);
+
+/// The closed-loop simulation of every cord.
+#[derive(Clone, Debug)]
+pub struct ClosedLoop {
+    /// One curve per cord.
+    pub curves: Vec<SimCurve>,
+    /// What was simulated (for `metrics.json`).
+    pub summary: Value,
+}
+
+/// Simulate one run per cord with the cord's extended model.
+pub fn run(a: &Analysis) -> anyhow::Result<ClosedLoop> {
     let mut curves = Vec::new();
     let mut n = 0usize;
     for (g, grp) in a.obs.groups.iter().enumerate() {
@@ -26,8 +38,8 @@ pub fn run(a: &Analysis) -> anyhow::Result<(Vec<(usize, Vec<(f64, f64)>)>, Value
         n += res.rows.len();
         curves.push((g, pts));
     }
-    Ok((
+    Ok(ClosedLoop {
         curves,
-        json!({"runs": a.obs.groups.len(), "runs_per_cord": 1, "pairs": n, "plant": "host_sim::campaign with the extended model per cord (sensor noise off)"}),
-    ))
+        summary: json!({"runs": a.obs.groups.len(), "runs_per_cord": 1, "pairs": n, "plant": "host_sim::campaign with the extended model per cord (sensor noise off)"}),
+    })
 }

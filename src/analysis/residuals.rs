@@ -9,7 +9,7 @@
 
 use super::{ln_amp, Predictions};
 use crate::data::Dataset;
-use crate::fit::stats::{eta_squared, regress, spearman};
+use crate::fit::stats::{eta_squared, mean, regress, spearman, variance};
 use crate::fit::Observations;
 use serde::Serialize;
 
@@ -113,10 +113,8 @@ pub fn patterns(ds: &Dataset, obs: &Observations, pred: &Predictions) -> Vec<Pat
                 })
                 .collect();
             for (name, v) in &cols {
-                let n = v.len() as f64;
-                let mean = v.iter().sum::<f64>() / n;
-                let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-                let x: Vec<Vec<f64>> = v.iter().map(|a| vec![1.0, (a - mean) / sd]).collect();
+                let (m, sd) = (mean(v), variance(v).sqrt());
+                let x: Vec<Vec<f64>> = v.iter().map(|a| vec![1.0, (a - m) / sd]).collect();
                 let reg = regress(&x, &resid, None, Some(&clusters));
                 let lv = levels(v);
                 let (eta2, f, f_p) = eta_squared(&resid, &lv);

@@ -75,19 +75,6 @@ pub fn thesis_amp(wrap_deg: f64, t1_n: f64) -> Option<f64> {
         .map(|c| -c.nd * (-c.ld * t1_n).exp() + c.n0 * (-c.l * t1_n).exp() + c.ss)
 }
 
-/// R² = 1 − SS_res/SS_tot of measured against predicted values.
-pub fn r_squared(measured: &[f64], predicted: &[f64]) -> f64 {
-    let n = measured.len() as f64;
-    let mean = measured.iter().sum::<f64>() / n;
-    let ss_res: f64 = measured
-        .iter()
-        .zip(predicted)
-        .map(|(m, p)| (m - p).powi(2))
-        .sum();
-    let ss_tot: f64 = measured.iter().map(|m| (m - mean).powi(2)).sum();
-    1.0 - ss_res / ss_tot
-}
-
 /// The thesis's per-angle R² of amplification: rows of each angle pooled over both capstan
 /// diameters, 1 − SS_res/SS_tot on T2/T1. Returns (angle, R², rows) for the angles of Table 3
 /// present in the data.
@@ -106,7 +93,7 @@ pub fn per_angle_r2(wrap_deg: &[f64], t1_n: &[f64], t2_n: &[f64]) -> Vec<(f64, f
                 .iter()
                 .map(|&i| thesis_amp(c.wrap_deg, t1_n[i]).unwrap_or(f64::NAN))
                 .collect();
-            Some((c.wrap_deg, r_squared(&m, &p), idx.len()))
+            Some((c.wrap_deg, crate::fit::stats::r_squared(&m, &p), idx.len()))
         })
         .collect()
 }

@@ -10,8 +10,9 @@
 //! * [`solve`]: the Levenberg-Marquardt problem ([`solve::FitProblem`], a
 //!   `levenberg_marquardt::LeastSquaresProblem`), fixed-effects fits, penalised / mixed fits
 //!   with the variance ratio re-estimated, leave-one-group-out, information criteria.
-//! * [`stats`]: small statistics (regressions with cluster-robust errors, rank correlation,
-//!   t and F distributions).
+//! * [`stats`]: small statistics (mean, variance, median, R², jackknife; regressions with
+//!   cluster-robust errors, rank correlation, t and F distributions).
+//! * [`par`]: independent fits on a few threads, results in input order.
 //!
 //! Typical use:
 //! ```no_run
@@ -24,6 +25,7 @@
 //! ```
 
 pub mod obs;
+pub mod par;
 pub mod params;
 pub mod predict;
 pub mod solve;

@@ -244,6 +244,37 @@ impl Observations {
     pub fn group_of_rows(&self) -> Vec<usize> {
         self.rows.iter().map(|r| r.group).collect()
     }
+
+    /// Indices of the runs on cord `group`.
+    pub fn runs_of_group(&self, group: usize) -> Vec<usize> {
+        (0..self.runs.len())
+            .filter(|&r| self.rows[self.runs[r][0]].group == group)
+            .collect()
+    }
+
+    /// Indices of the rows on cord `group`, in file order.
+    pub fn rows_of_group(&self, group: usize) -> Vec<usize> {
+        (0..self.rows.len())
+            .filter(|&i| self.rows[i].group == group)
+            .collect()
+    }
+
+    /// The capstan diameters of the cords, ascending, mm.
+    pub fn diameters(&self) -> Vec<f64> {
+        crate::fit::stats::distinct(self.groups.iter().map(|g| g.diameter_mm))
+    }
+
+    /// RMSE of predicted against measured T2 over the rows where the prediction is finite, N.
+    pub fn rmse_t2(&self, pred: &[f64]) -> f64 {
+        let (mut s, mut n) = (0.0, 0usize);
+        for (r, p) in self.rows.iter().zip(pred) {
+            if p.is_finite() {
+                s += (p - r.t2_n).powi(2);
+                n += 1;
+            }
+        }
+        (s / n as f64).sqrt()
+    }
 }
 
 #[cfg(test)]

@@ -1,7 +1,62 @@
-//! Small statistics: distributions, least squares with cluster-robust errors, rank correlation.
+//! Small statistics: summaries (mean, variance, median, R², jackknife), distributions, least
+//! squares with cluster-robust errors, rank correlation, two-sample and one-sample t tests.
 
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+
+/// Arithmetic mean (NaN for an empty slice).
+pub fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// Sample variance Σ(x − x̄)²/(n − 1).
+pub fn variance(v: &[f64]) -> f64 {
+    let m = mean(v);
+    v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() as f64 - 1.0)
+}
+
+/// Median (mean of the middle two for an even count; NaN for an empty slice). Sorts `v`.
+pub fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The distinct values, ascending (equal when bit-identical).
+pub fn distinct(v: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    let mut out: Vec<f64> = v.into_iter().collect();
+    out.sort_by(f64::total_cmp);
+    out.dedup_by(|a, b| a.to_bits() == b.to_bits());
+    out
+}
+
+/// R² = 1 − SS_res/SS_tot of measured against predicted values.
+pub fn r_squared(measured: &[f64], predicted: &[f64]) -> f64 {
+    let m = mean(measured);
+    let ss_res: f64 = measured
+        .iter()
+        .zip(predicted)
+        .map(|(y, p)| (y - p).powi(2))
+        .sum();
+    let ss_tot: f64 = measured.iter().map(|y| (y - m).powi(2)).sum();
+    1.0 - ss_res / ss_tot
+}
+
+/// Jackknife standard error of an estimate from its leave-one-out values:
+/// √((G − 1)/G · Σ(v − v̄)²).
+pub fn jackknife_se(values: &[f64]) -> f64 {
+    let g = values.len() as f64;
+    let m = mean(values);
+    let ss: f64 = values.iter().map(|v| (v - m).powi(2)).sum();
+    ((g - 1.0) / g * ss).sqrt()
+}
 
 /// ln Γ(x) (Lanczos, |error| < 1e-14 for x > 0).
 pub fn ln_gamma(x: f64) -> f64 {
@@ -203,8 +258,7 @@ pub fn ranks(v: &[f64]) -> Vec<f64> {
 
 /// Pearson correlation.
 pub fn pearson(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len() as f64;
-    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (ma, mb) = (mean(a), mean(b));
     let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
     for (x, y) in a.iter().zip(b) {
         sab += (x - ma) * (y - mb);
@@ -224,7 +278,7 @@ pub fn spearman(a: &[f64], b: &[f64]) -> f64 {
 pub fn eta_squared(y: &[f64], level: &[usize]) -> (f64, f64, f64) {
     let n = y.len() as f64;
     let k = level.iter().copied().max().map_or(0, |m| m + 1);
-    let mean = y.iter().sum::<f64>() / n;
+    let ybar = mean(y);
     let mut sums = vec![0.0; k];
     let mut counts = vec![0.0; k];
     for (v, &l) in y.iter().zip(level) {
@@ -233,9 +287,9 @@ pub fn eta_squared(y: &[f64], level: &[usize]) -> (f64, f64, f64) {
     }
     let ssb: f64 = (0..k)
         .filter(|&l| counts[l] > 0.0)
-        .map(|l| counts[l] * (sums[l] / counts[l] - mean).powi(2))
+        .map(|l| counts[l] * (sums[l] / counts[l] - ybar).powi(2))
         .sum();
-    let sst: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
+    let sst: f64 = y.iter().map(|v| (v - ybar).powi(2)).sum();
     let levels = counts.iter().filter(|c| **c > 0.0).count() as f64;
     let (d1, d2) = (levels - 1.0, n - levels);
     let f = if d1 > 0.0 && sst > ssb {
@@ -248,15 +302,7 @@ pub fn eta_squared(y: &[f64], level: &[usize]) -> (f64, f64, f64) {
 
 /// Welch's two-sample t test: (t, df, p).
 pub fn welch(a: &[f64], b: &[f64]) -> (f64, f64, f64) {
-    let mv = |v: &[f64]| {
-        let n = v.len() as f64;
-        let m = v.iter().sum::<f64>() / n;
-        (
-            m,
-            v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0),
-            n,
-        )
-    };
+    let mv = |v: &[f64]| (mean(v), variance(v), v.len() as f64);
     let (ma, va, na) = mv(a);
     let (mb, vb, nb) = mv(b);
     let se2 = va / na + vb / nb;
@@ -268,8 +314,8 @@ pub fn welch(a: &[f64], b: &[f64]) -> (f64, f64, f64) {
 /// One-sample t test of the mean against zero: (mean, t, p).
 pub fn one_sample_t(v: &[f64]) -> (f64, f64, f64) {
     let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let m = mean(v);
+    let sd = variance(v).sqrt();
     let t = m / (sd / n.sqrt());
     (m, t, t_p_two_sided(t, n - 1.0))
 }

@@ -3,8 +3,7 @@
 
 pub mod plot;
 
-/// A simulated amplification curve of one cord: (cord index, (T1, T2/T1) points).
-pub type SimCurve = (usize, Vec<(f64, f64)>);
+pub use crate::analysis::closed_loop::SimCurve;
 
 use crate::analysis::{Analysis, ModelMetrics};
 use crate::data::Dataset;

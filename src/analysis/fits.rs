@@ -1,0 +1,173 @@
+//! The fits behind the gain table: Euler-Eytelwein (one mu, one mu per cord), the thesis's
+//! Table 3 (published, not fitted), the extended mixed model and its strict-budget variant,
+//! and every model's leave-one-cord-out predictions.
+
+use super::{models, thesis};
+use crate::fit::par::par_map;
+use crate::fit::predict::evaluate;
+use crate::fit::solve::{fit_fixed, fit_mixed, fit_mixed_from, loco, Fit, Loco, MixedOptions};
+use crate::fit::stats::mean;
+use crate::fit::Observations;
+use std::time::Instant;
+
+/// The parameter budget of the strict-count variant (fixed + edf of the cord effects).
+pub const STRICT_BUDGET: f64 = 12.0;
+
+/// Per-row predictions of every model (N), NaN where a model has no prediction.
+#[derive(Clone, Debug, Default)]
+pub struct Predictions {
+    /// Euler-Eytelwein, one global mu.
+    pub baseline: Vec<f64>,
+    /// Euler-Eytelwein, one mu per cord.
+    pub baseline_per_cord: Vec<f64>,
+    /// Thesis Table 3, amp(T1)·T1 per angle.
+    pub thesis: Vec<f64>,
+    /// Extended model with the cord effects (in-sample).
+    pub extended: Vec<f64>,
+    /// Extended model, population values (cord effect 0).
+    pub extended_population: Vec<f64>,
+    /// Baseline, leave-one-cord-out.
+    pub baseline_loco: Vec<f64>,
+    /// Baseline per cord, leave-one-cord-out (mean log-mu of the other cords).
+    pub baseline_per_cord_loco: Vec<f64>,
+    /// Extended, leave-one-cord-out (population values of a fit on the other cords).
+    pub extended_loco: Vec<f64>,
+    /// Load memory H of the extended model at each window centre, N s.
+    pub extended_load_memory_ns: Vec<f64>,
+}
+
+/// Every model fitted, with its in-sample and leave-one-cord-out predictions.
+#[derive(Clone, Debug)]
+pub struct Fits {
+    /// Euler-Eytelwein with one mu.
+    pub baseline: Fit,
+    /// Euler-Eytelwein mu of each cord.
+    pub cord_mu: Vec<f64>,
+    /// The extended mixed model.
+    pub extended: Fit,
+    /// The extended model with the cord effects shrunk to [`STRICT_BUDGET`].
+    pub strict: Fit,
+    /// Baseline, leave-one-cord-out.
+    pub baseline_loco: Loco,
+    /// Extended, leave-one-cord-out.
+    pub extended_loco: Loco,
+    /// RMSE of T2 of the per-cord baseline on a new cord, N.
+    pub per_cord_loco_rmse: f64,
+    /// Table 3 covers every wrap of the data.
+    pub thesis_ok: bool,
+    /// Per-row predictions.
+    pub pred: Predictions,
+    /// Wall time of the in-sample fits, s.
+    pub fits_s: f64,
+    /// Wall time of the leave-one-cord-out refits, s.
+    pub loco_s: f64,
+}
+
+/// Fit every model of the gain table to `obs`.
+pub fn fit_all(obs: &Observations, threads: usize) -> Fits {
+    let all = obs.all_runs();
+    let t0 = Instant::now();
+
+    // Baseline: one global mu, and one mu per cord.
+    let base_spec = models::baseline();
+    let baseline = fit_fixed(&base_spec, obs, &all, None);
+    let groups: Vec<usize> = (0..obs.groups.len()).collect();
+    let per_cord_fits: Vec<Fit> = par_map(&groups, threads, |&g| {
+        fit_fixed(&base_spec, obs, &obs.runs_of_group(g), None)
+    });
+    let mut per_cord_pred = vec![f64::NAN; obs.len()];
+    for f in &per_cord_fits {
+        for i in obs.rows_of(&f.runs) {
+            per_cord_pred[i] = f.t2_n[i];
+        }
+    }
+    let cord_mu: Vec<f64> = per_cord_fits.iter().map(|f| f.model(None).law.mu).collect();
+
+    // The thesis's Table 3.
+    let thesis_pred: Vec<f64> = obs
+        .rows
+        .iter()
+        .map(|r| {
+            thesis::thesis_amp(r.op.wrap_rad.to_degrees().round(), r.t1_n)
+                .map_or(f64::NAN, |a| a * r.t1_n)
+        })
+        .collect();
+    let thesis_ok = thesis_pred.iter().all(|p| p.is_finite());
+
+    // The extended model (mixed: per-cord random log-mu).
+    let ext_spec = models::extended();
+    let extended = fit_mixed(&ext_spec, obs, &all, None, MixedOptions::default());
+    let ext_pop = extended.predict(obs, &all, false);
+    let ext_eval = evaluate(
+        &extended.spec,
+        &extended.theta,
+        &extended.u,
+        obs,
+        &all,
+        false,
+    );
+    let strict = fit_mixed(
+        &ext_spec,
+        obs,
+        &all,
+        Some(&extended.theta),
+        MixedOptions {
+            edf_cap: Some(STRICT_BUDGET),
+            ..MixedOptions::default()
+        },
+    );
+    let fits_s = t0.elapsed().as_secs_f64();
+
+    // Leave one cord out.
+    let t1 = Instant::now();
+    let baseline_loco = loco(obs, 1, |train| fit_fixed(&base_spec, obs, train, None));
+    let (th, u0) = (extended.theta.clone(), extended.u.clone());
+    let l0 = extended.lambda.unwrap_or(200.0);
+    let extended_loco = loco(obs, threads, |train| {
+        let opts = MixedOptions {
+            lambda0: l0,
+            ..MixedOptions::default()
+        };
+        fit_mixed_from(&ext_spec, obs, train, th.clone(), u0.clone(), opts)
+    });
+    // Per-cord baseline on a new cord: the mean log-mu of the other cords.
+    let mut per_cord_loco = vec![f64::NAN; obs.len()];
+    for g in 0..obs.groups.len() {
+        let others: Vec<f64> = (0..obs.groups.len())
+            .filter(|&k| k != g)
+            .map(|k| cord_mu[k].ln())
+            .collect();
+        let m = capstan_friction::Model::euler_eytelwein(mean(&others).exp());
+        for i in obs.rows_of_group(g) {
+            let r = &obs.rows[i];
+            per_cord_loco[i] = m.predict_t2_n(r.t1_n, &r.op);
+        }
+    }
+    let per_cord_loco_rmse = obs.rmse_t2(&per_cord_loco);
+    let loco_s = t1.elapsed().as_secs_f64();
+
+    let pred = Predictions {
+        baseline: baseline.t2_n.clone(),
+        baseline_per_cord: per_cord_pred,
+        thesis: thesis_pred,
+        extended: extended.t2_n.clone(),
+        extended_population: ext_pop,
+        baseline_loco: baseline_loco.t2_n.clone(),
+        baseline_per_cord_loco: per_cord_loco,
+        extended_loco: extended_loco.t2_n.clone(),
+        extended_load_memory_ns: ext_eval.load_memory_ns,
+    };
+    Fits {
+        baseline,
+        cord_mu,
+        extended,
+        strict,
+        baseline_loco,
+        extended_loco,
+        per_cord_loco_rmse,
+        thesis_ok,
+        pred,
+        fits_s,
+        loco_s,
+    }
+}
