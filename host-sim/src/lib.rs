@@ -3,6 +3,7 @@
 //!
 //! * [`time`]: the embassy-time driver (thread-local virtual clock) and `block_on`.
 //! * [`run`]: one run: plant + firmware + `Vec` sink.
+//! * [`setup`]: a cord's ranges, protocol and plant constants (campaigns and two-control).
 //! * [`campaign`]: many runs over diameters, wraps and voltages, in parallel threads.
 //! * [`two_control`]: several cords, each with its own servo and firmware, on one capstan and
 //!   one drive motor (the thesis's two-control, single-drive rig).
@@ -12,6 +13,7 @@
 
 pub mod campaign;
 pub mod run;
+pub mod setup;
 pub mod time;
 pub mod two_control;
 

@@ -1,6 +1,8 @@
 //! One firmware run against the plant: `firmware::run_once` with a `firmware::Rig`, the plant
-//! adapters as its hardware and a `Vec` sink, in virtual time.
+//! adapters as its hardware and a `Vec` sink, in virtual time, with an optional probe of the
+//! plant's true state (also used by the two-control rig).
 
+use crate::setup::OutOfRange;
 use crate::time;
 use capstan_plant::{
     rig_io, CordSetup, Injection, InjectionReport, Plant, PlantConfig, PlantError, ServoEvent,
@@ -176,12 +178,14 @@ impl RunOutput {
 }
 
 /// A run that could not be set up.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SetupError {
     /// The firmware refused the protocol.
     Protocol(ProtocolError),
     /// The plant refused its constants or an injection.
     Plant(PlantError),
+    /// A diameter, wrap or drive voltage is out of range ([`crate::setup`]).
+    Range(OutOfRange),
 }
 
 impl fmt::Display for SetupError {
@@ -209,11 +213,28 @@ impl fmt::Display for SetupError {
                 write!(f, "the firmware refuses the protocol ({e:?}): {why}")
             }
             SetupError::Plant(e) => write!(f, "{e}"),
+            SetupError::Range(e) => write!(f, "{e}"),
         }
     }
 }
 
 impl std::error::Error for SetupError {}
+
+/// Every `every` of virtual time, bring the plant to the present and hand it to `record`. Never
+/// ends: select it against the firmware's runners.
+pub(crate) async fn sample_plant(
+    plant: &RefCell<Plant>,
+    every: Duration,
+    mut record: impl FnMut(&Plant),
+) {
+    let mut t = Ticker::every(every);
+    loop {
+        t.next().await;
+        let mut p = plant.borrow_mut();
+        p.advance_to(time::now_us());
+        record(&p);
+    }
+}
 
 /// Longest a run may take in virtual time: the protocol, the press, and 10 s of slack.
 pub fn time_limit_us(protocol: &Protocol, cord: &CordSetup) -> u64 {
@@ -240,23 +261,17 @@ pub fn run(spec: &RunSpec) -> Result<RunOutput, SetupError> {
         let runner = firmware::run_once(&mut io, &mut rig, &mut sink);
         if spec.trace_every_ms > 0 {
             let every = Duration::from_millis(spec.trace_every_ms as u64);
-            let probe = async {
-                let mut t = Ticker::every(every);
-                loop {
-                    t.next().await;
-                    let mut p = plant.borrow_mut();
-                    p.advance_to(time::now_us());
-                    let (c, d) = (p.truth(0), p.drive());
-                    trace.borrow_mut().push(TraceSample {
-                        t_us: p.now_us(),
-                        t1_n: c.t1_n,
-                        t2_n: c.t2_n,
-                        angle_deg: c.angle_deg,
-                        capstan_rpm: d.capstan_rpm,
-                        current_a: d.current_a,
-                    });
-                }
-            };
+            let probe = sample_plant(&plant, every, |p| {
+                let (c, d) = (p.truth(0), p.drive());
+                trace.borrow_mut().push(TraceSample {
+                    t_us: p.now_us(),
+                    t1_n: c.t1_n,
+                    t2_n: c.t2_n,
+                    angle_deg: c.angle_deg,
+                    capstan_rpm: d.capstan_rpm,
+                    current_a: d.current_a,
+                });
+            });
             let both = embassy_futures::select::select(runner, probe);
             time::block_on_until(both, limit).map(|e| match e {
                 embassy_futures::select::Either::First(r) => r,

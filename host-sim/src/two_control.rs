@@ -12,19 +12,21 @@
 //! and, for every servo step of one channel, what the others saw across it: the change of their
 //! T2 and of the capstan speed.
 
-use crate::run::{time_limit_us, RunFailure, RunLog, SetupError, VecSink};
+mod crosstalk;
+
+pub use crosstalk::CrossTalk;
+
+use crate::run::{self, time_limit_us, RunFailure, RunLog, SetupError, VecSink};
+use crate::setup;
 use crate::time;
 use capstan_friction::Model;
 use capstan_plant::{rig_io, CordSetup, Plant, PlantConfig, ServoEvent, MAX_CORDS};
 use core::cell::RefCell;
 use embassy_futures::select::{select, Either};
-use embassy_time::{Duration, Ticker};
+use embassy_time::Duration;
 use firmware::record::RunEnd;
 use firmware::safety::SafetyLimits;
 use firmware::{Calibration, Protocol, Rig, StepOrder};
-use std::future::{poll_fn, Future};
-use std::pin::Pin;
-use std::task::Poll;
 
 /// One channel: a cord with its own servo and firmware.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -126,48 +128,6 @@ pub struct SeriesRow {
     /// Every channel, in order.
     pub channels: Vec<ChannelSample>,
 }
-
-/// What one channel saw while another stepped.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CrossTalk {
-    /// The channel that stepped (0-based).
-    pub stepping: usize,
-    /// When its servo command changed, s since the press.
-    pub t_s: f64,
-    /// Its commanded angle before and after, deg.
-    pub from_deg: f64,
-    /// See `from_deg`.
-    pub to_deg: f64,
-    /// The stepping channel's own T2 change, N.
-    pub stepping_d_t2_n: f64,
-    /// The channel that held (0-based).
-    pub observer: usize,
-    /// Its mean T2 over [t − 1 s, t − 50 ms), N.
-    pub observer_t2_before_n: f64,
-    /// Its mean T2 over [t + 0.5 s, t + 1.5 s), N.
-    pub observer_t2_after_n: f64,
-    /// Capstan speed over the same windows, rpm.
-    pub rpm_before: f64,
-    /// See `rpm_before`.
-    pub rpm_after: f64,
-    /// Drive current over the same windows, A.
-    pub current_before_a: f64,
-    /// See `current_before_a`.
-    pub current_after_a: f64,
-}
-
-impl CrossTalk {
-    /// The observer's T2 change, as a fraction of its T2 before.
-    pub fn observer_d_t2_rel(&self) -> f64 {
-        (self.observer_t2_after_n - self.observer_t2_before_n) / self.observer_t2_before_n
-    }
-
-    /// The capstan speed change, as a fraction.
-    pub fn d_rpm_rel(&self) -> f64 {
-        (self.rpm_after - self.rpm_before) / self.rpm_before
-    }
-}
-
 /// One channel's outcome.
 #[derive(Clone, Debug)]
 pub struct ChannelResult {
@@ -232,63 +192,41 @@ impl TwoControlResult {
     }
 }
 
-/// Poll every future to completion; outputs in the same order.
-async fn join_all<F: Future>(futs: Vec<F>) -> Vec<F::Output> {
-    let mut futs: Vec<Pin<Box<F>>> = futs.into_iter().map(Box::pin).collect();
-    let mut outs: Vec<Option<F::Output>> = futs.iter().map(|_| None).collect();
-    poll_fn(move |cx| {
-        for (f, o) in futs.iter_mut().zip(outs.iter_mut()) {
-            if o.is_none() {
-                if let Poll::Ready(v) = f.as_mut().poll(cx) {
-                    *o = Some(v);
-                }
-            }
+impl TwoControlConfig {
+    /// Check the channel count (1 to 4), the diameter, every wrap and the drive voltage (the
+    /// same ranges as a campaign's).
+    pub fn validate(&self) -> Result<(), SetupError> {
+        let n = self.channels.len();
+        if n == 0 || n > MAX_CORDS {
+            return Err(SetupError::Plant(capstan_plant::PlantError::CordCount));
         }
-        if outs.iter().all(Option::is_some) {
-            Poll::Ready(outs.iter_mut().map(|o| o.take().unwrap()).collect())
-        } else {
-            Poll::Pending
+        setup::check_diameter(self.diameter_mm).map_err(SetupError::Range)?;
+        for ch in &self.channels {
+            setup::check_wrap(ch.wrap_deg).map_err(SetupError::Range)?;
         }
-    })
-    .await
-}
-
-fn mean_over(series: &[SeriesRow], a_s: f64, b_s: f64, f: impl Fn(&SeriesRow) -> f64) -> f64 {
-    let v: Vec<f64> = series
-        .iter()
-        .filter(|r| r.t_s >= a_s && r.t_s < b_s)
-        .map(f)
-        .collect();
-    if v.is_empty() {
-        f64::NAN
-    } else {
-        v.iter().sum::<f64>() / v.len() as f64
+        setup::check_drive_v(self.drive_v, &self.calibration).map_err(SetupError::Range)
     }
 }
 
 /// Run every channel's firmware on one shared plant.
 pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, SetupError> {
+    cfg.validate()?;
     let n = cfg.channels.len();
-    if n == 0 || n > MAX_CORDS {
-        return Err(SetupError::Plant(capstan_plant::PlantError::CordCount));
-    }
-    let gain = cfg.calibration.amp.amp_gain as f64;
-    let mut plant_cfg = cfg.plant;
-    plant_cfg.capstan_diameter_mm = cfg.diameter_mm;
-    if !cfg.sensor_noise {
-        plant_cfg.sensor.noise_sd_n = 0.0;
-    }
+    let plant_cfg = setup::cord_plant(&cfg.plant, cfg.diameter_mm, cfg.sensor_noise);
     let mut rigs = Vec::with_capacity(n);
     let mut cords = Vec::with_capacity(n);
     let mut limit = 0;
     for ch in &cfg.channels {
         let protocol = Protocol {
-            order: ch.order,
             pre_trigger_ms: cfg.protocol.pre_trigger_ms + ch.delay_ms,
-            amp_control_v: (cfg.drive_v / gain) as f32,
-            capstan_diameter_mm: cfg.diameter_mm as f32,
-            wrap_deg: ch.wrap_deg as f32,
-            ..cfg.protocol
+            ..setup::cord_protocol(
+                &cfg.protocol,
+                &cfg.calibration,
+                ch.order,
+                cfg.diameter_mm,
+                ch.wrap_deg,
+                cfg.drive_v,
+            )
         };
         rigs.push(Rig::new(protocol, cfg.calibration, cfg.limits).map_err(SetupError::Protocol)?);
         let cord = CordSetup::new(ch.wrap_deg, cfg.model);
@@ -310,36 +248,30 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
             .zip(sinks.iter_mut())
             .map(|((io, rig), sink)| firmware::run_once(io, rig, sink))
             .collect();
-        let probe = async {
-            let mut t = Ticker::every(every);
-            loop {
-                t.next().await;
-                let mut p = plant.borrow_mut();
-                p.advance_to(time::now_us());
-                let d = p.drive();
-                let channels = (0..n)
-                    .map(|i| {
-                        let c = p.truth(i);
-                        ChannelSample {
-                            angle_deg: c.angle_deg,
-                            t1_n: c.t1_n,
-                            t2_n: c.t2_n,
-                        }
-                    })
-                    .collect();
-                series.borrow_mut().push(SeriesRow {
-                    t_s: p.now_us() as f64 * 1e-6,
-                    drive_v: d.drive_v,
-                    capstan_rpm: d.capstan_rpm,
-                    current_a: d.current_a,
-                    power_w: d.power_w,
-                    load_nm: d.load_nm,
-                    transmission: d.transmission,
-                    channels,
-                });
-            }
-        };
-        time::block_on_until(select(join_all(runners), probe), limit)
+        let probe = run::sample_plant(&plant, every, |p| {
+            let d = p.drive();
+            let channels = (0..n)
+                .map(|i| {
+                    let c = p.truth(i);
+                    ChannelSample {
+                        angle_deg: c.angle_deg,
+                        t1_n: c.t1_n,
+                        t2_n: c.t2_n,
+                    }
+                })
+                .collect();
+            series.borrow_mut().push(SeriesRow {
+                t_s: p.now_us() as f64 * 1e-6,
+                drive_v: d.drive_v,
+                capstan_rpm: d.capstan_rpm,
+                current_a: d.current_a,
+                power_w: d.power_w,
+                load_nm: d.load_nm,
+                transmission: d.transmission,
+                channels,
+            });
+        });
+        time::block_on_until(select(time::join_all(runners), probe), limit)
     };
     let ends: Vec<Result<RunEnd, RunFailure>> = match outcome {
         Ok(Either::First(v)) => v
@@ -363,7 +295,7 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
             trigger_rise_us: p.trigger_rise_us(i),
         })
         .collect();
-    let crosstalk = crosstalk(&series, &channels);
+    let crosstalk = crosstalk::crosstalk(&series, &channels);
     Ok(TwoControlResult {
         series,
         crosstalk,
@@ -371,50 +303,4 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
         simulated_s: (p.now_us() - p.origin_us()) as f64 * 1e-6,
         wall_s: wall.elapsed().as_secs_f64(),
     })
-}
-
-fn crosstalk(series: &[SeriesRow], channels: &[ChannelResult]) -> Vec<CrossTalk> {
-    let mut out = Vec::new();
-    for (j, ch) in channels.iter().enumerate() {
-        for w in ch.servo_events.windows(2) {
-            let (prev, ev) = (w[0], w[1]);
-            let t = ev.t_us as f64 * 1e-6;
-            let mean = |a: f64, b: f64, f: &dyn Fn(&SeriesRow) -> f64| mean_over(series, a, b, f);
-            let own = mean(t + 0.5, t + 1.5, &|r| r.channels[j].t2_n)
-                - mean(t - 1.0, t - 0.05, &|r| r.channels[j].t2_n);
-            for (i, other) in channels.iter().enumerate() {
-                if i == j {
-                    continue;
-                }
-                let busy = other.servo_events.iter().skip(1).any(|e| {
-                    let te = e.t_us as f64 * 1e-6;
-                    te > t - 1.0 && te < t + 1.5
-                });
-                if busy {
-                    continue;
-                }
-                let before = (t - 1.0, t - 0.05);
-                let after = (t + 0.5, t + 1.5);
-                let c = CrossTalk {
-                    stepping: j,
-                    t_s: t,
-                    from_deg: prev.angle_deg,
-                    to_deg: ev.angle_deg,
-                    stepping_d_t2_n: own,
-                    observer: i,
-                    observer_t2_before_n: mean(before.0, before.1, &|r| r.channels[i].t2_n),
-                    observer_t2_after_n: mean(after.0, after.1, &|r| r.channels[i].t2_n),
-                    rpm_before: mean(before.0, before.1, &|r| r.capstan_rpm),
-                    rpm_after: mean(after.0, after.1, &|r| r.capstan_rpm),
-                    current_before_a: mean(before.0, before.1, &|r| r.current_a),
-                    current_after_a: mean(after.0, after.1, &|r| r.current_a),
-                };
-                if c.observer_t2_before_n.is_finite() && c.observer_t2_after_n.is_finite() {
-                    out.push(c);
-                }
-            }
-        }
-    }
-    out.sort_by(|a, b| a.t_s.total_cmp(&b.t_s).then(a.observer.cmp(&b.observer)));
-    out
 }
