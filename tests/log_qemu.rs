@@ -1,6 +1,7 @@
 //! End-to-end proof of `capstan log` without a board.
 //!
-//! QEMU (`qemu-system-arm`, MPS2 AN385 board, Cortex-M3) runs our firmware build `qemu-fw`:
+//! QEMU (`qemu-system-arm`, lm3s6965evb board: Cortex-M3, 64 KiB of SRAM) runs our firmware
+//! build `qemu-fw`:
 //! the rig core on a SysTick embassy-time driver, the simulated plant compiled in, defmt over
 //! semihosting. Its stdout is piped into `capstan log --elf ... --from -`, and the decoded
 //! records are compared with host-sim's runs of the same protocol, plant and seeds
@@ -10,9 +11,14 @@
 //! test prints why and passes as skipped, except in CI (`CI=true`), where it fails.
 //!
 //! QEMU runs with `-icount shift=1,sleep=off`: emulated time follows the instruction count and
-//! jumps over idle time, so the run is deterministic and takes ~0.5 s instead of its 4.5 s.
+//! jumps over idle time, so the run is deterministic and takes ~0.3 s instead of its 4.5 s.
 //! `CAPSTAN_QEMU_REALTIME=1` runs it in real time instead (then a busy host can make the
 //! firmware miss a millisecond tick, and the data may differ slightly).
+//!
+//! The firmware must also stay inside the board's RAM: QEMU logs any access to unmapped memory
+//! (`-d guest_errors`; a stack overflow runs off the bottom of SRAM, where the lm3s6965evb
+//! drops writes without a fault), which fails the test, and qemu-fw's report of its stack
+//! high-water mark on QEMU's stderr is checked and printed.
 
 use capstan::data::load_pairs;
 use firmware::record::{RawSample, StepPair};
@@ -93,10 +99,52 @@ fn qemu_version() -> Result<String, String> {
     }
 }
 
+/// The QEMU command line, as `scripts/qemu-e2e` and `.cargo/config.toml`'s runner have it.
+fn qemu_command(elf: &Path, realtime: bool) -> Command {
+    let mut qemu = Command::new("qemu-system-arm");
+    qemu.args(["-machine", "lm3s6965evb", "-nographic", "-monitor", "none"])
+        .args(["-serial", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(["-d", "guest_errors"]);
+    if !realtime {
+        qemu.args(["-icount", "shift=1,sleep=off"]);
+    }
+    qemu.arg("-kernel").arg(elf);
+    qemu
+}
+
+/// qemu-fw's RAM use, from its report on QEMU's stderr: `qemu-fw: stack high-water mark USED
+/// of SIZE bytes; statics STATICS bytes`.
+#[derive(Debug)]
+struct RamUsage {
+    stack_used: u64,
+    stack_size: u64,
+    statics: u64,
+}
+
+fn ram_usage(qemu_stderr: &str) -> Option<RamUsage> {
+    let line = qemu_stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("qemu-fw: stack high-water mark "))?;
+    let n: Vec<u64> = line
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    match n[..] {
+        [stack_used, stack_size, statics] => Some(RamUsage {
+            stack_used,
+            stack_size,
+            statics,
+        }),
+        _ => None,
+    }
+}
+
 struct Decoded {
     raw: Vec<(u32, u32, f64, u16, u16, f64, f64)>,
     summary: serde_json::Value,
     out_dir: PathBuf,
+    ram: RamUsage,
 }
 
 /// QEMU | capstan log --from -. Returns what capstan wrote.
@@ -106,16 +154,7 @@ struct Decoded {
 fn run_qemu_into_capstan(elf: &Path, out_dir: &Path) -> Decoded {
     let _ = std::fs::remove_dir_all(out_dir);
     let realtime = std::env::var("CAPSTAN_QEMU_REALTIME").is_ok_and(|v| v == "1");
-    let mut qemu = Command::new("qemu-system-arm");
-    qemu.args(["-machine", "mps2-an385", "-nographic", "-monitor", "none"])
-        .args(["-serial", "none"])
-        .args(["-semihosting-config", "enable=on,target=native"]);
-    if !realtime {
-        qemu.args(["-icount", "shift=1,sleep=off"]);
-    }
-    let mut qemu = qemu
-        .arg("-kernel")
-        .arg(elf)
+    let mut qemu = qemu_command(elf, realtime)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -172,6 +211,29 @@ fn run_qemu_into_capstan(elf: &Path, out_dir: &Path) -> Decoded {
         "capstan log failed ({}):\n{c_err}",
         c_status.unwrap()
     );
+    // Outside RAM (or any other guest error): a stack overflow, most likely; the data would
+    // be wrong in ways the comparison below might not pin on the cause.
+    let guest_errors: Vec<&str> = q_err
+        .lines()
+        .filter(|l| l.starts_with("Invalid "))
+        .collect();
+    assert!(
+        guest_errors.is_empty(),
+        "qemu-fw accessed unmapped memory ({} accesses; stack overflow?), first: {}\n{}",
+        guest_errors.len(),
+        guest_errors[0],
+        q_err
+            .lines()
+            .rev()
+            .find(|l| l.starts_with("qemu-fw:"))
+            .unwrap_or("")
+    );
+    let ram = ram_usage(&q_err)
+        .unwrap_or_else(|| panic!("qemu-fw did not report its RAM use on stderr:\n{q_err}"));
+    assert!(
+        ram.stack_used < ram.stack_size,
+        "qemu-fw used all of its stack: {ram:?}"
+    );
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
             .unwrap();
@@ -196,6 +258,7 @@ fn run_qemu_into_capstan(elf: &Path, out_dir: &Path) -> Decoded {
         raw,
         summary,
         out_dir: out_dir.to_path_buf(),
+        ram,
     }
 }
 
@@ -307,10 +370,14 @@ fn qemu_run_decoded_by_capstan_log_agrees_with_host_sim() {
     eprintln!(
         "QEMU ({version}) vs host-sim: {n_pairs} pairs, max |pair difference| = {max_n} N \
          ({max_pair_counts:.3} counts); {n_raw} raw samples, max |count difference| = \
-         {max_counts}; firmware build {:.1} s, QEMU + capstan log {:.2} s, host-sim {:.3} s",
+         {max_counts}; firmware build {:.1} s, QEMU + capstan log {:.2} s, host-sim {:.3} s; \
+         qemu-fw RAM: stack high-water mark {} of {} bytes, statics {} bytes (64 KiB SRAM)",
         built.as_secs_f64(),
         emulated.as_secs_f64(),
-        simulated.as_secs_f64()
+        simulated.as_secs_f64(),
+        q.ram.stack_used,
+        q.ram.stack_size,
+        q.ram.statics
     );
     assert!(n_pairs >= 4);
     assert!(

@@ -1,12 +1,9 @@
-//! The rig firmware on an emulated Cortex-M3 (QEMU's MPS2 AN385 board): the same rig core as
-//! the Pico, on a SysTick time driver, with the simulated plant compiled in and defmt over
-//! semihosting. It runs `qemu_fw::scenario` (two runs; the plant presses the button) and exits
-//! QEMU.
-//!
-//! Why not the Stellaris lm3s6965evb, the usual QEMU Cortex-M3: its 64 KiB of RAM. The plant
-//! is ~12.5 KiB, `Plant::new_at` alone needs ~25 KiB of stack, and the task's future holds the
-//! plant again (Rust moves it, it cannot build it in place): that overflowed the 64 KiB (a
-//! lockup in QEMU). The AN385 is a Cortex-M3 too (same thumbv7m code), with 4 MiB of RAM.
+//! The rig firmware on an emulated Cortex-M3 (QEMU's lm3s6965evb, a Stellaris LM3S6965 with
+//! 256 KiB of flash and 64 KiB of SRAM): the same rig core as the Pico, on a SysTick time
+//! driver, with the simulated plant compiled in and defmt over semihosting. It runs
+//! `qemu_fw::scenario` (two runs; the plant presses the button) and exits QEMU, after writing
+//! its RAM use (the stack's high-water mark, read back from the paint the reset handler put on
+//! it) to QEMU's stderr; stdout carries only the defmt stream.
 //!
 //! `cargo run --release -p qemu-fw --target thumbv7m-none-eabi` runs it (the runner is in
 //! `.cargo/config.toml`); its stdout is the defmt stream `capstan log --from -` decodes.
@@ -29,9 +26,17 @@ mod time_driver;
 #[cfg(target_os = "none")]
 use defmt_semihosting as _;
 
-/// Leave QEMU with this exit code.
+/// Report the RAM use on stderr (tests/log_qemu.rs reads it) and leave QEMU with this exit
+/// code.
 #[cfg(target_os = "none")]
 fn exit(code: i32) -> ! {
+    let ram = rt::ram_usage();
+    semihosting::eprintln!(
+        "qemu-fw: stack high-water mark {} of {} bytes; statics {} bytes",
+        ram.stack_used,
+        ram.stack_size,
+        ram.statics
+    );
     semihosting::process::exit(code)
 }
 
