@@ -49,7 +49,9 @@ fn simulate_writes_pairs_raw_logs_and_one_json_object() {
     assert_eq!(v["runs"], 4);
     assert_eq!(v["pairs"], 48);
     assert!(v["simulated_s"].as_f64().unwrap() > 4.0 * 40.0);
-    assert!(v["realtime_factor"].as_f64().unwrap() > 100.0);
+    // Reported, not judged: a wall-clock bound would flake on a busy machine (the benchmark
+    // measures speed).
+    assert!(v["realtime_factor"].as_f64().unwrap() > 0.0);
     assert!(v["wall_s"].as_f64().unwrap() > 0.0);
     assert_eq!(v["faults"], serde_json::json!([]));
     // No progress bar when not on a terminal.

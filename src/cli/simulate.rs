@@ -1,18 +1,19 @@
 //! `capstan simulate`: the rig's firmware against the simulated plant, a whole campaign in
-//! virtual time (or the two-control, single-drive rig with `--two-control`).
+//! virtual time (or the two-control, single-drive rig with `--two-control`).//!
+//! * this module: the arguments, and a campaign run from them;
+//! * `output`: a campaign's files (`pairs.csv`, raw logs, `faults.csv`), JSON and summary;
+//! * `two`: the two-control rig (`--two-control`) and its files.
+
+mod output;
+mod two;
 
 use crate::data::{write_pairs, Pair};
 use anyhow::{bail, Context};
 use capstan_friction::{Effect, Model};
 use firmware::StepOrder;
-use host_sim::campaign::{
-    run_campaign_with_progress, CampaignConfig, CampaignResult, FaultSpec, PairRow, RunResult,
-};
-use host_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
-use serde_json::json;
-use std::fs::File;
-use std::io::{BufWriter, IsTerminal, Write};
-use std::path::{Path, PathBuf};
+use host_sim::campaign::{run_campaign_with_progress, CampaignConfig, FaultSpec, PairRow};
+use std::io::IsTerminal;
+use std::path::PathBuf;
 
 /// Step orders on the command line.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -175,7 +176,7 @@ fn plant(args: &Args) -> anyhow::Result<host_sim::plant::PlantConfig> {
 /// Run `capstan simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if args.two_control {
-        return run_two(&args);
+        return two::run_two(&args);
     }
     for (flag, given) in [
         ("--orders", args.orders.is_some()),
@@ -239,9 +240,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let pairs_path = args.out.join("pairs.csv");
     write_pairs(&pairs_path, &to_pairs(&result.rows))?;
     if !args.no_raw {
-        write_raw_logs(&args.out.join("raw"), &result.runs)?;
+        output::write_raw_logs(&args.out.join("raw"), &result.runs)?;
     }
-    write_faults(&args.out.join("faults.csv"), &result)?;
+    output::write_faults(&args.out.join("faults.csv"), &result)?;
 
     // An injection after its run had ended never happened: say so rather than list it.
     for r in &result.runs {
@@ -265,14 +266,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if args.json {
-        println!("{}", campaign_json(&result));
+        println!("{}", output::campaign_json(&result));
     } else {
-        print_summary(&args.out, &result, !args.no_raw);
+        output::print_summary(&args.out, &result, !args.no_raw);
     }
     Ok(())
 }
 
-fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
+/// The simulator's rows as pairs of the CSV schema (`capstan::data`): what `pairs.csv` holds,
+/// and what the diagnosis's generated cases read back.
+pub fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
     rows.iter()
         .map(|r| Pair {
             capstan_diameter_mm: Some(r.capstan_diameter_mm),
@@ -286,362 +289,4 @@ fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
             extra: Vec::new(),
         })
         .collect()
-}
-
-fn create(path: &Path) -> anyhow::Result<BufWriter<File>> {
-    let f = File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(BufWriter::new(f))
-}
-
-fn raw_name(r: &RunResult) -> String {
-    format!("{}_run{}.csv", r.cord.label(), r.run)
-}
-
-fn write_raw_logs(dir: &Path, runs: &[RunResult]) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    // Raw logs of an earlier simulation into the same directory would mix with these.
-    if let Ok(entries) = std::fs::read_dir(dir) {
-        for e in entries.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
-            let ours = name.starts_with('d') && name.contains("_run") && name.ends_with(".csv");
-            if ours && !runs.iter().any(|r| raw_name(r) == name) {
-                let _ = std::fs::remove_file(e.path());
-            }
-        }
-    }
-    for r in runs {
-        let path = dir.join(raw_name(r));
-        let mut w = create(&path)?;
-        writeln!(w, "t_s,t1_counts,t2_counts,t1_n,t2_n")?;
-        for s in &r.log.raw {
-            writeln!(
-                w,
-                "{},{},{},{},{}",
-                s.t_us as f64 / 1e6,
-                s.counts[0],
-                s.counts[1],
-                s.force_n[0],
-                s.force_n[1]
-            )?;
-        }
-        w.flush()
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    Ok(())
-}
-
-fn opt<T: ToString>(v: Option<T>) -> String {
-    v.map_or(String::new(), |x| x.to_string())
-}
-
-fn write_faults(path: &Path, r: &CampaignResult) -> anyhow::Result<()> {
-    let mut w = create(path)?;
-    writeln!(
-        w,
-        "run,capstan_diameter_mm,wrap_deg,drive_v,repeat,injected,fault,at_s,detected_s,safe_after_ms,pairs_kept"
-    )?;
-    for f in &r.faults {
-        writeln!(
-            w,
-            "{},{},{},{},{},{},{},{},{},{},{}",
-            f.run,
-            f.cord.diameter_mm,
-            f.cord.wrap_deg,
-            f.cord.drive_v,
-            f.repeat,
-            opt(f.injected.map(|k| k.name())),
-            opt(f.fault.map(|k| k.name())),
-            f.at_s,
-            opt(f.detected_s),
-            opt(f.safe_after_ms),
-            f.pairs_kept
-        )?;
-    }
-    w.flush()?;
-    Ok(())
-}
-
-fn campaign_json(r: &CampaignResult) -> serde_json::Value {
-    let faults: Vec<_> = r
-        .faults
-        .iter()
-        .map(|f| {
-            json!({
-                "run": f.run,
-                "fault": f.fault.map(|k| k.name()),
-                "at_s": f.at_s,
-                "safe_after_ms": f.safe_after_ms,
-                "pairs_kept": f.pairs_kept,
-            })
-        })
-        .collect();
-    json!({
-        "runs": r.runs.len(),
-        "pairs": r.rows.len(),
-        "simulated_s": r.simulated_s,
-        "wall_s": r.wall_s,
-        "realtime_factor": r.realtime_factor(),
-        "faults": faults,
-    })
-}
-
-fn print_summary(out: &Path, r: &CampaignResult, raw: bool) {
-    println!(
-        "{} runs, {:.0} s of rig time simulated in {:.2} s on {} threads ({:.0}x real time)",
-        r.runs.len(),
-        r.simulated_s,
-        r.wall_s,
-        r.threads,
-        r.realtime_factor()
-    );
-    println!(
-        "{} pairs -> {}",
-        r.rows.len(),
-        out.join("pairs.csv").display()
-    );
-    if raw {
-        println!("raw logs -> {}", out.join("raw").display());
-    }
-    for f in &r.faults {
-        let injected = f.injected.map_or("-".into(), |k| k.name().to_string());
-        let seen = f
-            .fault
-            .map_or("NOT DETECTED".into(), |k| k.name().to_string());
-        let safe = f
-            .safe_after_ms
-            .map_or("never".into(), |ms| format!("{ms} ms"));
-        println!(
-            "run {} ({} run {}): injected {injected} at {} s, firmware: {seen}, safe after \
-             {safe}, {} pairs kept",
-            f.run,
-            f.cord.label(),
-            f.repeat,
-            f.at_s,
-            f.pairs_kept
-        );
-    }
-    if !r.faults.is_empty() {
-        println!("faults -> {}", out.join("faults.csv").display());
-    }
-}
-
-fn run_two(args: &Args) -> anyhow::Result<()> {
-    let (model, effects) = model(args)?;
-    if !effects.is_empty() {
-        bail!("--effect is for campaigns; the two-control rig runs the base model (--mu)");
-    }
-    if !args.faults.is_empty() {
-        bail!("--fault is for campaigns, not --two-control");
-    }
-    let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
-    let n = wraps.len();
-    if !(1..=host_sim::plant::MAX_CORDS).contains(&n) {
-        bail!(
-            "--two-control: give 1 to {} wraps (one per channel), not {n}",
-            host_sim::plant::MAX_CORDS
-        );
-    }
-    let orders = args.orders.clone().unwrap_or_else(|| {
-        (0..n)
-            .map(|i| {
-                if i % 2 == 0 {
-                    Order::Monotone
-                } else {
-                    Order::Pulse
-                }
-            })
-            .collect()
-    });
-    let delays = args
-        .delays_ms
-        .clone()
-        .unwrap_or_else(|| (0..n as u32).map(|i| 5_000 * (i % 2)).collect());
-    if orders.len() != n || delays.len() != n {
-        bail!(
-            "--two-control: {n} channels (--wraps) but {} --orders and {} --delays-ms",
-            orders.len(),
-            delays.len()
-        );
-    }
-    let diameter = match args.diameters.as_deref() {
-        None => 12.7,
-        Some([d]) => *d,
-        Some(_) => bail!("--two-control: one capstan, one --diameters value"),
-    };
-    let drive_v = match args.drive_v.as_slice() {
-        [v] => *v,
-        _ => bail!("--two-control: one drive motor, one --drive-v value"),
-    };
-    if !(diameter.is_finite() && diameter > 0.0) {
-        bail!("--diameters {diameter}: must be positive");
-    }
-    if !(drive_v.is_finite() && (0.0..=13.2).contains(&drive_v)) {
-        bail!("--drive-v {drive_v}: must be 0 to 13.2 V");
-    }
-    for &w in &wraps {
-        if !(w.is_finite() && w > 0.0 && w <= 3600.0) {
-            bail!("--wraps {w}: must be in (0, 3600]");
-        }
-    }
-    let cfg = TwoControlConfig {
-        diameter_mm: diameter,
-        drive_v,
-        channels: wraps
-            .iter()
-            .zip(&orders)
-            .zip(&delays)
-            .map(|((&wrap_deg, &o), &delay_ms)| ChannelSpec {
-                wrap_deg,
-                order: o.into(),
-                delay_ms,
-            })
-            .collect(),
-        model,
-        protocol: protocol(args),
-        plant: plant(args)?,
-        seed: args.seed,
-        sensor_noise: !args.no_noise,
-        ..TwoControlConfig::default()
-    };
-    let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    write_two(&args.out, &cfg, &r)?;
-    let pairs: usize = r.channels.iter().map(|c| c.log.pairs.len()).sum();
-    let (t2_rel, rpm_rel) = r.worst_crosstalk();
-    let faults: Vec<_> = r
-        .channels
-        .iter()
-        .enumerate()
-        .filter_map(|(i, c)| {
-            let f = c.log.faults.first()?;
-            Some(json!({
-                "channel": i + 1,
-                "fault": f.kind.name(),
-                "at_s": f.t_us as f64 * 1e-6,
-                "pairs_kept": c.log.pairs.len(),
-            }))
-        })
-        .collect();
-    if args.json {
-        println!(
-            "{}",
-            json!({
-                "channels": n,
-                "pairs": pairs,
-                "simulated_s": r.simulated_s,
-                "wall_s": r.wall_s,
-                "realtime_factor": r.simulated_s / r.wall_s.max(1e-9),
-                "peak_current_a": r.peak_current_a(),
-                "peak_power_w": r.peak_power_w(),
-                "mean_power_w": r.mean_power_w(),
-                "crosstalk_events": r.crosstalk.len(),
-                "worst_t2_crosstalk_rel": t2_rel,
-                "worst_speed_crosstalk_rel": rpm_rel,
-                "faults": faults,
-            })
-        );
-    } else {
-        println!(
-            "{n} channels on one {diameter} mm capstan at {drive_v} V: {:.0} s simulated in {:.3} s",
-            r.simulated_s, r.wall_s
-        );
-        println!(
-            "drive: peak {:.2} A / {:.1} W (spin-up), mean {:.2} W while on",
-            r.peak_current_a(),
-            r.peak_power_w(),
-            r.mean_power_w()
-        );
-        println!(
-            "cross-talk over {} steps: holding channel's T2 moved at most {:.3} %, capstan \
-             speed at most {:.1} %",
-            r.crosstalk.len(),
-            t2_rel * 100.0,
-            rpm_rel * 100.0
-        );
-        println!(
-            "-> {}, {}, pairs_ch1..{n}.csv",
-            args.out.join("two_control.csv").display(),
-            args.out.join("crosstalk.csv").display()
-        );
-    }
-    Ok(())
-}
-
-fn write_two(out: &Path, cfg: &TwoControlConfig, r: &TwoControlResult) -> anyhow::Result<()> {
-    let n = cfg.channels.len();
-    let mut w = create(&out.join("two_control.csv"))?;
-    let mut header = String::from("t_s,drive_v,capstan_rpm,current_a,power_w,load_nm,transmission");
-    for k in 1..=n {
-        header += &format!(",ch{k}_angle_deg,ch{k}_t1_n,ch{k}_t2_n");
-    }
-    writeln!(w, "{header}")?;
-    for row in &r.series {
-        write!(
-            w,
-            "{},{},{},{},{},{},{}",
-            row.t_s,
-            row.drive_v,
-            row.capstan_rpm,
-            row.current_a,
-            row.power_w,
-            row.load_nm,
-            row.transmission
-        )?;
-        for c in &row.channels {
-            write!(w, ",{},{},{}", c.angle_deg, c.t1_n, c.t2_n)?;
-        }
-        writeln!(w)?;
-    }
-    w.flush()?;
-    let mut w = create(&out.join("crosstalk.csv"))?;
-    writeln!(
-        w,
-        "t_s,stepping_channel,from_deg,to_deg,stepping_d_t2_n,observer_channel,\
-         observer_t2_before_n,observer_t2_after_n,observer_d_t2_rel,rpm_before,rpm_after,\
-         d_rpm_rel,current_before_a,current_after_a"
-    )?;
-    for c in &r.crosstalk {
-        writeln!(
-            w,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            c.t_s,
-            c.stepping + 1,
-            c.from_deg,
-            c.to_deg,
-            c.stepping_d_t2_n,
-            c.observer + 1,
-            c.observer_t2_before_n,
-            c.observer_t2_after_n,
-            c.observer_d_t2_rel(),
-            c.rpm_before,
-            c.rpm_after,
-            c.d_rpm_rel(),
-            c.current_before_a,
-            c.current_after_a
-        )?;
-    }
-    w.flush()?;
-    for (k, ch) in r.channels.iter().enumerate() {
-        let rows: Vec<PairRow> = ch
-            .log
-            .pairs
-            .iter()
-            .map(|p| PairRow {
-                capstan_diameter_mm: cfg.diameter_mm,
-                wrap_deg: cfg.channels[k].wrap_deg,
-                drive_v: cfg.drive_v,
-                run: 1,
-                step: p.step,
-                time_s: p.t_mid_ms as f64 / 1000.0,
-                t1_n: format!("{}", p.t1.mean_n).parse().unwrap_or(f64::NAN),
-                t2_n: format!("{}", p.t2.mean_n).parse().unwrap_or(f64::NAN),
-            })
-            .collect();
-        write_pairs(
-            &out.join(format!("pairs_ch{}.csv", k + 1)),
-            &to_pairs(&rows),
-        )?;
-    }
-    Ok(())
 }

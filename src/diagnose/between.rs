@@ -1,4 +1,5 @@
-//! The runs' mu as a linear mixed model: the cord-to-cord and run-to-run scatter.
+//! The runs' mu between runs and cords: their scatter as a linear mixed model, and the tests of
+//! the covariates that vary between cords or runs ([`between_test`]).
 //!
 //! Each run's mu m_r comes from the within-run Euler-Eytelwein fit. Then
 //!
@@ -9,6 +10,11 @@
 //! of covariates use exact small-sample regressions at the cord or run level instead (ML
 //! variance components from a handful of cords are biased low, which makes likelihood-ratio
 //! tests anti-conservative).
+
+use super::prep::{self, Prepared};
+use super::Level;
+use crate::fit::stats;
+use capstan_friction::{EffectKind, REF_DIAMETER_MM, REF_DRIVE_V};
 
 /// ML fit of the random-intercept model.
 #[derive(Clone, Debug)]
@@ -131,4 +137,87 @@ pub(crate) fn fit_lmm(y: &[f64], x: &[Vec<f64>], cord: &[usize], n_cords: usize)
         Some(z) if z.loglik > best.loglik => Some(z),
         _ => Some(best),
     }
+}
+
+/// A cord-level or run-level regression test of the runs' mu.
+pub(super) struct BetweenTest {
+    /// The catalogue parameter.
+    pub value: f64,
+    /// Its standard error.
+    pub se: f64,
+    /// t statistic of the slope.
+    pub t: f64,
+    /// Its degrees of freedom.
+    pub df: f64,
+    /// Cords (or runs, for wear): the N of ln N in ΔBIC.
+    pub n_units: usize,
+    /// Where the evidence comes from.
+    pub level: Level,
+}
+
+/// Regress the runs' mu `y` on the effect's covariate, at the level where it varies.
+///
+/// * Between cords (gain: 1/β; diameter: d − 12.7 mm; speed: V − 10 V): the cord means of mu
+///   against the covariate by least squares, t with G − 2 degrees of freedom. The cord mean
+///   carries the cord's own scatter, so the error term is the cord-to-cord scatter.
+/// * Wear: the runs' mu against run − 1 with a separate intercept per cord, t with
+///   R − G − 1 degrees of freedom: the error term is the run-to-run scatter within cords.
+pub(super) fn between_test(kind: EffectKind, p: &Prepared, y: &[f64]) -> Option<BetweenTest> {
+    let nc = p.cords.len();
+    if kind == EffectKind::Wear {
+        let x: Vec<Vec<f64>> = (0..y.len())
+            .map(|u| {
+                let mut row = vec![0.0; nc + 1];
+                row[p.unit_cord[u]] = 1.0;
+                row[nc] = p.unit_run[u] - 1.0;
+                row
+            })
+            .collect();
+        if y.len() < nc + 2 {
+            return None;
+        }
+        let r = stats::regress(&x, y, None, None)?;
+        let a = r.coef[..nc].iter().sum::<f64>() / nc as f64;
+        let b = r.coef[nc];
+        return Some(BetweenTest {
+            value: b / a,
+            se: r.se[nc] / a.abs(),
+            t: r.t[nc],
+            df: r.df,
+            n_units: y.len(),
+            level: Level::BetweenRun,
+        });
+    }
+    // Cord means.
+    let mut sum = vec![0.0; nc];
+    let mut cnt = vec![0.0; nc];
+    for (u, &m) in y.iter().enumerate() {
+        sum[p.unit_cord[u]] += m;
+        cnt[p.unit_cord[u]] += 1.0;
+    }
+    let covariate = |c: &prep::Cord| match kind {
+        EffectKind::SensorGain => 1.0 / c.wrap_deg.to_radians(),
+        EffectKind::DiameterDependence => c.diameter_mm - REF_DIAMETER_MM,
+        _ => c.drive_v - REF_DRIVE_V,
+    };
+    let x: Vec<Vec<f64>> = p.cords.iter().map(|c| vec![1.0, covariate(c)]).collect();
+    let ym: Vec<f64> = sum.iter().zip(&cnt).map(|(s, n)| s / n).collect();
+    if nc < 3 {
+        return None;
+    }
+    let r = stats::regress(&x, &ym, None, None)?;
+    let (a, b) = (r.coef[0], r.coef[1]);
+    let (value, se) = if kind == EffectKind::SensorGain {
+        (b.exp(), b.exp() * r.se[1])
+    } else {
+        (b / a, r.se[1] / a.abs())
+    };
+    Some(BetweenTest {
+        value,
+        se,
+        t: r.t[1],
+        df: r.df,
+        n_units: nc,
+        level: Level::BetweenCord,
+    })
 }

@@ -68,23 +68,12 @@ impl Case {
         )
     }
 
-    /// Run the simulator and read its pairs back through the CSV schema.
+    /// Run the simulator and read its pairs back through the CSV schema, exactly as `capstan
+    /// simulate` writes them to `pairs.csv`.
     pub fn generate(&self) -> Result<(Dataset, CampaignResult), String> {
         let r = run_campaign(&self.config).map_err(|e| e.to_string())?;
-        let pairs: Vec<Pair> = r
-            .rows
-            .iter()
-            .map(|p| Pair {
-                capstan_diameter_mm: Some(p.capstan_diameter_mm),
-                wrap_deg: p.wrap_deg,
-                drive_v: Some(p.drive_v),
-                run: Some(p.run as f64),
-                step: Some(p.step as f64),
-                time_s: Some(p.time_s),
-                t1_n: p.t1_n,
-                t2_n: p.t2_n,
-                extra: Vec::new(),
-            })
+        let pairs: Vec<Pair> = crate::cli::simulate::to_pairs(&r.rows)
+            .into_iter()
             .map(|mut p| {
                 for c in &self.drop_columns {
                     match *c {

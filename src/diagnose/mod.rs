@@ -34,16 +34,22 @@
 
 pub mod between;
 pub mod cases;
+mod diagnosis;
 pub mod prep;
 pub mod within;
+
+pub use diagnosis::{
+    Baseline, Candidate, Design, Diagnosis, Extended, Level, NotTestable, Options, Scatter,
+    Thresholds,
+};
 
 use crate::data::Dataset;
 use crate::fit::params::{ModelSpec, Param};
 use crate::fit::solve::fit_fixed;
 use crate::fit::stats;
-use capstan_friction::{Effect, EffectKind, Model, REF_DIAMETER_MM, REF_DRIVE_V};
+use between::between_test;
+use capstan_friction::{EffectKind, Model};
 use prep::Prepared;
-use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
 use within::ThetaMap;
@@ -52,188 +58,6 @@ use within::ThetaMap;
 pub const WITHIN_THRESHOLD: f64 = 25.0;
 /// Decision threshold for effects seen between runs or cords: reported when ΔBIC < −8.
 pub const BETWEEN_THRESHOLD: f64 = 8.0;
-
-/// Options of [`diagnose_with`].
-#[derive(Clone, Copy, Debug)]
-pub struct Options {
-    /// A within-run (shape) candidate is supported when its ΔBIC < −this.
-    pub within_threshold: f64,
-    /// A between-run or between-cord candidate is supported when its ΔBIC < −this.
-    pub between_threshold: f64,
-    /// Without `time_s`, take the window times from `step` with the thesis protocol
-    /// (10 s steps): makes `thermal_drift` testable on the thesis data.
-    pub protocol_times: bool,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Options {
-            within_threshold: WITHIN_THRESHOLD,
-            between_threshold: BETWEEN_THRESHOLD,
-            protocol_times: false,
-        }
-    }
-}
-
-/// At which level of the data a candidate is judged.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Level {
-    /// Shape inside runs (run mu free).
-    WithinRun,
-    /// Runs' mu against a covariate that varies between cords (cord scatter as error).
-    BetweenCord,
-    /// Runs' mu against the run number within cords (run scatter as error).
-    BetweenRun,
-}
-
-/// One candidate effect, fitted.
-#[derive(Clone, Debug, Serialize)]
-pub struct Candidate {
-    /// Catalogue name.
-    pub effect: &'static str,
-    /// BIC of the model with this effect minus BIC of `none` (negative: supported).
-    pub delta_bic: f64,
-    /// The fitted catalogue parameter.
-    pub parameters: BTreeMap<&'static str, f64>,
-    /// Its standard error.
-    pub parameter_se: f64,
-    /// Where the evidence comes from.
-    pub level: Level,
-    /// The parameter is outside the region of practical equivalence with `none` (see
-    /// [`practically_relevant`]).
-    pub relevant: bool,
-    /// ΔBIC is below the threshold of its level and the size is relevant.
-    pub supported: bool,
-    /// The effect.
-    #[serde(skip)]
-    pub kind: EffectKind,
-    /// The fitted catalogue value.
-    #[serde(skip)]
-    pub value: f64,
-}
-
-/// An effect that could not be tested on this data set.
-#[derive(Clone, Debug, Serialize)]
-pub struct NotTestable {
-    /// Catalogue name.
-    pub effect: &'static str,
-    /// Why.
-    pub reason: String,
-}
-
-/// Plain Euler-Eytelwein with one mu.
-#[derive(Clone, Debug, Serialize)]
-pub struct Baseline {
-    /// Least-squares mu (T2 residuals, all rows).
-    pub mu: f64,
-    /// RMSE of T2 with that mu, N.
-    pub rmse_t2_n: f64,
-    /// RMSE of T2 with every run's own mu, N (the within-run noise of the comparison).
-    pub rmse_t2_run_mu_n: f64,
-}
-
-/// The chosen effect's population model (one mu and the effect) refitted to all rows.
-#[derive(Clone, Debug, Serialize)]
-pub struct Extended {
-    /// RMSE of T2, N.
-    pub rmse_t2_n: f64,
-    /// RMSE of T2 with every run's own mu and the effect, N (within-run effects only).
-    pub rmse_t2_run_mu_n: f64,
-}
-
-/// What the data set is made of.
-#[derive(Clone, Debug, Serialize)]
-pub struct Design {
-    /// Rows.
-    pub rows: usize,
-    /// Cords: (diameter, voltage, wrap) combinations.
-    pub cords: usize,
-    /// Runs (or cords, without a `run` column).
-    pub runs: usize,
-    /// Distinct wraps, deg.
-    pub wraps_deg: Vec<f64>,
-    /// Distinct diameters, mm.
-    pub diameters_mm: Vec<f64>,
-    /// Distinct drive voltages, V.
-    pub drive_v: Vec<f64>,
-    /// Optional columns present.
-    pub columns: prep::Columns,
-}
-
-/// Scatter and noise the models found.
-#[derive(Clone, Debug, Serialize)]
-pub struct Scatter {
-    /// Cord-to-cord standard deviation of mu, % of mu.
-    pub cord_pct: f64,
-    /// Run-to-run standard deviation of mu within cords, % of mu.
-    pub run_pct: f64,
-    /// Residual standard deviation of T2 with run-level mu (Euler-Eytelwein), N.
-    pub within_run_sd_n: f64,
-    /// Overdispersion ĉ of the within-run likelihood ratios (clustering of residuals in runs).
-    pub overdispersion: f64,
-}
-
-/// ΔBIC thresholds below which a candidate is supported.
-#[derive(Clone, Debug, Serialize)]
-pub struct Thresholds {
-    /// For within-run (shape) candidates.
-    pub within_run: f64,
-    /// For between-run and between-cord candidates.
-    pub between: f64,
-}
-
-/// The answer.
-#[derive(Clone, Debug, Serialize)]
-pub struct Diagnosis {
-    /// The effect found (`none` if nothing is supported).
-    pub effect: &'static str,
-    /// Its parameter (empty for `none`).
-    pub parameters: BTreeMap<&'static str, f64>,
-    /// Every testable effect, best (lowest ΔBIC) first.
-    pub candidates: Vec<Candidate>,
-    /// Plain Euler-Eytelwein.
-    pub baseline: Baseline,
-    /// With the chosen effect.
-    pub extended: Extended,
-    /// Wall time of the diagnosis, s.
-    pub elapsed_s: f64,
-    /// Effects that could not be tested, and why.
-    pub not_testable: Vec<NotTestable>,
-    /// The data set's design.
-    pub design: Design,
-    /// Scatter of mu and within-run noise.
-    pub scatter: Scatter,
-    /// The decision rule: thresholds on ΔBIC per level.
-    pub thresholds: Thresholds,
-    /// The effect found.
-    #[serde(skip)]
-    pub kind: EffectKind,
-    /// Its catalogue value (the neutral value for `none`).
-    #[serde(skip)]
-    pub value: f64,
-}
-
-impl Diagnosis {
-    /// The candidate for `kind`, if it was tested.
-    pub fn candidate(&self, kind: EffectKind) -> Option<&Candidate> {
-        self.candidates.iter().find(|c| c.kind == kind)
-    }
-
-    /// The found effect as a catalogue [`Effect`].
-    pub fn found(&self) -> Effect {
-        Effect {
-            kind: self.kind,
-            value: self.value,
-        }
-    }
-
-    /// The JSON object of `capstan diagnose --json`.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a diagnosis serialises")
-    }
-}
-
 /// Diagnose with the default options (the function behind `capstan diagnose`).
 pub fn diagnose(d: &Dataset) -> Diagnosis {
     diagnose_with(d, &Options::default())
@@ -271,84 +95,6 @@ fn untestable(kind: EffectKind, p: &Prepared) -> Option<String> {
         _ => None,
     }
 }
-
-/// A cord-level or run-level regression test of the runs' mu.
-struct BetweenTest {
-    value: f64,
-    se: f64,
-    t: f64,
-    df: f64,
-    n_units: usize,
-    level: Level,
-}
-
-/// Regress the runs' mu `y` on the effect's covariate, at the level where it varies.
-///
-/// * Between cords (gain: 1/β; diameter: d − 12.7 mm; speed: V − 10 V): the cord means of mu
-///   against the covariate by least squares, t with G − 2 degrees of freedom. The cord mean
-///   carries the cord's own scatter, so the error term is the cord-to-cord scatter.
-/// * Wear: the runs' mu against run − 1 with a separate intercept per cord, t with
-///   R − G − 1 degrees of freedom: the error term is the run-to-run scatter within cords.
-fn between_test(kind: EffectKind, p: &Prepared, y: &[f64]) -> Option<BetweenTest> {
-    let nc = p.cords.len();
-    if kind == EffectKind::Wear {
-        let x: Vec<Vec<f64>> = (0..y.len())
-            .map(|u| {
-                let mut row = vec![0.0; nc + 1];
-                row[p.unit_cord[u]] = 1.0;
-                row[nc] = p.unit_run[u] - 1.0;
-                row
-            })
-            .collect();
-        if y.len() < nc + 2 {
-            return None;
-        }
-        let r = stats::regress(&x, y, None, None)?;
-        let a = r.coef[..nc].iter().sum::<f64>() / nc as f64;
-        let b = r.coef[nc];
-        return Some(BetweenTest {
-            value: b / a,
-            se: r.se[nc] / a.abs(),
-            t: r.t[nc],
-            df: r.df,
-            n_units: y.len(),
-            level: Level::BetweenRun,
-        });
-    }
-    // Cord means.
-    let mut sum = vec![0.0; nc];
-    let mut cnt = vec![0.0; nc];
-    for (u, &m) in y.iter().enumerate() {
-        sum[p.unit_cord[u]] += m;
-        cnt[p.unit_cord[u]] += 1.0;
-    }
-    let covariate = |c: &prep::Cord| match kind {
-        EffectKind::SensorGain => 1.0 / c.wrap_deg.to_radians(),
-        EffectKind::DiameterDependence => c.diameter_mm - REF_DIAMETER_MM,
-        _ => c.drive_v - REF_DRIVE_V,
-    };
-    let x: Vec<Vec<f64>> = p.cords.iter().map(|c| vec![1.0, covariate(c)]).collect();
-    let ym: Vec<f64> = sum.iter().zip(&cnt).map(|(s, n)| s / n).collect();
-    if nc < 3 {
-        return None;
-    }
-    let r = stats::regress(&x, &ym, None, None)?;
-    let (a, b) = (r.coef[0], r.coef[1]);
-    let (value, se) = if kind == EffectKind::SensorGain {
-        (b.exp(), b.exp() * r.se[1])
-    } else {
-        (b / a, r.se[1] / a.abs())
-    };
-    Some(BetweenTest {
-        value,
-        se,
-        t: r.t[1],
-        df: r.df,
-        n_units: nc,
-        level: Level::BetweenCord,
-    })
-}
-
 /// The χ²₁ value with the same tail probability as a t statistic with `df` degrees of freedom
 /// (small-sample tests on the likelihood-ratio scale of BIC).
 fn chi2_equivalent(t: f64, df: f64) -> f64 {
@@ -616,117 +362,5 @@ fn candidate(kind: EffectKind, value: f64, se: f64, dbic: f64, level: Level) -> 
         value,
     }
 }
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::data::{read_pairs, write_pairs_to, Pair};
-
-    /// A data set straight from the shared model: 4 wraps × 2 diameters × 3 runs, each run with
-    /// its own mu, 12 tension levels, a little deterministic noise.
-    fn synthetic(effect: Effect) -> Dataset {
-        let mut pairs = Vec::new();
-        let mut k = 0u64;
-        for (di, d) in [12.7, 25.4].into_iter().enumerate() {
-            for (wi, w) in [270.0, 450.0, 630.0, 720.0].into_iter().enumerate() {
-                for run in 1..=3 {
-                    let mu = 0.115 * (1.0 + 0.02 * ((di * 7 + wi * 3 + run) % 5) as f64 - 0.04);
-                    let m = Model::euler_eytelwein(mu).with_effect(effect);
-                    for step in 1..=12 {
-                        k += 1;
-                        let noise = 0.002 * (((k * 2_654_435_761) % 1000) as f64 / 500.0 - 1.0);
-                        let t1 = 0.4 + 1.6 * step as f64 + effect_t1(effect);
-                        let op = capstan_friction::Operating {
-                            wrap_rad: f64::to_radians(w),
-                            diameter_mm: d,
-                            drive_v: 10.0,
-                            run: run as f64,
-                            time_s: 6.0 + 4.0 * step as f64,
-                            load_memory_ns: 0.0,
-                        };
-                        pairs.push(Pair {
-                            capstan_diameter_mm: Some(d),
-                            wrap_deg: w,
-                            drive_v: Some(10.0),
-                            run: Some(run as f64),
-                            step: Some(step as f64),
-                            time_s: Some(op.time_s),
-                            t1_n: t1,
-                            t2_n: m.predict_t2_n(t1, &op) + noise,
-                            extra: Vec::new(),
-                        });
-                    }
-                }
-            }
-        }
-        let mut csv = Vec::new();
-        write_pairs_to(&mut csv, &pairs).unwrap();
-        read_pairs(csv.as_slice(), "synthetic").unwrap()
-    }
-
-    fn effect_t1(e: Effect) -> f64 {
-        if e.kind == EffectKind::T1Offset {
-            e.value
-        } else {
-            0.0
-        }
-    }
-
-    #[test]
-    fn recovers_effects_from_the_shared_model() {
-        for (kind, value, tol) in [
-            (EffectKind::T1Offset, 0.5, 0.01),
-            (EffectKind::T2Offset, -0.7, 0.01),
-            (EffectKind::PressureFriction, 0.85, 0.005),
-            (EffectKind::BendingStiffness, 8e-5, 5e-6),
-            (EffectKind::ThermalDrift, 0.3, 0.01),
-        ] {
-            let d = diagnose(&synthetic(Effect { kind, value }));
-            assert_eq!(d.kind, kind, "{}", d.to_json());
-            assert!(
-                (d.value - value).abs() < tol,
-                "{kind}: {} vs {value}",
-                d.value
-            );
-        }
-        let d = diagnose(&synthetic(Effect::NONE));
-        assert_eq!(d.kind, EffectKind::None, "{}", d.to_json());
-    }
-
-    #[test]
-    fn run_mu_agree_with_the_fit_module() {
-        // The within-run Euler-Eytelwein mu of one run equals src/fit's fit_fixed on that run.
-        let data = synthetic(Effect::NONE);
-        let p = Prepared::new(&data, false);
-        let none = within::fit(
-            &p,
-            &ThetaMap::for_kind(EffectKind::None, &p),
-            0.0,
-            &within::start_mu(&p),
-        );
-        let spec = ModelSpec::new("ee", Model::euler_eytelwein(0.1)).free(Param::Mu);
-        for u in [0, 5, 11] {
-            let rows = &p.units[u];
-            let run = p.obs.rows[rows[0]].run;
-            let f = fit_fixed(&spec, &p.obs, &[run], None);
-            let mu = f.model(None).law.mu;
-            assert!(
-                (mu - none.mu[u]).abs() < 1e-7,
-                "unit {u}: {mu} vs {}",
-                none.mu[u]
-            );
-        }
-    }
-
-    #[test]
-    fn t_statistics_map_onto_chi_square() {
-        // Large df: the χ² equivalent of t is t².
-        for t in [1.0, 2.0, 3.5] {
-            let c = chi2_equivalent(t, 1e7);
-            assert!((c - t * t).abs() < 1e-3 * t * t, "{t}: {c}");
-        }
-        // Few df: the same t is weaker evidence.
-        assert!(chi2_equivalent(3.0, 4.0) < chi2_equivalent(3.0, 40.0));
-        assert!((erfc(0.0) - 1.0).abs() < 1e-7 && (erfc(1.0) - 0.157_299_2).abs() < 1e-6);
-    }
-}
+mod tests;

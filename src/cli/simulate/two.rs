@@ -1,0 +1,221 @@
+//! `capstan simulate --two-control`: one firmware per channel on one capstan and drive motor;
+//! writes `two_control.csv` (the drive and the true tensions over time), `crosstalk.csv` and
+//! each channel's `pairs_ch<k>.csv`.
+
+use super::output::create;
+use super::{model, plant, protocol, to_pairs, Args, Order};
+use crate::data::write_pairs;
+use anyhow::{bail, Context};
+use host_sim::campaign::{CordKey, PairRow};
+use host_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
+use serde_json::json;
+use std::io::Write;
+use std::path::Path;
+
+pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
+    let (model, effects) = model(args)?;
+    if !effects.is_empty() {
+        bail!("--effect is for campaigns; the two-control rig runs the base model (--mu)");
+    }
+    if !args.faults.is_empty() {
+        bail!("--fault is for campaigns, not --two-control");
+    }
+    let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
+    let n = wraps.len();
+    if !(1..=host_sim::plant::MAX_CORDS).contains(&n) {
+        bail!(
+            "--two-control: give 1 to {} wraps (one per channel), not {n}",
+            host_sim::plant::MAX_CORDS
+        );
+    }
+    let orders = args.orders.clone().unwrap_or_else(|| {
+        (0..n)
+            .map(|i| {
+                if i % 2 == 0 {
+                    Order::Monotone
+                } else {
+                    Order::Pulse
+                }
+            })
+            .collect()
+    });
+    let delays = args
+        .delays_ms
+        .clone()
+        .unwrap_or_else(|| (0..n as u32).map(|i| 5_000 * (i % 2)).collect());
+    if orders.len() != n || delays.len() != n {
+        bail!(
+            "--two-control: {n} channels (--wraps) but {} --orders and {} --delays-ms",
+            orders.len(),
+            delays.len()
+        );
+    }
+    let diameter = match args.diameters.as_deref() {
+        None => 12.7,
+        Some([d]) => *d,
+        Some(_) => bail!("--two-control: one capstan, one --diameters value"),
+    };
+    let drive_v = match args.drive_v.as_slice() {
+        [v] => *v,
+        _ => bail!("--two-control: one drive motor, one --drive-v value"),
+    };
+    let cfg = TwoControlConfig {
+        diameter_mm: diameter,
+        drive_v,
+        channels: wraps
+            .iter()
+            .zip(&orders)
+            .zip(&delays)
+            .map(|((&wrap_deg, &o), &delay_ms)| ChannelSpec {
+                wrap_deg,
+                order: o.into(),
+                delay_ms,
+            })
+            .collect(),
+        model,
+        protocol: protocol(args),
+        plant: plant(args)?,
+        seed: args.seed,
+        sensor_noise: !args.no_noise,
+        ..TwoControlConfig::default()
+    };
+    // The same ranges as a campaign's (diameter, wraps, drive voltage).
+    cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    write_two(&args.out, &cfg, &r)?;
+    let pairs: usize = r.channels.iter().map(|c| c.log.pairs.len()).sum();
+    let (t2_rel, rpm_rel) = r.worst_crosstalk();
+    let faults: Vec<_> = r
+        .channels
+        .iter()
+        .enumerate()
+        .filter_map(|(i, c)| {
+            let f = c.log.faults.first()?;
+            Some(json!({
+                "channel": i + 1,
+                "fault": f.kind.name(),
+                "at_s": f.t_us as f64 * 1e-6,
+                "pairs_kept": c.log.pairs.len(),
+            }))
+        })
+        .collect();
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "channels": n,
+                "pairs": pairs,
+                "simulated_s": r.simulated_s,
+                "wall_s": r.wall_s,
+                "realtime_factor": r.simulated_s / r.wall_s.max(1e-9),
+                "peak_current_a": r.peak_current_a(),
+                "peak_power_w": r.peak_power_w(),
+                "mean_power_w": r.mean_power_w(),
+                "crosstalk_events": r.crosstalk.len(),
+                "worst_t2_crosstalk_rel": t2_rel,
+                "worst_speed_crosstalk_rel": rpm_rel,
+                "faults": faults,
+            })
+        );
+    } else {
+        println!(
+            "{n} channels on one {diameter} mm capstan at {drive_v} V: {:.0} s simulated in {:.3} s",
+            r.simulated_s, r.wall_s
+        );
+        println!(
+            "drive: peak {:.2} A / {:.1} W (spin-up), mean {:.2} W while on",
+            r.peak_current_a(),
+            r.peak_power_w(),
+            r.mean_power_w()
+        );
+        println!(
+            "cross-talk over {} steps: holding channel's T2 moved at most {:.3} %, capstan \
+             speed at most {:.1} %",
+            r.crosstalk.len(),
+            t2_rel * 100.0,
+            rpm_rel * 100.0
+        );
+        println!(
+            "-> {}, {}, pairs_ch1..{n}.csv",
+            args.out.join("two_control.csv").display(),
+            args.out.join("crosstalk.csv").display()
+        );
+    }
+    Ok(())
+}
+
+fn write_two(out: &Path, cfg: &TwoControlConfig, r: &TwoControlResult) -> anyhow::Result<()> {
+    let n = cfg.channels.len();
+    let mut w = create(&out.join("two_control.csv"))?;
+    let mut header = String::from("t_s,drive_v,capstan_rpm,current_a,power_w,load_nm,transmission");
+    for k in 1..=n {
+        header += &format!(",ch{k}_angle_deg,ch{k}_t1_n,ch{k}_t2_n");
+    }
+    writeln!(w, "{header}")?;
+    for row in &r.series {
+        write!(
+            w,
+            "{},{},{},{},{},{},{}",
+            row.t_s,
+            row.drive_v,
+            row.capstan_rpm,
+            row.current_a,
+            row.power_w,
+            row.load_nm,
+            row.transmission
+        )?;
+        for c in &row.channels {
+            write!(w, ",{},{},{}", c.angle_deg, c.t1_n, c.t2_n)?;
+        }
+        writeln!(w)?;
+    }
+    w.flush()?;
+    let mut w = create(&out.join("crosstalk.csv"))?;
+    writeln!(
+        w,
+        "t_s,stepping_channel,from_deg,to_deg,stepping_d_t2_n,observer_channel,\
+         observer_t2_before_n,observer_t2_after_n,observer_d_t2_rel,rpm_before,rpm_after,\
+         d_rpm_rel,current_before_a,current_after_a"
+    )?;
+    for c in &r.crosstalk {
+        writeln!(
+            w,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            c.t_s,
+            c.stepping + 1,
+            c.from_deg,
+            c.to_deg,
+            c.stepping_d_t2_n,
+            c.observer + 1,
+            c.observer_t2_before_n,
+            c.observer_t2_after_n,
+            c.observer_d_t2_rel(),
+            c.rpm_before,
+            c.rpm_after,
+            c.d_rpm_rel(),
+            c.current_before_a,
+            c.current_after_a
+        )?;
+    }
+    w.flush()?;
+    for (k, ch) in r.channels.iter().enumerate() {
+        let cord = CordKey {
+            diameter_mm: cfg.diameter_mm,
+            wrap_deg: cfg.channels[k].wrap_deg,
+            drive_v: cfg.drive_v,
+        };
+        let rows: Vec<PairRow> = ch
+            .log
+            .pairs
+            .iter()
+            .map(|p| PairRow::new(cord, 1, p))
+            .collect();
+        write_pairs(
+            &out.join(format!("pairs_ch{}.csv", k + 1)),
+            &to_pairs(&rows),
+        )?;
+    }
+    Ok(())
+}
