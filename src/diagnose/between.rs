@@ -177,7 +177,7 @@ pub(super) fn between_test(kind: EffectKind, p: &Prepared, y: &[f64]) -> Option<
             return None;
         }
         let r = stats::regress(&x, y, None, None)?;
-        let a = r.coef[..nc].iter().sum::<f64>() / nc as f64;
+        let a = stats::mean(&r.coef[..nc]);
         let b = r.coef[nc];
         return Some(BetweenTest {
             value: b / a,

@@ -265,7 +265,7 @@ pub fn diagnose_with(d: &Dataset, opts: &Options) -> Diagnosis {
 
     // Population fits through src/fit: one mu, and one mu with the chosen effect.
     let runs = p.obs.all_runs();
-    let ee = ModelSpec::new("ee", Model::euler_eytelwein(y_mean(&none.mu))).free(Param::Mu);
+    let ee = ModelSpec::new("ee", Model::euler_eytelwein(stats::mean(&none.mu))).free(Param::Mu);
     let base_fit = fit_fixed(&ee, &p.obs, &runs, None);
     let mu_pop = base_fit.model(None).law.mu;
     let ext_rmse = match Param::from_effect(kind) {
@@ -288,7 +288,7 @@ pub fn diagnose_with(d: &Dataset, opts: &Options) -> Diagnosis {
         .iter()
         .find(|w| w.0 == kind)
         .map_or((none.rss / n).sqrt(), |w| (w.2.rss / w.2.n as f64).sqrt());
-    let mu_bar = y_mean(&none.mu);
+    let mu_bar = stats::mean(&none.mu);
     let scatter = Scatter {
         cord_pct: null
             .as_ref()
@@ -339,10 +339,6 @@ pub fn diagnose_with(d: &Dataset, opts: &Options) -> Diagnosis {
         },
         elapsed_s: t0.elapsed().as_secs_f64(),
     }
-}
-
-fn y_mean(v: &[f64]) -> f64 {
-    v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
 fn candidate(kind: EffectKind, value: f64, se: f64, dbic: f64, level: Level) -> Candidate {

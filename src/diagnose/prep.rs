@@ -4,6 +4,7 @@
 
 use crate::data::Dataset;
 use crate::fit::obs::Observations;
+use crate::fit::stats::distinct;
 use capstan_friction::Operating;
 
 /// A cord: one (capstan diameter, drive voltage, wrap) combination, reused for its runs.
@@ -68,17 +69,6 @@ pub struct Prepared {
     pub columns: Columns,
     /// The arrangement from `src/fit` (used for the population fits).
     pub obs: Observations,
-}
-
-fn distinct(v: impl Iterator<Item = f64>) -> Vec<f64> {
-    let mut out: Vec<f64> = Vec::new();
-    for x in v {
-        if !out.iter().any(|y| y.to_bits() == x.to_bits()) {
-            out.push(x);
-        }
-    }
-    out.sort_by(f64::total_cmp);
-    out
 }
 
 impl Prepared {

@@ -325,6 +325,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn summaries() {
+        let v = [3.0, 1.0, 4.0, 1.0, 5.0];
+        assert_eq!(mean(&v), 2.8);
+        assert!((variance(&v) - 3.2).abs() < 1e-12);
+        assert_eq!(median(&mut v.clone()), 3.0);
+        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(distinct(v), vec![1.0, 3.0, 4.0, 5.0]);
+        assert_eq!(r_squared(&[1.0, 2.0, 3.0], &[1.0, 2.0, 3.0]), 1.0);
+        assert_eq!(r_squared(&[1.0, 2.0, 3.0], &[2.0, 2.0, 2.0]), 0.0);
+        // Leave-one-out means of 1..=4: the jackknife SE equals the SE of the mean.
+        let loo: Vec<f64> = (1..=4).map(|k| (10.0 - k as f64) / 3.0).collect();
+        let se_mean = (variance(&[1.0, 2.0, 3.0, 4.0]) / 4.0).sqrt();
+        assert!((jackknife_se(&loo) - se_mean).abs() < 1e-12);
+    }
+
+    #[test]
     fn distributions_match_tables() {
         // t(10) two-sided 5 % critical value 2.228; F(2, 20) 5 % critical value 3.493.
         assert!((t_p_two_sided(2.228_138_9, 10.0) - 0.05).abs() < 1e-6);
