@@ -181,13 +181,117 @@ fn report_has_an_svg_for_every_figure() {
             body.contains("<svg") && body.contains("</svg>"),
             "figure without svg"
         );
-        assert!(
-            body.contains("<circle") || body.contains("<polyline"),
-            "figure without marks"
-        );
+        assert!(body.contains("class=\"mark"), "figure without data marks");
     }
     assert!(
         !html.contains("src=\"http"),
         "the report must be self-contained"
     );
+}
+
+fn figure_body<'a>(html: &'a str, id: &str) -> &'a str {
+    let start = html
+        .find(&format!("data-figure=\"{id}\""))
+        .unwrap_or_else(|| panic!("no figure {id}"));
+    &html[start..start + html[start..].find("</figure>").unwrap()]
+}
+
+#[test]
+fn figures_have_one_colour_per_wrap_and_a_style_per_model() {
+    let html = std::fs::read_to_string(outputs().join("report.html")).unwrap();
+    // Okabe-Ito, one colour per wrap, the same in every per-wrap figure.
+    let wrap_colours = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7"];
+    for id in [
+        "t2_vs_t1",
+        "amp_vs_t1",
+        "residuals",
+        "mechanism_evidence",
+        "closed_loop",
+    ] {
+        let body = figure_body(&html, id);
+        for (c, w) in wrap_colours.iter().zip(["270", "360", "450", "630", "720"]) {
+            assert!(body.contains(c), "{id}: no {c}");
+            assert!(
+                body.contains(&format!("{w}° wrap")),
+                "{id}: no legend for {w}°"
+            );
+        }
+    }
+    // Three models, three line styles, named in the legend.
+    for id in ["t2_vs_t1", "amp_vs_t1"] {
+        let body = figure_body(&html, id);
+        for (style, label) in [
+            ("stroke-dasharray=\"7 4\"", "Euler-Eytelwein"),
+            ("stroke-dasharray=\"0.1 4.5\"", "thesis Table 3"),
+            ("stroke-width=\"3\"", "extended model"),
+        ] {
+            assert!(
+                body.contains(style) && body.contains(label),
+                "{id}: {label}"
+            );
+        }
+    }
+    // The gain is a grouped bar chart by model name; Table 3 has no LOCO bar.
+    let gain = figure_body(&html, "gain");
+    assert_eq!(
+        gain.matches("class=\"mark bar\"").count(),
+        7,
+        "4 in-sample + 3 LOCO bars"
+    );
+    for name in [
+        "baseline",
+        "baseline_per_cord",
+        "thesis",
+        "extended",
+        "not refittable",
+    ] {
+        assert!(gain.contains(&format!(">{name}<")), "gain: {name}");
+    }
+}
+
+#[test]
+fn report_and_metrics_quote_capstan_diagnose() {
+    let dir = outputs();
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap();
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let q = &metrics["diagnose"];
+    // The quoted calls are the diagnosis itself, run on the same data.
+    let data = thesis_dataset();
+    let plain = capstan::diagnose::diagnose(&data);
+    let timed = capstan::diagnose::diagnose_with(
+        &data,
+        &capstan::diagnose::Options {
+            protocol_times: true,
+            ..Default::default()
+        },
+    );
+    for (key, d) in [("default", &plain), ("protocol_times", &timed)] {
+        let r = &q[key]["result"];
+        assert_eq!(r["effect"], d.effect, "{key}");
+        let best = &r["candidates"][0];
+        assert_eq!(
+            best["delta_bic"].as_f64().unwrap(),
+            d.candidates[0].delta_bic,
+            "{key}"
+        );
+        assert!(html.contains(&format!("<b>{}", d.effect)), "{key}: report");
+    }
+    let relation = q["relation"].as_str().unwrap();
+    assert!(!relation.is_empty() && html.contains("capstan diagnose"));
+    // Its numbers are the analysis's and the diagnosis's, not typed in.
+    let n = plain
+        .candidate(capstan_friction::EffectKind::PressureFriction)
+        .unwrap()
+        .value;
+    assert!(relation.contains(&format!("n = {n:.3}")), "{relation}");
+    let e1 = metrics["extended_fit"]["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|v| v[0] == "t1_offset_n")
+        .unwrap()[1]
+        .as_f64()
+        .unwrap();
+    assert!(relation.contains(&format!("e1 = {e1:+.3} N")), "{relation}");
 }

@@ -3,6 +3,7 @@
 //! contact heating and the T1-path loss), on the thesis campaign, one run per cord.
 
 use super::Analysis;
+use crate::fit::par::par_map;
 use host_sim::campaign::{run_campaign, CampaignConfig};
 use serde_json::{json, Value};
 
@@ -18,11 +19,11 @@ pub struct ClosedLoop {
     pub summary: Value,
 }
 
-/// Simulate one run per cord with the cord's extended model.
-pub fn run(a: &Analysis) -> anyhow::Result<ClosedLoop> {
-    let mut curves = Vec::new();
-    let mut n = 0usize;
-    for (g, grp) in a.obs.groups.iter().enumerate() {
+/// Simulate one run per cord with the cord's extended model (cords on up to `threads` threads).
+pub fn run(a: &Analysis, threads: usize) -> anyhow::Result<ClosedLoop> {
+    let groups: Vec<usize> = (0..a.obs.groups.len()).collect();
+    let runs = par_map(&groups, threads, |&g| {
+        let grp = &a.obs.groups[g];
         let cfg = CampaignConfig {
             diameters_mm: vec![grp.diameter_mm],
             wraps_deg: vec![grp.wrap_deg],
@@ -31,8 +32,12 @@ pub fn run(a: &Analysis) -> anyhow::Result<ClosedLoop> {
             sensor_noise: false,
             ..CampaignConfig::default()
         };
-        let res = run_campaign(&cfg)
-            .map_err(|e| anyhow::anyhow!("closed loop, cord {}: {e:?}", grp.label))?;
+        run_campaign(&cfg).map_err(|e| anyhow::anyhow!("closed loop, cord {}: {e:?}", grp.label))
+    });
+    let mut curves = Vec::new();
+    let mut n = 0usize;
+    for (g, res) in runs.into_iter().enumerate() {
+        let res = res?;
         let mut pts: Vec<(f64, f64)> = res.rows.iter().map(|r| (r.t1_n, r.t2_n / r.t1_n)).collect();
         pts.sort_by(|x, y| x.0.total_cmp(&y.0));
         n += res.rows.len();

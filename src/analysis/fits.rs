@@ -120,7 +120,9 @@ pub fn fit_all(obs: &Observations, threads: usize) -> Fits {
 
     // Leave one cord out.
     let t1 = Instant::now();
-    let baseline_loco = loco(obs, 1, |train| fit_fixed(&base_spec, obs, train, None));
+    let baseline_loco = loco(obs, threads, |train| {
+        fit_fixed(&base_spec, obs, train, None)
+    });
     let (th, u0) = (extended.theta.clone(), extended.u.clone());
     let l0 = extended.lambda.unwrap_or(200.0);
     let extended_loco = loco(obs, threads, |train| {

@@ -7,10 +7,12 @@
 //!
 //! Files: [`fits`] (every model fitted, in-sample and leave-one-cord-out), [`metrics`] (the
 //! gain table), [`extended`] (the extended fit in detail), [`residuals`] (what the models get
-//! wrong), [`mechanisms`] (why), [`closed_loop`] (the firmware against the fitted plant),
+//! wrong), [`mechanisms`] (why), [`diagnosis`] (`capstan diagnose` on the same data, quoted),
+//! [`closed_loop`] (the firmware against the fitted plant),
 //! [`models`] and [`thesis`] (the specs and the thesis's Table 3).
 
 pub mod closed_loop;
+pub mod diagnosis;
 pub mod extended;
 pub mod fits;
 pub mod mechanisms;
@@ -53,6 +55,8 @@ pub struct Elapsed {
     pub loco_s: f64,
     /// Mechanism variants and tests.
     pub mechanisms_s: f64,
+    /// `capstan diagnose` on the same data (both calls, run alongside the mechanisms).
+    pub diagnose_s: f64,
     /// Closed-loop simulation.
     pub closed_loop_s: f64,
     /// Writing the report (filled by the CLI).
@@ -80,6 +84,8 @@ pub struct Analysis {
     pub residual_patterns: Vec<residuals::Pattern>,
     /// Mechanism tests.
     pub mechanisms: mechanisms::Mechanisms,
+    /// `capstan diagnose` on the same data (None if it failed).
+    pub diagnosis: Option<diagnosis::DiagnoseQuote>,
     /// The fitted extended model (for the closed loop).
     pub extended_fit: Fit,
     /// The fitted baseline.
@@ -104,17 +110,28 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let extended = extended::detail(&obs, &f);
     let thesis_per_angle_r2 = metrics::thesis_per_angle(&obs);
 
+    // The mechanisms, with `capstan diagnose` on the same data alongside.
     let t2 = Instant::now();
-    let residual_patterns = residuals::patterns(ds, &obs, &f.pred);
-    let mechanisms = mechanisms::run(
-        &obs,
-        &f.baseline,
-        &f.extended,
-        &f.extended_loco,
-        &f.cord_mu,
-        threads,
-    );
+    let (residual_patterns, mechanisms, diagnosed) = std::thread::scope(|s| {
+        let diag = s.spawn(|| {
+            let t = Instant::now();
+            (diagnosis::calls(ds), t.elapsed().as_secs_f64())
+        });
+        let residual_patterns = residuals::patterns(ds, &obs, &f.pred);
+        let mechanisms = mechanisms::run(
+            &obs,
+            &f.baseline,
+            &f.extended,
+            &f.extended_loco,
+            &f.cord_mu,
+            threads,
+        );
+        // A failed diagnosis leaves the analysis without its quote, not without a report.
+        (residual_patterns, mechanisms, diag.join().ok())
+    });
     let mechanisms_s = t2.elapsed().as_secs_f64();
+    let diagnose_s = diagnosed.as_ref().map_or(0.0, |d| d.1);
+    let diagnosis = diagnosed.map(|(c, _)| diagnosis::quote(c, &mechanisms, &extended));
 
     Ok(Analysis {
         source: ds.source.clone(),
@@ -124,10 +141,12 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
         extended,
         residual_patterns,
         mechanisms,
+        diagnosis,
         elapsed: Elapsed {
             fits_s: f.fits_s,
             loco_s: f.loco_s,
             mechanisms_s,
+            diagnose_s,
             ..Elapsed::default()
         },
         pred: f.pred,

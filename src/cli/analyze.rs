@@ -37,7 +37,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut a = crate::analysis::run(&ds, opts)?;
     let t_report = Instant::now();
     let t_cl = Instant::now();
-    let (curves, closed, note) = match crate::analysis::closed_loop::run(&a) {
+    let (curves, closed, note) = match crate::analysis::closed_loop::run(&a, opts.threads) {
         Ok(cl) => (Some(cl.curves), cl.summary, "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor, contact heating, T1-path loss), on the thesis campaign: one run per cord, sensor noise off.".to_string()),
         Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
     };

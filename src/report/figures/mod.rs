@@ -1,0 +1,178 @@
+//! The report's figures. One colour per wrap in every figure (Okabe-Ito, safe for the common
+//! colour-vision deficiencies), one line style per model (Euler-Eytelwein dashed, Table 3
+//! dotted, extended solid and thick), a legend above each figure. Every curve of a model is
+//! drawn through that model's predictions as written to `predictions.csv`; the evidence panels
+//! come from `metrics.json`.
+//!
+//! * [`curves`]: T2 and amplification against T1 with the three models, and the closed loop.
+//! * [`evidence`]: residuals, the mechanism evidence, and the gain (RMSE by model).
+
+pub mod curves;
+pub mod evidence;
+
+use super::plot::{Entry, Key, LineStyle, Marker};
+use super::svg::Dash;
+use crate::analysis::closed_loop::SimCurve;
+use crate::analysis::Analysis;
+use crate::fit::stats::distinct;
+
+/// The Okabe-Ito palette without yellow (poor on white) and black (kept for annotations).
+pub const OKABE_ITO: [&str; 6] = [
+    "#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9",
+];
+/// Neutral colour of the model line samples in legends and of annotations.
+pub const INK: &str = "#333333";
+
+/// Euler-Eytelwein with one mu: thin dashes.
+pub fn baseline_style(color: &'static str) -> LineStyle {
+    LineStyle {
+        color,
+        width: 1.6,
+        dash: Dash::Dashed,
+    }
+}
+
+/// The thesis's Table 3: dots.
+pub fn thesis_style(color: &'static str) -> LineStyle {
+    LineStyle {
+        color,
+        width: 2.6,
+        dash: Dash::Dotted,
+    }
+}
+
+/// The extended model: thick and solid.
+pub fn extended_style(color: &'static str) -> LineStyle {
+    LineStyle {
+        color,
+        width: 3.0,
+        dash: Dash::Solid,
+    }
+}
+
+/// A measured point.
+pub fn measured(color: &'static str) -> Marker {
+    Marker {
+        color,
+        radius: 2.3,
+        hollow: false,
+        opacity: 0.5,
+    }
+}
+
+/// A per-cord summary point: a disc on the smallest capstan, a ring on the others.
+pub fn cord_marker(color: &'static str, hollow: bool) -> Marker {
+    Marker {
+        color,
+        radius: 5.0,
+        hollow,
+        opacity: 0.9,
+    }
+}
+
+/// Colours by wrap angle.
+pub struct Palette {
+    wraps: Vec<f64>,
+}
+
+impl Palette {
+    /// The data's wraps, in order.
+    pub fn new(a: &Analysis) -> Self {
+        Palette {
+            wraps: distinct(a.obs.groups.iter().map(|g| g.wrap_deg)),
+        }
+    }
+
+    /// The colour of `wrap_deg` (colours repeat after six wraps).
+    pub fn color(&self, wrap_deg: f64) -> &'static str {
+        let k = self.wraps.iter().position(|w| *w == wrap_deg).unwrap_or(0);
+        OKABE_ITO[k % OKABE_ITO.len()]
+    }
+
+    /// Index of `wrap_deg` among the wraps.
+    pub fn index(&self, wrap_deg: f64) -> usize {
+        self.wraps.iter().position(|w| *w == wrap_deg).unwrap_or(0)
+    }
+
+    /// Number of wraps.
+    pub fn len(&self) -> usize {
+        self.wraps.len()
+    }
+
+    /// True without wraps.
+    pub fn is_empty(&self) -> bool {
+        self.wraps.is_empty()
+    }
+
+    /// Legend entries: one coloured disc per wrap.
+    pub fn legend(&self) -> Vec<Entry> {
+        self.wraps
+            .iter()
+            .map(|w| Entry {
+                key: Key::Marker(Marker {
+                    opacity: 1.0,
+                    ..measured(self.color(*w))
+                }),
+                label: format!("{w:.0}° wrap"),
+            })
+            .collect()
+    }
+}
+
+/// Legend entries of the three models (line styles in a neutral colour).
+pub fn model_legend(with_thesis: bool) -> Vec<Entry> {
+    let mut v = vec![Entry {
+        key: Key::Line(baseline_style(INK)),
+        label: "Euler-Eytelwein, one mu (baseline)".into(),
+    }];
+    if with_thesis {
+        v.push(Entry {
+            key: Key::Line(thesis_style(INK)),
+            label: "thesis Table 3".into(),
+        });
+    }
+    v.push(Entry {
+        key: Key::Line(extended_style(INK)),
+        label: "extended model".into(),
+    });
+    v
+}
+
+/// Legend entries for the capstan diameters (disc: smallest, ring: others).
+pub fn diameter_legend(a: &Analysis) -> Vec<Entry> {
+    a.obs
+        .diameters()
+        .iter()
+        .enumerate()
+        .map(|(k, d)| Entry {
+            key: Key::Marker(cord_marker(INK, k > 0)),
+            label: format!("D = {d} mm"),
+        })
+        .collect()
+}
+
+/// A figure of the report.
+pub struct Figure {
+    /// `data-figure` id.
+    pub id: &'static str,
+    /// The SVG document.
+    pub svg: String,
+    /// Caption.
+    pub caption: String,
+}
+
+/// Every figure, in report order.
+pub fn all(a: &Analysis, closed_loop: Option<&[SimCurve]>) -> Vec<Figure> {
+    let pal = Palette::new(a);
+    let mut figs = vec![
+        curves::t2_vs_t1(a, &pal),
+        curves::amp_vs_t1(a, &pal),
+        evidence::residuals(a, &pal),
+        evidence::mechanisms(a, &pal),
+        evidence::gain(a),
+    ];
+    if let Some(cl) = closed_loop {
+        figs.push(curves::closed_loop(a, &pal, cl));
+    }
+    figs
+}
