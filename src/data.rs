@@ -301,6 +301,46 @@ pub fn write_pairs_to(w: &mut impl Write, pairs: &[Pair]) -> std::io::Result<()>
     Ok(())
 }
 
+/// Writes pairs one at a time, as they come (`capstan log` writes each step's pair when the rig
+/// reports it): the full [`PAIRS_HEADER`] first, then one row per [`PairsWriter::write`] with
+/// every column. Unlike [`write_pairs_to`] it cannot drop a column that some pair lacks, since
+/// later pairs are not known yet: a `None`, or a wrap angle that is not finite (unknown), is
+/// written as an empty cell. A row with an empty wrap angle does not read back with
+/// [`read_pairs`]; `capstan log` keeps such rows in a file of their own.
+pub struct PairsWriter<W: Write> {
+    inner: W,
+}
+
+impl<W: Write> PairsWriter<W> {
+    /// Start the CSV: write the header.
+    pub fn new(mut inner: W) -> std::io::Result<Self> {
+        writeln!(inner, "{}", PAIRS_HEADER.join(","))?;
+        Ok(PairsWriter { inner })
+    }
+
+    /// Write one pair (not flushed).
+    pub fn write(&mut self, p: &Pair) -> std::io::Result<()> {
+        let cell = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+        writeln!(
+            self.inner,
+            "{},{},{},{},{},{},{},{}",
+            cell(p.capstan_diameter_mm),
+            cell(Some(p.wrap_deg).filter(|w| w.is_finite())),
+            cell(p.drive_v),
+            cell(p.run),
+            cell(p.step),
+            cell(p.time_s),
+            p.t1_n,
+            p.t2_n
+        )
+    }
+
+    /// Flush what was written to the underlying writer.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
 /// The bundled thesis data (720 pairs), compiled into the binary so no path is needed.
 pub const THESIS_CSV: &str = include_str!("../data/thesis-conditioned.csv");
 
@@ -318,6 +358,35 @@ pub fn bundled_path() -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pairs_written_one_at_a_time_read_back_and_unknowns_are_empty_cells() {
+        let pair = |wrap_deg: f64, run: Option<f64>| Pair {
+            capstan_diameter_mm: Some(12.7),
+            wrap_deg,
+            drive_v: Some(10.0),
+            run,
+            step: Some(2.0),
+            time_s: Some(1.65),
+            t1_n: 1.5469999,
+            t2_n: 3.1938002,
+            extra: Vec::new(),
+        };
+        let mut w = PairsWriter::new(Vec::new()).unwrap();
+        w.write(&pair(360.0, Some(1.0))).unwrap();
+        w.write(&pair(450.0, Some(2.0))).unwrap();
+        let csv = String::from_utf8(w.inner).unwrap();
+        let back = read_pairs(csv.as_bytes(), "test").unwrap();
+        assert_eq!(back.header.join(","), PAIRS_HEADER.join(","));
+        assert_eq!(back.pairs, [pair(360.0, Some(1.0)), pair(450.0, Some(2.0))]);
+        let mut w = PairsWriter::new(Vec::new()).unwrap();
+        w.write(&pair(f64::NAN, None)).unwrap();
+        let csv = String::from_utf8(w.inner).unwrap();
+        assert_eq!(
+            csv.lines().nth(1),
+            Some("12.7,,10,,2,1.65,1.5469999,3.1938002")
+        );
+    }
 
     #[test]
     fn bundled_thesis_data_has_720_rows_and_the_time_column_is_absent() {

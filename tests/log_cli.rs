@@ -30,9 +30,7 @@ fn stderr(o: &Output) -> String {
 }
 
 fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("capstan-log-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    log_support::fresh_dir("cli", name)
 }
 
 fn s(p: &Path) -> &str {

@@ -173,12 +173,7 @@ fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Result<()> {
     if let Stop::ProbeLost(e) = stop {
         bail!("lost the probe while logging ({e}); everything received until then is in {dir}");
     }
-    let records = summary.records.run_start
-        + summary.records.raw
-        + summary.records.pair
-        + summary.records.fault
-        + summary.records.run_end;
-    if records == 0 && summary.bytes > 0 {
+    if summary.records.total() == 0 && summary.bytes > 0 {
         bail!(
             "no rig records in {} bytes ({} frames, {} did not decode): is the stream from the \
              firmware built as {}?",

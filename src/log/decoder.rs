@@ -2,8 +2,9 @@
 //! frame and every sequence jump accounted for. Never panics on its input.
 
 use super::elf::Firmware;
+use super::frame::{decode_frame, Event};
 use super::seq::{SeqEvent, SeqTracker};
-use super::stream::{decode_frame, Deframer, Event, RawFrame, MAX_FRAME_BYTES};
+use super::stream::{Deframer, RawFrame, MAX_FRAME_BYTES};
 use serde::Serialize;
 
 /// A frame that did not decode.

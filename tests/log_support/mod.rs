@@ -12,6 +12,15 @@ pub fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// A fresh directory for one test's output: `capstan-log-KIND-PID-NAME` in the system's temp
+/// directory, emptied (not created).
+pub fn fresh_dir(kind: &str, name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("capstan-log-{kind}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
 /// The ELF that produced [`stream`] (qemu-fw, recorded by `scripts/qemu-e2e --record`).
 pub fn elf_path() -> PathBuf {
     data("qemu-fw.elf")
@@ -22,8 +31,8 @@ pub fn firmware() -> Firmware {
     Firmware::load(&elf_path()).expect("the recorded ELF loads")
 }
 
-/// A recorded QEMU run: a banner, two runs (the second ended by an over-force fault); 217
-/// frames.
+/// A recorded QEMU run (lm3s6965evb): a banner, two runs (the second ended by an over-force
+/// fault); 217 frames.
 pub fn stream() -> Vec<u8> {
     std::fs::read(data("qemu-run.defmt")).expect("recorded stream")
 }

@@ -1,0 +1,225 @@
+//! Frame pre-validation: [`Firmware::check_frame`] walks a decoded frame against the format
+//! strings of the table, the way defmt-decoder will read it, without allocating and without
+//! trusting any count in it. defmt-decoder trusts the bytes it is given: a garbage slice
+//! length makes it reserve gigabytes (an abort, not a panic), a deep nesting of `{=?}` can
+//! overflow the stack. Frames that would, that leave bytes over, or whose index is not in the
+//! table are refused here, with the reason.
+
+use super::{short, Entry, Firmware};
+use defmt_parser::{Parameter, Type};
+use std::ops::Range;
+
+/// Most elements a `{=[?]}` slice may claim in one frame (defmt-decoder reserves memory for
+/// the claimed count before reading any element).
+const MAX_SLICE_ELEMENTS: u64 = 4096;
+/// Deepest nesting of formats inside formats.
+const MAX_DEPTH: u32 = 24;
+/// Most parameters decoded for one frame.
+const MAX_STEPS: u32 = 20_000;
+/// rzCOBS pads a frame with up to this many zero bytes.
+pub const MAX_PADDING: usize = 7;
+
+impl Firmware {
+    /// Check that a decoded (de-rzCOBSed) frame is well-formed for this table, the way
+    /// defmt-decoder will read it, without trusting any count in it. Returns the format index.
+    pub fn check_frame(&self, frame: &[u8]) -> Result<u64, String> {
+        let mut cur = Cursor {
+            bytes: frame,
+            pos: 0,
+            steps: 0,
+        };
+        let index = cur
+            .read(2)
+            .map_err(|_| "frame shorter than its 2-byte index".to_string())?;
+        let index = u16::from_le_bytes([index[0], index[1]]) as u64;
+        if let Some(ts) = &self.timestamp {
+            let ts = ts.as_ref().map_err(|e| format!("timestamp format: {e}"))?;
+            self.walk(ts, &mut cur, 0)
+                .map_err(|e| format!("timestamp: {e}"))?;
+        }
+        let entry = self
+            .entries
+            .get(&index)
+            .ok_or_else(|| format!("format index {index} is not in the ELF's defmt table"))?;
+        let params = entry
+            .params
+            .as_ref()
+            .map_err(|e| format!("format index {index} cannot be decoded: {e}"))?;
+        self.walk(params, &mut cur, 0)
+            .map_err(|e| format!("`{}`: {e}", short(&entry.format)))?;
+        let rest = &frame[cur.pos..];
+        if rest.len() > MAX_PADDING || rest.iter().any(|&b| b != 0) {
+            return Err(format!(
+                "`{}`: {} bytes left over after the arguments",
+                short(&entry.format),
+                rest.len()
+            ));
+        }
+        Ok(index)
+    }
+
+    fn nested(&self, cur: &mut Cursor) -> Result<&Entry, String> {
+        let i = cur.u16()? as u64;
+        match self.entries.get(&i) {
+            Some(e) if !e.has_level() => Ok(e),
+            Some(_) => Err(format!("nested format index {i} is a log statement")),
+            None => Err(format!("nested format index {i} is not in the table")),
+        }
+    }
+
+    /// The parameters of one variant of an enum format (or of a plain format).
+    fn variant<'e>(&self, entry: &'e Entry, cur: &mut Cursor) -> Result<&'e [Parameter], String> {
+        let Some(variants) = &entry.variants else {
+            return entry.params.as_deref().map_err(Clone::clone);
+        };
+        // The discriminant is as wide as needed for the number of `|` (as defmt-decoder reads it).
+        let bars = variants.len() - 1;
+        let d = if bars <= u8::MAX as usize {
+            cur.read(1)?[0] as usize
+        } else if bars <= u16::MAX as usize {
+            cur.u16()? as usize
+        } else {
+            return Err("enum with too many variants".into());
+        };
+        variants
+            .get(d)
+            .ok_or_else(|| format!("enum variant {d} out of range"))?
+            .as_deref()
+            .map_err(Clone::clone)
+    }
+
+    fn walk(&self, params: &[Parameter], cur: &mut Cursor, depth: u32) -> Result<(), String> {
+        if depth > MAX_DEPTH {
+            return Err("formats nested too deep".into());
+        }
+        for p in params {
+            cur.steps += 1;
+            if cur.steps > MAX_STEPS {
+                return Err("too many arguments".into());
+            }
+            match &p.ty {
+                Type::Bool => {
+                    if cur.read(1)?[0] > 1 {
+                        return Err("bool is neither 0 nor 1".into());
+                    }
+                }
+                Type::U8 | Type::I8 => cur.skip(1)?,
+                Type::U16 | Type::I16 => cur.skip(2)?,
+                Type::U32 | Type::I32 | Type::Usize | Type::Isize | Type::F32 => cur.skip(4)?,
+                Type::U64 | Type::I64 | Type::F64 => cur.skip(8)?,
+                Type::U128 | Type::I128 => cur.skip(16)?,
+                Type::Char => {
+                    let c = cur.u32()?;
+                    if char::from_u32(c).is_none() {
+                        return Err(format!("{c:#x} is not a char"));
+                    }
+                }
+                Type::BitField(r) => cur.skip(bitfield_bytes(r)?)?,
+                Type::Str => {
+                    let n = cur.u32()? as usize;
+                    let s = cur.read(n)?;
+                    if std::str::from_utf8(s).is_err() {
+                        return Err("string is not UTF-8".into());
+                    }
+                }
+                Type::U8Slice => {
+                    let n = cur.u32()? as usize;
+                    cur.skip(n)?
+                }
+                Type::U8Array(n) => cur.skip(*n)?,
+                Type::IStr => {
+                    self.nested(cur)?;
+                }
+                Type::Debug | Type::Display => {
+                    let rest = &cur.bytes[cur.pos..];
+                    let end = rest
+                        .iter()
+                        .position(|&b| b == 0xff)
+                        .ok_or("unterminated preformatted string")?;
+                    if std::str::from_utf8(&rest[..end]).is_err() {
+                        return Err("preformatted string is not UTF-8".into());
+                    }
+                    cur.pos += end + 1;
+                }
+                Type::Format => {
+                    let entry = self.nested(cur)?;
+                    let inner = self.variant(entry, cur)?;
+                    self.walk(inner, cur, depth + 1)?;
+                }
+                Type::FormatSlice | Type::FormatArray(_) => {
+                    let n = match p.ty {
+                        Type::FormatArray(n) => n as u64,
+                        _ => cur.u32()? as u64,
+                    };
+                    if n > MAX_SLICE_ELEMENTS {
+                        return Err(format!("slice of {n} elements"));
+                    }
+                    let entry = self.nested(cur)?;
+                    for _ in 0..n {
+                        let inner = self.variant(entry, cur)?;
+                        self.walk(inner, cur, depth + 1)?;
+                    }
+                }
+                Type::FormatSequence => loop {
+                    let i = cur.u16()? as u64;
+                    if i == 0 {
+                        break;
+                    }
+                    let entry = match self.entries.get(&i) {
+                        Some(e) if !e.has_level() => e,
+                        _ => return Err(format!("sequence element index {i} is not a format")),
+                    };
+                    let inner = entry.params.as_deref().map_err(Clone::clone)?;
+                    self.walk(inner, cur, depth + 1)?;
+                },
+            }
+        }
+        Ok(())
+    }
+}
+
+struct Cursor<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    steps: u32,
+}
+
+impl<'a> Cursor<'a> {
+    fn read(&mut self, n: usize) -> Result<&'a [u8], String> {
+        let end = self
+            .pos
+            .checked_add(n)
+            .filter(|&e| e <= self.bytes.len())
+            .ok_or_else(|| "frame ends inside an argument".to_string())?;
+        let s = &self.bytes[self.pos..end];
+        self.pos = end;
+        Ok(s)
+    }
+
+    fn skip(&mut self, n: usize) -> Result<(), String> {
+        self.read(n).map(|_| ())
+    }
+
+    fn u16(&mut self) -> Result<u16, String> {
+        let b = self.read(2)?;
+        Ok(u16::from_le_bytes([b[0], b[1]]))
+    }
+
+    fn u32(&mut self) -> Result<u32, String> {
+        let b = self.read(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+}
+
+pub(super) fn bitfield_bytes(r: &Range<u8>) -> Result<usize, String> {
+    if r.end <= r.start || r.end > 128 {
+        return Err("bad bitfield range".into());
+    }
+    Ok(match (r.end - 1) / 8 - r.start / 8 + 1 {
+        1 => 1,
+        2 => 2,
+        3..=4 => 4,
+        5..=8 => 8,
+        _ => 16,
+    })
+}

@@ -1,0 +1,195 @@
+//! The session's files and their rows: the CSV writers (raw samples, faults, and the pairs
+//! through `data::PairsWriter`, the same schema `simulate` writes and `analyze` reads), the
+//! firmware's other log lines and the received bytes. Nothing here decides what goes where;
+//! the session does.
+
+use super::{
+    LogOptions, FAULTS_CSV, FAULTS_HEADER, MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, RAW_CSV,
+    RAW_HEADER, STREAM_FILE, SUMMARY_JSON,
+};
+use crate::data::{Pair, PairsWriter};
+use anyhow::Context;
+use firmware::hal::Channel;
+use firmware::record::{Fault, RawSample};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The open files of one session.
+pub(super) struct Files {
+    dir: PathBuf,
+    raw: BufWriter<File>,
+    pairs: PairsWriter<BufWriter<File>>,
+    faults: BufWriter<File>,
+    messages: BufWriter<File>,
+    stream: Option<BufWriter<File>>,
+    /// `pairs-incomplete.csv`, created when its first row arrives.
+    incomplete: Option<PairsWriter<BufWriter<File>>>,
+}
+
+fn create(dir: &Path, name: &str, header: Option<&str>) -> anyhow::Result<BufWriter<File>> {
+    let path = dir.join(name);
+    let file = File::create(&path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut w = BufWriter::new(file);
+    if let Some(h) = header {
+        writeln!(w, "{h}").with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(w)
+}
+
+fn create_pairs(dir: &Path, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
+    let w = create(dir, name, None)?;
+    PairsWriter::new(w).with_context(|| format!("cannot write {}", dir.join(name).display()))
+}
+
+/// f32 as written: the shortest decimal that reads back to the same f32.
+fn f(v: f32) -> String {
+    v.to_string()
+}
+
+/// An f32 as the f64 of its shortest decimal (12.7f32 -> 12.7, not 12.699999809265137). Written
+/// as an f64, it is the same shortest decimal again.
+pub(super) fn decimal(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(f64::NAN)
+}
+
+impl Files {
+    /// Create (or, with `overwrite`, replace) the session's files in `opts.out_dir`. Refuses a
+    /// directory that holds another session's files unless `overwrite` is set.
+    pub fn create(opts: &LogOptions) -> anyhow::Result<Files> {
+        let dir = &opts.out_dir;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+        if !opts.overwrite {
+            let existing: Vec<&str> = [
+                RAW_CSV,
+                PAIRS_CSV,
+                PAIRS_INCOMPLETE_CSV,
+                FAULTS_CSV,
+                SUMMARY_JSON,
+                STREAM_FILE,
+                MESSAGES_TXT,
+            ]
+            .into_iter()
+            .filter(|n| dir.join(n).exists())
+            .collect();
+            if !existing.is_empty() {
+                anyhow::bail!(
+                    "{} already holds a logged session ({}): choose another --out, or pass \
+                     --overwrite to replace it",
+                    dir.display(),
+                    existing.join(", ")
+                );
+            }
+        }
+        if opts.overwrite {
+            // Files of the earlier session that this one may not write again.
+            let stale = [
+                Some(PAIRS_INCOMPLETE_CSV),
+                (!opts.save_stream).then_some(STREAM_FILE),
+            ];
+            for name in stale.into_iter().flatten() {
+                let path = dir.join(name);
+                if path.exists() {
+                    std::fs::remove_file(&path)
+                        .with_context(|| format!("cannot remove {}", path.display()))?;
+                }
+            }
+        }
+        Ok(Files {
+            raw: create(dir, RAW_CSV, Some(RAW_HEADER))?,
+            pairs: create_pairs(dir, PAIRS_CSV)?,
+            faults: create(dir, FAULTS_CSV, Some(FAULTS_HEADER))?,
+            messages: create(dir, MESSAGES_TXT, None)?,
+            stream: if opts.save_stream {
+                Some(create(dir, STREAM_FILE, None)?)
+            } else {
+                None
+            },
+            incomplete: None,
+            dir: dir.clone(),
+        })
+    }
+
+    /// Keep received bytes (if the session keeps them).
+    pub fn stream(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        if let Some(s) = &mut self.stream {
+            s.write_all(bytes).context("cannot write stream.defmt")?;
+        }
+        Ok(())
+    }
+
+    /// One of the firmware's other log lines.
+    pub fn message(&mut self, level: &str, text: &str) -> anyhow::Result<()> {
+        writeln!(self.messages, "{level} {text}").context("cannot write messages.txt")
+    }
+
+    /// A raw sample of run `run` (empty: unknown).
+    pub fn raw(&mut self, run: &str, seq: u32, r: &RawSample) -> anyhow::Result<()> {
+        writeln!(
+            self.raw,
+            "{run},{seq},{},{},{},{},{}",
+            r.t_us as f64 / 1e6,
+            r.counts[0],
+            r.counts[1],
+            f(r.force_n[0]),
+            f(r.force_n[1])
+        )
+        .context("cannot write raw.csv")
+    }
+
+    /// A fault of run `run` (empty: unknown).
+    pub fn fault(&mut self, run: &str, seq: u32, flt: &Fault) -> anyhow::Result<()> {
+        let channel = match flt.channel {
+            Some(Channel::T1) => "t1",
+            Some(Channel::T2) => "t2",
+            None => "",
+        };
+        writeln!(
+            self.faults,
+            "{run},{seq},{},{},{channel},{}",
+            flt.t_us as f64 / 1e6,
+            flt.kind.name(),
+            f(flt.value)
+        )
+        .context("cannot write faults.csv")
+    }
+
+    /// A complete pair, to `pairs.csv`.
+    pub fn pair(&mut self, p: &Pair) -> anyhow::Result<()> {
+        self.pairs.write(p).context("cannot write pairs.csv")
+    }
+
+    /// Make sure `pairs-incomplete.csv` exists; true if this call created it.
+    pub fn open_incomplete(&mut self) -> anyhow::Result<bool> {
+        if self.incomplete.is_some() {
+            return Ok(false);
+        }
+        self.incomplete = Some(create_pairs(&self.dir, PAIRS_INCOMPLETE_CSV)?);
+        Ok(true)
+    }
+
+    /// A pair lacking a set-up value or its run number, to `pairs-incomplete.csv` (opened by
+    /// [`Files::open_incomplete`]).
+    pub fn incomplete_pair(&mut self, p: &Pair) -> anyhow::Result<()> {
+        let w = self.incomplete.as_mut().expect("opened first");
+        w.write(p).context("cannot write pairs-incomplete.csv")
+    }
+
+    /// Flush every file.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        let dir = self.dir.display().to_string();
+        let at = |name: &str| format!("cannot write {dir}/{name}");
+        self.raw.flush().with_context(|| at(RAW_CSV))?;
+        self.pairs.flush().with_context(|| at(PAIRS_CSV))?;
+        self.faults.flush().with_context(|| at(FAULTS_CSV))?;
+        self.messages.flush().with_context(|| at(MESSAGES_TXT))?;
+        if let Some(s) = &mut self.stream {
+            s.flush().with_context(|| at(STREAM_FILE))?;
+        }
+        if let Some(w) = &mut self.incomplete {
+            w.flush().with_context(|| at(PAIRS_INCOMPLETE_CSV))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,97 @@
+//! The files a logged run leaves in its directory, written as the records arrive and flushed
+//! after every chunk of the stream, so an interrupted session keeps everything decoded so far:
+//!
+//! | file | what |
+//! |---|---|
+//! | `raw.csv` | `run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n`: the decimated raw samples |
+//! | `pairs.csv` | the conditioned pairs, in the schema of `data.rs` (`analyze` reads it) |
+//! | `pairs-incomplete.csv` | only if needed: pairs whose set-up (wrap, diameter, drive voltage) or run number is unknown, same schema with those cells empty |
+//! | `faults.csv` | `run,seq,time_s,kind,channel,value` |
+//! | `messages.txt` | the firmware's other log lines (`LEVEL text`) |
+//! | `stream.defmt` | the bytes as received (for `capstan log --from`), unless read from a file |
+//! | `summary.json` | counts, runs, sequence gaps, bad frames, why the session stopped |
+//!
+//! Times are seconds since the logger trigger's rising edge (negative before it).
+//!
+//! [`Logger`] (`session`) keeps the session's state (the run under way, counts, the runs
+//! seen) and reports progress; `files` writes the rows; [`Summary`] (`summary`) is what
+//! `summary.json` and the closing lines on stderr say.
+
+mod files;
+mod session;
+mod summary;
+
+pub use session::Logger;
+pub use summary::{RecordCounts, RunSummary, Sourced, Summary, TruncatedTail};
+
+use std::path::PathBuf;
+
+/// File names in the output directory.
+pub const RAW_CSV: &str = "raw.csv";
+/// Conditioned pairs.
+pub const PAIRS_CSV: &str = "pairs.csv";
+/// Pairs that lack a set-up value or their run number (created only when one arrives).
+pub const PAIRS_INCOMPLETE_CSV: &str = "pairs-incomplete.csv";
+/// Faults.
+pub const FAULTS_CSV: &str = "faults.csv";
+/// Other log lines.
+pub const MESSAGES_TXT: &str = "messages.txt";
+/// The received bytes.
+pub const STREAM_FILE: &str = "stream.defmt";
+/// The summary.
+pub const SUMMARY_JSON: &str = "summary.json";
+
+/// Header of `raw.csv`.
+pub const RAW_HEADER: &str = "run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n";
+/// Header of `faults.csv`.
+pub const FAULTS_HEADER: &str = "run,seq,time_s,kind,channel,value";
+
+/// Rig set-up given on the command line; each overrides the run-start record's value.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SetupFlags {
+    /// Capstan diameter, mm.
+    pub capstan_diameter_mm: Option<f64>,
+    /// Wrap angle, deg.
+    pub wrap_deg: Option<f64>,
+    /// Drive-motor voltage, V.
+    pub drive_v: Option<f64>,
+}
+
+/// How to log.
+#[derive(Clone, Debug)]
+pub struct LogOptions {
+    /// Output directory (created if needed).
+    pub out_dir: PathBuf,
+    /// Replace files of an earlier session in `out_dir` (otherwise refuse).
+    pub overwrite: bool,
+    /// Keep a copy of the received bytes in `stream.defmt`.
+    pub save_stream: bool,
+    /// Set-up values for `pairs.csv`.
+    pub setup: SetupFlags,
+    /// Report runs, pairs, faults and gaps on stderr as they arrive.
+    pub progress: bool,
+}
+
+/// Why a session ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// The stream (file, pipe) ended.
+    EndOfStream,
+    /// Ctrl-C.
+    Interrupted,
+    /// The probe or the target stopped answering.
+    ProbeLost(String),
+    /// A limit given on the command line was reached.
+    Limit(String),
+}
+
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stop::EndOfStream => f.write_str("end of stream"),
+            Stop::Interrupted => f.write_str("interrupted (Ctrl-C)"),
+            Stop::ProbeLost(e) => write!(f, "probe lost: {e}"),
+            Stop::Limit(l) => write!(f, "limit reached: {l}"),
+        }
+    }
+}

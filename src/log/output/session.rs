@@ -1,0 +1,338 @@
+//! One logging session: bytes in, decoded records routed to the files as they arrive, the run
+//! under way and its set-up values tracked, progress reported on stderr, and the summary at
+//! the end.
+
+use super::files::{decimal, Files};
+use super::summary::{RecordCounts, RunSummary, Sourced, Summary, TruncatedTail};
+use super::{LogOptions, Stop, PAIRS_INCOMPLETE_CSV, SUMMARY_JSON};
+use crate::data::Pair;
+use crate::log::decoder::{BadFrame, Decoder, Located};
+use crate::log::elf::Firmware;
+use crate::log::frame::Event;
+use crate::log::seq::SeqEvent;
+use anyhow::Context;
+use firmware::record::{Fault, RawSample, Record, RunEnd, RunStart, StepPair};
+
+/// The run the records belong to: its entry in the summary's runs, and the set-up values its
+/// pairs are written with.
+#[derive(Clone, Copy)]
+struct Current {
+    index: usize,
+    diameter: Option<f64>,
+    wrap: Option<f64>,
+    drive: Option<f64>,
+}
+
+/// Writes one session's files.
+pub struct Logger<'f> {
+    decoder: Decoder<'f>,
+    opts: LogOptions,
+    source: String,
+    files: Files,
+    counts: RecordCounts,
+    runs: Vec<RunSummary>,
+    current: Option<Current>,
+    pairs_incomplete: u64,
+    events: Vec<Located>,
+    bad: Vec<BadFrame>,
+}
+
+/// A run number for messages: `?` when unknown.
+fn or_unknown(run: &str) -> &str {
+    if run.is_empty() {
+        "?"
+    } else {
+        run
+    }
+}
+
+impl<'f> Logger<'f> {
+    /// Start a session into `opts.out_dir`; `source` names the byte source in the summary.
+    pub fn create(fw: &'f Firmware, opts: LogOptions, source: &str) -> anyhow::Result<Self> {
+        Ok(Logger {
+            decoder: Decoder::new(fw),
+            files: Files::create(&opts)?,
+            source: source.to_string(),
+            opts,
+            counts: RecordCounts::default(),
+            runs: Vec::new(),
+            current: None,
+            pairs_incomplete: 0,
+            events: Vec::new(),
+            bad: Vec::new(),
+        })
+    }
+
+    /// Runs whose run-end record has arrived.
+    pub fn completed_runs(&self) -> usize {
+        self.runs.iter().filter(|r| r.complete).count()
+    }
+
+    /// Bytes received so far.
+    pub fn bytes_seen(&self) -> u64 {
+        self.decoder.bytes_seen()
+    }
+
+    /// Take a chunk of the stream: decode it, write what it completes, flush every file.
+    pub fn feed(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        self.files.stream(bytes)?;
+        let mut events = std::mem::take(&mut self.events);
+        let mut bad = std::mem::take(&mut self.bad);
+        self.decoder.push(bytes, &mut events, &mut bad);
+        for b in bad.drain(..) {
+            if self.opts.progress {
+                eprintln!(
+                    "capstan log: bad frame {} at byte {}: {}",
+                    b.frame, b.byte_offset, b.reason
+                );
+            }
+        }
+        for e in events.drain(..) {
+            self.handle(e)?;
+        }
+        self.events = events;
+        self.bad = bad;
+        self.files.flush()
+    }
+
+    /// The run under way, opened as a run of unknown number if its run-start record was lost
+    /// (or logging began mid-run). Returns it with its run number for the CSV (empty: unknown).
+    fn current_run(&mut self, seq: u32) -> (Current, String) {
+        if self.current.is_none() {
+            let s = self.opts.setup;
+            self.runs.push(RunSummary::new(
+                None,
+                seq,
+                Sourced::choose(s.capstan_diameter_mm, None),
+                Sourced::choose(s.wrap_deg, None),
+                Sourced::choose(s.drive_v, None),
+            ));
+            self.current = Some(Current {
+                index: self.runs.len() - 1,
+                diameter: s.capstan_diameter_mm,
+                wrap: s.wrap_deg,
+                drive: s.drive_v,
+            });
+        }
+        let c = self.current.expect("just set");
+        let run = self.runs[c.index]
+            .run
+            .map_or(String::new(), |r| r.to_string());
+        (c, run)
+    }
+
+    fn handle(&mut self, located: Located) -> anyhow::Result<()> {
+        match &located.seq {
+            Some(SeqEvent::Gap(g)) if self.opts.progress => eprintln!(
+                "capstan log: LOST {} record(s) after seq {} (byte {})",
+                g.missing, g.after_seq, g.byte_offset
+            ),
+            Some(SeqEvent::Restart(r)) => {
+                if self.opts.progress {
+                    eprintln!(
+                        "capstan log: the board restarted after seq {} (byte {})",
+                        r.after_seq, r.byte_offset
+                    );
+                }
+                self.current = None;
+            }
+            _ => {}
+        }
+        match located.event {
+            Event::Message { level, text } => self.files.message(&level, &text),
+            Event::Record { seq, record } => match record {
+                Record::RunStart(s) => {
+                    self.run_start(seq, &s);
+                    Ok(())
+                }
+                Record::Raw(r) => self.raw(seq, &r),
+                Record::Pair(p) => self.pair(seq, &p),
+                Record::Fault(f) => self.fault(seq, &f),
+                Record::RunEnd(e) => {
+                    self.run_end(seq, &e);
+                    Ok(())
+                }
+            },
+        }
+    }
+
+    fn run_start(&mut self, seq: u32, s: &RunStart) {
+        self.counts.run_start += 1;
+        let flags = self.opts.setup;
+        let p = &s.protocol;
+        // 0 (or garbage) in the record means "not given".
+        let given = |v: f32| (v.is_finite() && v > 0.0).then_some(decimal(v));
+        let drive = s.calibration.amp.drive_v(p.amp_control_v);
+        let summary = RunSummary::new(
+            Some(s.run),
+            seq,
+            Sourced::choose(flags.capstan_diameter_mm, given(p.capstan_diameter_mm)),
+            Sourced::choose(flags.wrap_deg, given(p.wrap_deg)),
+            Sourced::choose(
+                flags.drive_v,
+                Some(decimal(drive)).filter(|v| v.is_finite()),
+            ),
+        );
+        self.current = Some(Current {
+            index: self.runs.len(),
+            diameter: summary.capstan_diameter_mm.value,
+            wrap: summary.wrap_deg.value,
+            drive: summary.drive_v.value,
+        });
+        let missing: Vec<&str> = [
+            ("--wrap-deg", summary.wrap_deg.value),
+            ("--diameter-mm", summary.capstan_diameter_mm.value),
+            ("--drive-v", summary.drive_v.value),
+        ]
+        .iter()
+        .filter(|(_, v)| v.is_none())
+        .map(|(flag, _)| *flag)
+        .collect();
+        self.runs.push(summary);
+        if self.opts.progress {
+            eprintln!(
+                "capstan log: run {} started (seq {seq}): {} levels, {} ms each",
+                s.run,
+                p.levels(),
+                p.dwell_ms
+            );
+            if !missing.is_empty() {
+                // Said at once: the operator can still stop and restart with the flags.
+                eprintln!(
+                    "capstan log: WARNING: run {}'s run_start record does not give {} and no \
+                     flag does: its pairs go to {PAIRS_INCOMPLETE_CSV}",
+                    s.run,
+                    missing.join(", ")
+                );
+            }
+        }
+    }
+
+    fn raw(&mut self, seq: u32, r: &RawSample) -> anyhow::Result<()> {
+        self.counts.raw += 1;
+        let (c, run) = self.current_run(seq);
+        self.runs[c.index].raw += 1;
+        self.files.raw(&run, seq, r)
+    }
+
+    fn pair(&mut self, seq: u32, p: &StepPair) -> anyhow::Result<()> {
+        self.counts.pair += 1;
+        let progress = self.opts.progress;
+        let (c, run) = self.current_run(seq);
+        let rs = &mut self.runs[c.index];
+        let pair = Pair {
+            capstan_diameter_mm: c.diameter,
+            // Unknown: an empty cell (the pair then goes to pairs-incomplete.csv).
+            wrap_deg: c.wrap.unwrap_or(f64::NAN),
+            drive_v: c.drive,
+            run: rs.run.map(f64::from),
+            step: Some(p.step as f64),
+            time_s: Some(p.t_mid_ms as f64 / 1000.0),
+            t1_n: decimal(p.t1.mean_n),
+            t2_n: decimal(p.t2.mean_n),
+            extra: Vec::new(),
+        };
+        let complete =
+            c.diameter.is_some() && c.wrap.is_some() && c.drive.is_some() && rs.run.is_some();
+        rs.pairs += 1;
+        if !(p.t1.mean_n.is_finite() && p.t2.mean_n.is_finite()) {
+            rs.pairs_not_written += 1;
+        } else if complete {
+            self.files.pair(&pair)?;
+        } else {
+            // Every row of pairs.csv is complete, so `capstan analyze` reads it; the others
+            // are kept apart, with the cells that are unknown left empty.
+            rs.pairs_incomplete += 1;
+            self.pairs_incomplete += 1;
+            let run_unknown = rs.run.is_none();
+            if self.files.open_incomplete()? && progress && run_unknown {
+                eprintln!(
+                    "capstan log: WARNING: pairs without their run's run_start record (lost, \
+                     or logging began mid-run): their run is unknown; they go to \
+                     {PAIRS_INCOMPLETE_CSV}"
+                );
+            }
+            self.files.incomplete_pair(&pair)?;
+        }
+        if progress {
+            eprintln!(
+                "capstan log: run {} step {}: T1 {} N, T2 {} N ({} samples)",
+                or_unknown(&run),
+                p.step,
+                p.t1.mean_n,
+                p.t2.mean_n,
+                p.t1.count
+            );
+        }
+        Ok(())
+    }
+
+    fn fault(&mut self, seq: u32, flt: &Fault) -> anyhow::Result<()> {
+        self.counts.fault += 1;
+        let (c, run) = self.current_run(seq);
+        self.runs[c.index].faults += 1;
+        self.files.fault(&run, seq, flt)?;
+        if self.opts.progress {
+            eprintln!(
+                "capstan log: FAULT {} at {} s (run {})",
+                flt.kind.name(),
+                flt.t_us as f64 / 1e6,
+                or_unknown(&run)
+            );
+        }
+        Ok(())
+    }
+
+    fn run_end(&mut self, seq: u32, e: &RunEnd) {
+        self.counts.run_end += 1;
+        self.current_run(seq);
+        let c = self.current.take().expect("set");
+        let rs = &mut self.runs[c.index];
+        rs.complete = true;
+        rs.pairs_reported = Some(e.pairs);
+        rs.ended_by_fault = e.fault.map(|k| k.name());
+        rs.end_time_s = Some(e.t_us as f64 / 1e6);
+        if self.opts.progress {
+            eprintln!(
+                "capstan log: run {} ended at {} s: {} pairs{}",
+                rs.run.map_or("?".to_string(), |r| r.to_string()),
+                e.t_us as f64 / 1e6,
+                e.pairs,
+                e.fault
+                    .map_or(String::new(), |k| format!(", fault {}", k.name()))
+            );
+        }
+    }
+
+    /// End the session: account for an unfinished frame, flush, write `summary.json`.
+    pub fn finish(mut self, stop: &Stop) -> anyhow::Result<Summary> {
+        let tail = self.decoder.finish();
+        self.files.flush()?;
+        let d = &self.decoder;
+        let summary = Summary {
+            source: self.source.clone(),
+            elf: d.firmware().path.clone(),
+            stopped: stop.to_string(),
+            bytes: d.bytes_seen(),
+            frames: d.frames_seen,
+            records: self.counts.clone(),
+            messages: d.messages,
+            first_seq: d.seq.first_seq,
+            last_seq: d.seq.last_seq,
+            missing_records: d.seq.missing_records,
+            gaps: d.seq.gaps.clone(),
+            restarts: d.seq.restarts.clone(),
+            backwards: d.seq.backwards.clone(),
+            bad_frames: d.bad_frames,
+            bad_frame_examples: d.bad_examples.clone(),
+            truncated_tail: tail.map(|(byte_offset, bytes)| TruncatedTail { byte_offset, bytes }),
+            runs: self.runs.clone(),
+            pairs_incomplete: self.pairs_incomplete,
+        };
+        let path = self.opts.out_dir.join(SUMMARY_JSON);
+        let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
+        std::fs::write(&path, json + "\n")
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(summary)
+    }
+}

@@ -1,0 +1,173 @@
+//! Damaged streams: records dropped (gaps counted and located), truncation at any byte,
+//! corruption of any byte, and a board restart told from a gap.
+
+use crate::log_support::{firmware, split, stream};
+use crate::seqs;
+use capstan::log::{decode_all, Event};
+use firmware::record::Record;
+
+#[test]
+fn dropped_frames_are_counted_and_located() {
+    let fw = firmware();
+    let frames = split(&stream());
+    let original = seqs(&fw, &frames.without(&[]));
+    // Frame numbers of some records: a single raw sample, a run of five, and the run-end of
+    // run 1 together with the run-start of run 2 (the frame between them is a text message).
+    let at = |seq: u32| {
+        let (events, _) = decode_all(&fw, &frames.without(&[]));
+        events
+            .iter()
+            .find(|e| matches!(e.event, Event::Record { seq: s, .. } if s == seq))
+            .map(|e| e.frame as usize)
+            .unwrap()
+    };
+    let single = at(40);
+    let run: Vec<usize> = (100..105).map(at).collect();
+    let end_of_run_1 = decode_all(&fw, &stream())
+        .0
+        .iter()
+        .find_map(|e| match e.event {
+            Event::Record {
+                seq,
+                record: Record::RunEnd(_),
+            } => Some(seq),
+            _ => None,
+        })
+        .unwrap();
+    assert_eq!(original.len(), 211);
+    let mut drop = vec![single];
+    drop.extend(&run);
+    drop.push(at(end_of_run_1));
+    drop.push(at(end_of_run_1 + 1));
+    let damaged = frames.without(&drop);
+    let (events, d) = decode_all(&fw, &damaged);
+    assert_eq!(d.bad_frames, 0);
+    assert_eq!(d.records, 211 - 8);
+    assert_eq!(d.seq.missing_records, 8);
+    let gaps: Vec<(u32, u32, u32)> = d
+        .seq
+        .gaps
+        .iter()
+        .map(|g| (g.after_seq, g.missing, g.resumed_at_seq))
+        .collect();
+    assert_eq!(
+        gaps,
+        [
+            (39, 1, 41),
+            (99, 5, 105),
+            (end_of_run_1 - 1, 2, end_of_run_1 + 2)
+        ]
+    );
+    // Each gap points at the frame and the byte where the stream resumed.
+    for g in &d.seq.gaps {
+        let e = events
+            .iter()
+            .find(|e| matches!(e.event, Event::Record { seq, .. } if seq == g.resumed_at_seq))
+            .unwrap();
+        assert_eq!((g.frame, g.byte_offset), (e.frame, e.byte_offset));
+        assert_eq!(damaged[g.byte_offset as usize - 1], 0, "{g:?}");
+    }
+}
+
+#[test]
+fn a_truncated_stream_keeps_every_whole_frame_and_reports_the_rest() {
+    let fw = firmware();
+    let bytes = stream();
+    let frames = split(&bytes);
+    let mut last = 0;
+    // Cut points: every byte of the first and last frames, either side of every separator,
+    // and every 13th byte. Nothing panics, records only ever grow, and the unfinished frame
+    // is reported with its offset.
+    let mut cuts: Vec<usize> = (0..=bytes.len()).step_by(13).collect();
+    cuts.extend(0..120);
+    cuts.extend(bytes.len() - 120..=bytes.len());
+    for (o, f) in &frames.frames {
+        cuts.extend([o + f.len() - 1, o + f.len(), o + f.len() + 1]);
+    }
+    cuts.retain(|&c| c <= bytes.len());
+    cuts.sort();
+    cuts.dedup();
+    for cut in cuts {
+        let (_, mut d) = decode_all(&fw, &bytes[..cut]);
+        assert!(d.records >= last, "cut {cut}");
+        last = d.records;
+        assert_eq!(d.bad_frames, 0, "cut {cut}: {:?}", d.bad_examples);
+        let tail = d.finish();
+        let inside = frames
+            .frames
+            .iter()
+            .find(|(o, f)| cut > *o && cut < o + f.len());
+        assert_eq!(
+            tail,
+            inside.map(|(o, _)| (*o as u64, (cut - o) as u64)),
+            "cut {cut}"
+        );
+    }
+    assert_eq!(last, 211);
+}
+
+#[test]
+fn corrupted_bytes_cost_frames_not_the_stream() {
+    let fw = firmware();
+    let frames = split(&stream());
+    // Every single-byte corruption of every frame (the byte set to 0x00, to 0xff, and
+    // flipped), decoded with two frames either side: the decoder resynchronises at the next
+    // separator, so at most the two frames the byte can touch are lost, and every lost record
+    // is visible as a bad frame or a sequence gap.
+    let mut worst = 0;
+    let mut cases = 0;
+    for k in 0..frames.frames.len() {
+        let window: Vec<usize> = (k.saturating_sub(2)..(k + 3).min(frames.frames.len())).collect();
+        let mut clean = frames.lead.clone();
+        for &w in &window {
+            clean.extend_from_slice(&frames.frames[w].1);
+        }
+        let base = decode_all(&fw, &clean).1.records;
+        let start = frames.lead.len()
+            + window
+                .iter()
+                .take_while(|&&w| w < k)
+                .map(|&w| frames.frames[w].1.len())
+                .sum::<usize>();
+        for i in start..start + frames.frames[k].1.len() {
+            for v in [0x00, 0xff, clean[i] ^ 0x5a] {
+                if v == clean[i] {
+                    continue;
+                }
+                let mut b = clean.clone();
+                b[i] = v;
+                let (_, d) = decode_all(&fw, &b);
+                let lost = base.saturating_sub(d.records);
+                worst = worst.max(lost);
+                cases += 1;
+                assert!(
+                    lost <= 2,
+                    "frame {k}, byte {i} := {v:#x}: {lost} records lost"
+                );
+                if lost > 0 {
+                    assert!(
+                        d.bad_frames > 0 || d.seq.missing_records > 0,
+                        "frame {k}, byte {i} := {v:#x}: a record vanished without trace"
+                    );
+                }
+            }
+        }
+    }
+    assert!(cases > 10_000, "{cases}");
+    assert!(worst >= 1);
+}
+
+#[test]
+fn a_board_restart_is_told_from_a_gap() {
+    // Two sessions back to back, as when the board resets while logging: numbering starts
+    // again at 0. That is a restart, not 4 billion lost records.
+    let fw = firmware();
+    let mut bytes = stream();
+    bytes.extend(stream());
+    let (_, d) = decode_all(&fw, &bytes);
+    assert_eq!(d.records, 422);
+    assert!(d.seq.gaps.is_empty());
+    assert_eq!(d.seq.restarts.len(), 1);
+    assert_eq!(d.seq.restarts[0].after_seq, 210);
+    assert_eq!(d.bad_frames, 0);
+}

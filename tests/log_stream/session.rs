@@ -1,0 +1,123 @@
+//! A whole session's files from a damaged stream, and from one joined mid-run.
+
+use crate::log_support::{firmware, fresh_dir, split, stream};
+use crate::record_seq;
+use capstan::log::output::{LogOptions, Logger, SetupFlags, Stop};
+use capstan::log::seq::Gap;
+use capstan::log::{decode_all, Event};
+use firmware::record::Record;
+
+#[test]
+fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not() {
+    let fw = firmware();
+    let frames = split(&stream());
+    // Drop the first pair of run 1 (a record) and feed the rest in odd-sized chunks.
+    let (events, _) = decode_all(&fw, &stream());
+    let pair = events
+        .iter()
+        .find(|e| {
+            matches!(
+                e.event,
+                Event::Record {
+                    record: Record::Pair(_),
+                    ..
+                }
+            )
+        })
+        .unwrap();
+    let damaged = frames.without(&[pair.frame as usize]);
+    let dir = fresh_dir("test", "gap-files");
+    let opts = LogOptions {
+        out_dir: dir.clone(),
+        overwrite: false,
+        save_stream: true,
+        setup: SetupFlags::default(),
+        progress: false,
+    };
+    let mut logger = Logger::create(&fw, opts.clone(), "test").unwrap();
+    for chunk in damaged.chunks(37) {
+        logger.feed(chunk).unwrap();
+    }
+    let summary = logger.finish(&Stop::EndOfStream).unwrap();
+    assert_eq!(summary.missing_records, 1);
+    assert_eq!(
+        summary.gaps,
+        [Gap {
+            after_seq: record_seq(pair) - 1,
+            missing: 1,
+            resumed_at_seq: record_seq(pair) + 1,
+            frame: pair.frame,
+            byte_offset: pair.byte_offset,
+        }]
+    );
+    assert!(!summary.is_clean());
+    assert_eq!(summary.runs.len(), 2);
+    assert_eq!(summary.runs[0].pairs, 2);
+    assert_eq!(summary.runs[0].pairs_reported, Some(3));
+    let human = summary.human(&dir);
+    assert!(
+        human.contains(&format!(
+            "LOST 1 record(s) in 1 gap(s): 1 after seq {}",
+            record_seq(pair) - 1
+        )),
+        "{human}"
+    );
+    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    assert_eq!(pairs.pairs.len(), 3);
+    assert_eq!(pairs.pairs[0].step, Some(2.0));
+    assert_eq!(pairs.pairs[0].wrap_deg, 360.0);
+    assert_eq!(pairs.pairs[0].capstan_diameter_mm, Some(12.7));
+    assert_eq!(pairs.pairs[0].drive_v, Some(10.0));
+    let raw = std::fs::read_to_string(dir.join("raw.csv")).unwrap();
+    assert_eq!(raw.lines().count(), 1 + 202);
+    let faults = std::fs::read_to_string(dir.join("faults.csv")).unwrap();
+    assert_eq!(
+        faults.lines().nth(1).unwrap().split(',').nth(3),
+        Some("over_force")
+    );
+    assert_eq!(std::fs::read(dir.join("stream.defmt")).unwrap(), damaged);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["missing_records"], 1);
+    assert_eq!(json["gaps"][0]["missing"], 1);
+    // A second session into the same directory is refused, not mixed in.
+    let err = Logger::create(&fw, opts, "test").err().unwrap().to_string();
+    assert!(err.contains("already holds a logged session"), "{err}");
+}
+
+#[test]
+fn joining_mid_run_keeps_the_records_without_their_run_start() {
+    // Attaching to a running board: the stream starts mid-frame and mid-run.
+    let fw = firmware();
+    let bytes = stream();
+    let late = &bytes[1001..];
+    let dir = fresh_dir("test", "late");
+    let opts = LogOptions {
+        out_dir: dir.clone(),
+        overwrite: false,
+        save_stream: false,
+        setup: SetupFlags {
+            wrap_deg: Some(360.0),
+            ..SetupFlags::default()
+        },
+        progress: false,
+    };
+    let mut logger = Logger::create(&fw, opts, "late").unwrap();
+    logger.feed(late).unwrap();
+    let summary = logger.finish(&Stop::EndOfStream).unwrap();
+    assert_eq!(summary.bad_frames, 1, "the frame cut by joining");
+    assert!(summary.first_seq.unwrap() > 0);
+    assert_eq!(summary.runs[0].run, None);
+    assert!(summary.human(&dir).contains("joins the board at seq"));
+    // Run 1's pairs have no run number (nor the record's diameter and drive voltage): they are
+    // kept apart; run 2's are complete and go to pairs.csv, which `capstan analyze` reads.
+    assert_eq!(summary.pairs_incomplete, summary.runs[0].pairs);
+    assert!(summary.pairs_incomplete > 0);
+    assert!(summary.human(&dir).contains("pairs-incomplete.csv"));
+    let incomplete = std::fs::read_to_string(dir.join("pairs-incomplete.csv")).unwrap();
+    let first = incomplete.lines().nth(1).unwrap();
+    assert!(first.starts_with(",360,,,"), "{first}");
+    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    assert!(pairs.pairs.iter().all(|p| p.run == Some(2.0)));
+    assert_eq!(pairs.pairs.len(), summary.runs[1].pairs as usize);
+}
