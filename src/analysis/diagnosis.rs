@@ -158,36 +158,22 @@ fn relate(
     let n_alone = ev(m, "pressure_dependent_friction", "n_alone");
     let n_ext = ev(m, "pressure_dependent_friction", "n_with_extended");
     let dn_ext = ev(m, "pressure_dependent_friction", "delta_aic_with_extended");
-    let mut s = String::new();
-    // The extended model's mechanisms, and other ruled-in tests it does not model.
-    let modelled = ["contact_heating_load_memory", "t1_path_loss"];
-    let named = |keep: bool| -> Vec<&str> {
-        m.causes
-            .iter()
-            .map(|c| c.name.as_str())
-            .filter(|n| *n != "cord_and_run_variation" && modelled.contains(n) == keep)
-            .collect()
-    };
-    let (inside, also) = (named(true), named(false));
-    let _ = write!(s, "The diagnosis names the single catalogue effect that best explains the departure from Euler-Eytelwein; the analysis compares combinations by nested fits, and its extended model carries {} mechanism{} at once ({})", inside.len(), if inside.len() == 1 { "" } else { "s" }, inside.join(" + "));
-    if also.is_empty() {
-        s.push('.');
-    } else {
-        let _ = write!(
-            s,
-            "; also ruled in by its own test, not modelled: {}.",
-            also.join(", ")
-        );
-    }
-    let pf = d.candidate(EffectKind::PressureFriction);
-    if let (Some(c), true) = (pf, heating) {
-        let chosen = if d.kind == EffectKind::PressureFriction {
-            "Without step times its call is"
-        } else {
-            "Its pressure-friction candidate is"
-        };
-        let _ = write!(s, " {chosen} a tension exponent n = {:.3} ± {:.3} (ΔBIC {:.1}), {} the analysis's one-mu power law (n = {n_alone:.3}): the best single stand-in for an amplification that falls as the friction load builds. Once the load-memory term is in the model, the analysis's exponent is n = {n_ext:.3} (ΔAIC {dn_ext:+.1}), so the apparent n < 1 is the heating (dropping the load term costs ΔAIC {d_heat:+.1}).", c.value, c.parameter_se, c.delta_bic,
-            if (c.value - n_alone).abs() <= 2.0 * c.parameter_se { "the same apparent n as" } else { "compared with" });
+    // The extended model's mechanisms (other ruled-in tests are not modelled).
+    let inside: Vec<&str> = m
+        .causes
+        .iter()
+        .map(|c| c.name.as_str())
+        .filter(|n| ["contact_heating_load_memory", "t1_path_loss"].contains(n))
+        .collect();
+    let mut s = format!(
+        "capstan diagnose names the one catalogue effect that best explains the data; the analysis's extended model carries {} at once ({}).",
+        if inside.len() == 2 { "two mechanisms" } else { "its mechanisms" },
+        inside.join(" + ")
+    );
+    if let (Some(c), true) = (d.candidate(EffectKind::PressureFriction), heating) {
+        let same = (c.value - n_alone).abs() <= 2.0 * c.parameter_se;
+        let _ = write!(s, " Without times, the best single stand-in for amplification falling as the friction load builds is a tension exponent, n = {:.3} ± {:.3} ({} the analysis's one-mu power law: {n_alone:.3}); with the load memory in, the analysis's n is {n_ext:.3} (ΔAIC {dn_ext:+.1}).",
+            c.value, c.parameter_se, if same { "the same as" } else { "against" });
     }
     let drift_call = [timed, Some(d)]
         .into_iter()
@@ -197,25 +183,16 @@ fn relate(
         let c = t
             .candidate(EffectKind::ThermalDrift)
             .expect("the chosen effect is a candidate");
-        let runner = t
-            .candidates
-            .iter()
-            .find(|x| x.kind != EffectKind::ThermalDrift);
-        let _ = write!(s, " With times, time since the trigger grows with the load along every run, so a drift of mu with time becomes the best stand-in: {:+.1} % of mu per 100 s (ΔBIC {:.1}{}). The analysis separates the two because cords that reach different loads at the same step share the time but not the load: a drift in place of the load memory fits worse by ΔAIC {d_drift:+.1}.",
-            100.0 * c.value, c.delta_bic, runner.map_or(String::new(), |r| format!(", ahead of {} at {:.1}", r.effect, r.delta_bic)));
+        let _ = write!(s, " With step times, time grows with the load along every run, so a drift of mu wins ({:+.1} % per 100 s); in the analysis a drift in place of the load memory is worse by ΔAIC {d_drift:+.1}, because cords reaching different loads share the same step times.",
+            100.0 * c.value);
     }
     if let (Some(c), true) = (d.candidate(EffectKind::T1Offset), e1.is_finite()) {
         let same = c.value.signum() == e1.signum();
-        let _ = write!(s, " Alone, a T1 offset comes out at {:+.3} N (ΔBIC {:.1}, {}), {} the analysis's T1-path loss e1 = {e1:+.3} N{}.",
-            c.value, c.delta_bic, if c.supported { "supported" } else { "not supported" },
-            if same { "the same sign as" } else { "opposite in sign to" },
-            if same { "" } else { ": alone it has to mimic the decay of amplification with tension; next to the heating term it only carries the fast rise at low tension" });
+        let _ = write!(s, " Its single-effect T1 offset ({:+.3} N, {}) has {} the analysis's loss e1 = {e1:+.3} N{}.",
+            c.value, if c.supported { "supported" } else { "not supported" },
+            if same { "the same sign as" } else { "the opposite sign to" },
+            if same { "" } else { ": alone it must mimic the decay with tension" });
     }
-    s.push_str(if inside.len() >= 2 {
-        " Both see the same departure; the catalogue holds one effect at a time, so the diagnosis names the best single stand-in, while the analysis names a cause made of two."
-    } else {
-        " The catalogue holds one effect at a time; the analysis's nested fits test each mechanism in the presence of the others."
-    });
     let cand = |x: &Diagnosis, k: EffectKind| {
         x.candidate(k).map_or(Value::Null, |c| json!({"value": c.value, "se": c.parameter_se, "delta_bic": c.delta_bic, "supported": c.supported}))
     };
