@@ -263,76 +263,63 @@ pub fn write_pairs(path: &Path, pairs: &[Pair]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reads one optional column of a pair.
-type Getter = fn(&Pair) -> Option<f64>;
+/// The value of column `i` of [`PAIRS_HEADER`] in a pair (`None` when unknown).
+fn column_value(p: &Pair, i: usize) -> Option<f64> {
+    match i {
+        0 => p.capstan_diameter_mm,
+        1 => Some(p.wrap_deg).filter(|w| w.is_finite()),
+        2 => p.drive_v,
+        3 => p.run,
+        4 => p.step,
+        5 => p.time_s,
+        6 => Some(p.t1_n),
+        _ => Some(p.t2_n),
+    }
+}
 
 /// Write pairs to any writer: the standard header ([`PAIRS_HEADER`]) minus any optional column
 /// that the pairs do not all carry (so what is written reads back as it was).
 pub fn write_pairs_to(w: &mut impl Write, pairs: &[Pair]) -> std::io::Result<()> {
-    let all = |f: fn(&Pair) -> Option<f64>| pairs.iter().all(|p| f(p).is_some());
-    let optional: [(usize, Getter); 5] = [
-        (0, |p| p.capstan_diameter_mm),
-        (2, |p| p.drive_v),
-        (3, |p| p.run),
-        (4, |p| p.step),
-        (5, |p| p.time_s),
-    ];
-    let keep: Vec<(usize, Getter)> = optional.into_iter().filter(|(_, f)| all(*f)).collect();
-    let mut columns: Vec<usize> = keep.iter().map(|(i, _)| *i).chain([1, 6, 7]).collect();
-    columns.sort();
-    let names: Vec<&str> = columns.iter().map(|&i| PAIRS_HEADER[i]).collect();
-    writeln!(w, "{}", names.join(","))?;
-    for p in pairs {
-        let cells: Vec<String> = columns
-            .iter()
-            .map(|&i| match i {
-                1 => p.wrap_deg.to_string(),
-                6 => p.t1_n.to_string(),
-                7 => p.t2_n.to_string(),
-                _ => keep
-                    .iter()
-                    .find(|(j, _)| *j == i)
-                    .and_then(|(_, f)| f(p))
-                    .map_or(String::new(), |v| v.to_string()),
-            })
-            .collect();
-        writeln!(w, "{}", cells.join(","))?;
-    }
-    Ok(())
+    let columns = (0..PAIRS_HEADER.len())
+        .filter(|&i| pairs.iter().all(|p| column_value(p, i).is_some()))
+        .collect();
+    let mut out = PairsWriter::with_columns(w, columns)?;
+    pairs.iter().try_for_each(|p| out.write(p))
 }
 
 /// Writes pairs one at a time, as they come (`capstan log` writes each step's pair when the rig
-/// reports it): the full [`PAIRS_HEADER`] first, then one row per [`PairsWriter::write`] with
-/// every column. Unlike [`write_pairs_to`] it cannot drop a column that some pair lacks, since
-/// later pairs are not known yet: a `None`, or a wrap angle that is not finite (unknown), is
-/// written as an empty cell. A row with an empty wrap angle does not read back with
-/// [`read_pairs`]; `capstan log` keeps such rows in a file of their own.
+/// reports it): the header first, then one row per [`PairsWriter::write`]. With
+/// [`PairsWriter::new`] every column of [`PAIRS_HEADER`] is written, since later pairs are not
+/// known yet: a `None`, or a wrap angle that is not finite (unknown), is an empty cell. A row
+/// with an empty cell does not read back with [`read_pairs`]; `capstan log` keeps such rows in a
+/// file of their own.
 pub struct PairsWriter<W: Write> {
     inner: W,
+    /// Indices into [`PAIRS_HEADER`], in order.
+    columns: Vec<usize>,
 }
 
 impl<W: Write> PairsWriter<W> {
-    /// Start the CSV: write the header.
-    pub fn new(mut inner: W) -> std::io::Result<Self> {
-        writeln!(inner, "{}", PAIRS_HEADER.join(","))?;
-        Ok(PairsWriter { inner })
+    /// Start the CSV with every column: write the header.
+    pub fn new(inner: W) -> std::io::Result<Self> {
+        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect())
+    }
+
+    /// Start the CSV with these columns of [`PAIRS_HEADER`] (indices, in order).
+    fn with_columns(mut inner: W, columns: Vec<usize>) -> std::io::Result<Self> {
+        let names: Vec<&str> = columns.iter().map(|&i| PAIRS_HEADER[i]).collect();
+        writeln!(inner, "{}", names.join(","))?;
+        Ok(PairsWriter { inner, columns })
     }
 
     /// Write one pair (not flushed).
     pub fn write(&mut self, p: &Pair) -> std::io::Result<()> {
-        let cell = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
-        writeln!(
-            self.inner,
-            "{},{},{},{},{},{},{},{}",
-            cell(p.capstan_diameter_mm),
-            cell(Some(p.wrap_deg).filter(|w| w.is_finite())),
-            cell(p.drive_v),
-            cell(p.run),
-            cell(p.step),
-            cell(p.time_s),
-            p.t1_n,
-            p.t2_n
-        )
+        let cells: Vec<String> = self
+            .columns
+            .iter()
+            .map(|&i| column_value(p, i).map_or(String::new(), |v| v.to_string()))
+            .collect();
+        writeln!(self.inner, "{}", cells.join(","))
     }
 
     /// Flush what was written to the underlying writer.

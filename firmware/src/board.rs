@@ -2,7 +2,7 @@
 //! calibration. Compiled into the RP2040 binary only (`main.rs` declares it for
 //! `target_os = "none"`); the rig core (`lib.rs`) never sees it. Everything an operator may
 //! want to change before flashing is in this file. The wiring itself is in
-//! `docs/README-board.md`.
+//! the README (section "Firmware on a Raspberry Pi Pico").
 //!
 //! Pin map (Pico header pin in brackets; every signal is 3.3 V logic):
 //!

@@ -2,14 +2,11 @@
 //! string (`capstan log` on the host matches on the leading word and reads the typed
 //! arguments in order). Changing a format string here means changing the decoder too.
 
-use crate::record::{LogSink, Record};
+use crate::record::{LogSink, Record, NONE_CODE};
 
 /// Sends records as defmt frames on whatever global logger the binary links (RTT on the
 /// Pico, semihosting on QEMU).
 pub struct DefmtSink;
-
-/// Wire value for "no channel" / "no fault".
-pub const NONE_CODE: u8 = 0xff;
 
 impl LogSink for DefmtSink {
     fn emit(&mut self, seq: u32, record: &Record) {

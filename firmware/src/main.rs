@@ -5,7 +5,7 @@
 //! timing, protocol and calibration are in `board.rs`.
 //!
 //! Build and flash from the workspace root:
-//! `cargo run --release -p firmware --target thumbv6m-none-eabi` (see docs/README-board.md).
+//! `cargo run --release -p firmware --target thumbv6m-none-eabi` (see README.md, "Firmware on a Raspberry Pi Pico").
 //!
 //! On the host this compiles to a stub `main` that says what it is, so that `cargo test` at
 //! the root can build the whole workspace.
@@ -20,7 +20,7 @@ fn main() {
     eprintln!(
         "this is the RP2040 (Raspberry Pi Pico) firmware of the capstan rig; build and flash it \
          with `cargo run --release -p firmware --target thumbv6m-none-eabi` \
-         (see docs/README-board.md)"
+         (see README.md, \"Firmware on a Raspberry Pi Pico\")"
     );
 }
 

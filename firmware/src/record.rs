@@ -12,6 +12,9 @@ use crate::condition::ChannelStats;
 use crate::hal::Channel;
 use crate::protocol::Protocol;
 
+/// Wire value of "no channel" / "no fault" in the defmt records (the host decoder reads it too).
+pub const NONE_CODE: u8 = 0xff;
+
 /// Why a run was stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]

@@ -223,8 +223,7 @@ fn build(kind: RecordKind, f: &Fields) -> Result<Record, String> {
     })
 }
 
-/// Wire value for "no channel" / "no fault" (`firmware::defmt_sink::NONE_CODE`).
-pub const NONE_CODE: u8 = 0xff;
+pub use firmware::record::NONE_CODE;
 
 fn channel(code: u8) -> Result<Option<Channel>, String> {
     match code {
