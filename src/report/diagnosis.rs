@@ -1,6 +1,6 @@
 //! The report's section quoting `capstan diagnose` on the same data.
 
-use super::svg::esc;
+use super::html::esc;
 use crate::analysis::diagnosis::{parameter, verdict, Call, DiagnoseQuote};
 use std::fmt::Write as _;
 

@@ -2,21 +2,72 @@
 //! inline SVG and CSS, no scripts or external resources).
 
 use super::figures::{self, Figure};
-use super::svg::esc;
+use super::plot::{hex, Dash, Entry, Key, DASH, DOT_PERIOD};
 use super::tables;
 use crate::analysis::closed_loop::SimCurve;
 use crate::analysis::Analysis;
 use std::fmt::Write as _;
 
-const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg{max-width:100%;height:auto}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
+const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
 
+/// Escape text for HTML (and SVG).
+pub fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// A figure's legend: one row of samples (drawn as the chart draws them) and labels.
+fn legend_html(entries: &[Entry]) -> String {
+    let mut h = String::from("<div class=\"legend\">");
+    for e in entries {
+        let key = match e.key {
+            Key::Marker(m) => {
+                let (c, r) = (hex(m.color), f64::from(m.radius).max(4.5));
+                let paint = if m.hollow {
+                    format!("fill=\"none\" stroke=\"{c}\" stroke-width=\"1.3\"")
+                } else {
+                    format!("fill=\"{c}\"")
+                };
+                format!("<circle cx=\"14\" cy=\"8\" r=\"{r}\" {paint}/>")
+            }
+            Key::Line(l) => {
+                let dash = match l.dash {
+                    Dash::Solid => String::new(),
+                    Dash::Dashed => format!(" stroke-dasharray=\"{} {}\"", DASH.0, DASH.1),
+                    Dash::Dotted => format!(
+                        " stroke-dasharray=\"0.1 {}\" stroke-linecap=\"round\"",
+                        DOT_PERIOD - 0.1
+                    ),
+                };
+                format!(
+                    "<line x1=\"2\" y1=\"8\" x2=\"26\" y2=\"8\" stroke=\"{}\" stroke-width=\"{}\"{dash}/>",
+                    hex(l.color),
+                    l.width
+                )
+            }
+        };
+        let _ = write!(
+            h,
+            "<span><svg width=\"28\" height=\"16\" aria-hidden=\"true\">{key}</svg>{}</span>",
+            esc(&e.label)
+        );
+    }
+    h.push_str("</div>");
+    h
+}
+
+/// A figure: its legend, its chart (`data-series`: the number of data layers that
+/// `scripts/check-report` expects drawn) and its caption.
 fn figure_html(h: &mut String, figs: &[Figure], id: &str) {
     if let Some(f) = figs.iter().find(|f| f.id == id) {
         let _ = write!(
             h,
-            "<figure class=\"plot\" data-figure=\"{}\">{}<figcaption>{}</figcaption></figure>",
+            "<figure class=\"plot\" data-figure=\"{}\" data-series=\"{}\">{}{}<figcaption>{}</figcaption></figure>",
             f.id,
-            f.svg,
+            f.chart.marks,
+            legend_html(&f.legend),
+            f.chart.svg,
             esc(&f.caption)
         );
     }
@@ -76,7 +127,7 @@ pub fn report_html(
     closed_loop: Option<&[SimCurve]>,
     closed_loop_note: &str,
 ) -> anyhow::Result<String> {
-    let figs = figures::all(a, closed_loop);
+    let figs = figures::all(a, closed_loop)?;
     let mut h = String::new();
     let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Capstan analysis</title><style>{STYLE}</style></head><body>");
     let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len());

@@ -4,15 +4,14 @@
 //! * [`files`]: `metrics.json` and `predictions.csv`.
 //! * [`html`]: the page and its sections; [`tables`]: its tables; [`diagnosis`]: the section
 //!   quoting `capstan diagnose`.
-//! * [`figures`]: the figures; [`plot`]: panels, legends and bar charts; [`svg`]: the SVG
-//!   writer.
+//! * [`figures`]: the figures; [`plot`]: their charts (panels and bar charts, drawn by
+//!   `plotters`).
 
 pub mod diagnosis;
 pub mod figures;
 pub mod files;
 pub mod html;
 pub mod plot;
-pub mod svg;
 pub mod tables;
 
 pub use crate::analysis::closed_loop::SimCurve;

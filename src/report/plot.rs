@@ -1,15 +1,45 @@
-//! Panels of points and lines on a grid, with a figure legend, and grouped bar charts, drawn
-//! with [`super::svg`] (inline SVG, no fonts or scripts needed).
+//! The report's charts, drawn by `plotters` (SVG backend; text stays SVG `<text>`, so no font
+//! library is needed): panels of points and lines on a grid, and grouped bar charts.
+//!
+//! A chart is one `<svg class="chart">` holding an `axes` layer (background, grid, axes, tick
+//! labels, titles, in-panel legends) and one layer per data series or bar (`<g class="mark">`).
+//! Every layer is a plotters document of the chart's full size, laid out with the same panels
+//! and coordinates, so the layers overlay exactly. The layers are what `scripts/check-report`
+//! counts: a chart whose data is not drawn has no, or empty, `mark` layers, whatever its axes
+//! show. The figure legend is HTML (`html.rs`), from the same [`Entry`] values.
 
-use super::svg::{nice_ticks, text_width, tick_label, Anchor, Dash, Svg};
+use anyhow::Result;
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// A stroke pattern.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dash {
+    /// Continuous.
+    Solid,
+    /// Long dashes ([`DASH`]).
+    Dashed,
+    /// Round dots ([`DOT_PERIOD`] apart).
+    Dotted,
+}
+
+/// Dash and gap of a dashed line, px.
+pub const DASH: (u32, u32) = (7, 4);
+/// Distance between the dots of a dotted line, px (the legend's sample; plotters places the
+/// dots on whole pixels, 5 px apart).
+pub const DOT_PERIOD: f64 = 4.6;
 
 /// How a line is drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LineStyle {
     /// Stroke colour.
-    pub color: &'static str,
-    /// Stroke width, px.
-    pub width: f64,
+    pub color: RGBColor,
+    /// Stroke width, px (dotted: the dots' diameter).
+    pub width: u32,
     /// Pattern.
     pub dash: Dash,
 }
@@ -18,9 +48,9 @@ pub struct LineStyle {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Marker {
     /// Colour.
-    pub color: &'static str,
+    pub color: RGBColor,
     /// Radius, px.
-    pub radius: f64,
+    pub radius: u32,
     /// A ring instead of a disc.
     pub hollow: bool,
     /// Opacity (points overlap).
@@ -31,7 +61,7 @@ pub struct Marker {
 pub enum Series {
     /// Markers at (x, y).
     Points(Vec<(f64, f64)>, Marker),
-    /// A polyline through (x, y) in drawing order (non-finite points break it).
+    /// A line through (x, y) in drawing order (non-finite points break it).
     Line(Vec<(f64, f64)>, LineStyle),
 }
 
@@ -74,12 +104,44 @@ pub struct Panel {
     pub y_range: Option<(f64, f64)>,
 }
 
+/// A chart: the SVG and its number of data layers.
+pub struct Chart {
+    /// `<svg class="chart">…</svg>`.
+    pub svg: String,
+    /// Number of `mark` layers (series or bars) in it.
+    pub marks: usize,
+}
+
+const FAMILY: &str = "Helvetica, Arial, sans-serif";
 const TITLE: f64 = 14.0;
 const LABEL: f64 = 13.0;
 const TICK: f64 = 12.0;
 const LEGEND: f64 = 12.5;
-const AXIS: &str = "#444";
-const GRID: &str = "#e6e6e6";
+const TEXT: RGBColor = RGBColor(0x22, 0x22, 0x22);
+const AXIS: RGBColor = RGBColor(0x44, 0x44, 0x44);
+const GRID: RGBColor = RGBColor(0xe6, 0xe6, 0xe6);
+const ZERO: RGBColor = RGBColor(0x88, 0x88, 0x88);
+/// Space above a panel's plot area for its title, beside it for the axes and below them, px.
+const TITLE_H: u32 = 26;
+const LEFT: u32 = 62;
+const BOTTOM: u32 = 40;
+const BELOW: u32 = 6;
+const RIGHT: u32 = 14;
+
+/// `#RRGGBB`, as plotters writes colours.
+pub fn hex(c: RGBColor) -> String {
+    format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
+}
+
+/// Text of `px` pixels: plotters' SVG backend writes `font-size` as the style's size / 1.24.
+fn font(px: f64, bold: bool) -> TextStyle<'static> {
+    let style = if bold {
+        FontStyle::Bold
+    } else {
+        FontStyle::Normal
+    };
+    TextStyle::from(FontDesc::new(FontFamily::Name(FAMILY), px * 1.24, style)).color(&TEXT)
+}
 
 /// The range of the finite values, padded by 4 % (a unit range around a single value).
 pub fn finite_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -98,6 +160,209 @@ pub fn finite_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// A tick label with as many decimals as the spacing needs (a minus sign, never "−0").
+fn tick_label(v: f64, step: f64) -> String {
+    let decimals = (0..6)
+        .find(|&d| {
+            let s = step * 10f64.powi(d);
+            (s - s.round()).abs() < 1e-6 * s.max(1.0)
+        })
+        .unwrap_or(6) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.chars().all(|c| matches!(c, '-' | '0' | '.')) {
+        s.trim_start_matches('-').to_string()
+    } else {
+        s.replace('-', "−")
+    }
+}
+
+/// plotters' tick positions in [lo, hi] (at most `n`), labelled.
+fn auto_ticks(lo: f64, hi: f64, n: usize) -> Vec<(f64, String)> {
+    let keys = RangedCoordf64::from(lo..hi).key_points(n);
+    let step = match keys.as_slice() {
+        [a, b, ..] => b - a,
+        _ => 10f64.powf((hi - lo).abs().max(1e-12).log10().floor()),
+    };
+    keys.into_iter().map(|v| (v, tick_label(v, step))).collect()
+}
+
+/// The label of the tick nearest `v`.
+fn label_at(ticks: &[(f64, String)], v: f64) -> String {
+    ticks
+        .iter()
+        .min_by(|a, b| (a.0 - v).abs().total_cmp(&(b.0 - v).abs()))
+        .map_or_else(String::new, |t| t.1.clone())
+}
+
+/// A panel's coordinates: ranges and labelled ticks.
+struct Frame {
+    x: (f64, f64),
+    y: (f64, f64),
+    x_ticks: Vec<(f64, String)>,
+    y_ticks: Vec<(f64, String)>,
+    /// x ticks name categories: no vertical grid lines, labels at the axis-label size.
+    categorical: bool,
+}
+
+impl Frame {
+    fn of(p: &Panel, w: u32) -> Frame {
+        let pts = || p.series.iter().flat_map(|s| points(s).iter());
+        let x = finite_range(
+            pts()
+                .map(|v| v.0)
+                .chain(p.x_ticks.iter().flatten().map(|t| t.0)),
+        );
+        let y = p
+            .y_range
+            .unwrap_or_else(|| finite_range(pts().map(|v| v.1).chain(p.zero_line.then_some(0.0))));
+        let n = (f64::from(w.saturating_sub(LEFT + RIGHT)) / 55.0).clamp(3.0, 8.0) as usize;
+        Frame {
+            x,
+            y,
+            x_ticks: p.x_ticks.clone().unwrap_or_else(|| auto_ticks(x.0, x.1, n)),
+            y_ticks: auto_ticks(y.0, y.1, 5),
+            categorical: false,
+        }
+    }
+}
+
+/// A linear axis with given ticks (plotters' `WithKeyPoints` over `f64` takes no label
+/// formatter).
+struct Axis {
+    linear: RangedCoordf64,
+    ticks: Vec<f64>,
+}
+
+impl Axis {
+    fn new((lo, hi): (f64, f64), ticks: &[(f64, String)]) -> Axis {
+        Axis {
+            linear: (lo..hi).into(),
+            ticks: ticks.iter().map(|t| t.0).collect(),
+        }
+    }
+}
+
+impl Ranged for Axis {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        self.linear.map(v, limit)
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        // Grid lines at the ticks only (no light lines between them).
+        if hint.weight().allow_light_points() {
+            Vec::new()
+        } else {
+            self.ticks.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.linear.range()
+    }
+}
+
+type Coord = Cartesian2d<Axis, Axis>;
+
+/// The chart of a panel's cell: the same plot area in every layer.
+fn build<'a, 'b>(
+    cell: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    f: &Frame,
+) -> Result<ChartContext<'a, SVGBackend<'b>, Coord>> {
+    Ok(ChartBuilder::on(cell)
+        .margin_top(TITLE_H)
+        .margin_right(RIGHT)
+        .margin_bottom(BELOW)
+        .x_label_area_size(BOTTOM)
+        .y_label_area_size(LEFT)
+        .build_cartesian_2d(Axis::new(f.x, &f.x_ticks), Axis::new(f.y, &f.y_ticks))?)
+}
+
+/// An in-panel legend sample at `(x, y)` (its middle), 24 px wide (annotations are solid or
+/// dashed; dotted samples are only in the HTML legend).
+fn key_element<DB: DrawingBackend>(
+    key: Key,
+    (x, y): (i32, i32),
+) -> DynElement<'static, DB, (i32, i32)> {
+    match key {
+        Key::Marker(m) => Circle::new((x + 12, y), m.radius.max(4), marker_style(m)).into_dyn(),
+        Key::Line(l) => {
+            let line = vec![(x, y), (x + 24, y)];
+            match l.dash {
+                Dash::Dashed => {
+                    DashedPathElement::new(line, DASH.0, DASH.1, line_style(l)).into_dyn()
+                }
+                _ => PathElement::new(line, line_style(l)).into_dyn(),
+            }
+        }
+    }
+}
+
+fn line_style(l: LineStyle) -> ShapeStyle {
+    l.color.stroke_width(l.width)
+}
+
+fn marker_style(m: Marker) -> ShapeStyle {
+    let c = m.color.mix(m.opacity);
+    if m.hollow {
+        c.stroke_width(1)
+    } else {
+        c.filled()
+    }
+}
+
+/// Title, grid, axes, tick and axis labels, the zero line and the in-panel legend of a panel.
+fn draw_axes(cell: &DrawingArea<SVGBackend, Shift>, p: &Panel, f: &Frame) -> Result<()> {
+    let w = cell.dim_in_pixel().0 as i32;
+    let title = font(TITLE, true).pos(Pos::new(HPos::Center, VPos::Center));
+    cell.draw(&Text::new(p.title.clone(), (w / 2, 12), title))?;
+    let mut chart = build(cell, f)?;
+    let (fx, fy) = (
+        |v: &f64| label_at(&f.x_ticks, *v),
+        |v: &f64| label_at(&f.y_ticks, *v),
+    );
+    let mut mesh = chart.configure_mesh();
+    mesh.bold_line_style(GRID)
+        .axis_style(AXIS)
+        // Labels sit twice the tick length from the axis.
+        .set_tick_mark_size(LabelAreaPosition::Left, 3)
+        .set_tick_mark_size(LabelAreaPosition::Bottom, 4)
+        .x_label_style(font(if f.categorical { LABEL } else { TICK }, false))
+        .y_label_style(font(TICK, false))
+        .axis_desc_style(font(LABEL, false))
+        .x_desc(p.x_label.as_str())
+        .y_desc(p.y_label.as_str())
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy);
+    if f.categorical {
+        mesh.disable_x_mesh();
+    }
+    mesh.draw()?;
+    if p.zero_line {
+        chart.draw_series(LineSeries::new([(f.x.0, 0.0), (f.x.1, 0.0)], ZERO))?;
+    }
+    if !p.legend.is_empty() {
+        for e in &p.legend {
+            let key = e.key;
+            chart
+                .draw_series(std::iter::empty::<Circle<(f64, f64), u32>>())?
+                .label(e.label.as_str())
+                .legend(move |c| key_element(key, c));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font(font(LEGEND, false))
+            .background_style(WHITE.mix(0.85))
+            .border_style(TRANSPARENT)
+            .legend_area_size(30)
+            .draw()?;
+    }
+    Ok(())
+}
+
 /// The data points of a series.
 fn points(s: &Series) -> &[(f64, f64)] {
     match s {
@@ -105,168 +370,120 @@ fn points(s: &Series) -> &[(f64, f64)] {
     }
 }
 
-/// Draw a legend sample at (x, y) (y the text's middle).
-fn draw_key(svg: &mut Svg, key: &Key, x: f64, y: f64) {
-    match key {
-        Key::Marker(m) => svg.circle((x + 11.0, y), m.radius.max(4.5), m.color, m.hollow, 1.0),
-        Key::Line(l) => svg.line((x, y), (x + 24.0, y), l.color, l.width, l.dash, false),
+fn finite(p: &(f64, f64)) -> bool {
+    p.0.is_finite() && p.1.is_finite()
+}
+
+/// The drawable pieces of a line: its runs of two or more finite points.
+fn runs(xy: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> {
+    xy.split(|p| !finite(p)).filter(|r| r.len() >= 2)
+}
+
+/// True if the series draws anything.
+fn drawable(s: &Series) -> bool {
+    match s {
+        Series::Points(xy, _) => xy.iter().any(finite),
+        Series::Line(xy, _) => runs(xy).next().is_some(),
     }
 }
 
-/// Lay out `entries` in rows no wider than `w`, starting at (x0, y0); returns the height used.
-fn draw_legend(svg: &mut Svg, entries: &[Entry], x0: f64, y0: f64, w: f64) -> f64 {
-    let (mut x, mut y) = (x0, y0 + 10.0);
-    for e in entries {
-        let ew = 30.0 + text_width(&e.label, LEGEND) + 16.0;
-        if x > x0 && x + ew > x0 + w {
-            x = x0;
-            y += 20.0;
+/// A series on its panel's chart.
+fn draw_data(chart: &mut ChartContext<SVGBackend, Coord>, s: &Series) -> Result<()> {
+    match s {
+        Series::Points(xy, m) => {
+            let style = marker_style(*m);
+            let pts = xy.iter().filter(|p| finite(p));
+            chart.draw_series(pts.map(|p| Circle::new(*p, m.radius, style)))?;
         }
-        draw_key(svg, &e.key, x, y);
-        svg.text(
-            (x + 30.0, y + 4.5),
-            &e.label,
-            LEGEND,
-            Anchor::Start,
-            false,
-            false,
-        );
-        x += ew;
-    }
-    if entries.is_empty() {
-        0.0
-    } else {
-        y - y0 + 12.0
-    }
-}
-
-/// Height of a figure legend of `entries` laid out in `w` px.
-fn legend_height(entries: &[Entry], w: f64) -> f64 {
-    let mut svg = Svg::new(1.0, 1.0);
-    let h = draw_legend(&mut svg, entries, 0.0, 0.0, w);
-    if h > 0.0 {
-        h + 10.0
-    } else {
-        0.0
-    }
-}
-
-/// The plot area of a panel at (ox, oy) of size w×h: (left, top, right, bottom).
-fn plot_area(ox: f64, oy: f64, w: f64, h: f64) -> (f64, f64, f64, f64) {
-    (ox + 62.0, oy + 26.0, ox + w - 14.0, oy + h - 46.0)
-}
-
-fn draw_panel(svg: &mut Svg, p: &Panel, ox: f64, oy: f64, w: f64, h: f64) {
-    let (l, t, r, b) = plot_area(ox, oy, w, h);
-    let (x0, x1) = finite_range(
-        p.series
-            .iter()
-            .flat_map(|s| points(s).iter().map(|v| v.0))
-            .chain(p.x_ticks.iter().flatten().map(|t| t.0)),
-    );
-    let (y0, y1) = p.y_range.unwrap_or_else(|| {
-        finite_range(
-            p.series
-                .iter()
-                .flat_map(|s| points(s).iter().map(|v| v.1))
-                .chain(p.zero_line.then_some(0.0)),
-        )
-    });
-    let sx = |x: f64| l + (x - x0) / (x1 - x0) * (r - l);
-    let sy = |y: f64| b - (y - y0) / (y1 - y0) * (b - t);
-    svg.text(
-        (ox + w / 2.0, oy + 17.0),
-        &p.title,
-        TITLE,
-        Anchor::Middle,
-        true,
-        false,
-    );
-    // Grid and ticks.
-    let (yt, ys) = nice_ticks(y0, y1, 5);
-    for v in &yt {
-        svg.line((l, sy(*v)), (r, sy(*v)), GRID, 1.0, Dash::Solid, false);
-        svg.text(
-            (l - 6.0, sy(*v) + 4.0),
-            &tick_label(*v, ys),
-            TICK,
-            Anchor::End,
-            false,
-            false,
-        );
-    }
-    let xt: Vec<(f64, String)> = p.x_ticks.clone().unwrap_or_else(|| {
-        let (xt, xs) = nice_ticks(x0, x1, ((r - l) / 70.0).clamp(3.0, 8.0) as usize);
-        xt.iter().map(|v| (*v, tick_label(*v, xs))).collect()
-    });
-    for (v, s) in &xt {
-        svg.line((sx(*v), t), (sx(*v), b), GRID, 1.0, Dash::Solid, false);
-        svg.line(
-            (sx(*v), b),
-            (sx(*v), b + 4.0),
-            AXIS,
-            1.0,
-            Dash::Solid,
-            false,
-        );
-        svg.text((sx(*v), b + 17.0), s, TICK, Anchor::Middle, false, false);
-    }
-    if p.zero_line {
-        svg.line((l, sy(0.0)), (r, sy(0.0)), "#888", 1.2, Dash::Solid, false);
-    }
-    svg.line((l, b), (r, b), AXIS, 1.2, Dash::Solid, false);
-    svg.line((l, t), (l, b), AXIS, 1.2, Dash::Solid, false);
-    svg.text(
-        ((l + r) / 2.0, oy + h - 10.0),
-        &p.x_label,
-        LABEL,
-        Anchor::Middle,
-        false,
-        false,
-    );
-    svg.text(
-        (ox + 15.0, (t + b) / 2.0),
-        &p.y_label,
-        LABEL,
-        Anchor::Middle,
-        false,
-        true,
-    );
-    // Data.
-    for s in &p.series {
-        match s {
-            Series::Points(xy, m) => {
-                for (x, y) in xy.iter().filter(|v| v.0.is_finite() && v.1.is_finite()) {
-                    svg.circle((sx(*x), sy(*y)), m.radius, m.color, m.hollow, m.opacity);
-                }
-            }
-            Series::Line(xy, st) => {
-                for run in xy.split(|v| !(v.0.is_finite() && v.1.is_finite())) {
-                    let pts: Vec<(f64, f64)> = run.iter().map(|v| (sx(v.0), sy(v.1))).collect();
-                    svg.polyline(&pts, st.color, st.width, st.dash);
+        Series::Line(xy, l) => {
+            for run in runs(xy) {
+                let pts = run.iter().copied();
+                match l.dash {
+                    Dash::Solid => {
+                        chart.draw_series(LineSeries::new(pts, line_style(*l)))?;
+                    }
+                    Dash::Dashed => {
+                        chart.draw_series(DashedLineSeries::new(
+                            pts,
+                            DASH.0,
+                            DASH.1,
+                            line_style(*l),
+                        ))?;
+                    }
+                    Dash::Dotted => {
+                        // Dots of diameter `width` (plotters' radii are whole pixels).
+                        let (c, r) = (l.color, l.width / 2);
+                        let spacing = DOT_PERIOD.round() as u32;
+                        chart.draw_series(DottedLineSeries::new(pts, 0, spacing, move |p| {
+                            Circle::new(p, r, c.filled())
+                        }))?;
+                    }
                 }
             }
         }
     }
-    if !p.legend.is_empty() {
-        draw_legend(svg, &p.legend, l + 8.0, t + 2.0, r - l - 16.0);
-    }
+    Ok(())
 }
 
-/// Panels on a grid of `cols` columns, each `w`×`h` px, under a figure legend (`legend`,
-/// empty for none): one SVG document.
-pub fn figure(panels: &[Panel], cols: usize, w: f64, h: f64, legend: &[Entry]) -> String {
+/// One plotters document of `size`, with its newlines dropped (plotters ends every element
+/// with one and pads text with them; the SVG is inlined in the HTML).
+fn render(
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Result<()>,
+) -> Result<String> {
+    let mut buf = String::new();
+    {
+        let root = SVGBackend::with_string(&mut buf, size).into_drawing_area();
+        draw(&root)?;
+        root.present()?;
+    }
+    buf.retain(|c| c != '\n');
+    Ok(buf)
+}
+
+/// A layer of a chart: its class and its document.
+struct Layer {
+    class: &'static str,
+    svg: String,
+}
+
+/// The chart: the axes under the layers.
+fn compose((w, h): (u32, u32), axes: String, layers: Vec<Layer>) -> Chart {
+    let mut svg = format!("<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\"><g class=\"axes\">{axes}</g>");
+    for l in &layers {
+        svg.push_str(&format!("<g class=\"{}\">{}</g>", l.class, l.svg));
+    }
+    svg.push_str("</svg>");
+    let marks = layers
+        .iter()
+        .filter(|l| l.class.starts_with("mark"))
+        .count();
+    Chart { svg, marks }
+}
+
+/// Panels on a grid of `cols` columns, each `w`×`h` px.
+pub fn figure(panels: &[Panel], cols: usize, w: u32, h: u32) -> Result<Chart> {
     let cols = cols.max(1);
-    let rows = panels.len().div_ceil(cols);
-    let total_w = w * cols as f64;
-    let lh = legend_height(legend, total_w - 24.0);
-    let mut svg = Svg::new(total_w, lh + h * rows as f64);
-    draw_legend(&mut svg, legend, 12.0, 4.0, total_w - 24.0);
-    for (k, p) in panels.iter().enumerate() {
-        let (row, col) = (k / cols, k % cols);
-        draw_panel(&mut svg, p, col as f64 * w, lh + row as f64 * h, w, h);
+    let grid = (panels.len().div_ceil(cols).max(1), cols);
+    let size = (w * grid.1 as u32, h * grid.0 as u32);
+    let frames: Vec<Frame> = panels.iter().map(|p| Frame::of(p, w)).collect();
+    let axes = render(size, |root| {
+        root.fill(&WHITE)?;
+        for ((cell, p), f) in root.split_evenly(grid).iter().zip(panels).zip(&frames) {
+            draw_axes(cell, p, f)?;
+        }
+        Ok(())
+    })?;
+    let mut layers = Vec::new();
+    for (k, (p, f)) in panels.iter().zip(&frames).enumerate() {
+        for s in p.series.iter().filter(|s| drawable(s)) {
+            let svg = render(size, |root| {
+                draw_data(&mut build(&root.split_evenly(grid)[k], f)?, s)
+            })?;
+            layers.push(Layer { class: "mark", svg });
+        }
     }
-    svg.finish()
+    Ok(compose(size, axes, layers))
 }
 
 /// A grouped bar chart: for every category one bar per group.
@@ -278,31 +495,33 @@ pub struct Bars {
     /// Category names (x axis).
     pub categories: Vec<String>,
     /// Group names and colours (the legend).
-    pub groups: Vec<(String, &'static str)>,
+    pub groups: Vec<(String, RGBColor)>,
     /// values[category][group]; None draws an empty outlined slot with `missing`.
     pub values: Vec<Vec<Option<f64>>>,
     /// Text for a missing value.
     pub missing: String,
 }
 
-/// A grouped bar chart, `w`×`h` px, y from zero, each bar labelled with its value.
-pub fn bar_chart(c: &Bars, w: f64, h: f64) -> String {
-    let legend: Vec<Entry> = c
-        .groups
-        .iter()
-        .map(|(label, color)| Entry {
-            key: Key::Line(LineStyle {
-                color,
-                width: 10.0,
-                dash: Dash::Solid,
-            }),
-            label: label.clone(),
-        })
-        .collect();
-    let lh = legend_height(&legend, w - 24.0);
-    let mut svg = Svg::new(w, h + lh);
-    draw_legend(&mut svg, &legend, 12.0, 4.0, w - 24.0);
-    let (l, t, r, b) = plot_area(0.0, lh, w, h);
+impl Bars {
+    /// Legend entries: one swatch per group.
+    pub fn legend(&self) -> Vec<Entry> {
+        self.groups
+            .iter()
+            .map(|(label, color)| Entry {
+                key: Key::Line(LineStyle {
+                    color: *color,
+                    width: 10,
+                    dash: Dash::Solid,
+                }),
+                label: label.clone(),
+            })
+            .collect()
+    }
+}
+
+/// A grouped bar chart, `w`×`h` px, y from zero, each bar labelled with its value; every bar
+/// is a layer of class `mark bar`, every missing value one of class `missing`.
+pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
     let top = c
         .values
         .iter()
@@ -311,71 +530,121 @@ pub fn bar_chart(c: &Bars, w: f64, h: f64) -> String {
         .fold(0.0f64, |a, v| a.max(*v))
         * 1.12;
     let top = if top > 0.0 { top } else { 1.0 };
-    let sy = |y: f64| b - y / top * (b - t);
-    svg.text(
-        (w / 2.0, lh + 17.0),
-        &c.title,
-        TITLE,
-        Anchor::Middle,
-        true,
-        false,
-    );
-    let (yt, ys) = nice_ticks(0.0, top, 5);
-    for v in &yt {
-        svg.line((l, sy(*v)), (r, sy(*v)), GRID, 1.0, Dash::Solid, false);
-        svg.text(
-            (l - 6.0, sy(*v) + 4.0),
-            &tick_label(*v, ys),
-            TICK,
-            Anchor::End,
-            false,
-            false,
-        );
-    }
-    let slot = (r - l) / c.categories.len().max(1) as f64;
-    let ng = c.groups.len().max(1) as f64;
-    let bw = (slot * 0.7 / ng).min(70.0);
-    for (k, (name, vals)) in c.categories.iter().zip(&c.values).enumerate() {
-        let cx = l + slot * (k as f64 + 0.5);
-        svg.text((cx, b + 18.0), name, LABEL, Anchor::Middle, false, false);
+    let n = c.categories.len().max(1) as f64;
+    let panel = Panel {
+        title: c.title.clone(),
+        y_label: c.y_label.clone(),
+        ..Panel::default()
+    };
+    let f = Frame {
+        x: (0.0, n),
+        y: (0.0, top),
+        x_ticks: (c.categories.iter().enumerate())
+            .map(|(k, name)| (k as f64 + 0.5, name.clone()))
+            .collect(),
+        y_ticks: auto_ticks(0.0, top, 5),
+        categorical: true,
+    };
+    let size = (w, h);
+    let axes = render(size, |root| {
+        root.fill(&WHITE)?;
+        draw_axes(root, &panel, &f)
+    })?;
+    // Bars fill 70 % of each category's slot, with a small gap between neighbours.
+    let bw = 0.7 / c.groups.len().max(1) as f64;
+    let mut layers = Vec::new();
+    for (k, vals) in c.values.iter().enumerate() {
         for (j, (v, (_, color))) in vals.iter().zip(&c.groups).enumerate() {
-            let x = cx - bw * ng / 2.0 + bw * j as f64 + 2.0;
-            match v {
-                Some(v) => {
-                    svg.rect(x, sy(*v), bw - 4.0, b - sy(*v), color, "#222", "mark bar");
-                    svg.text(
-                        (x + bw / 2.0 - 2.0, sy(*v) - 5.0),
-                        &format!("{v:.3}"),
-                        TICK,
-                        Anchor::Middle,
-                        false,
-                        false,
-                    );
+            let x0 = k as f64 + 0.15 + bw * j as f64 + 0.01;
+            let x1 = x0 + bw - 0.02;
+            let svg = render(size, |root| {
+                let mut chart = build(root, &f)?;
+                match v {
+                    Some(v) => {
+                        let label = font(TICK, false).pos(Pos::new(HPos::Center, VPos::Bottom));
+                        chart.draw_series([
+                            Rectangle::new([(x0, 0.0), (x1, *v)], color.filled()),
+                            Rectangle::new([(x0, 0.0), (x1, *v)], TEXT.stroke_width(1)),
+                        ])?;
+                        chart.draw_series(std::iter::once(
+                            EmptyElement::at(((x0 + x1) / 2.0, *v))
+                                + Text::new(format!("{v:.3}"), (0, -4), label),
+                        ))?;
+                    }
+                    None => {
+                        let label = font(TICK, false)
+                            .transform(FontTransform::Rotate270)
+                            .pos(Pos::new(HPos::Left, VPos::Center));
+                        let grey = RGBColor(0x99, 0x99, 0x99);
+                        chart.draw_series([Rectangle::new(
+                            [(x0, 0.0), (x1, 0.3 * top)],
+                            grey.stroke_width(1),
+                        )])?;
+                        chart.draw_series(std::iter::once(
+                            EmptyElement::at(((x0 + x1) / 2.0, 0.0))
+                                + Text::new(c.missing.clone(), (0, -8), label),
+                        ))?;
+                    }
                 }
-                None => {
-                    let y = sy(top * 0.3);
-                    svg.rect(x, y, bw - 4.0, b - y, "none", "#999", "missing");
-                    svg.text(
-                        (x + bw / 2.0 + 2.0, b - 8.0),
-                        &c.missing,
-                        TICK,
-                        Anchor::Start,
-                        false,
-                        true,
-                    );
-                }
-            }
+                Ok(())
+            })?;
+            let class = if v.is_some() { "mark bar" } else { "missing" };
+            layers.push(Layer { class, svg });
         }
     }
-    svg.line((l, b), (r, b), AXIS, 1.2, Dash::Solid, false);
-    svg.line((l, t), (l, b), AXIS, 1.2, Dash::Solid, false);
-    svg.text(
-        (15.0, (t + b) / 2.0),
-        &c.y_label,
-        LABEL,
-        Anchor::Middle,
-        false,
-        true,
-    );
-    svg.finish()
+    Ok(compose(size, axes, layers))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick_label(1.5, 0.5), "1.5");
+        assert_eq!(tick_label(20.0, 5.0), "20");
+        assert_eq!(tick_label(0.25, 0.25), "0.25");
+        assert_eq!(tick_label(-0.0, 0.1), "0.0");
+        assert_eq!(tick_label(-2.0, 1.0), "−2");
+        let t = auto_ticks(0.13, 1.87, 6);
+        assert!(t.len() >= 3 && t.iter().all(|(v, _)| (0.13..=1.87).contains(v)));
+    }
+
+    #[test]
+    fn every_drawn_series_is_a_mark_layer_over_the_axes() {
+        let panel = Panel {
+            title: "t".into(),
+            series: vec![
+                Series::Points(vec![(0.0, 1.0), (1.0, 2.0)], marker()),
+                Series::Line(vec![(0.0, 1.0), (f64::NAN, 0.0), (1.0, 2.0)], dashed()),
+                Series::Line(vec![(0.0, 1.0), (1.0, 2.0), (2.0, 2.5)], dashed()),
+            ],
+            ..Panel::default()
+        };
+        let c = figure(&[panel], 1, 300, 200).unwrap();
+        // The broken line has no two consecutive finite points: no layer.
+        assert_eq!(c.marks, 2);
+        assert_eq!(c.svg.matches("<g class=\"mark\">").count(), 2);
+        let axes = &c.svg[..c.svg.find("<g class=\"mark\">").unwrap()];
+        assert!(axes.contains("<g class=\"axes\">") && !axes.contains("#0072B2"));
+        // Dashes are drawn as separate pieces.
+        assert!(c.svg.matches("<polyline").count() > 3);
+    }
+
+    fn marker() -> Marker {
+        Marker {
+            color: RGBColor(0x00, 0x72, 0xB2),
+            radius: 2,
+            hollow: false,
+            opacity: 0.5,
+        }
+    }
+
+    fn dashed() -> LineStyle {
+        LineStyle {
+            color: RGBColor(0x00, 0x72, 0xB2),
+            width: 2,
+            dash: Dash::Dashed,
+        }
+    }
 }

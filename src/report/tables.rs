@@ -1,7 +1,7 @@
 //! The report's HTML tables: the gain table, residual patterns, mechanism verdicts, nested
 //! variants, the extended fit, and the thesis's per-angle R².
 
-use super::svg::esc;
+use super::html::esc;
 use crate::analysis::{Analysis, ModelMetrics};
 use std::fmt::Write as _;
 

@@ -6,6 +6,8 @@ use super::{
 use crate::analysis::closed_loop::SimCurve;
 use crate::analysis::Analysis;
 use crate::report::plot::{figure, Entry, Key, Panel, Series};
+use anyhow::Result;
+use plotters::style::RGBColor;
 use std::collections::BTreeMap;
 
 /// (T1, y(i)) of cord `g`'s rows, sorted by T1: a model that depends on T1 and the cord only
@@ -40,7 +42,7 @@ fn step_means(a: &Analysis, g: usize, y: impl Fn(usize) -> f64) -> Vec<(f64, f64
 }
 
 /// The three models' curves of cord `g` in its wrap's colour; `amp` divides by T1.
-fn model_series(a: &Analysis, g: usize, color: &'static str, amp: bool) -> Vec<Series> {
+fn model_series(a: &Analysis, g: usize, color: RGBColor, amp: bool) -> Vec<Series> {
     let t1 = |i: usize| if amp { a.obs.rows[i].t1_n } else { 1.0 };
     let p = &a.pred;
     let mut s = vec![Series::Line(
@@ -86,7 +88,7 @@ fn legend(a: &Analysis, pal: &Palette) -> Vec<Entry> {
 }
 
 /// T2 against T1, one panel per capstan diameter.
-pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Figure {
+pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
     let mut panels = Vec::new();
     for dia in a.obs.diameters() {
         let mut series = Vec::new();
@@ -106,15 +108,16 @@ pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Figure {
             ..Panel::default()
         });
     }
-    Figure {
+    Ok(Figure {
         id: "t2_vs_t1",
-        svg: figure(&panels, 2, 650.0, 470.0, &legend(a, pal)),
+        legend: legend(a, pal),
+        chart: figure(&panels, 2, 650, 470)?,
         caption: "T2 against T1, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model (mean over the cord's runs at each step). Every curve joins the model's predictions in predictions.csv.".into(),
-    }
+    })
 }
 
 /// Amplification T2/T1 against T1, one panel per cord (rows: diameters, columns: wraps).
-pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Figure {
+pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
     let panels: Vec<Panel> = a
         .obs
         .groups
@@ -133,15 +136,16 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Figure {
             }
         })
         .collect();
-    Figure {
+    Ok(Figure {
         id: "amp_vs_t1",
-        svg: figure(&panels, pal.len().clamp(1, 5), 260.0, 230.0, &legend(a, pal)),
+        legend: legend(a, pal),
+        chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
         caption: "Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).".into(),
-    }
+    })
 }
 
 /// The closed loop: simulated amplification over the measured points, per cord.
-pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Figure {
+pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<Figure> {
     let panels: Vec<Panel> = a
         .obs
         .groups
@@ -167,9 +171,10 @@ pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Figure {
         key: Key::Line(extended_style(INK)),
         label: "closed-loop simulation (firmware + extended plant)".into(),
     });
-    Figure {
+    Ok(Figure {
         id: "closed_loop",
-        svg: figure(&panels, pal.len().clamp(1, 5), 260.0, 230.0, &legend),
+        legend,
+        chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
         caption: "Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu, heating, T1-path loss), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.".into(),
-    }
+    })
 }

@@ -4,13 +4,14 @@
 use super::{cord_marker, diameter_legend, measured, Figure, Palette, INK};
 use crate::analysis::Analysis;
 use crate::report::plot::{
-    bar_chart, figure, finite_range, Bars, Entry, Key, LineStyle, Panel, Series,
+    bar_chart, figure, finite_range, Bars, Dash, Entry, Key, LineStyle, Panel, Series,
 };
-use crate::report::svg::Dash;
+use anyhow::Result;
+use plotters::style::RGBColor;
 use serde_json::Value;
 
 /// Residuals of T2 against T1, step and run, for the baseline (top) and the extended model.
-pub fn residuals(a: &Analysis, pal: &Palette) -> Figure {
+pub fn residuals(a: &Analysis, pal: &Palette) -> Result<Figure> {
     let obs = &a.obs;
     let models = [
         ("Euler-Eytelwein", &a.pred.baseline),
@@ -63,11 +64,12 @@ pub fn residuals(a: &Analysis, pal: &Palette) -> Figure {
             });
         }
     }
-    Figure {
+    Ok(Figure {
         id: "residuals",
-        svg: figure(&panels, 3, 430.0, 300.0, &pal.legend()),
+        legend: pal.legend(),
+        chart: figure(&panels, 3, 430, 300)?,
         caption: "Residuals of T2 (measured − model) against T1, step and run, for Euler-Eytelwein (top) and the extended model (bottom), one colour per wrap, on a common scale. Run positions are spread by cord. From predictions.csv (t2_n − t2_baseline_n, t2_n − t2_extended_n).".into(),
-    }
+    })
 }
 
 fn num(v: &Value, k: &str) -> Option<f64> {
@@ -100,7 +102,7 @@ fn group_of(a: &Analysis, label: &str) -> usize {
 }
 
 /// The mechanism evidence: four panels.
-pub fn mechanisms(a: &Analysis, pal: &Palette) -> Figure {
+pub fn mechanisms(a: &Analysis, pal: &Palette) -> Result<Figure> {
     let m = &a.mechanisms;
     let annotation = |width, dash| LineStyle {
         color: INK,
@@ -123,10 +125,10 @@ pub fn mechanisms(a: &Analysis, pal: &Palette) -> Figure {
         let (lo, hi) = finite_range(m.cord_lines.iter().map(|c| c.slope));
         series.push(Series::Line(
             vec![(lo, ai + bi * lo), (hi, ai + bi * hi)],
-            annotation(1.8, Dash::Dashed),
+            annotation(2, Dash::Dashed),
         ));
         legend.push(Entry {
-            key: Key::Line(annotation(1.8, Dash::Dashed)),
+            key: Key::Line(annotation(2, Dash::Dashed)),
             label: format!("weighted fit c = {ai:.2} + {bi:.2}·s"),
         });
     }
@@ -151,15 +153,15 @@ pub fn mechanisms(a: &Analysis, pal: &Palette) -> Figure {
         x_label: "τ (s, log scale)".into(),
         y_label: "AIC (lower is better)".into(),
         series: vec![
-            Series::Line(prof.clone(), annotation(2.0, Dash::Solid)),
+            Series::Line(prof.clone(), annotation(2, Dash::Solid)),
             Series::Points(prof, cord_marker(INK, false)),
             Series::Line(
                 vec![(tau_fit.ln(), ylo), (tau_fit.ln(), yhi)],
-                annotation(1.5, Dash::Dashed),
+                annotation(2, Dash::Dashed),
             ),
         ],
         legend: vec![Entry {
-            key: Key::Line(annotation(1.5, Dash::Dashed)),
+            key: Key::Line(annotation(2, Dash::Dashed)),
             label: format!("fitted τ = {tau_fit:.2} s"),
         }],
         x_ticks: Some(
@@ -219,22 +221,23 @@ pub fn mechanisms(a: &Analysis, pal: &Palette) -> Figure {
     };
     let mut legend = pal.legend();
     legend.extend(diameter_legend(a));
-    Figure {
+    Ok(Figure {
         id: "mechanism_evidence",
-        svg: figure(&[isl, tau, low, u], 2, 560.0, 360.0, &legend),
+        legend,
+        chart: figure(&[isl, tau, low, u], 2, 560, 360)?,
         caption: "Evidence for the mechanisms, one point per cord (colour: wrap; disc: small capstan, ring: large). Intercepts grow with slope, which zero offsets cannot do; the memory time τ is short; the low-tension loss is not larger on the small capstan (no bending signature); cord-to-cord mu scatter. From metrics.json: cord_lines, intercept_vs_slope, tau_profile, low_tension_by_cord, extended_fit.cord_log_mu.".into(),
-    }
+    })
 }
 
 /// The gain: in-sample and leave-one-cord-out RMSE of T2 per model.
-pub fn gain(a: &Analysis) -> Figure {
+pub fn gain(a: &Analysis) -> Result<Figure> {
     let bars = Bars {
         title: "RMSE of T2 by model".into(),
         y_label: "RMSE of T2 (N)".into(),
         categories: a.models.iter().map(|m| m.name.clone()).collect(),
         groups: vec![
-            ("in-sample".into(), "#555555"),
-            ("leave one cord out".into(), "#56B4E9"),
+            ("in-sample".into(), RGBColor(0x55, 0x55, 0x55)),
+            ("leave one cord out".into(), RGBColor(0x56, 0xB4, 0xE9)),
         ],
         values: a
             .models
@@ -243,9 +246,10 @@ pub fn gain(a: &Analysis) -> Figure {
             .collect(),
         missing: "not refittable".into(),
     };
-    Figure {
+    Ok(Figure {
         id: "gain",
-        svg: bar_chart(&bars, 900.0, 380.0),
+        legend: bars.legend(),
+        chart: bar_chart(&bars, 900, 380)?,
         caption: "The gain: in-sample and leave-one-cord-out RMSE of T2 per model. Table 3's published constants are set per angle and cannot be refitted without a cord, so it has no leave-one-cord-out value.".into(),
-    }
+    })
 }

@@ -1,6 +1,6 @@
 //! The report's figures. One colour per wrap in every figure (Okabe-Ito, safe for the common
 //! colour-vision deficiencies), one line style per model (Euler-Eytelwein dashed, Table 3
-//! dotted, extended solid and thick), a legend above each figure. Every curve of a model is
+//! dotted, extended solid and thick), a legend above each figure (HTML). Every curve of a model is
 //! drawn through that model's predictions as written to `predictions.csv`; the evidence panels
 //! come from `metrics.json`.
 //!
@@ -10,61 +10,66 @@
 pub mod curves;
 pub mod evidence;
 
-use super::plot::{Entry, Key, LineStyle, Marker};
-use super::svg::Dash;
+use super::plot::{Chart, Dash, Entry, Key, LineStyle, Marker};
 use crate::analysis::closed_loop::SimCurve;
 use crate::analysis::Analysis;
 use crate::fit::stats::distinct;
+use plotters::style::RGBColor;
 
 /// The Okabe-Ito palette without yellow (poor on white) and black (kept for annotations).
-pub const OKABE_ITO: [&str; 6] = [
-    "#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9",
+pub const OKABE_ITO: [RGBColor; 6] = [
+    RGBColor(0x00, 0x72, 0xB2),
+    RGBColor(0xE6, 0x9F, 0x00),
+    RGBColor(0x00, 0x9E, 0x73),
+    RGBColor(0xD5, 0x5E, 0x00),
+    RGBColor(0xCC, 0x79, 0xA7),
+    RGBColor(0x56, 0xB4, 0xE9),
 ];
 /// Neutral colour of the model line samples in legends and of annotations.
-pub const INK: &str = "#333333";
+pub const INK: RGBColor = RGBColor(0x33, 0x33, 0x33);
 
 /// Euler-Eytelwein with one mu: thin dashes.
-pub fn baseline_style(color: &'static str) -> LineStyle {
+pub fn baseline_style(color: RGBColor) -> LineStyle {
     LineStyle {
         color,
-        width: 1.6,
+        width: 2,
         dash: Dash::Dashed,
     }
 }
 
 /// The thesis's Table 3: dots.
-pub fn thesis_style(color: &'static str) -> LineStyle {
+pub fn thesis_style(color: RGBColor) -> LineStyle {
     LineStyle {
         color,
-        width: 2.6,
+        width: 2,
         dash: Dash::Dotted,
     }
 }
 
 /// The extended model: thick and solid.
-pub fn extended_style(color: &'static str) -> LineStyle {
+pub fn extended_style(color: RGBColor) -> LineStyle {
     LineStyle {
         color,
-        width: 3.0,
+        width: 3,
         dash: Dash::Solid,
     }
 }
 
 /// A measured point.
-pub fn measured(color: &'static str) -> Marker {
+pub fn measured(color: RGBColor) -> Marker {
     Marker {
         color,
-        radius: 2.3,
+        radius: 2,
         hollow: false,
         opacity: 0.5,
     }
 }
 
 /// A per-cord summary point: a disc on the smallest capstan, a ring on the others.
-pub fn cord_marker(color: &'static str, hollow: bool) -> Marker {
+pub fn cord_marker(color: RGBColor, hollow: bool) -> Marker {
     Marker {
         color,
-        radius: 5.0,
+        radius: 5,
         hollow,
         opacity: 0.9,
     }
@@ -84,7 +89,7 @@ impl Palette {
     }
 
     /// The colour of `wrap_deg` (colours repeat after six wraps).
-    pub fn color(&self, wrap_deg: f64) -> &'static str {
+    pub fn color(&self, wrap_deg: f64) -> RGBColor {
         let k = self.wraps.iter().position(|w| *w == wrap_deg).unwrap_or(0);
         OKABE_ITO[k % OKABE_ITO.len()]
     }
@@ -155,24 +160,26 @@ pub fn diameter_legend(a: &Analysis) -> Vec<Entry> {
 pub struct Figure {
     /// `data-figure` id.
     pub id: &'static str,
-    /// The SVG document.
-    pub svg: String,
+    /// The legend above the chart (HTML).
+    pub legend: Vec<Entry>,
+    /// The chart.
+    pub chart: Chart,
     /// Caption.
     pub caption: String,
 }
 
 /// Every figure, in report order.
-pub fn all(a: &Analysis, closed_loop: Option<&[SimCurve]>) -> Vec<Figure> {
+pub fn all(a: &Analysis, closed_loop: Option<&[SimCurve]>) -> anyhow::Result<Vec<Figure>> {
     let pal = Palette::new(a);
     let mut figs = vec![
-        curves::t2_vs_t1(a, &pal),
-        curves::amp_vs_t1(a, &pal),
-        evidence::residuals(a, &pal),
-        evidence::mechanisms(a, &pal),
-        evidence::gain(a),
+        curves::t2_vs_t1(a, &pal)?,
+        curves::amp_vs_t1(a, &pal)?,
+        evidence::residuals(a, &pal)?,
+        evidence::mechanisms(a, &pal)?,
+        evidence::gain(a)?,
     ];
     if let Some(cl) = closed_loop {
-        figs.push(curves::closed_loop(a, &pal, cl));
+        figs.push(curves::closed_loop(a, &pal, cl)?);
     }
-    figs
+    Ok(figs)
 }
