@@ -9,12 +9,18 @@
 //! show. The figure legend is HTML (`html.rs`), from the same [`Entry`] values.
 
 use anyhow::Result;
-use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};
-use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+mod axis;
+mod bars;
+
+#[cfg(test)]
+use axis::{auto_ticks, tick_label};
+use axis::{label_at, Axis, Coord, Frame};
+pub use bars::{bar_chart, Bars};
 
 /// A stroke pattern.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -159,113 +165,6 @@ pub fn finite_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     let pad = 0.04 * (hi - lo);
     (lo - pad, hi + pad)
 }
-
-/// A tick label with as many decimals as the spacing needs (a minus sign, never "−0").
-fn tick_label(v: f64, step: f64) -> String {
-    let decimals = (0..6)
-        .find(|&d| {
-            let s = step * 10f64.powi(d);
-            (s - s.round()).abs() < 1e-6 * s.max(1.0)
-        })
-        .unwrap_or(6) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.chars().all(|c| matches!(c, '-' | '0' | '.')) {
-        s.trim_start_matches('-').to_string()
-    } else {
-        s.replace('-', "−")
-    }
-}
-
-/// plotters' tick positions in [lo, hi] (at most `n`), labelled.
-fn auto_ticks(lo: f64, hi: f64, n: usize) -> Vec<(f64, String)> {
-    let keys = RangedCoordf64::from(lo..hi).key_points(n);
-    let step = match keys.as_slice() {
-        [a, b, ..] => b - a,
-        _ => 10f64.powf((hi - lo).abs().max(1e-12).log10().floor()),
-    };
-    keys.into_iter().map(|v| (v, tick_label(v, step))).collect()
-}
-
-/// The label of the tick nearest `v`.
-fn label_at(ticks: &[(f64, String)], v: f64) -> String {
-    ticks
-        .iter()
-        .min_by(|a, b| (a.0 - v).abs().total_cmp(&(b.0 - v).abs()))
-        .map_or_else(String::new, |t| t.1.clone())
-}
-
-/// A panel's coordinates: ranges and labelled ticks.
-struct Frame {
-    x: (f64, f64),
-    y: (f64, f64),
-    x_ticks: Vec<(f64, String)>,
-    y_ticks: Vec<(f64, String)>,
-    /// x ticks name categories: no vertical grid lines, labels at the axis-label size.
-    categorical: bool,
-}
-
-impl Frame {
-    fn of(p: &Panel, w: u32) -> Frame {
-        let pts = || p.series.iter().flat_map(|s| points(s).iter());
-        let x = finite_range(
-            pts()
-                .map(|v| v.0)
-                .chain(p.x_ticks.iter().flatten().map(|t| t.0)),
-        );
-        let y = p
-            .y_range
-            .unwrap_or_else(|| finite_range(pts().map(|v| v.1).chain(p.zero_line.then_some(0.0))));
-        let n = (f64::from(w.saturating_sub(LEFT + RIGHT)) / 55.0).clamp(3.0, 8.0) as usize;
-        Frame {
-            x,
-            y,
-            x_ticks: p.x_ticks.clone().unwrap_or_else(|| auto_ticks(x.0, x.1, n)),
-            y_ticks: auto_ticks(y.0, y.1, 5),
-            categorical: false,
-        }
-    }
-}
-
-/// A linear axis with given ticks (plotters' `WithKeyPoints` over `f64` takes no label
-/// formatter).
-struct Axis {
-    linear: RangedCoordf64,
-    ticks: Vec<f64>,
-}
-
-impl Axis {
-    fn new((lo, hi): (f64, f64), ticks: &[(f64, String)]) -> Axis {
-        Axis {
-            linear: (lo..hi).into(),
-            ticks: ticks.iter().map(|t| t.0).collect(),
-        }
-    }
-}
-
-impl Ranged for Axis {
-    type FormatOption = DefaultFormatting;
-    type ValueType = f64;
-
-    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
-        self.linear.map(v, limit)
-    }
-
-    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
-        // Grid lines at the ticks only (no light lines between them).
-        if hint.weight().allow_light_points() {
-            Vec::new()
-        } else {
-            self.ticks.clone()
-        }
-    }
-
-    fn range(&self) -> std::ops::Range<f64> {
-        self.linear.range()
-    }
-}
-
-type Coord = Cartesian2d<Axis, Axis>;
-
 /// The chart of a panel's cell: the same plot area in every layer.
 fn build<'a, 'b>(
     cell: &'a DrawingArea<SVGBackend<'b>, Shift>,
@@ -481,115 +380,6 @@ pub fn figure(panels: &[Panel], cols: usize, w: u32, h: u32) -> Result<Chart> {
                 draw_data(&mut build(&root.split_evenly(grid)[k], f)?, s)
             })?;
             layers.push(Layer { class: "mark", svg });
-        }
-    }
-    Ok(compose(size, axes, layers))
-}
-
-/// A grouped bar chart: for every category one bar per group.
-pub struct Bars {
-    /// Title.
-    pub title: String,
-    /// y-axis label.
-    pub y_label: String,
-    /// Category names (x axis).
-    pub categories: Vec<String>,
-    /// Group names and colours (the legend).
-    pub groups: Vec<(String, RGBColor)>,
-    /// values[category][group]; None draws an empty outlined slot with `missing`.
-    pub values: Vec<Vec<Option<f64>>>,
-    /// Text for a missing value.
-    pub missing: String,
-}
-
-impl Bars {
-    /// Legend entries: one swatch per group.
-    pub fn legend(&self) -> Vec<Entry> {
-        self.groups
-            .iter()
-            .map(|(label, color)| Entry {
-                key: Key::Line(LineStyle {
-                    color: *color,
-                    width: 10,
-                    dash: Dash::Solid,
-                }),
-                label: label.clone(),
-            })
-            .collect()
-    }
-}
-
-/// A grouped bar chart, `w`×`h` px, y from zero, each bar labelled with its value; every bar
-/// is a layer of class `mark bar`, every missing value one of class `missing`.
-pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
-    let top = c
-        .values
-        .iter()
-        .flatten()
-        .flatten()
-        .fold(0.0f64, |a, v| a.max(*v))
-        * 1.12;
-    let top = if top > 0.0 { top } else { 1.0 };
-    let n = c.categories.len().max(1) as f64;
-    let panel = Panel {
-        title: c.title.clone(),
-        y_label: c.y_label.clone(),
-        ..Panel::default()
-    };
-    let f = Frame {
-        x: (0.0, n),
-        y: (0.0, top),
-        x_ticks: (c.categories.iter().enumerate())
-            .map(|(k, name)| (k as f64 + 0.5, name.clone()))
-            .collect(),
-        y_ticks: auto_ticks(0.0, top, 5),
-        categorical: true,
-    };
-    let size = (w, h);
-    let axes = render(size, |root| {
-        root.fill(&WHITE)?;
-        draw_axes(root, &panel, &f)
-    })?;
-    // Bars fill 70 % of each category's slot, with a small gap between neighbours.
-    let bw = 0.7 / c.groups.len().max(1) as f64;
-    let mut layers = Vec::new();
-    for (k, vals) in c.values.iter().enumerate() {
-        for (j, (v, (_, color))) in vals.iter().zip(&c.groups).enumerate() {
-            let x0 = k as f64 + 0.15 + bw * j as f64 + 0.01;
-            let x1 = x0 + bw - 0.02;
-            let svg = render(size, |root| {
-                let mut chart = build(root, &f)?;
-                match v {
-                    Some(v) => {
-                        let label = font(TICK, false).pos(Pos::new(HPos::Center, VPos::Bottom));
-                        chart.draw_series([
-                            Rectangle::new([(x0, 0.0), (x1, *v)], color.filled()),
-                            Rectangle::new([(x0, 0.0), (x1, *v)], TEXT.stroke_width(1)),
-                        ])?;
-                        chart.draw_series(std::iter::once(
-                            EmptyElement::at(((x0 + x1) / 2.0, *v))
-                                + Text::new(format!("{v:.3}"), (0, -4), label),
-                        ))?;
-                    }
-                    None => {
-                        let label = font(TICK, false)
-                            .transform(FontTransform::Rotate270)
-                            .pos(Pos::new(HPos::Left, VPos::Center));
-                        let grey = RGBColor(0x99, 0x99, 0x99);
-                        chart.draw_series([Rectangle::new(
-                            [(x0, 0.0), (x1, 0.3 * top)],
-                            grey.stroke_width(1),
-                        )])?;
-                        chart.draw_series(std::iter::once(
-                            EmptyElement::at(((x0 + x1) / 2.0, 0.0))
-                                + Text::new(c.missing.clone(), (0, -8), label),
-                        ))?;
-                    }
-                }
-                Ok(())
-            })?;
-            let class = if v.is_some() { "mark bar" } else { "missing" };
-            layers.push(Layer { class, svg });
         }
     }
     Ok(compose(size, axes, layers))

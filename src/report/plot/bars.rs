@@ -1,0 +1,119 @@
+//! Grouped bar charts (the gain figure).
+
+use super::axis::{auto_ticks, Frame};
+use super::{
+    build, compose, draw_axes, font, render, Chart, Dash, Entry, Key, Layer, LineStyle, Panel,
+    TEXT, TICK,
+};
+use anyhow::Result;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// A grouped bar chart: for every category one bar per group.
+pub struct Bars {
+    /// Title.
+    pub title: String,
+    /// y-axis label.
+    pub y_label: String,
+    /// Category names (x axis).
+    pub categories: Vec<String>,
+    /// Group names and colours (the legend).
+    pub groups: Vec<(String, RGBColor)>,
+    /// values[category][group]; None draws an empty outlined slot with `missing`.
+    pub values: Vec<Vec<Option<f64>>>,
+    /// Text for a missing value.
+    pub missing: String,
+}
+
+impl Bars {
+    /// Legend entries: one swatch per group.
+    pub fn legend(&self) -> Vec<Entry> {
+        self.groups
+            .iter()
+            .map(|(label, color)| Entry {
+                key: Key::Line(LineStyle {
+                    color: *color,
+                    width: 10,
+                    dash: Dash::Solid,
+                }),
+                label: label.clone(),
+            })
+            .collect()
+    }
+}
+
+/// A grouped bar chart, `w`×`h` px, y from zero, each bar labelled with its value; every bar
+/// is a layer of class `mark bar`, every missing value one of class `missing`.
+pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
+    let top = c
+        .values
+        .iter()
+        .flatten()
+        .flatten()
+        .fold(0.0f64, |a, v| a.max(*v))
+        * 1.12;
+    let top = if top > 0.0 { top } else { 1.0 };
+    let n = c.categories.len().max(1) as f64;
+    let panel = Panel {
+        title: c.title.clone(),
+        y_label: c.y_label.clone(),
+        ..Panel::default()
+    };
+    let f = Frame {
+        x: (0.0, n),
+        y: (0.0, top),
+        x_ticks: (c.categories.iter().enumerate())
+            .map(|(k, name)| (k as f64 + 0.5, name.clone()))
+            .collect(),
+        y_ticks: auto_ticks(0.0, top, 5),
+        categorical: true,
+    };
+    let size = (w, h);
+    let axes = render(size, |root| {
+        root.fill(&WHITE)?;
+        draw_axes(root, &panel, &f)
+    })?;
+    // Bars fill 70 % of each category's slot, with a small gap between neighbours.
+    let bw = 0.7 / c.groups.len().max(1) as f64;
+    let mut layers = Vec::new();
+    for (k, vals) in c.values.iter().enumerate() {
+        for (j, (v, (_, color))) in vals.iter().zip(&c.groups).enumerate() {
+            let x0 = k as f64 + 0.15 + bw * j as f64 + 0.01;
+            let x1 = x0 + bw - 0.02;
+            let svg = render(size, |root| {
+                let mut chart = build(root, &f)?;
+                match v {
+                    Some(v) => {
+                        let label = font(TICK, false).pos(Pos::new(HPos::Center, VPos::Bottom));
+                        chart.draw_series([
+                            Rectangle::new([(x0, 0.0), (x1, *v)], color.filled()),
+                            Rectangle::new([(x0, 0.0), (x1, *v)], TEXT.stroke_width(1)),
+                        ])?;
+                        chart.draw_series(std::iter::once(
+                            EmptyElement::at(((x0 + x1) / 2.0, *v))
+                                + Text::new(format!("{v:.3}"), (0, -4), label),
+                        ))?;
+                    }
+                    None => {
+                        let label = font(TICK, false)
+                            .transform(FontTransform::Rotate270)
+                            .pos(Pos::new(HPos::Left, VPos::Center));
+                        let grey = RGBColor(0x99, 0x99, 0x99);
+                        chart.draw_series([Rectangle::new(
+                            [(x0, 0.0), (x1, 0.3 * top)],
+                            grey.stroke_width(1),
+                        )])?;
+                        chart.draw_series(std::iter::once(
+                            EmptyElement::at(((x0 + x1) / 2.0, 0.0))
+                                + Text::new(c.missing.clone(), (0, -8), label),
+                        ))?;
+                    }
+                }
+                Ok(())
+            })?;
+            let class = if v.is_some() { "mark bar" } else { "missing" };
+            layers.push(Layer { class, svg });
+        }
+    }
+    Ok(compose(size, axes, layers))
+}
