@@ -125,15 +125,7 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
         .enumerate()
         .map(|(g, grp)| {
             let c = pal.color(grp.wrap_deg);
-            let mut series = vec![Series::Points(measured_points(a, g, true), measured(c))];
-            series.extend(model_series(a, g, c, true));
-            Panel {
-                title: format!("{:.0}°, D = {} mm", grp.wrap_deg, grp.diameter_mm),
-                x_label: "T1 (N)".into(),
-                y_label: "amplification T2/T1".into(),
-                series,
-                ..Panel::default()
-            }
+            amp_panel(a, g, c, model_series(a, g, c, true))
         })
         .collect();
     Ok(Figure {
@@ -142,6 +134,25 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
         chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
         caption: "Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).".into(),
     })
+}
+
+/// One cord's amplification panel: its measured points, then `curves` over them.
+fn amp_panel(
+    a: &Analysis,
+    g: usize,
+    c: RGBColor,
+    curves: impl IntoIterator<Item = Series>,
+) -> Panel {
+    let grp = &a.obs.groups[g];
+    let mut series = vec![Series::Points(measured_points(a, g, true), measured(c))];
+    series.extend(curves);
+    Panel {
+        title: format!("{:.0}°, D = {} mm", grp.wrap_deg, grp.diameter_mm),
+        x_label: "T1 (N)".into(),
+        y_label: "amplification T2/T1".into(),
+        series,
+        ..Panel::default()
+    }
 }
 
 /// The closed loop: simulated amplification over the measured points, per cord.
@@ -153,17 +164,13 @@ pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<F
         .enumerate()
         .map(|(g, grp)| {
             let c = pal.color(grp.wrap_deg);
-            let mut series = vec![Series::Points(measured_points(a, g, true), measured(c))];
-            for (_, sim) in curves.iter().filter(|(cg, _)| *cg == g) {
-                series.push(Series::Line(sim.clone(), extended_style(c)));
-            }
-            Panel {
-                title: format!("{:.0}°, D = {} mm", grp.wrap_deg, grp.diameter_mm),
-                x_label: "T1 (N)".into(),
-                y_label: "amplification T2/T1".into(),
-                series,
-                ..Panel::default()
-            }
+            let sims = curves.iter().filter(|(cg, _)| *cg == g);
+            amp_panel(
+                a,
+                g,
+                c,
+                sims.map(|(_, sim)| Series::Line(sim.clone(), extended_style(c))),
+            )
         })
         .collect();
     let mut legend = pal.legend();
