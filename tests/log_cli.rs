@@ -37,6 +37,16 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `capstan log [FLAGS] --elf <the recorded firmware> --from FROM --out DIR [EXTRA]`.
+fn decode(flags: &[&str], from: &str, dir: &Path, extra: &[&str], stdin: Option<&[u8]>) -> Output {
+    let elf = elf_path();
+    let mut args = vec!["log"];
+    args.extend(flags);
+    args.extend(["--elf", s(&elf), "--from", from, "--out", s(dir)]);
+    args.extend(extra);
+    capstan(&args, stdin)
+}
+
 #[test]
 fn help_documents_the_board_flow() {
     let o = capstan(&["log", "--help"], None);
@@ -64,18 +74,7 @@ fn help_documents_the_board_flow() {
 fn a_saved_stream_is_decoded_into_the_run_files() {
     let dir = out_dir("file");
     let stream_path = log_support::data("qemu-run.defmt");
-    let o = capstan(
-        &[
-            "log",
-            "--elf",
-            s(&elf_path()),
-            "--from",
-            s(&stream_path),
-            "--out",
-            s(&dir),
-        ],
-        None,
-    );
+    let o = decode(&[], s(&stream_path), &dir, &[], None);
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(err.contains("run 1 step 1: T1 "), "{err}");
@@ -102,18 +101,7 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
     );
     assert_eq!(pairs.pairs.len(), 4);
     // Running again into the same directory is refused unless --overwrite.
-    let again = capstan(
-        &[
-            "log",
-            "--elf",
-            s(&elf_path()),
-            "--from",
-            s(&stream_path),
-            "--out",
-            s(&dir),
-        ],
-        None,
-    );
+    let again = decode(&[], s(&stream_path), &dir, &[], None);
     assert!(!again.status.success());
     assert!(stderr(&again).contains("--overwrite"), "{}", stderr(&again));
 }
@@ -121,23 +109,8 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
 #[test]
 fn stdin_works_and_flags_override_the_run_start_set_up() {
     let dir = out_dir("stdin");
-    let o = capstan(
-        &[
-            "log",
-            "--quiet",
-            "--elf",
-            s(&elf_path()),
-            "--from",
-            "-",
-            "--out",
-            s(&dir),
-            "--wrap-deg",
-            "450",
-            "--diameter-mm",
-            "25.4",
-        ],
-        Some(&stream()),
-    );
+    let set_up = ["--wrap-deg", "450", "--diameter-mm", "25.4"];
+    let o = decode(&["--quiet"], "-", &dir, &set_up, Some(&stream()));
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("step 1"), "--quiet: {}", stderr(&o));
     let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
@@ -160,9 +133,7 @@ fn lost_records_are_reported_and_strict_makes_them_fail() {
     let frames = split(&stream());
     let damaged = frames.without(&[30, 31, 32]);
     let dir = out_dir("strict");
-    let elf = elf_path();
-    let args = ["log", "--elf", s(&elf), "--from", "-", "--out", s(&dir)];
-    let o = capstan(&args, Some(&damaged));
+    let o = decode(&[], "-", &dir, &[], Some(&damaged));
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("LOST 3 record(s) after seq"),
@@ -170,19 +141,7 @@ fn lost_records_are_reported_and_strict_makes_them_fail() {
         stderr(&o)
     );
     let dir2 = out_dir("strict2");
-    let o = capstan(
-        &[
-            "log",
-            "--strict",
-            "--elf",
-            s(&elf_path()),
-            "--from",
-            "-",
-            "--out",
-            s(&dir2),
-        ],
-        Some(&damaged),
-    );
+    let o = decode(&["--strict"], "-", &dir2, &[], Some(&damaged));
     assert!(!o.status.success());
     let err = stderr(&o);
     assert!(err.contains("--strict: 3 record(s) lost"), "{err}");
@@ -210,18 +169,7 @@ fn a_wrong_elf_or_a_foreign_stream_fails_with_a_message() {
         x ^= x << 17;
         junk.push((x >> 24) as u8);
     }
-    let o = capstan(
-        &[
-            "log",
-            "--elf",
-            s(&elf_path()),
-            "--from",
-            "-",
-            "--out",
-            s(&dir),
-        ],
-        Some(&junk),
-    );
+    let o = decode(&[], "-", &dir, &[], Some(&junk));
     assert!(!o.status.success());
     let err = stderr(&o);
     assert!(err.contains("no rig records in 5000 bytes"), "{err}");
