@@ -1,9 +1,11 @@
-//! Puts the RP2040's `memory.x` (at the workspace root) on the linker's search path, and only
-//! when building for the Pico's target (thumbv6m-none-eabi). Every other target — the host, and
-//! the thumbv7m QEMU firmware with its own memory layout — gets nothing from this script.
-//!
-//! The link arguments themselves (`link.x`, `link-rp.x`, `defmt.x`, `--nmagic`) live in
-//! `.cargo/config.toml` under `[target.thumbv6m-none-eabi]`, not here.
+//! The RP2040 board binary's link set-up, and only when building for the Pico's target
+//! (thumbv6m-none-eabi): the RP2040's `memory.x` (at the workspace root) goes on the linker's
+//! search path, and the link arguments (`--nmagic`, cortex-m-rt's `link.x`, embassy-rp's
+//! `link-rp.x` with the boot2 section, defmt's `defmt.x`) are given to the binary only, as
+//! embassy's own examples do. They are not `rustflags` in `.cargo/config.toml`: a `RUSTFLAGS`
+//! in the environment (common in CI) replaces config rustflags and would drop them silently.
+//! Every other target — the host, and the thumbv7m QEMU firmware with its own memory layout —
+//! gets nothing from this script.
 
 use std::env;
 use std::fs;
@@ -28,4 +30,8 @@ fn main() {
     let out = PathBuf::from(env::var_os("OUT_DIR").unwrap());
     fs::write(out.join("memory.x"), layout).expect("cannot write memory.x to OUT_DIR");
     println!("cargo:rustc-link-search={}", out.display());
+    // For the board binary only (the rig core is a library: nothing to link).
+    for arg in ["--nmagic", "-Tlink.x", "-Tlink-rp.x", "-Tdefmt.x"] {
+        println!("cargo:rustc-link-arg-bins={arg}");
+    }
 }

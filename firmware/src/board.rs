@@ -30,7 +30,10 @@
 //! this binary is for the plain Pico.)
 //!
 //! To move a signal, change its line in [`Pins`] (type and `take`) and the table above; for a
-//! PWM pin, the slice must be the one that pin belongs to (the compiler checks that).
+//! PWM pin, the slice must be the one that pin belongs to (the compiler checks that). For an
+//! output, also its number in [`SERVO_GPIO`]/[`SERVO_SLICE`], [`AMP_GPIO`]/[`AMP_SLICE`] or
+//! [`TRIGGER_GPIO`]: the panic path writes those registers directly (`main` checks at boot that
+//! they are the pins of [`Pins`]).
 
 use embassy_rp::peripherals::{
     ADC, PIN_16, PIN_18, PIN_20, PIN_21, PIN_23, PIN_25, PIN_26, PIN_27, PWM_SLICE0, PWM_SLICE1,
@@ -89,6 +92,17 @@ impl Pins {
     }
 }
 
+/// GPIO of the servo signal, for the panic path's register writes (the pin of [`Pins::servo`]).
+pub const SERVO_GPIO: usize = 16;
+/// PWM slice of the servo signal (of [`Pins::servo_slice`]).
+pub const SERVO_SLICE: usize = 0;
+/// GPIO of the amplifier control PWM (of [`Pins::amp`]).
+pub const AMP_GPIO: usize = 18;
+/// PWM slice of the amplifier control (of [`Pins::amp_slice`]).
+pub const AMP_SLICE: usize = 1;
+/// GPIO of the logger trigger (of [`Pins::trigger`]).
+pub const TRIGGER_GPIO: usize = 20;
+
 /// clk_sys that the PWM settings below assume: embassy-rp's default clocks (12 MHz crystal,
 /// PLL to 125 MHz). `main` checks it at boot.
 pub const CLK_SYS_HZ: u32 = 125_000_000;
@@ -105,12 +119,21 @@ pub const AMP_PWM_DIVIDER: u8 = 1;
 /// (0.8 mV steps of the 3.3 V swing). The RC filter is sized for this frequency (see the README).
 pub const AMP_PWM_TOP: u16 = 4_095;
 
-/// Hardware watchdog timeout. The runner feeds it every sample (1 ms), so only a hung loop
-/// (a blocked RTT write, a panic, a HardFault) lets it run out; the chip then resets and every
-/// output pin falls back to an input (servo pulses stop, amplifier control and trigger are
-/// pulled low by their resistors). The software supervisor's 10 ms sample-gap fault catches a
-/// merely slow loop long before this.
+/// Hardware watchdog timeout. The runner feeds it every sample (1 ms), so only a loop that has
+/// stopped (a hang, or a core halted by the debugger) lets it run out; the chip then resets
+/// and every output pin falls back to an input (servo pulses stop, amplifier control and
+/// trigger are pulled low by their resistors). A panic or HardFault does not wait for it: its
+/// handler drives the outputs safe first (`board_panic.rs`). The software supervisor's 10 ms
+/// sample-gap fault catches a merely slow loop long before this.
 pub const WATCHDOG_TIMEOUT: Duration = Duration::from_millis(250);
+
+/// Does the watchdog pause while a debugger halts the core? Not on the rig (`false`): a core
+/// halted by the probe — probe-rs stopping it on a HardFault, or a breakpoint — is reset within
+/// [`WATCHDOG_TIMEOUT`], with every output pin. (The RP2040's reset value pauses it: with a
+/// probe attached a halted core would then leave the amplifier at its control voltage and the
+/// servo pulling, for as long as it stays halted.) Set `true` only to debug with breakpoints
+/// on a rig whose drive motor and servo are unpowered.
+pub const WATCHDOG_PAUSES_WHILE_HALTED: bool = false;
 
 /// The test protocol: the thesis's protocol (`Protocol::default()`).
 ///
@@ -128,9 +151,11 @@ pub fn protocol() -> Protocol {
 }
 
 /// The calibration: the defaults (50 N sensors, zero at 400 counts, 0.015 N/count; servo
-/// 1000-2000 µs over 0-180°; amplifier 3.3 V full scale, gain 4). Each run re-zeroes both
+/// angles as the thesis's Arduino Servo library meant them, 544-2400 µs over 0-180°, so 125°
+/// is 1833 µs and 65° 1214 µs; amplifier 3.3 V full scale, gain 4). Each run re-zeroes both
 /// channels during its tare, so only the sensitivities (`n_per_count`, measured through the
-/// divider in front of the ADC) need to be right.
+/// divider in front of the ADC) need to be right. Keep the servo map unless the rig's angles
+/// are meant to differ from the thesis's: the protocol's angles are Arduino commands.
 pub fn calibration() -> Calibration {
     Calibration::default()
 }

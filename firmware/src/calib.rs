@@ -4,28 +4,44 @@
 pub const SERVO_FRAME_US: f32 = 20_000.0;
 
 /// Servo angle to pulse width, linear between two calibration points.
+///
+/// The protocol's angles are *command* angles, as the thesis's Arduino sketch wrote them
+/// (`myservo.write(pos)`): the default is that convention ([`ServoMap::ARDUINO_SERVO`]), so
+/// 125° is the thesis's 1833 µs pulse and 65° its 1214 µs. Where the horn really goes for a
+/// pulse is the servo's own business (the HS-322HD turns 0.1°/µs about 1500 µs; the simulated
+/// plant models that separately), so the same command means the same tension as on the thesis's
+/// rig only with this map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub struct ServoMap {
-    /// Pulse at 0 deg, µs (default 1000).
+    /// Pulse at 0 deg, µs (default 544).
     pub pulse_at_min_us: f32,
-    /// Pulse at `max_deg`, µs (default 2000).
+    /// Pulse at `max_deg`, µs (default 2400).
     pub pulse_at_max_us: f32,
     /// Angle reached with `pulse_at_max_us`, deg (default 180).
     pub max_deg: f32,
 }
 
 impl Default for ServoMap {
+    /// The Arduino Servo library's convention, as on the thesis's rig.
     fn default() -> Self {
-        ServoMap {
-            pulse_at_min_us: 1_000.0,
-            pulse_at_max_us: 2_000.0,
-            max_deg: 180.0,
-        }
+        ServoMap::ARDUINO_SERVO
     }
 }
 
 impl ServoMap {
+    /// The Arduino Servo library's default map, which the thesis's sketch used
+    /// (`myservo.attach(9)`, then `myservo.write(pos)` for pos = 125 … 65): `MIN_PULSE_WIDTH`
+    /// 544 µs at 0°, `MAX_PULSE_WIDTH` 2400 µs at 180°, linear between. pulse = 544 + angle ·
+    /// (2400 − 544) / 180 µs: 125° → 1832.9 µs, 65° → 1214.2 µs. (The library's integer
+    /// `map()` truncates to whole µs, 1832 and 1214: within 1 µs of this map, and inside the
+    /// HS-322HD's 5 µs dead band.)
+    pub const ARDUINO_SERVO: ServoMap = ServoMap {
+        pulse_at_min_us: 544.0,
+        pulse_at_max_us: 2_400.0,
+        max_deg: 180.0,
+    };
+
     /// Pulse width for an angle, µs (angle clamped to 0..=max).
     pub fn pulse_us(&self, angle_deg: f32) -> f32 {
         // Not `f32::clamp`: its `min <= max` assertion formats floats on panic, which links
@@ -49,6 +65,20 @@ impl ServoMap {
     /// Duty (of `max_duty`) for an angle on a 50 Hz PWM.
     pub fn duty(&self, angle_deg: f32, max_duty: u16) -> u16 {
         fraction_to_duty(self.pulse_us(angle_deg) / SERVO_FRAME_US, max_duty)
+    }
+
+    /// Angle a duty (of `max_duty`, 50 Hz PWM) commands, deg, within 0..=`max_deg` (inverse of
+    /// [`ServoMap::duty`] to within one count).
+    pub fn angle_for_duty(&self, duty: u16, max_duty: u16) -> f32 {
+        let pulse_us = duty as f32 / max_duty.max(1) as f32 * SERVO_FRAME_US;
+        let a = self.angle_deg(pulse_us);
+        if a.is_nan() || a < 0.0 {
+            0.0
+        } else if a > self.max_deg {
+            self.max_deg
+        } else {
+            a
+        }
     }
 }
 
@@ -158,15 +188,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn servo_map_spans_one_to_two_ms_on_a_50hz_frame() {
+    fn default_servo_map_is_the_arduino_servo_librarys() {
         let m = ServoMap::default();
-        assert_eq!(m.pulse_us(0.0), 1000.0);
-        assert_eq!(m.pulse_us(90.0), 1500.0);
-        assert_eq!(m.pulse_us(180.0), 2000.0);
-        assert_eq!(m.pulse_us(200.0), 2000.0);
-        // RP2040 at 125 MHz, divider 40: top = 62499 -> 1.5 ms is 7.5 % of the frame.
-        assert_eq!(m.duty(90.0, 62_499), 4687);
+        assert_eq!(m, ServoMap::ARDUINO_SERVO);
+        assert_eq!(m.pulse_us(0.0), 544.0);
+        assert_eq!(m.pulse_us(180.0), 2400.0);
+        assert_eq!(m.pulse_us(200.0), 2400.0);
+        // The thesis's rest and last angle: write(125) and write(65).
+        let (rest, last) = (m.pulse_us(125.0), m.pulse_us(65.0));
+        assert!((rest - 1833.0).abs() <= 1.0, "{rest}");
+        assert!((last - 1214.0).abs() <= 1.0, "{last}");
+        // What the RP2040 puts on the wire: 125 MHz / 40, top 62 499, so 0.32 µs per count.
+        for (angle, want_us) in [(125.0, 1833.0), (65.0, 1214.0)] {
+            let on_wire_us = m.duty(angle, 62_499) as f32 * 0.32;
+            assert!((on_wire_us - want_us).abs() <= 1.0, "{angle}: {on_wire_us}");
+        }
+        // The thesis's 60° span is 619 µs of pulse, not the 333 µs of a 1-2 ms map.
+        assert!(((rest - last) - 618.7).abs() < 0.1);
         assert!((m.angle_deg(m.pulse_us(125.0)) - 125.0).abs() < 1e-4);
+        assert!((m.angle_for_duty(m.duty(125.0, 62_499), 62_499) - 125.0).abs() < 0.04);
+        assert_eq!(m.angle_for_duty(0, 62_499), 0.0);
+        assert_eq!(m.angle_for_duty(62_499, 62_499), 180.0);
         let custom = ServoMap {
             pulse_at_min_us: 500.0,
             pulse_at_max_us: 2500.0,

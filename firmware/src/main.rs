@@ -2,7 +2,8 @@
 //! runs forever. All behaviour (protocol, tare, conditioning, safety, records) is in the
 //! library; this file only builds the drivers, adapts the two things embedded-hal has no trait
 //! for (the ADC and the watchdog) and calls [`firmware::run_once`] in a loop. The pins, PWM
-//! timing, protocol and calibration are in `board.rs`.
+//! timing, protocol and calibration are in `board.rs`; the panic and HardFault handlers, which
+//! drive the outputs safe through the registers, in `board_safe.rs`.
 //!
 //! Build and flash from the workspace root:
 //! `cargo run --release -p firmware --target thumbv6m-none-eabi` (see README.md, "Firmware on a Raspberry Pi Pico").
@@ -14,6 +15,8 @@
 
 #[cfg(target_os = "none")]
 mod board;
+#[cfg(target_os = "none")]
+mod board_safe;
 
 #[cfg(not(target_os = "none"))]
 fn main() {
@@ -27,17 +30,17 @@ fn main() {
 #[cfg(target_os = "none")]
 mod pico {
     use crate::board::{self, Pins};
+    use crate::board_safe::{self, RememberingServo};
     use defmt_rtt as _;
     use embassy_executor::Spawner;
     use embassy_rp::adc::{self, Adc, Blocking};
-    use embassy_rp::gpio::{Input, Level, Output, Pull};
-    use embassy_rp::pwm::{self, Pwm};
+    use embassy_rp::gpio::{Input, Level, Output, Pin, Pull};
+    use embassy_rp::pwm::{self, Pwm, Slice};
     use embassy_rp::watchdog::{ResetReason, Watchdog};
     use embassy_time::Duration;
     use firmware::defmt_sink::DefmtSink;
     use firmware::hal::{AdcError, Channel, ForceAdc};
-    use firmware::{run_once, RigIo};
-    use panic_probe as _;
+    use firmware::{run_once, RigIo, SafeDuties};
 
     /// Both force sensors on the RP2040's ADC, read by blocking conversions (2 µs each at
     /// 500 ksps: nothing to gain from the async driver at 1 kHz).
@@ -90,20 +93,55 @@ mod pico {
             "PWM timing assumes a 125 MHz clk_sys"
         );
         let pins = Pins::take(p);
+        // The panic path writes these pins' registers by number (board_safe.rs).
+        defmt::assert!(
+            pins.servo.pin() as usize == board::SERVO_GPIO
+                && pins.servo_slice.number() == board::SERVO_SLICE
+                && pins.amp.pin() as usize == board::AMP_GPIO
+                && pins.amp_slice.number() == board::AMP_SLICE
+                && pins.trigger.pin() as usize == board::TRIGGER_GPIO,
+            "board::*_GPIO/*_SLICE must name the pins of board::Pins"
+        );
 
         // Quieter 3V3/ADC_VREF for the force sensors; kept for the whole program (dropping an
         // Output would release the pin).
         let _smps_pwm_mode = Output::new(pins.smps_mode, Level::High);
-        let dog = Watchdog::new(pins.watchdog);
-        if let Some(ResetReason::TimedOut) = dog.reset_reason() {
-            defmt::warn!("the hardware watchdog reset the chip (loop hung or panicked)");
+        let mut dog = Watchdog::new(pins.watchdog);
+        match dog.reset_reason() {
+            Some(ResetReason::TimedOut) => defmt::warn!(
+                "the hardware watchdog reset the chip: the loop stopped, or a debugger held the core halted"
+            ),
+            Some(ResetReason::Forced) => defmt::warn!(
+                "reset by the panic/HardFault handler, after it had made the outputs safe"
+            ),
+            None => {}
         }
+        // Not paused while a debugger halts the core (see board::WATCHDOG_PAUSES_WHILE_HALTED),
+        // set before anything can halt.
+        dog.pause_on_debug(board::WATCHDOG_PAUSES_WHILE_HALTED);
 
         let mut rig = defmt::unwrap!(firmware::Rig::new(
             board::protocol(),
             board::calibration(),
             board::safety_limits(),
         ));
+        // From here a panic puts the servo at rest (before: no pulses at all).
+        board_safe::arm(SafeDuties::for_rig(&rig, board::SERVO_PWM_TOP));
+        // After a reset that left the horn away from rest, bring it back slowly.
+        if let Some(duty) = board_safe::servo_duty_before_reset() {
+            let angle = rig
+                .calibration()
+                .servo
+                .angle_for_duty(duty, board::SERVO_PWM_TOP);
+            rig.home_from(angle);
+            if rig.is_homing() {
+                defmt::info!(
+                    "servo was at {=f32} deg before the reset: homing to rest at {=f32} deg/s",
+                    angle,
+                    firmware::rig::HOMING_DEG_PER_S
+                );
+            }
+        }
 
         let servo = Pwm::new_output_a(
             pins.servo_slice,
@@ -122,7 +160,7 @@ mod pico {
             t2: adc::Channel::new_pin(pins.t2, Pull::None),
         };
         let mut io = RigIo {
-            servo,
+            servo: RememberingServo(servo),
             amp,
             trigger: Output::new(pins.trigger, Level::Low),
             led: Output::new(pins.led, Level::Low),
@@ -133,11 +171,11 @@ mod pico {
                 timeout: board::WATCHDOG_TIMEOUT,
             },
         };
-        // Servo to its rest angle, amplifier to 0 V, trigger low, before anything runs.
-        defmt::unwrap!(io.make_safe(&rig));
+        // Amplifier to 0 V, trigger low, servo where the rig believes it is (at rest, or where
+        // it was before a reset: the idle rig then brings it to rest slowly), before anything
+        // runs.
+        defmt::unwrap!(io.boot(&rig));
 
-        // Paused while a debugger halts the core (the reset value, made explicit).
-        io.watchdog.dog.pause_on_debug(true);
         io.watchdog.dog.start(board::WATCHDOG_TIMEOUT);
         defmt::info!(
             "capstan rig ready: {=u32} Hz sampling, watchdog {=u64} ms; press the button to run",
@@ -152,8 +190,8 @@ mod pico {
                 // The rig has logged `run_end` and is back to idle: wait for the next press.
                 Ok(_) => {}
                 // Cannot happen with this HAL (its pins are infallible, duties are clamped to
-                // top). The runner has already commanded the safe state; a panic stops the
-                // loop, the watchdog then resets the chip and every output pin with it.
+                // top). The runner has already commanded the safe state; the panic handler
+                // forces it again through the registers and the chip resets.
                 Err(e) => defmt::panic!("hardware error {}: outputs made safe", e),
             }
         }

@@ -133,6 +133,34 @@ pub enum ProtocolError {
     TooLong,
 }
 
+impl ProtocolError {
+    /// What is wrong, for a person (the same words on every host and in the board's log).
+    pub const fn message(self) -> &'static str {
+        match self {
+            ProtocolError::AngleOutOfRange => "an angle is outside 0..=180°",
+            ProtocolError::NoSteps => "it needs a positive step and a final angle below rest",
+            ProtocolError::StepsNotWhole => {
+                "rest − final must be a whole number of steps (at most 64)"
+            }
+            ProtocolError::ZeroDuration => "the dwell and the trigger pulse must be > 0",
+            ProtocolError::TareTooLong => "the tare must end before the trigger",
+            ProtocolError::EmptyWindow => {
+                "window-after + window-before must leave at least 1 ms of the dwell"
+            }
+            ProtocolError::SampleRate => "sampling must be 1000..=10000 Hz",
+            ProtocolError::RawLogRate => "the raw log rate must divide the sample rate",
+            ProtocolError::AmpVoltage => "the amplifier control voltage must be 0..=3.3 V",
+            ProtocolError::TooLong => "the run is too long",
+        }
+    }
+}
+
+impl core::fmt::Display for ProtocolError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.message())
+    }
+}
+
 /// Most levels a protocol may have.
 pub const MAX_LEVELS: u32 = 64;
 
@@ -416,6 +444,8 @@ mod tests {
         ];
         for (p, want) in cases {
             assert_eq!(p.validate(), Err(want), "{p:?}");
+            assert!(!want.message().is_empty());
+            assert_eq!(std::format!("{want}"), want.message());
         }
     }
 }

@@ -19,6 +19,11 @@ pub const DEBOUNCE_MS: u32 = 10;
 /// moved and the tensions settled by then).
 pub const CORD_CHECK_SETTLE_MS: u32 = 200;
 
+/// How fast the idle rig brings the servo command to rest when it starts away from it (after a
+/// reset that left the horn elsewhere: [`Rig::home_from`]), deg/s. 60° then take 6 s, where
+/// the HS-322HD alone would swing there in 0.2 s.
+pub const HOMING_DEG_PER_S: f32 = 10.0;
+
 /// What the rig reads each sample period.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inputs {
@@ -47,8 +52,9 @@ pub struct Outputs {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Phase {
-    /// Waiting for the button (LED blinks slowly; fast after a fault).
-    Idle { last_fault: Option<FaultKind> },
+    /// Waiting for the button (LED blinks slowly). After a fault, `latched` holds it (LED
+    /// blinks fast) until a press acknowledges it; only the press after that starts a run.
+    Idle { latched: Option<FaultKind> },
     /// Sampling the preloaded cord with the capstan stopped.
     Tare { sum: [u64; 2], n: u32 },
     /// Running the protocol; `step` is the step being held, `window` its conditioning.
@@ -73,6 +79,8 @@ pub struct Rig {
     pairs: u32,
     press_us: u64,
     samples: u32,
+    /// Servo command while idle, deg: the rest angle, or on its way there ([`Rig::home_from`]).
+    idle_servo_deg: f32,
 }
 
 impl Rig {
@@ -88,7 +96,7 @@ impl Rig {
             protocol,
             cal,
             limits,
-            phase: Phase::Idle { last_fault: None },
+            phase: Phase::Idle { latched: None },
             button: Debouncer::new(debounce),
             seq: Sequencer::default(),
             supervisor: Supervisor::new(limits),
@@ -96,7 +104,46 @@ impl Rig {
             pairs: 0,
             press_us: 0,
             samples: 0,
+            idle_servo_deg: protocol.rest_deg,
         })
+    }
+
+    /// The servo is believed to be at `angle_deg` (e.g. the last command before a reset): the
+    /// idle rig starts its command there and brings it to rest at [`HOMING_DEG_PER_S`]; a press
+    /// is not accepted until it is there. Ignored during a run. Without this call the rig
+    /// assumes the servo is at rest (where every run, fault and panic leaves it).
+    pub fn home_from(&mut self, angle_deg: f32) {
+        if self.is_running() || !angle_deg.is_finite() {
+            return;
+        }
+        // Not `f32::clamp` (its assertion links float formatting into the board image).
+        #[allow(clippy::manual_clamp)]
+        let angle_deg = if angle_deg < 0.0 {
+            0.0
+        } else if angle_deg > 180.0 {
+            180.0
+        } else {
+            angle_deg
+        };
+        // Within a few PWM counts of rest (a duty read back through the map) is rest.
+        self.idle_servo_deg = if (angle_deg - self.protocol.rest_deg).abs() < 0.1 {
+            self.protocol.rest_deg
+        } else {
+            angle_deg
+        };
+    }
+
+    /// True while the idle servo command is still on its way to rest.
+    pub fn is_homing(&self) -> bool {
+        self.idle_servo_deg != self.protocol.rest_deg
+    }
+
+    /// The fault that ended the last run, while it waits to be acknowledged by a press.
+    pub fn latched_fault(&self) -> Option<FaultKind> {
+        match self.phase {
+            Phase::Idle { latched } => latched,
+            _ => None,
+        }
     }
 
     /// The protocol in force.
@@ -114,6 +161,16 @@ impl Rig {
         !matches!(self.phase, Phase::Idle { .. })
     }
 
+    /// What the idle rig commands now: [`Rig::safe_outputs`] with the servo where homing has
+    /// brought it (at rest unless [`Rig::home_from`] was called). The runner writes this at
+    /// boot, before the first sample.
+    pub fn idle_outputs(&self) -> Outputs {
+        Outputs {
+            servo_deg: self.idle_servo_deg,
+            ..self.safe_outputs()
+        }
+    }
+
     /// The state outputs hold when nothing runs: servo at rest, amplifier off, trigger low.
     pub fn safe_outputs(&self) -> Outputs {
         Outputs {
@@ -129,13 +186,39 @@ impl Rig {
     pub fn step(&mut self, inp: &Inputs, sink: &mut impl LogSink) -> Outputs {
         let pressed = self.button.step(inp.button_pressed);
         match self.phase {
-            Phase::Idle { last_fault } => {
-                if pressed {
-                    self.start(inp.now_us);
-                    return self.step_running(inp, false, sink);
+            Phase::Idle { latched } => {
+                if self.is_homing() {
+                    let rest = self.protocol.rest_deg;
+                    let step = HOMING_DEG_PER_S / self.protocol.sample_hz as f32;
+                    let gap = rest - self.idle_servo_deg;
+                    self.idle_servo_deg = if gap.abs() <= step {
+                        rest
+                    } else if gap > 0.0 {
+                        self.idle_servo_deg + step
+                    } else {
+                        self.idle_servo_deg - step
+                    };
+                    if pressed {
+                        info!("press ignored: the servo is still on its way to rest");
+                    }
+                } else if pressed {
+                    if latched.is_some() {
+                        self.phase = Phase::Idle { latched: None };
+                        info!(
+                            "fault acknowledged; press again to start run {=u32}",
+                            self.runs + 1
+                        );
+                    } else {
+                        self.start(inp.now_us);
+                        return self.step_running(inp, false, sink);
+                    }
                 }
-                let blink_ms = if last_fault.is_some() { 100 } else { 500 };
-                let mut out = self.safe_outputs();
+                let blink_ms = if self.latched_fault().is_some() {
+                    100
+                } else {
+                    500
+                };
+                let mut out = self.idle_outputs();
                 out.led = (inp.now_us / 1000 / blink_ms) % 2 == 0;
                 out
             }
@@ -337,7 +420,14 @@ impl Rig {
         };
         self.emit(sink, Record::RunEnd(end));
         info!("run {=u32} ended: {=u32} pairs", self.runs, self.pairs);
-        self.phase = Phase::Idle { last_fault: fault };
+        self.phase = Phase::Idle { latched: fault };
+        self.idle_servo_deg = self.protocol.rest_deg;
+        if fault.is_some() {
+            warn!(
+                "run {=u32}: fault latched; press once to acknowledge it",
+                self.runs
+            );
+        }
         let mut out = self.safe_outputs();
         out.finished = Some(end);
         out

@@ -9,6 +9,9 @@ use crate::rig::{Inputs, Outputs, Rig};
 use crate::safety::SafetyLimits;
 use std::vec::Vec;
 
+/// Between runs: fault latching and acknowledgement, slow homing after a reset.
+mod idle;
+
 #[derive(Default)]
 struct VecSink(Vec<(u32, Record)>);
 

@@ -37,6 +37,22 @@ pub enum RunError {
     Pin,
 }
 
+impl RunError {
+    /// What failed, for a person.
+    pub const fn message(self) -> &'static str {
+        match self {
+            RunError::Pwm => "setting a PWM duty (servo or amplifier) failed",
+            RunError::Pin => "driving or reading a pin (trigger, LED or button) failed",
+        }
+    }
+}
+
+impl core::fmt::Display for RunError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.message())
+    }
+}
+
 /// Last duty written to each PWM, so unchanged commands cost no register (or plant) writes,
 /// and the command it was made from, so an unchanged command costs no conversion either.
 #[derive(Default)]
@@ -110,6 +126,13 @@ where
     /// Put the hardware in its safe state: servo at rest, amplifier 0 V, trigger low.
     pub fn make_safe(&mut self, rig: &Rig) -> Result<(), RunError> {
         self.apply(rig, &rig.safe_outputs(), &mut Written::default())
+    }
+
+    /// The outputs at boot, before the first sample: amplifier 0 V, trigger low, LED off, and
+    /// the servo where the rig believes it is ([`Rig::idle_outputs`]: at rest, or where
+    /// [`Rig::home_from`] said, from where the idle rig brings it to rest slowly).
+    pub fn boot(&mut self, rig: &Rig) -> Result<(), RunError> {
+        self.apply(rig, &rig.idle_outputs(), &mut Written::default())
     }
 }
 

@@ -192,25 +192,7 @@ impl fmt::Display for SetupError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SetupError::Protocol(e) => {
-                let why = match e {
-                    ProtocolError::AngleOutOfRange => "an angle is outside 0..=180°",
-                    ProtocolError::NoSteps => {
-                        "it needs a positive step and a final angle below rest"
-                    }
-                    ProtocolError::StepsNotWhole => {
-                        "rest − final must be a whole number of steps (at most 64)"
-                    }
-                    ProtocolError::ZeroDuration => "the dwell and the trigger pulse must be > 0",
-                    ProtocolError::TareTooLong => "the tare must end before the trigger",
-                    ProtocolError::EmptyWindow => {
-                        "window-after + window-before must leave at least 1 ms of the dwell"
-                    }
-                    ProtocolError::SampleRate => "sampling must be 1000..=10000 Hz",
-                    ProtocolError::RawLogRate => "the raw log rate must divide the sample rate",
-                    ProtocolError::AmpVoltage => "the amplifier control voltage must be 0..=3.3 V",
-                    ProtocolError::TooLong => "the run is too long",
-                };
-                write!(f, "the firmware refuses the protocol ({e:?}): {why}")
+                write!(f, "the firmware refuses the protocol ({e:?}): {e}")
             }
             SetupError::Plant(e) => write!(f, "{e}"),
             SetupError::Range(e) => write!(f, "{e}"),

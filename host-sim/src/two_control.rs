@@ -295,7 +295,7 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
             trigger_rise_us: p.trigger_rise_us(i),
         })
         .collect();
-    let crosstalk = crosstalk::crosstalk(&series, &channels);
+    let crosstalk = crosstalk::crosstalk(&series, &channels, &cfg.calibration.servo);
     Ok(TwoControlResult {
         series,
         crosstalk,

@@ -2,9 +2,9 @@
 //! plant's side — what it was commanded, when, and what it really carried.
 
 use capstan_friction::Model;
-use capstan_plant::{CordSetup, Injection, InjectionKind, SERVO_MAX_DUTY};
+use capstan_plant::{CordSetup, Injection, InjectionKind, ServoCharacteristic, SERVO_MAX_DUTY};
 use firmware::hal::Channel;
-use firmware::{FaultKind, Protocol, StepOrder};
+use firmware::{FaultKind, Protocol, ServoMap, StepOrder};
 use host_sim::run::{run, RunOutput, RunSpec, TraceSample};
 
 const MS: u64 = 1_000;
@@ -18,8 +18,20 @@ fn spec(wrap_deg: f64) -> RunSpec {
     }
 }
 
-/// The angle the plant derives from the firmware's duty: one duty count is 0.058°.
-const ANGLE_TOL: f64 = 180.0 * 20_000.0 / 1_000.0 / SERVO_MAX_DUTY as f64;
+/// One duty count of the servo PWM, as horn angle on the HS-322HD (0.1°/µs): 0.032°.
+const ANGLE_TOL: f64 = 0.1 * 20_000.0 / SERVO_MAX_DUTY as f64;
+/// One duty count, as pulse width: 0.32 µs.
+const PULSE_TOL: f64 = 20_000.0 / SERVO_MAX_DUTY as f64;
+
+/// The pulse the protocol's angle means: the Arduino Servo convention (544-2400 µs, 0-180°).
+fn arduino_pulse_us(angle_deg: f32) -> f64 {
+    ServoMap::ARDUINO_SERVO.pulse_us(angle_deg) as f64
+}
+
+/// Where the simulated HS-322HD's horn goes for that pulse, deg.
+fn horn_deg(angle_deg: f32) -> f64 {
+    ServoCharacteristic::HS_322HD.angle_deg(arduino_pulse_us(angle_deg))
+}
 
 #[test]
 fn servo_steps_and_trigger_reach_the_plant_on_time() {
@@ -41,23 +53,33 @@ fn servo_steps_and_trigger_reach_the_plant_on_time() {
     // Servo commands: rest at the first sample, then steps 1..=12 every 10 s, rest at the end.
     let ev = &out.servo_events;
     assert_eq!(ev.len(), 1 + 13, "{ev:?}");
-    assert!((ev[0].angle_deg - 125.0).abs() <= ANGLE_TOL && ev[0].t_us == MS);
+    // The rest at 1833 µs and the last level at 1214 µs: the thesis's write(125), write(65).
+    assert!(
+        (ev[0].pulse_us - 1_833.0).abs() <= 1.0 && ev[0].t_us == MS,
+        "{ev:?}"
+    );
+    assert!((ev[12].pulse_us - 1_214.0).abs() <= 1.0, "{ev:?}");
     for k in 1..=13u32 {
         let e = ev[k as usize];
         let want_t = PRESS_US + p.step_start_ms(k) as u64 * MS;
         assert_eq!(e.t_us, want_t, "step {k}");
         assert!(
-            (e.angle_deg - p.angle_deg(k) as f64).abs() <= ANGLE_TOL,
+            (e.pulse_us as f64 - arduino_pulse_us(p.angle_deg(k))).abs() <= PULSE_TOL,
+            "step {k}: {e:?}"
+        );
+        assert!(
+            (e.angle_deg as f64 - horn_deg(p.angle_deg(k))).abs() <= ANGLE_TOL,
             "step {k}: {e:?}"
         );
     }
-    // The servo itself is there within a PWM frame plus its slew (5° at ≥ 158°/s): 60 ms.
+    // The servo itself is there within a PWM frame plus its slew (5.2° of horn at ≥ 158°/s):
+    // 60 ms.
     for k in 1..=12u32 {
         let t = PRESS_US + p.step_start_ms(k) as u64 * MS;
         let at = |dt_ms: u64| -> &TraceSample {
             out.trace.iter().find(|s| s.t_us >= t + dt_ms * MS).unwrap()
         };
-        let target = p.angle_deg(k) as f64;
+        let target = horn_deg(p.angle_deg(k));
         assert!(
             (at(0).angle_deg - target).abs() > 4.0,
             "step {k} moved early"
@@ -154,8 +176,8 @@ fn updown_order_visits_every_level_once_and_the_plant_follows() {
         ..Protocol::default()
     };
     for (k, ev) in out.servo_events[1..13].iter().enumerate() {
-        let want = 125.0 - 5.0 * p.level(k as u32 + 1) as f64;
-        assert!((ev.angle_deg - want).abs() <= ANGLE_TOL, "{ev:?}");
+        let want = arduino_pulse_us(125.0 - 5.0 * p.level(k as u32 + 1) as f32);
+        assert!((ev.pulse_us as f64 - want).abs() <= PULSE_TOL, "{ev:?}");
     }
     // Tension follows the level, not the time: T1 orders as the levels do.
     let mut by_level: Vec<(u32, f32)> = out
@@ -203,7 +225,7 @@ fn fault_case(kind: InjectionKind, want: FaultKind) -> RunOutput {
     let safe_ms = rep.safe_after_us().expect("made safe") as f64 / 1000.0;
     assert!(safe_ms <= 20.0, "{kind:?}: safe after {safe_ms} ms");
     let last = out.servo_events.last().unwrap();
-    assert!((last.angle_deg - 125.0).abs() <= ANGLE_TOL);
+    assert!((last.pulse_us as f64 - arduino_pulse_us(125.0)).abs() <= PULSE_TOL);
     assert_eq!(out.safe_since_us, rep.safe_at_us);
     // The three pairs made before it are kept, identical to the clean run's.
     assert_eq!(end.pairs, 3);

@@ -1,18 +1,86 @@
 //! The plant's constants. `Default` is the thesis's rig (appendix m-files and text); where the
 //! thesis contradicts itself, the choice and its reason are written next to the number.
 
+use crate::disturb::{Disturbances, Unmodelled};
 use capstan_friction::Model;
-use firmware::ServoMap;
+
+/// What a servo does with a pulse: its own transfer from pulse width to horn angle, linear
+/// about its neutral pulse and limited to its travel. This is the servo's, not the firmware's:
+/// the firmware maps the protocol's angles to pulses with its own calibration
+/// (`firmware::ServoMap`, the Arduino Servo convention by default), so a firmware map that
+/// disagrees with the servo moves the lever by other amounts than the protocol means, here as
+/// on the rig.
+///
+/// Default ([`ServoCharacteristic::HS_322HD`]): the HiTec HS-322HD data sheet as the thesis's
+/// appendix quotes it in its m-file ("Control System: +Pulse Width Control 1500usec Neutral",
+/// "Operating Angle: 40 Deg. one side pulse traveling 400usec", "Direction: Clockwise/Pulse
+/// Traveling 1500 to 1900usec", "Dead Band Width: 5usec"; HiTec's HS-311/HS-322 spec sheet has
+/// the same figures): 40° per 400 µs, 0.1° of horn per µs about 1500 µs. Angles are on the
+/// usual 0-180° scale with the neutral at 90°: the thesis's write(125) (1833 µs) puts the horn
+/// at 123.3°, write(65) (1214 µs) at 61.4°, so the protocol's 60° span is 61.9° of horn. The
+/// travel is limited to that scale, 600-2400 µs (HiTec's standard-size servos sweep about 180°
+/// over 600-2400 µs: consistent with 0.1°/µs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ServoCharacteristic {
+    /// Pulse of the centre of travel, µs.
+    pub neutral_pulse_us: f64,
+    /// Horn travel per µs of pulse, deg/µs (a longer pulse turns clockwise: angle up).
+    pub deg_per_us: f64,
+    /// Horn angle at the neutral pulse, deg.
+    pub neutral_deg: f64,
+    /// End of travel at short pulses, deg.
+    pub min_deg: f64,
+    /// End of travel at long pulses, deg.
+    pub max_deg: f64,
+    /// Dead band, µs: pulses closer than this are the same position to the servo.
+    pub dead_band_us: f64,
+}
+
+impl ServoCharacteristic {
+    /// The HiTec HS-322HD (see the type's documentation for the source of each figure).
+    pub const HS_322HD: ServoCharacteristic = ServoCharacteristic {
+        neutral_pulse_us: 1_500.0,
+        deg_per_us: 40.0 / 400.0,
+        neutral_deg: 90.0,
+        min_deg: 0.0,
+        max_deg: 180.0,
+        dead_band_us: 5.0,
+    };
+
+    /// The horn angle a pulse of `pulse_us` holds, deg, within the travel.
+    pub fn angle_deg(&self, pulse_us: f64) -> f64 {
+        let a = self.neutral_deg + (pulse_us - self.neutral_pulse_us) * self.deg_per_us;
+        a.clamp(self.min_deg, self.max_deg)
+    }
+
+    /// The pulse that holds the horn at `angle_deg`, µs (inverse of [`Self::angle_deg`]).
+    pub fn pulse_us(&self, angle_deg: f64) -> f64 {
+        self.neutral_pulse_us + (angle_deg - self.neutral_deg) / self.deg_per_us
+    }
+}
+
+impl Default for ServoCharacteristic {
+    fn default() -> Self {
+        ServoCharacteristic::HS_322HD
+    }
+}
+
+/// The rest pulse of the thesis's rig, µs: its sketch's `myservo.write(125)` under the Arduino
+/// Servo library's default 544-2400 µs over 0-180°.
+pub const THESIS_REST_PULSE_US: f64 = 544.0 + 125.0 * (2_400.0 - 544.0) / 180.0;
 
 /// The HiTec HS-322HD servo and its lever.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ServoConfig {
-    /// Pulse width to angle (the servo's own; by default the firmware's nominal map).
-    pub map: ServoMap,
-    /// PWM frame, µs: a new pulse width is taken at the next frame (50 Hz).
+    /// Pulse width to horn angle: the servo's own (HS-322HD data sheet).
+    pub characteristic: ServoCharacteristic,
+    /// PWM frame, µs: a new pulse width is taken at the next frame (50 Hz). A frame without a
+    /// pulse (duty 0) leaves the servo unpowered: the horn stays where it is.
     pub frame_us: u32,
-    /// Angle at which the cord carries its preload, deg (the protocol's rest, 125).
-    pub rest_deg: f64,
+    /// The pulse the rig holds at rest, µs: where the operator tightened the tension bolt to
+    /// the cord's preload, and what "servo at rest" means for [`crate::Plant::is_safe`]
+    /// (within the dead band). Default [`THESIS_REST_PULSE_US`], 1832.9 µs (horn at 123.3°).
+    pub rest_pulse_us: f64,
     /// No-load slew rate, deg/s (0.19 s per 60° at 4.8 V).
     pub no_load_deg_per_s: f64,
     /// Stall torque, N m (3.0 kg cm at 4.8 V); the slew rate falls linearly to zero at it.
@@ -24,9 +92,9 @@ pub struct ServoConfig {
 impl Default for ServoConfig {
     fn default() -> Self {
         ServoConfig {
-            map: ServoMap::default(),
+            characteristic: ServoCharacteristic::HS_322HD,
             frame_us: 20_000,
-            rest_deg: 125.0,
+            rest_pulse_us: THESIS_REST_PULSE_US,
             no_load_deg_per_s: 60.0 / 0.19,
             stall_torque_nm: 3.0 * 9.81e-2,
             lever_m: 6.35e-3,
@@ -48,6 +116,15 @@ impl Default for ServoConfig {
 /// at 720° — under the firmware's 45 N over-force limit (the thesis's own cords reached 47-55 N
 /// at 630-720°, which that limit would stop). Result: T1 0.75 → 21 N over steps 1-12 at 270°,
 /// 0.35 → 8.7 N at 720°.
+///
+/// The fit (k = 12.68) counted 5° of lever travel per protocol step. With the protocol's
+/// angles as the thesis's Arduino meant them and the HS-322HD's own 0.1°/µs, a step is
+/// 5 · (2400 − 544)/180 µs · 0.1°/µs = 5.156° of horn (s = 1.0311 times more). The stretch the
+/// lever imposes scales by s, and so does the preload's (ε_pre ∝ k^(−1/p)): k' = k · s^(−p) =
+/// 12.68 · 1.0311^(−1.45) = 12.13 gives the same tensions at every step, to 0.1-0.2 % (the
+/// rounding of k and the PWM's 0.32 µs steps): e.g. Euler-Eytelwein at mu 0.115, 270°, steps
+/// 1/6/12: 0.753/7.915/21.048 N before, 0.754/7.924/21.066 N now (the plant test
+/// `euler_eytelwein_is_exact_and_the_protocol_spans_the_thesis_tensions` holds the ranges).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CordConfig {
     /// Tension with the servo at rest and the capstan stopped, N (the tension bolt's 0.1 N).
@@ -64,7 +141,7 @@ impl Default for CordConfig {
     fn default() -> Self {
         CordConfig {
             preload_n: 0.1,
-            stiffness: 12.68,
+            stiffness: 12.13,
             hardening: 1.45,
             far_side_ratio: 2.6,
         }
@@ -100,6 +177,10 @@ pub struct MotorConfig {
     pub amp_full_scale_v: f64,
     /// Amplifier supply: the drive voltage saturates here, V.
     pub amp_supply_v: f64,
+    /// Time constant of the RC filter between the PWM pin and the amplifier's control input, s
+    /// (the README's 10 kΩ and 1 µF: 10 ms; a step settles to 1 % in 46 ms, so after a fault
+    /// the drive needs that long to fall below 1 %). 0 = no filter.
+    pub amp_filter_tau_s: f64,
 }
 
 impl Default for MotorConfig {
@@ -114,6 +195,7 @@ impl Default for MotorConfig {
             amp_gain: 4.0,
             amp_full_scale_v: 3.3,
             amp_supply_v: 24.0,
+            amp_filter_tau_s: 0.010,
         }
     }
 }
@@ -189,6 +271,8 @@ pub struct PlantConfig {
     /// With a time-dependent friction law (drift with time, contact heating), how often the
     /// tensions are re-solved, µs.
     pub refresh_us: u32,
+    /// Scatter inside a run that no model fits (none by default).
+    pub disturbances: Disturbances,
 }
 
 impl Default for PlantConfig {
@@ -202,6 +286,7 @@ impl Default for PlantConfig {
             faults: FaultConfig::default(),
             max_step_us: 1_000,
             refresh_us: 10_000,
+            disturbances: Disturbances::QUIET,
         }
     }
 }
@@ -221,6 +306,8 @@ pub struct CordSetup {
     pub press_at_us: Option<u64>,
     /// How long the start press lasts, µs.
     pub press_us: u64,
+    /// Physics outside the effect catalogue on this cord (none by default).
+    pub unmodelled: Unmodelled,
 }
 
 impl CordSetup {
@@ -232,6 +319,7 @@ impl CordSetup {
             run: 1,
             press_at_us: Some(10_000),
             press_us: 200_000,
+            unmodelled: Unmodelled::default(),
         }
     }
 }

@@ -10,7 +10,7 @@ use core::convert::Infallible;
 use embedded_hal::digital::{ErrorType as PinErrorType, InputPin, OutputPin};
 use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
 use firmware::hal::{AdcError, Channel, ForceAdc, Watchdog};
-use firmware::RigIo;
+use firmware::{ForceOutputs, RigIo};
 
 /// `max_duty_cycle()` of the simulated servo PWM: the RP2040's 50 Hz `top` (125 MHz / 40).
 pub const SERVO_MAX_DUTY: u16 = 62_499;
@@ -164,6 +164,27 @@ impl ForceAdc for SimAdc<'_> {
 impl Watchdog for SimWatchdog<'_> {
     fn feed(&mut self) {
         self.0.with(|p, i| p.feed_watchdog(i));
+    }
+}
+
+/// The outputs of cord `cord`'s rig as the firmware's last-resort path reaches them on the
+/// board: straight to the pins, past the runner and its drivers. [`firmware::force_safe`] on
+/// this is what the RP2040's panic and HardFault handlers do on its registers (host-sim's
+/// `panic` module runs it when the firmware panics).
+pub struct ForcedOutputs<'a>(pub CordRef<'a>);
+
+impl ForceOutputs for ForcedOutputs<'_> {
+    fn force_amp_off(&mut self) {
+        self.0.with(|p, i| p.set_amp_duty(i, 0, AMP_MAX_DUTY));
+    }
+
+    fn force_servo_duty(&mut self, duty: u16) {
+        self.0
+            .with(|p, i| p.set_servo_duty(i, duty, SERVO_MAX_DUTY));
+    }
+
+    fn force_trigger_low(&mut self) {
+        self.0.with(|p, i| p.set_trigger(i, false));
     }
 }
 

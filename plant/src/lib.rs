@@ -1,10 +1,12 @@
 //! The simulated capstan rig, `no_std`: what the firmware drives when there is no rig.
 //!
 //! ```text
-//! servo PWM ─► HS-322HD (50 Hz frames, slew- and torque-limited) ─► 6.35 mm lever
-//!          ─► cord (hardening spring, 0.1 N preload at 125°) ─► T1 sensor
+//! servo PWM ─► HS-322HD (its own 0.1°/µs about 1500 µs; 50 Hz frames, slew- and
+//!              torque-limited) ─► 6.35 mm lever
+//!          ─► cord (hardening spring, 0.1 N preload at the rest pulse) ─► T1 sensor
 //!          ─► capstan friction (capstan_friction::Model, the shared law) ─► T2 sensor
-//! amp PWM ─► power amplifier (×4) ─► Pittman gearmotor (19.7:1) ─► capstan speed, current
+//! amp PWM ─► RC filter (10 ms) ─► power amplifier (×4) ─► Pittman gearmotor (19.7:1)
+//!             ─► capstan speed, current
 //!             ▲ friction torque Σ(T2 − T1)·r of every cord, through the gearbox
 //! sensors: zero, gain, Gaussian noise, 12-bit ADC (nominal = firmware's default calibration)
 //! ```
@@ -31,17 +33,21 @@
 //! counts, on the host and on a Cortex-M.
 #![no_std]
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod config;
+pub mod disturb;
 pub mod hal;
 mod injection;
 mod plant;
 pub mod rng;
 
 pub use config::{
-    CordConfig, CordSetup, FaultConfig, MotorConfig, PlantConfig, SensorConfig, ServoConfig,
+    CordConfig, CordSetup, FaultConfig, MotorConfig, PlantConfig, SensorConfig,
+    ServoCharacteristic, ServoConfig, THESIS_REST_PULSE_US,
 };
-pub use hal::{rig_io, SimRigIo, AMP_MAX_DUTY, SERVO_MAX_DUTY};
+pub use disturb::{Disturbances, Unmodelled};
+pub use hal::{rig_io, ForcedOutputs, SimRigIo, AMP_MAX_DUTY, SERVO_MAX_DUTY};
 pub use injection::{Injection, InjectionKind, InjectionReport};
 pub use plant::{
     CordTruth, DriveState, Plant, PlantError, ServoEvent, MAX_CORDS, MAX_INJECTIONS,

@@ -21,10 +21,10 @@ pub use build::PlantError;
 pub use observe::{CordTruth, DriveState, ServoEvent};
 
 use crate::config::{CordSetup, PlantConfig};
+use crate::disturb::DisturbState;
 use crate::injection::{Injection, InjectionReport};
 use crate::rng::Rng;
 use capstan_friction::{LoadMemory, Operating};
-use firmware::ServoMap;
 use heapless::Vec;
 
 /// Most cords (servos) one plant can carry on its capstan.
@@ -43,18 +43,25 @@ struct CordState {
     op: Operating,
     time_dependent: bool,
     heats: bool,
-    // servo
+    // servo (horn angles, deg; pulses, µs; 0 = no pulse)
     pending_pulse_us: f64,
     target_deg: f64,
     angle_deg: f64,
+    commanded_pulse_us: f64,
     commanded_deg: f64,
+    // amplifier control: the PWM's mean (commanded) and after the RC filter, V
     amp_control_v: f64,
+    amp_filtered_v: f64,
     // tensions
     t1: f64,
     t2: f64,
     a_kin: f64,
     dirty: bool,
     memory: LoadMemory,
+    /// Wander of mu and zero errors (None on a quiet plant).
+    disturb: Option<DisturbState>,
+    /// The servo last moved to release the cord (tension falling).
+    falling: bool,
     broken: bool,
     snag: bool,
     unplugged: [bool; 2],
@@ -81,6 +88,8 @@ struct CordState {
 pub struct Plant {
     cfg: PlantConfig,
     // derived constants
+    /// Horn angle at the rest pulse, where the cord carries its preload, deg.
+    rest_deg: f64,
     lever_mm_per_deg: f64,
     e_pre_mm: f64,
     inv_hardening: f64,
@@ -94,11 +103,14 @@ pub struct Plant {
     demand_m: f64,
     decay_dt_us: u32,
     decay: f64,
+    rc_decay_dt_us: u32,
+    rc_decay: f64,
     // time
     origin_us: u64,
     t_us: u64,
     next_frame_us: u64,
     next_refresh_us: u64,
+    next_wander_us: u64,
     any_time_dependent: bool,
     // drive
     drive_v: f64,
@@ -108,18 +120,6 @@ pub struct Plant {
     rng: Rng,
     cords: Vec<CordState, MAX_CORDS>,
     injections: Vec<InjectionReport, MAX_INJECTIONS>,
-}
-
-/// The servo's pulse for an angle, µs (the firmware's map, in f64).
-fn pulse_us(map: &ServoMap, angle_deg: f64) -> f64 {
-    let (lo, hi) = (map.pulse_at_min_us as f64, map.pulse_at_max_us as f64);
-    lo + (hi - lo) * angle_deg.clamp(0.0, map.max_deg as f64) / map.max_deg as f64
-}
-
-/// The angle a pulse commands, deg, within the servo's travel.
-fn angle_deg(map: &ServoMap, pulse_us: f64) -> f64 {
-    let (lo, hi) = (map.pulse_at_min_us as f64, map.pulse_at_max_us as f64);
-    ((pulse_us - lo) / (hi - lo) * map.max_deg as f64).clamp(0.0, map.max_deg as f64)
 }
 
 impl Plant {
@@ -180,10 +180,13 @@ impl Plant {
         }
     }
 
-    /// Is cord `i`'s rig commanding the safe state (servo at rest, amplifier 0 V)?
+    /// Is cord `i`'s rig commanding the safe state: the servo's pulse at rest (within the
+    /// servo's dead band of [`crate::ServoConfig::rest_pulse_us`]) and amplifier duty 0?
     pub fn is_safe(&self, i: usize) -> bool {
         let c = &self.cords[i];
-        (c.commanded_deg - self.cfg.servo.rest_deg).abs() < 0.5 && c.amp_control_v == 0.0
+        let s = &self.cfg.servo;
+        (c.commanded_pulse_us - s.rest_pulse_us).abs() <= s.characteristic.dead_band_us
+            && c.amp_control_v == 0.0
     }
 
     fn note_safe(&mut self, i: usize) {

@@ -7,8 +7,15 @@ use firmware::hal::Channel;
 
 const MS: u64 = 1_000;
 
+/// The duty the firmware writes for a protocol angle (its default map: the Arduino Servo's).
 fn duty_for(angle_deg: f64) -> u16 {
     firmware::ServoMap::default().duty(angle_deg as f32, SERVO_MAX_DUTY)
+}
+
+/// Where the HS-322HD's horn goes for that duty, deg.
+fn horn_deg(angle_deg: f64) -> f64 {
+    let pulse_us = duty_for(angle_deg) as f64 / SERVO_MAX_DUTY as f64 * 20_000.0;
+    ServoCharacteristic::HS_322HD.angle_deg(pulse_us)
 }
 
 fn plant(wrap_deg: f64, model: Model, seed: u64) -> Plant {
@@ -52,7 +59,7 @@ fn euler_eytelwein_is_exact_and_the_protocol_spans_the_thesis_tensions() {
                 "{wrap} step {k}: {t:?}"
             );
             assert!(
-                (t.angle_deg - (125.0 - 5.0 * k as f64)).abs() < 0.1,
+                (t.angle_deg - horn_deg(125.0 - 5.0 * k as f64)).abs() < 0.1,
                 "{t:?}"
             );
             *t1 = t.t1_n;
@@ -144,26 +151,42 @@ fn the_servo_takes_pulses_at_frames_and_slews_at_its_rated_speed() {
     p.advance_to(25 * MS);
     p.set_servo_duty(0, duty_for(65.0), SERVO_MAX_DUTY);
     p.advance_to(39 * MS);
-    assert!((p.truth(0).angle_deg - 125.0).abs() < 1e-9); // next frame at 40 ms
+    let rest = horn_deg(125.0);
+    assert!((p.truth(0).angle_deg - rest).abs() < 0.032); // one duty count; next frame: 40 ms
     p.advance_to(40 * MS);
-    assert!((p.truth(0).target_deg - 65.0).abs() < 0.05); // one duty count is 0.06°
+    let last = horn_deg(65.0);
+    assert!((p.truth(0).target_deg - last).abs() < 1e-9); // one duty count is 0.032°
                                                           // Release towards rest runs at the no-load rate: 60° in 0.19 s.
     p.advance_to(1_000 * MS);
     p.set_servo_duty(0, duty_for(125.0), SERVO_MAX_DUTY);
     p.advance_to(1_020 * MS);
     let start = p.now_us();
-    let rest = p.truth(0).target_deg;
-    assert!((rest - 125.0).abs() < 0.05);
+    assert!((p.truth(0).target_deg - rest).abs() < 1e-9);
     while p.truth(0).angle_deg < rest {
         p.advance_to(p.now_us() + MS);
     }
     let took = p.now_us() - start;
-    assert!((185 * MS..=195 * MS).contains(&took), "{took}");
+    // The thesis's 60° of command are 61.9° of this servo's horn: 196 ms.
+    let want = (rest - last) / (60.0 / 0.19) * 1e6;
+    assert!(
+        (took as f64 - want).abs() <= 1_000.0,
+        "{took} µs, want {want}"
+    );
     let (events, dropped) = p.servo_events(0);
     assert_eq!(dropped, 0);
     assert_eq!(events.len(), 2);
     assert_eq!(events[0].t_us, 25 * MS);
-    assert!((events[0].angle_deg - 65.0).abs() < 0.05);
+    assert!((events[0].angle_deg as f64 - last).abs() < 1e-4);
+    assert!(
+        (events[0].pulse_us - 1214.0).abs() <= 1.0,
+        "{:?}",
+        events[0]
+    );
+    assert!(
+        (events[1].pulse_us - 1833.0).abs() <= 1.0,
+        "{:?}",
+        events[1]
+    );
 }
 
 #[test]
@@ -344,4 +367,94 @@ fn the_plant_fits_a_small_microcontroller() {
     // The QEMU build keeps one in RAM (lm3s6965: 64 KiB).
     let size = core::mem::size_of::<Plant>();
     assert!(size < 6 * 1024, "{size} bytes");
+}
+
+#[test]
+fn the_servo_is_an_hs322hd_whatever_the_firmware_means() {
+    let hs = ServoCharacteristic::HS_322HD;
+    // Data sheet: 1500 µs neutral, 40° per 400 µs, clockwise as the pulse grows.
+    assert_eq!(hs.angle_deg(1_500.0), 90.0);
+    assert!((hs.angle_deg(1_900.0) - 130.0).abs() < 1e-9);
+    assert!((hs.angle_deg(1_100.0) - 50.0).abs() < 1e-9);
+    assert_eq!(hs.angle_deg(3_000.0), 180.0); // end of travel
+    assert!((hs.pulse_us(hs.angle_deg(1_833.0)) - 1_833.0).abs() < 1e-9);
+    // The thesis's write(125) and write(65): the protocol's 60° are 61.9° of horn.
+    assert!((THESIS_REST_PULSE_US - 1_832.89).abs() < 0.01);
+    assert!((horn_deg(125.0) - 123.3).abs() < 0.05);
+    assert!((horn_deg(65.0) - 61.4).abs() < 0.05);
+    // A firmware still on a 1000-2000 µs map over 0-180° rests this servo 13.9° of horn past
+    // the preload point (1694 µs: T1 2.6 N where the tare assumes 0.1 N) and moves it by about
+    // half the thesis's travel: the last level is nowhere near the thesis's ~21 N.
+    let old = firmware::ServoMap {
+        pulse_at_min_us: 1_000.0,
+        pulse_at_max_us: 2_000.0,
+        max_deg: 180.0,
+    };
+    let mut p = plant(270.0, Model::euler_eytelwein(0.115), 8);
+    let mut t1 = [0.0; 13];
+    for (k, t) in t1.iter_mut().enumerate() {
+        let t0 = p.now_us();
+        p.set_amp_duty(0, 2_500, AMP_MAX_DUTY);
+        let duty = old.duty(125.0 - 5.0 * k as f32, SERVO_MAX_DUTY);
+        p.set_servo_duty(0, duty, SERVO_MAX_DUTY);
+        p.advance_to(t0 + 2_000 * MS);
+        *t = p.truth(0).t1_n;
+    }
+    assert!((2.0..3.0).contains(&t1[0]), "{t1:?}");
+    assert!(t1[12] < 16.0 && t1[12] - t1[0] < 12.0, "{t1:?}");
+    // With the Arduino convention the same servo spans the thesis's tensions (0.75 → 21 N).
+    let mut p = plant(270.0, Model::euler_eytelwein(0.115), 8);
+    hold(&mut p, 120.0, 10.0);
+    let first = p.truth(0).t1_n;
+    hold(&mut p, 65.0, 10.0);
+    let last = p.truth(0).t1_n;
+    assert!((0.6..0.9).contains(&first) && (19.0..23.0).contains(&last));
+}
+
+#[test]
+fn a_frame_without_a_pulse_leaves_the_horn_where_it_is() {
+    let mut p = plant(360.0, Model::euler_eytelwein(0.115), 6);
+    hold(&mut p, 95.0, 0.0);
+    let held = p.truth(0).angle_deg;
+    p.set_servo_duty(0, 0, SERVO_MAX_DUTY);
+    p.advance_to(p.now_us() + 500 * MS);
+    let t = p.truth(0);
+    assert_eq!((t.angle_deg, t.target_deg), (held, held));
+    assert_eq!(t.commanded_pulse_us, 0.0);
+    assert!(!p.is_safe(0));
+    let (events, _) = p.servo_events(0);
+    assert_eq!(events.last().unwrap().pulse_us, 0.0);
+}
+
+#[test]
+fn the_amplifiers_rc_filter_takes_46_ms_to_settle_within_1_percent() {
+    let mut p = plant(360.0, Model::euler_eytelwein(0.115), 7);
+    p.set_servo_duty(0, duty_for(160.0), SERVO_MAX_DUTY); // slack: no friction load
+    p.set_amp_duty(0, 2_500, AMP_MAX_DUTY); // 2.5 V control, 10 V drive
+    assert!(!p.is_safe(0));
+    p.advance_to(10 * MS);
+    // One time constant (10 kΩ · 1 µF): 63 %.
+    let d = p.drive().drive_v;
+    assert!((d - 10.0 * (1.0 - (-1.0f64).exp())).abs() < 0.01, "{d}");
+    p.advance_to(1_000 * MS);
+    assert_eq!(p.drive().drive_v, 10.0);
+    assert_eq!(p.truth(0).amp_filtered_v, 2.5);
+    // The safe state is commanded at once (duty 0), the drive follows the filter.
+    p.set_amp_duty(0, 0, AMP_MAX_DUTY);
+    p.set_servo_duty(0, duty_for(125.0), SERVO_MAX_DUTY);
+    assert!(p.is_safe(0));
+    p.advance_to(1_040 * MS);
+    assert!(p.drive().drive_v > 0.1, "{:?}", p.drive());
+    p.advance_to(1_047 * MS);
+    assert!(p.drive().drive_v < 0.1, "{:?}", p.drive());
+    p.advance_to(1_200 * MS);
+    assert_eq!(p.drive().drive_v, 0.0);
+    // Without the filter the drive follows the duty at once.
+    let mut cfg = PlantConfig::default();
+    cfg.motor.amp_filter_tau_s = 0.0;
+    let mut cord = CordSetup::new(360.0, Model::euler_eytelwein(0.115));
+    cord.press_at_us = None;
+    let mut q = Plant::new_at(cfg, &[cord], 7, 0).unwrap();
+    q.set_amp_duty(0, 2_500, AMP_MAX_DUTY);
+    assert_eq!(q.drive().drive_v, 10.0);
 }

@@ -2,6 +2,7 @@
 //! across it — its T2, the capstan speed and the drive current, before and after.
 
 use super::{ChannelResult, SeriesRow};
+use firmware::ServoMap;
 
 /// What one channel saw while another stepped.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -10,7 +11,9 @@ pub struct CrossTalk {
     pub stepping: usize,
     /// When its servo command changed, s since the press.
     pub t_s: f64,
-    /// Its commanded angle before and after, deg.
+    /// Its commanded angle before and after, deg: the protocol's angle, read back from the
+    /// pulse the plant received through the firmware's servo map (the horn itself goes where
+    /// the servo's own characteristic puts it).
     pub from_deg: f64,
     /// See `from_deg`.
     pub to_deg: f64,
@@ -57,7 +60,12 @@ fn mean_over(series: &[SeriesRow], a_s: f64, b_s: f64, f: impl Fn(&SeriesRow) ->
     }
 }
 
-pub(super) fn crosstalk(series: &[SeriesRow], channels: &[ChannelResult]) -> Vec<CrossTalk> {
+pub(super) fn crosstalk(
+    series: &[SeriesRow],
+    channels: &[ChannelResult],
+    servo: &ServoMap,
+) -> Vec<CrossTalk> {
+    let commanded_deg = |pulse_us: f32| servo.angle_deg(pulse_us) as f64;
     let mut out = Vec::new();
     for (j, ch) in channels.iter().enumerate() {
         for w in ch.servo_events.windows(2) {
@@ -82,8 +90,8 @@ pub(super) fn crosstalk(series: &[SeriesRow], channels: &[ChannelResult]) -> Vec
                 let c = CrossTalk {
                     stepping: j,
                     t_s: t,
-                    from_deg: prev.angle_deg,
-                    to_deg: ev.angle_deg,
+                    from_deg: commanded_deg(prev.pulse_us),
+                    to_deg: commanded_deg(ev.pulse_us),
                     stepping_d_t2_n: own,
                     observer: i,
                     observer_t2_before_n: mean(before.0, before.1, &|r| r.channels[i].t2_n),

@@ -1,9 +1,10 @@
 //! Making a plant: every constant checked against its physical range, then the plant at rest
 //! (servo at its rest angle, capstan stopped, cords at their preload, sensor zeros drawn).
 
-use super::{pulse_us, CordState, Plant, MAX_CORDS, MAX_INJECTIONS};
+use super::{CordState, Plant, MAX_CORDS, MAX_INJECTIONS};
 use crate::config::{CordSetup, PlantConfig};
-use crate::rng::Rng;
+use crate::disturb::DisturbState;
+use crate::rng::{derive_seed, Rng};
 use capstan_friction::{LoadMemory, Operating};
 use heapless::Vec;
 
@@ -66,9 +67,26 @@ impl Plant {
         check(positive(s.no_load_deg_per_s), "servo.no_load_deg_per_s")?;
         check(positive(s.stall_torque_nm), "servo.stall_torque_nm")?;
         check(s.frame_us > 0, "servo.frame_us")?;
+        let sc = s.characteristic;
         check(
-            s.rest_deg.is_finite() && (0.0..=180.0).contains(&s.rest_deg),
-            "servo.rest_deg",
+            sc.neutral_pulse_us.is_finite(),
+            "servo.characteristic.neutral_pulse_us",
+        )?;
+        check(positive(sc.deg_per_us), "servo.characteristic.deg_per_us")?;
+        check(
+            sc.min_deg.is_finite()
+                && sc.max_deg.is_finite()
+                && sc.min_deg < sc.max_deg
+                && (sc.min_deg..=sc.max_deg).contains(&sc.neutral_deg),
+            "servo.characteristic travel (min_deg <= neutral_deg <= max_deg)",
+        )?;
+        check(
+            sc.dead_band_us.is_finite() && sc.dead_band_us >= 0.0,
+            "servo.characteristic.dead_band_us",
+        )?;
+        check(
+            positive(s.rest_pulse_us) && s.rest_pulse_us < s.frame_us as f64,
+            "servo.rest_pulse_us",
         )?;
         check(positive(c.preload_n), "cord.preload_n")?;
         check(positive(c.stiffness), "cord.stiffness")?;
@@ -98,6 +116,10 @@ impl Plant {
             m.amp_supply_v.is_finite() && m.amp_supply_v >= 0.0,
             "motor.amp_supply_v",
         )?;
+        check(
+            m.amp_filter_tau_s.is_finite() && m.amp_filter_tau_s >= 0.0,
+            "motor.amp_filter_tau_s",
+        )?;
         check(positive(n.n_per_count), "sensor.n_per_count")?;
         check(positive(n.gain), "sensor.gain")?;
         check(n.zero_counts.is_finite(), "sensor.zero_counts")?;
@@ -111,21 +133,44 @@ impl Plant {
         )?;
         check(cfg.max_step_us > 0, "max_step_us")?;
         check(cfg.refresh_us > 0, "refresh_us")?;
+        let d = cfg.disturbances;
+        check(
+            d.mu_wander_sd.is_finite() && (0.0..=0.5).contains(&d.mu_wander_sd),
+            "disturbances.mu_wander_sd",
+        )?;
+        check(positive(d.mu_wander_tau_s), "disturbances.mu_wander_tau_s")?;
+        check(
+            d.zero_error_sd_n.is_finite() && (0.0..=5.0).contains(&d.zero_error_sd_n),
+            "disturbances.zero_error_sd_n",
+        )?;
         for cs in cords {
             check(
                 cs.wrap_deg.is_finite() && cs.wrap_deg >= 0.0,
                 "cord wrap_deg",
             )?;
             check(cs.run >= 1, "cord run")?;
+            let u = cs.unmodelled;
+            check(
+                u.hysteresis.is_finite() && u.hysteresis > -0.9 && u.hysteresis < 2.0,
+                "cord unmodelled.hysteresis",
+            )?;
+            check(
+                u.t2_nonlinearity.is_finite() && u.t2_nonlinearity.abs() < 10.0,
+                "cord unmodelled.t2_nonlinearity",
+            )?;
+            check(
+                u.regime_change.is_finite() && u.regime_change > -0.9 && u.regime_change < 2.0,
+                "cord unmodelled.regime_change",
+            )?;
         }
 
         let mut rng = Rng::new(seed);
         let inv_hardening = 1.0 / c.hardening;
         let e_pre_mm =
             (1.0 + c.far_side_ratio) * libm::pow(c.preload_n / c.stiffness, inv_hardening);
-        let rest_pulse = pulse_us(&s.map, s.rest_deg);
+        let rest_deg = sc.angle_deg(s.rest_pulse_us);
         let mut states: Vec<CordState, MAX_CORDS> = Vec::new();
-        for cs in cords {
+        for (k, cs) in cords.iter().enumerate() {
             let op = Operating {
                 wrap_rad: cs.wrap_deg.to_radians(),
                 diameter_mm: cfg.capstan_diameter_mm,
@@ -141,21 +186,31 @@ impl Plant {
                 *z = n.zero_counts + n.zero_spread_counts * rng.normal();
             }
             let cpn = n.gain / n.n_per_count;
+            // Its own stream, so a quiet plant draws exactly the numbers it always drew.
+            let disturb = d
+                .any()
+                .then(|| DisturbState::new(&d, derive_seed(seed, &[0xD157_0000, k as u64])));
             let st = CordState {
                 setup: *cs,
                 op,
-                time_dependent: heats || law.mu_change_per_100s != 0.0,
+                time_dependent: heats
+                    || law.mu_change_per_100s != 0.0
+                    || (d.mu_wander_sd > 0.0),
                 heats,
-                pending_pulse_us: rest_pulse,
-                target_deg: s.rest_deg,
-                angle_deg: s.rest_deg,
-                commanded_deg: s.rest_deg,
+                pending_pulse_us: s.rest_pulse_us,
+                target_deg: rest_deg,
+                angle_deg: rest_deg,
+                commanded_pulse_us: s.rest_pulse_us,
+                commanded_deg: rest_deg,
                 amp_control_v: 0.0,
+                amp_filtered_v: 0.0,
                 t1: c.preload_n,
                 t2: c.preload_n,
                 a_kin: 1.0,
                 dirty: true,
                 memory: LoadMemory::default(),
+                disturb,
+                falling: false,
                 broken: false,
                 snag: false,
                 unplugged: [false; 2],
@@ -180,6 +235,7 @@ impl Plant {
         let any_time_dependent = states.iter().any(|c| c.time_dependent);
         let mut plant = Plant {
             cfg,
+            rest_deg,
             lever_mm_per_deg: s.lever_m * 1e3 * core::f64::consts::PI / 180.0,
             e_pre_mm,
             inv_hardening,
@@ -191,10 +247,13 @@ impl Plant {
             demand_m: 0.0,
             decay_dt_us: 0,
             decay: 1.0,
+            rc_decay_dt_us: 0,
+            rc_decay: 1.0,
             origin_us,
             t_us: origin_us,
             next_frame_us: origin_us + s.frame_us as u64,
             next_refresh_us: origin_us,
+            next_wander_us: origin_us + crate::disturb::WANDER_STEP_US,
             any_time_dependent,
             drive_v: 0.0,
             omega: 0.0,

@@ -1,11 +1,12 @@
 //! What the HAL adapters call, after bringing the plant to the present with
 //! [`Plant::advance_to`]: PWM duties, pin levels, ADC conversions and watchdog feeds.
 
-use super::{angle_deg, Plant, ServoEvent};
+use super::{Plant, ServoEvent};
 use firmware::hal::{AdcError, Channel, ADC_MAX_COUNTS};
 
 impl Plant {
-    /// The servo PWM of cord `i` is set to `duty` of `max_duty` (50 Hz frame).
+    /// The servo PWM of cord `i` is set to `duty` of `max_duty` (50 Hz frame; duty 0: no
+    /// pulses). The servo takes it at its next frame, through its own characteristic.
     pub fn set_servo_duty(&mut self, i: usize, duty: u16, max_duty: u16) {
         let frame = self.cfg.servo.frame_us as f64;
         let pulse = if max_duty == 0 {
@@ -13,15 +14,23 @@ impl Plant {
         } else {
             duty as f64 / max_duty as f64 * frame
         };
-        let angle = angle_deg(&self.cfg.servo.map, pulse);
         let now = self.t_us;
+        let characteristic = self.cfg.servo.characteristic;
         let c = &mut self.cords[i];
+        // No pulse: the servo is unpowered and its horn stays where it is.
+        let angle = if pulse > 0.0 {
+            characteristic.angle_deg(pulse)
+        } else {
+            c.angle_deg
+        };
         c.pending_pulse_us = pulse;
-        if angle != c.commanded_deg || c.servo_events.is_empty() {
+        if pulse != c.commanded_pulse_us || c.servo_events.is_empty() {
+            c.commanded_pulse_us = pulse;
             c.commanded_deg = angle;
             let ev = ServoEvent {
                 t_us: now,
-                angle_deg: angle,
+                pulse_us: pulse as f32,
+                angle_deg: angle as f32,
             };
             if c.servo_events.push(ev).is_err() {
                 c.servo_events_dropped += 1;
@@ -30,9 +39,10 @@ impl Plant {
         self.note_safe(i);
     }
 
-    /// The amplifier control PWM of cord `i`'s rig is set to `duty` of `max_duty`. The power
-    /// amplifier follows the highest control voltage of all rigs (their control lines are
-    /// diode-OR'd: any running rig keeps the capstan turning).
+    /// The amplifier control PWM of cord `i`'s rig is set to `duty` of `max_duty`. Its mean
+    /// reaches the amplifier through the RC filter (`motor.amp_filter_tau_s`, advanced with
+    /// time); the power amplifier follows the highest filtered control voltage of all rigs
+    /// (their control lines are diode-OR'd: any running rig keeps the capstan turning).
     pub fn set_amp_duty(&mut self, i: usize, duty: u16, max_duty: u16) {
         let m = self.cfg.motor;
         let v = if max_duty == 0 {
@@ -41,10 +51,21 @@ impl Plant {
             duty as f64 / max_duty as f64 * m.amp_full_scale_v
         };
         self.cords[i].amp_control_v = v;
+        if m.amp_filter_tau_s <= 0.0 {
+            self.cords[i].amp_filtered_v = v;
+            self.update_drive();
+        }
+        self.note_safe(i);
+    }
+
+    /// The drive voltage from the filtered control voltages; every cord is re-solved when it
+    /// changes.
+    pub(super) fn update_drive(&mut self) {
+        let m = self.cfg.motor;
         let control = self
             .cords
             .iter()
-            .map(|c| c.amp_control_v)
+            .map(|c| c.amp_filtered_v)
             .fold(0.0, f64::max);
         let drive = (control * m.amp_gain).min(m.amp_supply_v);
         if drive != self.drive_v {
@@ -54,7 +75,6 @@ impl Plant {
                 c.dirty = true;
             }
         }
-        self.note_safe(i);
     }
 
     /// Cord `i`'s trigger line is driven `high` or low.
@@ -95,12 +115,16 @@ impl Plant {
         let art = c.setup.model.sensors;
         // The catalogue artefacts ride on the drive (see the crate docs): the tare, done with
         // the capstan stopped, neither removes the offsets nor sees the gain.
-        let reading = match ch {
+        let t2 = c.setup.unmodelled.t2_reading_n(c.t2);
+        let mut reading = match ch {
             Channel::T1 if drive_on => c.t1 + art.t1_offset_n,
-            Channel::T2 if drive_on => art.t2_gain * c.t2 + art.t2_offset_n,
+            Channel::T2 if drive_on => art.t2_gain * t2 + art.t2_offset_n,
             Channel::T1 => c.t1,
-            Channel::T2 => c.t2,
+            Channel::T2 => t2,
         };
+        if let (true, Some(d)) = (drive_on, c.disturb.as_ref()) {
+            reading += d.zero_error_n[k];
+        }
         let mut counts = c.zero[k] + reading * c.counts_per_n[k];
         if self.noise_sd_counts > 0.0 {
             counts += self.noise_sd_counts * self.rng.normal();

@@ -3,13 +3,17 @@
 
 use super::Plant;
 
-/// A servo command as the plant received it.
+/// A servo command as the plant received it (f32: a plant keeps [`crate::MAX_SERVO_EVENTS`]
+/// of them per cord, in a few KiB).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ServoEvent {
     /// When the PWM duty was written, plant µs.
     pub t_us: u64,
-    /// The angle that pulse width commands, deg.
-    pub angle_deg: f64,
+    /// The pulse width that duty makes, µs (0: no pulses).
+    pub pulse_us: f32,
+    /// The horn angle that pulse holds on this servo, deg (its characteristic; without a
+    /// pulse, where the horn was).
+    pub angle_deg: f32,
 }
 
 /// The true state of one cord.
@@ -19,14 +23,18 @@ pub struct CordTruth {
     pub t1_n: f64,
     /// True tension at the fixed sensor, N.
     pub t2_n: f64,
-    /// Servo angle now, deg.
+    /// Horn angle now, deg (the servo's own scale: [`crate::ServoCharacteristic`]).
     pub angle_deg: f64,
-    /// Angle the servo is moving to (the last pulse taken at a frame), deg.
+    /// Horn angle the servo is moving to (the last pulse taken at a frame), deg.
     pub target_deg: f64,
-    /// Angle the last PWM write commands, deg.
+    /// Horn angle the last PWM write commands, deg.
     pub commanded_deg: f64,
-    /// Amplifier control voltage this cord's rig commands, V.
+    /// Pulse width of the last PWM write, µs (0: no pulses).
+    pub commanded_pulse_us: f64,
+    /// Amplifier control voltage this cord's rig commands (its PWM's mean), V.
     pub amp_control_v: f64,
+    /// That control voltage after the RC filter, at the amplifier's input, V.
+    pub amp_filtered_v: f64,
     /// The friction law's T2/T1 at this T1 with the capstan slipping.
     pub kinetic_amplification: f64,
     /// The friction law's effective mu now.
@@ -65,7 +73,9 @@ impl Plant {
             angle_deg: c.angle_deg,
             target_deg: c.target_deg,
             commanded_deg: c.commanded_deg,
+            commanded_pulse_us: c.commanded_pulse_us,
             amp_control_v: c.amp_control_v,
+            amp_filtered_v: c.amp_filtered_v,
             kinetic_amplification: c.a_kin,
             mu: c.setup.model.law.effective_mu(&c.op),
             broken: c.broken,

@@ -2,24 +2,35 @@
 //! follows its load exactly over a step, injections take effect, and the tensions of every
 //! cord whose inputs changed are re-solved through the shared friction law.
 
-use super::{angle_deg, Plant};
+use super::Plant;
 use crate::injection::InjectionKind;
+use capstan_friction::FrictionLaw;
 
 impl Plant {
     pub(super) fn step(&mut self, dt_us: u32) {
         let t_end = self.t_us + dt_us as u64;
         let frame = self.cfg.servo.frame_us as u64;
-        // The servo takes the pulse width present at each frame.
+        // The servo takes the pulse width present at each frame (none: it stops where it is).
         if t_end >= self.next_frame_us {
-            let map = self.cfg.servo.map;
+            let characteristic = self.cfg.servo.characteristic;
             for c in self.cords.iter_mut() {
-                c.target_deg = angle_deg(&map, c.pending_pulse_us);
+                let target = if c.pending_pulse_us > 0.0 {
+                    characteristic.angle_deg(c.pending_pulse_us)
+                } else {
+                    c.angle_deg
+                };
+                // Releasing (angle rising) lets the tension fall; pulling raises it.
+                if target != c.target_deg {
+                    c.falling = target > c.target_deg;
+                }
+                c.target_deg = target;
             }
             while self.next_frame_us <= t_end {
                 self.next_frame_us += frame;
             }
         }
         self.activate_injections(t_end);
+        self.filter_amp(dt_us);
         self.move_servos(dt_us);
         self.move_drive(dt_us);
         let dt_s = dt_us as f64 * 1e-6;
@@ -27,6 +38,18 @@ impl Plant {
             if c.heats {
                 c.memory
                     .advance(dt_s, c.t2 - c.t1, c.setup.model.law.heat_tau_s);
+            }
+        }
+        if t_end >= self.next_wander_us {
+            let d = self.cfg.disturbances;
+            let step = crate::disturb::WANDER_STEP_US;
+            while self.next_wander_us <= t_end {
+                for c in self.cords.iter_mut() {
+                    if let Some(s) = c.disturb.as_mut() {
+                        s.advance(&d, step as f64 * 1e-6);
+                    }
+                }
+                self.next_wander_us += step;
             }
         }
         if self.any_time_dependent && t_end >= self.next_refresh_us {
@@ -77,6 +100,33 @@ impl Plant {
                 self.injections[k].safe_at_us = Some(at);
             }
         }
+    }
+
+    /// The RC filter in front of each rig's amplifier input follows its PWM's mean, exactly
+    /// for a duty held over the step; within 1 µV it is there.
+    fn filter_amp(&mut self, dt_us: u32) {
+        let tau_s = self.cfg.motor.amp_filter_tau_s;
+        if self
+            .cords
+            .iter()
+            .all(|c| c.amp_filtered_v == c.amp_control_v)
+        {
+            return;
+        }
+        if tau_s > 0.0 && self.rc_decay_dt_us != dt_us {
+            self.rc_decay_dt_us = dt_us;
+            self.rc_decay = libm::exp(-(dt_us as f64) * 1e-6 / tau_s);
+        }
+        for c in self.cords.iter_mut() {
+            let target = c.amp_control_v;
+            let v = target + (c.amp_filtered_v - target) * self.rc_decay;
+            c.amp_filtered_v = if tau_s <= 0.0 || (v - target).abs() < 1e-6 {
+                target
+            } else {
+                v
+            };
+        }
+        self.update_drive();
     }
 
     fn move_servos(&mut self, dt_us: u32) {
@@ -166,7 +216,7 @@ impl Plant {
     pub(super) fn solve(&mut self, i: usize) {
         let cfg = self.cfg.cord;
         let snag_n = self.cfg.faults.snag_n;
-        let rest = self.cfg.servo.rest_deg;
+        let rest = self.rest_deg;
         let lever = self.lever_mm_per_deg;
         let e_pre = self.e_pre_mm;
         let inv_p = self.inv_hardening;
@@ -192,12 +242,18 @@ impl Plant {
             c.t2 = if c.snag { snag_n } else { 0.0 };
             return;
         }
-        let law = c.setup.model.law;
+        let mut law = c.setup.model.law;
+        law.mu *= c.disturb.as_ref().map_or(1.0, |d| libm::exp(d.ln_mu));
         let op = c.op;
+        let (unmodelled, falling) = (c.setup.unmodelled, c.falling);
         let kinetic = |t1: f64| -> f64 {
             if t1 <= 0.0 {
                 return 1.0;
             }
+            let law = FrictionLaw {
+                mu: law.mu * unmodelled.mu_factor(t1, falling),
+                ..law
+            };
             let a = law.t2_n(t1, &op) / t1;
             if a.is_finite() {
                 a.clamp(1e-6, 1e6)

@@ -1,0 +1,141 @@
+//! The last-resort safe state: what a panic or HardFault handler does before anything else.
+//!
+//! In normal operation the runner makes the rig safe through its drivers
+//! ([`crate::RigIo::make_safe`], and every fault ends its run in the safe state). A panic or a
+//! HardFault can strike with those drivers in any state — borrowed mid-write, not yet built, or
+//! the whole rig never made — so the handlers cannot use them, nor the [`crate::Rig`], nor
+//! floating point, locks or the log. They call [`force_safe`] on a [`ForceOutputs`] that reaches
+//! the outputs directly: the RP2040 board implements it on raw registers
+//! (`firmware/src/board_panic.rs`), the simulated plant on its pins (`capstan-plant`'s
+//! `hal::ForcedOutputs`), so the simulator proves the same sequence the board runs.
+//!
+//! The only number the handlers need, the servo's rest duty, is computed once at boot while
+//! everything works ([`SafeDuties::for_rig`]) and kept where a handler can read it.
+//!
+//! Also here: the servo's last command kept across a reset ([`remembered_servo_word`],
+//! [`recall_servo_duty`]), so that after a watchdog or panic reset the rig knows where the horn
+//! was and can bring it home slowly (`Rig::home_from`).
+
+use crate::rig::Rig;
+
+/// The rig's outputs as a panic or HardFault handler reaches them: directly, whatever state
+/// their drivers are in. Every method must be safe to call at any time, any number of times,
+/// in any order, and must not block.
+pub trait ForceOutputs {
+    /// Amplifier control to 0 V (PWM duty 0, or the pin driven low): the drive stops.
+    fn force_amp_off(&mut self);
+    /// Servo PWM to `duty` counts of its frame's top; 0 stops the pulses (the servo is then
+    /// unpowered: it holds no position and pulls on nothing).
+    fn force_servo_duty(&mut self, duty: u16);
+    /// Logger trigger line low.
+    fn force_trigger_low(&mut self);
+}
+
+/// What the handlers command, computed at boot while everything still works.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SafeDuties {
+    /// Servo PWM duty of the rest angle (0: no pulses).
+    pub servo_rest: u16,
+}
+
+impl SafeDuties {
+    /// Before the rig exists: no servo pulses at all (the servo goes limp), amplifier off.
+    pub const NO_SERVO_PULSES: SafeDuties = SafeDuties { servo_rest: 0 };
+
+    /// The rig's rest angle through its calibration, on a servo PWM whose top is
+    /// `servo_max_duty`: the same duty the runner writes for the rest angle.
+    pub fn for_rig(rig: &Rig, servo_max_duty: u16) -> SafeDuties {
+        let cal = rig.calibration();
+        SafeDuties {
+            servo_rest: cal.servo.duty(rig.protocol().rest_deg, servo_max_duty),
+        }
+    }
+}
+
+/// Drive every output to the safe state: the amplifier off first (the drive is the hazard),
+/// then the servo to its rest duty (releasing the cord), then the trigger low.
+pub fn force_safe(out: &mut impl ForceOutputs, duties: SafeDuties) {
+    out.force_amp_off();
+    out.force_servo_duty(duties.servo_rest);
+    out.force_trigger_low();
+}
+
+/// Tag of a servo duty kept across a reset (upper 16 bits of the word).
+const SERVO_WORD_TAG: u32 = 0xCA57_0000;
+
+/// The word that keeps a servo duty across a reset (e.g. in the RP2040's watchdog scratch
+/// register, which survives a watchdog reset but not a power cycle).
+pub const fn remembered_servo_word(duty: u16) -> u32 {
+    SERVO_WORD_TAG | duty as u32
+}
+
+/// The servo duty a word kept across a reset holds, if it is one of ours and a pulse within
+/// the PWM's range (`None` after a power cycle, or for anything else).
+pub const fn recall_servo_duty(word: u32, max_duty: u16) -> Option<u16> {
+    let duty = (word & 0xFFFF) as u16;
+    if word & 0xFFFF_0000 == SERVO_WORD_TAG && duty > 0 && duty <= max_duty {
+        Some(duty)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::safety::SafetyLimits;
+    use crate::{Calibration, Protocol};
+    use std::vec::Vec;
+
+    #[derive(Default)]
+    struct Pins(Vec<&'static str>, Vec<u16>);
+
+    impl ForceOutputs for Pins {
+        fn force_amp_off(&mut self) {
+            self.0.push("amp");
+        }
+        fn force_servo_duty(&mut self, duty: u16) {
+            self.0.push("servo");
+            self.1.push(duty);
+        }
+        fn force_trigger_low(&mut self) {
+            self.0.push("trigger");
+        }
+    }
+
+    #[test]
+    fn the_amplifier_goes_first_and_the_servo_to_the_runners_rest_duty() {
+        let rig = Rig::new(
+            Protocol::default(),
+            Calibration::default(),
+            SafetyLimits::default(),
+        )
+        .unwrap();
+        let duties = SafeDuties::for_rig(&rig, 62_499);
+        // 125° under the Arduino convention: 1833 µs of the 20 ms frame.
+        assert_eq!(duties.servo_rest, 5_728);
+        assert_eq!(
+            duties.servo_rest,
+            rig.calibration().servo.duty(125.0, 62_499)
+        );
+        let mut pins = Pins::default();
+        force_safe(&mut pins, duties);
+        assert_eq!(pins.0, ["amp", "servo", "trigger"]);
+        assert_eq!(pins.1, [5_728]);
+        let mut pins = Pins::default();
+        force_safe(&mut pins, SafeDuties::NO_SERVO_PULSES);
+        assert_eq!(pins.1, [0]);
+    }
+
+    #[test]
+    fn a_servo_duty_survives_a_reset_only_as_our_word() {
+        assert_eq!(
+            recall_servo_duty(remembered_servo_word(5_728), 62_499),
+            Some(5_728)
+        );
+        // Power-on value, someone else's word, no pulse, a duty beyond the top.
+        for w in [0, 0xB007_C0D3, remembered_servo_word(0), 0xCA57_FFFF] {
+            assert_eq!(recall_servo_duty(w, 62_499), None, "{w:#x}");
+        }
+    }
+}
