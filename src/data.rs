@@ -4,11 +4,24 @@
 //! Schema: `capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n`. Reading needs
 //! only `wrap_deg,t1_n,t2_n`; the other known columns are optional, and any further column
 //! must be numeric and is kept (by name) for the analysis.
+//!
+//! Tensions may be zero or negative: a sensor with a zero offset reads a slack or lightly
+//! loaded cord below zero, and those readings are what tells the offset. Values no force sensor
+//! on a capstan rig produces (|T| over [`MAX_TENSION_N`]), wraps over [`MAX_WRAP_DEG`] and
+//! diameters over [`MAX_DIAMETER_MM`] are refused with their file, line and column.
 
 use serde::Serialize;
 use std::fmt;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+
+/// Largest tension magnitude accepted, N: ten kilonewtons is far beyond any bench capstan rig
+/// (the thesis rig's sensors end at about 55 N) and keeps every sum of squares finite.
+pub const MAX_TENSION_N: f64 = 1.0e4;
+/// Largest wrap accepted, deg (ten turns).
+pub const MAX_WRAP_DEG: f64 = 3600.0;
+/// Largest capstan diameter accepted, mm.
+pub const MAX_DIAMETER_MM: f64 = 1000.0;
 
 /// The columns `simulate` and `log` write, in order.
 pub const PAIRS_HEADER: [&str; 8] = [
@@ -208,14 +221,14 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
         };
         let opt = |i: Option<usize>, rule: Rule| i.map(|i| cell(i, rule)).transpose();
         pairs.push(Pair {
-            capstan_diameter_mm: opt(optional[0], Rule::Positive)?,
-            wrap_deg: cell(wrap, Rule::Positive)?,
+            capstan_diameter_mm: opt(optional[0], Rule::Positive(MAX_DIAMETER_MM))?,
+            wrap_deg: cell(wrap, Rule::Positive(MAX_WRAP_DEG))?,
             drive_v: opt(optional[1], Rule::Finite)?,
             run: opt(optional[2], Rule::Finite)?,
             step: opt(optional[3], Rule::Finite)?,
             time_s: opt(optional[4], Rule::Finite)?,
-            t1_n: cell(t1, Rule::Positive)?,
-            t2_n: cell(t2, Rule::Finite)?,
+            t1_n: cell(t1, Rule::Tension)?,
+            t2_n: cell(t2, Rule::Tension)?,
             extra: extra_idx
                 .iter()
                 .map(|&i| cell(i, Rule::Finite))
@@ -236,7 +249,10 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
 #[derive(Clone, Copy)]
 enum Rule {
     Finite,
-    Positive,
+    /// Greater than zero and at most the bound.
+    Positive(f64),
+    /// A force reading: |v| ≤ [`MAX_TENSION_N`].
+    Tension,
 }
 
 fn parse_cell(raw: &str, rule: Rule) -> Result<f64, &'static str> {
@@ -248,7 +264,14 @@ fn parse_cell(raw: &str, rule: Rule) -> Result<f64, &'static str> {
         return Err("not a finite number");
     }
     match rule {
-        Rule::Positive if v <= 0.0 => Err("must be greater than zero"),
+        Rule::Positive(_) if v <= 0.0 => Err("must be greater than zero"),
+        Rule::Positive(max) if v > max => Err(match max {
+            MAX_WRAP_DEG => "must be at most 3600 (ten turns)",
+            _ => "must be at most 1000",
+        }),
+        Rule::Tension if v.abs() > MAX_TENSION_N => {
+            Err("is beyond any force sensor of a capstan rig (|T| must be at most 10000 N)")
+        }
         _ => Ok(v),
     }
 }
@@ -399,9 +422,17 @@ mod tests {
             "x.csv:3:2: column `t1_n`: not a number (found `abc`)"
         );
         assert_eq!(
-            err("wrap_deg,t1_n,t2_n\n270,0,2\n"),
-            "x.csv:2:2: column `t1_n`: must be greater than zero (found `0`)"
+            err("wrap_deg,t1_n,t2_n\n0,1,2\n"),
+            "x.csv:2:1: column `wrap_deg`: must be greater than zero (found `0`)"
         );
+        assert_eq!(
+            err("wrap_deg,t1_n,t2_n\n270,1e154,2\n"),
+            "x.csv:2:2: column `t1_n`: is beyond any force sensor of a capstan rig (|T| must be at most 10000 N) (found `1e154`)"
+        );
+        // A reading at or below zero is data (a zero offset makes it real).
+        let d = read_pairs("wrap_deg,t1_n,t2_n\n270,0,2\n270,-0.16,0.3\n".as_bytes(), "x")
+            .unwrap();
+        assert_eq!(d.pairs[1].t1_n, -0.16);
         assert_eq!(
             err("wrap_deg,t1_n,t2_n\n270,1,NaN\n"),
             "x.csv:2:3: column `t2_n`: not a finite number (found `NaN`)"

@@ -6,6 +6,7 @@ pub mod analysis;
 pub mod cli;
 pub mod data;
 pub mod diagnose;
+pub mod evidence;
 pub mod fit;
 pub mod log;
 pub mod report;

@@ -28,13 +28,13 @@ fn bad_cells_and_columns_are_located() {
         &format!("{h}12.7,270,10,1,1,1.0,2.0\n12.7,270,10,1,2,abc,2.0\n"),
     );
     assert!(e.contains("text.csv:3:6") && e.contains("t1_n"), "{e}");
-    let e = analyze_csv("zero.csv", &format!("{h}12.7,270,10,1,1,0,2.0\n"));
+    let e = analyze_csv("zero.csv", &format!("{h}0,270,10,1,1,1,2.0\n"));
     assert!(
-        e.contains("zero.csv:2:6") && e.contains("greater than zero"),
+        e.contains("zero.csv:2:1") && e.contains("greater than zero"),
         "{e}"
     );
-    let e = analyze_csv("neg.csv", &format!("{h}12.7,270,10,1,1,-1,2.0\n"));
-    assert!(e.contains("neg.csv:2:6"), "{e}");
+    let e = analyze_csv("huge.csv", &format!("{h}12.7,270,10,1,1,2e300,2.0\n"));
+    assert!(e.contains("huge.csv:2:6") && e.contains("10000 N"), "{e}");
     let e = analyze_csv("nan.csv", &format!("{h}12.7,270,10,1,1,1.0,NaN\n"));
     assert!(e.contains("nan.csv:2:7") && e.contains("finite"), "{e}");
     let e = analyze_csv("nofile.csv", "");

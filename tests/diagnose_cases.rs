@@ -1,33 +1,28 @@
-//! `capstan diagnose` against effects hidden in generated data.
+//! `capstan diagnose` against effects hidden the way the rig would hide them.
 //!
-//! Every case is a data set made by the firmware-in-the-loop simulator (`host-sim`: the
-//! firmware's own protocol, sampling and conditioning against the simulated plant) with one
-//! catalogue effect at a random magnitude in the ranges met in practice, or none; cord-to-cord
-//! and run-to-run scatter of mu (1-3 %), sensor noise, both step orders, varied wraps,
-//! diameters, voltages and run counts (see `capstan::diagnose::cases`). `diagnose` must name
-//! the effect.
+//! Every case is a data set made end to end by the firmware-in-the-loop simulator (`host-sim`:
+//! the firmware's protocol, sampling and conditioning against the plant) with the thesis rig's
+//! noise — cord-to-cord and run-to-run scatter of mu, a slow wander of mu inside runs, a zero
+//! error per run, sensor noise and the ADC — and a planted truth: nothing, one catalogue effect
+//! (at a size that matters, or small), two at once, or physics outside the catalogue that only
+//! the plant knows (`capstan::diagnose::cases`). The thresholds were calibrated on seed 99
+//! (`cargo run --release --example calibrate -- 99 --grid`); this test asserts on another.
 //!
-//! Assertions (over 238 cases: 22 per effect, 40 without one):
-//! * at least 95 % named correctly overall, and at least 85 % for every effect;
-//! * false alarms on `none` at most 5 %;
-//! * the parameter within 25 % for at least 90 % of the correct calls (for `n` and `gain`,
-//!   25 % of the departure from the neutral value 1);
-//! * a constant or a random diagnosis, scored on the same cases, fails these assertions.
-//!
-//! `cargo test --release --test diagnose_cases -- --nocapture` prints the confusion matrix;
-//! `CAPSTAN_DIAGNOSE_SEED=N` draws the cases from another master seed (fresh data).
+//! * `cargo test` runs a fixed slice: every 6th case of the test seed (53 cases);
+//! * `CAPSTAN_CASES=full cargo test --release --test diagnose_cases -- --nocapture` runs all
+//!   317 cases and asserts the targets of `capstan::diagnose::score` (`.ci/run` does this);
+//! * `CAPSTAN_DIAGNOSE_SEED=N` draws the cases from another master seed.
 
-use capstan::diagnose::{self, cases, Diagnosis};
+use capstan::diagnose::cases::{self, Case, Class};
+use capstan::diagnose::score::{self, Metrics, Outcome};
 use capstan_friction::{Effect, EffectKind};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::OnceLock;
 
-/// Seed of the test cases. The thresholds were calibrated on another seed (99), but the
-/// practical-equivalence rule was added after a false alarm on this one: its honest check is on
-/// fresh seeds (docs/README-diagnose.md, "Fresh seeds").
+/// Seed of the test cases (the thresholds were calibrated on seed 99).
 const MASTER_SEED: u64 = 20_260_522;
+/// The slice `cargo test` runs: every this-many-th case.
+const SLICE: usize = 6;
 
-/// The master seed: [`MASTER_SEED`], or `CAPSTAN_DIAGNOSE_SEED` to evaluate on fresh cases.
 fn master_seed() -> u64 {
     match std::env::var("CAPSTAN_DIAGNOSE_SEED") {
         Ok(s) => s
@@ -38,257 +33,154 @@ fn master_seed() -> u64 {
         Err(_) => MASTER_SEED,
     }
 }
-/// Cases per effect, and without an effect.
-const PER_EFFECT: u64 = 22;
-const PER_NONE: u64 = 40;
 
-/// What a diagnosis said about one case.
-#[derive(Clone, Debug)]
-struct Outcome {
-    truth: Effect,
-    found: Effect,
-    describe: String,
-    rows: usize,
-    elapsed_s: f64,
-    candidates: String,
+fn full() -> bool {
+    std::env::var("CAPSTAN_CASES").is_ok_and(|v| v == "full")
+}
+
+fn the_cases() -> Vec<Case> {
+    let every = if full() { 1 } else { SLICE };
+    cases::draw_cases(master_seed())
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % every == 0)
+        .map(|x| x.1)
+        .collect()
 }
 
 fn outcomes() -> &'static [Outcome] {
     static CELL: OnceLock<Vec<Outcome>> = OnceLock::new();
     CELL.get_or_init(|| {
-        let seed = master_seed();
-        let mut jobs = Vec::new();
-        for kind in EffectKind::ALL {
-            let n = if kind == EffectKind::None {
-                PER_NONE
-            } else {
-                PER_EFFECT
-            };
-            for i in 0..n {
-                jobs.push(cases::draw_case(seed, kind, i));
-            }
-        }
+        let cs = the_cases();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let next = AtomicUsize::new(0);
-        let out: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; jobs.len()]);
         let t0 = std::time::Instant::now();
-        std::thread::scope(|s| {
-            for _ in 0..threads {
-                s.spawn(|| loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(case) = jobs.get(i) else { break };
-                    let (data, _) = case.generate().expect("the case simulates");
-                    let d: Diagnosis = diagnose::diagnose(&data);
-                    let o = Outcome {
-                        truth: case.effect,
-                        found: d.found(),
-                        describe: case.describe(),
-                        rows: data.pairs.len(),
-                        elapsed_s: d.elapsed_s,
-                        candidates: d
-                            .candidates
-                            .iter()
-                            .take(3)
-                            .map(|c| format!("{}={:.4e} ({:.1})", c.effect, c.value, c.delta_bic))
-                            .collect::<Vec<_>>()
-                            .join(", "),
-                    };
-                    out.lock().unwrap()[i] = Some(o);
-                });
-            }
-        });
+        let out = score::run(&cs, threads, capstan::diagnose::diagnose)
+            .unwrap_or_else(|e| panic!("{e}"));
         eprintln!(
-            "master seed {seed}: generated and diagnosed {} cases in {:.1} s on {threads} threads",
-            jobs.len(),
+            "master seed {}: {} cases simulated and diagnosed in {:.1} s on {threads} threads",
+            master_seed(),
+            out.len(),
             t0.elapsed().as_secs_f64()
         );
-        out.into_inner()
-            .unwrap()
-            .into_iter()
-            .map(|o| o.expect("every case ran"))
-            .collect()
+        out
     })
 }
 
-/// Is the estimate within 25 % of the truth? For `n` and `gain` (neutral 1), 25 % of the
-/// departure from 1; for the others (neutral 0), 25 % of the value.
-fn parameter_ok(truth: Effect, found: Effect) -> bool {
-    let neutral = truth.kind.neutral_value();
-    ((found.value - truth.value) / (truth.value - neutral)).abs() <= 0.25
-}
-
-/// Accuracy figures of a list of (truth, call) pairs.
-#[derive(Debug)]
-struct Metrics {
-    per_effect: Vec<(EffectKind, usize, usize)>,
-    overall: f64,
-    false_alarms: f64,
-    parameter_ok: f64,
-}
-
-fn metrics(calls: &[(Effect, Effect)]) -> Metrics {
-    let per_effect = EffectKind::ALL
-        .iter()
-        .map(|&k| {
-            let of_k: Vec<_> = calls.iter().filter(|(t, _)| t.kind == k).collect();
-            let right = of_k.iter().filter(|(t, f)| t.kind == f.kind).count();
-            (k, right, of_k.len())
-        })
-        .collect();
-    let right = calls.iter().filter(|(t, f)| t.kind == f.kind).count();
-    let nones: Vec<_> = calls
-        .iter()
-        .filter(|(t, _)| t.kind == EffectKind::None)
-        .collect();
-    let alarms = nones
-        .iter()
-        .filter(|(_, f)| f.kind != EffectKind::None)
-        .count();
-    let correct_effects: Vec<_> = calls
-        .iter()
-        .filter(|(t, f)| t.kind == f.kind && t.kind != EffectKind::None)
-        .collect();
-    let param_ok = correct_effects
-        .iter()
-        .filter(|(t, f)| parameter_ok(*t, *f))
-        .count();
-    Metrics {
-        per_effect,
-        overall: right as f64 / calls.len().max(1) as f64,
-        false_alarms: alarms as f64 / nones.len().max(1) as f64,
-        parameter_ok: if correct_effects.is_empty() {
-            0.0
-        } else {
-            param_ok as f64 / correct_effects.len() as f64
-        },
-    }
-}
-
-/// The acceptance criteria; the reasons it fails (empty: passes).
-fn failures(m: &Metrics) -> Vec<String> {
-    let mut why = Vec::new();
-    if m.overall < 0.95 {
-        why.push(format!("overall accuracy {:.3} < 0.95", m.overall));
-    }
-    if m.false_alarms > 0.05 {
-        why.push(format!("false alarms on none {:.3} > 0.05", m.false_alarms));
-    }
-    for &(k, right, n) in &m.per_effect {
-        if n > 0 && (right as f64) < 0.85 * n as f64 {
-            why.push(format!("{k}: {right}/{n} < 85 %"));
-        }
-    }
-    if m.parameter_ok < 0.90 {
-        why.push(format!(
-            "parameter within 25 % for {:.3} < 0.90 of correct calls",
-            m.parameter_ok
-        ));
-    }
-    why
-}
-
-fn confusion_matrix(calls: &[(Effect, Effect)]) -> String {
-    let short = |k: EffectKind| -> String { k.name().chars().take(6).collect() };
-    let mut s = format!("{:>20} |", "truth \\ diagnosis");
-    for k in EffectKind::ALL {
-        s += &format!(" {:>6}", short(k));
-    }
-    s += " | accuracy\n";
-    for t in EffectKind::ALL {
-        s += &format!("{:>20} |", t.name());
-        let mut n = 0;
-        let mut right = 0;
-        for f in EffectKind::ALL {
-            let c = calls
-                .iter()
-                .filter(|(a, b)| a.kind == t && b.kind == f)
-                .count();
-            n += c;
-            if f == t {
-                right = c;
-            }
-            s += &format!(" {:>6}", if c == 0 { ".".into() } else { c.to_string() });
-        }
-        s += &format!(" | {right}/{n}\n");
-    }
-    s
-}
-
 #[test]
-fn diagnose_names_the_hidden_effect() {
+fn diagnose_names_what_was_planted_and_flags_what_it_cannot_name() {
     let out = outcomes();
-    let calls: Vec<(Effect, Effect)> = out.iter().map(|o| (o.truth, o.found)).collect();
-    let m = metrics(&calls);
-    println!("{}", confusion_matrix(&calls));
-    println!(
-        "overall {:.3}, false alarms on none {:.3}, parameter within 25 % for {:.3} of correct calls",
-        m.overall, m.false_alarms, m.parameter_ok
-    );
-    for o in out {
-        let wrong = o.truth.kind != o.found.kind;
-        let bad_param =
-            !wrong && o.truth.kind != EffectKind::None && !parameter_ok(o.truth, o.found);
-        if wrong || bad_param {
-            println!(
-                "{} {} -> {}={:.4e} | {} | {}",
-                if wrong { "MISS " } else { "PARAM" },
-                o.truth.kind,
-                o.found.kind,
-                o.found.value,
-                o.describe,
-                o.candidates
-            );
-        }
+    let m = Metrics::of(out);
+    println!("{}", m.table());
+    for class in [Class::Single, Class::SmallSingle] {
+        let pe: Vec<String> = score::per_effect(out, class)
+            .iter()
+            .filter(|x| x.2 > 0)
+            .map(|(k, a, b)| format!("{}:{a}/{b}", k.name()))
+            .collect();
+        println!("{}: {}", class.name(), pe.join(" "));
+    }
+    for o in out.iter().filter(|o| !o.correct()) {
+        let found: Vec<String> = o
+            .found
+            .iter()
+            .map(|e| format!("{}={:.4}", e.kind, e.value))
+            .collect();
+        println!(
+            "MISS {} -> {found:?} unexplained={} | {}",
+            o.describe, o.unexplained, o.candidates
+        );
     }
     let rows: usize = out.iter().map(|o| o.rows).sum();
     let secs: f64 = out.iter().map(|o| o.elapsed_s).sum();
-    let slowest = out
-        .iter()
-        .max_by(|a, b| (a.elapsed_s / a.rows as f64).total_cmp(&(b.elapsed_s / b.rows as f64)))
-        .unwrap();
     println!(
-        "diagnose: {:.1} ms per 1000 rows on average ({} rows in all); slowest {:.1} ms for {} rows",
-        1e3 * secs / rows as f64 * 1000.0,
-        rows,
-        1e3 * slowest.elapsed_s,
-        slowest.rows
+        "diagnose: {:.1} ms per 1000 rows on average",
+        1e3 * secs / rows as f64 * 1000.0
     );
-    let why = failures(&m);
-    assert!(why.is_empty(), "{}", why.join("; "));
+    if full() {
+        let why = m.failures();
+        assert!(why.is_empty(), "{}", why.join("; "));
+    } else {
+        // The slice has too few cases per class for the targets' percentages; it asserts the
+        // same behaviour in aggregate, and never a false alarm on a clean set.
+        let named = |x: (usize, usize)| x.0;
+        let total = |x: (usize, usize)| x.1;
+        let right = named(m.single) + named(m.pairs) + named(m.outside);
+        let all = total(m.single) + total(m.pairs) + total(m.outside);
+        assert!(
+            right as f64 >= 0.8 * all as f64,
+            "{right}/{all} single, pair and outside cases right (slice)"
+        );
+        assert_eq!(m.clean_alarms.0, 0, "false alarms on clean sets");
+    }
 }
 
-/// The assertions are not met by a diagnosis that does not look at the data.
+/// The assertions are not met by answers that do not look at the data.
 #[test]
-fn a_constant_or_random_diagnosis_fails_the_same_assertions() {
+fn a_constant_or_random_answer_fails_the_same_assertions() {
     let out = outcomes();
-    let truths: Vec<Effect> = out.iter().map(|o| o.truth).collect();
-    for guess in EffectKind::ALL {
-        let calls: Vec<(Effect, Effect)> = truths
-            .iter()
-            .map(|&t| {
-                // Even a constant guesser that happens to guess right gets the value right.
-                let value = if t.kind == guess { t.value } else { 0.5 };
-                (t, Effect { kind: guess, value })
-            })
-            .collect();
-        let why = failures(&metrics(&calls));
-        assert!(!why.is_empty(), "constant {guess} passes");
+    let with = |o: &Outcome, found: Vec<Effect>, unexplained: bool| Outcome {
+        found,
+        unexplained,
+        ..o.clone()
+    };
+    // Always "none"; always "unexplained"; always one effect (with its true value when right).
+    let mut answers: Vec<Vec<Outcome>> = vec![
+        out.iter().map(|o| with(o, Vec::new(), false)).collect(),
+        out.iter().map(|o| with(o, Vec::new(), true)).collect(),
+    ];
+    for k in EffectKind::ALL.into_iter().skip(1) {
+        answers.push(
+            out.iter()
+                .map(|o| {
+                    let value = o
+                        .truth
+                        .iter()
+                        .find(|t| t.kind == k)
+                        .map_or(0.5, |t| t.value);
+                    with(o, vec![Effect { kind: k, value }], false)
+                })
+                .collect(),
+        );
     }
-    // A seeded random guesser (uniform over the catalogue), with the true value when right.
+    // A seeded random guesser over none, one effect, two effects and unexplained.
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let calls: Vec<(Effect, Effect)> = truths
-        .iter()
-        .map(|&t| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            let kind = EffectKind::ALL[(state >> 33) as usize % EffectKind::ALL.len()];
-            let value = if kind == t.kind { t.value } else { 0.5 };
-            (t, Effect { kind, value })
-        })
-        .collect();
-    let m = metrics(&calls);
-    let why = failures(&m);
-    assert!(!why.is_empty(), "a random guesser passes: {m:?}");
-    assert!(m.overall < 0.3, "{m:?}");
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 33) as usize
+    };
+    answers.push(
+        out.iter()
+            .map(|o| {
+                let pick = |r: usize| EffectKind::ALL[1 + r % (EffectKind::ALL.len() - 1)];
+                let value = |k: EffectKind| {
+                    o.truth
+                        .iter()
+                        .find(|t| t.kind == k)
+                        .map_or(0.5, |t| t.value)
+                };
+                match next() % 4 {
+                    0 => with(o, Vec::new(), false),
+                    1 => with(o, Vec::new(), true),
+                    2 => {
+                        let k = pick(next());
+                        with(o, vec![Effect { kind: k, value: value(k) }], false)
+                    }
+                    _ => {
+                        let (a, b) = (pick(next()), pick(next()));
+                        let found = vec![
+                            Effect { kind: a, value: value(a) },
+                            Effect { kind: b, value: value(b) },
+                        ];
+                        with(o, found, false)
+                    }
+                }
+            })
+            .collect(),
+    );
+    for (i, a) in answers.iter().enumerate() {
+        let m = Metrics::of(a);
+        assert!(!m.failures().is_empty(), "answer {i} passes: {m:?}");
+    }
 }

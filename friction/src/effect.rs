@@ -14,8 +14,19 @@
 //! | `wear` | `mu_change_per_run` | 0 |
 //! | `diameter_dependence` | `mu_change_per_mm` | 0 |
 //! | `speed_dependence` | `mu_change_per_v` | 0 |
+//! | `contact_heating` | `heat_per_n` | 0 |
+//!
+//! `contact_heating` is friction that falls with the friction load T2 − T1 the contact
+//! carries: mu·exp(−h·H) with H the load remembered over [`HEAT_TAU_S`] (see
+//! [`crate::LoadMemory`]). Its parameter is h·τ, the steady-state loss of ln mu per newton of
+//! load (1/N); the memory is short against any conditioning window, so the data see
+//! mu·exp(−heat_per_n·(T2 − T1)).
 
 use crate::Model;
+
+/// Memory time of the catalogue's `contact_heating`, s: shorter than the settling before any
+/// conditioning window, so a window sees the steady state of the load it carries.
+pub const HEAT_TAU_S: f64 = 0.25;
 use core::fmt;
 use core::str::FromStr;
 
@@ -42,11 +53,13 @@ pub enum EffectKind {
     DiameterDependence,
     /// mu depends on drive voltage.
     SpeedDependence,
+    /// mu falls with the friction load T2 − T1 (contact heating with a short memory).
+    ContactHeating,
 }
 
 impl EffectKind {
     /// Every effect, `none` first.
-    pub const ALL: [EffectKind; 10] = [
+    pub const ALL: [EffectKind; 11] = [
         EffectKind::None,
         EffectKind::PressureFriction,
         EffectKind::BendingStiffness,
@@ -57,6 +70,7 @@ impl EffectKind {
         EffectKind::Wear,
         EffectKind::DiameterDependence,
         EffectKind::SpeedDependence,
+        EffectKind::ContactHeating,
     ];
 
     /// The catalogue name.
@@ -72,6 +86,7 @@ impl EffectKind {
             EffectKind::Wear => "wear",
             EffectKind::DiameterDependence => "diameter_dependence",
             EffectKind::SpeedDependence => "speed_dependence",
+            EffectKind::ContactHeating => "contact_heating",
         }
     }
 
@@ -87,6 +102,7 @@ impl EffectKind {
             EffectKind::Wear => Some("mu_change_per_run"),
             EffectKind::DiameterDependence => Some("mu_change_per_mm"),
             EffectKind::SpeedDependence => Some("mu_change_per_v"),
+            EffectKind::ContactHeating => Some("heat_per_n"),
         }
     }
 
@@ -152,6 +168,12 @@ impl Effect {
             EffectKind::Wear => model.law.mu_change_per_run = v,
             EffectKind::DiameterDependence => model.law.mu_change_per_mm = v,
             EffectKind::SpeedDependence => model.law.mu_change_per_v = v,
+            // Without heating the memory time means nothing: leave it.
+            EffectKind::ContactHeating if v == 0.0 => model.law.heat_per_ns = 0.0,
+            EffectKind::ContactHeating => {
+                model.law.heat_per_ns = v / HEAT_TAU_S;
+                model.law.heat_tau_s = HEAT_TAU_S;
+            }
         }
     }
 
@@ -168,6 +190,7 @@ impl Effect {
             EffectKind::Wear => model.law.mu_change_per_run,
             EffectKind::DiameterDependence => model.law.mu_change_per_mm,
             EffectKind::SpeedDependence => model.law.mu_change_per_v,
+            EffectKind::ContactHeating => model.law.heat_per_ns * model.law.heat_tau_s,
         }
     }
 }
@@ -271,7 +294,7 @@ mod tests {
     fn apply_then_read_gives_the_value() {
         for kind in EffectKind::ALL.into_iter().skip(1) {
             let m = Model::euler_eytelwein(0.1).with_effect(Effect { kind, value: 0.37 });
-            assert_eq!(Effect::read(kind, &m), 0.37, "{kind}");
+            assert!((Effect::read(kind, &m) - 0.37).abs() < 1e-15, "{kind}");
         }
     }
 }

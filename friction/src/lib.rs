@@ -14,7 +14,7 @@ mod effect;
 mod law;
 mod sensor;
 
-pub use effect::{Effect, EffectKind, ParseEffectError};
+pub use effect::{Effect, EffectKind, ParseEffectError, HEAT_TAU_S};
 pub use law::{FrictionLaw, LoadMemory};
 pub use sensor::{SensorArtefacts, SLACK_T1_N};
 

@@ -20,7 +20,7 @@ pub use results::{CampaignResult, CordKey, FaultSummary, PairRow, RunResult};
 
 use crate::run::SetupError;
 use capstan_friction::{Effect, Model};
-use capstan_plant::{InjectionKind, PlantConfig};
+use capstan_plant::{InjectionKind, PlantConfig, Unmodelled};
 use firmware::safety::SafetyLimits;
 use firmware::{Calibration, Protocol, StepOrder};
 use std::fmt;
@@ -95,9 +95,13 @@ pub struct CampaignConfig {
     pub effects: Vec<Effect>,
     /// The base friction model (and sensor artefacts).
     pub model: Model,
-    /// Cord-to-cord standard deviation of mu, % (run-to-run: half of it). A cord is one
-    /// (diameter, drive voltage, wrap) group.
+    /// Cord-to-cord standard deviation of mu, %. A cord is one (diameter, drive voltage, wrap)
+    /// group.
     pub scatter_pct: f64,
+    /// Run-to-run standard deviation of mu within a cord, % (`None`: half of `scatter_pct`).
+    pub run_scatter_pct: Option<f64>,
+    /// Physics outside the effect catalogue, on every cord (none by default).
+    pub unmodelled: Unmodelled,
     /// Gaussian sensor noise (the plant's `sensor.noise_sd_n`); off = noiseless conversions.
     pub sensor_noise: bool,
     /// Campaign seed.
@@ -130,6 +134,8 @@ impl Default for CampaignConfig {
             effects: Vec::new(),
             model: Model::euler_eytelwein(capstan_plant::THESIS_MU),
             scatter_pct: 0.0,
+            run_scatter_pct: None,
+            unmodelled: Unmodelled::default(),
             sensor_noise: true,
             seed: 1,
             faults: Vec::new(),

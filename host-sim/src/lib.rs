@@ -3,7 +3,9 @@
 //!
 //! * [`time`]: the embassy-time driver (thread-local virtual clock) and `block_on`.
 //! * [`run`]: one run: plant + firmware + `Vec` sink.
+//! * [`panic`](mod@panic): one run in which the firmware panics, and the board's panic path on the plant.
 //! * [`setup`]: a cord's ranges, protocol and plant constants (campaigns and two-control).
+//! * [`noise`]: the quiet simulator or the thesis rig's scatter ([`noise::NoiseProfile`]).
 //! * [`campaign`]: many runs over diameters, wraps and voltages, in parallel threads.
 //! * [`two_control`]: several cords, each with its own servo and firmware, on one capstan and
 //!   one drive motor (the thesis's two-control, single-drive rig).
@@ -12,6 +14,8 @@
 #![deny(missing_docs)]
 
 pub mod campaign;
+pub mod noise;
+pub mod panic;
 pub mod run;
 pub mod setup;
 pub mod time;

@@ -5,7 +5,7 @@
 use super::mechanisms::Mechanisms;
 use super::ExtendedDetail;
 use crate::data::Dataset;
-use crate::diagnose::{diagnose, diagnose_with, Candidate, Diagnosis, Options};
+use crate::diagnose::{diagnose, diagnose_with, Diagnosis, Options};
 use capstan_friction::EffectKind;
 use serde::Serialize;
 use serde_json::{json, Value};
@@ -37,44 +37,16 @@ pub struct DiagnoseQuote {
     pub comparison: Value,
 }
 
-/// A catalogue parameter with its SE, the value to the SE's precision (two significant
-/// digits of the SE): "n = 0.9017 ± 0.0086".
-pub fn parameter(c: &Candidate) -> String {
-    let (name, v) = c
-        .parameters
-        .iter()
-        .next()
-        .map_or(("value", c.value), |(k, v)| (*k, *v));
-    let se = c.parameter_se;
-    if !(se.is_finite() && se > 0.0) {
-        return format!("{name} = {}", sig(v));
-    }
-    let decimals = (1.0 - se.log10().floor()).max(0.0) as usize;
-    if decimals > 6 {
-        return format!("{name} = {v:.3e} ± {se:.1e}");
-    }
-    format!("{name} = {v:.decimals$} ± {se:.decimals$}")
-}
-
-/// Four significant digits (scientific for very small or large magnitudes).
-pub fn sig(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let e = v.abs().log10().floor();
-    if (-3.0..5.0).contains(&e) {
-        format!("{:.*}", (3.0 - e).max(0.0) as usize, v)
-    } else {
-        format!("{v:.3e}")
-    }
-}
-
 /// The answer in one phrase: "pressure_friction (n = 0.9017 ± 0.0086, ΔBIC −74.0)".
 pub fn verdict(d: &Diagnosis) -> String {
-    match d.candidate(d.kind) {
-        Some(c) => format!("{} ({}, ΔBIC {:.1})", d.effect, parameter(c), c.delta_bic),
-        None => format!("{} (no candidate supported)", d.effect),
+    if d.unexplained {
+        return format!("unexplained ({})", d.residual_pattern.unwrap_or("cells"));
     }
+    if d.effects.is_empty() {
+        return "none (no candidate supported)".into();
+    }
+    let v: Vec<String> = d.effects.iter().map(crate::diagnose::words::effect_phrase).collect();
+    v.join(" + ")
 }
 
 fn test<'a>(m: &'a Mechanisms, name: &str) -> Option<&'a super::mechanisms::Mechanism> {

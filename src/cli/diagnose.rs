@@ -1,8 +1,8 @@
-//! `capstan diagnose DATA.csv [--json]`: which single catalogue effect (if any) makes a data
-//! set depart from Euler-Eytelwein, and its size. See [`crate::diagnose`].
+//! `capstan diagnose DATA.csv [--json]`: which catalogue effects (if any) make a data set depart
+//! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`crate::diagnose`].
 
 use crate::data::{load_pairs, thesis_dataset};
-use crate::diagnose::{self, Diagnosis, Level, Options};
+use crate::diagnose::{self, words, Diagnosis, Options};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -33,10 +33,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
+    for (flag, v) in [
+        ("--within-threshold", args.within_threshold),
+        ("--between-threshold", args.between_threshold),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            anyhow::bail!("{flag} {v}: must be a finite number, 0 or more");
+        }
+    }
     let opts = Options {
         within_threshold: args.within_threshold,
         between_threshold: args.between_threshold,
         protocol_times: args.protocol_times,
+        ..Options::default()
     };
     let d = diagnose::diagnose_with(&data, &opts);
     if args.json {
@@ -47,15 +56,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn level_name(l: Level) -> &'static str {
-    match l {
-        Level::WithinRun => "shape within runs",
-        Level::BetweenCord => "between cords",
-        Level::BetweenRun => "between runs",
-    }
-}
-
-/// The human summary: the call, the evidence, what could not be tested.
+/// The human summary: the verdict, the effects with their evidence, what is left, what
+/// could not be tested.
 pub fn summary(d: &Diagnosis, source: &str) -> String {
     let mut s = String::new();
     let g = &d.design;
@@ -64,48 +66,49 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
         "{source}: {} rows, {} cords, {} runs; wraps {:?} deg, diameters {:?} mm, drive {:?} V",
         g.rows, g.cords, g.runs, g.wraps_deg, g.diameters_mm, g.drive_v
     );
-    match d.parameters.iter().next() {
-        Some((name, v)) => {
-            let c = d
-                .candidate(d.kind)
-                .expect("the chosen effect is a candidate");
-            let _ = writeln!(
-                s,
-                "diagnosis: {} ({name} = {v:.4e} ± {:.1e}), ΔBIC {:.1} against Euler-Eytelwein ({})",
-                d.effect,
-                c.parameter_se,
-                c.delta_bic,
-                level_name(c.level)
-            );
-        }
-        None => {
-            let _ = writeln!(
-                s,
-                "diagnosis: none (no effect reaches ΔBIC {:.0} within runs or {:.0} between runs/cords)",
-                d.thresholds.within_run, d.thresholds.between
-            );
-        }
-    }
-    let _ = writeln!(
-        s,
-        "Euler-Eytelwein: mu = {:.4}, RMSE(T2) {:.3} N with one mu, {:.4} N with every run's own mu",
-        d.baseline.mu, d.baseline.rmse_t2_n, d.baseline.rmse_t2_run_mu_n
-    );
-    if d.effect != "none" {
+    let _ = writeln!(s, "{}", d.verdict);
+    if d.unexplained {
+        let _ = writeln!(s, "diagnosis: UNEXPLAINED ({})", d.residual_pattern.unwrap_or("cells"));
+    } else if d.effects.is_empty() {
         let _ = writeln!(
             s,
-            "with {}: RMSE(T2) {:.3} N with one mu, {:.4} N with every run's own mu",
-            d.effect, d.extended.rmse_t2_n, d.extended.rmse_t2_run_mu_n
+            "diagnosis: none (no effect reaches ΔBIC {:.0} within runs or {:.0} between runs/cords)",
+            d.thresholds.within_run, d.thresholds.between
+        );
+    } else {
+        let names: Vec<&str> = d.effects.iter().map(|f| f.effect).collect();
+        let _ = writeln!(s, "diagnosis: {}", names.join(" + "));
+    }
+    for f in &d.effects {
+        let _ = writeln!(
+            s,
+            "  {:<20} {}  [{}]",
+            f.effect,
+            words::effect_phrase(f),
+            f.level.words()
         );
     }
     let _ = writeln!(
         s,
-        "scatter of mu: {:.2} % cord to cord, {:.2} % run to run; overdispersion of within-run evidence {:.1}",
-        d.scatter.cord_pct, d.scatter.run_pct, d.scatter.overdispersion
+        "Euler-Eytelwein: mu = {:.4}, RMSE(T2) {:.3} N with one mu, {:.3} N with every run's own mu",
+        d.baseline.mu, d.baseline.rmse_t2_n, d.baseline.rmse_t2_run_mu_n
+    );
+    if !d.effects.is_empty() {
+        let _ = writeln!(
+            s,
+            "with the effects found: RMSE(T2) {:.3} N with one mu, {:.3} N with every run's own mu",
+            d.extended.rmse_t2_n, d.extended.rmse_t2_run_mu_n
+        );
+    }
+    let sc = &d.scatter;
+    let _ = writeln!(
+        s,
+        "scatter of mu: {:.2} % cord to cord, {:.2} % run to run; noise {:.3} N + {:.2} % of T2, lag-1 autocorrelation {:.2}",
+        sc.cord_pct, sc.run_pct, sc.noise_abs_n, 100.0 * sc.noise_rel, sc.lag1_autocorrelation
     );
     let _ = writeln!(
         s,
-        "candidates (ΔBIC against none; supported if below the threshold of its level):"
+        "candidates (ΔBIC given the effects found; named if below the threshold of its level and large enough to matter):"
     );
     for c in &d.candidates {
         let (name, v) = c
@@ -119,13 +122,18 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
             c.effect,
             c.delta_bic,
             c.parameter_se,
-            level_name(c.level),
-            if c.supported { "  supported" } else { "" }
+            c.level.words(),
+            if c.selected { "  found" } else if c.supported { "  supported" } else { "" }
         );
     }
     for n in &d.not_testable {
         let _ = writeln!(s, "  {:<20} not testable: {}", n.effect, n.reason);
     }
+    let _ = writeln!(
+        s,
+        "rows used: {} in the T2 fits, {} with T1 and T2 above zero for the logarithms",
+        d.rows_used.t2_fits, d.rows_used.logarithms
+    );
     let _ = writeln!(s, "({:.3} s)", d.elapsed_s);
     s
 }

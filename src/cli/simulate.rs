@@ -12,6 +12,7 @@ use anyhow::{bail, Context};
 use capstan_friction::{Effect, Model};
 use firmware::StepOrder;
 use host_sim::campaign::{run_campaign_with_progress, CampaignConfig, FaultSpec, PairRow};
+use host_sim::noise::NoiseProfile;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -84,14 +85,22 @@ pub struct Args {
     /// Friction coefficient of the base model.
     #[arg(long, default_value_t = 0.115, allow_negative_numbers = true)]
     pub mu: f64,
-    /// Cord-to-cord sd of mu, % (run-to-run: half of it).
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "PCT",
-        allow_negative_numbers = true
-    )]
-    pub scatter: f64,
+    /// Cord-to-cord sd of mu, % [default: 0; with --noise thesis, the thesis rig's].
+    #[arg(long, value_name = "PCT", allow_negative_numbers = true)]
+    pub scatter: Option<f64>,
+    /// Run-to-run sd of mu within a cord, % [default: half of --scatter; with --noise thesis,
+    /// the thesis rig's].
+    #[arg(long, value_name = "PCT", allow_negative_numbers = true)]
+    pub run_scatter: Option<f64>,
+    /// Noise profile: `quiet` (sensor white noise only) or `thesis` (the thesis rig's scatter
+    /// of mu between cords and runs, a slow wander of mu within runs, a zero error per run).
+    #[arg(long, default_value = "quiet", value_name = "PROFILE")]
+    pub noise: String,
+    /// Physics outside the effect catalogue, NAME=VALUE (repeatable): hysteresis (mu larger by
+    /// this fraction while the tension falls), t2_nonlinearity (the T2 sensor's S-shaped calibration error, its largest deviation in N),
+    /// regime_change (mu changes by this fraction above T1 ≈ 4 N).
+    #[arg(long = "unmodelled", value_name = "NAME=VALUE")]
+    pub unmodelled: Vec<String>,
     /// Seed of every random number (noise, scatter, sensor zeros).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -138,14 +147,44 @@ fn model(args: &Args) -> anyhow::Result<(Model, Vec<Effect>)> {
     if !(args.mu.is_finite() && args.mu >= 0.0 && args.mu <= 2.0) {
         bail!("--mu {}: must be 0 to 2", args.mu);
     }
-    let mut effects = Vec::new();
+    let mut effects: Vec<Effect> = Vec::new();
     for e in &args.effects {
         let eff: Effect = e
             .parse()
             .map_err(|err| anyhow::anyhow!("--effect {e}: {err}"))?;
+        if effects.iter().any(|x| x.kind == eff.kind) {
+            bail!("--effect {e}: {} is given twice", eff.kind);
+        }
         effects.push(eff);
     }
     Ok((Model::euler_eytelwein(args.mu), effects))
+}
+
+/// The physics outside the catalogue given by `--unmodelled`.
+fn unmodelled(args: &Args) -> anyhow::Result<host_sim::plant::Unmodelled> {
+    let mut u = host_sim::plant::Unmodelled::default();
+    let mut seen: Vec<&str> = Vec::new();
+    for item in &args.unmodelled {
+        let known = host_sim::plant::Unmodelled::NAMES.join(", ");
+        let (name, value) = item
+            .split_once('=')
+            .ok_or_else(|| anyhow::anyhow!("--unmodelled {item}: expected NAME=VALUE"))?;
+        let name = name.trim();
+        let value: f64 = value
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| anyhow::anyhow!("--unmodelled {item}: the value is not a number"))?;
+        if seen.contains(&name) {
+            bail!("--unmodelled {item}: {name} is given twice");
+        }
+        if !u.set(name, value) {
+            bail!("--unmodelled {item}: unknown (known: {known})");
+        }
+        seen.push(name);
+    }
+    Ok(u)
 }
 
 fn protocol(args: &Args) -> firmware::Protocol {
@@ -194,8 +233,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .map_err(|e| anyhow::anyhow!("--fault {e}"))?,
         );
     }
-    let defaults = CampaignConfig::default();
-    let cfg = CampaignConfig {
+    let noise: NoiseProfile = args
+        .noise
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--noise {e}"))?;
+    let mut defaults = CampaignConfig::default();
+    noise.apply(&mut defaults);
+    let mut cfg = CampaignConfig {
         diameters_mm: args.diameters.clone().unwrap_or(defaults.diameters_mm),
         wraps_deg: args.wraps.clone().unwrap_or(defaults.wraps_deg),
         drive_vs: args.drive_v.clone(),
@@ -203,7 +247,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         order: args.order.into(),
         effects,
         model,
-        scatter_pct: args.scatter,
+        scatter_pct: args.scatter.unwrap_or(defaults.scatter_pct),
+        run_scatter_pct: args.run_scatter.or(defaults.run_scatter_pct),
+        unmodelled: unmodelled(&args)?,
         sensor_noise: !args.no_noise,
         seed: args.seed,
         faults,
@@ -213,6 +259,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         keep_raw: !args.no_raw,
         ..defaults
     };
+    cfg.plant.disturbances = noise.disturbances();
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;

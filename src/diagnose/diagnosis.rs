@@ -1,78 +1,32 @@
-//! What `capstan diagnose` answers (`Diagnosis`, serialised as its `--json` object) and the
-//! options of the decision rule.
+//! What `capstan diagnose` answers (`Diagnosis`, serialised as its `--json` object).
 
-use super::{prep, BETWEEN_THRESHOLD, WITHIN_THRESHOLD};
+use crate::evidence::{Adequacy, Columns, Evidence, Level, NotTestable, RowsUsed, Scatter};
 use capstan_friction::{Effect, EffectKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Options of [`diagnose_with`].
-#[derive(Clone, Copy, Debug)]
-pub struct Options {
-    /// A within-run (shape) candidate is supported when its ΔBIC < −this.
-    pub within_threshold: f64,
-    /// A between-run or between-cord candidate is supported when its ΔBIC < −this.
-    pub between_threshold: f64,
-    /// Without `time_s`, take the window times from `step` with the thesis protocol
-    /// (10 s steps): makes `thermal_drift` testable on the thesis data.
-    pub protocol_times: bool,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Options {
-            within_threshold: WITHIN_THRESHOLD,
-            between_threshold: BETWEEN_THRESHOLD,
-            protocol_times: false,
-        }
-    }
-}
-
-/// At which level of the data a candidate is judged.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Level {
-    /// Shape inside runs (run mu free).
-    WithinRun,
-    /// Runs' mu against a covariate that varies between cords (cord scatter as error).
-    BetweenCord,
-    /// Runs' mu against the run number within cords (run scatter as error).
-    BetweenRun,
-}
-
-/// One candidate effect, fitted.
+/// One effect the data hold.
 #[derive(Clone, Debug, Serialize)]
-pub struct Candidate {
+pub struct Found {
     /// Catalogue name.
     pub effect: &'static str,
-    /// BIC of the model with this effect minus BIC of `none` (negative: supported).
-    pub delta_bic: f64,
-    /// The fitted catalogue parameter.
+    /// Its fitted catalogue parameter (with the other found effects in the model).
     pub parameters: BTreeMap<&'static str, f64>,
-    /// Its standard error.
+    /// Its standard error (cluster-robust).
     pub parameter_se: f64,
-    /// Where the evidence comes from.
+    /// ΔBIC of dropping it, given the other found effects (negative: the data want it).
+    pub delta_bic_given_others: f64,
+    /// Where its evidence comes from.
     pub level: Level,
-    /// The parameter is outside the region of practical equivalence with `none` (see
-    /// [`practically_relevant`]).
-    pub relevant: bool,
-    /// ΔBIC is below the threshold of its level and the size is relevant.
-    pub supported: bool,
-    /// The effect.
-    #[serde(skip)]
-    pub kind: EffectKind,
-    /// The fitted catalogue value.
-    #[serde(skip)]
-    pub value: f64,
 }
 
-/// An effect that could not be tested on this data set.
+/// A step of the forward selection.
 #[derive(Clone, Debug, Serialize)]
-pub struct NotTestable {
-    /// Catalogue name.
+pub struct PathStep {
+    /// The effect that came in.
     pub effect: &'static str,
-    /// Why.
-    pub reason: String,
+    /// Its ΔBIC when it came in (given those before it).
+    pub delta_bic: f64,
 }
 
 /// Plain Euler-Eytelwein with one mu.
@@ -82,22 +36,22 @@ pub struct Baseline {
     pub mu: f64,
     /// RMSE of T2 with that mu, N.
     pub rmse_t2_n: f64,
-    /// RMSE of T2 with every run's own mu, N (the within-run noise of the comparison).
+    /// RMSE of T2 with every run's own mu, N (the null of the within-run comparisons).
     pub rmse_t2_run_mu_n: f64,
 }
 
-/// The chosen effect's population model (one mu and the effect) refitted to all rows.
+/// The found effects' population model (one mu and the effects) refitted to all rows.
 #[derive(Clone, Debug, Serialize)]
 pub struct Extended {
     /// RMSE of T2, N.
     pub rmse_t2_n: f64,
-    /// RMSE of T2 with every run's own mu and the effect, N (within-run effects only).
+    /// RMSE of T2 with every run's own mu and the within-run effects, N.
     pub rmse_t2_run_mu_n: f64,
 }
 
 /// What the data set is made of.
 #[derive(Clone, Debug, Serialize)]
-pub struct Design {
+pub struct DesignSummary {
     /// Rows.
     pub rows: usize,
     /// Cords: (diameter, voltage, wrap) combinations.
@@ -111,23 +65,14 @@ pub struct Design {
     /// Distinct drive voltages, V.
     pub drive_v: Vec<f64>,
     /// Optional columns present.
-    pub columns: prep::Columns,
+    pub columns: Columns,
+    /// Both rising and falling steps inside runs.
+    pub both_directions: bool,
+    /// Cord × step cells with at least two runs (the pure error's replicates).
+    pub replicated_cells: usize,
 }
 
-/// Scatter and noise the models found.
-#[derive(Clone, Debug, Serialize)]
-pub struct Scatter {
-    /// Cord-to-cord standard deviation of mu, % of mu.
-    pub cord_pct: f64,
-    /// Run-to-run standard deviation of mu within cords, % of mu.
-    pub run_pct: f64,
-    /// Residual standard deviation of T2 with run-level mu (Euler-Eytelwein), N.
-    pub within_run_sd_n: f64,
-    /// Overdispersion ĉ of the within-run likelihood ratios (clustering of residuals in runs).
-    pub overdispersion: f64,
-}
-
-/// ΔBIC thresholds below which a candidate is supported.
+/// ΔBIC thresholds below which a candidate is named.
 #[derive(Clone, Debug, Serialize)]
 pub struct Thresholds {
     /// For within-run (shape) candidates.
@@ -139,27 +84,42 @@ pub struct Thresholds {
 /// The answer.
 #[derive(Clone, Debug, Serialize)]
 pub struct Diagnosis {
-    /// The effect found (`none` if nothing is supported).
+    /// The strongest effect found (`none` if nothing is supported).
     pub effect: &'static str,
     /// Its parameter (empty for `none`).
     pub parameters: BTreeMap<&'static str, f64>,
-    /// Every testable effect, best (lowest ΔBIC) first.
-    pub candidates: Vec<Candidate>,
+    /// Every effect found, strongest first, each with its evidence given the others.
+    pub effects: Vec<Found>,
+    /// Structure is left that no catalogue effect explains (see `adequacy`).
+    pub unexplained: bool,
+    /// The pattern that remains, if any (`step_direction`, `t1_shape`, `time`, `wrap`,
+    /// `diameter`, `cells`).
+    pub residual_pattern: Option<&'static str>,
+    /// The answer in plain words, generated from the decision.
+    pub verdict: String,
+    /// The tests of what is left.
+    pub adequacy: Adequacy,
+    /// Every testable candidate's evidence given the found effects, found ones first.
+    pub candidates: Vec<Evidence>,
+    /// The order in which within-run effects came in.
+    pub selection_path: Vec<PathStep>,
     /// Plain Euler-Eytelwein.
     pub baseline: Baseline,
-    /// With the chosen effect.
+    /// With the found effects.
     pub extended: Extended,
     /// Wall time of the diagnosis, s.
     pub elapsed_s: f64,
     /// Effects that could not be tested, and why.
     pub not_testable: Vec<NotTestable>,
     /// The data set's design.
-    pub design: Design,
-    /// Scatter of mu and within-run noise.
+    pub design: DesignSummary,
+    /// Scatter of mu and the noise the found model leaves.
     pub scatter: Scatter,
+    /// How many rows each part used.
+    pub rows_used: RowsUsed,
     /// The decision rule: thresholds on ΔBIC per level.
     pub thresholds: Thresholds,
-    /// The effect found.
+    /// The strongest effect found.
     #[serde(skip)]
     pub kind: EffectKind,
     /// Its catalogue value (the neutral value for `none`).
@@ -169,16 +129,28 @@ pub struct Diagnosis {
 
 impl Diagnosis {
     /// The candidate for `kind`, if it was tested.
-    pub fn candidate(&self, kind: EffectKind) -> Option<&Candidate> {
+    pub fn candidate(&self, kind: EffectKind) -> Option<&Evidence> {
         self.candidates.iter().find(|c| c.kind == kind)
     }
 
-    /// The found effect as a catalogue [`Effect`].
+    /// The strongest found effect as a catalogue [`Effect`].
     pub fn found(&self) -> Effect {
         Effect {
             kind: self.kind,
             value: self.value,
         }
+    }
+
+    /// Every found effect as a catalogue [`Effect`], strongest first.
+    pub fn found_effects(&self) -> Vec<Effect> {
+        self.candidates
+            .iter()
+            .filter(|c| c.selected)
+            .map(|c| Effect {
+                kind: c.kind,
+                value: c.value,
+            })
+            .collect()
     }
 
     /// The JSON object of `capstan diagnose --json`.

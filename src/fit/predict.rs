@@ -110,6 +110,59 @@ pub fn predict_model(model: &Model, obs: &Observations) -> (Vec<f64>, Vec<f64>) 
     (ev.t2_n, ev.load_memory_ns)
 }
 
+/// Predicted measured T2 of one run's rows (`rows`, in time order) with `model`, written to
+/// `out[i]`. With contact heating (h ≠ 0) the load memory is carried from step to step when
+/// `carry` (the run's step timing is known); otherwise each row starts from a cold contact at
+/// its step change. Without heating every row is `model.predict_t2_n`.
+///
+/// `hint`, if given, holds predictions for nearby parameters (measured T2 per row): the step
+/// equation is then polished by Newton's method from there, a few law evaluations instead of
+/// a bracketed search.
+pub fn predict_run(
+    model: &Model,
+    rows: RunRows<'_>,
+    carry: bool,
+    hint: Option<&[f64]>,
+    out: &mut [f64],
+) {
+    let RunRows {
+        t1_n,
+        op,
+        timing,
+        rows,
+    } = rows;
+    let law = &model.law;
+    if law.heat_per_ns == 0.0 {
+        for &i in rows {
+            out[i] = model.predict_t2_n(t1_n[i], &op[i]);
+        }
+        return;
+    }
+    let tau = law.heat_tau_s;
+    let mut h_acc = 0.0;
+    let mut prev_end: Option<f64> = None;
+    for &i in rows {
+        let tm = timing[i];
+        match prev_end {
+            Some(end) if carry && tm.change_s > end => {
+                h_acc = memory_step(h_acc, tm.change_s - end, 0.0, tau).0;
+            }
+            Some(_) if carry => {}
+            _ => h_acc = 0.0,
+        }
+        let x = model.sensors.true_t1_n(t1_n[i]);
+        let dt_c = tm.centre_s - tm.change_s;
+        let near = hint.map(|h| (h[i] - model.sensors.t2_offset_n) / model.sensors.t2_gain);
+        let y = match near {
+            Some(y0) => solve_step_from(law, x, &op[i], h_acc, dt_c, y0),
+            None => solve_step(law, x, &op[i], h_acc, dt_c).0,
+        };
+        out[i] = model.sensors.measured_t2_n(y);
+        h_acc = memory_step(h_acc, tm.end_s - tm.change_s, y - x, tau).0;
+        prev_end = Some(tm.end_s);
+    }
+}
+
 /// Memory after `dt` of constant `load`, and its partials (dH_new/dH_old, /dload, /dτ).
 fn memory_step(h: f64, dt: f64, load: f64, tau: f64) -> (f64, f64, f64, f64) {
     let mut m = LoadMemory { h_ns: h };
@@ -131,6 +184,56 @@ fn t2_at(law: &FrictionLaw, x: f64, op: &Operating, h: f64) -> f64 {
         ..*op
     };
     law.t2_n(x, &op)
+}
+
+/// The rows of one run and what predicting them needs, by row index.
+#[derive(Clone, Copy)]
+pub struct RunRows<'a> {
+    /// Measured T1 per row, N.
+    pub t1_n: &'a [f64],
+    /// Operating point per row.
+    pub op: &'a [Operating],
+    /// Step timing per row.
+    pub timing: &'a [super::obs::StepTiming],
+    /// The run's rows, in time order.
+    pub rows: &'a [usize],
+}
+
+/// [`solve_step`]'s T2 by Newton's method from a nearby solution `y0` (falls back to the
+/// bracketed search if Newton does not settle at once).
+fn solve_step_from(law: &FrictionLaw, x: f64, op: &Operating, h_acc: f64, dt_c: f64, y0: f64) -> f64 {
+    let tau = law.heat_tau_s;
+    // The memory after dt_c, linear in the load: H(y) = h_acc·a + τ(1 − a)·max(y − x, 0).
+    let a = {
+        let mut m = LoadMemory { h_ns: 1.0 };
+        m.advance(dt_c, 0.0, tau);
+        m.h_ns
+    };
+    let h_of = |y: f64| {
+        if dt_c > 0.0 && tau > 0.0 {
+            h_acc * a + (y - x).max(0.0) * tau * (1.0 - a)
+        } else {
+            h_acc
+        }
+    };
+    let f = |y: f64| t2_at(law, x, op, h_of(y)) - y;
+    if law.heat_per_ns != 0.0 && x > 0.0 && y0.is_finite() && y0 > x {
+        let mut y = y0;
+        for _ in 0..4 {
+            let fy = f(y);
+            if fy.abs() <= 1e-12 * y {
+                return y;
+            }
+            let d = 1e-7 * y;
+            let slope = (f(y + d) - fy) / d;
+            let next = y - fy / slope;
+            if !(slope < 0.0 && next.is_finite() && next > x) {
+                break;
+            }
+            y = next;
+        }
+    }
+    solve_step(law, x, op, h_acc, dt_c).0
 }
 
 /// Solve y = t2_n(x, H(y)) with H(y) = memory after `dt_c` from `h_acc` under load y − x.
@@ -358,6 +461,36 @@ mod tests {
             };
             assert!((m.predict_t2_n(r.t1_n, &op) - t2).abs() < 1e-9 * t2.max(1.0));
             mem.advance(10.0, load, m.law.heat_tau_s);
+        }
+    }
+
+    #[test]
+    fn one_run_predicts_as_the_whole_evaluation() {
+        let obs = Observations::from_dataset(&thesis_dataset());
+        let spec = model_a();
+        let th = spec.start();
+        let ev = evaluate(&spec, &th, &[0.0; 10], &obs, &obs.all_runs(), false);
+        let m = spec.model(&th, 0.0);
+        let t1: Vec<f64> = obs.rows.iter().map(|r| r.t1_n).collect();
+        let op: Vec<Operating> = obs.rows.iter().map(|r| r.op).collect();
+        let tm: Vec<_> = obs.rows.iter().map(|r| r.timing).collect();
+        let mut out = vec![f64::NAN; obs.len()];
+        let mut near = vec![f64::NAN; obs.len()];
+        for run in &obs.runs {
+            let rows = RunRows {
+                t1_n: &t1,
+                op: &op,
+                timing: &tm,
+                rows: run,
+            };
+            predict_run(&m, rows, true, None, &mut out);
+            // From a nearby solution, Newton's method finds the same one.
+            let hint: Vec<f64> = out.iter().map(|y| y * 1.001).collect();
+            predict_run(&m, rows, true, Some(&hint), &mut near);
+        }
+        for i in 0..obs.len() {
+            assert!((out[i] - ev.t2_n[i]).abs() <= 1e-12 * ev.t2_n[i].abs().max(1.0));
+            assert!((near[i] - out[i]).abs() <= 1e-10 * out[i].abs().max(1.0));
         }
     }
 

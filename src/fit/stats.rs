@@ -2,6 +2,7 @@
 //! squares with cluster-robust errors, rank correlation, two-sample and one-sample t tests.
 
 use nalgebra::{DMatrix, DVector};
+use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor, StudentsT};
 use serde::Serialize;
 
 /// Arithmetic mean (NaN for an empty slice).
@@ -58,97 +59,84 @@ pub fn jackknife_se(values: &[f64]) -> f64 {
     ((g - 1.0) / g * ss).sqrt()
 }
 
-/// ln Γ(x) (Lanczos, |error| < 1e-14 for x > 0).
-pub fn ln_gamma(x: f64) -> f64 {
-    const G: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        let pi = std::f64::consts::PI;
-        return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = G[0];
-    let t = x + 7.5;
-    for (i, g) in G.iter().enumerate().skip(1) {
-        a += g / (x + i as f64);
-    }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
-
-/// Regularised incomplete beta I_x(a, b).
-pub fn inc_beta(a: f64, b: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x >= 1.0 {
-        return 1.0;
-    }
-    let ln_front = ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln();
-    if x < (a + 1.0) / (a + b + 2.0) {
-        ln_front.exp() * beta_cf(a, b, x) / a
-    } else {
-        1.0 - ln_front.exp() * beta_cf(b, a, 1.0 - x) / b
-    }
-}
-
-fn beta_cf(a: f64, b: f64, x: f64) -> f64 {
-    let tiny = 1e-300;
-    let (qab, qap, qam) = (a + b, a + 1.0, a - 1.0);
-    let mut c = 1.0;
-    let mut d = 1.0 - qab * x / qap;
-    if d.abs() < tiny {
-        d = tiny;
-    }
-    d = 1.0 / d;
-    let mut h = d;
-    for m in 1..400 {
-        let m = m as f64;
-        let m2 = 2.0 * m;
-        let aa = m * (b - m) * x / ((qam + m2) * (a + m2));
-        d = 1.0 + aa * d;
-        d = if d.abs() < tiny { tiny } else { d };
-        c = 1.0 + aa / c;
-        c = if c.abs() < tiny { tiny } else { c };
-        d = 1.0 / d;
-        h *= d * c;
-        let aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
-        d = 1.0 + aa * d;
-        d = if d.abs() < tiny { tiny } else { d };
-        c = 1.0 + aa / c;
-        c = if c.abs() < tiny { tiny } else { c };
-        d = 1.0 / d;
-        let del = d * c;
-        h *= del;
-        if (del - 1.0).abs() < 1e-15 {
-            break;
-        }
-    }
-    h
-}
-
-/// Two-sided p-value of a t statistic with `df` degrees of freedom.
+/// Two-sided p-value of a t statistic with `df` degrees of freedom (statrs' Student t).
 pub fn t_p_two_sided(t: f64, df: f64) -> f64 {
     if !t.is_finite() {
         return 0.0;
     }
-    inc_beta(0.5 * df, 0.5, df / (df + t * t))
+    match StudentsT::new(0.0, 1.0, df.max(1e-9)) {
+        Ok(d) => 2.0 * d.sf(t.abs()),
+        Err(_) => f64::NAN,
+    }
 }
 
-/// Upper-tail p-value of an F statistic.
+/// Upper-tail p-value of an F statistic (statrs' Fisher-Snedecor).
 pub fn f_p_upper(f: f64, d1: f64, d2: f64) -> f64 {
     if f <= 0.0 {
         return 1.0;
     }
-    inc_beta(0.5 * d2, 0.5 * d1, d2 / (d2 + d1 * f))
+    if !f.is_finite() {
+        return 0.0;
+    }
+    match FisherSnedecor::new(d1.max(1e-9), d2.max(1e-9)) {
+        Ok(d) => d.sf(f),
+        Err(_) => f64::NAN,
+    }
+}
+
+/// The χ² value with `df` degrees of freedom whose upper-tail probability is `p`: puts any
+/// test on the likelihood-ratio scale of an information criterion. Far in the tail (p below
+/// 1e-300, where the quantile no longer resolves) it returns `fallback`.
+pub fn chi2_with_tail(p: f64, df: f64, fallback: f64) -> f64 {
+    if p.is_nan() {
+        return 0.0;
+    }
+    if p >= 1.0 {
+        return 0.0;
+    }
+    if p <= 1e-300 {
+        return fallback;
+    }
+    match ChiSquared::new(df) {
+        // Quantile of the upper tail: for small p through the lower tail of the complement
+        // loses digits, so use the inverse survival function by bisection on sf.
+        Ok(d) => {
+            let (mut lo, mut hi) = (0.0f64, fallback.max(1.0));
+            while d.sf(hi) > p && hi < 1e6 {
+                hi *= 2.0;
+            }
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if d.sf(mid) > p {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+                if hi - lo <= 1e-12 * hi {
+                    break;
+                }
+            }
+            0.5 * (lo + hi)
+        }
+        Err(_) => fallback,
+    }
+}
+
+/// A t statistic with `df` degrees of freedom on the χ²₁ scale (same two-sided tail).
+pub fn chi2_of_t(t: f64, df: f64) -> f64 {
+    if !t.is_finite() {
+        return 0.0;
+    }
+    chi2_with_tail(t_p_two_sided(t, df), 1.0, t * t)
+}
+
+/// An F statistic with (d1, d2) degrees of freedom on the χ²_{d1} scale (same upper tail): a
+/// quasi-likelihood ratio divided by an overdispersion estimated from d2 clusters.
+pub fn chi2_of_f(f: f64, d1: f64, d2: f64) -> f64 {
+    if !(f.is_finite() && f > 0.0) {
+        return 0.0;
+    }
+    chi2_with_tail(f_p_upper(f, d1, d2), d1, f * d1)
 }
 
 /// A linear regression with standard errors.
@@ -198,24 +186,20 @@ pub fn regress(
         }
         Some(cl) => {
             let g_max = cl.iter().copied().max().unwrap_or(0) + 1;
-            let mut meat = DMatrix::<f64>::zeros(k, k);
-            let mut n_g = 0;
-            for g in 0..g_max {
-                let mut s = DVector::<f64>::zeros(k);
-                let mut any = false;
-                for i in 0..n {
-                    if cl[i] == g {
-                        any = true;
-                        for j in 0..k {
-                            s[j] += xw[(i, j)] * resid[i];
-                        }
-                    }
-                }
-                if any {
-                    n_g += 1;
-                    meat += &s * s.transpose();
+            // Each cluster's score, accumulated in one pass over the rows.
+            let mut scores = vec![DVector::<f64>::zeros(k); g_max];
+            let mut seen = vec![false; g_max];
+            for i in 0..n {
+                seen[cl[i]] = true;
+                for j in 0..k {
+                    scores[cl[i]][j] += xw[(i, j)] * resid[i];
                 }
             }
+            let mut meat = DMatrix::<f64>::zeros(k, k);
+            for s in scores.iter() {
+                meat += s * s.transpose();
+            }
+            let n_g = seen.iter().filter(|&&x| x).count();
             let g = n_g as f64;
             let c = g / (g - 1.0) * (n as f64 - 1.0) / (n as f64 - k as f64);
             (&xtx_inv * meat * &xtx_inv * c, g - 1.0)
@@ -345,7 +329,12 @@ mod tests {
         // t(10) two-sided 5 % critical value 2.228; F(2, 20) 5 % critical value 3.493.
         assert!((t_p_two_sided(2.228_138_9, 10.0) - 0.05).abs() < 1e-6);
         assert!((f_p_upper(3.492_828, 2.0, 20.0) - 0.05).abs() < 1e-6);
-        assert!((ln_gamma(5.0) - 24f64.ln()).abs() < 1e-12);
+        // χ² scale: a two-sided t of 1.96 with many df is χ²₁ = 3.84; F(1, ∞) = χ²₁.
+        assert!((chi2_of_t(1.959_964, 1e6) - 3.841_459).abs() < 1e-4);
+        assert!((chi2_of_f(3.841_459, 1.0, 1e7) - 3.841_459).abs() < 1e-3);
+        // Few clusters make the same statistic weaker evidence.
+        assert!(chi2_of_f(10.0, 1.0, 9.0) < 7.0);
+        assert_eq!(chi2_with_tail(1e-320, 1.0, 1234.0), 1234.0);
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! The report's section quoting `capstan diagnose` on the same data.
 
 use super::html::esc;
-use crate::analysis::diagnosis::{parameter, verdict, Call, DiagnoseQuote};
+use crate::analysis::diagnosis::{verdict, Call, DiagnoseQuote};
+use crate::diagnose::words::parameter;
 use std::fmt::Write as _;
 
 /// How many candidates of each call the table shows.
@@ -23,7 +24,11 @@ fn call_table(h: &mut String, c: &Call) {
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.1}</td><td>{}</td></tr>",
             k.effect,
             level.as_ref().and_then(|v| v.as_str()).unwrap_or(""),
-            esc(&parameter(k)),
+            esc(&k
+                .parameters
+                .iter()
+                .next()
+                .map_or(String::new(), |(n, v)| parameter(n, *v, k.parameter_se))),
             k.delta_bic,
             if k.supported { "yes" } else { "no" }
         );

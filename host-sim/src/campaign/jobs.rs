@@ -59,6 +59,10 @@ impl CampaignConfig {
         if !(self.scatter_pct.is_finite() && (0.0..=50.0).contains(&self.scatter_pct)) {
             return Err(Bad("scatter (%)", self.scatter_pct, "must be 0 to 50"));
         }
+        let run_scatter_pct = self.run_scatter_pct.unwrap_or(0.5 * self.scatter_pct);
+        if !(run_scatter_pct.is_finite() && (0.0..=50.0).contains(&run_scatter_pct)) {
+            return Err(Bad("run scatter (%)", run_scatter_pct, "must be 0 to 50"));
+        }
         let n = self.run_count() as u32;
         for f in &self.faults {
             if let Some(r) = f.run.filter(|&r| r > n) {
@@ -86,10 +90,9 @@ impl CampaignConfig {
                         index += 1;
                         let run_seed = derive_seed(cord_seed, &[run as u64]);
                         let run_z = Rng::new(run_seed).normal();
-                        let sc = self.scatter_pct / 100.0;
+                        let (sc, sr) = (self.scatter_pct / 100.0, run_scatter_pct / 100.0);
                         let mut m = model;
-                        m.law.mu =
-                            (m.law.mu * (1.0 + sc * cord_z) * (1.0 + 0.5 * sc * run_z)).max(0.0);
+                        m.law.mu = (m.law.mu * (1.0 + sc * cord_z) * (1.0 + sr * run_z)).max(0.0);
                         let plant = setup::cord_plant(&self.plant, d, self.sensor_noise);
                         let protocol = setup::cord_protocol(
                             &self.protocol,
@@ -111,6 +114,7 @@ impl CampaignConfig {
                             .collect();
                         let mut cs = CordSetup::new(w, m);
                         cs.run = run;
+                        cs.unmodelled = self.unmodelled;
                         let spec = RunSpec {
                             plant,
                             cord: cs,

@@ -17,8 +17,17 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     if !effects.is_empty() {
         bail!("--effect is for campaigns; the two-control rig runs the base model (--mu)");
     }
-    if !args.faults.is_empty() {
-        bail!("--fault is for campaigns, not --two-control");
+    for (flag, given) in [
+        ("--fault", !args.faults.is_empty()),
+        ("--scatter", args.scatter.is_some()),
+        ("--run-scatter", args.run_scatter.is_some()),
+        ("--unmodelled", !args.unmodelled.is_empty()),
+        ("--noise", args.noise != "quiet"),
+        ("--runs", args.runs != 6),
+    ] {
+        if given {
+            bail!("{flag} is for campaigns, not --two-control");
+        }
     }
     let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
     let n = wraps.len();

@@ -137,6 +137,8 @@ impl Param {
             EffectKind::Wear => Param::MuChangePerRun,
             EffectKind::DiameterDependence => Param::MuChangePerMm,
             EffectKind::SpeedDependence => Param::MuChangePerV,
+            // The catalogue value is h·τ with τ = `capstan_friction::HEAT_TAU_S`.
+            EffectKind::ContactHeating => Param::HeatPerNs,
         })
     }
 
@@ -261,7 +263,12 @@ mod tests {
             let p = Param::from_effect(kind).unwrap();
             let m = Model::euler_eytelwein(0.1)
                 .with_effect(capstan_friction::Effect { kind, value: 0.77 });
-            assert_eq!(p.get(&m), 0.77, "{kind}");
+            let scale = if kind == EffectKind::ContactHeating {
+                capstan_friction::HEAT_TAU_S
+            } else {
+                1.0
+            };
+            assert!((p.get(&m) * scale - 0.77).abs() < 1e-15, "{kind}");
         }
     }
 }

@@ -1,0 +1,116 @@
+//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan::diagnose::cases`).
+//!
+//! ```text
+//! cargo run --release --example calibrate -- [SEED] [--every K] [--grid] [--verbose]
+//!                                            [--dump-seed CASE_SEED]
+//! ```
+//! * without `--grid`: the figures of the default decision rule on the cases of SEED (every
+//!   K-th case), with every miss;
+//! * `--grid`: the same figures for a grid of thresholds (within-run ΔBIC, between ΔBIC, the
+//!   adequacy test's α and size), on the same simulated data sets: how the thresholds in
+//!   `src/evidence/mod.rs` and `src/evidence/adequacy.rs` were chosen (on seed 99; the test
+//!   asserts on another seed);
+//! * `--dump-seed S`: write the case with seed S to /tmp/case.csv.
+use capstan::diagnose::{cases, diagnose_with, score, Options};
+use capstan::evidence::AdequacyRule;
+
+fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> Option<T> {
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let seed: u64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(99);
+    let every: usize = arg(&args, "--every").unwrap_or(1);
+    let verbose = args.iter().any(|a| a == "--verbose");
+    let cs: Vec<cases::Case> = cases::draw_cases(seed)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % every == 0)
+        .map(|x| x.1)
+        .collect();
+    if let Some(s) = arg::<u64>(&args, "--dump-seed") {
+        let c = cs.iter().find(|c| c.seed == s).expect("a case with that seed");
+        let (d, _) = c.generate().expect("the case simulates");
+        let mut f = std::fs::File::create("/tmp/case.csv").expect("/tmp is writable");
+        capstan::data::write_pairs_to(&mut f, &d.pairs).expect("written");
+        eprintln!("wrote /tmp/case.csv: {}", c.describe());
+        return;
+    }
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let t0 = std::time::Instant::now();
+    let data = score::generate(&cs, threads).expect("every case simulates");
+    eprintln!("{} cases simulated in {:.1} s", cs.len(), t0.elapsed().as_secs_f64());
+    if args.iter().any(|a| a == "--grid") {
+        println!("within between alpha ratio | single pairs outside clean | small");
+        for within in [4.0, 6.0, 8.0, 10.0] {
+            for between in [2.0, 4.0, 6.0] {
+                for (alpha, ratio) in [(1e-3, 0.35), (5e-4, 0.5), (5e-4, 0.35)] {
+                    let opts = Options {
+                        within_threshold: within,
+                        between_threshold: between,
+                        adequacy: AdequacyRule {
+                            alpha,
+                            min_ratio: ratio,
+                            ..AdequacyRule::default()
+                        },
+                        threads: 1,
+                        ..Options::default()
+                    };
+                    let out = score::evaluate(&cs, &data, threads, |d| diagnose_with(d, &opts));
+                    let m = score::Metrics::of(&out);
+                    let f = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
+                    println!(
+                        "{within:>6} {between:>7} {alpha:>5} {ratio:>5} | {:>5.1} {:>5.1} {:>5.1} {:>5.1} | {:>5.1}{}",
+                        f(m.single),
+                        f(m.pairs),
+                        f(m.outside),
+                        f(m.clean_alarms),
+                        f(m.small),
+                        if m.failures().is_empty() { "  passes" } else { "" }
+                    );
+                }
+            }
+        }
+        return;
+    }
+    let opts = Options::default();
+    let out = score::evaluate(&cs, &data, threads, |d| diagnose_with(d, &opts));
+    let m = score::Metrics::of(&out);
+    print!("{}", m.table());
+    for class in [cases::Class::Single, cases::Class::SmallSingle] {
+        let pe: Vec<String> = score::per_effect(&out, class)
+            .iter()
+            .filter(|x| x.2 > 0)
+            .map(|(k, a, b)| format!("{}:{a}/{b}", k.name()))
+            .collect();
+        println!("{}: {}", class.name(), pe.join(" "));
+    }
+    for o in &out {
+        if !o.correct() || verbose {
+            let found: Vec<String> = o
+                .found
+                .iter()
+                .map(|e| format!("{}={:.4}", e.kind, e.value))
+                .collect();
+            println!(
+                "{} {} -> {:?} unexplained={} {:?} | {}",
+                if o.correct() { "ok  " } else { "MISS" },
+                o.describe,
+                found,
+                o.unexplained,
+                o.pattern,
+                o.candidates
+            );
+        }
+    }
+    let rows: usize = out.iter().map(|o| o.rows).sum();
+    let secs: f64 = out.iter().map(|o| o.elapsed_s).sum();
+    println!(
+        "diagnose: {:.1} ms per 1000 rows on average",
+        1e3 * secs / rows as f64 * 1000.0
+    );
+}

@@ -1,0 +1,146 @@
+//! Forward selection of the within-run effects: start from every run's own mu (Euler-Eytelwein
+//! in shape), add the best-fitting of the candidates supported given those already in, drop any earlier one that no longer is, and report every candidate's evidence
+//! given the final set (the selected ones by dropping each, the others by adding each).
+//!
+//! The evidence of one parameter is a quasi-likelihood ratio: the weighted likelihood ratio
+//! LR = n·ln(WRSS_without / WRSS_with), divided by the parameter's overdispersion ĉ (its
+//! cluster-robust variance over its model-based variance, runs as clusters, at least 1), put
+//! on the χ²₁ scale through the F(1, G − 1) distribution (ĉ is estimated from G runs), and
+//! ΔBIC = −χ² + ln n.
+
+use super::candidates::{practically_relevant, ThetaMap};
+use super::design::Design;
+use super::within::{fit_multistart, Weights, WithinFit};
+use super::Evidence;
+use crate::fit::stats::chi2_of_f;
+use capstan_friction::EffectKind;
+
+/// Evidence for parameter `j` of `with` against `without` (the same set without it).
+fn evidence(d: &Design, without: &WithinFit, with: &WithinFit, j: usize) -> Evidence {
+    let n = d.n() as f64;
+    let g = d.units.len() as f64;
+    let lr = (n * (without.wrss / with.wrss).ln()).max(0.0);
+    let c_hat = with.c_hat(j);
+    let chi2 = chi2_of_f(lr / c_hat, 1.0, (g - 1.0).max(1.0));
+    let kind = with.maps[j].kind;
+    let mut e = Evidence::new(
+        kind,
+        with.value(j),
+        with.se_robust(j),
+        -chi2 + n.ln(),
+        chi2,
+        g - 1.0,
+    );
+    e.overdispersion = c_hat;
+    e.relevant = practically_relevant(kind, e.value, d);
+    e
+}
+
+/// `fit`'s set with `kind` added (its θ from its starts, the others warm).
+fn add(d: &Design, fit: &WithinFit, kind: EffectKind, w: &Weights) -> WithinFit {
+    let mut maps = fit.maps.clone();
+    maps.push(ThetaMap::for_kind(kind, d));
+    let mut theta = fit.theta.clone();
+    theta.push(0.0);
+    fit_multistart(d, &maps, &theta, &fit.mu, w)
+}
+
+/// `fit`'s set without parameter `j` (warm start).
+fn drop(d: &Design, fit: &WithinFit, j: usize, w: &Weights) -> WithinFit {
+    let keep: Vec<usize> = (0..fit.k()).filter(|&x| x != j).collect();
+    let maps: Vec<ThetaMap> = keep.iter().map(|&x| fit.maps[x]).collect();
+    let theta: Vec<f64> = keep.iter().map(|&x| fit.theta[x]).collect();
+    super::within::fit(d, &maps, &theta, &fit.mu, w)
+}
+
+/// Run `f` over `items` on up to `threads` threads, results in input order.
+fn par<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    crate::fit::par::par_map(items, threads, f)
+}
+
+/// The result of the within-run selection.
+pub struct WithinSelection {
+    /// The final fit (the selected effects, in the order they came in).
+    pub fit: WithinFit,
+    /// Every testable candidate's evidence given the final set.
+    pub evidence: Vec<Evidence>,
+    /// The order in which effects were added, with their ΔBIC when added.
+    pub path: Vec<(EffectKind, f64)>,
+}
+
+/// Forward selection from `null` over `candidates`. A candidate is supported when it is
+/// practically relevant and its ΔBIC is below −`threshold`.
+pub fn forward(
+    d: &Design,
+    null: WithinFit,
+    candidates: &[EffectKind],
+    w: &Weights,
+    threshold: f64,
+    threads: usize,
+) -> WithinSelection {
+    let supported = |e: &Evidence| e.relevant && e.delta_bic < -threshold;
+    let mut last: Vec<Evidence> = Vec::new();
+    let mut current = null;
+    let mut path = Vec::new();
+    // An effect that a later one made redundant does not come back (stepwise selection can
+    // otherwise cycle), so the loop ends after at most two rounds per candidate.
+    let mut retired: Vec<EffectKind> = Vec::new();
+    for _round in 0..=2 * candidates.len() {
+        let pool: Vec<EffectKind> = candidates
+            .iter()
+            .copied()
+            .filter(|&k| !current.maps.iter().any(|m| m.kind == k) && !retired.contains(&k))
+            .collect();
+        let fits: Vec<WithinFit> = par(&pool, threads, |&k| add(d, &current, k, w));
+        last = fits
+            .iter()
+            .map(|f| evidence(d, &current, f, f.k() - 1))
+            .collect();
+        // Among the supported candidates the best fit comes in: each one's overdispersion
+        // decides whether it is supported, not which of two rival shapes the data prefer.
+        let best = (0..fits.len())
+            .filter(|&i| supported(&last[i]))
+            .min_by(|&a, &b| fits[a].wrss.total_cmp(&fits[b].wrss));
+        let Some(b) = best else { break };
+        path.push((pool[b], last[b].delta_bic));
+        current = fits.into_iter().nth(b).expect("index in range");
+        // An earlier effect that the new one makes redundant leaves again.
+        while current.k() > 1 {
+            let drops: Vec<(WithinFit, Evidence)> = (0..current.k() - 1)
+                .map(|j| {
+                    let less = drop(d, &current, j, w);
+                    let e = evidence(d, &less, &current, j);
+                    (less, e)
+                })
+                .collect();
+            let weakest = (0..drops.len())
+                .filter(|&j| !supported(&drops[j].1))
+                .max_by(|&a, &b| drops[a].1.delta_bic.total_cmp(&drops[b].1.delta_bic));
+            match weakest {
+                Some(j) => {
+                    retired.push(current.maps[j].kind);
+                    current = drops.into_iter().nth(j).expect("index in range").0;
+                }
+                None => break,
+            }
+        }
+    }
+    // The selected effects, each given the others.
+    let mut evidence: Vec<Evidence> = (0..current.k())
+        .map(|j| {
+            let less = drop(d, &current, j, w);
+            let mut e = evidence(d, &less, &current, j);
+            e.selected = true;
+            e
+        })
+        .collect();
+    evidence.extend(last);
+    for e in &mut evidence {
+        e.supported = supported(e);
+    }
+    WithinSelection {
+        fit: current,
+        evidence,
+        path,
+    }
+}

@@ -1,0 +1,539 @@
+//! Within-run fits: every run has its own mu, and a set of effects shares its parameters θ
+//! across runs.
+//!
+//! T2ᵢ = Model(mu_r(i), θ).predict(T1ᵢ, opᵢ), weighted least squares in T2 (N) with the
+//! weights of the noise's variance function ([`Weights`]). Giving every run its own mu
+//! conditions out everything that varies between runs and cords (their scatter of mu, their
+//! tare, wear, diameter and speed dependence, a gain error): what is left to θ is the shape of
+//! T2 against T1, time and wrap inside runs — the within estimator of a mixed model whose run
+//! effects are far larger than the noise.
+//!
+//! The problem is solved by Levenberg-Marquardt on (θ, mu₁…mu_R) through its arrow-head
+//! structure: each residual depends on θ and on its own run's mu only, so the normal equations
+//! reduce (Schur complement) to a k×k system for δθ plus R scalar ones. Predictions come from
+//! `fit::predict::predict_run` (the shared `capstan_friction::Model`, with the contact's load
+//! memory carried along each run); sensitivities are forward differences of it.
+//!
+//! Uncertainty: the model-based covariance σ²S⁻¹ (S the Schur complement of the information)
+//! and the cluster-robust sandwich with runs as clusters (CR1, G/(G − 1)), built from each
+//! run's profile score (its mu projected out): valid whatever the correlation of residuals
+//! inside a run (its tare, the wander of its mu, serial correlation).
+
+use super::candidates::{run_model, ThetaMap};
+use super::design::Design;
+use crate::fit::predict::{predict_run, RunRows};
+use nalgebra::{DMatrix, DVector};
+
+/// Weights of the rows: 1/(σ_a² + σ_r²·f²), the variance of a T2 reading that carries an
+/// absolute part (zero errors, sensor noise) and one proportional to the tension (mu's
+/// wander and scatter).
+#[derive(Clone, Debug)]
+pub struct Weights {
+    /// Per row.
+    pub w: Vec<f64>,
+    /// σ_a, N.
+    pub sd_abs_n: f64,
+    /// σ_r (fraction of T2).
+    pub sd_rel: f64,
+}
+
+impl Weights {
+    /// Equal weights.
+    pub fn equal(n: usize) -> Weights {
+        Weights {
+            w: vec![1.0; n],
+            sd_abs_n: 1.0,
+            sd_rel: 0.0,
+        }
+    }
+
+    /// The variance function fitted to residuals `r` at fitted values `f`: least squares of
+    /// r² on (1, f²) with both coefficients kept positive, then w = 1/(σ_a² + σ_r²·f²).
+    pub fn from_residuals(r: &[f64], f: &[f64]) -> Weights {
+        let n = r.len();
+        let (mut s00, mut s01, mut s11, mut y0, mut y1) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for i in 0..n {
+            if !(r[i].is_finite() && f[i].is_finite()) {
+                continue;
+            }
+            let x = f[i] * f[i];
+            let y = r[i] * r[i];
+            s00 += 1.0;
+            s01 += x;
+            s11 += x * x;
+            y0 += y;
+            y1 += x * y;
+        }
+        let det = s00 * s11 - s01 * s01;
+        let (mut a, mut b) = if det > 1e-12 * s00 * s11 {
+            ((s11 * y0 - s01 * y1) / det, (s00 * y1 - s01 * y0) / det)
+        } else {
+            (y0 / s00.max(1.0), 0.0)
+        };
+        if b < 0.0 {
+            b = 0.0;
+            a = y0 / s00.max(1.0);
+        }
+        if a <= 0.0 {
+            a = 0.0;
+            b = if s11 > 0.0 { y1 / s11 } else { 0.0 };
+        }
+        // Keep a floor on both parts (a quarter of an ADC count; 0.1 % of the tension) so that
+        // no row gets an unbounded weight.
+        let a = a.max(0.004f64.powi(2));
+        let b = b.max(1e-6);
+        let w = f
+            .iter()
+            .map(|&fi| {
+                let fi = if fi.is_finite() { fi } else { 0.0 };
+                1.0 / (a + b * fi * fi)
+            })
+            .collect();
+        Weights {
+            w,
+            sd_abs_n: a.sqrt(),
+            sd_rel: b.sqrt(),
+        }
+    }
+}
+
+impl Weights {
+    /// The variance function of the residuals of a smooth curve per run: T2 on (1, T1, T1²)
+    /// inside each run of five rows or more. Any catalogue effect is smooth along a run, so what
+    /// such a curve leaves is the noise, whatever the effects (scaled by √(m/(m − 3)) for the
+    /// curve's three values per run).
+    pub fn from_run_curves(d: &Design) -> Weights {
+        let n = d.n();
+        let (mut r, mut f) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+        for rows in &d.units {
+            let m = rows.len();
+            if m < 5 {
+                continue;
+            }
+            let x: Vec<Vec<f64>> = rows
+                .iter()
+                .map(|&i| vec![1.0, d.t1[i], d.t1[i] * d.t1[i]])
+                .collect();
+            let y: Vec<f64> = rows.iter().map(|&i| d.t2[i]).collect();
+            let Some(reg) = crate::fit::stats::regress(&x, &y, None, None) else {
+                continue;
+            };
+            let scale = (m as f64 / (m as f64 - 3.0)).sqrt();
+            for (k, &i) in rows.iter().enumerate() {
+                let fit: f64 = (0..3).map(|j| x[k][j] * reg.coef[j]).sum();
+                f[i] = fit;
+                r[i] = (y[k] - fit) * scale;
+            }
+        }
+        let mut w = Weights::from_residuals(&r, &f);
+        // Rows of short runs: weigh them by their own tension.
+        for i in 0..n {
+            if !f[i].is_finite() {
+                let t = d.t2[i].abs();
+                w.w[i] = 1.0 / (w.sd_abs_n.powi(2) + (w.sd_rel * t).powi(2));
+            }
+        }
+        w
+    }
+}
+
+/// A fitted within-run model.
+#[derive(Clone, Debug)]
+pub struct WithinFit {
+    /// The effects and their θ maps, in θ order.
+    pub maps: Vec<ThetaMap>,
+    /// θ (internal coordinates).
+    pub theta: Vec<f64>,
+    /// Every run's mu.
+    pub mu: Vec<f64>,
+    /// Fitted T2 per row, N.
+    pub fitted: Vec<f64>,
+    /// Weighted residual sum of squares.
+    pub wrss: f64,
+    /// Unweighted residual sum of squares, N².
+    pub rss: f64,
+    /// Model-based covariance of θ, σ²S⁻¹ (row-major k×k; NaN where S is singular).
+    pub cov_model: Vec<f64>,
+    /// Cluster-robust covariance of θ (runs as clusters, CR1).
+    pub cov_robust: Vec<f64>,
+}
+
+impl WithinFit {
+    /// Number of shared parameters.
+    pub fn k(&self) -> usize {
+        self.maps.len()
+    }
+
+    /// Catalogue value of parameter `j`.
+    pub fn value(&self, j: usize) -> f64 {
+        self.maps[j].value(self.theta[j])
+    }
+
+    /// Overdispersion of parameter `j`: robust over model-based variance (at least 1).
+    pub fn c_hat(&self, j: usize) -> f64 {
+        let k = self.k();
+        let r = self.cov_robust[j * k + j] / self.cov_model[j * k + j];
+        if r.is_finite() {
+            r.max(1.0)
+        } else {
+            1.0
+        }
+    }
+
+    /// Cluster-robust standard error of the catalogue value of parameter `j`.
+    pub fn se_robust(&self, j: usize) -> f64 {
+        let k = self.k();
+        self.cov_robust[j * k + j].max(0.0).sqrt() * self.maps[j].derivative(self.theta[j]).abs()
+    }
+
+    /// Residuals, N.
+    pub fn residuals(&self, d: &Design) -> Vec<f64> {
+        (0..d.n()).map(|i| d.t2[i] - self.fitted[i]).collect()
+    }
+}
+
+/// The rows of run `u` for the predictor.
+fn run_rows(d: &Design, u: usize) -> RunRows<'_> {
+    RunRows {
+        t1_n: &d.t1,
+        op: &d.op,
+        timing: &d.timing,
+        rows: &d.units[u],
+    }
+}
+
+/// Predict every row for run mu `mu` and shared `theta` (from predictions `near` for nearby
+/// values, if given); returns (WRSS, RSS).
+fn predict(
+    d: &Design,
+    maps: &[ThetaMap],
+    (mu, theta): (&[f64], &[f64]),
+    w: &Weights,
+    near: Option<&[f64]>,
+    out: &mut [f64],
+) -> (f64, f64) {
+    for u in 0..d.units.len() {
+        let m = run_model(maps, mu[u], theta);
+        predict_run(&m, run_rows(d, u), d.timed, near, out);
+    }
+    let (mut wrss, mut rss) = (0.0, 0.0);
+    for i in 0..d.n() {
+        let r = out[i] - d.t2[i];
+        rss += r * r;
+        wrss += w.w[i] * r * r;
+    }
+    if wrss.is_finite() {
+        (wrss, rss)
+    } else {
+        (f64::INFINITY, f64::INFINITY)
+    }
+}
+
+/// Sensitivities of every row: a = ∂f/∂mu (own run), b = ∂f/∂θ (row-major n×k).
+struct Sens {
+    a: Vec<f64>,
+    b: Vec<f64>,
+    scratch: Vec<f64>,
+}
+
+impl Sens {
+    fn new(n: usize, k: usize) -> Sens {
+        Sens {
+            a: vec![0.0; n],
+            b: vec![0.0; n * k],
+            scratch: vec![0.0; n],
+        }
+    }
+}
+
+/// Forward differences at (mu, θ) around the predictions `f0`.
+fn jacobian(d: &Design, maps: &[ThetaMap], mu: &[f64], theta: &[f64], f0: &[f64], s: &mut Sens) {
+    let n = d.n();
+    let k = maps.len();
+    let Sens { a, b, scratch } = s;
+    let h: Vec<f64> = mu.iter().map(|m| 1e-6 * m.abs().max(1e-3)).collect();
+    let mu_h: Vec<f64> = mu.iter().zip(&h).map(|(m, h)| m + h).collect();
+    for (u, rows) in d.units.iter().enumerate() {
+        let m = run_model(maps, mu_h[u], theta);
+        predict_run(&m, run_rows(d, u), d.timed, Some(f0), scratch);
+        for &i in rows {
+            a[i] = (scratch[i] - f0[i]) / h[u];
+        }
+    }
+    for j in 0..k {
+        let step = maps[j].step();
+        let hb = if theta[j] + step > maps[j].hi { -step } else { step };
+        let mut th = theta.to_vec();
+        th[j] += hb;
+        for u in 0..d.units.len() {
+            let m = run_model(maps, mu[u], &th);
+            predict_run(&m, run_rows(d, u), d.timed, Some(f0), scratch);
+        }
+        for i in 0..n {
+            b[i * k + j] = (scratch[i] - f0[i]) / hb;
+        }
+    }
+}
+
+/// Per-run and shared sums of the normal equations.
+struct Normal {
+    d: Vec<f64>,
+    c: Vec<f64>,
+    g: Vec<f64>,
+    h: DMatrix<f64>,
+    gb: DVector<f64>,
+}
+
+fn normal(d: &Design, k: usize, w: &Weights, resid: &[f64], a: &[f64], b: &[f64]) -> Normal {
+    let nu = d.units.len();
+    let mut nm = Normal {
+        d: vec![0.0; nu],
+        c: vec![0.0; nu * k],
+        g: vec![0.0; nu],
+        h: DMatrix::zeros(k, k),
+        gb: DVector::zeros(k),
+    };
+    for (u, rows) in d.units.iter().enumerate() {
+        let (mut du, mut gu) = (0.0, 0.0);
+        for &i in rows {
+            let wi = w.w[i];
+            du += wi * a[i] * a[i];
+            gu += wi * a[i] * resid[i];
+            for j in 0..k {
+                let bj = b[i * k + j];
+                nm.c[u * k + j] += wi * a[i] * bj;
+                nm.gb[j] += wi * bj * resid[i];
+                for l in 0..=j {
+                    nm.h[(j, l)] += wi * bj * b[i * k + l];
+                }
+            }
+        }
+        nm.d[u] = du.max(1e-300);
+        nm.g[u] = gu;
+    }
+    for j in 0..k {
+        for l in 0..j {
+            nm.h[(l, j)] = nm.h[(j, l)];
+        }
+    }
+    nm
+}
+
+/// S = H − Σ c cᵀ/d with the run terms damped by (1 + λ) and H's diagonal by (1 + λ).
+fn schur(nm: &Normal, k: usize, lambda: f64) -> (DMatrix<f64>, DVector<f64>) {
+    let mut s = nm.h.clone();
+    for j in 0..k {
+        s[(j, j)] *= 1.0 + lambda;
+    }
+    let mut rhs = -nm.gb.clone();
+    for u in 0..nm.d.len() {
+        let du = nm.d[u] * (1.0 + lambda);
+        let c = &nm.c[u * k..(u + 1) * k];
+        for j in 0..k {
+            rhs[j] += c[j] * nm.g[u] / du;
+            for l in 0..k {
+                s[(j, l)] -= c[j] * c[l] / du;
+            }
+        }
+    }
+    (s, rhs)
+}
+
+/// The Newton step of θ from S·δ = rhs, with any parameter that sits on a bound and would step
+/// out of it held there (its row and column taken out of the system): a projected step, so an
+/// effect pinned at its neutral bound (B = 0) neither creeps nor stalls the others.
+fn bounded_step(
+    mut s: DMatrix<f64>,
+    mut rhs: DVector<f64>,
+    theta: &[f64],
+    maps: &[ThetaMap],
+) -> DVector<f64> {
+    let k = theta.len();
+    if k == 0 {
+        return DVector::zeros(0);
+    }
+    let solve = |s: &DMatrix<f64>, rhs: &DVector<f64>| {
+        s.clone().lu().solve(rhs).unwrap_or_else(|| DVector::zeros(k))
+    };
+    let mut step = solve(&s, &rhs);
+    for _ in 0..k {
+        let pinned: Vec<usize> = (0..k)
+            .filter(|&j| {
+                let span = (maps[j].hi - maps[j].lo).abs().max(1e-300);
+                let at_lo = theta[j] - maps[j].lo <= 1e-12 * span && step[j] < 0.0;
+                let at_hi = maps[j].hi - theta[j] <= 1e-12 * span && step[j] > 0.0;
+                (at_lo || at_hi) && s[(j, j)] != 1.0
+            })
+            .collect();
+        if pinned.is_empty() {
+            break;
+        }
+        for &j in &pinned {
+            for l in 0..k {
+                s[(j, l)] = 0.0;
+                s[(l, j)] = 0.0;
+            }
+            s[(j, j)] = 1.0;
+            rhs[j] = 0.0;
+        }
+        step = solve(&s, &rhs);
+    }
+    step
+}
+
+/// Fit the effects of `maps` from θ₀ and run mu₀.
+pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weights) -> WithinFit {
+    let n = d.n();
+    let k = maps.len();
+    let nu = d.units.len();
+    let mut theta: Vec<f64> = theta0
+        .iter()
+        .zip(maps)
+        .map(|(t, m)| t.clamp(m.lo, m.hi))
+        .collect();
+    let mut mu = mu0.to_vec();
+    let mut f = vec![0.0; n];
+    let mut trial = vec![0.0; n];
+    let mut sens = Sens::new(n, k);
+    let (mut wrss, mut rss) = predict(d, maps, (&mu, &theta), w, None, &mut f);
+    let mut lambda = 1e-3;
+    let mut _iters = 0;
+    for _iter in 0..80 {
+        _iters += 1;
+        jacobian(d, maps, &mu, &theta, &f, &mut sens);
+        let resid: Vec<f64> = (0..n).map(|i| f[i] - d.t2[i]).collect();
+        let nm = normal(d, k, w, &resid, &sens.a, &sens.b);
+        let mut improved = false;
+        for _ in 0..30 {
+            let (s, rhs) = schur(&nm, k, lambda);
+            let dtheta = bounded_step(s, rhs, &theta, maps);
+            let new_theta: Vec<f64> = (0..k)
+                .map(|j| (theta[j] + dtheta[j]).clamp(maps[j].lo, maps[j].hi))
+                .collect();
+            let dt: Vec<f64> = (0..k).map(|j| new_theta[j] - theta[j]).collect();
+            let new_mu: Vec<f64> = (0..nu)
+                .map(|u| {
+                    let c = &nm.c[u * k..(u + 1) * k];
+                    let cd: f64 = c.iter().zip(&dt).map(|(c, t)| c * t).sum();
+                    (mu[u] + (-nm.g[u] - cd) / (nm.d[u] * (1.0 + lambda))).max(1e-4)
+                })
+                .collect();
+            let (new_wrss, new_rss) =
+                predict(d, maps, (&new_mu, &new_theta), w, Some(&f), &mut trial);
+            if new_wrss < wrss {
+                let rel = (wrss - new_wrss) / wrss.max(1e-300);
+                theta = new_theta;
+                mu = new_mu;
+                wrss = new_wrss;
+                rss = new_rss;
+                std::mem::swap(&mut f, &mut trial);
+                lambda = (lambda / 4.0).max(1e-9);
+                improved = rel > 1e-10;
+                break;
+            }
+            lambda *= 5.0;
+            if lambda > 1e12 {
+                break;
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    if std::env::var("CAPSTAN_TRACE").is_ok() {
+        eprintln!("fit {:?} iters {_iters}", maps.iter().map(|m| m.kind.name()).collect::<Vec<_>>());
+    }
+    let (cov_model, cov_robust) = covariances(d, maps, &mu, &theta, &f, w, wrss);
+    WithinFit {
+        maps: maps.to_vec(),
+        theta,
+        mu,
+        fitted: f,
+        wrss,
+        rss,
+        cov_model,
+        cov_robust,
+    }
+}
+
+/// Model-based and cluster-robust covariances of θ at the solution.
+fn covariances(d: &Design, maps: &[ThetaMap], mu: &[f64], theta: &[f64], f: &[f64], w: &Weights, wrss: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = d.n();
+    let k = maps.len();
+    let nan = vec![f64::NAN; k * k];
+    if k == 0 {
+        return (Vec::new(), Vec::new());
+    }
+    let mut sens = Sens::new(n, k);
+    jacobian(d, maps, mu, theta, f, &mut sens);
+    let (a, b) = (&sens.a, &sens.b);
+    let resid: Vec<f64> = (0..n).map(|i| f[i] - d.t2[i]).collect();
+    let nm = normal(d, k, w, &resid, a, b);
+    let (s, _) = schur(&nm, k, 0.0);
+    let Some(s_inv) = s.try_inverse() else {
+        return (nan.clone(), nan);
+    };
+    let g = d.units.len() as f64;
+    let dof = (n as f64 - g - k as f64).max(1.0);
+    let sigma2 = wrss / dof;
+    let mut meat = DMatrix::<f64>::zeros(k, k);
+    for (u, rows) in d.units.iter().enumerate() {
+        let c = &nm.c[u * k..(u + 1) * k];
+        let mut score = DVector::<f64>::zeros(k);
+        for &i in rows {
+            for j in 0..k {
+                score[j] += w.w[i] * (b[i * k + j] - a[i] * c[j] / nm.d[u]) * resid[i];
+            }
+        }
+        meat += &score * score.transpose();
+    }
+    let robust = &s_inv * meat * &s_inv * (g / (g - 1.0).max(1.0));
+    let model = &s_inv * sigma2;
+    let flat = |m: DMatrix<f64>| (0..k * k).map(|x| m[(x / k, x % k)]).collect();
+    (flat(model), flat(robust))
+}
+
+/// Start values of every run's mu: the median of ln(T2/T1)/β over its rows with both
+/// tensions above zero (the only rows a logarithm takes).
+pub fn start_mu(d: &Design) -> Vec<f64> {
+    d.units
+        .iter()
+        .map(|rows| {
+            let mut v: Vec<f64> = rows
+                .iter()
+                .filter(|&&i| d.t1[i] > 0.0 && d.t2[i] > 0.0)
+                .map(|&i| (d.t2[i] / d.t1[i]).ln() / d.op[i].wrap_rad)
+                .filter(|x| x.is_finite())
+                .collect();
+            v.sort_by(f64::total_cmp);
+            let m = if v.is_empty() { 0.1 } else { v[v.len() / 2] };
+            m.clamp(0.005, 2.0)
+        })
+        .collect()
+}
+
+/// The best of fits from several starts of the last parameter (the others at `theta0`).
+pub fn fit_multistart(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weights) -> WithinFit {
+    let k = maps.len();
+    let starts = if k == 0 {
+        vec![theta0.to_vec()]
+    } else {
+        maps[k - 1]
+            .starts()
+            .into_iter()
+            .map(|s| {
+                let mut t = theta0.to_vec();
+                t[k - 1] = s;
+                t
+            })
+            .collect()
+    };
+    let mut best: Option<WithinFit> = None;
+    for t in starts {
+        let f = fit(d, maps, &t, mu0, w);
+        if best.as_ref().is_none_or(|b| f.wrss < b.wrss) {
+            best = Some(f);
+        }
+    }
+    best.expect("at least one start")
+}
