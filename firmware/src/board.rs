@@ -109,14 +109,19 @@ pub const CLK_SYS_HZ: u32 = 125_000_000;
 
 /// Servo PWM clock divider: 125 MHz / 40 = 3.125 MHz, 0.32 µs per count.
 pub const SERVO_PWM_DIVIDER: u8 = 40;
-/// Servo PWM top: (62 499 + 1) counts × 0.32 µs = 20 ms, a 50 Hz frame. The rig core's duty is
-/// a fraction of `max_duty_cycle()`, which is this `top`.
+/// Servo PWM top: (62 499 + 1) counts × 0.32 µs = 20 ms, a 50 Hz frame.
 pub const SERVO_PWM_TOP: u16 = 62_499;
+/// The servo PWM's full scale, counts: the whole 20 ms frame, `top + 1` (the output is high for
+/// `compare` counts of every `top + 1`). The rig core's duty is a fraction of
+/// `max_duty_cycle()`, which the board's PWM driver (`main.rs`, `PeriodPwm`) reports as this,
+/// so a duty count is 0.32 µs of pulse.
+pub const SERVO_FULL_SCALE: u16 = SERVO_PWM_TOP + 1;
 
 /// Amplifier PWM clock divider: the full 125 MHz.
 pub const AMP_PWM_DIVIDER: u8 = 1;
 /// Amplifier PWM top: 4096 counts per period → 125 MHz / 4096 = 30.5 kHz, 12-bit resolution
 /// (0.8 mV steps of the 3.3 V swing). The RC filter is sized for this frequency (see the README).
+/// The duty's full scale is the period, 4096 counts (as for the servo, [`SERVO_FULL_SCALE`]).
 pub const AMP_PWM_TOP: u16 = 4_095;
 
 /// Hardware watchdog timeout. The runner feeds it every sample (1 ms), so only a loop that has

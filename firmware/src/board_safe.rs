@@ -139,11 +139,51 @@ fn remember_servo_duty(duty: u16) {
 
 /// The servo duty the firmware last commanded before this boot's reset, if it survived.
 pub fn servo_duty_before_reset() -> Option<u16> {
-    recall_servo_duty(pac::WATCHDOG.scratch0().read(), board::SERVO_PWM_TOP)
+    recall_servo_duty(pac::WATCHDOG.scratch0().read(), board::SERVO_FULL_SCALE)
+}
+
+/// An RP2040 PWM output on channel A whose duty is counted against the whole period: the
+/// output is high for `compare` counts of every `top + 1`, so `max_duty_cycle()` is `top + 1`
+/// and a duty of `top + 1` is 100 %. (embassy-rp's `Pwm` reports `top` as its full scale: every
+/// duty the rig core converts would then come out `1/(top + 1)` short — the amplifier's 2.5 V
+/// as 2.4992 V, one count low, which the emulated board's pin measurement showed.)
+pub struct PeriodPwm {
+    pwm: Pwm<'static>,
+    slice: usize,
+}
+
+impl PeriodPwm {
+    /// `pwm` (channel A of `slice`), configured with a `top` below 65 535.
+    pub fn new(pwm: Pwm<'static>, slice: usize) -> Self {
+        PeriodPwm { pwm, slice }
+    }
+}
+
+impl ErrorType for PeriodPwm {
+    type Error = PwmError;
+}
+
+impl SetDutyCycle for PeriodPwm {
+    fn max_duty_cycle(&self) -> u16 {
+        self.pwm.max_duty_cycle().saturating_add(1)
+    }
+
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), PwmError> {
+        let top = self.pwm.max_duty_cycle();
+        if duty <= top {
+            self.pwm.set_duty_cycle(duty)
+        } else if duty == top.saturating_add(1) {
+            // 100 %: a compare above `top`, which embassy-rp's driver refuses.
+            pac::PWM.ch(self.slice).cc().modify(|w| w.set_a(duty));
+            Ok(())
+        } else {
+            Err(PwmError::InvalidDutyCycle)
+        }
+    }
 }
 
 /// The servo PWM, remembering every duty it is given across a reset.
-pub struct RememberingServo(pub Pwm<'static>);
+pub struct RememberingServo(pub PeriodPwm);
 
 impl ErrorType for RememberingServo {
     type Error = PwmError;

@@ -198,9 +198,10 @@ mod tests {
         let (rest, last) = (m.pulse_us(125.0), m.pulse_us(65.0));
         assert!((rest - 1833.0).abs() <= 1.0, "{rest}");
         assert!((last - 1214.0).abs() <= 1.0, "{last}");
-        // What the RP2040 puts on the wire: 125 MHz / 40, top 62 499, so 0.32 µs per count.
+        // What the RP2040 puts on the wire: 125 MHz / 40, top 62 499, a 62 500-count frame
+        // (the board's full scale), so 0.32 µs per count.
         for (angle, want_us) in [(125.0, 1833.0), (65.0, 1214.0)] {
-            let on_wire_us = m.duty(angle, 62_499) as f32 * 0.32;
+            let on_wire_us = m.duty(angle, 62_500) as f32 * 0.32;
             assert!((on_wire_us - want_us).abs() <= 1.0, "{angle}: {on_wire_us}");
         }
         // The thesis's 60° span is 619 µs of pulse, not the 333 µs of a 1-2 ms map.

@@ -30,7 +30,7 @@ fn main() {
 #[cfg(target_os = "none")]
 mod pico {
     use crate::board::{self, Pins};
-    use crate::board_safe::{self, RememberingServo};
+    use crate::board_safe::{self, PeriodPwm, RememberingServo};
     use defmt_rtt as _;
     use embassy_executor::Spawner;
     use embassy_rp::adc::{self, Adc, Blocking};
@@ -126,13 +126,13 @@ mod pico {
             board::safety_limits(),
         ));
         // From here a panic puts the servo at rest (before: no pulses at all).
-        board_safe::arm(SafeDuties::for_rig(&rig, board::SERVO_PWM_TOP));
+        board_safe::arm(SafeDuties::for_rig(&rig, board::SERVO_FULL_SCALE));
         // After a reset that left the horn away from rest, bring it back slowly.
         if let Some(duty) = board_safe::servo_duty_before_reset() {
             let angle = rig
                 .calibration()
                 .servo
-                .angle_for_duty(duty, board::SERVO_PWM_TOP);
+                .angle_for_duty(duty, board::SERVO_FULL_SCALE);
             rig.home_from(angle);
             if rig.is_homing() {
                 defmt::info!(
@@ -160,8 +160,9 @@ mod pico {
             t2: adc::Channel::new_pin(pins.t2, Pull::None),
         };
         let mut io = RigIo {
-            servo: RememberingServo(servo),
-            amp,
+            // Duties as fractions of the whole period (top + 1 counts), see `PeriodPwm`.
+            servo: RememberingServo(PeriodPwm::new(servo, board::SERVO_SLICE)),
+            amp: PeriodPwm::new(amp, board::AMP_SLICE),
             trigger: Output::new(pins.trigger, Level::Low),
             led: Output::new(pins.led, Level::Low),
             button: Input::new(pins.button, Pull::Up),

@@ -111,12 +111,12 @@ mod tests {
             SafetyLimits::default(),
         )
         .unwrap();
-        let duties = SafeDuties::for_rig(&rig, 62_499);
+        let duties = SafeDuties::for_rig(&rig, 62_500);
         // 125° under the Arduino convention: 1833 µs of the 20 ms frame.
         assert_eq!(duties.servo_rest, 5_728);
         assert_eq!(
             duties.servo_rest,
-            rig.calibration().servo.duty(125.0, 62_499)
+            rig.calibration().servo.duty(125.0, 62_500)
         );
         let mut pins = Pins::default();
         force_safe(&mut pins, duties);
@@ -130,12 +130,12 @@ mod tests {
     #[test]
     fn a_servo_duty_survives_a_reset_only_as_our_word() {
         assert_eq!(
-            recall_servo_duty(remembered_servo_word(5_728), 62_499),
+            recall_servo_duty(remembered_servo_word(5_728), 62_500),
             Some(5_728)
         );
         // Power-on value, someone else's word, no pulse, a duty beyond the top.
         for w in [0, 0xB007_C0D3, remembered_servo_word(0), 0xCA57_FFFF] {
-            assert_eq!(recall_servo_duty(w, 62_499), None, "{w:#x}");
+            assert_eq!(recall_servo_duty(w, 62_500), None, "{w:#x}");
         }
     }
 }

@@ -12,8 +12,10 @@ use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
 use firmware::hal::{AdcError, Channel, ForceAdc, Watchdog};
 use firmware::{ForceOutputs, RigIo};
 
-/// `max_duty_cycle()` of the simulated servo PWM: the RP2040's 50 Hz `top` (125 MHz / 40).
-pub const SERVO_MAX_DUTY: u16 = 62_499;
+/// `max_duty_cycle()` of the simulated servo PWM: the RP2040's 50 Hz frame in counts of
+/// 0.32 µs (125 MHz / 40), `top + 1` = 62 500, the full scale the board's driver reports (its
+/// output is high for `compare` counts of every `top + 1`): a duty count is the board's 0.32 µs.
+pub const SERVO_MAX_DUTY: u16 = 62_500;
 /// `max_duty_cycle()` of the simulated amplifier PWM: 1 mV of control voltage per count.
 pub const AMP_MAX_DUTY: u16 = 3_300;
 

@@ -106,11 +106,29 @@ impl Plant {
 
     /// Convert one force channel of cord `i` now.
     pub fn read_counts(&mut self, i: usize, ch: Channel) -> Result<u16, AdcError> {
+        let counts = self.read_analog(i, ch);
+        // Round half up and clamp to the ADC's range (`as` truncates: floor, as x ≥ 1).
+        let x = counts + 0.5;
+        Ok(if x < 1.0 {
+            0
+        } else if x >= ADC_MAX_COUNTS as f64 {
+            ADC_MAX_COUNTS
+        } else {
+            x as u16
+        })
+    }
+
+    /// The analog value one conversion of cord `i`'s force channel sees now, in ADC counts
+    /// before quantisation (the sensor's output through its divider, noise included: one
+    /// noise draw per call, as [`Plant::read_counts`], which rounds and clamps this). An
+    /// unplugged sensor reads 0. For a harness with an ADC of its own (the emulated RP2040's):
+    /// `volts at the pin = counts × V_ref / 4096`.
+    pub fn read_analog(&mut self, i: usize, ch: Channel) -> f64 {
         let k = ch as usize;
         let drive_on = self.drive_v > 0.0;
         let c = &self.cords[i];
         if c.unplugged[k] {
-            return Ok(0);
+            return 0.0;
         }
         let art = c.setup.model.sensors;
         // The catalogue artefacts ride on the drive (see the crate docs): the tare, done with
@@ -129,15 +147,7 @@ impl Plant {
         if self.noise_sd_counts > 0.0 {
             counts += self.noise_sd_counts * self.rng.normal();
         }
-        // Round half up and clamp to the ADC's range (`as` truncates: floor, as x ≥ 1).
-        let x = counts + 0.5;
-        Ok(if x < 1.0 {
-            0
-        } else if x >= ADC_MAX_COUNTS as f64 {
-            ADC_MAX_COUNTS
-        } else {
-            x as u16
-        })
+        counts
     }
 
     /// Cord `i`'s watchdog is fed.

@@ -1,0 +1,791 @@
+//! The bench: the simulated rig wired to the emulated RP2040's pins.
+//!
+//! The harness (`emu/harness.mjs`) calls in at every event of the emulated chip, with the
+//! emulator's time in ns:
+//!
+//! * an output pin changes ([`Bench::pin`]): the servo (GP16) and amplifier (GP18) PWMs are
+//!   measured edge by edge ([`crate::meter`]) and each change of waveform is handed to the
+//!   plant — the servo's pulse width when a pulse ends, the amplifier's duty at the start of
+//!   the period that has it (the plant's RC filter and amplifier take it from there) — and
+//!   the trigger (GP20) directly;
+//! * a conversion starts ([`Bench::adc`]): the plant is brought to that instant, its sensor's
+//!   reading goes through the board's divider and ADC ([`crate::front_end`]), and the code is
+//!   what the emulated ADC returns 2 µs later;
+//! * the core goes to sleep after a busy stretch ([`Bench::burst`]): its cycles, for the loop
+//!   budget;
+//! * the chip is reset ([`Bench::reset`]): every pin is released.
+//!
+//! The bench tells the harness when to call [`Bench::wake`] ([`Bench::deadline`]): the
+//! operator's button edges (GP21), the chip fault of the case, the end.
+//!
+//! **The plant's clock.** The plant is made at the firmware's first conversion, and its time
+//! zero is put one sample period (1 ms) before it: when the firmware's sampling ticker
+//! started, as host-sim's clock starts with `run_once`. A plant time is the emulator's time
+//! from there, rounded to the µs. The T1 conversions then fall on whole milliseconds of plant
+//! time, as host-sim's do (the T2 conversion a few µs later), the operator's press falls on
+//! the same sample, and every conversion draws the same sensor noise as in host-sim.
+//!
+//! **PWM values for the plant.** The plant takes a PWM as a duty of a full scale, in counts,
+//! as host-sim's adapters give it. The meters measure the pin in ns; the harness gives each
+//! PWM pin's counter tick (its slice's divider over clk_sys: 320 ns for the servo, 8 ns for
+//! the amplifier), and the bench hands the plant high time / tick of period / tick: the pin's
+//! duty, in the counts the firmware wrote (the servo's 62 500-count frame is host-sim's
+//! `SERVO_MAX_DUTY`, so both plants get the same pulse widths to the bit).
+
+use crate::case::{Case, CoreFault, Stop};
+use crate::front_end::{quantise, FrontEnd};
+use crate::meter::{Event, PwmMeter, Segment};
+use capstan_plant::{InjectionKind, Plant, PlantError, ServoEvent};
+use firmware::hal::Channel;
+use serde::Serialize;
+
+/// GPIO of the servo signal.
+pub const SERVO_GPIO: u32 = 16;
+/// GPIO of the amplifier control PWM.
+pub const AMP_GPIO: u32 = 18;
+/// GPIO of the logger trigger.
+pub const TRIGGER_GPIO: u32 = 20;
+/// GPIO of the start/abort button.
+pub const BUTTON_GPIO: u32 = 21;
+/// GPIO of the LED.
+pub const LED_GPIO: u32 = 25;
+/// Cycles per 1 ms sample at 125 MHz.
+pub const CYCLES_PER_SAMPLE: u32 = 125_000;
+
+/// [`Bench::wake`]: the button's level changed (read it with [`Bench::button_pressed`]).
+pub const WAKE_BUTTON: u32 = 1;
+/// [`Bench::wake`]: divert the core into the firmware's panic path now.
+pub const WAKE_PANIC: u32 = 2;
+/// [`Bench::wake`]: the emulation is over.
+pub const WAKE_STOP: u32 = 4;
+
+/// Why the chip was reset (the watchdog's REASON register).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ResetReason {
+    /// The watchdog timed out.
+    Timeout,
+    /// Software triggered the watchdog (the HardFault handler does).
+    Forced,
+}
+
+/// A chip reset.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Reset {
+    /// When, ns.
+    pub t_ns: f64,
+    /// Why.
+    pub reason: ResetReason,
+}
+
+/// Busy cycles per wake of the core: statistics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Stats {
+    /// Busy stretches (one per sample: the timer interrupt wakes the core, the sample runs,
+    /// the core sleeps).
+    pub bursts: u64,
+    /// Mean cycles.
+    pub mean: f64,
+    /// Median.
+    pub p50: u32,
+    /// 99th percentile.
+    pub p99: u32,
+    /// 99.9th percentile.
+    pub p999: u32,
+    /// Largest.
+    pub max: u32,
+    /// When the largest began, ns.
+    pub max_at_ns: f64,
+    /// Largest as a fraction of the 125 000 cycles of a 1 ms sample.
+    pub max_fraction: f64,
+}
+
+impl Stats {
+    fn of(bursts: &mut [(f64, u32)]) -> Stats {
+        if bursts.is_empty() {
+            return Stats::default();
+        }
+        let n = bursts.len();
+        let sum: u64 = bursts.iter().map(|b| b.1 as u64).sum();
+        let (max_at_ns, max) = bursts
+            .iter()
+            .copied()
+            .max_by_key(|b| b.1)
+            .expect("not empty");
+        bursts.sort_by_key(|b| b.1);
+        let q = |f: f64| bursts[((n as f64 - 1.0) * f).round() as usize].1;
+        Stats {
+            bursts: n as u64,
+            mean: sum as f64 / n as f64,
+            p50: q(0.5),
+            p99: q(0.99),
+            p999: q(0.999),
+            max,
+            max_at_ns,
+            max_fraction: max as f64 / CYCLES_PER_SAMPLE as f64,
+        }
+    }
+}
+
+/// The loop budget: busy cycles per sample against the 125 000 a 1 ms sample has at 125 MHz.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Budget {
+    /// Cycles available per sample.
+    pub available_per_sample: u32,
+    /// During runs: from the press (after its 10 ms debounce) to the amplifier's stop or a
+    /// reset.
+    pub run: Stats,
+    /// The rest (boot, idle, after the run).
+    pub idle: Stats,
+    /// The five busiest stretches of the runs: (start, ns since the trigger's rising edge,
+    /// cycles).
+    pub run_worst: Vec<(f64, u32)>,
+    /// Busy cycles in all.
+    pub cycles: u64,
+}
+
+/// What became of a plant injection.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InjectionOut {
+    /// The fault's name (`cord_break`, ...).
+    pub kind: &'static str,
+    /// When it took effect, emulator ns.
+    pub at_ns: Option<f64>,
+    /// When the plant saw the rig command the safe state (servo at rest, amplifier 0) after
+    /// it, emulator ns (at the plant's µs resolution).
+    pub plant_safe_at_ns: Option<f64>,
+}
+
+/// The chip fault of the case.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CoreFaultOut {
+    /// `hang` or `panic`.
+    pub kind: &'static str,
+    /// When it was due, ns.
+    pub due_ns: Option<f64>,
+    /// When it struck: the first conversion that never completed, or the instant the harness
+    /// diverted the core, ns.
+    pub struck_ns: Option<f64>,
+}
+
+/// A servo command as the plant received it, in emulator ns.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PlantServoEvent {
+    /// When the plant received it, ns.
+    pub t_ns: f64,
+    /// The pulse the plant made of it, µs.
+    pub pulse_us: f32,
+    /// The horn angle that pulse holds, deg.
+    pub angle_deg: f32,
+}
+
+/// Everything the bench saw: the JSON the harness writes next to the stream.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// The case.
+    pub case: String,
+    /// The plant's time zero, emulator ns.
+    pub origin_ns: Option<f64>,
+    /// When the emulation ended, ns.
+    pub end_ns: f64,
+    /// The servo signal (GP16), one segment per change of waveform.
+    pub servo: Vec<Segment>,
+    /// Pulses seen on GP16.
+    pub servo_pulses: u64,
+    /// PWM high times that were not a whole number of the PWM's counter ticks (none expected).
+    pub pwm_off_grid: u64,
+    /// The amplifier control PWM (GP18), one segment per change of waveform.
+    pub amp: Vec<Segment>,
+    /// Periods seen on GP18.
+    pub amp_periods: u64,
+    /// Trigger (GP20) edges: (ns, level).
+    pub trigger: Vec<(f64, bool)>,
+    /// LED (GP25) edges.
+    pub led_edges: u64,
+    /// The operator's button (GP21) edges: (ns, pressed).
+    pub button: Vec<(f64, bool)>,
+    /// Conversions where the plant's own button model disagreed with the pin (none
+    /// expected).
+    pub button_mismatches: u64,
+    /// Conversions served.
+    pub conversions: u64,
+    /// Conversions where divider + ADC gave another code than the plant's own ADC would
+    /// have (none expected: see `front_end`).
+    pub rounding_mismatches: u64,
+    /// The first of them: (ns, the plant's reading in counts).
+    pub mismatch_examples: Vec<(f64, f64)>,
+    /// T1 conversions' offset from the plant's whole milliseconds until the first run ended
+    /// (the next `run_once` starts a ticker of its own, on another phase): (min, max), ns.
+    pub t1_phase_ns: Option<(f64, f64)>,
+    /// The first ten of those conversions more than 2 µs off: (ns, offset ns).
+    pub late_t1: Vec<(f64, f64)>,
+    /// The trigger's first rising edge (the logger's time zero), ns.
+    pub trigger_rise_ns: Option<f64>,
+    /// The plant's faults.
+    pub injections: Vec<InjectionOut>,
+    /// The chip fault.
+    pub core_fault: Option<CoreFaultOut>,
+    /// Chip resets.
+    pub resets: Vec<Reset>,
+    /// The loop budget.
+    pub budget: Budget,
+    /// Servo commands as the plant received them.
+    pub plant_servo: Vec<PlantServoEvent>,
+}
+
+/// The rig around the emulated chip. See the module documentation.
+pub struct Bench {
+    case: Case,
+    front_end: FrontEnd,
+    plant: Option<Plant>,
+    origin_ns: f64,
+    servo: PwmMeter,
+    servo_tick_ns: f64,
+    servo_first_pending: bool,
+    amp: PwmMeter,
+    amp_tick_ns: f64,
+    amp_sent: Option<(u16, u16)>,
+    pwm_off_grid: u64,
+    releasing: bool,
+    trigger_high: bool,
+    trigger: Vec<(f64, bool)>,
+    led_high: bool,
+    led_edges: u64,
+    button_pressed: bool,
+    button: Vec<(f64, bool)>,
+    button_mismatches: u64,
+    conversions: u64,
+    rounding_mismatches: u64,
+    mismatch_examples: Vec<(f64, f64)>,
+    t1_phase_ns: Option<(f64, f64)>,
+    late_t1: Vec<(f64, f64)>,
+    trigger_rise_ns: Option<f64>,
+    core_fault_done: bool,
+    core_fault_struck_ns: Option<f64>,
+    hang: bool,
+    resets: Vec<Reset>,
+    run_since_ns: Option<f64>,
+    first_run_over: bool,
+    run_bursts: Vec<(f64, u32)>,
+    idle_bursts: Vec<(f64, u32)>,
+    cycles: u64,
+    stopped: bool,
+    now_ns: f64,
+}
+
+impl Bench {
+    /// A bench for `case`, before the chip boots.
+    pub fn new(case: Case) -> Bench {
+        Bench {
+            case,
+            front_end: FrontEnd::BOARD,
+            plant: None,
+            origin_ns: 0.0,
+            // The servo frame is 20 ms, the amplifier's period 32.8 µs.
+            servo: PwmMeter::new(25e6),
+            servo_tick_ns: 0.0,
+            servo_first_pending: false,
+            amp: PwmMeter::new(100e3),
+            amp_tick_ns: 0.0,
+            amp_sent: None,
+            pwm_off_grid: 0,
+            releasing: false,
+            trigger_high: false,
+            trigger: Vec::new(),
+            led_high: false,
+            led_edges: 0,
+            button_pressed: false,
+            button: Vec::new(),
+            button_mismatches: 0,
+            conversions: 0,
+            rounding_mismatches: 0,
+            mismatch_examples: Vec::new(),
+            t1_phase_ns: None,
+            late_t1: Vec::new(),
+            trigger_rise_ns: None,
+            core_fault_done: false,
+            core_fault_struck_ns: None,
+            hang: false,
+            resets: Vec::new(),
+            run_since_ns: None,
+            first_run_over: false,
+            run_bursts: Vec::new(),
+            idle_bursts: Vec::new(),
+            cycles: 0,
+            stopped: false,
+            now_ns: 0.0,
+        }
+    }
+
+    /// The case.
+    pub fn case(&self) -> &Case {
+        &self.case
+    }
+
+    /// The plant, once made.
+    pub fn plant(&self) -> Option<&Plant> {
+        self.plant.as_ref()
+    }
+
+    fn plant_us(&self, t_ns: f64) -> u64 {
+        ((t_ns - self.origin_ns) / 1_000.0).round().max(0.0) as u64
+    }
+
+    fn ns(&self, plant_us: u64) -> f64 {
+        self.origin_ns + plant_us as f64 * 1_000.0
+    }
+
+    /// The plant brought to `t_ns` (never back: a change known late applies now).
+    fn plant_at(&mut self, t_ns: f64) -> Option<&mut Plant> {
+        let us = self.plant_us(t_ns);
+        let p = self.plant.as_mut()?;
+        p.advance_to(us);
+        Some(p)
+    }
+
+    fn make_plant(&mut self, first_conversion_ns: f64) -> Result<(), PlantError> {
+        self.origin_ns = first_conversion_ns - 1e6;
+        let mut plant = Plant::new_at(self.case.plant, &[self.case.cord], self.case.seed, 0)?;
+        for inj in &self.case.injections {
+            plant.inject(*inj)?;
+        }
+        self.plant = Some(plant);
+        // What the pins show already (before the plant existed nothing was forwarded).
+        let t = first_conversion_ns;
+        if let Some(p) = self.plant_at(t) {
+            p.set_trigger(0, false);
+        }
+        let amp = self.amp.current();
+        self.apply_amp(t, amp.high_ns, amp.period_ns, amp.duty);
+        if let (Some(period), false) = (self.servo.period_ns(), self.servo.current().is_static()) {
+            let width = self.servo.current().high_ns;
+            self.apply_servo(t, width, period);
+        }
+        Ok(())
+    }
+
+    /// A high time in PWM ticks, counting one off the tick grid (but for a pulse a reset cut).
+    fn ticks(&mut self, ns: f64, tick_ns: f64) -> u16 {
+        let x = ns / tick_ns;
+        if (x - x.round()).abs() > 0.01 && !self.releasing {
+            self.pwm_off_grid += 1;
+        }
+        x.round().clamp(0.0, u16::MAX as f64) as u16
+    }
+
+    /// A period in PWM ticks. Not checked against the grid: rp2040js recomputes a PWM's counter
+    /// from the clock, rounded to a whole tick, when its divider or top is written (the panic
+    /// path writes the servo slice's again), which shifts the next wrap by up to half a tick.
+    fn period_ticks(ns: f64, tick_ns: f64) -> u16 {
+        (ns / tick_ns).round().clamp(0.0, u16::MAX as f64) as u16
+    }
+
+    fn apply_servo(&mut self, t_ns: f64, width_ns: f64, period_ns: f64) {
+        let tick = self.servo_tick_ns;
+        if tick <= 0.0 {
+            return;
+        }
+        let duty = self.ticks(width_ns, tick);
+        let full_scale = Self::period_ticks(period_ns, tick);
+        if let Some(p) = self.plant_at(t_ns) {
+            p.set_servo_duty(0, duty, full_scale);
+        }
+    }
+
+    /// The amplifier's PWM to the plant, if it changed (every period reports its shape).
+    fn apply_amp(&mut self, t_ns: f64, high_ns: f64, period_ns: f64, duty: f64) {
+        let (duty, full_scale) = if period_ns > 0.0 && self.amp_tick_ns > 0.0 {
+            let tick = self.amp_tick_ns;
+            let full_scale = Self::period_ticks(period_ns, tick);
+            (self.ticks(high_ns, tick), full_scale)
+        } else {
+            // Static: 0 or 100 %.
+            (if duty > 0.0 { 1 } else { 0 }, 1)
+        };
+        if self.plant.is_none() || self.amp_sent == Some((duty, full_scale)) {
+            return;
+        }
+        self.amp_sent = Some((duty, full_scale));
+        if let Some(p) = self.plant_at(t_ns) {
+            p.set_amp_duty(0, duty, full_scale);
+        }
+    }
+
+    fn servo_event(&mut self, e: Event) {
+        match e {
+            Event::PulseEnd {
+                rise_ns,
+                width_ns,
+                period_ns: Some(period),
+            } => self.apply_servo(rise_ns + width_ns, width_ns, period),
+            Event::PulseEnd {
+                period_ns: None, ..
+            } => self.servo_first_pending = true,
+            Event::Period {
+                start_ns,
+                high_ns,
+                period_ns,
+            } => {
+                if self.servo_first_pending {
+                    self.servo_first_pending = false;
+                    self.apply_servo(start_ns + period_ns, high_ns, period_ns);
+                }
+            }
+            // No pulses (or a pin stuck high, which is no valid pulse either): the servo is
+            // unpowered and stays where it is.
+            Event::Static { since_ns, .. } => {
+                self.servo_first_pending = false;
+                if let Some(p) = self.plant_at(since_ns) {
+                    p.set_servo_duty(0, 0, 1);
+                }
+            }
+        }
+    }
+
+    fn amp_event(&mut self, e: Event) {
+        match e {
+            Event::Period {
+                start_ns,
+                high_ns,
+                period_ns,
+            } => self.apply_amp(start_ns, high_ns, period_ns, high_ns / period_ns),
+            Event::Static { since_ns, high } => {
+                self.apply_amp(since_ns, 0.0, 0.0, if high { 1.0 } else { 0.0 });
+                if !high && self.run_since_ns.take().is_some() {
+                    // The amplifier's stop ends a run (normally or by a fault).
+                    self.first_run_over = true;
+                }
+            }
+            Event::PulseEnd { .. } => {}
+        }
+    }
+
+    /// Bring the meters up to `t_ns` (a PWM that stopped switching) and forward what changed.
+    fn settle(&mut self, t_ns: f64) {
+        self.now_ns = self.now_ns.max(t_ns);
+        for e in self.servo.settle(t_ns).into_iter().flatten() {
+            self.servo_event(e);
+        }
+        for e in self.amp.settle(t_ns).into_iter().flatten() {
+            self.amp_event(e);
+        }
+    }
+
+    /// Output pin `gpio` is now `high` (an input counts as low: the board's pull-downs) at
+    /// `t_ns`; `tick_ns` is its PWM counter's period (0 for a software-driven pin).
+    pub fn pin(&mut self, gpio: u32, high: bool, t_ns: f64, tick_ns: f64) {
+        self.settle(t_ns);
+        match gpio {
+            SERVO_GPIO => {
+                if tick_ns > 0.0 {
+                    self.servo_tick_ns = tick_ns;
+                }
+                if let Some(e) = self.servo.edge(t_ns, high) {
+                    self.servo_event(e);
+                }
+            }
+            AMP_GPIO => {
+                if tick_ns > 0.0 {
+                    self.amp_tick_ns = tick_ns;
+                }
+                if let Some(e) = self.amp.edge(t_ns, high) {
+                    self.amp_event(e);
+                }
+            }
+            TRIGGER_GPIO if high != self.trigger_high => {
+                self.trigger_high = high;
+                self.trigger.push((t_ns, high));
+                if high && self.trigger_rise_ns.is_none() {
+                    self.trigger_rise_ns = Some(t_ns);
+                }
+                if let Some(p) = self.plant_at(t_ns) {
+                    p.set_trigger(0, high);
+                }
+            }
+            LED_GPIO if high != self.led_high => {
+                self.led_high = high;
+                self.led_edges += 1;
+            }
+            _ => {}
+        }
+    }
+
+    /// A conversion of ADC channel `channel` (0 = T1 on GP26, 1 = T2 on GP27) starts at
+    /// `t_ns`: its result, or `None` if it never completes (the case's hang).
+    pub fn adc(&mut self, channel: u32, t_ns: f64) -> Option<u16> {
+        self.settle(t_ns);
+        if self.plant.is_none() {
+            if let Err(e) = self.make_plant(t_ns) {
+                panic!("the case's plant cannot be made: {e}");
+            }
+        }
+        if self.hang {
+            self.core_fault_struck_ns.get_or_insert(t_ns);
+            return None;
+        }
+        self.conversions += 1;
+        let ch = if channel == 0 {
+            Channel::T1
+        } else {
+            Channel::T2
+        };
+        // The sampling grid of the first run (each `run_once` starts its own ticker).
+        if ch == Channel::T1 && !self.first_run_over {
+            let x = t_ns - self.origin_ns;
+            let phase = x - (x / 1e6).round() * 1e6;
+            let (lo, hi) = self.t1_phase_ns.unwrap_or((phase, phase));
+            self.t1_phase_ns = Some((lo.min(phase), hi.max(phase)));
+            if phase.abs() > 2_000.0 && self.late_t1.len() < 10 {
+                self.late_t1.push((t_ns, phase));
+            }
+        }
+        let pressed = self.button_pressed;
+        let fe = self.front_end;
+        let p = self.plant_at(t_ns).expect("made above");
+        let plant_pressed = p.button_pressed(0);
+        let counts = p.read_analog(0, ch);
+        // The firmware reads the button just after its T2 conversion.
+        if ch == Channel::T2 && plant_pressed != pressed {
+            self.button_mismatches += 1;
+        }
+        let code = fe.code(fe.pin_v(fe.sensor_v(counts)));
+        if code != quantise(counts) {
+            self.rounding_mismatches += 1;
+            if self.mismatch_examples.len() < 5 {
+                self.mismatch_examples.push((t_ns, counts));
+            }
+        }
+        Some(code)
+    }
+
+    /// The core was busy for `cycles` from `t_ns` until it slept again.
+    pub fn burst(&mut self, t_ns: f64, cycles: u32) {
+        self.cycles += cycles as u64;
+        let in_run = self.run_since_ns.is_some_and(|s| t_ns >= s);
+        if in_run {
+            self.run_bursts.push((t_ns, cycles));
+        } else {
+            self.idle_bursts.push((t_ns, cycles));
+        }
+    }
+
+    /// The harness diverted the core into the panic path at `t_ns`.
+    pub fn panicked(&mut self, t_ns: f64) {
+        self.core_fault_struck_ns.get_or_insert(t_ns);
+    }
+
+    /// The chip was reset at `t_ns`: every pin is an input from then on, until the firmware
+    /// drives it again.
+    pub fn reset(&mut self, t_ns: f64, reason: ResetReason) {
+        self.settle(t_ns);
+        self.resets.push(Reset { t_ns, reason });
+        self.hang = false;
+        self.releasing = true;
+        for e in self.servo.release(t_ns) {
+            self.servo_event(e);
+        }
+        for e in self.amp.release(t_ns) {
+            self.amp_event(e);
+        }
+        self.releasing = false;
+        self.run_since_ns = None;
+        self.first_run_over = true;
+        self.pin(TRIGGER_GPIO, false, t_ns, 0.0);
+        self.pin(LED_GPIO, false, t_ns, 0.0);
+    }
+
+    /// Is the operator holding the button down?
+    pub fn button_pressed(&self) -> bool {
+        self.button_pressed
+    }
+
+    /// The operator's presses, [start, end) in plant µs, as far as they are known.
+    fn press_windows(&self) -> Vec<(u64, u64)> {
+        let mut w = Vec::new();
+        if let Some(at) = self.case.cord.press_at_us {
+            w.push((at, at + self.case.cord.press_us));
+        }
+        let rise = self.plant.as_ref().and_then(|p| p.trigger_rise_us(0));
+        if let Some(rise) = rise {
+            let hold = self.case.plant.faults.abort_press_ms as u64 * 1_000;
+            for inj in &self.case.injections {
+                if inj.kind == InjectionKind::Abort {
+                    let at = rise + inj.after_trigger_us;
+                    w.push((at, at + hold));
+                }
+            }
+        }
+        w
+    }
+
+    fn pressed_at(&self, t_ns: f64) -> bool {
+        if self.plant.is_none() {
+            return false;
+        }
+        self.press_windows()
+            .iter()
+            .any(|&(a, b)| t_ns >= self.ns(a) && t_ns < self.ns(b))
+    }
+
+    fn core_fault_due(&self) -> Option<f64> {
+        let fault = self.case.core_fault?;
+        let rise = self.plant.as_ref()?.trigger_rise_us(0)?;
+        let after = match fault {
+            CoreFault::Hang { after_trigger_us } | CoreFault::Panic { after_trigger_us } => {
+                after_trigger_us
+            }
+        };
+        Some(self.ns(rise + after))
+    }
+
+    fn stop_at(&self) -> Option<f64> {
+        let p = self.plant.as_ref()?;
+        match self.case.stop {
+            Stop::At(us) => Some(self.ns(us)),
+            Stop::AfterTrigger(us) => Some(self.ns(p.trigger_rise_us(0)? + us)),
+            Stop::AfterReset(us) => Some(self.resets.first()?.t_ns + us as f64 * 1_000.0),
+        }
+    }
+
+    /// When [`Bench::wake`] must be called next, ns (None: no deadline).
+    pub fn deadline(&self) -> Option<f64> {
+        let now = self.now_ns;
+        let mut next: Option<f64> = None;
+        let mut consider = |t: f64| {
+            if t > now && next.is_none_or(|n| t < n) {
+                next = Some(t);
+            }
+        };
+        if self.plant.is_some() {
+            for (a, b) in self.press_windows() {
+                consider(self.ns(a));
+                consider(self.ns(b));
+            }
+        }
+        if !self.core_fault_done {
+            if let Some(t) = self.core_fault_due() {
+                consider(t);
+            }
+        }
+        if let Some(t) = self.stop_at() {
+            consider(t);
+        }
+        next
+    }
+
+    /// Time is `t_ns`: the operator, the chip fault and the end. Returns `WAKE_*` flags.
+    pub fn wake(&mut self, t_ns: f64) -> u32 {
+        self.settle(t_ns);
+        let mut out = 0;
+        let pressed = self.pressed_at(t_ns);
+        if pressed != self.button_pressed {
+            self.button_pressed = pressed;
+            self.button.push((t_ns, pressed));
+            if pressed && self.run_since_ns.is_none() && self.button.len() == 1 {
+                // The start press: the run begins once it is debounced (10 samples).
+                self.run_since_ns = Some(t_ns + 10e6);
+            }
+            out |= WAKE_BUTTON;
+        }
+        if !self.core_fault_done && self.core_fault_due().is_some_and(|due| t_ns >= due) {
+            self.core_fault_done = true;
+            match self.case.core_fault {
+                // Struck at the first conversion that does not complete.
+                Some(CoreFault::Hang { .. }) => self.hang = true,
+                // Struck when the harness has diverted the core (`panicked`).
+                Some(CoreFault::Panic { .. }) => out |= WAKE_PANIC,
+                None => {}
+            }
+        }
+        if self.stop_at().is_some_and(|s| t_ns >= s) {
+            self.stopped = true;
+            out |= WAKE_STOP;
+        }
+        out
+    }
+
+    /// Has the emulation reached its end?
+    pub fn stopped(&self) -> bool {
+        self.stopped
+    }
+
+    /// Everything seen, at the end of the emulation (`t_ns`).
+    pub fn report(&mut self, t_ns: f64) -> Report {
+        self.settle(t_ns);
+        if let Some(p) = self.plant.as_mut() {
+            let us = ((t_ns - self.origin_ns) / 1_000.0).round().max(0.0) as u64;
+            p.advance_to(us);
+        }
+        let rise = self.trigger_rise_ns;
+        let mut run = self.run_bursts.clone();
+        let mut idle = self.idle_bursts.clone();
+        let mut worst = run.clone();
+        worst.sort_by_key(|b| std::cmp::Reverse(b.1));
+        worst.truncate(5);
+        let run_worst = worst
+            .iter()
+            .map(|&(t, c)| (t - rise.unwrap_or(0.0), c))
+            .collect();
+        let origin = self.origin_ns;
+        let (injections, plant_servo) = match self.plant.as_ref() {
+            Some(p) => (
+                p.injections()
+                    .iter()
+                    .map(|r| InjectionOut {
+                        kind: r.injection.kind.name(),
+                        at_ns: r.at_us.map(|us| origin + us as f64 * 1e3),
+                        plant_safe_at_ns: r.safe_at_us.map(|us| origin + us as f64 * 1e3),
+                    })
+                    .collect(),
+                p.servo_events(0)
+                    .0
+                    .iter()
+                    .map(|e: &ServoEvent| PlantServoEvent {
+                        t_ns: origin + e.t_us as f64 * 1e3,
+                        pulse_us: e.pulse_us,
+                        angle_deg: e.angle_deg,
+                    })
+                    .collect(),
+            ),
+            None => (Vec::new(), Vec::new()),
+        };
+        Report {
+            case: self.case.name.to_string(),
+            origin_ns: self.plant.as_ref().map(|_| origin),
+            end_ns: t_ns,
+            servo: self.servo.segments.clone(),
+            servo_pulses: self.servo.rises,
+            pwm_off_grid: self.pwm_off_grid,
+            amp: self.amp.segments.clone(),
+            amp_periods: self.amp.rises,
+            trigger: self.trigger.clone(),
+            led_edges: self.led_edges,
+            button: self.button.clone(),
+            button_mismatches: self.button_mismatches,
+            conversions: self.conversions,
+            rounding_mismatches: self.rounding_mismatches,
+            mismatch_examples: self.mismatch_examples.clone(),
+            t1_phase_ns: self.t1_phase_ns,
+            late_t1: self.late_t1.clone(),
+            trigger_rise_ns: rise,
+            injections,
+            core_fault: self.case.core_fault.map(|f| CoreFaultOut {
+                kind: match f {
+                    CoreFault::Hang { .. } => "hang",
+                    CoreFault::Panic { .. } => "panic",
+                },
+                due_ns: self.core_fault_due(),
+                struck_ns: self.core_fault_struck_ns,
+            }),
+            resets: self.resets.clone(),
+            budget: Budget {
+                available_per_sample: CYCLES_PER_SAMPLE,
+                run: Stats::of(&mut run),
+                idle: Stats::of(&mut idle),
+                run_worst,
+                cycles: self.cycles,
+            },
+            plant_servo,
+        }
+    }
+}

@@ -1,0 +1,246 @@
+//! The emulated board's test cases: the rig the board image is put in (plant constants, cord,
+//! seed), what the operator does, what goes wrong, and when the emulation stops. The harness
+//! (`emu/harness.mjs`, through the WebAssembly build) and the host test (`tests/emu_rp2040.rs`,
+//! which runs host-sim on the same case for comparison) both take them from here, so they
+//! cannot drift apart.
+
+use capstan_friction::Model;
+use capstan_plant::{CordSetup, Injection, InjectionKind, PlantConfig, THESIS_MU};
+use firmware::hal::Channel;
+use firmware::safety::SafetyLimits;
+use firmware::{Calibration, Protocol};
+
+/// When the operator presses the start button: 0.5 s after the rig started sampling (the
+/// plant's time zero, see [`crate::bench`]). Late enough that the servo's first frames after
+/// boot have settled before the tare, as they have on a rig whose operator presses a while
+/// after power-up.
+pub const PRESS_AT_US: u64 = 500_000;
+/// How long the operator holds the start button, µs.
+pub const PRESS_US: u64 = 200_000;
+/// When the fault cases' faults strike: 11 s after the trigger's rising edge, 0.5 s into step 1
+/// (the first tension level, servo at 120°, the cord-break checks armed).
+pub const FAULT_AFTER_TRIGGER_US: u64 = 11_000_000;
+/// The panic case's instant: 0.4 ms after [`FAULT_AFTER_TRIGGER_US`], between two samples.
+pub const PANIC_AFTER_TRIGGER_US: u64 = FAULT_AFTER_TRIGGER_US + 400;
+
+/// The board image's protocol, calibration and safety limits: what `firmware/src/board.rs`
+/// compiles in (`protocol()`, `calibration()`, `safety_limits()`). That file builds for the
+/// RP2040 only, so it is mirrored here; the test checks the decoded run against host-sim with
+/// these values (same pair times, same end), which fails if the two ever differ.
+pub fn board_protocol() -> Protocol {
+    Protocol {
+        capstan_diameter_mm: 0.0,
+        wrap_deg: 0.0,
+        ..Protocol::default()
+    }
+}
+
+/// See [`board_protocol`].
+pub fn board_calibration() -> Calibration {
+    Calibration::default()
+}
+
+/// See [`board_protocol`].
+pub fn board_limits() -> SafetyLimits {
+    SafetyLimits::default()
+}
+
+/// A fault of the chip itself, which the harness brings about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CoreFault {
+    /// From this instant (µs after the trigger's rising edge) the ADC completes no conversion:
+    /// the firmware's blocking conversion (embassy-rp's `blocking_read`, which spins on the
+    /// ADC's READY bit) never returns, so the sampling loop hangs with interrupts still running
+    /// and nothing feeds the watchdog.
+    Hang {
+        /// When, µs after the trigger's rising edge.
+        after_trigger_us: u64,
+    },
+    /// At this instant the core, in thread mode, is diverted into the image's own
+    /// `core::panicking::panic` with a message and a source location the harness writes into
+    /// unused RAM: what a `panic!("...")` in the rig's task at that instant would execute.
+    Panic {
+        /// When, µs after the trigger's rising edge.
+        after_trigger_us: u64,
+    },
+}
+
+/// When the emulation stops.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// At this plant time, µs.
+    At(u64),
+    /// This long after the trigger's rising edge, µs.
+    AfterTrigger(u64),
+    /// This long after the chip's first reset, µs.
+    AfterReset(u64),
+}
+
+/// One emulated-board case.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// Its name (the harness and the test select cases by it).
+    pub name: &'static str,
+    /// What it shows.
+    pub about: &'static str,
+    /// Seed of the plant (sensor zeros and noise).
+    pub seed: u64,
+    /// The rig's constants.
+    pub plant: PlantConfig,
+    /// The cord, and when the operator presses the start button.
+    pub cord: CordSetup,
+    /// Physical faults the plant suffers (after the trigger, as host-sim injects them).
+    pub injections: Vec<Injection>,
+    /// A fault of the chip.
+    pub core_fault: Option<CoreFault>,
+    /// When the emulation ends.
+    pub stop: Stop,
+    /// A debug probe is attached (`probe-rs run`): it halts the core on HardFault entry, as
+    /// probe-rs does to print the backtrace, and the watchdog, not paused by the halt, resets
+    /// the chip.
+    pub probe_attached: bool,
+    /// In the fixed slice plain `cargo test` runs (the rest only with `CAPSTAN_EMU=full`).
+    pub quick: bool,
+}
+
+impl Case {
+    /// Capstan diameter of the case's plant, mm.
+    pub fn diameter_mm(&self) -> f64 {
+        self.plant.capstan_diameter_mm
+    }
+
+    /// The fault the firmware must report, if the case has one of the plant's.
+    pub fn expected_fault(&self) -> Option<firmware::FaultKind> {
+        self.injections.first().map(|i| i.kind.fault())
+    }
+}
+
+/// The thesis's 360° cord on the 12.7 mm capstan, Euler-Eytelwein at mu 0.115, pressed at
+/// [`PRESS_AT_US`].
+fn cord() -> CordSetup {
+    CordSetup {
+        press_at_us: Some(PRESS_AT_US),
+        press_us: PRESS_US,
+        ..CordSetup::new(360.0, Model::euler_eytelwein(THESIS_MU))
+    }
+}
+
+fn fault_case(name: &'static str, about: &'static str, kind: InjectionKind, quick: bool) -> Case {
+    Case {
+        name,
+        about,
+        seed: 11,
+        plant: PlantConfig::default(),
+        cord: cord(),
+        injections: vec![Injection {
+            kind,
+            cord: 0,
+            after_trigger_us: FAULT_AFTER_TRIGGER_US,
+        }],
+        core_fault: None,
+        stop: Stop::AfterTrigger(FAULT_AFTER_TRIGGER_US + 200_000),
+        probe_attached: false,
+        quick,
+    }
+}
+
+fn core_case(
+    name: &'static str,
+    about: &'static str,
+    fault: CoreFault,
+    probe_attached: bool,
+    quick: bool,
+) -> Case {
+    Case {
+        name,
+        about,
+        seed: 12,
+        plant: PlantConfig::default(),
+        cord: cord(),
+        injections: Vec::new(),
+        core_fault: Some(fault),
+        // Long enough after the reset for the boot, its reports and the servo's homing from
+        // 120° to rest (5° at 10°/s) when it starts away from rest.
+        stop: Stop::AfterReset(900_000),
+        probe_attached,
+        quick,
+    }
+}
+
+/// Every case, the full protocol run first.
+pub fn all() -> Vec<Case> {
+    let protocol = board_protocol();
+    // The press is debounced for 10 samples; the run ends `end_ms` after that.
+    let run_end_us = PRESS_AT_US + 10_000 + protocol.end_ms() as u64 * 1_000;
+    vec![
+        Case {
+            name: "run",
+            about: "a whole protocol run through the button, compared with host-sim",
+            seed: 1,
+            plant: PlantConfig::default(),
+            cord: cord(),
+            injections: Vec::new(),
+            core_fault: None,
+            stop: Stop::At(run_end_us + 300_000),
+            probe_attached: false,
+            quick: false,
+        },
+        fault_case(
+            "abort",
+            "the operator presses the button again during step 1",
+            InjectionKind::Abort,
+            true,
+        ),
+        fault_case(
+            "over_force",
+            "the cord snags: T2 jumps to 50 N during step 1",
+            InjectionKind::OverForce,
+            false,
+        ),
+        fault_case(
+            "cord_break",
+            "the cord parts during step 1",
+            InjectionKind::CordBreak,
+            false,
+        ),
+        fault_case(
+            "sensor_unplugged",
+            "the T2 sensor's connector comes out during step 1",
+            InjectionKind::SensorUnplugged(Channel::T2),
+            false,
+        ),
+        core_case(
+            "hang",
+            "the sampling loop hangs during step 1; the watchdog resets the chip",
+            CoreFault::Hang {
+                after_trigger_us: FAULT_AFTER_TRIGGER_US,
+            },
+            false,
+            false,
+        ),
+        core_case(
+            "panic",
+            "the firmware panics during step 1 (issue 12)",
+            CoreFault::Panic {
+                after_trigger_us: PANIC_AFTER_TRIGGER_US,
+            },
+            false,
+            true,
+        ),
+        core_case(
+            "panic_probe",
+            "the firmware panics during step 1 with probe-rs attached: the core halts on the \
+             HardFault, the watchdog resets the chip",
+            CoreFault::Panic {
+                after_trigger_us: PANIC_AFTER_TRIGGER_US,
+            },
+            true,
+            false,
+        ),
+    ]
+}
+
+/// The case called `name`.
+pub fn by_name(name: &str) -> Option<Case> {
+    all().into_iter().find(|c| c.name == name)
+}

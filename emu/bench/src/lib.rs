@@ -1,0 +1,20 @@
+//! The rig around the emulated RP2040: `capstan-plant` on the pins of the board image that
+//! `emu/harness.mjs` runs on rp2040js. Built to WebAssembly for the harness (see `wasm`), and
+//! for the host, where `tests/emu_rp2040.rs` takes the cases from it to run host-sim on the
+//! same rig.
+//!
+//! * [`case`]: the cases (rig, operator, faults, end);
+//! * [`bench`]: the plant on the pins, the pin meters' records, the loop budget;
+//! * [`meter`]: a PWM measured from its pin's edges;
+//! * [`front_end`]: a force sensor through the board's divider into the RP2040's ADC.
+#![deny(missing_docs)]
+
+pub mod bench;
+pub mod case;
+pub mod front_end;
+pub mod meter;
+#[cfg(target_arch = "wasm32")]
+mod wasm;
+
+pub use bench::{Bench, Report};
+pub use case::{Case, CoreFault, Stop};

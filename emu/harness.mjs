@@ -1,0 +1,283 @@
+// The RP2040 board image on rp2040js, in the rig: the plant (emu/bench, WebAssembly) on its
+// pins. Usage: node emu/harness.mjs JOB.json (written by tests/emu_rp2040/setup.rs; see emu/README.md).
+//
+// The emulated chip runs in its own virtual time (8 ns per cycle at 125 MHz, idle time skipped).
+// Everything the rig sees goes through the bench, at the emulator's time in ns:
+//   output pins (GP16 servo PWM, GP18 amplifier PWM, GP20 trigger, GP25 LED) -> bench_pin,
+//   each ADC conversion -> bench_adc, whose code the ADC returns 2 us later,
+//   the operator's button (GP21), the case's chip fault and the end <- bench_deadline/bench_wake,
+//   every busy stretch of the core (wake to sleep) -> bench_burst (the loop budget).
+// The defmt stream is read from the RTT up-buffer every 1 ms, as a debug probe does.
+// What rp2040js lacks, the harness does, as the hardware would: a UDF (or BKPT) raises a
+// HardFault, and a watchdog bite or trigger resets the chip (a fresh chip, with the watchdog's
+// REASON and SCRATCH registers carried over).
+import { RP2040 } from 'rp2040js';
+import fs from 'node:fs';
+import path from 'node:path';
+
+const job = JSON.parse(fs.readFileSync(process.argv[2], 'utf8'));
+const elf = fs.readFileSync(job.elf);
+fs.mkdirSync(job.out, { recursive: true });
+
+// The bench.
+const wasm = await WebAssembly.instantiate(fs.readFileSync(job.wasm), {
+  env: { bench_log: (ptr, len) => process.stderr.write(text(ptr, len) + '\n') },
+});
+const B = wasm.instance.exports;
+function text(ptr, len) {
+  return Buffer.from(B.memory.buffer, ptr, len).toString('utf8');
+}
+{
+  const name = Buffer.from(job.case, 'utf8');
+  const at = B.bench_buffer(name.length); // may grow the memory: take its buffer after
+  new Uint8Array(B.memory.buffer, at, name.length).set(name);
+  if (!B.bench_new()) throw new Error(`emu-bench has no case ${job.case}`);
+}
+// With a debug probe attached, probe-rs halts the core on HardFault entry (vector catch); the
+// clock, the peripherals and the watchdog go on.
+const probeAttached = B.bench_probe_attached() !== 0;
+const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4;
+const SERVO = 16, AMP = 18, TRIGGER = 20, BUTTON = 21, LED = 25;
+const FUNCSEL_PWM = 4, HIGH = 1, HARDFAULT = 3;
+const WATCHDOG_BASE = 0x40058000, RAM = 0x20000000;
+
+// rp2040js's own logger prints every SEV and throws on errors: keep them, quietly.
+const warnings = new Map();
+const errors = [];
+let badAccesses = 0;
+const logger = {
+  debug() {},
+  info() {},
+  warn(who, msg) {
+    const key = warnings.size < 100 ? `${who}: ${msg}` : 'other warnings';
+    warnings.set(key, (warnings.get(key) ?? 0) + 1);
+    if (/invalid|undefined address|not implemented/i.test(msg) && badAccesses++ < 10) errors.push({ t_ns: now(), pc: core.PC, msg: `${who}: ${msg}` });
+  },
+  error(who, msg) {
+    errors.push({ t_ns: now(), msg: `${who}: ${msg}` });
+  },
+};
+
+const SimulationClock = new RP2040().clock.constructor; // rp2040js's clock, not exported by name
+let mcu, core, clock, benchAlarm, benchAlarmAt = -1;
+let epoch = 0; // emulator time at which the present chip's clock started (each reset restarts it)
+const now = () => epoch + clock.nanos;
+const stream = [];
+let streamBytes = 0;
+const resets = [], breaks = [];
+// Writes that changed a PWM compare (servo slice 0, amplifier slice 1): when the firmware
+// commanded a pulse width or duty, as opposed to when the pin shows it.
+const pwmWrites = [];
+let panicInjected = null;
+let pendingPanic = false, pendingBreak = null, pendingReset = false, stop = false;
+let halted = false;
+let instructions = 0, cycles = 0;
+
+function pwmTickNs(gpio) {
+  if (mcu.gpio[gpio].functionSelect !== FUNCSEL_PWM) return 0;
+  const div = mcu.pwm.channels[(gpio >> 1) & 7].div;
+  return (((div >> 4) & 0xff || 256) + (div & 0xf) / 16) * 1e9 / mcu.clkSys;
+}
+
+function syncBench() {
+  const t = B.bench_deadline();
+  if (t === benchAlarmAt) return;
+  benchAlarmAt = t;
+  if (t < 0) benchAlarm.cancel();
+  else benchAlarm.schedule(Math.max(0, t - now()));
+}
+
+function wake() {
+  benchAlarmAt = -1;
+  const flags = B.bench_wake(now());
+  if (flags & WAKE_BUTTON) mcu.gpio[BUTTON].setInputValue(!B.bench_button()); // pull-up; pressed = low
+  if (flags & WAKE_PANIC) pendingPanic = true;
+  if (flags & WAKE_STOP) stop = true;
+  syncBench();
+}
+
+// Read the defmt-rtt up channel 0 like a probe: bytes from the read to the write offset.
+function pollRtt() {
+  const base = job.rtt - RAM;
+  if (mcu.sram[base] !== 0x53) return; // "SEGGER RTT" not written yet (boot)
+  const sv = mcu.sramView;
+  const up = base + 24;
+  const buf = sv.getUint32(up + 4, true) - RAM;
+  const size = sv.getUint32(up + 8, true);
+  const wr = sv.getUint32(up + 12, true);
+  let rd = sv.getUint32(up + 16, true);
+  if (wr >= size || rd >= size) throw new Error(`bad RTT offsets ${rd} ${wr} of ${size}`);
+  while (rd !== wr) {
+    const end = wr > rd ? wr : size;
+    stream.push(Buffer.from(mcu.sram.subarray(buf + rd, buf + end)));
+    streamBytes += end - rd;
+    rd = end === size ? 0 : end;
+  }
+  sv.setUint32(up + 16, rd, true);
+}
+
+function boot(carried) {
+  clock = new SimulationClock();
+  mcu = new RP2040(clock);
+  core = mcu.core;
+  mcu.logger = logger;
+  for (const s of job.segments) mcu.flash.set(elf.subarray(s.offset, s.offset + s.size), s.paddr - 0x10000000);
+  // No boot ROM: start at boot2, with the stack the ROM would have set.
+  core.PC = job.boot.pc;
+  core.SP = job.boot.sp;
+  const dog = mcu.findPeripheral(WATCHDOG_BASE);
+  if (carried) {
+    dog.reason = carried.reason;
+    dog.scratchData.set(carried.scratch);
+  }
+  // rp2040js's watchdog sets REASON but does not reset the chip (and its alarm would fire
+  // again at the same instant forever): stop it and reset here.
+  dog.onWatchdogTrigger = () => {
+    dog.alarm.enable = false;
+    dog.timer.enable = false;
+    pendingReset = true;
+  };
+  // A UDF or BKPT: rp2040js only reports it; the core takes a HardFault (after this instruction).
+  mcu.onBreak = (code) => (pendingBreak = code);
+  for (const gpio of [SERVO, AMP, TRIGGER, LED]) {
+    mcu.gpio[gpio].addListener((state) => B.bench_pin(gpio, state === HIGH ? 1 : 0, now(), pwmTickNs(gpio)));
+  }
+  mcu.gpio[BUTTON].setInputValue(!B.bench_button());
+  for (const slice of [0, 1]) {
+    const ch = mcu.pwm.channels[slice];
+    const write = ch.writeRegister.bind(ch);
+    ch.writeRegister = (offset, value) => {
+      const before = ch.cc & 0xffff;
+      write(offset, value);
+      if (offset === 0x0c && (ch.cc & 0xffff) !== before) pwmWrites.push({ t_ns: now(), slice, cc_a: ch.cc & 0xffff });
+    };
+  }
+  mcu.adc.onADCRead = (channel) => {
+    const code = B.bench_adc(channel, now());
+    syncBench();
+    if (code < 0) return; // the case's hang: this conversion never completes
+    mcu.adc.channelValues[channel] = code;
+    mcu.adc.currentChannel = channel;
+    mcu.adc.sampleAlarm.schedule(mcu.adc.sampleTime * 1000);
+  };
+  const rtt = clock.createAlarm(() => {
+    pollRtt();
+    rtt.schedule(1e6);
+  });
+  rtt.schedule(1e6);
+  benchAlarm = clock.createAlarm(wake);
+  benchAlarmAt = -1;
+  syncBench();
+}
+
+function reset() {
+  pendingReset = false;
+  pollRtt();
+  const dog = mcu.findPeripheral(WATCHDOG_BASE);
+  const carried = { reason: dog.reason, scratch: Uint32Array.from(dog.scratchData) };
+  const t = now();
+  // The outputs' registers as the old chip left them (what a panic handler wrote).
+  const pins = Object.fromEntries(
+    [SERVO, AMP, TRIGGER].map((g) => [g, { funcsel: mcu.gpio[g].functionSelect, out: mcu.gpio[g].outputValue, oe: mcu.gpio[g].outputEnable }]),
+  );
+  const cc = [0, 1].map((slice) => mcu.pwm.channels[slice].cc & 0xffff);
+  resets.push({ t_ns: t, reason: carried.reason, scratch0: carried.scratch[0], halted, pins, pwm_cc_a: cc });
+  halted = false;
+  B.bench_reset(t, carried.reason);
+  epoch = t;
+  boot(carried);
+}
+
+// A `panic!("...")` in thread mode, now: the image's core::panicking::panic(msg, &Location),
+// with the message and location written into RAM the firmware does not use.
+function injectPanic() {
+  pendingPanic = false;
+  const p = job.panic;
+  const enc = (s) => Buffer.from(s, 'utf8');
+  const file = enc(p.file), msg = enc(p.message);
+  const fileAt = p.ram, msgAt = p.ram + file.length, locAt = (msgAt + msg.length + 3) & ~3;
+  mcu.sram.set(file, fileAt - RAM);
+  mcu.sram.set(msg, msgAt - RAM);
+  const sv = mcu.sramView;
+  [fileAt, file.length, p.line, p.col].forEach((v, i) => sv.setUint32(locAt - RAM + 4 * i, v, true));
+  panicInjected = { t_ns: now(), interrupted_pc: core.PC, was_waiting: core.waiting };
+  core.registers[0] = msgAt;
+  core.registers[1] = msg.length;
+  core.registers[2] = locAt;
+  core.LR = core.PC | 1;
+  core.PC = p.fn & ~1;
+  core.waiting = false;
+  B.bench_panicked(now());
+}
+
+boot(null);
+const wall0 = Date.now();
+const wallLimitMs = job.wall_limit_s * 1000;
+const emulatedLimitNs = job.emulated_limit_s * 1e9;
+let burst = 0, burstStart = 0;
+while (!stop) {
+  for (let i = 0; i < 200000 && !stop; i++) {
+    if (pendingPanic && core.IPSR === 0) injectPanic();
+    if (core.waiting || halted) {
+      if (burst) {
+        B.bench_burst(burstStart, burst);
+        burst = 0;
+      }
+      const n = clock.nanosToNextAlarm;
+      clock.tick(n > 0 ? n : 8);
+    } else {
+      if (!burst) burstStart = now();
+      const c = core.executeInstruction();
+      instructions++;
+      burst += c;
+      cycles += c;
+      if (pendingBreak !== null) {
+        const pc = core.PC - core.breakRewind;
+        breaks.push({ t_ns: now(), pc, code: pendingBreak, ipsr: core.IPSR });
+        pendingBreak = null;
+        if (core.IPSR === HARDFAULT) throw new Error(`lockup: UDF/BKPT in the HardFault handler at ${pc.toString(16)}`);
+        core.PC = pc;
+        core.exceptionEntry(HARDFAULT);
+        if (probeAttached) halted = true;
+      }
+      clock.tick(c * 8);
+    }
+    if (pendingReset) reset();
+  }
+  if (process.env.EMU_DEBUG) process.stderr.write(`t=${now() / 1e9} instr=${instructions} waiting=${core.waiting} deadline=${benchAlarmAt}\n`);
+  if (errors.length) throw new Error(`the emulated chip went wrong: ${JSON.stringify(errors.slice(0, 5))}`);
+  if (Date.now() - wall0 > wallLimitMs) throw new Error(`wall-clock limit of ${job.wall_limit_s} s reached at ${now() / 1e9} s emulated`);
+  if (now() > emulatedLimitNs) throw new Error(`emulated-time limit of ${job.emulated_limit_s} s reached without the case's end`);
+}
+pollRtt();
+const wallS = (Date.now() - wall0) / 1000;
+const end = now();
+const reportLen = B.bench_report(end);
+const report = JSON.parse(text(B.bench_buffer_ptr(), reportLen));
+fs.writeFileSync(path.join(job.out, 'stream.defmt'), Buffer.concat(stream));
+const summary = {
+  case: job.case,
+  rp2040js: JSON.parse(fs.readFileSync(new URL('./node_modules/rp2040js/package.json', import.meta.url))).version,
+  wall_s: wallS,
+  emulated_s: end / 1e9,
+  realtime_factor: end / 1e9 / wallS,
+  instructions,
+  cycles,
+  mips: instructions / wallS / 1e6,
+  rtt_bytes: streamBytes,
+  resets,
+  breaks,
+  pwm_writes: pwmWrites,
+  panic: panicInjected,
+  probe_attached: probeAttached,
+  warnings: Object.fromEntries(warnings),
+  errors,
+  bench: report,
+};
+fs.writeFileSync(path.join(job.out, 'emulation.json'), JSON.stringify(summary, null, 1));
+process.stderr.write(
+  `emu: ${job.case}: ${(end / 1e9).toFixed(3)} s emulated in ${wallS.toFixed(1)} s (${(end / 1e9 / wallS).toFixed(2)}x real time, ` +
+    `${(instructions / wallS / 1e6).toFixed(1)} MIPS), ${streamBytes} bytes of defmt, ${resets.length} reset(s); ` +
+    `loop budget during runs: mean ${report.budget.run.mean.toFixed(0)}, max ${report.budget.run.max} of ` +
+    `${report.budget.available_per_sample} cycles per sample\n`,
+);
