@@ -44,7 +44,11 @@ fn main() {
     picks.push(cases::draw_case(1, Class::Pair, 0));
     picks.push(cases::draw_case(1, Class::Outside, 0));
     let mut sets = vec![("thesis".to_string(), thesis_dataset(), 1_000)];
-    for &rows in if quick { &[1_000][..] } else { &[1_000, 10_000][..] } {
+    for &rows in if quick {
+        &[1_000][..]
+    } else {
+        &[1_000, 10_000][..]
+    } {
         for c in &picks {
             let (name, d) = scaled(c.clone(), rows);
             sets.push((name, d, rows));

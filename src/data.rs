@@ -430,8 +430,11 @@ mod tests {
             "x.csv:2:2: column `t1_n`: is beyond any force sensor of a capstan rig (|T| must be at most 10000 N) (found `1e154`)"
         );
         // A reading at or below zero is data (a zero offset makes it real).
-        let d = read_pairs("wrap_deg,t1_n,t2_n\n270,0,2\n270,-0.16,0.3\n".as_bytes(), "x")
-            .unwrap();
+        let d = read_pairs(
+            "wrap_deg,t1_n,t2_n\n270,0,2\n270,-0.16,0.3\n".as_bytes(),
+            "x",
+        )
+        .unwrap();
         assert_eq!(d.pairs[1].t1_n, -0.16);
         assert_eq!(
             err("wrap_deg,t1_n,t2_n\n270,1,NaN\n"),

@@ -13,6 +13,8 @@ fn analyze_csv(name: &str, body: &str) -> String {
             out: dir.join("out"),
             json: false,
             threads: Some(1),
+            validate: false,
+            seed: 0,
         }),
     });
     format!("{:#}", r.expect_err("bad input must fail"))

@@ -67,6 +67,8 @@ fn report_renders_in_headless_chromium() {
             out: dir.clone(),
             json: false,
             threads: None,
+            validate: false,
+            seed: 0,
         }),
     })
     .unwrap();

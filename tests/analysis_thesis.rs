@@ -23,6 +23,8 @@ fn outputs() -> &'static PathBuf {
                 out: dir.clone(),
                 json: false,
                 threads: None,
+                validate: false,
+                seed: 0,
             }),
         })
         .unwrap();
@@ -74,38 +76,62 @@ fn golden_numbers_match_the_independent_reference() {
 }
 
 #[test]
-fn extended_model_meets_the_targets() {
-    let e = model(analysis(), "extended");
-    assert!(e.n_params <= 12.0, "{}", e.n_params);
+fn extended_model_is_counted_straight_and_meets_the_in_sample_target() {
+    let a = analysis();
+    let e = model(a, "extended");
+    // The count is fixed values + the cord effects' effective dof, within the budget.
+    let d = &e.n_params_detail;
+    assert!((e.n_params - (d.fixed as f64 + d.edf_random)).abs() < 1e-9);
+    assert!(e.n_params <= 12.0 + 1e-9, "{}", e.n_params);
     assert!(e.rmse_t2_n <= 0.80, "in-sample {}", e.rmse_t2_n);
-    assert!(
-        e.loco_rmse_t2_n.unwrap() <= 1.45,
-        "LOCO {:?}",
-        e.loco_rmse_t2_n
-    );
-    // Honest counting is reported alongside.
-    assert!(e.n_params_detail.edf_random > 9.0 && e.n_params_strict > 14.0);
+    // Leave-one-cord-out: the 1.30 N is not reached (docs/README-analysis.md says so);
+    // this guards the figure the README quotes.
+    let loco = e.loco_rmse_t2_n.unwrap();
+    assert!(loco <= 1.45, "LOCO {loco}");
+    // Every RMSE carries its cord-bootstrap interval around it.
+    for m in &a.models {
+        let u = &m.rmse_t2_uncertainty;
+        assert!(
+            u.ci95.lo < m.rmse_t2_n && m.rmse_t2_n < u.ci95.hi,
+            "{}",
+            m.name
+        );
+        assert!(u.jackknife_se > 0.0, "{}", m.name);
+    }
+    // The held-out gain has its interval, and every cord its held-out error.
+    assert!(a.gain.ci95.lo < a.gain.value && a.gain.value < a.gain.ci95.hi);
+    assert_eq!(a.held_out.len(), 10);
 }
 
 #[test]
-fn named_causes_and_verdicts_come_from_the_tests() {
-    let m = &analysis().mechanisms;
-    let names: Vec<&str> = m.causes.iter().map(|c| c.name.as_str()).collect();
-    assert!(names.contains(&"contact_heating_load_memory"), "{names:?}");
-    assert!(names.contains(&"t1_path_loss"), "{names:?}");
-    let verdict = |n: &str| {
-        m.tests
-            .iter()
-            .find(|t| t.name == n)
-            .unwrap()
-            .verdict
-            .as_str()
-    };
-    assert_eq!(verdict("howell_line_pressure"), "ruled_out");
-    assert_eq!(verdict("bending_stiffness"), "ruled_out");
-    assert_eq!(verdict("sensor_gain"), "ruled_out");
-    assert_eq!(verdict("pressure_dependent_friction"), "explained_away");
-    assert_eq!(verdict("diameter_dependence"), "no_effect");
+fn named_causes_are_the_evidence_engines() {
+    let a = analysis();
+    let m = &a.mechanisms;
+    let causes: Vec<&str> = m.causes.iter().map(|c| c.name).collect();
+    let engine: Vec<&str> = a.evidence.effects.iter().map(|e| e.effect).collect();
+    assert_eq!(causes, engine);
+    // The same as `capstan diagnose` on the same data.
+    let d = capstan::diagnose::diagnose(&thesis_dataset());
+    let diag: Vec<&str> = d.effects.iter().map(|e| e.effect).collect();
+    assert_eq!(causes, diag);
+    assert!(causes.contains(&"contact_heating"), "{causes:?}");
+    // Every mechanism has a verdict, and a ruled-in one is a cause.
+    assert_eq!(m.tests.len(), 10);
+    for t in &m.tests {
+        assert_eq!(
+            t.verdict == capstan::analysis::mechanisms::Verdict::RuledIn,
+            causes.contains(&t.name),
+            "{}",
+            t.name
+        );
+    }
+    // Parameter uncertainties: cluster-robust, NaN with the reason when not identified.
+    for v in &a.extended.values {
+        assert!(
+            v.jackknife_se > 0.0 || (v.jackknife_se.is_nan() && !v.note.is_empty()),
+            "{v:?}"
+        );
+    }
 }
 
 fn csv_column(csv: &str, name: &str) -> Vec<f64> {
@@ -166,7 +192,10 @@ fn predictions_csv_recomputes_the_metrics() {
             assert!(!m[k].is_null(), "{name}.{k}");
         }
     }
-    assert!(metrics["causes"].as_array().unwrap().len() >= 2);
+    assert_eq!(
+        metrics["causes"].as_array().unwrap().len(),
+        metrics["evidence"]["effects"].as_array().unwrap().len()
+    );
     assert!(metrics["elapsed_s"]["total_s"].as_f64().unwrap() > 0.0);
 }
 
@@ -201,13 +230,7 @@ fn figures_have_one_colour_per_wrap_and_a_style_per_model() {
     let html = std::fs::read_to_string(outputs().join("report.html")).unwrap();
     // Okabe-Ito, one colour per wrap, the same in every per-wrap figure.
     let wrap_colours = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7"];
-    for id in [
-        "t2_vs_t1",
-        "amp_vs_t1",
-        "residuals",
-        "mechanism_evidence",
-        "closed_loop",
-    ] {
+    for id in ["t2_vs_t1", "amp_vs_t1", "residuals", "closed_loop"] {
         let body = figure_body(&html, id);
         for (c, w) in wrap_colours.iter().zip(["270", "360", "450", "630", "720"]) {
             assert!(body.contains(c), "{id}: no {c}");
@@ -250,48 +273,12 @@ fn figures_have_one_colour_per_wrap_and_a_style_per_model() {
 }
 
 #[test]
-fn report_and_metrics_quote_capstan_diagnose() {
+fn every_verdict_sentence_is_made_from_its_verdict() {
     let dir = outputs();
     let metrics: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap();
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
-    let q = &metrics["diagnose"];
-    // The quoted calls are the diagnosis itself, run on the same data.
-    let data = thesis_dataset();
-    let plain = capstan::diagnose::diagnose(&data);
-    let timed = capstan::diagnose::diagnose_with(
-        &data,
-        &capstan::diagnose::Options {
-            protocol_times: true,
-            ..Default::default()
-        },
-    );
-    for (key, d) in [("default", &plain), ("protocol_times", &timed)] {
-        let r = &q[key]["result"];
-        assert_eq!(r["effect"], d.effect, "{key}");
-        let best = &r["candidates"][0];
-        assert_eq!(
-            best["delta_bic"].as_f64().unwrap(),
-            d.candidates[0].delta_bic,
-            "{key}"
-        );
-        assert!(html.contains(&format!("<b>{}", d.effect)), "{key}: report");
-    }
-    let relation = q["relation"].as_str().unwrap();
-    assert!(!relation.is_empty() && html.contains("capstan diagnose"));
-    // Its numbers are the analysis's and the diagnosis's, not typed in.
-    let n = plain
-        .candidate(capstan_friction::EffectKind::PressureFriction)
-        .unwrap()
-        .value;
-    assert!(relation.contains(&format!("n = {n:.3}")), "{relation}");
-    let e1 = metrics["extended_fit"]["values"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|v| v[0] == "t1_offset_n")
-        .unwrap()[1]
-        .as_f64()
-        .unwrap();
-    assert!(relation.contains(&format!("e1 = {e1:+.3} N")), "{relation}");
+    analysis_support::check(&metrics, &html);
 }
+
+mod analysis_support;

@@ -71,11 +71,13 @@ fn json_object_names_both_effects_with_evidence_given_the_other() {
     }
     let cands = v["candidates"].as_array().unwrap();
     assert!(cands.iter().all(|c| c["parameters"].is_object()));
-    assert!(v["adequacy"]["lack_of_fit"]["p"].as_f64().unwrap() > 1e-3, "{v}");
+    assert!(
+        v["adequacy"]["lack_of_fit"]["p"].as_f64().unwrap() > 1e-3,
+        "{v}"
+    );
     assert!(v["baseline"]["mu"].as_f64().unwrap() > 0.05);
     assert!(
-        v["extended"]["rmse_t2_n"].as_f64().unwrap()
-            < v["baseline"]["rmse_t2_n"].as_f64().unwrap()
+        v["extended"]["rmse_t2_n"].as_f64().unwrap() < v["baseline"]["rmse_t2_n"].as_f64().unwrap()
     );
     assert_eq!(v["rows_used"]["t2_fits"], data.pairs.len());
     // The human summary says the same.
@@ -85,7 +87,10 @@ fn json_object_names_both_effects_with_evidence_given_the_other() {
         .unwrap();
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("The data hold"), "{text}");
-    assert!(text.contains("contact_heating") && text.contains("t1_offset"), "{text}");
+    assert!(
+        text.contains("contact_heating") && text.contains("t1_offset"),
+        "{text}"
+    );
 }
 
 /// A T2 reading that depends on the step direction (hysteresis, outside the catalogue) is
@@ -98,7 +103,12 @@ fn structure_outside_the_catalogue_is_unexplained() {
     let (data, _) = case.generate().unwrap();
     let d = diagnose::diagnose(&data);
     assert!(d.unexplained, "{}", d.to_json());
-    assert_eq!(d.residual_pattern, Some("step_direction"), "{}", d.to_json());
+    assert_eq!(
+        d.residual_pattern,
+        Some("step_direction"),
+        "{}",
+        d.to_json()
+    );
     assert!(
         d.verdict.contains("T2 depends on the step direction")
             && d.verdict.contains("no catalogue effect explains it"),
@@ -154,7 +164,10 @@ fn an_effect_whose_column_is_absent_is_not_testable() {
     let (data, _) = case.generate().unwrap();
     assert!(!data.has_column("time_s"));
     let d = diagnose::diagnose(&data);
-    assert!(!d.found_effects().iter().any(|e| e.kind == EffectKind::ThermalDrift));
+    assert!(!d
+        .found_effects()
+        .iter()
+        .any(|e| e.kind == EffectKind::ThermalDrift));
     assert!(d.candidate(EffectKind::ThermalDrift).is_none());
     assert!(
         d.not_testable

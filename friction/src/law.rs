@@ -62,13 +62,20 @@ impl FrictionLaw {
 
     /// The friction coefficient in force at these operating conditions (never negative).
     pub fn effective_mu(&self, op: &Operating) -> f64 {
+        let ln_factor = self.mu_log_slope_per_rad * (op.wrap_rad - REF_WRAP_RAD)
+            - self.heat_per_ns * op.load_memory_ns;
+        // exp(0) is exactly 1: skipping it changes no bit, and saves the most frequent call.
+        let factor = if ln_factor == 0.0 {
+            1.0
+        } else {
+            exp(ln_factor)
+        };
         let mu = self.mu
             * (1.0 + self.mu_change_per_100s * op.time_s / 100.0)
             * (1.0 + self.mu_change_per_run * (op.run - 1.0))
             * (1.0 + self.mu_change_per_mm * (op.diameter_mm - REF_DIAMETER_MM))
             * (1.0 + self.mu_change_per_v * (op.drive_v - REF_DRIVE_V))
-            * exp(self.mu_log_slope_per_rad * (op.wrap_rad - REF_WRAP_RAD)
-                - self.heat_per_ns * op.load_memory_ns);
+            * factor;
         mu.max(0.0)
     }
 
@@ -85,12 +92,35 @@ impl FrictionLaw {
         }
         let radius_m = op.diameter_mm * 0.5e-3;
         let lift_rad = |t_n: f64| sqrt(self.bending_b_nm2 / t_n) / radius_m;
-        let lost_t1_rad = lift_rad(t1_n);
-        // g(T2) = transmit over β − lost(T1) − lost(T2) grows with T2, so iterating from the
-        // upper bound g(∞) descends monotonically onto the physical (largest) fixed point.
-        let mut t2_n = self.integrate(t1_n, k, op.wrap_rad - lost_t1_rad);
+        let wrap_rad = op.wrap_rad - lift_rad(t1_n);
+        // T2 = G(T2) = transmit over β − lost(T1) − lost(T2); G grows with T2, so from the
+        // upper bound G(∞) Newton's method on G(y) − y descends onto the physical (largest)
+        // fixed point. G'(y) = k·G^n·T_ref^(1-n) (the tension's growth rate at the exit) times
+        // the lift-off's ½·√B/r·y^(-3/2).
+        let n = self.tension_exponent;
+        let k_n = if n == 1.0 {
+            k
+        } else {
+            k * pow(REF_TENSION_N, 1.0 - n)
+        };
+        let mut t2_n = self.integrate(t1_n, k, wrap_rad);
         for _ in 0..60 {
-            let next = self.integrate(t1_n, k, op.wrap_rad - lost_t1_rad - lift_rad(t2_n));
+            let lost = lift_rad(t2_n);
+            let g = self.integrate(t1_n, k, wrap_rad - lost);
+            let dg = if wrap_rad - lost > 0.0 {
+                let g_n = if n == 1.0 { g } else { pow(g, n) };
+                k_n * g_n * 0.5 * lost / t2_n
+            } else {
+                0.0
+            };
+            let next = t2_n - (g - t2_n) / (dg - 1.0);
+            // Newton can overshoot below the root only if G is far from linear; fall back to
+            // the plain iteration (monotone from above) then.
+            let next = if next.is_finite() && next > 0.0 && next <= t2_n.max(g) {
+                next
+            } else {
+                g
+            };
             let done = (t2_n - next).abs() <= 1e-13 * t2_n;
             t2_n = next;
             if done {

@@ -1,85 +1,92 @@
-//! The extended fit in detail: values with Gauss-Newton and jackknife (leave-one-cord-out)
-//! standard errors, the cord offsets and their variance, the steady-state heating effect, and
-//! the strict-budget variant.
+//! The extended fit in detail: its values with cluster-robust uncertainties (the cord
+//! jackknife over the leave-one-cord-out refits, and the evidence engine's run-clustered SEs of
+//! the named causes), the cord offsets and their variance, and the parameter count.
 
 use super::fits::Fits;
 use super::metrics::named;
-use crate::fit::stats::jackknife_se;
+use crate::evidence::Assessment;
 use crate::fit::Observations;
 use serde::Serialize;
+
+/// One fitted value with its uncertainties.
+#[derive(Clone, Debug, Serialize)]
+pub struct Value {
+    /// Name (`capstan_friction` parameter).
+    pub name: String,
+    /// Population value.
+    pub value: f64,
+    /// Cord-jackknife SE over the leave-one-cord-out refits (cords as clusters); NaN when not
+    /// identified.
+    pub jackknife_se: f64,
+    /// The evidence engine's SE of the cause this value belongs to (runs as clusters, every
+    /// run's own mu); NaN for the population mu.
+    pub run_clustered_se: f64,
+    /// Why an SE is NaN (empty otherwise).
+    pub note: String,
+}
 
 /// The extended fit in detail.
 #[derive(Clone, Debug, Serialize)]
 pub struct ExtendedDetail {
-    /// Fitted population values.
-    pub values: Vec<(String, f64)>,
-    /// Gauss-Newton standard errors of the values.
-    pub standard_errors: Vec<(String, f64)>,
-    /// Jackknife standard errors over the leave-one-cord-out refits.
-    pub jackknife_se: Vec<(String, f64)>,
+    /// Fitted values with their uncertainties.
+    pub values: Vec<Value>,
     /// Per-cord log-mu offsets (BLUPs).
     pub cord_log_mu: Vec<(String, f64)>,
     /// SD of the cord log-mu offsets.
     pub sigma_u: f64,
     /// λ = σ²/σ_u².
     pub lambda: f64,
-    /// Effective dof of the cord offsets.
+    /// Fixed values.
+    pub n_fixed: usize,
+    /// Effective degrees of freedom of the cord offsets.
     pub edf_random: f64,
+    /// The count: fixed values + edf of the cord offsets.
+    pub effective_dof: f64,
     /// RMSE of T2 with population values only (cord offsets 0), N.
     pub rmse_population_t2_n: f64,
-    /// Steady-state mu factor at a friction load T2 − T1 = 40 N: exp(−h·τ·40).
-    pub mu_factor_at_40n_load: f64,
-    /// h·τ, 1/N: steady-state ln-mu loss per newton of friction load.
-    pub heat_per_n_steady: f64,
     /// How the extended fit stopped.
     pub termination: String,
-    /// The strict-count variant: cord effects shrunk so that fixed + edf ≤ 12.
-    pub strict12: StrictVariant,
-}
-
-/// The extended model with its cord effects shrunk to a strict budget.
-#[derive(Clone, Debug, Serialize)]
-pub struct StrictVariant {
-    /// Fixed + edf of the cord effects.
-    pub n_params_strict: f64,
-    /// In-sample RMSE of T2, N.
-    pub rmse_t2_n: f64,
-    /// λ used.
-    pub lambda: f64,
-}
-
-/// Jackknife SE of h·τ over the folds (the product is what the data fix when τ is short).
-fn heat_product_jackknife(f: &Fits) -> f64 {
-    let prods: Vec<f64> = f
-        .extended_loco
-        .fold_values
-        .iter()
-        .map(|fold| {
-            let get = |k: &str| fold.iter().find(|x| x.0 == k).map_or(f64::NAN, |x| x.1);
-            get("heat_per_ns") * get("heat_tau_s")
-        })
-        .collect();
-    jackknife_se(&prods)
 }
 
 /// The extended fit of `f` in detail.
-pub fn detail(obs: &Observations, f: &Fits) -> ExtendedDetail {
+pub fn detail(obs: &Observations, f: &Fits, a: &Assessment) -> ExtendedDetail {
     let ext = &f.extended;
-    let se = ext.standard_errors(obs);
-    let m_pop = ext.model(None);
-    let h_tau = m_pop.law.heat_per_ns * m_pop.law.heat_tau_s;
-    let mut jackknife = named(f.extended_loco.jackknife_se());
-    jackknife.push(("heat_per_ns*heat_tau_s".into(), heat_product_jackknife(f)));
+    let jk = f.extended_loco.jackknife_se();
+    let values = named(ext.values())
+        .into_iter()
+        .map(|(name, value)| {
+            let j = jk.iter().find(|x| x.0 == name).map_or(f64::NAN, |x| x.1);
+            let cause = a.selected_evidence().into_iter().find(|e| {
+                crate::fit::Param::from_effect(e.kind).map(|p| p.name()) == Some(name.as_str())
+            });
+            let run_se = match cause {
+                // The heating's catalogue value is h·τ; the model's is h.
+                Some(e) if e.kind == capstan_friction::EffectKind::ContactHeating => {
+                    e.parameter_se / capstan_friction::HEAT_TAU_S
+                }
+                Some(e) => e.parameter_se,
+                None => f64::NAN,
+            };
+            let note = if !(j.is_finite() && j > 0.0) {
+                "not identified: the cord-jackknife variance is zero or undefined".to_string()
+            } else {
+                String::new()
+            };
+            Value {
+                name,
+                value,
+                jackknife_se: if j.is_finite() && j > 0.0 {
+                    j
+                } else {
+                    f64::NAN
+                },
+                run_clustered_se: run_se,
+                note,
+            }
+        })
+        .collect();
     ExtendedDetail {
-        values: named(ext.values()),
-        standard_errors: ext
-            .spec
-            .free
-            .iter()
-            .zip(se)
-            .map(|(p, s)| (p.param.name().to_string(), s))
-            .collect(),
-        jackknife_se: jackknife,
+        values,
         cord_log_mu: obs
             .groups
             .iter()
@@ -88,15 +95,10 @@ pub fn detail(obs: &Observations, f: &Fits) -> ExtendedDetail {
             .collect(),
         sigma_u: ext.sigma_u.unwrap_or(f64::NAN),
         lambda: ext.lambda.unwrap_or(f64::NAN),
+        n_fixed: ext.n_fixed(),
         edf_random: ext.edf_random,
+        effective_dof: ext.n_params_edf(),
         rmse_population_t2_n: obs.rmse_t2(&f.pred.extended_population),
-        mu_factor_at_40n_load: (-h_tau * 40.0).exp(),
-        heat_per_n_steady: h_tau,
         termination: ext.termination.clone(),
-        strict12: StrictVariant {
-            n_params_strict: f.strict.n_params_edf(),
-            rmse_t2_n: f.strict.rmse(),
-            lambda: f.strict.lambda.unwrap_or(f64::NAN),
-        },
     }
 }

@@ -4,6 +4,7 @@
 
 use super::fits::Fits;
 use super::thesis;
+use super::uncertainty::{self, CordErrors, WithInterval};
 use crate::fit::solve::information_criteria;
 use crate::fit::stats::{median, r_squared};
 use crate::fit::Observations;
@@ -52,6 +53,10 @@ pub struct ModelMetrics {
     pub rmse_ln_amp: f64,
     /// Leave-one-cord-out RMSE of T2, N (None if the model cannot be refitted).
     pub loco_rmse_t2_n: Option<f64>,
+    /// In-sample RMSE of T2 with its 95 % cord-bootstrap interval and cord-jackknife SE.
+    pub rmse_t2_uncertainty: WithInterval,
+    /// Leave-one-cord-out RMSE of T2 with its uncertainty.
+    pub loco_rmse_t2_uncertainty: Option<WithInterval>,
     /// AIC with `n_params`.
     pub aic: f64,
     /// BIC with `n_params`.
@@ -121,7 +126,7 @@ struct Entry<'a> {
     name: &'a str,
     description: &'a str,
     pred: &'a [f64],
-    loco: Option<f64>,
+    loco: Option<&'a [f64]>,
     count: ParamCount,
     n_params: f64,
     n_strict: f64,
@@ -139,6 +144,13 @@ fn metrics(obs: &Observations, e: Entry<'_>) -> ModelMetrics {
     let (aic_s, bic_s) = information_criteria(rss, obs.len(), e.n_strict);
     let per_cord = per_cord_r2(obs, e.pred);
     let mut r2s: Vec<f64> = per_cord.iter().map(|c| c.r2).collect();
+    let seed = e
+        .name
+        .bytes()
+        .fold(0u64, |a, b| a.wrapping_mul(31).wrapping_add(b as u64));
+    let loco = e
+        .loco
+        .map(|p| uncertainty::rmse(&CordErrors::of(obs, p), seed ^ 1));
     ModelMetrics {
         name: e.name.into(),
         description: e.description.into(),
@@ -147,7 +159,9 @@ fn metrics(obs: &Observations, e: Entry<'_>) -> ModelMetrics {
         n_params_strict: e.n_strict,
         rmse_t2_n: obs.rmse_t2(e.pred),
         rmse_ln_amp: rmse_ln_amp(obs, e.pred),
-        loco_rmse_t2_n: e.loco,
+        loco_rmse_t2_n: loco.as_ref().map(|l| l.value),
+        rmse_t2_uncertainty: uncertainty::rmse(&CordErrors::of(obs, e.pred), seed),
+        loco_rmse_t2_uncertainty: loco,
         aic,
         bic,
         aic_strict: aic_s,
@@ -176,8 +190,9 @@ fn count(fixed: usize, per_group_values: usize, rule: &'static str) -> ParamCoun
     }
 }
 
-/// The gain table: baseline, baseline per cord, thesis (if Table 3 covers the wraps), extended.
-pub fn gain_table(obs: &Observations, f: &Fits) -> Vec<ModelMetrics> {
+/// The gain table: baseline, baseline per cord, thesis (if Table 3 covers the wraps), extended;
+/// `causes` describes the extended model's named causes.
+pub fn gain_table(obs: &Observations, f: &Fits, causes: &str) -> Vec<ModelMetrics> {
     let pred = &f.pred;
     let n_groups = obs.groups.len();
     let mut table = vec![
@@ -187,7 +202,7 @@ pub fn gain_table(obs: &Observations, f: &Fits) -> Vec<ModelMetrics> {
                 name: "baseline",
                 description: "Euler-Eytelwein T2 = T1·exp(mu·β), one global mu (least squares on T2)",
                 pred: &pred.baseline,
-                loco: Some(f.baseline_loco.rmse),
+                loco: Some(&pred.baseline_loco),
                 count: count(1, 0, "fixed values"),
                 n_params: 1.0,
                 n_strict: 1.0,
@@ -200,7 +215,7 @@ pub fn gain_table(obs: &Observations, f: &Fits) -> Vec<ModelMetrics> {
                 name: "baseline_per_cord",
                 description: "Euler-Eytelwein with one mu per cord (a new cord is predicted with the mean log-mu of the others)",
                 pred: &pred.baseline_per_cord,
-                loco: Some(f.per_cord_loco_rmse),
+                loco: Some(&pred.baseline_per_cord_loco),
                 count: count(0, n_groups, "one value per cord"),
                 n_params: n_groups as f64,
                 n_strict: n_groups as f64,
@@ -229,21 +244,25 @@ pub fn gain_table(obs: &Observations, f: &Fits) -> Vec<ModelMetrics> {
         ));
     }
     let ext = &f.extended;
+    let description = format!(
+        "Euler-Eytelwein with the named causes ({causes}) and a per-cord random log-mu (mixed model; the cord effects shrunk so that fixed values + their effective degrees of freedom ≤ {})",
+        super::fits::STRICT_BUDGET
+    );
     table.push(metrics(
         obs,
         Entry {
             name: "extended",
-            description: "Euler-Eytelwein + T1-path loss e1 + wrap slope of ln mu + contact heating (mu·exp(−h·H), H the friction-load memory) + per-cord random log-mu (mixed model)",
+            description: &description,
             pred: &pred.extended,
-            loco: Some(f.extended_loco.rmse),
+            loco: Some(&pred.extended_loco),
             count: ParamCount {
                 fixed: ext.n_fixed(),
                 variance_components: 1,
                 edf_random: ext.edf_random,
                 per_group_values: 0,
-                rule: "mixed-model convention: fixed effects + variance components (the cord effects are predicted, not free)",
+                rule: "fixed values + the effective degrees of freedom of the cord effects",
             },
-            n_params: ext.n_params_mixed() as f64,
+            n_params: ext.n_params_edf(),
             n_strict: ext.n_params_edf(),
             values: named(ext.values()),
         },

@@ -1,48 +1,51 @@
-//! The model specs of the analysis: the baseline, the extended model and its variants.
+//! The model specs of the analysis: the baseline, and the extended model built from the causes
+//! the evidence engine names.
 
+use crate::evidence::Assessment;
 use crate::fit::{ModelSpec, Param, Transform};
-use capstan_friction::Model;
+use capstan_friction::{Effect, EffectKind, Model, HEAT_TAU_S};
 
 /// Euler-Eytelwein with one free mu.
 pub fn baseline() -> ModelSpec {
     ModelSpec::new("baseline", Model::euler_eytelwein(0.115)).free(Param::Mu)
 }
 
-/// Bounds of the load-memory time constant, s (the thesis protocol cannot resolve memories
-/// much shorter than the 2 s settling before each window, nor longer than a run).
-pub const TAU_BOUNDS_S: (f64, f64) = (0.1, 300.0);
-
-/// The extended model: Euler-Eytelwein with
-/// * a T1-path loss e1 (`sensors.t1_offset_n`),
-/// * mu0 with a wrap slope of ln mu (`law.mu_log_slope_per_rad`, anchored at 540°),
-/// * contact heating: mu falls by exp(−h·H), H the friction-load memory (`law.heat_per_ns`,
-///   `law.heat_tau_s`), carried along each run with the protocol's step timing,
-/// * per-cord random log-mu offsets (mixed model).
-pub fn extended() -> ModelSpec {
-    let mut base = Model::euler_eytelwein(0.145);
-    base.law.heat_tau_s = 1.0;
-    base.law.heat_per_ns = 0.009;
-    base.law.mu_log_slope_per_rad = 0.015;
-    base.sensors.t1_offset_n = 0.2;
-    ModelSpec::new("extended", base)
-        .free(Param::Mu)
-        .free(Param::HeatPerNs)
-        .free_with(
-            Param::HeatTauS,
-            Transform::Logistic {
-                lo: TAU_BOUNDS_S.0,
-                hi: TAU_BOUNDS_S.1,
-            },
-        )
-        .free(Param::T1Offset)
-        .free(Param::MuLogSlopePerRad)
-        .random_effect_on(Param::Mu)
+/// How a named cause enters the population model: its parameter and transform.
+fn free_param(kind: EffectKind) -> Option<(Param, Transform)> {
+    let p = Param::from_effect(kind)?;
+    let t = match kind {
+        EffectKind::PressureFriction => Transform::Logistic { lo: 0.3, hi: 1.0 },
+        EffectKind::SensorGain | EffectKind::ContactHeating | EffectKind::BendingStiffness => {
+            Transform::Log
+        }
+        _ => Transform::Identity,
+    };
+    Some((p, t))
 }
 
-/// Power law dT/dθ = k·Tⁿ with mu and n free.
-pub fn power_law() -> ModelSpec {
-    ModelSpec::new("power_law", Model::euler_eytelwein(0.12))
-        .with_value(Param::TensionExponent, 0.9)
-        .free(Param::Mu)
-        .free(Param::TensionExponent)
+/// The extended model: Euler-Eytelwein with every cause the engine names, each at the value
+/// it found (the start of the fit), one population mu and a per-cord random log-mu (mixed).
+/// Contact heating keeps the catalogue's short memory (τ = `HEAT_TAU_S`). Without named
+/// causes it is Euler-Eytelwein with the cord effects.
+pub fn extended(a: &Assessment) -> ModelSpec {
+    let mu0 = crate::fit::stats::mean(&a.fit.mu);
+    let mut base = Model::euler_eytelwein(if mu0.is_finite() { mu0 } else { 0.115 });
+    let causes = a.selected_evidence();
+    for e in &causes {
+        Effect {
+            kind: e.kind,
+            value: e.value,
+        }
+        .apply(&mut base);
+    }
+    if causes.iter().any(|e| e.kind == EffectKind::ContactHeating) {
+        base.law.heat_tau_s = HEAT_TAU_S;
+    }
+    let mut spec = ModelSpec::new("extended", base).free(Param::Mu);
+    for e in &causes {
+        if let Some((p, t)) = free_param(e.kind) {
+            spec = spec.free_with(p, t);
+        }
+    }
+    spec.random_effect_on(Param::Mu)
 }

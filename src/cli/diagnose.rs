@@ -68,7 +68,11 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
     );
     let _ = writeln!(s, "{}", d.verdict);
     if d.unexplained {
-        let _ = writeln!(s, "diagnosis: UNEXPLAINED ({})", d.residual_pattern.unwrap_or("cells"));
+        let _ = writeln!(
+            s,
+            "diagnosis: UNEXPLAINED ({})",
+            d.residual_pattern.unwrap_or("cells")
+        );
     } else if d.effects.is_empty() {
         let _ = writeln!(
             s,
@@ -123,7 +127,13 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
             c.delta_bic,
             c.parameter_se,
             c.level.words(),
-            if c.selected { "  found" } else if c.supported { "  supported" } else { "" }
+            if c.selected {
+                "  found"
+            } else if c.supported {
+                "  supported"
+            } else {
+                ""
+            }
         );
     }
     for n in &d.not_testable {

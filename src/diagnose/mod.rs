@@ -11,14 +11,12 @@
 //! through `src/fit`, and the verdict in words.
 
 pub mod cases;
-pub mod score;
 mod diagnosis;
+pub mod score;
 pub mod words;
 
 pub use crate::evidence::{Level, NotTestable, BETWEEN_THRESHOLD, WITHIN_THRESHOLD};
-pub use diagnosis::{
-    Baseline, DesignSummary, Diagnosis, Extended, Found, PathStep, Thresholds,
-};
+pub use diagnosis::{Baseline, DesignSummary, Diagnosis, Extended, Found, PathStep, Thresholds};
 
 use crate::data::Dataset;
 use crate::evidence::{self, Assessment};
@@ -152,7 +150,9 @@ fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) 
     let ext = if found.is_empty() {
         base_fit.rmse()
     } else {
-        fit_fixed(&spec, obs, &runs, None).rmse().min(base_fit.rmse())
+        fit_fixed(&spec, obs, &runs, None)
+            .rmse()
+            .min(base_fit.rmse())
     };
     (
         Baseline {

@@ -48,7 +48,7 @@ fn synthetic(effect: Effect) -> Dataset {
             timing: &timing,
             rows: run,
         };
-        crate::fit::predict::predict_run(&models[run[0]], rows, true, None, &mut t2);
+        crate::fit::predict::predict_run(&models[run[0]], rows, true, None, &mut t2, None);
     }
     for (k, p) in data.pairs.iter_mut().enumerate() {
         let noise = 0.002 * ((((k + 1) as u64 * 2_654_435_761) % 1000) as f64 / 500.0 - 1.0);
@@ -97,7 +97,8 @@ fn run_mu_agree_with_the_fit_module() {
     let data = synthetic(Effect::NONE);
     let des = crate::evidence::Design::new(&data, false);
     let w = crate::evidence::within::Weights::equal(des.n());
-    let none = crate::evidence::within::fit(&des, &[], &[], &crate::evidence::within::start_mu(&des), &w);
+    let none =
+        crate::evidence::within::fit(&des, &[], &[], &crate::evidence::within::start_mu(&des), &w);
     let spec = ModelSpec::new("ee", Model::euler_eytelwein(0.1)).free(Param::Mu);
     for u in [0, 5, 11] {
         let rows = &des.units[u];

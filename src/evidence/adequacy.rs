@@ -19,7 +19,7 @@
 //! sentence is generated from that decision and the pattern found.
 
 use super::design::Design;
-use super::within::{Weights, WithinFit};
+use super::within::{fit_strata, Strata, Weights, WithinFit};
 use crate::fit::stats::f_p_upper;
 use host_sim::plant::rng::Rng;
 use nalgebra::{DMatrix, DVector};
@@ -36,6 +36,9 @@ pub struct AdequacyRule {
     /// The share of the residual variance a directed test explains at or above which it is
     /// large (used without replicates).
     pub min_r2: f64,
+    /// The spread of an effect's per-wrap sizes (fraction of its common size) at or above
+    /// which a significant inconstancy is large.
+    pub min_spread: f64,
 }
 
 impl Default for AdequacyRule {
@@ -44,6 +47,7 @@ impl Default for AdequacyRule {
             alpha: 1e-3,
             min_ratio: 0.35,
             min_r2: 0.05,
+            min_spread: 0.5,
         }
     }
 }
@@ -63,6 +67,26 @@ pub struct LackOfFit {
     pub p: f64,
     /// RMS of the systematic part over the RMS of the pure error.
     pub systematic_ratio: f64,
+}
+
+/// Do the selected effects have one size for all wraps? The same physics has the same size on
+/// every cord; an effect that takes different sizes on different wraps stands in for something
+/// else. A cluster-robust Wald test (runs as clusters) of the per-wrap sizes' contrasts.
+#[derive(Clone, Debug, Serialize)]
+pub struct Constancy {
+    /// Per effect: its size on each wrap, (wrap in degrees, value).
+    pub by_wrap: Vec<(&'static str, Vec<(f64, f64)>)>,
+    /// F of the Wald statistic.
+    pub f: f64,
+    /// Numerator degrees of freedom: effects × (wraps − 1).
+    pub df1: f64,
+    /// Denominator degrees of freedom: runs − df1.
+    pub df2: f64,
+    /// Upper-tail p.
+    pub p: f64,
+    /// The largest spread of one effect's per-wrap sizes around its common size, as a
+    /// fraction of the common size's departure from no effect.
+    pub spread: f64,
 }
 
 /// One directed test of the residuals.
@@ -95,6 +119,9 @@ pub struct Adequacy {
     /// Selected effects whose best fit sits on the edge of their physical range, with the
     /// value there: the data want more than the effect can be.
     pub at_physical_limit: Vec<(&'static str, f64)>,
+    /// The selected within-run effects refitted with one size per wrap (None with one wrap
+    /// or none selected).
+    pub constancy: Option<Constancy>,
     /// The pure-error test (None without replicate runs).
     pub lack_of_fit: Option<LackOfFit>,
     /// The directed tests.
@@ -126,7 +153,11 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             best.is_some_and(|t| t.p < bonferroni && t.partial_r2 >= rule.min_r2)
         }
     };
-    let unexplained = lack || !at_physical_limit.is_empty();
+    let constancy = constancy(d, fit, w);
+    let inconstant = constancy
+        .as_ref()
+        .is_some_and(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
+    let unexplained = lack || !at_physical_limit.is_empty() || inconstant;
     let pattern = match (best, &lack_of_fit) {
         (Some(t), _) => Some(t.structure),
         (None, Some(l)) if l.p < rule.alpha => Some("cells"),
@@ -142,13 +173,42 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             "The data push {} to the edge of the physical range, so the catalogue does not explain them.",
             list.join(" and ")
         );
-        sentence = if lack { format!("{sentence} {edge}") } else { edge };
+        sentence = if lack {
+            format!("{sentence} {edge}")
+        } else {
+            edge
+        };
+    }
+    if inconstant {
+        if let Some(c) = &constancy {
+            let list: Vec<String> = c
+                .by_wrap
+                .iter()
+                .map(|(k, v)| {
+                    let vals: Vec<String> =
+                        v.iter().map(|(w, x)| format!("{x:.4} at {w}°")).collect();
+                    format!("{k} ({})", vals.join(", "))
+                })
+                .collect();
+            let text = format!(
+                "The found effects take different sizes on different wraps ({}; F = {:.1}, p = {:.1e}), which the same physics would not: they stand in for something no catalogue effect explains.",
+                list.join("; "),
+                c.f,
+                c.p
+            );
+            sentence = if lack || !at_physical_limit.is_empty() {
+                format!("{sentence} {text}")
+            } else {
+                text
+            };
+        }
     }
     Adequacy {
         unexplained,
         pattern,
         sentence,
         at_physical_limit,
+        constancy,
         lack_of_fit,
         directed,
         rule,
@@ -250,8 +310,14 @@ fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     for &(_, i, c) in &entries {
         mean[c] += z[i] / cnt[c] as f64;
     }
-    let ss_pe: f64 = entries.iter().map(|&(_, i, c)| (z[i] - mean[c]).powi(2)).sum();
-    let df_pe: f64 = (0..n_cells).filter(|&c| used[c]).map(|c| (cnt[c] - 1) as f64).sum();
+    let ss_pe: f64 = entries
+        .iter()
+        .map(|&(_, i, c)| (z[i] - mean[c]).powi(2))
+        .sum();
+    let df_pe: f64 = (0..n_cells)
+        .filter(|&c| used[c])
+        .map(|c| (cnt[c] - 1) as f64)
+        .sum();
     let cords: std::collections::HashSet<usize> = (0..n_cells)
         .filter(|&c| used[c])
         .map(|c| cord_of_cell[c])
@@ -285,6 +351,79 @@ fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     })
 }
 
+/// Refit the selected effects with one size per wrap and test that the sizes agree.
+fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
+    let k = fit.k();
+    let wraps = d.wraps();
+    if k == 0 || wraps.len() < 2 {
+        return None;
+    }
+    let of_unit: Vec<usize> = d
+        .unit_cord
+        .iter()
+        .map(|&c| {
+            wraps
+                .iter()
+                .position(|&x| x == d.cords[c].wrap_deg)
+                .unwrap_or(0)
+        })
+        .collect();
+    let s_n = wraps.len();
+    let maps: Vec<_> = (0..s_n).flat_map(|_| fit.maps.iter().copied()).collect();
+    let theta0: Vec<f64> = (0..s_n).flat_map(|_| fit.theta.iter().copied()).collect();
+    let strata = Strata { k, of_unit };
+    let split = fit_strata(d, (&maps, &strata), &theta0, &fit.mu, w);
+    let big_k = k * s_n;
+    let q = k * (s_n - 1);
+    let g = d.units.len() as f64;
+    if g - (q as f64) < 2.0 {
+        return None;
+    }
+    // Contrasts θ[s, j] − θ[0, j].
+    let mut c = DMatrix::<f64>::zeros(q, big_k);
+    for s in 1..s_n {
+        for j in 0..k {
+            let row = (s - 1) * k + j;
+            c[(row, s * k + j)] = 1.0;
+            c[(row, j)] = -1.0;
+        }
+    }
+    let theta = DVector::from_column_slice(&split.theta);
+    let v = DMatrix::from_row_slice(big_k, big_k, &split.cov_robust);
+    let ct = &c * &theta;
+    let cvc = &c * v * c.transpose();
+    let wald = (ct.transpose() * cvc.try_inverse()? * &ct)[(0, 0)];
+    let qf = q as f64;
+    let f = wald / qf * (g - qf) / (g - 1.0);
+    if !f.is_finite() {
+        return None;
+    }
+    let mut spread: f64 = 0.0;
+    let by_wrap = (0..k)
+        .map(|j| {
+            let common = fit.value(j);
+            let scale = (common - fit.maps[j].kind.neutral_value()).abs();
+            let vals: Vec<(f64, f64)> = (0..s_n)
+                .map(|s| (wraps[s], split.value(s * k + j)))
+                .collect();
+            for &(_, x) in &vals {
+                if scale > 0.0 {
+                    spread = spread.max((x - common).abs() / scale);
+                }
+            }
+            (fit.maps[j].kind.name(), vals)
+        })
+        .collect();
+    Some(Constancy {
+        by_wrap,
+        f,
+        df1: qf,
+        df2: g - qf,
+        p: f_p_upper(f, qf, g - qf),
+        spread,
+    })
+}
+
 /// Subtract each run's mean from `v`.
 fn run_centred(d: &Design, v: &[f64]) -> Vec<f64> {
     let mut out = v.to_vec();
@@ -301,7 +440,10 @@ fn run_centred(d: &Design, v: &[f64]) -> Vec<f64> {
 fn structures(d: &Design) -> Vec<(&'static str, Vec<Vec<f64>>)> {
     let n = d.n();
     let s: Vec<f64> = d.t1.iter().map(|t| (t / 0.5).asinh()).collect();
-    let mut out = vec![("t1_shape", vec![s.clone(), s.iter().map(|x| x * x).collect()])];
+    let mut out = vec![(
+        "t1_shape",
+        vec![s.clone(), s.iter().map(|x| x * x).collect()],
+    )];
     if d.columns.time_s && d.max_time_spread_s() > 0.0 {
         let t: Vec<f64> = d.op.iter().map(|o| o.time_s / 100.0).collect();
         out.push(("time", vec![t.clone(), t.iter().map(|x| x * x).collect()]));

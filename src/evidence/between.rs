@@ -183,7 +183,14 @@ fn cord_regression(d: &Design, cord_mu: &[f64], kinds: &[EffectKind]) -> Option<
         (b / a, r.se[j] / a.abs())
     };
     let chi2 = chi2_of_t(r.t[j], r.df);
-    Some(Evidence::new(kind, value, se, -chi2 + (g as f64).ln(), chi2, r.df))
+    Some(Evidence::new(
+        kind,
+        value,
+        se,
+        -chi2 + (g as f64).ln(),
+        chi2,
+        r.df,
+    ))
 }
 
 /// Wear: the runs' mu on run − 1 with one intercept per cord.
@@ -205,7 +212,14 @@ fn wear(d: &Design, run_mu: &[f64]) -> Option<Evidence> {
     let b = r.coef[nc];
     let chi2 = chi2_of_t(r.t[nc], r.df);
     let n = run_mu.len() as f64;
-    Some(Evidence::new(EffectKind::Wear, b / a, r.se[nc] / a.abs(), -chi2 + n.ln(), chi2, r.df))
+    Some(Evidence::new(
+        EffectKind::Wear,
+        b / a,
+        r.se[nc] / a.abs(),
+        -chi2 + n.ln(),
+        chi2,
+        r.df,
+    ))
 }
 
 /// The cords' mean of their runs' mu.
@@ -219,20 +233,28 @@ pub fn cord_means(d: &Design, run_mu: &[f64]) -> Vec<f64> {
     sum.iter().zip(&cnt).map(|(s, n)| s / n).collect()
 }
 
+/// What the between-level tests found.
+pub struct BetweenTests {
+    /// Every testable candidate's evidence: selected ones given the other selected, the rest
+    /// added to them.
+    pub evidence: Vec<Evidence>,
+    /// The selected effects.
+    pub selected: Vec<EffectKind>,
+    /// Every candidate's evidence alone.
+    pub alone: Vec<Evidence>,
+}
+
 /// The between-level effects on the runs' mu: forward selection among the cord-level ones
-/// (each addition must be supported given those in), wear on its own. Returns every testable
-/// candidate's evidence (selected ones given the other selected, the rest added to them) and
-/// the selection path.
+/// (each addition must be supported given those in), wear on its own.
 pub fn between_tests(
     d: &Design,
     run_mu: &[f64],
     testable: &[EffectKind],
     threshold: f64,
-) -> (Vec<Evidence>, Vec<EffectKind>) {
+) -> BetweenTests {
     let cord_mu = cord_means(d, run_mu);
-    let supported = |e: &Evidence| {
-        practically_relevant(e.kind, e.value, d) && e.delta_bic < -threshold
-    };
+    let supported =
+        |e: &Evidence| practically_relevant(e.kind, e.value, d) && e.delta_bic < -threshold;
     let pool: Vec<EffectKind> = testable
         .iter()
         .copied()
@@ -240,6 +262,7 @@ pub fn between_tests(
         .collect();
     let mut chosen: Vec<EffectKind> = Vec::new();
     let mut last: Vec<Evidence>;
+    let mut alone: Option<Vec<Evidence>> = None;
     loop {
         last = pool
             .iter()
@@ -250,6 +273,9 @@ pub fn between_tests(
                 cord_regression(d, &cord_mu, &ks)
             })
             .collect();
+        if alone.is_none() {
+            alone = Some(last.clone());
+        }
         let best = last
             .iter()
             .filter(|e| supported(e))
@@ -268,13 +294,23 @@ pub fn between_tests(
             out.insert(i, e);
         }
     }
+    let mut alone = alone.unwrap_or_default();
     if testable.contains(&EffectKind::Wear) {
         if let Some(e) = wear(d, run_mu) {
             if supported(&e) {
                 chosen.push(EffectKind::Wear);
             }
+            alone.push(e.clone());
             out.push(e);
         }
     }
-    (out, chosen)
+    for e in &mut alone {
+        e.relevant = practically_relevant(e.kind, e.value, d);
+        e.supported = supported(e);
+    }
+    BetweenTests {
+        evidence: out,
+        selected: chosen,
+        alone,
+    }
 }

@@ -32,9 +32,9 @@ impl Level {
 /// The level at which an effect is judged.
 pub fn level(kind: EffectKind) -> Level {
     match kind {
-        EffectKind::SensorGain
-        | EffectKind::DiameterDependence
-        | EffectKind::SpeedDependence => Level::BetweenCord,
+        EffectKind::SensorGain | EffectKind::DiameterDependence | EffectKind::SpeedDependence => {
+            Level::BetweenCord
+        }
         EffectKind::Wear => Level::BetweenRun,
         _ => Level::WithinRun,
     }
@@ -200,32 +200,41 @@ pub fn untestable(kind: EffectKind, d: &Design) -> Option<String> {
     }
 }
 
-/// Is an effect of this size more than the rig can resolve? The region of practical
-/// equivalence with no effect: offsets under 0.02 N (about one ADC count, 0.015 N), a gain
-/// within 1 % of 1, an exponent within 0.01 of 1, a bending stiffness under 2·10⁻⁶ N m², a
-/// heating that changes mu by less than 1 % at the data's largest friction load, and a drift,
-/// wear, diameter or speed dependence that changes mu by less than 1 % across the data set's
-/// span of time, runs, diameters or voltages.
-pub fn practically_relevant(kind: EffectKind, value: f64, d: &Design) -> bool {
+/// The half-width of the region of practical equivalence with no effect, in the catalogue's
+/// units (a departure from the neutral value smaller than this is below what the rig can
+/// resolve or what would matter): offsets 0.02 N (about one ADC count, 0.015 N), a gain 1 %, an
+/// exponent 0.01, a bending stiffness 2·10⁻⁶ N m² (B ≥ 0: the region is [0, 2·10⁻⁶]), a heating
+/// that changes mu by 1 % at the data's largest friction load, and a drift, wear, diameter or
+/// speed dependence that changes mu by 1 % across the data set's span of time, runs,
+/// diameters or voltages (infinite when that span is zero).
+pub fn relevance_width(kind: EffectKind, d: &Design) -> f64 {
     let span = |v: Vec<f64>| v.last().copied().unwrap_or(0.0) - v.first().copied().unwrap_or(0.0);
+    let per = |s: f64| if s > 0.0 { 0.01 / s } else { f64::INFINITY };
     match kind {
-        EffectKind::None => false,
-        EffectKind::T1Offset | EffectKind::T2Offset => value.abs() >= 0.02,
-        EffectKind::SensorGain => (value - 1.0).abs() >= 0.01,
-        EffectKind::PressureFriction => (1.0 - value).abs() >= 0.01,
-        EffectKind::BendingStiffness => value >= 2e-6,
-        EffectKind::ThermalDrift => (value * d.max_time_spread_s() / 100.0).abs() >= 0.01,
+        EffectKind::None => f64::INFINITY,
+        EffectKind::T1Offset | EffectKind::T2Offset => 0.02,
+        EffectKind::SensorGain | EffectKind::PressureFriction => 0.01,
+        EffectKind::BendingStiffness => 2e-6,
+        EffectKind::ThermalDrift => 100.0 * per(d.max_time_spread_s()),
         EffectKind::ContactHeating => {
-            let load = (0..d.n())
-                .map(|i| d.t2[i] - d.t1[i])
-                .fold(0.0f64, f64::max);
-            (value * load).abs() >= 0.01
+            per((0..d.n()).map(|i| d.t2[i] - d.t1[i]).fold(0.0f64, f64::max))
         }
-        EffectKind::Wear => {
-            let runs = span(crate::fit::stats::distinct(d.unit_run.iter().copied()));
-            (value * runs).abs() >= 0.01
-        }
-        EffectKind::DiameterDependence => (value * span(d.diameters())).abs() >= 0.01,
-        EffectKind::SpeedDependence => (value * span(d.voltages())).abs() >= 0.01,
+        EffectKind::Wear => per(span(crate::fit::stats::distinct(
+            d.unit_run.iter().copied(),
+        ))),
+        EffectKind::DiameterDependence => per(span(d.diameters())),
+        EffectKind::SpeedDependence => per(span(d.voltages())),
     }
+}
+
+/// Is an effect of this size more than the rig can resolve (outside the region of practical
+/// equivalence, [`relevance_width`])?
+pub fn practically_relevant(kind: EffectKind, value: f64, d: &Design) -> bool {
+    (value - kind.neutral_value()).abs() >= relevance_width(kind, d)
+}
+
+/// Does the robust 95 % interval of an estimate lie inside the region of practical
+/// equivalence (so the data exclude a size that matters: two one-sided tests)?
+pub fn excluded(kind: EffectKind, value: f64, se: f64, d: &Design) -> bool {
+    se.is_finite() && (value - kind.neutral_value()).abs() + 1.96 * se < relevance_width(kind, d)
 }

@@ -52,7 +52,7 @@ use within::{Weights, WithinFit};
 /// Within-run (shape) effects are named when ΔBIC < −this.
 pub const WITHIN_THRESHOLD: f64 = 6.0;
 /// Between-run and between-cord effects are named when ΔBIC < −this.
-pub const BETWEEN_THRESHOLD: f64 = 4.0;
+pub const BETWEEN_THRESHOLD: f64 = 6.0;
 
 /// How to assess.
 #[derive(Clone, Copy, Debug)]
@@ -196,6 +196,8 @@ pub struct Assessment {
     pub not_testable: Vec<NotTestable>,
     /// The within-run selection path: (effect, ΔBIC when it came in).
     pub path: Vec<(EffectKind, f64)>,
+    /// Every testable candidate's evidence alone (no other effect in).
+    pub alone: Vec<Evidence>,
     /// What is left.
     pub adequacy: Adequacy,
     /// Scatter and noise.
@@ -236,10 +238,17 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
         .into_iter()
         .filter(|k| testable.contains(k))
         .collect();
-    // The noise's variance function from smooth curves through each run: what they leave is
-    // noise, not a missing effect.
-    let w0 = Weights::from_run_curves(&d);
-    let null = within::fit(&d, &[], &[], &within::start_mu(&d), &w0);
+    // The noise's variance function from the pure error of the replicate runs: what effects
+    // the data hold move a cell's runs alike, so what is left is noise.
+    let clock = std::time::Instant::now();
+    let lap = |what: &str| {
+        if std::env::var("CAPSTAN_LAPS").is_ok() {
+            eprintln!("{what}: {:.1} ms", clock.elapsed().as_secs_f64() * 1e3);
+        }
+    };
+    let cold = within::fit(&d, &[], &[], &within::start_mu(&d), &Weights::equal(d.n()));
+    let w0 = Weights::from_pure_error(&d, &cold);
+    let null = within::fit(&d, &[], &[], &cold.mu, &w0);
     let sel = select::forward(
         &d,
         null.clone(),
@@ -248,18 +257,21 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
         opts.within_threshold,
         opts.threads,
     );
-    // The final fit with the variance function of its own residuals.
-    let w = Weights::from_residuals(&sel.fit.residuals(&d), &sel.fit.fitted);
-    let fit = within::fit(&d, &sel.fit.maps, &sel.fit.theta, &sel.fit.mu, &w);
-    let (between_ev, between_sel) =
-        between::between_tests(&d, &fit.mu, &testable, opts.between_threshold);
+    lap("selection");
+    let fit = sel.fit;
+    let w = w0;
+    lap("final fit");
+    let bt = between::between_tests(&d, &fit.mu, &testable, opts.between_threshold);
+    let between_sel = bt.selected;
     let mut evidence = sel.evidence;
-    for mut e in between_ev {
+    for mut e in bt.evidence {
         e.relevant = candidates::practically_relevant(e.kind, e.value, &d);
         e.supported = e.relevant && e.delta_bic < -opts.between_threshold;
         e.selected = between_sel.contains(&e.kind);
         evidence.push(e);
     }
+    let mut alone = sel.alone;
+    alone.extend(bt.alone);
     evidence.sort_by(|a, b| {
         b.selected
             .cmp(&a.selected)
@@ -267,7 +279,9 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
     });
     let mut selected: Vec<EffectKind> = fit.maps.iter().map(|m| m.kind).collect();
     selected.extend(between_sel);
+    lap("between");
     let adequacy = adequacy::assess(&d, &fit, &w, opts.adequacy);
+    lap("adequacy");
     let scatter = scatter(&d, &fit, &w);
     let rows_used = RowsUsed {
         t2_fits: d.n(),
@@ -282,6 +296,7 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
         evidence,
         not_testable,
         path: sel.path,
+        alone,
         adequacy,
         scatter,
         rows_used,
@@ -317,6 +332,10 @@ fn scatter(d: &Design, fit: &WithinFit, w: &Weights) -> Scatter {
         within_run_rms_n: (fit.rss / d.n() as f64).sqrt(),
         noise_abs_n: w.sd_abs_n,
         noise_rel: w.sd_rel,
-        lag1_autocorrelation: if d.timed && sq > 0.0 { lag / sq } else { f64::NAN },
+        lag1_autocorrelation: if d.timed && sq > 0.0 {
+            lag / sq
+        } else {
+            f64::NAN
+        },
     }
 }

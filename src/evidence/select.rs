@@ -15,6 +15,11 @@ use super::Evidence;
 use crate::fit::stats::chi2_of_f;
 use capstan_friction::EffectKind;
 
+/// Most within-run effects named at once. Data that want more than three catalogue effects at
+/// once are better described as holding something the catalogue does not have: what is left
+/// after three goes to the adequacy check, which then says so (and the fits stay fast).
+pub const MAX_WITHIN: usize = 3;
+
 /// Evidence for parameter `j` of `with` against `without` (the same set without it).
 fn evidence(d: &Design, without: &WithinFit, with: &WithinFit, j: usize) -> Evidence {
     let n = d.n() as f64;
@@ -36,13 +41,28 @@ fn evidence(d: &Design, without: &WithinFit, with: &WithinFit, j: usize) -> Evid
     e
 }
 
-/// `fit`'s set with `kind` added (its θ from its starts, the others warm).
-fn add(d: &Design, fit: &WithinFit, kind: EffectKind, w: &Weights) -> WithinFit {
+/// `fit`'s set with `kind` added, the others warm. Its θ starts from `start` if given (its
+/// value when it was fitted alone), else from each of its start values.
+fn add(
+    d: &Design,
+    fit: &WithinFit,
+    kind: EffectKind,
+    w: &Weights,
+    start: Option<f64>,
+) -> WithinFit {
     let mut maps = fit.maps.clone();
     maps.push(ThetaMap::for_kind(kind, d));
     let mut theta = fit.theta.clone();
-    theta.push(0.0);
-    fit_multistart(d, &maps, &theta, &fit.mu, w)
+    match start {
+        Some(t) => {
+            theta.push(t);
+            super::within::fit(d, &maps, &theta, &fit.mu, w)
+        }
+        None => {
+            theta.push(0.0);
+            fit_multistart(d, &maps, &theta, &fit.mu, w)
+        }
+    }
 }
 
 /// `fit`'s set without parameter `j` (warm start).
@@ -51,6 +71,66 @@ fn drop(d: &Design, fit: &WithinFit, j: usize, w: &Weights) -> WithinFit {
     let maps: Vec<ThetaMap> = keep.iter().map(|&x| fit.maps[x]).collect();
     let theta: Vec<f64> = keep.iter().map(|&x| fit.theta[x]).collect();
     super::within::fit(d, &maps, &theta, &fit.mu, w)
+}
+
+/// Stepwise refinement by swaps: replace one selected effect by an unselected one when the
+/// set then fits better and every member is still supported. Forward selection's first pick
+/// is the single effect that best mimics the whole truth (a power law standing in for heating
+/// plus a T1 loss, say); a swap lets the pair that is really there win on fit.
+fn swaps(
+    d: &Design,
+    mut current: WithinFit,
+    candidates: &[EffectKind],
+    w: &Weights,
+    supported: &(dyn Fn(&Evidence) -> bool + Sync),
+    alone: &[(EffectKind, f64)],
+    threads: usize,
+) -> WithinFit {
+    for _pass in 0..2 {
+        // One effect alone is already the best-fitting single one: only sets can improve.
+        let k = current.k();
+        if k < 2 {
+            break;
+        }
+        let options: Vec<(usize, EffectKind)> = (0..k)
+            .flat_map(|j| {
+                candidates
+                    .iter()
+                    .copied()
+                    .filter(|c| !current.maps.iter().any(|m| m.kind == *c))
+                    .map(move |c| (j, c))
+            })
+            .collect();
+        let fits: Vec<WithinFit> = par(&options, threads, |&(j, c)| {
+            let mut maps = current.maps.clone();
+            let mut theta = current.theta.clone();
+            maps[j] = ThetaMap::for_kind(c, d);
+            theta[j] = alone
+                .iter()
+                .find(|a| a.0 == c)
+                .map_or(maps[j].theta(c.neutral_value()), |a| a.1);
+            super::within::fit(d, &maps, &theta, &current.mu, w)
+        });
+        let mut better: Vec<usize> = (0..fits.len())
+            .filter(|&i| fits[i].wrss < current.wrss * (1.0 - 1e-9))
+            .collect();
+        better.sort_by(|&a, &b| fits[a].wrss.total_cmp(&fits[b].wrss));
+        let accepted = better.into_iter().find(|&i| {
+            let cand = &fits[i];
+            (0..cand.k()).all(|j| {
+                let less = drop(d, cand, j, w);
+                supported(&evidence(d, &less, cand, j))
+            })
+        });
+        let Some(b) = accepted else { break };
+        current = fits.into_iter().nth(b).expect("index in range");
+    }
+    current
+}
+
+/// The effects of a fit, in θ order.
+fn kinds(f: &WithinFit) -> Vec<EffectKind> {
+    f.maps.iter().map(|m| m.kind).collect()
 }
 
 /// Run `f` over `items` on up to `threads` threads, results in input order.
@@ -66,6 +146,8 @@ pub struct WithinSelection {
     pub evidence: Vec<Evidence>,
     /// The order in which effects were added, with their ΔBIC when added.
     pub path: Vec<(EffectKind, f64)>,
+    /// Every candidate's evidence alone (added to every run's own mu, no other effect).
+    pub alone: Vec<Evidence>,
 }
 
 /// Forward selection from `null` over `candidates`. A candidate is supported when it is
@@ -80,22 +162,46 @@ pub fn forward(
 ) -> WithinSelection {
     let supported = |e: &Evidence| e.relevant && e.delta_bic < -threshold;
     let mut last: Vec<Evidence> = Vec::new();
+    // The set `last` was computed against (it is reused when the selection ends there).
+    let mut last_for: Vec<EffectKind> = Vec::new();
     let mut current = null;
     let mut path = Vec::new();
     // An effect that a later one made redundant does not come back (stepwise selection can
     // otherwise cycle), so the loop ends after at most two rounds per candidate.
     let mut retired: Vec<EffectKind> = Vec::new();
+    // Each candidate's θ when fitted alone (from all its starts): later rounds start there.
+    let mut alone: Vec<(EffectKind, f64)> = Vec::new();
+    let mut alone_evidence: Vec<Evidence> = Vec::new();
+    let start_of =
+        |alone: &[(EffectKind, f64)], k: EffectKind| alone.iter().find(|a| a.0 == k).map(|a| a.1);
     for _round in 0..=2 * candidates.len() {
+        if current.k() >= MAX_WITHIN {
+            // Structure beyond this many effects at once is left to the adequacy check.
+            break;
+        }
         let pool: Vec<EffectKind> = candidates
             .iter()
             .copied()
             .filter(|&k| !current.maps.iter().any(|m| m.kind == k) && !retired.contains(&k))
             .collect();
-        let fits: Vec<WithinFit> = par(&pool, threads, |&k| add(d, &current, k, w));
+        let fits: Vec<WithinFit> = par(&pool, threads, |&k| {
+            add(d, &current, k, w, start_of(&alone, k))
+        });
+        if alone.is_empty() {
+            alone = fits.iter().map(|f| (f.maps[0].kind, f.theta[0])).collect();
+        }
+        let first_round = alone_evidence.is_empty();
         last = fits
             .iter()
             .map(|f| evidence(d, &current, f, f.k() - 1))
             .collect();
+        last_for = kinds(&current);
+        if first_round {
+            alone_evidence = last.clone();
+            for e in &mut alone_evidence {
+                e.supported = supported(e);
+            }
+        }
         // Among the supported candidates the best fit comes in: each one's overdispersion
         // decides whether it is supported, not which of two rival shapes the data prefer.
         let best = (0..fits.len())
@@ -125,6 +231,23 @@ pub fn forward(
             }
         }
     }
+    current = swaps(d, current, candidates, w, &supported, &alone, threads);
+    // Every other candidate added to the final set (recomputed if the last round's were
+    // against another set: the selection stopped at its cap, or an effect left).
+    if last_for != kinds(&current) || last.len() + current.k() < candidates.len() {
+        let pool: Vec<EffectKind> = candidates
+            .iter()
+            .copied()
+            .filter(|&k| !current.maps.iter().any(|m| m.kind == k))
+            .collect();
+        let fits: Vec<WithinFit> = par(&pool, threads, |&k| {
+            add(d, &current, k, w, start_of(&alone, k))
+        });
+        last = fits
+            .iter()
+            .map(|f| evidence(d, &current, f, f.k() - 1))
+            .collect();
+    }
     // The selected effects, each given the others.
     let mut evidence: Vec<Evidence> = (0..current.k())
         .map(|j| {
@@ -142,5 +265,6 @@ pub fn forward(
         fit: current,
         evidence,
         path,
+        alone: alone_evidence,
     }
 }

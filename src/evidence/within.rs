@@ -15,13 +15,15 @@
 //! memory carried along each run); sensitivities are forward differences of it.
 //!
 //! Uncertainty: the model-based covariance σ²S⁻¹ (S the Schur complement of the information)
-//! and the cluster-robust sandwich with runs as clusters (CR1, G/(G − 1)), built from each
-//! run's profile score (its mu projected out): valid whatever the correlation of residuals
-//! inside a run (its tare, the wander of its mu, serial correlation).
+//! and the cluster-robust covariance with runs as clusters, built from each run's profile
+//! score (its mu projected out) in the jackknife form (CR3: each run's score through the
+//! information without that run, (G − 1)/G): valid whatever the correlation of residuals
+//! inside a run (its tare, the wander of its mu, serial correlation), and not fooled by a few
+//! runs that carry most of the information.
 
 use super::candidates::{run_model, ThetaMap};
 use super::design::Design;
-use crate::fit::predict::{predict_run, RunRows};
+use crate::fit::predict::{predict_run, Hint, RunRows};
 use nalgebra::{DMatrix, DVector};
 
 /// Weights of the rows: 1/(σ_a² + σ_r²·f²), the variance of a T2 reading that carries an
@@ -98,6 +100,43 @@ impl Weights {
 }
 
 impl Weights {
+    /// The variance function of the pure error: the residuals of every run's own mu (no
+    /// effect), less their mean over the cord × step cell's runs. Whatever effect the data
+    /// hold shifts a cell's runs alike and leaves the cell mean; what is left is the run-to-run
+    /// noise at that step (the wander of mu, the zero errors, the sensors), scaled by
+    /// √(m/(m − 1)) for the cell mean of m runs. Without replicate runs, [`Self::from_run_curves`].
+    pub fn from_pure_error(d: &Design, null: &WithinFit) -> Weights {
+        let n = d.n();
+        let cells = d.cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
+        let (mut sum, mut cnt) = (vec![0.0; cells], vec![0usize; cells]);
+        for i in 0..n {
+            if let Some(c) = d.cell[i] {
+                sum[c] += d.t2[i] - null.fitted[i];
+                cnt[c] += 1;
+            }
+        }
+        let replicated = cnt.iter().filter(|&&m| m >= 2).count();
+        if replicated < 4 {
+            return Weights::from_run_curves(d);
+        }
+        let (mut r, mut f) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+        for i in 0..n {
+            if let Some(c) = d.cell[i].filter(|&c| cnt[c] >= 2) {
+                let m = cnt[c] as f64;
+                r[i] = (d.t2[i] - null.fitted[i] - sum[c] / m) * (m / (m - 1.0)).sqrt();
+                f[i] = null.fitted[i];
+            }
+        }
+        let mut w = Weights::from_residuals(&r, &f);
+        for i in 0..n {
+            if !f[i].is_finite() {
+                let t = null.fitted[i].abs();
+                w.w[i] = 1.0 / (w.sd_abs_n.powi(2) + (w.sd_rel * t).powi(2));
+            }
+        }
+        w
+    }
+
     /// The variance function of the residuals of a smooth curve per run: T2 on (1, T1, T1²)
     /// inside each run of five rows or more. Any catalogue effect is smooth along a run, so what
     /// such a curve leaves is the noise, whatever the effects (scaled by √(m/(m − 3)) for the
@@ -137,11 +176,40 @@ impl Weights {
     }
 }
 
+/// Which block of θ each run uses: one block (every run shares θ), or one block per stratum
+/// of runs (e.g. per wrap) for the constancy check of the adequacy test. Block s is
+/// θ[s·k .. (s + 1)·k] with its maps; run u uses block `of_unit[u]`.
+#[derive(Clone, Debug)]
+pub struct Strata {
+    /// Parameters per block.
+    pub k: usize,
+    /// The block of every run.
+    pub of_unit: Vec<usize>,
+}
+
+impl Strata {
+    /// Every run shares the `k` parameters.
+    pub fn shared(d: &Design, k: usize) -> Strata {
+        Strata {
+            k,
+            of_unit: vec![0; d.units.len()],
+        }
+    }
+
+    /// The θ (and maps) range of run `u`.
+    fn block(&self, u: usize) -> std::ops::Range<usize> {
+        let s = self.of_unit[u];
+        s * self.k..(s + 1) * self.k
+    }
+}
+
 /// A fitted within-run model.
 #[derive(Clone, Debug)]
 pub struct WithinFit {
-    /// The effects and their θ maps, in θ order.
+    /// The effects and their θ maps, in θ order (block after block with strata).
     pub maps: Vec<ThetaMap>,
+    /// Which block of θ each run uses.
+    pub strata: Strata,
     /// θ (internal coordinates).
     pub theta: Vec<f64>,
     /// Every run's mu.
@@ -206,15 +274,17 @@ fn run_rows(d: &Design, u: usize) -> RunRows<'_> {
 /// values, if given); returns (WRSS, RSS).
 fn predict(
     d: &Design,
-    maps: &[ThetaMap],
+    (maps, strata): (&[ThetaMap], &Strata),
     (mu, theta): (&[f64], &[f64]),
     w: &Weights,
     near: Option<&[f64]>,
-    out: &mut [f64],
+    (out, slopes): (&mut [f64], &mut [f64]),
 ) -> (f64, f64) {
+    let hint = near.map(|t2| Hint { t2, slope: None });
     for u in 0..d.units.len() {
-        let m = run_model(maps, mu[u], theta);
-        predict_run(&m, run_rows(d, u), d.timed, near, out);
+        let b = strata.block(u);
+        let m = run_model(&maps[b.clone()], mu[u], &theta[b]);
+        predict_run(&m, run_rows(d, u), d.timed, hint, out, Some(&mut *slopes));
     }
     let (mut wrss, mut rss) = (0.0, 0.0);
     for i in 0..d.n() {
@@ -246,31 +316,51 @@ impl Sens {
     }
 }
 
-/// Forward differences at (mu, θ) around the predictions `f0`.
-fn jacobian(d: &Design, maps: &[ThetaMap], mu: &[f64], theta: &[f64], f0: &[f64], s: &mut Sens) {
-    let n = d.n();
+/// Forward differences at (mu, θ) around the predictions `f0` (with the step equation's
+/// slopes `slope0` there, for the heating's solve).
+fn jacobian(
+    d: &Design,
+    (maps, strata): (&[ThetaMap], &Strata),
+    (mu, theta): (&[f64], &[f64]),
+    (f0, slope0): (&[f64], &[f64]),
+    s: &mut Sens,
+) {
     let k = maps.len();
     let Sens { a, b, scratch } = s;
+    let hint = Some(Hint {
+        t2: f0,
+        slope: Some(slope0),
+    });
     let h: Vec<f64> = mu.iter().map(|m| 1e-6 * m.abs().max(1e-3)).collect();
-    let mu_h: Vec<f64> = mu.iter().zip(&h).map(|(m, h)| m + h).collect();
     for (u, rows) in d.units.iter().enumerate() {
-        let m = run_model(maps, mu_h[u], theta);
-        predict_run(&m, run_rows(d, u), d.timed, Some(f0), scratch);
+        let blk = strata.block(u);
+        let m = run_model(&maps[blk.clone()], mu[u] + h[u], &theta[blk]);
+        predict_run(&m, run_rows(d, u), d.timed, hint, scratch, None);
         for &i in rows {
             a[i] = (scratch[i] - f0[i]) / h[u];
         }
     }
+    b.iter_mut().for_each(|x| *x = 0.0);
     for j in 0..k {
         let step = maps[j].step();
-        let hb = if theta[j] + step > maps[j].hi { -step } else { step };
+        let hb = if theta[j] + step > maps[j].hi {
+            -step
+        } else {
+            step
+        };
         let mut th = theta.to_vec();
         th[j] += hb;
-        for u in 0..d.units.len() {
-            let m = run_model(maps, mu[u], &th);
-            predict_run(&m, run_rows(d, u), d.timed, Some(f0), scratch);
-        }
-        for i in 0..n {
-            b[i * k + j] = (scratch[i] - f0[i]) / hb;
+        // Only the runs whose block holds θ_j move.
+        for (u, rows) in d.units.iter().enumerate() {
+            let blk = strata.block(u);
+            if !blk.contains(&j) {
+                continue;
+            }
+            let m = run_model(&maps[blk.clone()], mu[u], &th[blk]);
+            predict_run(&m, run_rows(d, u), d.timed, hint, scratch, None);
+            for &i in rows {
+                b[i * k + j] = (scratch[i] - f0[i]) / hb;
+            }
         }
     }
 }
@@ -353,7 +443,10 @@ fn bounded_step(
         return DVector::zeros(0);
     }
     let solve = |s: &DMatrix<f64>, rhs: &DVector<f64>| {
-        s.clone().lu().solve(rhs).unwrap_or_else(|| DVector::zeros(k))
+        s.clone()
+            .lu()
+            .solve(rhs)
+            .unwrap_or_else(|| DVector::zeros(k))
     };
     let mut step = solve(&s, &rhs);
     for _ in 0..k {
@@ -381,8 +474,19 @@ fn bounded_step(
     step
 }
 
-/// Fit the effects of `maps` from θ₀ and run mu₀.
+/// Fit the effects of `maps` from θ₀ and run mu₀, every run sharing θ.
 pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weights) -> WithinFit {
+    fit_strata(d, (maps, &Strata::shared(d, maps.len())), theta0, mu0, w)
+}
+
+/// Fit with θ in blocks by strata of runs (see [`Strata`]).
+pub fn fit_strata(
+    d: &Design,
+    (maps, strata): (&[ThetaMap], &Strata),
+    theta0: &[f64],
+    mu0: &[f64],
+    w: &Weights,
+) -> WithinFit {
     let n = d.n();
     let k = maps.len();
     let nu = d.units.len();
@@ -394,13 +498,20 @@ pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weigh
     let mut mu = mu0.to_vec();
     let mut f = vec![0.0; n];
     let mut trial = vec![0.0; n];
+    let mut slopes = vec![f64::NAN; n];
+    let mut trial_slopes = vec![f64::NAN; n];
     let mut sens = Sens::new(n, k);
-    let (mut wrss, mut rss) = predict(d, maps, (&mu, &theta), w, None, &mut f);
+    let (mut wrss, mut rss) = predict(
+        d,
+        (maps, strata),
+        (&mu, &theta),
+        w,
+        None,
+        (&mut f, &mut slopes),
+    );
     let mut lambda = 1e-3;
-    let mut _iters = 0;
     for _iter in 0..80 {
-        _iters += 1;
-        jacobian(d, maps, &mu, &theta, &f, &mut sens);
+        jacobian(d, (maps, strata), (&mu, &theta), (&f, &slopes), &mut sens);
         let resid: Vec<f64> = (0..n).map(|i| f[i] - d.t2[i]).collect();
         let nm = normal(d, k, w, &resid, &sens.a, &sens.b);
         let mut improved = false;
@@ -418,8 +529,14 @@ pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weigh
                     (mu[u] + (-nm.g[u] - cd) / (nm.d[u] * (1.0 + lambda))).max(1e-4)
                 })
                 .collect();
-            let (new_wrss, new_rss) =
-                predict(d, maps, (&new_mu, &new_theta), w, Some(&f), &mut trial);
+            let (new_wrss, new_rss) = predict(
+                d,
+                (maps, strata),
+                (&new_mu, &new_theta),
+                w,
+                Some(&f),
+                (&mut trial, &mut trial_slopes),
+            );
             if new_wrss < wrss {
                 let rel = (wrss - new_wrss) / wrss.max(1e-300);
                 theta = new_theta;
@@ -427,8 +544,9 @@ pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weigh
                 wrss = new_wrss;
                 rss = new_rss;
                 std::mem::swap(&mut f, &mut trial);
+                std::mem::swap(&mut slopes, &mut trial_slopes);
                 lambda = (lambda / 4.0).max(1e-9);
-                improved = rel > 1e-10;
+                improved = rel > 1e-8;
                 break;
             }
             lambda *= 5.0;
@@ -440,12 +558,11 @@ pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weigh
             break;
         }
     }
-    if std::env::var("CAPSTAN_TRACE").is_ok() {
-        eprintln!("fit {:?} iters {_iters}", maps.iter().map(|m| m.kind.name()).collect::<Vec<_>>());
-    }
-    let (cov_model, cov_robust) = covariances(d, maps, &mu, &theta, &f, w, wrss);
+    let (cov_model, cov_robust) =
+        covariances(d, (maps, strata), (&mu, &theta), (&f, &slopes), w, wrss);
     WithinFit {
         maps: maps.to_vec(),
+        strata: strata.clone(),
         theta,
         mu,
         fitted: f,
@@ -457,7 +574,14 @@ pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weigh
 }
 
 /// Model-based and cluster-robust covariances of θ at the solution.
-fn covariances(d: &Design, maps: &[ThetaMap], mu: &[f64], theta: &[f64], f: &[f64], w: &Weights, wrss: f64) -> (Vec<f64>, Vec<f64>) {
+fn covariances(
+    d: &Design,
+    (maps, strata): (&[ThetaMap], &Strata),
+    (mu, theta): (&[f64], &[f64]),
+    (f, slopes): (&[f64], &[f64]),
+    w: &Weights,
+    wrss: f64,
+) -> (Vec<f64>, Vec<f64>) {
     let n = d.n();
     let k = maps.len();
     let nan = vec![f64::NAN; k * k];
@@ -465,29 +589,42 @@ fn covariances(d: &Design, maps: &[ThetaMap], mu: &[f64], theta: &[f64], f: &[f6
         return (Vec::new(), Vec::new());
     }
     let mut sens = Sens::new(n, k);
-    jacobian(d, maps, mu, theta, f, &mut sens);
+    jacobian(d, (maps, strata), (mu, theta), (f, slopes), &mut sens);
     let (a, b) = (&sens.a, &sens.b);
     let resid: Vec<f64> = (0..n).map(|i| f[i] - d.t2[i]).collect();
     let nm = normal(d, k, w, &resid, a, b);
     let (s, _) = schur(&nm, k, 0.0);
-    let Some(s_inv) = s.try_inverse() else {
+    let Some(s_inv) = s.clone().try_inverse() else {
         return (nan.clone(), nan);
     };
     let g = d.units.len() as f64;
     let dof = (n as f64 - g - k as f64).max(1.0);
     let sigma2 = wrss / dof;
-    let mut meat = DMatrix::<f64>::zeros(k, k);
+    // Each run's profile score s_g (its mu projected out) and its share A_g of the information.
+    // The jackknife form (CR3, the one-step leave-one-run-out estimate) inflates the score of
+    // a run that carries much of the information (a high wrap tells more about a T1 offset
+    // than a low one): the plain sandwich (CR1) understates the variance then.
+    let mut robust = DMatrix::<f64>::zeros(k, k);
     for (u, rows) in d.units.iter().enumerate() {
         let c = &nm.c[u * k..(u + 1) * k];
         let mut score = DVector::<f64>::zeros(k);
+        let mut info = DMatrix::<f64>::zeros(k, k);
         for &i in rows {
+            let bt: Vec<f64> = (0..k)
+                .map(|j| b[i * k + j] - a[i] * c[j] / nm.d[u])
+                .collect();
             for j in 0..k {
-                score[j] += w.w[i] * (b[i * k + j] - a[i] * c[j] / nm.d[u]) * resid[i];
+                score[j] += w.w[i] * bt[j] * resid[i];
+                for l in 0..k {
+                    info[(j, l)] += w.w[i] * bt[j] * bt[l];
+                }
             }
         }
-        meat += &score * score.transpose();
+        let m = (&s - info).try_inverse().unwrap_or_else(|| s_inv.clone());
+        let ms = &m * score;
+        robust += &ms * ms.transpose();
     }
-    let robust = &s_inv * meat * &s_inv * (g / (g - 1.0).max(1.0));
+    let robust = robust * ((g - 1.0) / g).max(0.0);
     let model = &s_inv * sigma2;
     let flat = |m: DMatrix<f64>| (0..k * k).map(|x| m[(x / k, x % k)]).collect();
     (flat(model), flat(robust))
@@ -513,7 +650,13 @@ pub fn start_mu(d: &Design) -> Vec<f64> {
 }
 
 /// The best of fits from several starts of the last parameter (the others at `theta0`).
-pub fn fit_multistart(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weights) -> WithinFit {
+pub fn fit_multistart(
+    d: &Design,
+    maps: &[ThetaMap],
+    theta0: &[f64],
+    mu0: &[f64],
+    w: &Weights,
+) -> WithinFit {
     let k = maps.len();
     let starts = if k == 0 {
         vec![theta0.to_vec()]

@@ -115,15 +115,17 @@ pub fn predict_model(model: &Model, obs: &Observations) -> (Vec<f64>, Vec<f64>) 
 /// `carry` (the run's step timing is known); otherwise each row starts from a cold contact at
 /// its step change. Without heating every row is `model.predict_t2_n`.
 ///
-/// `hint`, if given, holds predictions for nearby parameters (measured T2 per row): the step
-/// equation is then polished by Newton's method from there, a few law evaluations instead of
-/// a bracketed search.
+/// `hint`, if given, holds predictions for nearby parameters (measured T2 per row, and maybe
+/// the step equation's slope there): the step equation is then polished by Newton's method
+/// from there, one or two law evaluations instead of a bracketed search. With heating,
+/// `slopes` (if given) receives each row's slope for later hints.
 pub fn predict_run(
     model: &Model,
     rows: RunRows<'_>,
     carry: bool,
-    hint: Option<&[f64]>,
+    hint: Option<Hint<'_>>,
     out: &mut [f64],
+    mut slopes: Option<&mut [f64]>,
 ) {
     let RunRows {
         t1_n,
@@ -139,27 +141,75 @@ pub fn predict_run(
         return;
     }
     let tau = law.heat_tau_s;
+    let mut decay = Decay::new(tau);
     let mut h_acc = 0.0;
     let mut prev_end: Option<f64> = None;
     for &i in rows {
         let tm = timing[i];
         match prev_end {
             Some(end) if carry && tm.change_s > end => {
-                h_acc = memory_step(h_acc, tm.change_s - end, 0.0, tau).0;
+                h_acc = decay.after(h_acc, tm.change_s - end, 0.0);
             }
             Some(_) if carry => {}
             _ => h_acc = 0.0,
         }
         let x = model.sensors.true_t1_n(t1_n[i]);
         let dt_c = tm.centre_s - tm.change_s;
-        let near = hint.map(|h| (h[i] - model.sensors.t2_offset_n) / model.sensors.t2_gain);
-        let y = match near {
-            Some(y0) => solve_step_from(law, x, &op[i], h_acc, dt_c, y0),
-            None => solve_step(law, x, &op[i], h_acc, dt_c).0,
+        let near = hint.map(|h| {
+            let y0 = (h.t2[i] - model.sensors.t2_offset_n) / model.sensors.t2_gain;
+            (y0, h.slope.map_or(f64::NAN, |s| s[i]))
+        });
+        let (y, slope) = match near {
+            Some((y0, s0)) => {
+                let a_c = decay.factor(dt_c);
+                solve_step_from(law, x, &op[i], (h_acc, dt_c, a_c), (y0, s0))
+            }
+            None => (solve_step(law, x, &op[i], h_acc, dt_c).0, f64::NAN),
         };
+        if let Some(s) = slopes.as_deref_mut() {
+            s[i] = slope;
+        }
         out[i] = model.sensors.measured_t2_n(y);
-        h_acc = memory_step(h_acc, tm.end_s - tm.change_s, y - x, tau).0;
+        h_acc = decay.after(h_acc, tm.end_s - tm.change_s, y - x);
         prev_end = Some(tm.end_s);
+    }
+}
+
+/// [`LoadMemory::advance`] with its decay factor remembered for the last interval (a run's
+/// steps share their timing): the same numbers, one exponential per distinct interval.
+struct Decay {
+    tau: f64,
+    dt: f64,
+    a: f64,
+}
+
+impl Decay {
+    fn new(tau: f64) -> Decay {
+        Decay {
+            tau,
+            dt: f64::NAN,
+            a: 1.0,
+        }
+    }
+
+    /// exp(−dt/τ), exactly as `LoadMemory::advance` computes it.
+    fn factor(&mut self, dt: f64) -> f64 {
+        if dt != self.dt {
+            let mut m = LoadMemory { h_ns: 1.0 };
+            m.advance(dt, 0.0, self.tau);
+            self.dt = dt;
+            self.a = m.h_ns;
+        }
+        self.a
+    }
+
+    /// The memory after `dt` under `load`, bit for bit `LoadMemory::advance`.
+    fn after(&mut self, h: f64, dt: f64, load: f64) -> f64 {
+        if dt <= 0.0 || self.tau <= 0.0 {
+            return h;
+        }
+        let a = self.factor(dt);
+        h * a + load.max(0.0) * self.tau * (1.0 - a)
     }
 }
 
@@ -186,6 +236,16 @@ fn t2_at(law: &FrictionLaw, x: f64, op: &Operating, h: f64) -> f64 {
     law.t2_n(x, &op)
 }
 
+/// Nearby predictions for [`predict_run`]: measured T2 per row, and the step equation's
+/// slope per row where known (NaN or `None`: computed afresh).
+#[derive(Clone, Copy)]
+pub struct Hint<'a> {
+    /// Measured T2 per row, N.
+    pub t2: &'a [f64],
+    /// d(G(y) − y)/dy of the step equation per row.
+    pub slope: Option<&'a [f64]>,
+}
+
 /// The rows of one run and what predicting them needs, by row index.
 #[derive(Clone, Copy)]
 pub struct RunRows<'a> {
@@ -200,15 +260,17 @@ pub struct RunRows<'a> {
 }
 
 /// [`solve_step`]'s T2 by Newton's method from a nearby solution `y0` (falls back to the
-/// bracketed search if Newton does not settle at once).
-fn solve_step_from(law: &FrictionLaw, x: f64, op: &Operating, h_acc: f64, dt_c: f64, y0: f64) -> f64 {
+/// bracketed search if Newton does not settle at once); `a` is the memory's decay over `dt_c`.
+fn solve_step_from(
+    law: &FrictionLaw,
+    x: f64,
+    op: &Operating,
+    (h_acc, dt_c, a): (f64, f64, f64),
+    (y0, s0): (f64, f64),
+) -> (f64, f64) {
     let tau = law.heat_tau_s;
-    // The memory after dt_c, linear in the load: H(y) = h_acc·a + τ(1 − a)·max(y − x, 0).
-    let a = {
-        let mut m = LoadMemory { h_ns: 1.0 };
-        m.advance(dt_c, 0.0, tau);
-        m.h_ns
-    };
+    // The memory after dt_c, linear in the load: H(y) = h_acc·a + τ(1 − a)·max(y − x, 0),
+    // a = exp(−dt_c/τ).
     let h_of = |y: f64| {
         if dt_c > 0.0 && tau > 0.0 {
             h_acc * a + (y - x).max(0.0) * tau * (1.0 - a)
@@ -219,21 +281,33 @@ fn solve_step_from(law: &FrictionLaw, x: f64, op: &Operating, h_acc: f64, dt_c: 
     let f = |y: f64| t2_at(law, x, op, h_of(y)) - y;
     if law.heat_per_ns != 0.0 && x > 0.0 && y0.is_finite() && y0 > x {
         let mut y = y0;
+        let mut known = s0;
         for _ in 0..4 {
             let fy = f(y);
             if fy.abs() <= 1e-12 * y {
-                return y;
+                return (y, known);
             }
-            let d = 1e-7 * y;
-            let slope = (f(y + d) - fy) / d;
+            let slope = if known.is_finite() && known < 0.0 {
+                known
+            } else {
+                let d = 1e-7 * y;
+                (f(y + d) - fy) / d
+            };
             let next = y - fy / slope;
             if !(slope < 0.0 && next.is_finite() && next > x) {
                 break;
             }
+            // From within 1e-5 of the root one Newton step lands within ~1e-10 (the step
+            // equation is smooth, its slope changes by less than that fraction): no need to
+            // evaluate it again.
+            if fy.abs() <= 1e-5 * y {
+                return (next, slope);
+            }
             y = next;
+            known = f64::NAN;
         }
     }
-    solve_step(law, x, op, h_acc, dt_c).0
+    (solve_step(law, x, op, h_acc, dt_c).0, f64::NAN)
 }
 
 /// Solve y = t2_n(x, H(y)) with H(y) = memory after `dt_c` from `h_acc` under load y − x.
@@ -483,10 +557,14 @@ mod tests {
                 timing: &tm,
                 rows: run,
             };
-            predict_run(&m, rows, true, None, &mut out);
+            predict_run(&m, rows, true, None, &mut out, None);
             // From a nearby solution, Newton's method finds the same one.
             let hint: Vec<f64> = out.iter().map(|y| y * 1.001).collect();
-            predict_run(&m, rows, true, Some(&hint), &mut near);
+            let h = Hint {
+                t2: &hint,
+                slope: None,
+            };
+            predict_run(&m, rows, true, Some(h), &mut near, None);
         }
         for i in 0..obs.len() {
             assert!((out[i] - ev.t2_n[i]).abs() <= 1e-12 * ev.t2_n[i].abs().max(1.0));

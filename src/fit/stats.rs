@@ -2,8 +2,8 @@
 //! squares with cluster-robust errors, rank correlation, two-sample and one-sample t tests.
 
 use nalgebra::{DMatrix, DVector};
-use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor, StudentsT};
 use serde::Serialize;
+use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor, StudentsT};
 
 /// Arithmetic mean (NaN for an empty slice).
 pub fn mean(v: &[f64]) -> f64 {

@@ -8,7 +8,7 @@ use crate::analysis::closed_loop::SimCurve;
 use crate::analysis::Analysis;
 use std::fmt::Write as _;
 
-const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
+const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}tr.worse td{background:#fbeaea}.unexplained{color:#a50}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
 
 /// Escape text for HTML (and SVG).
 pub fn esc(s: &str) -> String {
@@ -78,26 +78,54 @@ fn headline(h: &mut String, a: &Analysis) {
     let (Some(b), Some(e)) = (get("baseline"), get("extended")) else {
         return;
     };
-    let _ = write!(h, "<h2>Headline</h2><ul><li>Euler-Eytelwein with one fitted mu = {:.4}: RMSE of T2 {:.3} N, leave-one-cord-out {:.3} N.</li>", a.baseline_fit.model(None).law.mu, b.rmse_t2_n, b.loco_rmse_t2_n.unwrap_or(f64::NAN));
+    let loco = |m: &crate::analysis::ModelMetrics| {
+        m.loco_rmse_t2_uncertainty
+            .as_ref()
+            .map_or("not refittable".into(), tables::with_ci)
+    };
+    let _ = write!(h, "<h2>Headline</h2><ul><li>Euler-Eytelwein with one fitted mu = {:.4}: RMSE of T2 {} N, leave-one-cord-out {} N (95 % intervals from resampling whole cords).</li>", a.baseline_fit.model(None).law.mu, tables::with_ci(&b.rmse_t2_uncertainty), loco(b));
     if let Some(t) = get("thesis") {
         let _ = write!(h, "<li>The thesis's Table 3 double exponential ({} hand-set numbers): RMSE {:.3} N; it cannot predict a new cord.</li>", t.n_params, t.rmse_t2_n);
     }
-    let _ = write!(h, "<li>The extended model ({} fitted values: {} fixed + {} variance component; strictly {:.1} with the cord effects' effective dof): RMSE {:.3} N in-sample, {:.3} N leave-one-cord-out.</li>", e.n_params, e.n_params_detail.fixed, e.n_params_detail.variance_components, e.n_params_strict, e.rmse_t2_n, e.loco_rmse_t2_n.unwrap_or(f64::NAN));
+    let _ = write!(h, "<li>The extended model ({:.1} parameters: {} fixed values + {:.1} effective degrees of freedom of the cord effects): RMSE {} N in-sample, {} N leave-one-cord-out.</li>", e.n_params, e.n_params_detail.fixed, e.n_params_detail.edf_random, tables::with_ci(&e.rmse_t2_uncertainty), loco(e));
+    let better = a.held_out.iter().filter(|c| c.extended_better).count();
+    let g = &a.gain;
+    let _ = write!(h, "<li>The held-out gain: the extended model's leave-one-cord-out RMSE is {:.3} of Euler-Eytelwein's (95 % interval {:.3} to {:.3}, cord-jackknife SE {:.3}); it predicts {better} of {} cords better. {}</li>",
+        g.value, g.ci95.lo, g.ci95.hi, g.jackknife_se, a.held_out.len(), esc(&gain_words(g.ci95.hi)));
     let causes: Vec<String> = a
         .mechanisms
         .causes
         .iter()
-        .map(|c| format!("<b>{}</b>: {}", esc(&c.name), esc(&c.description)))
+        .map(|c| format!("<b>{}</b> ({})", esc(c.name), esc(c.description)))
         .collect();
-    let _ = write!(h, "<li>Named causes: {}.</li>", causes.join("; "));
-    if let Some(d) = &a.diagnosis {
+    if causes.is_empty() {
+        h.push_str("<li>No cause of the catalogue is named.</li>");
+    } else {
+        let _ = write!(h, "<li>Named causes: {}.</li>", causes.join("; "));
+    }
+    let u = &a.mechanisms.unexplained;
+    if u.flag {
         let _ = write!(
             h,
-            "<li><code>capstan diagnose</code> on the same data: {}.</li>",
-            esc(&d.headline)
+            "<li class=\"unexplained\"><b>Unexplained</b>: {}</li>",
+            esc(&u.sentence)
         );
     }
+    let _ = write!(
+        h,
+        "<li><code>capstan diagnose</code> on the same data (the same evidence engine): {}</li>",
+        esc(&a.evidence.verdict)
+    );
     h.push_str("</ul>");
+}
+
+/// What the gain's interval says, from its upper end.
+fn gain_words(hi: f64) -> String {
+    if hi < 1.0 {
+        "The interval excludes no gain: the extended model predicts new cords better.".into()
+    } else {
+        "The interval includes no gain (a ratio of 1): the data do not show that the extended model predicts a new cord better.".into()
+    }
 }
 
 fn gain_section(h: &mut String, a: &Analysis, figs: &[Figure]) {
@@ -113,11 +141,21 @@ fn gain_section(h: &mut String, a: &Analysis, figs: &[Figure]) {
             esc(m.n_params_detail.rule)
         );
     }
-    if let Some(e) = a.models.iter().find(|m| m.name == "extended") {
-        let s = &a.extended.strict12;
-        let _ = write!(h, "<p class=\"note\">Parameter count. The ≤ 12 budget is read with the standard mixed-model convention: fixed effects ({}) plus variance components ({}), {} in all; the ten per-cord offsets are predictions governed by one fitted variance, not free values. Counted strictly by their effective degrees of freedom ({:.2}), the model uses {:.2} values; shrinking the cord effects until fixed + edf = 12 gives an in-sample RMSE of {:.3} N (λ = {:.0}), {} 0.80 N. AIC/BIC in the table use the mixed count; with the strict count AIC = {:.1}, BIC = {:.1}.</p>",
-            e.n_params_detail.fixed, e.n_params_detail.variance_components, e.n_params, e.n_params_detail.edf_random, e.n_params_strict, s.rmse_t2_n, s.lambda,
-            if s.rmse_t2_n <= 0.80 { "within" } else { "just above" }, e.aic_strict, e.bic_strict);
+    h.push_str("<h3>Every cord predicted from the others</h3>");
+    h.push_str(&tables::held_out(a));
+    if let Some(steps) = &a.ln_amp_by_step {
+        let worse: Vec<String> = steps
+            .iter()
+            .filter(|s| s.extended_rms > s.baseline_rms)
+            .map(|s| format!("{}", s.step))
+            .collect();
+        let _ = write!(h, "<h3>Where the extended model is worse: ln-amplification residuals by step</h3><p>The fits are in T2, where a low-tension row weighs little; the logarithm of the amplification shows the low tensions. {}</p>",
+            if worse.is_empty() {
+                "The extended model's ln-amplification residuals are no larger than Euler-Eytelwein's at any step.".to_string()
+            } else {
+                format!("The extended model's RMS ln-amplification residual is larger than Euler-Eytelwein's at step {} (rows marked).", worse.join(", "))
+            });
+        h.push_str(&tables::ln_amp_by_step(steps));
     }
 }
 
@@ -136,22 +174,32 @@ pub fn report_html(
     h.push_str("<h2>The data against the models</h2>");
     figure_html(&mut h, &figs, "t2_vs_t1");
     figure_html(&mut h, &figs, "amp_vs_t1");
-    h.push_str("<h2>What Euler-Eytelwein gets wrong</h2><p>Residual trends against every column (Spearman ρ; slope per SD with cord-clustered t; η² of the column's levels with its F test, which treats rows as independent).</p>");
+    h.push_str("<h2>What Euler-Eytelwein gets wrong</h2><p>Residual trends against every column (Spearman ρ; slope per SD with cord-clustered t; η² of the column's levels with its F test, which treats rows as independent: read it with η²).</p>");
     h.push_str(&tables::residual_patterns(a));
     figure_html(&mut h, &figs, "residuals");
-    h.push_str("<h2>Why: the mechanisms</h2>");
+    let ev = &a.evidence;
+    let _ = write!(h, "<h2>Why: the mechanisms</h2><p>Every mechanism of the catalogue is judged by the evidence engine that <code>capstan diagnose</code> uses, on these data: every run has its own mu; the effects that change the shape of T2 inside runs are selected forward, each judged by its quasi-likelihood ratio over its cluster-robust overdispersion (runs as clusters, so the serial correlation inside a run and each run's own tare count), referred to F(1, runs − 1) and put on the BIC scale; the effects on mu between cords and runs are judged on the runs' mu with cords or runs as the units. Thresholds: ΔBIC below {:.0} within runs, {:.0} between. Scatter of mu: {:.1} % cord to cord, {:.1} % run to run; noise {:.3} N + {:.1} % of T2; lag-1 autocorrelation of the residuals inside runs {:.2}.</p>",
+        ev.thresholds.within_run, ev.thresholds.between, ev.scatter.cord_pct, ev.scatter.run_pct, ev.scatter.noise_abs_n, 100.0 * ev.scatter.noise_rel, ev.scatter.lag1_autocorrelation);
     h.push_str(&tables::mechanisms(a));
-    h.push_str("<h3>Nested variants (ΔAIC against the reference; negative = better)</h3>");
-    h.push_str(&tables::variants(a));
     figure_html(&mut h, &figs, "mechanism_evidence");
-    if let Some(d) = &a.diagnosis {
-        super::diagnosis::section(&mut h, d);
-    }
-    h.push_str("<h2>The extended model</h2><p>T1 = T1<sub>measured</sub> − e1 (a T1-path loss; a reading below e1 is a slack cord); mu = mu0·exp(q·(β − 3π))·exp(u<sub>cord</sub>)·exp(−h·H); T2 = T1·exp(mu·β), solved at each step with H the friction-load memory (dH/dt = (T2 − T1) − H/τ, carried along the run with the protocol's step timing); u<sub>cord</sub> ~ N(0, σ<sub>u</sub>²), fitted by penalised least squares with λ = σ²/σ<sub>u</sub>² re-estimated (Levenberg-Marquardt, analytic-sensitivity Jacobian). All predictions go through <code>capstan_friction::FrictionLaw::t2_n</code>, the same law the simulator runs.</p>");
+    let u = &a.mechanisms.unexplained;
+    let _ = write!(
+        h,
+        "<h3>What is left</h3><p class=\"note\">{}</p>",
+        esc(&u.sentence)
+    );
+    let causes: Vec<&str> = a.mechanisms.causes.iter().map(|c| c.name).collect();
+    let _ = write!(h, "<h2>The extended model</h2><p>Euler-Eytelwein with the named causes ({}), each through the catalogue's own term in <code>capstan_friction::FrictionLaw</code> and <code>SensorArtefacts</code> (the law the simulator runs), one population mu and a per-cord random log-mu u<sub>cord</sub> ~ N(0, σ<sub>u</sub>²), fitted by penalised least squares with λ = σ²/σ<sub>u</sub>² re-estimated and the cord effects shrunk so that the fixed values plus their effective degrees of freedom stay within {}.</p>",
+        if causes.is_empty() { "none".to_string() } else { causes.join(", ") }, crate::analysis::fits::STRICT_BUDGET);
     h.push_str(&tables::extended(a));
-    h.push_str("<h2>The thesis's R² of amplification, reproduced</h2><p>Table 3 applied per angle, R² = 1 − SS<sub>res</sub>/SS<sub>tot</sub> of T2/T1 with both diameters pooled (the definition that reproduces the thesis's range, negative up to about 0.69).</p>");
+    let r2: Vec<f64> = a.thesis_per_angle_r2.iter().map(|r| r.r2).collect();
+    let (lo, hi) = r2.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |x, &v| {
+        (x.0.min(v), x.1.max(v))
+    });
+    let _ = write!(h, "<h2>The thesis's R² of amplification, reproduced</h2><p>Table 3 applied per angle, R² = 1 − SS<sub>res</sub>/SS<sub>tot</sub> of T2/T1 with both diameters pooled: from {} to {} on these data.</p>",
+        tables::f3(lo), tables::f3(hi));
     h.push_str(&tables::thesis_r2(a));
-    h.push_str("<h2>What this protocol cannot separate</h2><ul>");
+    h.push_str("<h2>What this design cannot separate</h2><ul>");
     for l in &a.mechanisms.protocol_limits {
         let _ = write!(h, "<li>{}</li>", esc(l));
     }
@@ -159,6 +207,6 @@ pub fn report_html(
     let _ = write!(h, "<p>{}</p>", esc(closed_loop_note));
     figure_html(&mut h, &figs, "closed_loop");
     let e = &a.elapsed;
-    let _ = write!(h, "<h2>Reproducing</h2><p><code>predictions.csv</code> holds the input rows, the cord, the window centre used for the load memory and every model's in-sample and leave-one-cord-out prediction; <code>metrics.json</code> every number of this page. Timing: fits {:.3} s, LOCO {:.3} s, mechanisms {:.3} s, diagnose {:.3} s, closed loop {:.3} s.</p></body></html>", e.fits_s, e.loco_s, e.mechanisms_s, e.diagnose_s, e.closed_loop_s);
+    let _ = write!(h, "<h2>Reproducing</h2><p><code>predictions.csv</code> holds the input rows, the cord, the window centre used for the load memory and every model's in-sample and leave-one-cord-out prediction; <code>metrics.json</code> every number of this page (its <code>evidence</code> object is what <code>capstan diagnose --json</code> prints). Timing: evidence {:.3} s, fits {:.3} s, LOCO {:.3} s, tables {:.3} s, closed loop {:.3} s.</p></body></html>", e.evidence_s, e.fits_s, e.loco_s, e.tables_s, e.closed_loop_s);
     Ok(h)
 }

@@ -7,7 +7,6 @@
 //! * [`figures`]: the figures; [`plot`]: their charts (panels and bar charts, drawn by
 //!   `plotters`).
 
-pub mod diagnosis;
 pub mod figures;
 pub mod files;
 pub mod html;

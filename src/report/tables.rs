@@ -1,7 +1,11 @@
-//! The report's HTML tables: the gain table, residual patterns, mechanism verdicts, nested
-//! variants, the extended fit, and the thesis's per-angle R².
+//! The report's HTML tables: the gain table with its intervals, the held-out cords, the
+//! ln-amplification residuals by step, residual patterns, mechanism verdicts, the extended fit,
+//! and the thesis's per-angle R².
 
 use super::html::esc;
+use crate::analysis::mechanisms::Verdict;
+use crate::analysis::residuals::StepResidual;
+use crate::analysis::uncertainty::WithInterval;
 use crate::analysis::{Analysis, ModelMetrics};
 use std::fmt::Write as _;
 
@@ -14,9 +18,17 @@ pub fn f3(v: f64) -> String {
     }
 }
 
+/// A value with its 95 % interval: "0.775 [0.70, 0.86]".
+pub fn with_ci(w: &WithInterval) -> String {
+    format!("{} [{}, {}]", f3(w.value), f3(w.ci95.lo), f3(w.ci95.hi))
+}
+
 fn model_row(m: &ModelMetrics) -> String {
-    let count = if m.n_params_strict != m.n_params {
-        format!("{} (strict {:.1})", m.n_params, m.n_params_strict)
+    let count = if m.n_params_detail.edf_random > 0.0 {
+        format!(
+            "{:.1} ({} fixed + {:.1} edf of the cord effects)",
+            m.n_params, m.n_params_detail.fixed, m.n_params_detail.edf_random
+        )
     } else {
         format!("{}", m.n_params)
     };
@@ -28,9 +40,11 @@ fn model_row(m: &ModelMetrics) -> String {
     format!(
         "<tr><td>{}</td><td>{count}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.1}</td><td>{:.1}</td><td>{}</td></tr>",
         esc(&m.name),
-        f3(m.rmse_t2_n),
+        with_ci(&m.rmse_t2_uncertainty),
         f3(m.rmse_ln_amp),
-        m.loco_rmse_t2_n.map_or("not refittable".into(), f3),
+        m.loco_rmse_t2_uncertainty
+            .as_ref()
+            .map_or("not refittable".into(), with_ci),
         f3(m.per_cord_r2_amp_median),
         m.aic,
         m.bic,
@@ -40,7 +54,7 @@ fn model_row(m: &ModelMetrics) -> String {
 
 /// The gain table, one row per model.
 pub fn gain(a: &Analysis) -> String {
-    let mut h = String::from("<table><tr><th>model</th><th>fitted values</th><th>RMSE T2 (N)</th><th>RMSE ln(T2/T1)</th><th>LOCO RMSE T2 (N)</th><th>median per-cord R² amp</th><th>AIC</th><th>BIC</th><th>per-cord R² of amplification</th></tr>");
+    let mut h = String::from("<table><tr><th>model</th><th>parameters (effective dof)</th><th>RMSE T2 (N) [95 % CI, cords resampled]</th><th>RMSE ln(T2/T1)</th><th>LOCO RMSE T2 (N) [95 % CI]</th><th>median per-cord R² amp</th><th>AIC (rows as if independent)</th><th>BIC (ditto)</th><th>per-cord R² of amplification</th></tr>");
     for m in &a.models {
         h.push_str(&model_row(m));
     }
@@ -58,76 +72,109 @@ pub fn residual_patterns(a: &Analysis) -> String {
     h
 }
 
-/// The mechanism verdicts.
+/// The mechanism verdicts, each with its generated sentence.
 pub fn mechanisms(a: &Analysis) -> String {
-    let mut h = String::from(
-        "<table><tr><th>mechanism</th><th>verdict</th><th>evidence</th><th>rule</th></tr>",
-    );
+    let mut h = String::from("<table><tr><th>mechanism</th><th>verdict</th><th>evidence</th></tr>");
     for t in &a.mechanisms.tests {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td class=\"verdict-{}\">{}</td><td>{}</td><td>{}</td></tr>",
-            esc(&t.name),
-            t.verdict,
-            t.verdict,
+            "<tr data-mechanism=\"{}\"><td>{}</td><td class=\"verdict-{}\">{}</td><td class=\"summary\">{}</td></tr>",
+            t.name,
+            esc(t.name),
+            t.verdict.name(),
+            t.verdict.name(),
             esc(&t.summary),
-            esc(&t.rule)
         );
     }
-    h.push_str("</table>");
-    h
-}
-
-/// Every nested variant with ΔAIC/ΔBIC.
-pub fn variants(a: &Analysis) -> String {
-    let mut h = String::from("<table><tr><th>variant</th><th>reference</th><th>values</th><th>RMSE T2</th><th>RMSE ln amp</th><th>ΔAIC</th><th>ΔBIC</th><th>fitted</th></tr>");
-    for v in &a.mechanisms.variants {
-        let vals: Vec<String> = v
-            .values
-            .iter()
-            .map(|(k, x)| format!("{k} = {x:.4}"))
-            .collect();
-        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:+.1}</td><td>{:+.1}</td><td>{}</td></tr>", esc(&v.description), esc(&v.reference), v.n_params, v.rmse_t2_n, v.rmse_ln_amp, v.delta_aic, v.delta_bic, esc(&vals.join(", ")));
+    h.push_str("</table><p>The rules, one for every mechanism:</p><ul>");
+    for v in [
+        Verdict::RuledIn,
+        Verdict::ExplainedAway,
+        Verdict::RuledOut,
+        Verdict::NotEstablished,
+        Verdict::NotTestable,
+    ] {
+        let _ = write!(h, "<li>{}</li>", esc(v.rule()));
     }
-    h.push_str("</table>");
+    h.push_str("</ul>");
     h
 }
 
-/// The extended fit's values with their standard errors, then the cord offsets.
-pub fn extended(a: &Analysis) -> String {
-    let e = &a.extended;
-    let mut h = String::from("<table><tr><th>value</th><th>estimate</th><th>Gauss-Newton SE</th><th>jackknife SE (LOCO)</th></tr>");
-    let jk = |k: &str| {
-        e.jackknife_se
-            .iter()
-            .find(|x| x.0 == k)
-            .map_or(f64::NAN, |x| x.1)
-    };
-    for ((k, v), (_, se)) in e.values.iter().zip(&e.standard_errors) {
-        let se = if se.abs() < 1e3 {
-            format!("{se:.5}")
-        } else {
-            "unidentified alone".into()
-        };
-        let j = jk(k);
-        let j = if j.is_finite() {
-            format!("{j:.5}")
-        } else {
-            "–".into()
-        };
+/// Every cord's held-out RMSE.
+pub fn held_out(a: &Analysis) -> String {
+    let mut h = String::from("<table><tr><th>held-out cord</th><th>rows</th>");
+    let names: Vec<String> = a
+        .held_out
+        .first()
+        .map(|c| c.rmse_t2_n.iter().map(|x| x.0.clone()).collect())
+        .unwrap_or_default();
+    for n in &names {
+        let _ = write!(h, "<th>{} LOCO RMSE T2 (N)</th>", esc(n));
+    }
+    h.push_str("<th>extended better</th></tr>");
+    for c in &a.held_out {
+        let _ = write!(h, "<tr><td>{}</td><td>{}</td>", esc(&c.cord), c.rows);
+        for (_, v) in &c.rmse_t2_n {
+            let _ = write!(h, "<td>{}</td>", f3(*v));
+        }
         let _ = write!(
             h,
-            "<tr><td>{k}</td><td>{v:.5}</td><td>{se}</td><td>{j}</td></tr>"
+            "<td>{}</td></tr>",
+            if c.extended_better { "yes" } else { "no" }
         );
     }
-    let _ = write!(
-        h,
-        "<tr><td>h·τ (1/N)</td><td>{:.5}</td><td></td><td>{:.5}</td></tr></table>",
-        e.heat_per_n_steady,
-        jk("heat_per_ns*heat_tau_s")
-    );
-    let _ = write!(h, "<p>σ<sub>u</sub> = {:.4} (ln mu), λ = {:.1}, edf of the cord effects {:.2}; population-only RMSE (u = 0) {:.3} N. h and τ trade off when τ is short; their product (steady-state ln-mu loss per newton of friction load) is what the data fix: mu × {:.3} at T2 − T1 = 40 N.</p>",
-        e.sigma_u, e.lambda, e.edf_random, e.rmse_population_t2_n, e.mu_factor_at_40n_load);
+    h.push_str("</table>");
+    h
+}
+
+/// ln-amplification residuals by step.
+pub fn ln_amp_by_step(steps: &[StepResidual]) -> String {
+    let mut h = String::from("<table><tr><th>step</th><th>rows</th><th>mean T1 (N)</th><th>mean ln-amp residual, Euler-Eytelwein</th><th>extended</th><th>RMS, Euler-Eytelwein</th><th>RMS, extended</th></tr>");
+    for s in steps {
+        let worse = s.extended_rms > s.baseline_rms;
+        let _ = write!(
+            h,
+            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{:+.3}</td><td>{:+.3}</td><td>{:.3}</td><td>{:.3}</td></tr>",
+            if worse { " class=\"worse\"" } else { "" },
+            s.step,
+            s.rows,
+            f3(s.mean_t1_n),
+            s.baseline_mean,
+            s.extended_mean,
+            s.baseline_rms,
+            s.extended_rms
+        );
+    }
+    h.push_str("</table>");
+    h
+}
+
+/// The extended fit's values with their cluster-robust standard errors, then the cord
+/// offsets.
+pub fn extended(a: &Analysis) -> String {
+    let e = &a.extended;
+    let se = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.5}")
+        } else {
+            "–".into()
+        }
+    };
+    let mut h = String::from("<table><tr><th>value</th><th>estimate</th><th>cord-jackknife SE (cords as clusters)</th><th>evidence engine SE (runs as clusters)</th><th>note</th></tr>");
+    for v in &e.values {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{:.5}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&v.name),
+            v.value,
+            se(v.jackknife_se),
+            se(v.run_clustered_se),
+            esc(&v.note)
+        );
+    }
+    h.push_str("</table>");
+    let _ = write!(h, "<p>σ<sub>u</sub> = {:.4} (ln mu), λ = {:.1}; the cord effects count {:.2} effective degrees of freedom, so the model uses {} fixed + {:.2} = {:.2}; population-only RMSE (u = 0) {:.3} N.</p>",
+        e.sigma_u, e.lambda, e.edf_random, e.n_fixed, e.edf_random, e.effective_dof, e.rmse_population_t2_n);
     h.push_str("<table><tr><th>cord</th><th>u (ln mu)</th></tr>");
     for (c, u) in &e.cord_log_mu {
         let _ = write!(h, "<tr><td>{}</td><td>{u:+.4}</td></tr>", esc(c));

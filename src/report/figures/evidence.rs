@@ -1,14 +1,11 @@
-//! The evidence figures: residuals of the baseline and the extended model, the mechanism
-//! evidence (intercepts, memory time, low-tension loss, cord effects), and the gain.
+//! The evidence figures: residuals of the baseline and the extended model, the mechanisms'
+//! evidence, and the gain.
 
-use super::{cord_marker, diameter_legend, measured, Figure, Palette, INK};
+use super::{measured, Figure, Palette};
 use crate::analysis::Analysis;
-use crate::report::plot::{
-    bar_chart, figure, finite_range, Bars, Dash, Entry, Key, LineStyle, Panel, Series,
-};
+use crate::report::plot::{bar_chart, figure, finite_range, Bars, Panel, Series};
 use anyhow::Result;
 use plotters::style::RGBColor;
-use serde_json::Value;
 
 /// Residuals of T2 against T1, step and run, for the baseline (top) and the extended model.
 pub fn residuals(a: &Analysis, pal: &Palette) -> Result<Figure> {
@@ -72,160 +69,56 @@ pub fn residuals(a: &Analysis, pal: &Palette) -> Result<Figure> {
     })
 }
 
-fn num(v: &Value, k: &str) -> Option<f64> {
-    v.get(k).and_then(Value::as_f64)
-}
-
-/// Points per cord coloured by wrap, a disc on the smallest capstan and a ring on the others.
-fn cord_points(
-    a: &Analysis,
-    pal: &Palette,
-    pts: impl Iterator<Item = (usize, f64, f64)>,
-) -> Vec<Series> {
-    let small = a.obs.diameters().first().copied().unwrap_or(f64::NAN);
-    pts.map(|(g, x, y)| {
-        let grp = &a.obs.groups[g];
-        Series::Points(
-            vec![(x, y)],
-            cord_marker(pal.color(grp.wrap_deg), grp.diameter_mm != small),
-        )
-    })
-    .collect()
-}
-
-fn group_of(a: &Analysis, label: &str) -> usize {
-    a.obs
-        .groups
-        .iter()
-        .position(|g| g.label == label)
-        .unwrap_or(0)
-}
-
-/// The mechanism evidence: four panels.
-pub fn mechanisms(a: &Analysis, pal: &Palette) -> Result<Figure> {
-    let m = &a.mechanisms;
-    let annotation = |width, dash| LineStyle {
-        color: INK,
-        width,
-        dash,
+/// The mechanism evidence: every testable mechanism's evidence on the χ²₁ scale, alone and
+/// given the named causes, with the naming threshold of its level.
+pub fn mechanisms(a: &Analysis, _pal: &Palette) -> Result<Figure> {
+    let ev = &a.evidence;
+    let testable: Vec<&crate::evidence::Evidence> = ev.candidates.iter().collect();
+    let alone = |name: &str| {
+        a.mechanisms
+            .get(name)
+            .and_then(|m| m.evidence.as_ref())
+            .map(|n| n.delta_bic_alone)
     };
-    // Intercept against slope, with the weighted line.
-    let mut series = cord_points(
-        a,
-        pal,
-        m.cord_lines
-            .iter()
-            .map(|c| (group_of(a, &c.cord), c.slope, c.intercept_n)),
-    );
-    let mut legend = Vec::new();
-    if let (Some(ai), Some(bi)) = (
-        num(&m.intercept_vs_slope, "a"),
-        num(&m.intercept_vs_slope, "b"),
-    ) {
-        let (lo, hi) = finite_range(m.cord_lines.iter().map(|c| c.slope));
-        series.push(Series::Line(
-            vec![(lo, ai + bi * lo), (hi, ai + bi * hi)],
-            annotation(2, Dash::Dashed),
-        ));
-        legend.push(Entry {
-            key: Key::Line(annotation(2, Dash::Dashed)),
-            label: format!("weighted fit c = {ai:.2} + {bi:.2}·s"),
-        });
-    }
-    let isl = Panel {
-        title: "Intercept against slope of T2(T1), steps ≥ 5".into(),
-        x_label: "slope s of T2 = c + s·T1".into(),
-        y_label: "intercept c (N)".into(),
-        series,
-        legend,
-        ..Panel::default()
+    let n = ev.design.rows as f64;
+    // χ² = −ΔBIC + ln N, N the level's units: rows within runs, cords or runs between.
+    let chi2 = |dbic: f64, level: crate::evidence::Level| {
+        let units = match level {
+            crate::evidence::Level::WithinRun => n,
+            crate::evidence::Level::BetweenCord => ev.design.cords as f64,
+            crate::evidence::Level::BetweenRun => ev.design.runs as f64,
+        };
+        (-dbic + units.ln()).max(0.0)
     };
-    // Profile over τ (x: ln τ, labelled in s).
-    let prof: Vec<(f64, f64)> = m
-        .tau_profile
-        .iter()
-        .map(|p| (p.tau_s.ln(), p.aic))
-        .collect();
-    let tau_fit = a.extended_fit.model(None).law.heat_tau_s;
-    let (ylo, yhi) = finite_range(prof.iter().map(|p| p.1));
-    let tau = Panel {
-        title: "Profile over the load-memory time τ".into(),
-        x_label: "τ (s, log scale)".into(),
-        y_label: "AIC (lower is better)".into(),
-        series: vec![
-            Series::Line(prof.clone(), annotation(2, Dash::Solid)),
-            Series::Points(prof, cord_marker(INK, false)),
-            Series::Line(
-                vec![(tau_fit.ln(), ylo), (tau_fit.ln(), yhi)],
-                annotation(2, Dash::Dashed),
-            ),
+    let bars = Bars {
+        title: "Evidence of each mechanism (χ²₁ scale; named when ΔBIC is below the threshold)"
+            .into(),
+        y_label: "evidence χ² (cluster-robust)".into(),
+        categories: testable.iter().map(|e| e.effect.to_string()).collect(),
+        groups: vec![
+            ("alone".into(), RGBColor(0x99, 0x99, 0x99)),
+            ("given the named causes".into(), RGBColor(0x00, 0x72, 0xB2)),
         ],
-        legend: vec![Entry {
-            key: Key::Line(annotation(2, Dash::Dashed)),
-            label: format!("fitted τ = {tau_fit:.2} s"),
-        }],
-        x_ticks: Some(
-            m.tau_profile
-                .iter()
-                .map(|p| (p.tau_s.ln(), format!("{}", p.tau_s)))
-                .collect(),
-        ),
-        ..Panel::default()
+        values: testable
+            .iter()
+            .map(|e| {
+                vec![
+                    alone(e.effect).map(|d| chi2(d, e.level)),
+                    Some(chi2(e.delta_bic, e.level)),
+                ]
+            })
+            .collect(),
+        missing: "–".into(),
     };
-    // Low-tension loss by diameter, cords spread by wrap.
-    let nw = pal.len().max(1) as f64;
-    let spread = |d: f64, w: f64| d + 1.2 * (pal.index(w) as f64 - (nw - 1.0) / 2.0) / nw;
-    let low = Panel {
-        title: "Low-tension (T1 < 2 N) loss without e1, per cord".into(),
-        x_label: "capstan diameter (mm)".into(),
-        y_label: "mean ln-amp residual".into(),
-        series: cord_points(
-            a,
-            pal,
-            m.low_tension_by_cord.iter().map(|(label, d, r)| {
-                let g = group_of(a, label);
-                (g, spread(*d, a.obs.groups[g].wrap_deg), *r)
-            }),
-        ),
-        x_ticks: Some(
-            a.obs
-                .diameters()
-                .iter()
-                .map(|d| (*d, format!("{d}")))
-                .collect(),
-        ),
-        ..Panel::default()
-    };
-    // Cord effects.
-    let u = Panel {
-        title: "Per-cord log-mu offsets u (extended)".into(),
-        x_label: "wrap (deg)".into(),
-        y_label: "u (ln mu)".into(),
-        series: cord_points(
-            a,
-            pal,
-            a.extended_fit
-                .u
-                .iter()
-                .enumerate()
-                .map(|(g, u)| (g, a.obs.groups[g].wrap_deg, *u)),
-        ),
-        x_ticks: Some(
-            crate::fit::stats::distinct(a.obs.groups.iter().map(|g| g.wrap_deg))
-                .into_iter()
-                .map(|w| (w, format!("{w:.0}")))
-                .collect(),
-        ),
-        zero_line: true,
-        ..Panel::default()
-    };
-    let mut legend = pal.legend();
-    legend.extend(diameter_legend(a));
+    let named: Vec<&str> = ev.effects.iter().map(|e| e.effect).collect();
     Ok(Figure {
         id: "mechanism_evidence",
-        legend,
-        chart: figure(&[isl, tau, low, u], 2, 560, 360)?,
-        caption: "Evidence for the mechanisms, one point per cord (colour: wrap; disc: small capstan, ring: large). Intercepts grow with slope, which zero offsets cannot do; the memory time τ is short; the low-tension loss is not larger on the small capstan (no bending signature); cord-to-cord mu scatter. From metrics.json: cord_lines, intercept_vs_slope, tau_profile, low_tension_by_cord, extended_fit.cord_log_mu.".into(),
+        legend: bars.legend(),
+        chart: bar_chart(&bars, 1100, 380)?,
+        caption: format!(
+            "The evidence engine's numbers (metrics.json: evidence.candidates, mechanisms[].evidence): each mechanism's likelihood-ratio evidence over its cluster-robust overdispersion, on the χ²₁ scale, added alone to every run's own mu (grey) and given the named causes (blue; for a named cause: dropping it). Named: {}.",
+            if named.is_empty() { "none".to_string() } else { named.join(", ") }
+        ),
     })
 }
 

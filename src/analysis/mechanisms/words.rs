@@ -1,0 +1,122 @@
+//! The mechanisms in words. Every sentence that states a verdict is made here, from the verdict
+//! and its numbers: the report and `metrics.json` print these, never a sentence typed in beside
+//! them.
+
+use super::verdict::{Numbers, Verdict};
+use crate::diagnose::words::{list, parameter, sig};
+use crate::evidence::Design;
+use capstan_friction::EffectKind;
+
+/// What each mechanism of the catalogue is, physically.
+pub fn title(kind: EffectKind) -> &'static str {
+    match kind {
+        EffectKind::None => "Euler-Eytelwein",
+        EffectKind::PressureFriction => {
+            "pressure-dependent friction (Howell's power law dT/dθ = k·Tⁿ, n < 1)"
+        }
+        EffectKind::BendingStiffness => {
+            "bending stiffness (the cord lifts off the capstan at low tension)"
+        }
+        EffectKind::T1Offset => "a loss or zero offset on the T1 (servo) path",
+        EffectKind::T2Offset => "a zero offset of the T2 sensor",
+        EffectKind::SensorGain => "a gain error of the T2 sensor relative to T1",
+        EffectKind::ThermalDrift => "a drift of mu with time since the trigger",
+        EffectKind::Wear => "wear or polishing: mu changing from run to run",
+        EffectKind::DiameterDependence => "a dependence of mu on the capstan diameter",
+        EffectKind::SpeedDependence => "a dependence of mu on the drive voltage (speed)",
+        EffectKind::ContactHeating => {
+            "contact heating: mu falling with the friction load T2 − T1 the contact carries"
+        }
+    }
+}
+
+fn value_text(kind: EffectKind, v: f64, se: f64) -> String {
+    parameter(kind.parameter().unwrap_or("value"), v, se)
+}
+
+/// The sentence of one mechanism's verdict, with its numbers; `causes` are the named causes.
+pub fn sentence(
+    kind: EffectKind,
+    verdict: Verdict,
+    n: Option<&Numbers>,
+    causes: &[&str],
+    reason: &str,
+) -> String {
+    let name = title(kind);
+    let Some(n) = n else {
+        return format!(
+            "{} cannot be tested on these data: {reason}.",
+            capital(name)
+        );
+    };
+    let given = if causes.is_empty() {
+        "on its own".to_string()
+    } else {
+        format!(
+            "given {}",
+            list(&causes.iter().map(|c| c.to_string()).collect::<Vec<_>>())
+        )
+    };
+    let v = value_text(kind, n.value, n.se);
+    match verdict {
+        Verdict::RuledIn => format!(
+            "{} is in the data: {v}; dropping it costs ΔBIC {:+.1} {} (evidence computed with runs as clusters).",
+            capital(name),
+            -n.delta_bic_given_causes,
+            if causes.is_empty() { "against every run's own mu" } else { "given the other named causes" }
+        ),
+        Verdict::ExplainedAway => format!(
+            "{} alone would improve the fit ({} = {}, ΔBIC {:+.1}), but not {given} (ΔBIC {:+.1}): it stood in for them.",
+            capital(name),
+            kind.parameter().unwrap_or("value"),
+            sig(n.value_alone),
+            n.delta_bic_alone,
+            n.delta_bic_given_causes
+        ),
+        Verdict::RuledOut => format!(
+            "{} is ruled out: {v} {given}, and its 95 % interval lies inside ±{} of no effect, a size that would not matter (ΔBIC {:+.1}).",
+            capital(name),
+            sig(n.relevance_width),
+            n.delta_bic_given_causes
+        ),
+        Verdict::NotEstablished => format!(
+            "{} is not established: {v} {given} (ΔBIC {:+.1}), but its 95 % interval still reaches a size that matters (±{} from no effect).",
+            capital(name),
+            n.delta_bic_given_causes,
+            sig(n.relevance_width)
+        ),
+        Verdict::NotTestable => format!("{} cannot be tested on these data: {reason}.", capital(name)),
+    }
+}
+
+/// What the design of these data can and cannot separate, from the data themselves.
+pub fn protocol_limits(d: &Design, named: &[EffectKind]) -> Vec<String> {
+    let mut out = Vec::new();
+    let both = d.has_both_directions();
+    if both {
+        out.push("Steps rise and fall in these data, so a memory of the friction load shows as a difference between rising and falling tension, and load is decorrelated from time.".to_string());
+    } else {
+        out.push("Steps only rise in these data: tension, friction load and time since the trigger grow together inside every run, so a drift with time, contact heating and a power law in tension are told apart only by cords reaching different tensions at the same step. An up-down (or randomised) step order separates them.".to_string());
+    }
+    if !d.columns.time_s {
+        out.push("There is no time_s column: a drift with time cannot be tested (capstan diagnose --protocol-times takes the times from step with the thesis protocol).".to_string());
+    }
+    if named.contains(&EffectKind::ContactHeating) {
+        out.push(format!("Contact heating is fitted with the catalogue's short load memory (τ = {} s): window means taken ≥ 1 s after each change cannot resolve a memory shorter than the settling, so a contact temperature that settles within a second cannot be told from a friction law that depends on the load itself. Logging the samples inside each dwell would show the transient.", capstan_friction::HEAT_TAU_S));
+    }
+    if d.wraps().len() < 3 {
+        out.push("Fewer than three wraps: an offset on T1 and one on T2 (and a gain) are told apart only across wraps.".to_string());
+    }
+    if d.cords.len() < 10 {
+        out.push(format!("{} cords: effects on mu that vary between cords (gain, diameter, speed) are judged against the cord-to-cord scatter with only that many independent observations.", d.cords.len()));
+    }
+    out
+}
+
+fn capital(s: &str) -> String {
+    let mut c = s.chars();
+    match c.next() {
+        Some(f) => f.to_uppercase().collect::<String>() + c.as_str(),
+        None => String::new(),
+    }
+}

@@ -1,0 +1,118 @@
+//! Shared by the analysis tests: the report's verdict sentences against `metrics.json`.
+
+use capstan::analysis::mechanisms::{words, Numbers, Verdict};
+use capstan::evidence::Level;
+use capstan_friction::EffectKind;
+use serde_json::Value;
+
+fn unescape(s: &str) -> String {
+    s.replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&amp;", "&")
+}
+
+/// The text of the report's summary cell of mechanism `name`.
+fn summary_cell<'a>(html: &'a str, name: &str) -> &'a str {
+    let row = html
+        .find(&format!("<tr data-mechanism=\"{name}\">"))
+        .unwrap_or_else(|| panic!("no row for {name}"));
+    let cell = row + html[row..].find("<td class=\"summary\">").unwrap() + 20;
+    &html[cell..cell + html[cell..].find("</td>").unwrap()]
+}
+
+fn verdict(s: &str) -> Verdict {
+    match s {
+        "ruled_in" => Verdict::RuledIn,
+        "explained_away" => Verdict::ExplainedAway,
+        "ruled_out" => Verdict::RuledOut,
+        "not_established" => Verdict::NotEstablished,
+        "not_testable" => Verdict::NotTestable,
+        other => panic!("unknown verdict {other}"),
+    }
+}
+
+fn level(s: &str) -> Level {
+    match s {
+        "within_run" => Level::WithinRun,
+        "between_cord" => Level::BetweenCord,
+        _ => Level::BetweenRun,
+    }
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
+/// Every mechanism's sentence in the report is the one its verdict and numbers in
+/// `metrics.json` make; the headline names exactly the causes of `metrics.json`; no sentence
+/// written for other data is left.
+pub fn check(metrics: &Value, html: &str) {
+    let causes: Vec<&str> = metrics["causes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    for m in metrics["mechanisms"].as_array().unwrap() {
+        let name = m["name"].as_str().unwrap();
+        let kind = EffectKind::from_name(name).unwrap();
+        let v = verdict(m["verdict"].as_str().unwrap());
+        let numbers = (!m["evidence"].is_null()).then(|| {
+            let e = &m["evidence"];
+            Numbers {
+                parameter: kind.parameter().unwrap(),
+                value: num(&e["value"]),
+                se: num(&e["se"]),
+                delta_bic_given_causes: num(&e["delta_bic_given_causes"]),
+                delta_bic_alone: num(&e["delta_bic_alone"]),
+                value_alone: num(&e["value_alone"]),
+                relevance_width: num(&e["relevance_width"]),
+                level: level(e["level"].as_str().unwrap()),
+            }
+        });
+        let others: Vec<&str> = causes.iter().copied().filter(|c| *c != name).collect();
+        let reason = m["not_testable_reason"].as_str().unwrap();
+        let made = words::sentence(kind, v, numbers.as_ref(), &others, reason);
+        let json = m["summary"].as_str().unwrap();
+        // Numbers round-trip through JSON exactly, so the sentence does too.
+        assert_eq!(
+            made, json,
+            "{name}: metrics.json's sentence is not its verdict's"
+        );
+        assert_eq!(
+            unescape(summary_cell(html, name)),
+            json,
+            "{name}: the report's"
+        );
+        assert_eq!(v == Verdict::RuledIn, causes.contains(&name), "{name}");
+    }
+    // The headline names the causes of metrics.json, no more, no less.
+    let head =
+        &html[html.find("<h2>Headline</h2>").unwrap()..html.find("<h2>The gain</h2>").unwrap()];
+    for k in EffectKind::ALL.into_iter().skip(1) {
+        assert_eq!(
+            head.contains(&format!("<b>{}</b>", k.name())),
+            causes.contains(&k.name()),
+            "headline and {}",
+            k.name()
+        );
+    }
+    assert_eq!(
+        head.contains("<b>Unexplained</b>"),
+        metrics["unexplained"]["flag"].as_bool().unwrap()
+    );
+    // Sentences that were once typed in for the thesis data must not come back.
+    for stale in [
+        "does not remain",
+        "collapse on T1, not T1/R",
+        "ten per-cord offsets",
+        "up to about 0.69",
+        "2 s of settling",
+    ] {
+        assert!(!html.contains(stale), "stale sentence: {stale}");
+    }
+    let both = metrics["evidence"]["design"]["both_directions"]
+        .as_bool()
+        .unwrap();
+    assert_eq!(html.contains("Steps only rise"), !both);
+}
