@@ -193,9 +193,7 @@ impl Plant {
             let st = CordState {
                 setup: *cs,
                 op,
-                time_dependent: heats
-                    || law.mu_change_per_100s != 0.0
-                    || (d.mu_wander_sd > 0.0),
+                time_dependent: heats || law.mu_change_per_100s != 0.0 || (d.mu_wander_sd > 0.0),
                 heats,
                 pending_pulse_us: s.rest_pulse_us,
                 target_deg: rest_deg,
