@@ -71,7 +71,7 @@ fn main() {
         println!("within between alpha ratio | single pairs outside clean | small");
         for within in [6.0, 7.0, 8.0] {
             for between in [4.0, 5.0, 6.0] {
-                for (alpha, ratio) in [(1e-3, 0.35)] {
+                for (alpha, ratio) in [(1e-3, 0.35), (1e-3, 0.5)] {
                     let opts = Options {
                         within_threshold: within,
                         between_threshold: between,

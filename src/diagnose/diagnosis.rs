@@ -40,7 +40,8 @@ pub struct Baseline {
     pub rmse_t2_run_mu_n: f64,
 }
 
-/// The found effects' population model (one mu and the effects) refitted to all rows.
+/// The found effects' population model: one mu refitted to all rows with the effects at the
+/// sizes found.
 #[derive(Clone, Debug, Serialize)]
 pub struct Extended {
     /// RMSE of T2, N.

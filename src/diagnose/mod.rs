@@ -115,7 +115,8 @@ pub fn from_assessment(a: &Assessment, opts: &Options, t0: Instant) -> Diagnosis
     }
 }
 
-/// The population fits through `src/fit`: one mu, and one mu with the found effects.
+/// The population fits through `src/fit`: one mu, and one mu with the found effects at their
+/// sizes.
 fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) {
     let obs = &a.design.obs;
     let runs = obs.all_runs();
@@ -124,7 +125,6 @@ fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) 
     let base_fit = fit_fixed(&ee, obs, &runs, None);
     let mu_pop = base_fit.model(None).law.mu;
     let mut model = Model::euler_eytelwein(mu_pop);
-    let mut spec_params = Vec::new();
     for e in found {
         let value = match e.kind {
             EffectKind::BendingStiffness => e.value.max(1e-8),
@@ -136,23 +136,17 @@ fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) 
             value,
         }
         .apply(&mut model);
-        if let Some(p) = Param::from_effect(e.kind) {
-            spec_params.push(p);
-        }
     }
     if found.iter().any(|e| e.kind == EffectKind::ContactHeating) {
         model.law.heat_tau_s = HEAT_TAU_S;
     }
-    let mut spec = ModelSpec::new("found", model).free(Param::Mu);
-    for p in spec_params {
-        spec = spec.free(p);
-    }
+    // One mu with the effects at the sizes the engine found (refitting them all on the
+    // population scale is the analysis's job, `capstan analyze`).
+    let spec = ModelSpec::new("found", model).free(Param::Mu);
     let ext = if found.is_empty() {
         base_fit.rmse()
     } else {
-        fit_fixed(&spec, obs, &runs, None)
-            .rmse()
-            .min(base_fit.rmse())
+        fit_fixed(&spec, obs, &runs, None).rmse()
     };
     (
         Baseline {

@@ -158,9 +158,16 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         .as_ref()
         .is_some_and(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
     let unexplained = lack || !at_physical_limit.is_empty() || inconstant;
+    // When the pure error says structure is left, the pattern is the directed test that
+    // comes closest to it (a description of what is left, at p < 0.05: the omnibus test has
+    // made the decision); otherwise a directed test must be significant on its own.
+    let closest = directed
+        .iter()
+        .filter(|t| t.p < 0.05)
+        .min_by(|a, b| a.p.total_cmp(&b.p));
     let pattern = match (best, &lack_of_fit) {
         (Some(t), _) => Some(t.structure),
-        (None, Some(l)) if l.p < rule.alpha => Some("cells"),
+        (None, Some(l)) if l.p < rule.alpha => Some(closest.map_or("cells", |t| t.structure)),
         _ => None,
     };
     let mut sentence = sentence(lack, pattern, lack_of_fit.as_ref(), &directed);
@@ -325,7 +332,7 @@ fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     let df_lof = (n_used as f64 - cords.len() as f64 - k as f64).max(1.0);
     let ms_pe = ss_pe / df_pe.max(1.0);
     // Rademacher flips of whole runs, from a fixed seed (the answer is reproducible).
-    let mut rng = Rng::new(0x1ac0_f17);
+    let mut rng = Rng::new(0x01ac_0f17);
     let (mut above, mut total) = (0usize, 0.0);
     let mut signs = vec![1.0; d.units.len()];
     for _ in 0..FLIPS {

@@ -87,9 +87,9 @@ pub struct Design {
 fn index_of<K: std::hash::Hash + Eq + Copy>(
     map: &mut HashMap<K, usize>,
     key: K,
-    mut add: impl FnMut() -> usize,
+    add: impl FnMut() -> usize,
 ) -> usize {
-    *map.entry(key).or_insert_with(|| add())
+    *map.entry(key).or_insert_with(add)
 }
 
 impl Design {

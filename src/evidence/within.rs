@@ -128,10 +128,10 @@ impl Weights {
             }
         }
         let mut w = Weights::from_residuals(&r, &f);
-        for i in 0..n {
-            if !f[i].is_finite() {
-                let t = null.fitted[i].abs();
-                w.w[i] = 1.0 / (w.sd_abs_n.powi(2) + (w.sd_rel * t).powi(2));
+        let (sd_abs, sd_rel) = (w.sd_abs_n, w.sd_rel);
+        for ((wi, fi), fitted) in w.w.iter_mut().zip(&f).zip(&null.fitted) {
+            if !fi.is_finite() {
+                *wi = 1.0 / (sd_abs.powi(2) + (sd_rel * fitted.abs()).powi(2));
             }
         }
         w
@@ -166,10 +166,10 @@ impl Weights {
         }
         let mut w = Weights::from_residuals(&r, &f);
         // Rows of short runs: weigh them by their own tension.
-        for i in 0..n {
-            if !f[i].is_finite() {
-                let t = d.t2[i].abs();
-                w.w[i] = 1.0 / (w.sd_abs_n.powi(2) + (w.sd_rel * t).powi(2));
+        let (sd_abs, sd_rel) = (w.sd_abs_n, w.sd_rel);
+        for ((wi, fi), t2) in w.w.iter_mut().zip(&f).zip(&d.t2) {
+            if !fi.is_finite() {
+                *wi = 1.0 / (sd_abs.powi(2) + (sd_rel * t2.abs()).powi(2));
             }
         }
         w
@@ -281,16 +281,16 @@ fn predict(
     (out, slopes): (&mut [f64], &mut [f64]),
 ) -> (f64, f64) {
     let hint = near.map(|t2| Hint { t2, slope: None });
-    for u in 0..d.units.len() {
+    for (u, &mu_u) in mu.iter().enumerate().take(d.units.len()) {
         let b = strata.block(u);
-        let m = run_model(&maps[b.clone()], mu[u], &theta[b]);
+        let m = run_model(&maps[b.clone()], mu_u, &theta[b]);
         predict_run(&m, run_rows(d, u), d.timed, hint, out, Some(&mut *slopes));
     }
     let (mut wrss, mut rss) = (0.0, 0.0);
-    for i in 0..d.n() {
-        let r = out[i] - d.t2[i];
+    for ((o, t2), wi) in out.iter().zip(&d.t2).zip(&w.w) {
+        let r = o - t2;
         rss += r * r;
-        wrss += w.w[i] * r * r;
+        wrss += wi * r * r;
     }
     if wrss.is_finite() {
         (wrss, rss)
