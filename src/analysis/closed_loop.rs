@@ -1,6 +1,6 @@
 //! Close the loop: the firmware run against the simulated plant (`host_sim::campaign`) with the
-//! extended model as the plant's friction law (each cord with its own fitted mu factor, the
-//! contact heating and the T1-path loss), on the thesis campaign, one run per cord.
+//! extended model as the plant's friction law (each cord with its own fitted mu factor and the
+//! causes the evidence engine named), on the thesis campaign, one run per cord.
 
 use super::Analysis;
 use crate::fit::par::par_map;

@@ -155,6 +155,15 @@ fn amp_panel(
     }
 }
 
+/// The named causes the closed-loop plant carries, as a caption fragment (", a, b").
+fn plant_causes(a: &Analysis) -> String {
+    a.mechanisms
+        .causes
+        .iter()
+        .map(|c| format!(", {}", c.name))
+        .collect()
+}
+
 /// The closed loop: simulated amplification over the measured points, per cord.
 pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<Figure> {
     let panels: Vec<Panel> = a
@@ -182,6 +191,6 @@ pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<F
         id: "closed_loop",
         legend,
         chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
-        caption: "Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu, heating, T1-path loss), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.".into(),
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.", plant_causes(a)),
     })
 }
