@@ -120,6 +120,18 @@ pub enum DataError {
     },
     /// The file has a header but no rows.
     Empty { path: String },
+    /// The file is empty: not even a header.
+    NoHeader { path: String },
+    /// The header has one column that looks like several joined by another separator.
+    Separator {
+        path: String,
+        header: String,
+        separator: char,
+    },
+    /// A line is longer than any pairs CSV line can be (e.g. a binary file).
+    LineTooLong { path: String, line: u64 },
+    /// The data cannot come from a capstan: no row has T2 above T1.
+    NoFriction { path: String, rows: usize },
 }
 
 impl fmt::Display for DataError {
@@ -149,6 +161,37 @@ impl fmt::Display for DataError {
                 "{path}:{line}:{column}: column `{name}`: {reason} (found `{value}`)"
             ),
             DataError::Empty { path } => write!(f, "{path}: no data rows"),
+            DataError::NoHeader { path } => {
+                write!(
+                    f,
+                    "{path}: the file is empty (expected a CSV header and rows)"
+                )
+            }
+            DataError::Separator {
+                path,
+                header,
+                separator,
+            } => write!(
+                f,
+                "{path}:1: the header `{header}` is one column: the file looks separated by \
+                 {}; capstan reads comma-separated values (e.g. `tr '{}' ','`)",
+                match separator {
+                    '\t' => "tabs".to_string(),
+                    c => format!("`{c}`"),
+                },
+                separator.escape_default()
+            ),
+            DataError::LineTooLong { path, line } => write!(
+                f,
+                "{path}:{line}: a line longer than {} bytes: not a pairs CSV (a binary file?)",
+                MAX_LINE_BYTES
+            ),
+            DataError::NoFriction { path, rows } => write!(
+                f,
+                "{path}: T2 is at most T1 in all {rows} rows: a capstan amplifies tension \
+                 (T2 > T1), so these are not capstan data (are the t1_n and t2_n columns \
+                 swapped, or the drive off?)"
+            ),
         }
     }
 }
@@ -172,26 +215,14 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
     let path = source.to_string();
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
-        .from_reader(reader);
-    let csv_err = |e: csv::Error| DataError::Csv {
-        path: path.clone(),
-        line: e.position().map_or(0, |p| p.line()),
-        message: e.to_string(),
-    };
+        .from_reader(LineLimit::new(reader));
     let header: Vec<String> = rdr
         .headers()
-        .map_err(csv_err)?
+        .map_err(|e| line_error(e, &path))?
         .iter()
         .map(str::to_string)
         .collect();
-    for (i, h) in header.iter().enumerate() {
-        if header[..i].contains(h) {
-            return Err(DataError::DuplicateColumn {
-                path,
-                column: h.clone(),
-            });
-        }
-    }
+    check_header(&header, &path)?;
     let find = |name: &str| header.iter().position(|h| h == name);
     let required = |column: &'static str| {
         find(column).ok_or(DataError::MissingColumn {
@@ -206,7 +237,7 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
         .collect();
     let mut pairs = Vec::new();
     for record in rdr.records() {
-        let record = record.map_err(csv_err)?;
+        let record = record.map_err(|e| line_error(e, &path))?;
         let line = record.position().map_or(0, |p| p.line());
         let cell = |i: usize, rule: Rule| -> Result<f64, DataError> {
             let raw = record.get(i).unwrap_or("");
@@ -223,10 +254,10 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
         pairs.push(Pair {
             capstan_diameter_mm: opt(optional[0], Rule::Positive(MAX_DIAMETER_MM))?,
             wrap_deg: cell(wrap, Rule::Positive(MAX_WRAP_DEG))?,
-            drive_v: opt(optional[1], Rule::Finite)?,
-            run: opt(optional[2], Rule::Finite)?,
-            step: opt(optional[3], Rule::Finite)?,
-            time_s: opt(optional[4], Rule::Finite)?,
+            drive_v: opt(optional[1], Rule::Bounded(MAX_DRIVE_V))?,
+            run: opt(optional[2], Rule::Bounded(MAX_INDEX))?,
+            step: opt(optional[3], Rule::Bounded(MAX_INDEX))?,
+            time_s: opt(optional[4], Rule::Bounded(MAX_TIME_S))?,
             t1_n: cell(t1, Rule::Tension)?,
             t2_n: cell(t2, Rule::Tension)?,
             extra: extra_idx
@@ -246,9 +277,118 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
     })
 }
 
+/// The longest line a pairs CSV may have (a header of a few hundred columns fits many times).
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+/// |drive_v| at most this, V.
+const MAX_DRIVE_V: f64 = 1000.0;
+/// |run|, |step| at most this.
+const MAX_INDEX: f64 = 1e9;
+/// |time_s| at most this (a year), s.
+const MAX_TIME_S: f64 = 3.2e7;
+
+/// A CSV error with the line it is at; a line over [`MAX_LINE_BYTES`] is named as such.
+fn line_error(e: csv::Error, path: &str) -> DataError {
+    let line = e.position().map_or(0, |p| p.line());
+    if let csv::ErrorKind::Io(io) = e.kind() {
+        if io.kind() == std::io::ErrorKind::InvalidData && io.to_string() == LINE_TOO_LONG {
+            return DataError::LineTooLong {
+                path: path.to_string(),
+                line: line.max(1),
+            };
+        }
+    }
+    DataError::Csv {
+        path: path.to_string(),
+        line,
+        message: e.to_string(),
+    }
+}
+
+/// An empty file, another separator, a column named twice (checked in linear time).
+fn check_header(header: &[String], path: &str) -> Result<(), DataError> {
+    let path = path.to_string();
+    if header.is_empty() || header.iter().all(|h| h.is_empty()) {
+        return Err(DataError::NoHeader { path });
+    }
+    if let [only] = header {
+        if let Some(sep) = [';', '\t', '|', ' ']
+            .into_iter()
+            .find(|&c| only.contains(c))
+        {
+            return Err(DataError::Separator {
+                path,
+                header: only.chars().take(80).collect(),
+                separator: sep,
+            });
+        }
+    }
+    let mut seen = std::collections::HashSet::with_capacity(header.len());
+    for h in header {
+        if !seen.insert(h.as_str()) {
+            return Err(DataError::DuplicateColumn {
+                path,
+                column: h.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+const LINE_TOO_LONG: &str = "line too long";
+
+/// A reader that fails on a line over [`MAX_LINE_BYTES`] (so `/dev/zero` or a binary file
+/// given as a CSV ends in an error, not in unbounded memory).
+struct LineLimit<R> {
+    inner: R,
+    since_newline: usize,
+}
+
+impl<R: Read> LineLimit<R> {
+    fn new(inner: R) -> Self {
+        LineLimit {
+            inner,
+            since_newline: 0,
+        }
+    }
+}
+
+impl<R: Read> Read for LineLimit<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in &buf[..n] {
+            if b == b'\n' {
+                self.since_newline = 0;
+            } else {
+                self.since_newline += 1;
+                if self.since_newline > MAX_LINE_BYTES {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        LINE_TOO_LONG,
+                    ));
+                }
+            }
+        }
+        Ok(n)
+    }
+}
+
+/// Data that cannot come from a capstan: no row with T2 above T1 (e.g. the columns swapped,
+/// or T2 = T1 throughout: no friction to analyse).
+pub fn check_capstan_data(ds: &Dataset) -> Result<(), DataError> {
+    if ds.pairs.iter().any(|p| p.t2_n > p.t1_n) {
+        return Ok(());
+    }
+    Err(DataError::NoFriction {
+        path: ds.source.clone(),
+        rows: ds.pairs.len(),
+    })
+}
+
 #[derive(Clone, Copy)]
 enum Rule {
     Finite,
+    /// |v| at most the bound.
+    Bounded(f64),
     /// Greater than zero and at most the bound.
     Positive(f64),
     /// A force reading: |v| ≤ [`MAX_TENSION_N`].
@@ -268,6 +408,11 @@ fn parse_cell(raw: &str, rule: Rule) -> Result<f64, &'static str> {
         Rule::Positive(max) if v > max => Err(match max {
             MAX_WRAP_DEG => "must be at most 3600 (ten turns)",
             _ => "must be at most 1000",
+        }),
+        Rule::Bounded(max) if v.abs() > max => Err(match max {
+            MAX_DRIVE_V => "must be within ±1000 V",
+            MAX_TIME_S => "must be within ±3.2e7 s (a year)",
+            _ => "must be within ±1e9",
         }),
         Rule::Tension if v.abs() > MAX_TENSION_N => {
             Err("is beyond any force sensor of a capstan rig (|T| must be at most 10000 N)")

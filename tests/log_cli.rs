@@ -234,8 +234,25 @@ fn ctrl_c_keeps_everything_received_and_says_so() {
     pipe.write_all(&bytes[..bytes.len() / 2]).unwrap();
     pipe.flush().unwrap();
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
-    // Wait until what was sent has been written out (pairs.csv has run 1's first pair).
-    while std::fs::read_to_string(dir.join("raw.csv")).map_or(0, |r| r.lines().count()) < 50 {
+    // Wait until what was sent has been written out: the session's files grow in its staging
+    // directory and are moved into place when it ends.
+    let live_raw = || -> usize {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            return 0;
+        };
+        entries
+            .flatten()
+            .filter(|e| {
+                e.file_name()
+                    .to_string_lossy()
+                    .starts_with(".capstan-staging-")
+            })
+            .map(|e| {
+                std::fs::read_to_string(e.path().join("raw.csv")).map_or(0, |r| r.lines().count())
+            })
+            .sum()
+    };
+    while live_raw() < 50 {
         assert!(std::time::Instant::now() < deadline, "capstan did not log");
         std::thread::sleep(std::time::Duration::from_millis(20));
     }

@@ -15,8 +15,11 @@ mod exec;
 mod jobs;
 mod results;
 
-pub use exec::{run_campaign, run_campaign_with_progress};
-pub use results::{CampaignResult, CordKey, FaultSummary, PairRow, RunResult};
+pub use exec::{
+    pair_rows, run_campaign, run_campaign_with_progress, stream_campaign, CampaignStats,
+    StreamError,
+};
+pub use results::{summarise_faults, CampaignResult, CordKey, FaultSummary, PairRow, RunResult};
 
 use crate::run::SetupError;
 use capstan_friction::{Effect, Model};

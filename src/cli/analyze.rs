@@ -2,7 +2,6 @@
 //! report (`report.html`), `metrics.json` and `predictions.csv`.
 
 use crate::data::{load_pairs, thesis_dataset};
-use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -36,15 +35,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return validate(&args);
     }
     let t0 = Instant::now();
+    // Lock the output directory and prove it writable before the analysis, not after it.
+    let mut set = super::open_out(&args.out)?.stage()?;
     let ds = match &args.data {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
+    crate::data::check_capstan_data(&ds)?;
     let mut opts = crate::analysis::Options::default();
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
-    eprintln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
+    crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     let mut a = crate::analysis::run(&ds, opts)?;
     let t_report = Instant::now();
     let t_cl = Instant::now();
@@ -53,27 +55,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
     };
     a.elapsed.closed_loop_s = t_cl.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
     let html = crate::report::report_html(&a, curves.as_deref(), &note)?;
     let csv = crate::report::predictions_csv(&ds, &a);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
     let metrics = crate::report::metrics_json(&a, &closed);
-    let write = |name: &str, s: &str| -> anyhow::Result<()> {
-        let p = args.out.join(name);
-        std::fs::write(&p, s).with_context(|| format!("writing {}", p.display()))
-    };
-    write("report.html", &html)?;
-    write("predictions.csv", &csv)?;
-    write("metrics.json", &serde_json::to_string_pretty(&metrics)?)?;
-    eprintln!(
+    set.write("report.html", html.as_bytes())?;
+    set.write("predictions.csv", csv.as_bytes())?;
+    set.write(
+        "metrics.json",
+        serde_json::to_string_pretty(&metrics)?.as_bytes(),
+    )?;
+    set.commit()?;
+    crate::errln!(
         "wrote {}/report.html, metrics.json, predictions.csv in {:.2} s",
         args.out.display(),
         t0.elapsed().as_secs_f64()
     );
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&metrics)?);
+        crate::outln!("{}", serde_json::to_string_pretty(&metrics)?);
     }
     Ok(())
 }
@@ -83,44 +83,47 @@ fn validate(args: &Args) -> anyhow::Result<()> {
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    eprintln!(
+    crate::errln!(
         "validating the cause-naming on {} planted data sets (seed {}) ...",
         crate::analysis::validate::cases(args.seed).len(),
         args.seed
     );
+    let mut set = super::open_out(&args.out)?.stage()?;
     let t0 = Instant::now();
     let v = crate::analysis::validate::validate(args.seed, 1, threads)?;
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
-    println!(
+    crate::outln!(
         "causes named exactly (clean, single, heating + T1 loss): {}/{} ({:.0} %, target ≥ 90 %)",
         v.named_exactly.0,
         v.named_exactly.1,
         pct(v.named_exactly)
     );
-    println!(
+    crate::outln!(
         "clean sets with a cause named or structure flagged: {}/{} ({:.0} %, target ≤ 5 %)",
         v.clean_alarms.0,
         v.clean_alarms.1,
         pct(v.clean_alarms)
     );
-    println!(
+    crate::outln!(
         "outside the catalogue flagged unexplained: {}/{} ({:.0} %, target ≥ 80 %)",
         v.outside_flagged.0,
         v.outside_flagged.1,
         pct(v.outside_flagged)
     );
     for o in v.outcomes.iter().filter(|o| !o.correct) {
-        println!(
+        crate::outln!(
             "MISS {} -> named {:?}, unexplained {}",
-            o.case, o.named, o.unexplained
+            o.case,
+            o.named,
+            o.unexplained
         );
     }
-    println!("({:.1} s)", t0.elapsed().as_secs_f64());
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    let p = args.out.join("validation.json");
-    std::fs::write(&p, serde_json::to_string_pretty(&v)?)
-        .with_context(|| format!("writing {}", p.display()))?;
+    crate::outln!("({:.1} s)", t0.elapsed().as_secs_f64());
+    set.write(
+        "validation.json",
+        serde_json::to_string_pretty(&v)?.as_bytes(),
+    )?;
+    set.commit()?;
     let why = v.failures();
     if !why.is_empty() {
         anyhow::bail!("validation missed its targets: {}", why.join("; "));

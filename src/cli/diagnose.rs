@@ -29,10 +29,6 @@ pub struct Args {
 
 /// Run `capstan diagnose`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let data = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
     for (flag, v) in [
         ("--within-threshold", args.within_threshold),
         ("--between-threshold", args.between_threshold),
@@ -41,6 +37,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             anyhow::bail!("{flag} {v}: must be a finite number, 0 or more");
         }
     }
+    let data = match &args.data {
+        Some(p) => load_pairs(p)?,
+        None => thesis_dataset(),
+    };
+    crate::data::check_capstan_data(&data)?;
     let opts = Options {
         within_threshold: args.within_threshold,
         between_threshold: args.between_threshold,
@@ -49,9 +50,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let d = diagnose::diagnose_with(&data, &opts);
     if args.json {
-        println!("{}", d.to_json());
+        crate::outln!("{}", d.to_json());
     } else {
-        print!("{}", summary(&d, &data.source));
+        crate::out!("{}", summary(&d, &data.source));
     }
     Ok(())
 }

@@ -5,7 +5,7 @@ use crate::log::Firmware;
 use anyhow::{bail, Context};
 use std::io::Read;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -115,19 +115,6 @@ pub struct Args {
     pub quiet: bool,
 }
 
-static STOP: AtomicBool = AtomicBool::new(false);
-
-fn install_ctrl_c() {
-    // A second call in the same process (tests) fails harmlessly: the handler is already set.
-    let _ = ctrlc::set_handler(|| {
-        if STOP.swap(true, Ordering::SeqCst) {
-            eprintln!("capstan log: second Ctrl-C, exiting now");
-            std::process::exit(130);
-        }
-        eprintln!("capstan log: Ctrl-C: finishing (flushing files, writing summary.json)");
-    });
-}
-
 /// Run `capstan log`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(d) = args.duration {
@@ -158,13 +145,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         progress: !args.quiet,
     };
-    STOP.store(false, Ordering::SeqCst);
-    install_ctrl_c();
+    super::signal::stop_flag("log"); // Ctrl-C and SIGTERM end the session, keeping it
     let (summary, stop) = match &args.from {
         Some(from) => from_stream(&fw, opts, from, &args)?,
         None => from_board(&fw, opts, &args)?,
     };
-    eprintln!("{}", summary.human(&args.out));
+    crate::errln!("{}", summary.human(&args.out));
     verdict(&summary, &stop, &args)
 }
 
@@ -182,6 +168,12 @@ fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Result<()> {
             summary.bad_frames,
             args.elf.display()
         );
+    }
+    if args.strict && summary.bytes == 0 {
+        bail!("--strict: the stream is empty (no byte received)");
+    }
+    if args.strict && summary.runs.iter().all(|r| !r.complete) {
+        bail!("--strict: no complete run in the stream (see {dir}/summary.json)");
     }
     if args.strict && !summary.is_clean() {
         bail!(
@@ -209,6 +201,27 @@ fn limit_reached(logger: &Logger, args: &Args, started: std::time::Instant) -> O
         return Some(Stop::Limit(format!("{d} s (--duration)")));
     }
     None
+}
+
+/// Feed a chunk; with `--runs`, frame by frame, so the session stops right after the record
+/// that completes the last run wanted (a chunk may hold dozens of runs).
+fn feed(
+    logger: &mut Logger,
+    chunk: &[u8],
+    args: &Args,
+    started: std::time::Instant,
+) -> anyhow::Result<Option<Stop>> {
+    if args.runs.is_none() {
+        logger.feed(chunk)?;
+        return Ok(None);
+    }
+    for frame in chunk.split_inclusive(|&b| b == 0) {
+        logger.feed(frame)?;
+        if let Some(s) = limit_reached(logger, args, started) {
+            return Ok(Some(s));
+        }
+    }
+    Ok(None)
 }
 
 /// Decode a file or stdin. The reading happens on its own thread so that Ctrl-C and the
@@ -246,18 +259,22 @@ fn from_stream(
     });
     let started = std::time::Instant::now();
     let stop = loop {
-        if STOP.load(Ordering::SeqCst) {
+        if super::signal::stop_flag("log").load(Ordering::SeqCst) {
             break Stop::Interrupted;
         }
         if let Some(s) = limit_reached(&logger, args, started) {
             break s;
         }
         match rx.recv_timeout(Duration::from_millis(100)) {
-            Ok(Ok(chunk)) => logger.feed(&chunk)?,
+            Ok(Ok(chunk)) => {
+                if let Some(s) = feed(&mut logger, &chunk, args, started)? {
+                    break s;
+                }
+            }
             Ok(Err(e)) => {
                 let at = logger.bytes_seen();
                 let summary = logger.finish(&Stop::EndOfStream)?;
-                eprintln!("{}", summary.human(&args.out));
+                crate::errln!("{}", summary.human(&args.out));
                 return Err(e).with_context(|| format!("reading {source} failed at byte {at}"));
             }
             Err(mpsc::RecvTimeoutError::Timeout) => {}
@@ -292,7 +309,7 @@ fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(S
     let mut board = connect(&args.elf, &popts)?;
     let source = format!("{chip} over RTT (probe: {})", board.probe_name);
     let mut logger = Logger::create(fw, opts, &source)?;
-    let stop = board.stream(limits, &mut logger, &STOP)?;
+    let stop = board.stream(limits, &mut logger, super::signal::stop_flag("log"))?;
     let summary = logger.finish(&stop)?;
     Ok((summary, stop))
 }
@@ -329,9 +346,22 @@ mod tests {
             bad_frames: 0,
             bad_frame_examples: Vec::new(),
             truncated_tail: None,
-            runs: Vec::new(),
+            runs: vec![complete_run()],
             pairs_incomplete: 0,
         }
+    }
+
+    fn complete_run() -> crate::log::output::RunSummary {
+        use crate::log::output::{RunSummary, Sourced};
+        let mut r = RunSummary::new(
+            Some(1),
+            0,
+            Sourced::choose(None, None),
+            Sourced::choose(None, None),
+            Sourced::choose(None, None),
+        );
+        r.complete = true;
+        r
     }
 
     fn args(extra: &[&str]) -> Args {
@@ -366,12 +396,23 @@ mod tests {
         let none = summary(RecordCounts::default(), 100, 0);
         let e = verdict(&none, &Stop::EndOfStream, &args(&[])).unwrap_err();
         assert!(e.to_string().contains("no rig records in 100 bytes"));
-        // An empty stream is not an error (nothing was sent).
-        assert!(verdict(
-            &summary(RecordCounts::default(), 0, 0),
-            &Stop::EndOfStream,
-            &args(&[])
-        )
-        .is_ok());
+        // An empty stream is not an error (nothing was sent), except under --strict; nor is a
+        // stream without a complete run.
+        let empty = summary(RecordCounts::default(), 0, 0);
+        assert!(verdict(&empty, &Stop::EndOfStream, &args(&[])).is_ok());
+        let e = verdict(&empty, &Stop::EndOfStream, &args(&["--strict"])).unwrap_err();
+        assert!(e.to_string().contains("the stream is empty"), "{e}");
+        let mut unfinished = summary(
+            RecordCounts {
+                raw: 10,
+                ..RecordCounts::default()
+            },
+            100,
+            0,
+        );
+        unfinished.runs[0].complete = false;
+        assert!(verdict(&unfinished, &Stop::EndOfStream, &args(&[])).is_ok());
+        let e = verdict(&unfinished, &Stop::EndOfStream, &args(&["--strict"])).unwrap_err();
+        assert!(e.to_string().contains("no complete run"), "{e}");
     }
 }

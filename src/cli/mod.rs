@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod analyze;
 pub mod diagnose;
 pub mod log;
+pub mod signal;
 pub mod simulate;
 
 /// Capstan-friction rig: simulate, analyse, diagnose and log.
@@ -37,4 +38,13 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Diagnose(a) => diagnose::run(a),
         Command::Log(a) => log::run(a),
     }
+}
+
+/// The output directory, locked, with what was recovered in it said on stderr.
+pub fn open_out(dir: &std::path::Path) -> anyhow::Result<crate::outdir::OutputDir> {
+    let out = crate::outdir::OutputDir::open(dir)?;
+    for r in &out.recovered {
+        crate::errln!("note: {r}");
+    }
+    Ok(out)
 }

@@ -7,11 +7,11 @@
 mod output;
 mod two;
 
-use crate::data::{write_pairs, Pair};
+use crate::data::Pair;
 use anyhow::{bail, Context};
 use capstan_friction::{Effect, Model};
 use firmware::StepOrder;
-use host_sim::campaign::{run_campaign_with_progress, CampaignConfig, FaultSpec, PairRow};
+use host_sim::campaign::{stream_campaign, CampaignConfig, FaultSpec, PairRow, StreamError};
 use host_sim::noise::NoiseProfile;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -70,9 +70,9 @@ pub struct Args {
         allow_negative_numbers = true
     )]
     pub wraps: Option<Vec<f64>>,
-    /// Repeat runs per cord.
-    #[arg(long, default_value_t = 6)]
-    pub runs: u32,
+    /// Repeat runs per cord [default: 6].
+    #[arg(long)]
+    pub runs: Option<u32>,
     /// Drive voltages, V (at most 13.2: 3.3 V of control x the amplifier's gain of 4).
     #[arg(long = "drive-v", value_delimiter = ',', value_name = "V", default_values_t = [10.0], allow_negative_numbers = true)]
     pub drive_v: Vec<f64>,
@@ -243,7 +243,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         diameters_mm: args.diameters.clone().unwrap_or(defaults.diameters_mm),
         wraps_deg: args.wraps.clone().unwrap_or(defaults.wraps_deg),
         drive_vs: args.drive_v.clone(),
-        runs: args.runs,
+        runs: args.runs.unwrap_or(6),
         order: args.order.into(),
         effects,
         model,
@@ -261,11 +261,50 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     cfg.plant.disturbances = noise.disturbances();
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let out = super::open_out(&args.out)?;
+    let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
+    let bar = progress_bar(&args, cfg.run_count());
+    let stop = super::signal::stop_flag("simulate");
+    let streamed = stream_campaign(&cfg, stop, &mut |r| {
+        files
+            .add(&r)
+            .with_context(|| format!("writing run {} into {}", r.index, args.out.display()))?;
+        if let Some(pb) = &bar {
+            pb.set_position(r.index as u64);
+        }
+        Ok::<(), anyhow::Error>(())
+    });
+    if let Some(pb) = bar {
+        pb.finish_and_clear();
+    }
+    let stats = match streamed {
+        Ok(s) => s,
+        Err(StreamError::Campaign(e)) => bail!("{e}"),
+        Err(StreamError::Sink(e)) => return Err(e),
+    };
+    let summary = output::campaign_json(&stats, files.rows, &files.faults);
+    let (rows, faults) = (files.rows, std::mem::take(&mut files.faults));
+    files.finish(&summary)?;
+    if args.json {
+        crate::outln!("{summary}");
+    } else {
+        output::print_summary(&args.out, &stats, rows, &faults, !args.no_raw);
+    }
+    if stats.interrupted {
+        return Err(super::signal::Interrupted(format!(
+            "interrupted: {} of {} runs made; they are in {} (summary.json says \"interrupted\")",
+            stats.done,
+            stats.planned,
+            args.out.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
 
-    let bar = (!args.json && std::io::stderr().is_terminal()).then(|| {
-        let pb = indicatif::ProgressBar::new(cfg.run_count() as u64);
+fn progress_bar(args: &Args, runs: usize) -> Option<indicatif::ProgressBar> {
+    (!args.json && std::io::stderr().is_terminal()).then(|| {
+        let pb = indicatif::ProgressBar::new(runs as u64);
         pb.set_style(
             indicatif::ProgressStyle::with_template(
                 "simulating {bar:40} {pos}/{len} runs [{elapsed_precise}]",
@@ -273,51 +312,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .expect("a valid template"),
         );
         pb
-    });
-    let progress = |done: usize, _total: usize| {
-        if let Some(pb) = &bar {
-            pb.set_position(done as u64);
-        }
-    };
-    let result = run_campaign_with_progress(&cfg, &progress).map_err(|e| anyhow::anyhow!("{e}"))?;
-    if let Some(pb) = bar {
-        pb.finish_and_clear();
-    }
-
-    let pairs_path = args.out.join("pairs.csv");
-    write_pairs(&pairs_path, &to_pairs(&result.rows))?;
-    if !args.no_raw {
-        output::write_raw_logs(&args.out.join("raw"), &result.runs)?;
-    }
-    output::write_faults(&args.out.join("faults.csv"), &result)?;
-
-    // An injection after its run had ended never happened: say so rather than list it.
-    for r in &result.runs {
-        if let Err(e) = r.end {
-            eprintln!(
-                "warning: run {} ({} run {}) did not end: {e:?}",
-                r.index,
-                r.cord.label(),
-                r.run
-            );
-        }
-        for inj in r.injections.iter().filter(|i| i.at_us.is_none()) {
-            eprintln!(
-                "warning: run {}: {}@{} s never took effect (the run ended {:.1} s after its \
-                 trigger)",
-                r.index,
-                inj.injection.kind.name(),
-                inj.injection.after_trigger_us as f64 / 1e6,
-                r.log.end.map_or(f64::NAN, |e| e.t_us as f64 / 1e6)
-            );
-        }
-    }
-    if args.json {
-        println!("{}", output::campaign_json(&result));
-    } else {
-        output::print_summary(&args.out, &result, !args.no_raw);
-    }
-    Ok(())
+    })
 }
 
 /// The simulator's rows as pairs of the CSV schema (`capstan::data`): what `pairs.csv` holds,

@@ -243,7 +243,7 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
     let clock = std::time::Instant::now();
     let lap = |what: &str| {
         if std::env::var("CAPSTAN_LAPS").is_ok() {
-            eprintln!("{what}: {:.1} ms", clock.elapsed().as_secs_f64() * 1e3);
+            crate::errln!("{what}: {:.1} ms", clock.elapsed().as_secs_f64() * 1e3);
         }
     };
     let cold = within::fit(&d, &[], &[], &within::start_mu(&d), &Weights::equal(d.n()));

@@ -117,7 +117,7 @@ pub fn connect(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connectio
     };
     let (mut session, probe_name) = open_session(opts)?;
     if opts.flash {
-        eprintln!(
+        crate::errln!(
             "capstan log: flashing {} to the {} through {probe_name}...",
             elf_path.display(),
             opts.chip
@@ -128,7 +128,7 @@ pub fn connect(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connectio
         let loader = ElfLoader(ElfOptions::default());
         probe_rs::flashing::download_file_with_options(&mut session, elf_path, loader, dl)
             .with_context(|| format!("flashing {} failed", elf_path.display()))?;
-        eprintln!("capstan log: flashed in {:.1} s", t.elapsed().as_secs_f64());
+        crate::errln!("capstan log: flashed in {:.1} s", t.elapsed().as_secs_f64());
     }
     let rtt = {
         let mut core = session
@@ -163,7 +163,7 @@ pub fn connect(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connectio
             )
         })?
         .buffer_size();
-    eprintln!(
+    crate::errln!(
         "capstan log: reading defmt from RTT channel {} ({size} bytes buffer); Ctrl-C stops and \
          keeps everything",
         conn.channel

@@ -140,7 +140,9 @@ fn f32_to_f64(x: f32) -> f64 {
     format!("{x}").parse().unwrap_or(f64::NAN)
 }
 
-pub(super) fn summarise_faults(r: &RunResult) -> Vec<FaultSummary> {
+/// The faults of a run: one row per injection that happened, or the fault the firmware
+/// raised by itself.
+pub fn summarise_faults(r: &RunResult) -> Vec<FaultSummary> {
     let fault = r.log.faults.first().copied();
     let pairs_kept = r.log.end.map_or(r.log.pairs.len() as u32, |e| e.pairs);
     let detected_s = fault.map(|f| f.t_us as f64 * 1e-6);

@@ -1,89 +1,149 @@
-//! A campaign's output: `pairs.csv` is written by the caller through `capstan::data`; here the
-//! raw logs, `faults.csv`, the JSON object and the printed summary.
+//! A campaign's output, written as it runs: each finished run's rows go to `pairs.csv` and
+//! `faults.csv` and its raw log to `raw/`, in campaign order, flushed run by run into the
+//! output set's staging directory; `summary.json` says how many runs were planned and made and
+//! whether the campaign was interrupted; the set replaces the previous one when it is closed
+//! (`outdir`). Memory holds one run at a time, whatever `--runs` is.
 
+use crate::data::PairsWriter;
+use crate::outdir::{OutputDir, Staged};
 use anyhow::Context;
-use host_sim::campaign::{CampaignResult, RunResult};
-use serde_json::json;
+use host_sim::campaign::{pair_rows, CampaignStats, FaultSummary, RunResult};
+use serde_json::{json, Value};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
-pub(super) fn create(path: &Path) -> anyhow::Result<BufWriter<File>> {
-    let f = File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(BufWriter::new(f))
+const FAULTS_HEADER: &str = "run,capstan_diameter_mm,wrap_deg,drive_v,repeat,injected,fault,at_s,detected_s,safe_after_ms,pairs_kept";
+
+/// The campaign's files, being written.
+pub(super) struct CampaignWriter {
+    set: Staged,
+    pairs: PairsWriter<BufWriter<File>>,
+    faults_csv: BufWriter<File>,
+    raw: bool,
+    /// Pairs written.
+    pub rows: usize,
+    /// Every fault summary (one per faulted run).
+    pub faults: Vec<FaultSummary>,
+}
+
+impl CampaignWriter {
+    /// Start the set in `out`.
+    pub fn new(out: OutputDir, raw: bool) -> anyhow::Result<Self> {
+        let mut set = out.stage()?;
+        let pairs = PairsWriter::new(set.create("pairs.csv")?)?;
+        let mut faults_csv = set.create("faults.csv")?;
+        writeln!(faults_csv, "{FAULTS_HEADER}")?;
+        Ok(CampaignWriter {
+            set,
+            pairs,
+            faults_csv,
+            raw,
+            rows: 0,
+            faults: Vec::new(),
+        })
+    }
+
+    /// Write one finished run (in campaign order), flushed.
+    pub fn add(&mut self, r: &RunResult) -> anyhow::Result<()> {
+        for row in pair_rows(r) {
+            self.pairs.write(&super::to_pairs(&[row])[0])?;
+            self.rows += 1;
+        }
+        if self.raw {
+            self.set.write(&raw_name(r), raw_csv(r).as_bytes())?;
+        }
+        for f in host_sim::campaign::summarise_faults(r) {
+            write_fault(&mut self.faults_csv, &f)?;
+            self.faults.push(f);
+        }
+        self.pairs.flush()?;
+        self.faults_csv.flush()?;
+        warn_about(r);
+        Ok(())
+    }
+
+    /// Close the set: `summary.json`, then replace the previous results.
+    pub fn finish(mut self, summary: &Value) -> anyhow::Result<()> {
+        self.pairs.flush()?;
+        self.faults_csv.flush()?;
+        let text = serde_json::to_string_pretty(summary)? + "\n";
+        self.set.write("summary.json", text.as_bytes())?;
+        let dir = self.set.target().display().to_string();
+        self.set
+            .commit()
+            .with_context(|| format!("writing the campaign into {dir}"))
+    }
 }
 
 fn raw_name(r: &RunResult) -> String {
-    format!("{}_run{}.csv", r.cord.label(), r.run)
+    format!("raw/{}_run{}.csv", r.cord.label(), r.run)
 }
 
-pub(super) fn write_raw_logs(dir: &Path, runs: &[RunResult]) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    // Raw logs of an earlier simulation into the same directory would mix with these.
-    if let Ok(entries) = std::fs::read_dir(dir) {
-        for e in entries.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
-            let ours = name.starts_with('d') && name.contains("_run") && name.ends_with(".csv");
-            if ours && !runs.iter().any(|r| raw_name(r) == name) {
-                let _ = std::fs::remove_file(e.path());
-            }
-        }
+fn raw_csv(r: &RunResult) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::from("t_s,t1_counts,t2_counts,t1_n,t2_n\n");
+    for x in &r.log.raw {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{}",
+            x.t_us as f64 / 1e6,
+            x.counts[0],
+            x.counts[1],
+            x.force_n[0],
+            x.force_n[1]
+        );
     }
-    for r in runs {
-        let path = dir.join(raw_name(r));
-        let mut w = create(&path)?;
-        writeln!(w, "t_s,t1_counts,t2_counts,t1_n,t2_n")?;
-        for s in &r.log.raw {
-            writeln!(
-                w,
-                "{},{},{},{},{}",
-                s.t_us as f64 / 1e6,
-                s.counts[0],
-                s.counts[1],
-                s.force_n[0],
-                s.force_n[1]
-            )?;
-        }
-        w.flush()
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    Ok(())
+    s
 }
 
 fn opt<T: ToString>(v: Option<T>) -> String {
     v.map_or(String::new(), |x| x.to_string())
 }
 
-pub(super) fn write_faults(path: &Path, r: &CampaignResult) -> anyhow::Result<()> {
-    let mut w = create(path)?;
+fn write_fault(w: &mut impl Write, f: &FaultSummary) -> std::io::Result<()> {
     writeln!(
         w,
-        "run,capstan_diameter_mm,wrap_deg,drive_v,repeat,injected,fault,at_s,detected_s,safe_after_ms,pairs_kept"
-    )?;
-    for f in &r.faults {
-        writeln!(
-            w,
-            "{},{},{},{},{},{},{},{},{},{},{}",
-            f.run,
-            f.cord.diameter_mm,
-            f.cord.wrap_deg,
-            f.cord.drive_v,
-            f.repeat,
-            opt(f.injected.map(|k| k.name())),
-            opt(f.fault.map(|k| k.name())),
-            f.at_s,
-            opt(f.detected_s),
-            opt(f.safe_after_ms),
-            f.pairs_kept
-        )?;
-    }
-    w.flush()?;
-    Ok(())
+        "{},{},{},{},{},{},{},{},{},{},{}",
+        f.run,
+        f.cord.diameter_mm,
+        f.cord.wrap_deg,
+        f.cord.drive_v,
+        f.repeat,
+        opt(f.injected.map(|k| k.name())),
+        opt(f.fault.map(|k| k.name())),
+        f.at_s,
+        opt(f.detected_s),
+        opt(f.safe_after_ms),
+        f.pairs_kept
+    )
 }
 
-pub(super) fn campaign_json(r: &CampaignResult) -> serde_json::Value {
-    let faults: Vec<_> = r
-        .faults
+/// A run that did not end, or an injection after its run had ended (it never happened: say
+/// so rather than list it).
+fn warn_about(r: &RunResult) {
+    if let Err(e) = r.end {
+        crate::errln!(
+            "warning: run {} ({} run {}) did not end: {e:?}",
+            r.index,
+            r.cord.label(),
+            r.run
+        );
+    }
+    for inj in r.injections.iter().filter(|i| i.at_us.is_none()) {
+        crate::errln!(
+            "warning: run {}: {}@{} s never took effect (the run ended {:.1} s after its trigger)",
+            r.index,
+            inj.injection.kind.name(),
+            inj.injection.after_trigger_us as f64 / 1e6,
+            r.log.end.map_or(f64::NAN, |e| e.t_us as f64 / 1e6)
+        );
+    }
+}
+
+/// `summary.json`, and what `--json` prints.
+pub(super) fn campaign_json(s: &CampaignStats, rows: usize, faults: &[FaultSummary]) -> Value {
+    let faults: Vec<_> = faults
         .iter()
         .map(|f| {
             json!({
@@ -96,33 +156,38 @@ pub(super) fn campaign_json(r: &CampaignResult) -> serde_json::Value {
         })
         .collect();
     json!({
-        "runs": r.runs.len(),
-        "pairs": r.rows.len(),
-        "simulated_s": r.simulated_s,
-        "wall_s": r.wall_s,
-        "realtime_factor": r.realtime_factor(),
+        "runs": s.done,
+        "planned_runs": s.planned,
+        "interrupted": s.interrupted,
+        "pairs": rows,
+        "simulated_s": s.simulated_s,
+        "wall_s": s.wall_s,
+        "realtime_factor": s.realtime_factor(),
+        "threads": s.threads,
         "faults": faults,
     })
 }
 
-pub(super) fn print_summary(out: &Path, r: &CampaignResult, raw: bool) {
-    println!(
+pub(super) fn print_summary(
+    out: &Path,
+    s: &CampaignStats,
+    rows: usize,
+    faults: &[FaultSummary],
+    raw: bool,
+) {
+    crate::outln!(
         "{} runs, {:.0} s of rig time simulated in {:.2} s on {} threads ({:.0}x real time)",
-        r.runs.len(),
-        r.simulated_s,
-        r.wall_s,
-        r.threads,
-        r.realtime_factor()
+        s.done,
+        s.simulated_s,
+        s.wall_s,
+        s.threads,
+        s.realtime_factor()
     );
-    println!(
-        "{} pairs -> {}",
-        r.rows.len(),
-        out.join("pairs.csv").display()
-    );
+    crate::outln!("{} pairs -> {}", rows, out.join("pairs.csv").display());
     if raw {
-        println!("raw logs -> {}", out.join("raw").display());
+        crate::outln!("raw logs -> {}", out.join("raw").display());
     }
-    for f in &r.faults {
+    for f in faults {
         let injected = f.injected.map_or("-".into(), |k| k.name().to_string());
         let seen = f
             .fault
@@ -130,7 +195,7 @@ pub(super) fn print_summary(out: &Path, r: &CampaignResult, raw: bool) {
         let safe = f
             .safe_after_ms
             .map_or("never".into(), |ms| format!("{ms} ms"));
-        println!(
+        crate::outln!(
             "run {} ({} run {}): injected {injected} at {} s, firmware: {seen}, safe after \
              {safe}, {} pairs kept",
             f.run,
@@ -140,7 +205,7 @@ pub(super) fn print_summary(out: &Path, r: &CampaignResult, raw: bool) {
             f.pairs_kept
         );
     }
-    if !r.faults.is_empty() {
-        println!("faults -> {}", out.join("faults.csv").display());
+    if !faults.is_empty() {
+        crate::outln!("faults -> {}", out.join("faults.csv").display());
     }
 }

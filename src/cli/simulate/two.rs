@@ -2,15 +2,14 @@
 //! writes `two_control.csv` (the drive and the true tensions over time), `crosstalk.csv` and
 //! each channel's `pairs_ch<k>.csv`.
 
-use super::output::create;
 use super::{model, plant, protocol, to_pairs, Args, Order};
-use crate::data::write_pairs;
-use anyhow::{bail, Context};
+use crate::data::write_pairs_to;
+use crate::outdir::Staged;
+use anyhow::bail;
 use host_sim::campaign::{CordKey, PairRow};
 use host_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
 use serde_json::json;
 use std::io::Write;
-use std::path::Path;
 
 pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     let (model, effects) = model(args)?;
@@ -23,7 +22,7 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
         ("--run-scatter", args.run_scatter.is_some()),
         ("--unmodelled", !args.unmodelled.is_empty()),
         ("--noise", args.noise != "quiet"),
-        ("--runs", args.runs != 6),
+        ("--runs", args.runs.is_some()),
     ] {
         if given {
             bail!("{flag} is for campaigns, not --two-control");
@@ -90,10 +89,10 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     };
     // The same ranges as a campaign's (diameter, wraps, drive voltage).
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut set = crate::cli::open_out(&args.out)?.stage()?;
     let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    write_two(&args.out, &cfg, &r)?;
+    write_two(&mut set, &cfg, &r)?;
+    set.commit()?;
     let pairs: usize = r.channels.iter().map(|c| c.log.pairs.len()).sum();
     let (t2_rel, rpm_rel) = r.worst_crosstalk();
     let faults: Vec<_> = r
@@ -111,7 +110,7 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
         })
         .collect();
     if args.json {
-        println!(
+        crate::outln!(
             "{}",
             json!({
                 "channels": n,
@@ -129,24 +128,24 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
             })
         );
     } else {
-        println!(
+        crate::outln!(
             "{n} channels on one {diameter} mm capstan at {drive_v} V: {:.0} s simulated in {:.3} s",
             r.simulated_s, r.wall_s
         );
-        println!(
+        crate::outln!(
             "drive: peak {:.2} A / {:.1} W (spin-up), mean {:.2} W while on",
             r.peak_current_a(),
             r.peak_power_w(),
             r.mean_power_w()
         );
-        println!(
+        crate::outln!(
             "cross-talk over {} steps: holding channel's T2 moved at most {:.3} %, capstan \
              speed at most {:.1} %",
             r.crosstalk.len(),
             t2_rel * 100.0,
             rpm_rel * 100.0
         );
-        println!(
+        crate::outln!(
             "-> {}, {}, pairs_ch1..{n}.csv",
             args.out.join("two_control.csv").display(),
             args.out.join("crosstalk.csv").display()
@@ -155,9 +154,9 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn write_two(out: &Path, cfg: &TwoControlConfig, r: &TwoControlResult) -> anyhow::Result<()> {
+fn write_two(set: &mut Staged, cfg: &TwoControlConfig, r: &TwoControlResult) -> anyhow::Result<()> {
     let n = cfg.channels.len();
-    let mut w = create(&out.join("two_control.csv"))?;
+    let mut w = set.create("two_control.csv")?;
     let mut header = String::from("t_s,drive_v,capstan_rpm,current_a,power_w,load_nm,transmission");
     for k in 1..=n {
         header += &format!(",ch{k}_angle_deg,ch{k}_t1_n,ch{k}_t2_n");
@@ -181,7 +180,7 @@ fn write_two(out: &Path, cfg: &TwoControlConfig, r: &TwoControlResult) -> anyhow
         writeln!(w)?;
     }
     w.flush()?;
-    let mut w = create(&out.join("crosstalk.csv"))?;
+    let mut w = set.create("crosstalk.csv")?;
     writeln!(
         w,
         "t_s,stepping_channel,from_deg,to_deg,stepping_d_t2_n,observer_channel,\
@@ -221,10 +220,9 @@ fn write_two(out: &Path, cfg: &TwoControlConfig, r: &TwoControlResult) -> anyhow
             .iter()
             .map(|p| PairRow::new(cord, 1, p))
             .collect();
-        write_pairs(
-            &out.join(format!("pairs_ch{}.csv", k + 1)),
-            &to_pairs(&rows),
-        )?;
+        let mut w = set.create(&format!("pairs_ch{}.csv", k + 1))?;
+        write_pairs_to(&mut w, &to_pairs(&rows))?;
+        w.flush()?;
     }
     Ok(())
 }

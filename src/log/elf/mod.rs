@@ -28,6 +28,7 @@ use defmt_parser::{Fragment, Parameter, ParserMode, Type};
 use object::{Object, ObjectSection, ObjectSymbol};
 use records::find_records;
 use std::collections::HashMap;
+use std::io::Read;
 use std::ops::Range;
 use std::panic::AssertUnwindSafe;
 use std::path::Path;
@@ -68,8 +69,19 @@ pub struct Firmware {
 impl Firmware {
     /// Read an ELF from a file.
     pub fn load(path: &Path) -> anyhow::Result<Firmware> {
-        let bytes = std::fs::read(path)
+        // Bounded: a firmware ELF with its debug info is a few MB; /dev/zero is not one.
+        const MAX_ELF_BYTES: u64 = 256 << 20;
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_ELF_BYTES + 1).read_to_end(&mut bytes))
             .with_context(|| format!("cannot read the firmware ELF {}", path.display()))?;
+        if bytes.len() as u64 > MAX_ELF_BYTES {
+            bail!(
+                "{} is over {} MiB: not a firmware ELF",
+                path.display(),
+                MAX_ELF_BYTES >> 20
+            );
+        }
         Firmware::from_elf_bytes(&bytes, &path.display().to_string())
     }
 

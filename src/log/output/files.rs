@@ -8,15 +8,19 @@ use super::{
     RAW_HEADER, STREAM_FILE, SUMMARY_JSON,
 };
 use crate::data::{Pair, PairsWriter};
+use crate::outdir::Staged;
 use anyhow::Context;
 use firmware::hal::Channel;
 use firmware::record::{Fault, RawSample};
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-/// The open files of one session.
+/// The open files of one session: an output set (`outdir`) whose files grow as the records
+/// arrive, flushed after every chunk, and replace the previous session's when it closes. If
+/// the process dies, the next run into the directory keeps them as `incomplete-*`.
 pub(super) struct Files {
+    set: Staged,
     dir: PathBuf,
     raw: BufWriter<File>,
     pairs: PairsWriter<BufWriter<File>>,
@@ -27,19 +31,17 @@ pub(super) struct Files {
     incomplete: Option<PairsWriter<BufWriter<File>>>,
 }
 
-fn create(dir: &Path, name: &str, header: Option<&str>) -> anyhow::Result<BufWriter<File>> {
-    let path = dir.join(name);
-    let file = File::create(&path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut w = BufWriter::new(file);
+fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<BufWriter<File>> {
+    let mut w = set.create(name)?;
     if let Some(h) = header {
-        writeln!(w, "{h}").with_context(|| format!("cannot write {}", path.display()))?;
+        writeln!(w, "{h}").with_context(|| format!("cannot write {name}"))?;
     }
     Ok(w)
 }
 
-fn create_pairs(dir: &Path, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
-    let w = create(dir, name, None)?;
-    PairsWriter::new(w).with_context(|| format!("cannot write {}", dir.join(name).display()))
+fn create_pairs(set: &mut Staged, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
+    let w = create(set, name, None)?;
+    PairsWriter::new(w).with_context(|| format!("cannot write {name}"))
 }
 
 /// f32 as written: the shortest decimal that reads back to the same f32.
@@ -82,31 +84,20 @@ impl Files {
                 );
             }
         }
-        if opts.overwrite {
-            // Files of the earlier session that this one may not write again.
-            let stale = [
-                Some(PAIRS_INCOMPLETE_CSV),
-                (!opts.save_stream).then_some(STREAM_FILE),
-            ];
-            for name in stale.into_iter().flatten() {
-                let path = dir.join(name);
-                if path.exists() {
-                    std::fs::remove_file(&path)
-                        .with_context(|| format!("cannot remove {}", path.display()))?;
-                }
-            }
-        }
+        let mut set = crate::cli::open_out(dir)?.stage()?;
+        set.keep_on_failure();
         Ok(Files {
-            raw: create(dir, RAW_CSV, Some(RAW_HEADER))?,
-            pairs: create_pairs(dir, PAIRS_CSV)?,
-            faults: create(dir, FAULTS_CSV, Some(FAULTS_HEADER))?,
-            messages: create(dir, MESSAGES_TXT, None)?,
+            raw: create(&mut set, RAW_CSV, Some(RAW_HEADER))?,
+            pairs: create_pairs(&mut set, PAIRS_CSV)?,
+            faults: create(&mut set, FAULTS_CSV, Some(FAULTS_HEADER))?,
+            messages: create(&mut set, MESSAGES_TXT, None)?,
             stream: if opts.save_stream {
-                Some(create(dir, STREAM_FILE, None)?)
+                Some(create(&mut set, STREAM_FILE, None)?)
             } else {
                 None
             },
             incomplete: None,
+            set,
             dir: dir.clone(),
         })
     }
@@ -165,7 +156,7 @@ impl Files {
         if self.incomplete.is_some() {
             return Ok(false);
         }
-        self.incomplete = Some(create_pairs(&self.dir, PAIRS_INCOMPLETE_CSV)?);
+        self.incomplete = Some(create_pairs(&mut self.set, PAIRS_INCOMPLETE_CSV)?);
         Ok(true)
     }
 
@@ -191,5 +182,20 @@ impl Files {
             w.flush().with_context(|| at(PAIRS_INCOMPLETE_CSV))?;
         }
         Ok(())
+    }
+
+    /// Close the session: flush, add `summary.json`, and replace the previous session's files.
+    pub fn close(mut self, summary_json: &str) -> anyhow::Result<()> {
+        self.flush()?;
+        drop((
+            self.raw,
+            self.pairs,
+            self.faults,
+            self.messages,
+            self.stream,
+            self.incomplete,
+        ));
+        self.set.write(SUMMARY_JSON, summary_json.as_bytes())?;
+        self.set.commit()
     }
 }

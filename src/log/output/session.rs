@@ -4,13 +4,12 @@
 
 use super::files::{decimal, Files};
 use super::summary::{RecordCounts, RunSummary, Sourced, Summary, TruncatedTail};
-use super::{LogOptions, Stop, PAIRS_INCOMPLETE_CSV, SUMMARY_JSON};
+use super::{LogOptions, Stop, PAIRS_INCOMPLETE_CSV};
 use crate::data::Pair;
 use crate::log::decoder::{BadFrame, Decoder, Located};
 use crate::log::elf::Firmware;
 use crate::log::frame::Event;
 use crate::log::seq::SeqEvent;
-use anyhow::Context;
 use firmware::record::{Fault, RawSample, Record, RunEnd, RunStart, StepPair};
 
 /// The run the records belong to: its entry in the summary's runs, and the set-up values its
@@ -81,9 +80,11 @@ impl<'f> Logger<'f> {
         self.decoder.push(bytes, &mut events, &mut bad);
         for b in bad.drain(..) {
             if self.opts.progress {
-                eprintln!(
+                crate::errln!(
                     "capstan log: bad frame {} at byte {}: {}",
-                    b.frame, b.byte_offset, b.reason
+                    b.frame,
+                    b.byte_offset,
+                    b.reason
                 );
             }
         }
@@ -123,15 +124,18 @@ impl<'f> Logger<'f> {
 
     fn handle(&mut self, located: Located) -> anyhow::Result<()> {
         match &located.seq {
-            Some(SeqEvent::Gap(g)) if self.opts.progress => eprintln!(
+            Some(SeqEvent::Gap(g)) if self.opts.progress => crate::errln!(
                 "capstan log: LOST {} record(s) after seq {} (byte {})",
-                g.missing, g.after_seq, g.byte_offset
+                g.missing,
+                g.after_seq,
+                g.byte_offset
             ),
             Some(SeqEvent::Restart(r)) => {
                 if self.opts.progress {
-                    eprintln!(
+                    crate::errln!(
                         "capstan log: the board restarted after seq {} (byte {})",
-                        r.after_seq, r.byte_offset
+                        r.after_seq,
+                        r.byte_offset
                     );
                 }
                 self.current = None;
@@ -190,7 +194,7 @@ impl<'f> Logger<'f> {
         .collect();
         self.runs.push(summary);
         if self.opts.progress {
-            eprintln!(
+            crate::errln!(
                 "capstan log: run {} started (seq {seq}): {} levels, {} ms each",
                 s.run,
                 p.levels(),
@@ -198,7 +202,7 @@ impl<'f> Logger<'f> {
             );
             if !missing.is_empty() {
                 // Said at once: the operator can still stop and restart with the flags.
-                eprintln!(
+                crate::errln!(
                     "capstan log: WARNING: run {}'s run_start record does not give {} and no \
                      flag does: its pairs go to {PAIRS_INCOMPLETE_CSV}",
                     s.run,
@@ -246,7 +250,7 @@ impl<'f> Logger<'f> {
             self.pairs_incomplete += 1;
             let run_unknown = rs.run.is_none();
             if self.files.open_incomplete()? && progress && run_unknown {
-                eprintln!(
+                crate::errln!(
                     "capstan log: WARNING: pairs without their run's run_start record (lost, \
                      or logging began mid-run): their run is unknown; they go to \
                      {PAIRS_INCOMPLETE_CSV}"
@@ -255,7 +259,7 @@ impl<'f> Logger<'f> {
             self.files.incomplete_pair(&pair)?;
         }
         if progress {
-            eprintln!(
+            crate::errln!(
                 "capstan log: run {} step {}: T1 {} N, T2 {} N ({} samples)",
                 or_unknown(&run),
                 p.step,
@@ -273,7 +277,7 @@ impl<'f> Logger<'f> {
         self.runs[c.index].faults += 1;
         self.files.fault(&run, seq, flt)?;
         if self.opts.progress {
-            eprintln!(
+            crate::errln!(
                 "capstan log: FAULT {} at {} s (run {})",
                 flt.kind.name(),
                 flt.t_us as f64 / 1e6,
@@ -293,7 +297,7 @@ impl<'f> Logger<'f> {
         rs.ended_by_fault = e.fault.map(|k| k.name());
         rs.end_time_s = Some(e.t_us as f64 / 1e6);
         if self.opts.progress {
-            eprintln!(
+            crate::errln!(
                 "capstan log: run {} ended at {} s: {} pairs{}",
                 rs.run.map_or("?".to_string(), |r| r.to_string()),
                 e.t_us as f64 / 1e6,
@@ -325,14 +329,16 @@ impl<'f> Logger<'f> {
             backwards: d.seq.backwards.clone(),
             bad_frames: d.bad_frames,
             bad_frame_examples: d.bad_examples.clone(),
-            truncated_tail: tail.map(|(byte_offset, bytes)| TruncatedTail { byte_offset, bytes }),
+            // A frame cut by the end of the stream (or a lost probe) is damage; one cut where we
+            // chose to stop reading (a limit, Ctrl-C) is not.
+            truncated_tail: tail
+                .filter(|_| !matches!(stop, Stop::Interrupted | Stop::Limit(_)))
+                .map(|(byte_offset, bytes)| TruncatedTail { byte_offset, bytes }),
             runs: self.runs.clone(),
             pairs_incomplete: self.pairs_incomplete,
         };
-        let path = self.opts.out_dir.join(SUMMARY_JSON);
         let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-        std::fs::write(&path, json + "\n")
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        self.files.close(&(json + "\n"))?;
         Ok(summary)
     }
 }

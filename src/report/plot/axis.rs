@@ -24,6 +24,12 @@ pub(super) fn tick_label(v: f64, step: f64) -> String {
 
 /// plotters' tick positions in [lo, hi] (at most `n`), labelled.
 pub(super) fn auto_ticks(lo: f64, hi: f64, n: usize) -> Vec<(f64, String)> {
+    // plotters' key points never finish on a range that overflows (1e154..1e308): no ticks
+    // rather than a hang on such a range.
+    let span = hi - lo;
+    if !(span.is_finite() && span > 0.0 && span > 1e-12 * hi.abs().max(lo.abs())) {
+        return Vec::new();
+    }
     let keys = RangedCoordf64::from(lo..hi).key_points(n);
     let step = match keys.as_slice() {
         [a, b, ..] => b - a,

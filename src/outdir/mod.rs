@@ -1,0 +1,164 @@
+//! Output directories that never hold half a result: every command writes its files into a
+//! staging directory inside the target and moves them into place only when the set is
+//! complete, so the previous results survive any failure (a full disk, a signal, a crash).
+//!
+//! * [`OutputDir::open`] creates the directory, takes its lock (a second `capstan` writing into
+//!   the same directory is refused, naming the process that holds it), finishes a commit that an
+//!   earlier process was interrupted in, keeps an abandoned staging directory's work under a
+//!   visible name, and proves the directory writable before any work is done;
+//! * [`Staged`] (`staged`) is one output set being written; [`Staged::commit`] replaces the
+//!   previous set.
+//!
+//! Commit protocol (a small write-ahead journal, `commit`): the complete set, with a manifest
+//! naming its files, is renamed to `.capstan-commit` (one atomic rename: from here on the new
+//! set is the truth); then each file is renamed over its old version, the previous set's files
+//! that the new one lacks are removed (only files the previous manifest names: files we
+//! wrote), and the manifest is moved to `.capstan-manifest.json` last. Any interruption before
+//! the first rename leaves the old set; any after it is rolled forward by the next `open`.
+//! Renames replace a symbolic link at the target name; they never write through it, and a
+//! symbolic link where a sub-directory of ours should be is refused.
+//!
+//! Why by hand: the crates for atomic files (`tempfile`'s `persist`, `atomicwrites`) replace
+//! one file; the requirement here is a set of files (a report and its metrics, a campaign's
+//! pairs and raw logs) replaced together, and a lock that outlives no process (`File::lock`
+//! from std, released by the kernel when its holder dies).
+
+mod commit;
+mod staged;
+
+pub use staged::Staged;
+
+#[cfg(test)]
+mod tests;
+
+use anyhow::Context;
+use std::fs::{File, OpenOptions};
+use std::io::{Read, Seek, Write};
+use std::path::{Path, PathBuf};
+
+/// The lock file's name.
+pub const LOCK: &str = ".capstan.lock";
+/// The manifest of the current set.
+pub const MANIFEST: &str = ".capstan-manifest.json";
+/// The set being committed (the journal).
+pub const COMMIT: &str = ".capstan-commit";
+/// Prefix of staging directories.
+pub const STAGING_PREFIX: &str = ".capstan-staging-";
+/// Prefix under which an abandoned staging directory's work is kept.
+pub const INCOMPLETE_PREFIX: &str = "incomplete-";
+
+/// An output directory, locked for this process.
+#[derive(Debug)]
+pub struct OutputDir {
+    dir: PathBuf,
+    _lock: File,
+    /// What `open` found and did (an interrupted commit finished, an abandoned set kept).
+    pub recovered: Vec<String>,
+}
+
+impl OutputDir {
+    /// Create `dir` if needed, lock it, recover what an earlier process left, and check that
+    /// it can be written to.
+    pub fn open(dir: &Path) -> anyhow::Result<OutputDir> {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+        let lock = take_lock(dir)?;
+        let mut out = OutputDir {
+            dir: dir.to_path_buf(),
+            _lock: lock,
+            recovered: Vec::new(),
+        };
+        if dir.join(COMMIT).exists() {
+            commit::roll_forward(dir, &mut commit::NoCrash)
+                .with_context(|| format!("finishing an interrupted commit in {}", dir.display()))?;
+            out.recovered.push(format!(
+                "finished replacing the results in {} that an earlier run was interrupted in",
+                dir.display()
+            ));
+        }
+        out.keep_abandoned()?;
+        Ok(out)
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Start a new output set (a staging directory, created now: an unwritable directory
+    /// fails here, before any work). The set keeps the lock until it is committed or dropped.
+    pub fn stage(self) -> anyhow::Result<Staged> {
+        Staged::new(self)
+    }
+
+    /// Staging directories of processes that died (we hold the lock, so none is live): keep
+    /// any work in them under a visible name, remove empty ones.
+    fn keep_abandoned(&mut self) -> anyhow::Result<()> {
+        let entries = std::fs::read_dir(&self.dir)
+            .with_context(|| format!("cannot read {}", self.dir.display()))?;
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let Some(id) = name.strip_prefix(STAGING_PREFIX) else {
+                continue;
+            };
+            let path = e.path();
+            if is_empty_tree(&path) {
+                let _ = std::fs::remove_dir_all(&path);
+                continue;
+            }
+            let kept = self.dir.join(format!("{INCOMPLETE_PREFIX}{id}"));
+            std::fs::rename(&path, &kept)
+                .with_context(|| format!("cannot keep {}", path.display()))?;
+            self.recovered.push(format!(
+                "an earlier run into {} stopped without finishing (killed?): its completed work \
+                 is kept in {}",
+                self.dir.display(),
+                kept.display()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Lock `dir` for this process, or say who holds it.
+fn take_lock(dir: &Path) -> anyhow::Result<File> {
+    let path = dir.join(LOCK);
+    let mut f = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .with_context(|| format!("cannot write to the output directory {}", dir.display()))?;
+    match f.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut holder = String::new();
+            let _ = f.read_to_string(&mut holder);
+            anyhow::bail!(
+                "{} is in use by another capstan process ({}): wait for it, or choose another \
+                 output directory",
+                dir.display(),
+                holder.trim()
+            );
+        }
+        Err(std::fs::TryLockError::Error(e)) => {
+            return Err(e).with_context(|| format!("cannot lock {}", path.display()));
+        }
+    }
+    f.set_len(0)?;
+    f.rewind()?;
+    let args: Vec<String> = std::env::args().collect();
+    write!(f, "pid {}: {}", std::process::id(), args.join(" "))?;
+    Ok(f)
+}
+
+/// A directory tree without a single file.
+fn is_empty_tree(path: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(path) else {
+        return true;
+    };
+    entries
+        .flatten()
+        .all(|e| e.file_type().is_ok_and(|t| t.is_dir()) && is_empty_tree(&e.path()))
+}

@@ -1,0 +1,131 @@
+//! One output set being written: files go into a staging directory inside the output
+//! directory; [`Staged::commit`] replaces the previous set with them, dropping without a
+//! commit discards them (or, for a logged session, keeps them under a visible name).
+
+use super::{commit, OutputDir, INCOMPLETE_PREFIX, STAGING_PREFIX};
+use anyhow::Context;
+use std::collections::BTreeSet;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// An output set being written.
+#[derive(Debug)]
+pub struct Staged {
+    out: OutputDir,
+    path: PathBuf,
+    id: String,
+    files: BTreeSet<String>,
+    done: bool,
+    keep_on_failure: bool,
+}
+
+impl Staged {
+    pub(super) fn new(out: OutputDir) -> anyhow::Result<Staged> {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        let id = format!("{}-{nanos}", std::process::id());
+        let path = out.path().join(format!("{STAGING_PREFIX}{id}"));
+        std::fs::create_dir(&path).with_context(|| {
+            format!(
+                "cannot write to the output directory {}",
+                out.path().display()
+            )
+        })?;
+        Ok(Staged {
+            out,
+            path,
+            id,
+            files: BTreeSet::new(),
+            done: false,
+            keep_on_failure: false,
+        })
+    }
+
+    /// If this set is dropped without a commit (an error), keep what was written under
+    /// `DIR/incomplete-<id>` instead of discarding it (a logged session is data that cannot
+    /// be made again).
+    pub fn keep_on_failure(&mut self) {
+        self.keep_on_failure = true;
+    }
+
+    /// The staging path of `rel` (a relative name such as `raw/d12.7_run1.csv`), registered as
+    /// part of the set; its parent directories are created.
+    pub fn path_of(&mut self, rel: &str) -> anyhow::Result<PathBuf> {
+        commit::check_name(rel)?;
+        let p = self.path.join(rel);
+        if let Some(parent) = p.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("cannot create {}", parent.display()))?;
+        }
+        self.files.insert(rel.to_string());
+        Ok(p)
+    }
+
+    /// Create `rel` in the set, buffered.
+    pub fn create(&mut self, rel: &str) -> anyhow::Result<BufWriter<File>> {
+        let p = self.path_of(rel)?;
+        let f = File::create(&p).with_context(|| format!("cannot write {}", p.display()))?;
+        Ok(BufWriter::new(f))
+    }
+
+    /// Write `rel` whole.
+    pub fn write(&mut self, rel: &str, bytes: &[u8]) -> anyhow::Result<()> {
+        let p = self.path_of(rel)?;
+        let mut f = File::create(&p).with_context(|| format!("cannot write {}", p.display()))?;
+        f.write_all(bytes)
+            .and_then(|()| f.sync_all())
+            .with_context(|| format!("cannot write {}", p.display()))
+    }
+
+    /// Whether `rel` is in the set.
+    pub fn contains(&self, rel: &str) -> bool {
+        self.files.contains(rel)
+    }
+
+    /// Where the final files will be: the output directory.
+    pub fn target(&self) -> &Path {
+        self.out.path()
+    }
+
+    /// Replace the previous set with this one (see the module's commit protocol).
+    pub fn commit(mut self) -> anyhow::Result<()> {
+        self.commit_with(&mut commit::NoCrash)
+    }
+
+    pub(super) fn commit_with(&mut self, crash: &mut dyn commit::Crash) -> anyhow::Result<()> {
+        let files: Vec<String> = self.files.iter().cloned().collect();
+        let r = commit::publish(&self.path, self.out.path(), &files, crash);
+        // Past the journal's rename the staging directory is gone: nothing to clean up.
+        if r.is_ok() || !self.path.exists() {
+            self.done = true;
+        }
+        r.with_context(|| format!("replacing the results in {}", self.out.path().display()))
+    }
+
+    /// Forget this set without touching the disk (tests: a process that died here).
+    #[cfg(test)]
+    pub(super) fn abandon(mut self) {
+        self.done = true;
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if self.done {
+            return;
+        }
+        if self.keep_on_failure {
+            let kept = self
+                .out
+                .path()
+                .join(format!("{INCOMPLETE_PREFIX}{}", self.id));
+            if std::fs::rename(&self.path, &kept).is_ok() {
+                crate::errln!("the work done so far is kept in {}", kept.display());
+            }
+        } else {
+            let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
+}

@@ -1,0 +1,370 @@
+//! Nothing lost, nothing hung: each failure of the "nothing lost" issue kept as a test, run on
+//! the binary a user runs.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_capstan"))
+}
+
+fn capstan(args: &[&str]) -> Output {
+    bin().args(args).output().expect("capstan runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("capstan-lost-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn write(dir: &Path, name: &str, body: &str) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, body).unwrap();
+    p
+}
+
+/// A short campaign: 3 s steps, one cord.
+const SHORT: [&str; 10] = [
+    "--dwell-ms",
+    "3000",
+    "--window-after-ms",
+    "1000",
+    "--window-before-ms",
+    "500",
+    "--diameters",
+    "12.7",
+    "--wraps",
+    "360",
+];
+
+fn wait_with_deadline(child: &mut Child, secs: u64) -> std::process::ExitStatus {
+    let deadline = Instant::now() + Duration::from_secs(secs);
+    loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            return st;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("capstan did not end within {secs} s");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_quietly_with_status_141() {
+    use std::os::unix::process::ExitStatusExt;
+    // The reader is gone before diagnose prints: `capstan diagnose --json | head -c0`.
+    let mut child = bin()
+        .args(["diagnose", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let st = wait_with_deadline(&mut child, 300);
+    assert_eq!(st.code(), Some(141), "{st:?} {err}");
+    assert!(st.signal().is_none());
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[cfg(unix)]
+#[test]
+fn a_closed_stderr_still_leaves_the_logged_session() {
+    let dir = tmp("log-pipe");
+    let mut child = bin()
+        .args([
+            "log",
+            "--elf",
+            "tests/data/qemu-fw.elf",
+            "--from",
+            "tests/data/qemu-run.defmt",
+            "--out",
+            s(&dir),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stderr.take());
+    let st = wait_with_deadline(&mut child, 60);
+    assert_eq!(st.code(), Some(141), "{st:?}");
+    let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    assert!(summary.contains("\"runs\""), "{summary}");
+}
+
+#[test]
+fn an_unwritable_output_fails_before_the_analysis() {
+    let dir = tmp("unwritable");
+    let file = write(&dir, "a-file", "not a directory");
+    let o = capstan(&["analyze", "--out", s(&file.join("report"))]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("cannot create the output directory"), "{err}");
+    assert!(!err.contains("analysing"), "the analysis ran first: {err}");
+}
+
+#[test]
+fn values_no_sensor_produces_and_data_without_friction_are_refused() {
+    let dir = tmp("values");
+    let cases = [
+        (
+            "huge.csv",
+            "wrap_deg,t1_n,t2_n\n360,1,2\n360,1e154,2\n",
+            "huge.csv:3:2: column `t1_n`: is beyond any force sensor",
+        ),
+        (
+            "time.csv",
+            "wrap_deg,t1_n,t2_n,time_s\n360,1,2,1e300\n",
+            "time.csv:2:4: column `time_s`: must be within",
+        ),
+        (
+            "same.csv",
+            "wrap_deg,t1_n,t2_n\n360,1,1\n360,2,2\n360,3,3\n",
+            "T2 is at most T1 in all 3 rows",
+        ),
+        ("empty.csv", "", "empty.csv: the file is empty"),
+        (
+            "semicolon.csv",
+            "wrap_deg;t1_n;t2_n\n360;1;2\n",
+            "looks separated by `;`",
+        ),
+        (
+            "tabs.csv",
+            "wrap_deg\tt1_n\tt2_n\n360\t1\t2\n",
+            "looks separated by tabs",
+        ),
+    ];
+    for (name, body, want) in cases {
+        let p = write(&dir, name, body);
+        for cmd in ["diagnose", "analyze"] {
+            let out = dir.join(format!("out-{name}"));
+            let o =
+                capstan(&[cmd, s(&p), "--out", s(&out)][..if cmd == "diagnose" { 2 } else { 4 }]);
+            assert!(!o.status.success(), "{cmd} {name}");
+            assert!(stderr(&o).contains(want), "{cmd} {name}: {}", stderr(&o));
+            assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+        }
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn an_endless_input_is_refused_in_bounded_memory() {
+    let o = capstan(&["diagnose", "/dev/zero"]);
+    assert!(stderr(&o).contains("a line longer than"), "{}", stderr(&o));
+    let o = capstan(&[
+        "log",
+        "--elf",
+        "/dev/zero",
+        "--from",
+        "tests/data/qemu-run.defmt",
+        "--out",
+        s(&tmp("zero-elf")),
+    ]);
+    assert!(stderr(&o).contains("not a firmware ELF"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_thousand_thousand_column_header_is_checked_in_linear_time() {
+    let dir = tmp("wide");
+    let mut header: Vec<String> = (0..100_000).map(|i| format!("c{i}")).collect();
+    header.push("c5".into());
+    let p = write(
+        &dir,
+        "wide.csv",
+        &format!("wrap_deg,t1_n,t2_n,{}\n", header.join(",")),
+    );
+    let o = capstan(&["diagnose", s(&p)]);
+    assert!(
+        stderr(&o).contains("column `c5` appears twice"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn contradictory_flags_are_refused() {
+    let o = capstan(&[
+        "simulate",
+        "--out",
+        s(&tmp("flags")),
+        "--two-control",
+        "--runs",
+        "6",
+    ]);
+    assert!(
+        stderr(&o).contains("--runs is for campaigns"),
+        "{}",
+        stderr(&o)
+    );
+    let o = capstan(&["diagnose", "--within-threshold", "nan"]);
+    assert!(
+        stderr(&o).contains("--within-threshold NaN"),
+        "{}",
+        stderr(&o)
+    );
+    let o = capstan(&[
+        "simulate",
+        "--out",
+        s(&tmp("flags2")),
+        "--effect",
+        "t2_offset=0.1",
+        "--effect",
+        "t2_offset=0.2",
+    ]);
+    assert!(stderr(&o).contains("is given twice"), "{}", stderr(&o));
+}
+
+#[cfg(unix)]
+#[test]
+fn a_stopped_campaign_keeps_every_finished_run_and_a_second_writer_is_refused() {
+    let dir = tmp("stop");
+    // The user's own file that looks like one of ours: never deleted.
+    write(&dir.join("raw"), "d12.7_w360_v10_run0.csv", "mine");
+    // A first, complete campaign.
+    let mut args = vec!["simulate", "--out", s(&dir), "--runs", "2"];
+    args.extend(SHORT);
+    assert!(capstan(&args).status.success());
+    // A long one, stopped by SIGTERM while it runs.
+    let mut args = vec![
+        "simulate",
+        "--out",
+        s(&dir),
+        "--runs",
+        "100000",
+        "--threads",
+        "1",
+    ];
+    args.extend(SHORT);
+    let mut child = bin()
+        .args(&args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let second = capstan(&args);
+    assert!(
+        stderr(&second).contains("in use by another capstan process"),
+        "{}",
+        stderr(&second)
+    );
+    let kill = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let st = wait_with_deadline(&mut child, 60);
+    assert_eq!(st.code(), Some(130), "{st:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["interrupted"], true);
+    let runs = summary["runs"].as_u64().unwrap();
+    assert!((1..100_000).contains(&runs), "{summary}");
+    // Every finished run is on disk, whole: its raw log, and its pairs (3 s steps: 12 each).
+    let raw: Vec<String> = std::fs::read_dir(dir.join("raw"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(raw.len() as u64, runs + 1, "{raw:?}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("raw/d12.7_w360_v10_run0.csv")).unwrap(),
+        "mine"
+    );
+    let pairs = std::fs::read_to_string(dir.join("pairs.csv")).unwrap();
+    assert_eq!(
+        pairs.lines().count() as u64 - 1,
+        summary["pairs"].as_u64().unwrap()
+    );
+    assert_eq!(summary["pairs"].as_u64().unwrap(), 12 * runs);
+    // No staging directory is left behind.
+    let hidden: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("staging") || n.starts_with("incomplete"))
+        .collect();
+    assert!(hidden.is_empty(), "{hidden:?}");
+}
+
+#[test]
+fn a_long_stream_stops_at_its_run_limit_with_no_false_truncation() {
+    // The saved QEMU stream forty times over: 187 kB, frames across every 64 KiB read.
+    let one = std::fs::read("tests/data/qemu-run.defmt").unwrap();
+    let dir = tmp("rep");
+    let rep = write(&dir, "rep.defmt", "");
+    std::fs::write(&rep, one.repeat(40)).unwrap();
+    let out = dir.join("out");
+    let o = capstan(&[
+        "log",
+        "--elf",
+        "tests/data/qemu-fw.elf",
+        "--from",
+        s(&rep),
+        "--out",
+        s(&out),
+        "--runs",
+        "3",
+        "--strict",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["runs"].as_array().unwrap().len(), 3, "{summary}");
+    assert!(summary["truncated_tail"].is_null(), "{summary}");
+    // The whole stream, strictly: 80 runs, every frame whole.
+    let o = capstan(&[
+        "log",
+        "--elf",
+        "tests/data/qemu-fw.elf",
+        "--from",
+        s(&rep),
+        "--out",
+        s(&out),
+        "--overwrite",
+        "--strict",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("80 run(s) (80 complete)"),
+        "{}",
+        stderr(&o)
+    );
+    // Empty: refused under --strict.
+    let empty = write(&dir, "empty.defmt", "");
+    let o = capstan(&[
+        "log",
+        "--elf",
+        "tests/data/qemu-fw.elf",
+        "--from",
+        s(&empty),
+        "--out",
+        s(&dir.join("out-empty")),
+        "--strict",
+    ]);
+    assert!(stderr(&o).contains("the stream is empty"), "{}", stderr(&o));
+}
