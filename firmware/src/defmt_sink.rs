@@ -2,7 +2,7 @@
 //! string (`capstan log` on the host matches on the leading word and reads the typed
 //! arguments in order). Changing a format string here means changing the decoder too.
 
-use crate::record::{LogSink, Record, NONE_CODE};
+use crate::record::{record_crc, LogSink, Record, NONE_CODE};
 
 /// Sends records as defmt frames on whatever global logger the binary links (RTT on the
 /// Pico, semihosting on QEMU).
@@ -10,12 +10,14 @@ pub struct DefmtSink;
 
 impl LogSink for DefmtSink {
     fn emit(&mut self, seq: u32, record: &Record) {
+        // Each record ends with the CRC-32 of its fields, in the order written here.
+        let crc = record_crc(seq, record);
         match record {
             Record::RunStart(s) => {
                 let p = &s.protocol;
                 let c = &s.calibration;
                 defmt::info!(
-                    "run_start seq={=u32} run={=u32} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32} pre_trigger_ms={=u32} trigger_ms={=u32} tare_ms={=u32} amp_control_v={=f32} sample_hz={=u32} raw_log_hz={=u32} window_after_ms={=u32} window_before_ms={=u32} diameter_mm={=f32} wrap_deg={=f32} amp_gain={=f32} t1_zero={=f32} t1_n_per_count={=f32} t2_zero={=f32} t2_n_per_count={=f32}",
+                    "run_start seq={=u32} run={=u32} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32} pre_trigger_ms={=u32} trigger_ms={=u32} tare_ms={=u32} amp_control_v={=f32} sample_hz={=u32} raw_log_hz={=u32} window_after_ms={=u32} window_before_ms={=u32} diameter_mm={=f32} wrap_deg={=f32} amp_gain={=f32} t1_zero={=f32} t1_n_per_count={=f32} t2_zero={=f32} t2_n_per_count={=f32} crc={=u32}",
                     seq,
                     s.run,
                     p.order.code(),
@@ -37,20 +39,22 @@ impl LogSink for DefmtSink {
                     c.t1.zero_counts,
                     c.t1.n_per_count,
                     c.t2.zero_counts,
-                    c.t2.n_per_count
+                    c.t2.n_per_count,
+                    crc
                 );
             }
             Record::Raw(r) => defmt::info!(
-                "raw seq={=u32} t_us={=i64} c1={=u16} c2={=u16} t1_n={=f32} t2_n={=f32}",
+                "raw seq={=u32} t_us={=i64} c1={=u16} c2={=u16} t1_n={=f32} t2_n={=f32} crc={=u32}",
                 seq,
                 r.t_us,
                 r.counts[0],
                 r.counts[1],
                 r.force_n[0],
-                r.force_n[1]
+                r.force_n[1],
+                crc
             ),
             Record::Pair(p) => defmt::info!(
-                "pair seq={=u32} step={=u32} level={=u32} angle_deg={=f32} t_mid_ms={=u32} t1_mean_n={=f32} t1_std_n={=f32} t1_count={=u32} t2_mean_n={=f32} t2_std_n={=f32} t2_count={=u32}",
+                "pair seq={=u32} step={=u32} level={=u32} angle_deg={=f32} t_mid_ms={=u32} t1_mean_n={=f32} t1_std_n={=f32} t1_count={=u32} t2_mean_n={=f32} t2_std_n={=f32} t2_count={=u32} crc={=u32}",
                 seq,
                 p.step,
                 p.level,
@@ -61,22 +65,25 @@ impl LogSink for DefmtSink {
                 p.t1.count,
                 p.t2.mean_n,
                 p.t2.std_n,
-                p.t2.count
+                p.t2.count,
+                crc
             ),
             Record::Fault(f) => defmt::warn!(
-                "fault seq={=u32} kind={=u8} channel={=u8} value={=f32} t_us={=i64}",
+                "fault seq={=u32} kind={=u8} channel={=u8} value={=f32} t_us={=i64} crc={=u32}",
                 seq,
                 f.kind.code(),
                 f.channel.map_or(NONE_CODE, |c| c as u8),
                 f.value,
-                f.t_us
+                f.t_us,
+                crc
             ),
             Record::RunEnd(e) => defmt::info!(
-                "run_end seq={=u32} t_us={=i64} pairs={=u32} fault={=u8}",
+                "run_end seq={=u32} t_us={=i64} pairs={=u32} fault={=u8} crc={=u32}",
                 seq,
                 e.t_us,
                 e.pairs,
-                e.fault.map_or(NONE_CODE, |k| k.code())
+                e.fault.map_or(NONE_CODE, |k| k.code()),
+                crc
             ),
         }
     }

@@ -173,3 +173,117 @@ impl Sequencer {
         seq
     }
 }
+
+/// The CRC of every log record: CRC-32/ISO-HDLC (the Ethernet and zip CRC).
+const RECORD_CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// The bytes a record's checksum covers, fed one field at a time in the order of the record's
+/// format string (`defmt_sink.rs`), each little-endian at its wire width; a NaN always as the
+/// canonical NaN (the host reads NaN back from its text, without its payload).
+pub struct CrcFields(crc::Digest<'static, u32>);
+
+impl CrcFields {
+    /// An empty checksum.
+    pub fn new() -> Self {
+        CrcFields(RECORD_CRC.digest())
+    }
+    /// A `u8` field.
+    pub fn u8(mut self, v: u8) -> Self {
+        self.0.update(&[v]);
+        self
+    }
+    /// A `u16` field.
+    pub fn u16(mut self, v: u16) -> Self {
+        self.0.update(&v.to_le_bytes());
+        self
+    }
+    /// A `u32` field.
+    pub fn u32(mut self, v: u32) -> Self {
+        self.0.update(&v.to_le_bytes());
+        self
+    }
+    /// An `i64` field.
+    pub fn i64(mut self, v: i64) -> Self {
+        self.0.update(&v.to_le_bytes());
+        self
+    }
+    /// An `f32` field.
+    pub fn f32(mut self, v: f32) -> Self {
+        let bits = if v.is_nan() {
+            f32::NAN.to_bits()
+        } else {
+            v.to_bits()
+        };
+        self.0.update(&bits.to_le_bytes());
+        self
+    }
+    /// The checksum.
+    pub fn finish(self) -> u32 {
+        self.0.finalize()
+    }
+}
+
+impl Default for CrcFields {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The checksum a record is logged with (`crc=` in its format string): over its sequence
+/// number and every field, in the format string's order.
+pub fn record_crc(seq: u32, record: &Record) -> u32 {
+    let c = CrcFields::new().u32(seq);
+    match record {
+        Record::RunStart(s) => {
+            let (p, k) = (&s.protocol, &s.calibration);
+            c.u32(s.run)
+                .u8(p.order.code())
+                .f32(p.rest_deg)
+                .f32(p.step_deg)
+                .f32(p.final_deg)
+                .u32(p.dwell_ms)
+                .u32(p.pre_trigger_ms)
+                .u32(p.trigger_ms)
+                .u32(p.tare_ms)
+                .f32(p.amp_control_v)
+                .u32(p.sample_hz)
+                .u32(p.raw_log_hz)
+                .u32(p.window_after_change_ms)
+                .u32(p.window_before_next_ms)
+                .f32(p.capstan_diameter_mm)
+                .f32(p.wrap_deg)
+                .f32(k.amp.amp_gain)
+                .f32(k.t1.zero_counts)
+                .f32(k.t1.n_per_count)
+                .f32(k.t2.zero_counts)
+                .f32(k.t2.n_per_count)
+        }
+        Record::Raw(r) => c
+            .i64(r.t_us)
+            .u16(r.counts[0])
+            .u16(r.counts[1])
+            .f32(r.force_n[0])
+            .f32(r.force_n[1]),
+        Record::Pair(p) => c
+            .u32(p.step)
+            .u32(p.level)
+            .f32(p.angle_deg)
+            .u32(p.t_mid_ms)
+            .f32(p.t1.mean_n)
+            .f32(p.t1.std_n)
+            .u32(p.t1.count)
+            .f32(p.t2.mean_n)
+            .f32(p.t2.std_n)
+            .u32(p.t2.count),
+        Record::Fault(f) => c
+            .u8(f.kind.code())
+            .u8(f.channel.map_or(NONE_CODE, |ch| ch as u8))
+            .f32(f.value)
+            .i64(f.t_us),
+        Record::RunEnd(e) => c
+            .i64(e.t_us)
+            .u32(e.pairs)
+            .u8(e.fault.map_or(NONE_CODE, |k| k.code())),
+    }
+    .finish()
+}

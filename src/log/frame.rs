@@ -8,7 +8,9 @@ use defmt_parser::Fragment;
 use firmware::calib::{AmpMap, Calibration, ChannelCal};
 use firmware::condition::ChannelStats;
 use firmware::hal::Channel;
-use firmware::record::{Fault, FaultKind, RawSample, Record, RunEnd, RunStart, StepPair};
+use firmware::record::{
+    CrcFields, Fault, FaultKind, RawSample, Record, RunEnd, RunStart, StepPair,
+};
 use firmware::{Protocol, StepOrder};
 use std::panic::AssertUnwindSafe;
 
@@ -126,8 +128,44 @@ fn record_from_values(layout: &RecordLayout, values: &[String]) -> Result<Event,
     let f = Fields { layout, values };
     let seq = f.u("seq")?;
     let word = layout.kind.word();
+    check_crc(layout, values).map_err(|e| format!("`{word}` record seq {seq}: {e}"))?;
     let record = build(layout.kind, &f).map_err(|e| format!("`{word}` record seq {seq}: {e}"))?;
     Ok(Event::Record { seq, record })
+}
+
+/// The record's `crc` field (firmware since the records carry one) against the CRC-32 of its
+/// other fields as received (`firmware::record::CrcFields`, the firmware's own code): a
+/// mismatch is a corrupted record, refused rather than decoded into wrong numbers. Records of
+/// a firmware without the field are not checked (`Firmware::records_checked` says which).
+fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), String> {
+    let Some(at) = layout.position("crc") else {
+        return Ok(());
+    };
+    let bad = |name: &str, v: &str| format!("field `{name}`: `{v}` is not its type");
+    let mut c = CrcFields::new();
+    for ((name, prim), v) in layout
+        .fields
+        .iter()
+        .zip(values)
+        .filter(|((n, _), _)| n != "crc")
+    {
+        c = match prim {
+            Prim::U8 => c.u8(v.parse().map_err(|_| bad(name, v))?),
+            Prim::U16 => c.u16(v.parse().map_err(|_| bad(name, v))?),
+            Prim::U32 => c.u32(v.parse().map_err(|_| bad(name, v))?),
+            Prim::I64 => c.i64(v.parse().map_err(|_| bad(name, v))?),
+            Prim::F32 => c.f32(v.parse().map_err(|_| bad(name, v))?),
+        };
+    }
+    let sent: u32 = values[at].parse().map_err(|_| bad("crc", &values[at]))?;
+    let got = c.finish();
+    if sent != got {
+        return Err(format!(
+            "checksum mismatch (sent {sent:#010x}, computed {got:#010x}): the record was \
+             corrupted on its way"
+        ));
+    }
+    Ok(())
 }
 
 fn build(kind: RecordKind, f: &Fields) -> Result<Record, String> {

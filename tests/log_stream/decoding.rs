@@ -11,8 +11,8 @@ fn the_recorded_stream_decodes_completely() {
     let bytes = stream();
     let (events, d) = decode_all(&fw, &bytes);
     assert_eq!(d.bad_frames, 0, "{:?}", d.bad_examples);
-    assert_eq!(d.frames_seen, 217);
-    assert_eq!((d.records, d.messages), (211, 6));
+    assert_eq!(d.frames_seen, 218);
+    assert_eq!((d.records, d.messages), (211, 7));
     assert!(d.seq.gaps.is_empty() && d.seq.restarts.is_empty());
     assert_eq!((d.seq.first_seq, d.seq.last_seq), (Some(0), Some(210)));
     let mut kinds = [0; 5];
