@@ -20,7 +20,7 @@ fn by_t1(a: &Analysis, g: usize, y: impl Fn(usize) -> f64) -> Vec<(f64, f64)> {
         .map(|i| (a.obs.rows[i].t1_n, y(i)))
         .collect();
     v.sort_by(|p, q| p.0.total_cmp(&q.0));
-    v
+    super::drawn(v)
 }
 
 /// Step means (over the runs of cord `g`) of x and y, in T1 order: the extended model, whose
@@ -67,8 +67,7 @@ fn model_series(a: &Analysis, g: usize, color: RGBColor, amp: bool) -> Vec<Serie
 }
 
 fn measured_points(a: &Analysis, g: usize, amp: bool) -> Vec<(f64, f64)> {
-    a.obs
-        .rows_of_group(g)
+    super::drawn(a.obs.rows_of_group(g))
         .into_iter()
         .map(|i| {
             let r = &a.obs.rows[i];
@@ -112,7 +111,7 @@ pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
         id: "t2_vs_t1",
         legend: legend(a, pal),
         chart: figure(&panels, 2, 650, 470)?,
-        caption: "T2 against T1, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model (mean over the cord's runs at each step). Every curve joins the model's predictions in predictions.csv.".into(),
+        caption: format!("T2 against T1, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model (mean over the cord's runs at each step). Every curve joins the model's predictions in predictions.csv.{}", super::drawn_note(a)),
     })
 }
 
@@ -132,7 +131,7 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
         id: "amp_vs_t1",
         legend: legend(a, pal),
         chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
-        caption: "Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).".into(),
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).{}", super::drawn_note(a)),
     })
 }
 
@@ -191,6 +190,6 @@ pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<F
         id: "closed_loop",
         legend,
         chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
-        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.", plant_causes(a)),
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{}", plant_causes(a), super::drawn_note(a)),
     })
 }

@@ -42,8 +42,7 @@ pub fn residuals(a: &Analysis, pal: &Palette) -> Result<Figure> {
                 .iter()
                 .enumerate()
                 .map(|(g, grp)| {
-                    let xy = obs
-                        .rows_of_group(g)
+                    let xy = super::drawn(obs.rows_of_group(g))
                         .into_iter()
                         .map(|i| (x(i), resid(pred, i)))
                         .collect();
@@ -65,7 +64,7 @@ pub fn residuals(a: &Analysis, pal: &Palette) -> Result<Figure> {
         id: "residuals",
         legend: pal.legend(),
         chart: figure(&panels, 3, 430, 300)?,
-        caption: "Residuals of T2 (measured − model) against T1, step and run, for Euler-Eytelwein (top) and the extended model (bottom), one colour per wrap, on a common scale. Run positions are spread by cord. From predictions.csv (t2_n − t2_baseline_n, t2_n − t2_extended_n).".into(),
+        caption: format!("Residuals of T2 (measured − model) against T1, step and run, for Euler-Eytelwein (top) and the extended model (bottom), one colour per wrap, on a common scale. Run positions are spread by cord. From predictions.csv (t2_n − t2_baseline_n, t2_n − t2_extended_n).{}", super::drawn_note(a)),
     })
 }
 

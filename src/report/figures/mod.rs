@@ -16,6 +16,33 @@ use crate::analysis::Analysis;
 use crate::fit::stats::distinct;
 use plotters::style::RGBColor;
 
+/// The most markers (or line vertices) drawn per cord and series: a million-row data set
+/// would otherwise make an SVG of hundreds of megabytes that no browser opens.
+pub const MAX_DRAWN_PER_CORD: usize = 2_000;
+
+/// At most [`MAX_DRAWN_PER_CORD`] of `v`, evenly spaced (every k-th, in the given order).
+pub fn drawn<T>(v: Vec<T>) -> Vec<T> {
+    let k = v.len().div_ceil(MAX_DRAWN_PER_CORD).max(1);
+    v.into_iter().step_by(k).collect()
+}
+
+/// The caption's sentence when some cord has more rows than are drawn (empty otherwise).
+pub fn drawn_note(a: &Analysis) -> String {
+    let most = (0..a.obs.groups.len())
+        .map(|g| a.obs.rows_of_group(g).len())
+        .max()
+        .unwrap_or(0);
+    if most <= MAX_DRAWN_PER_CORD {
+        return String::new();
+    }
+    format!(
+        " With up to {most} rows per cord, every {}-th is drawn (at most {MAX_DRAWN_PER_CORD} \
+         per cord and series); every statistic uses all {} rows.",
+        most.div_ceil(MAX_DRAWN_PER_CORD),
+        a.obs.len()
+    )
+}
+
 /// The Okabe-Ito palette without yellow (poor on white) and black (kept for annotations).
 pub const OKABE_ITO: [RGBColor; 6] = [
     RGBColor(0x00, 0x72, 0xB2),
