@@ -2,6 +2,8 @@
 //! report (`report.html`), `metrics.json` and `predictions.csv`.
 
 use crate::data::{load_pairs, thesis_dataset};
+use anyhow::Context;
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -56,12 +58,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     a.elapsed.closed_loop_s = t_cl.elapsed().as_secs_f64();
     let html = crate::report::report_html(&a, curves.as_deref(), &note)?;
-    let csv = crate::report::predictions_csv(&ds, &a);
+    let mut csv = set.create("predictions.csv")?;
+    crate::report::write_predictions_csv(&mut csv, &ds, &a)
+        .and_then(|()| csv.flush())
+        .context("writing predictions.csv")?;
+    drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
     let metrics = crate::report::metrics_json(&a, &closed);
     set.write("report.html", html.as_bytes())?;
-    set.write("predictions.csv", csv.as_bytes())?;
     set.write(
         "metrics.json",
         serde_json::to_string_pretty(&metrics)?.as_bytes(),

@@ -282,13 +282,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Err(StreamError::Campaign(e)) => bail!("{e}"),
         Err(StreamError::Sink(e)) => return Err(e),
     };
-    let summary = output::campaign_json(&stats, files.rows, &files.faults);
-    let (rows, faults) = (files.rows, std::mem::take(&mut files.faults));
+    let summary = output::campaign_json(&stats, files.rows, &files.faults, files.faults_total);
+    let (rows, faults, faults_total) = (
+        files.rows,
+        std::mem::take(&mut files.faults),
+        files.faults_total,
+    );
     files.finish(&summary)?;
     if args.json {
         crate::outln!("{summary}");
     } else {
-        output::print_summary(&args.out, &stats, rows, &faults, !args.no_raw);
+        output::print_summary(&args.out, &stats, rows, &faults, faults_total, !args.no_raw);
     }
     if stats.interrupted {
         return Err(super::signal::Interrupted(format!(

@@ -107,15 +107,24 @@ impl Observations {
             TimingSource::None
         };
         // Groups.
+        // Keyed by bits in hash maps: linear in the rows, whatever the number of runs.
         let key = |dia: f64, wrap: f64| (dia.to_bits(), wrap.to_bits());
+        let mut seen = std::collections::HashSet::new();
         let mut gk: Vec<(f64, f64)> = Vec::new();
         for p in &d.pairs {
             let dia = p.capstan_diameter_mm.unwrap_or(REF_DIAMETER_MM);
-            if !gk.iter().any(|g| key(g.0, g.1) == key(dia, p.wrap_deg)) {
+            if seen.insert(key(dia, p.wrap_deg)) {
                 gk.push((dia, p.wrap_deg));
             }
         }
         gk.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let group_of: std::collections::HashMap<(u64, u64), usize> = gk
+            .iter()
+            .enumerate()
+            .map(|(i, g)| (key(g.0, g.1), i))
+            .collect();
+        let mut run_of: std::collections::HashMap<(usize, u64, u64), usize> =
+            std::collections::HashMap::new();
         let groups: Vec<Group> = gk
             .iter()
             .map(|&(dia, w)| Group {
@@ -129,10 +138,7 @@ impl Observations {
         let mut rows = Vec::with_capacity(d.pairs.len());
         for (i, p) in d.pairs.iter().enumerate() {
             let dia = p.capstan_diameter_mm.unwrap_or(REF_DIAMETER_MM);
-            let group = gk
-                .iter()
-                .position(|g| key(g.0, g.1) == key(dia, p.wrap_deg))
-                .unwrap_or(0);
+            let group = group_of.get(&key(dia, p.wrap_deg)).copied().unwrap_or(0);
             let drive_v = p.drive_v.unwrap_or(REF_DRIVE_V);
             let run_no = p.run.unwrap_or(1.0);
             let rk = if timing == TimingSource::None {
@@ -140,13 +146,10 @@ impl Observations {
             } else {
                 (group, drive_v.to_bits(), run_no.to_bits())
             };
-            let run = match run_keys.iter().position(|k| *k == rk) {
-                Some(r) => r,
-                None => {
-                    run_keys.push(rk);
-                    run_keys.len() - 1
-                }
-            };
+            let run = *run_of.entry(rk).or_insert_with(|| {
+                run_keys.push(rk);
+                run_keys.len() - 1
+            });
             let timing_row = match (timing, p.time_s, p.step) {
                 (TimingSource::ThesisProtocolFromStep, _, Some(k)) => StepTiming::thesis_step(k),
                 (TimingSource::TimeColumn, Some(t), _) => StepTiming {

@@ -4,7 +4,6 @@
 use crate::analysis::Analysis;
 use crate::data::Dataset;
 use serde_json::{json, Value};
-use std::fmt::Write as _;
 
 /// The contents of `metrics.json`.
 pub fn metrics_json(a: &Analysis, closed_loop: &Value) -> Value {
@@ -49,9 +48,12 @@ fn num(v: f64) -> String {
 }
 
 /// `predictions.csv`: the input rows (columns as read) plus the cord, the step timing used, and
-/// every model's prediction.
-pub fn predictions_csv(ds: &Dataset, a: &Analysis) -> String {
-    let mut s = String::new();
+/// every model's prediction, written row by row (a million rows are ~230 MB: not held).
+pub fn write_predictions_csv(
+    s: &mut impl std::io::Write,
+    ds: &Dataset,
+    a: &Analysis,
+) -> std::io::Result<()> {
     let mut header: Vec<String> = ds.header.clone();
     header.extend(
         [
@@ -69,7 +71,7 @@ pub fn predictions_csv(ds: &Dataset, a: &Analysis) -> String {
         ]
         .map(String::from),
     );
-    let _ = writeln!(s, "{}", header.join(","));
+    writeln!(s, "{}", header.join(","))?;
     let p = &a.pred;
     for (i, pair) in ds.pairs.iter().enumerate() {
         let mut cells: Vec<String> = ds
@@ -107,7 +109,7 @@ pub fn predictions_csv(ds: &Dataset, a: &Analysis) -> String {
         ] {
             cells.push(num(v));
         }
-        let _ = writeln!(s, "{}", cells.join(","));
+        writeln!(s, "{}", cells.join(","))?;
     }
-    s
+    Ok(())
 }

@@ -14,5 +14,5 @@ pub mod plot;
 pub mod tables;
 
 pub use crate::analysis::closed_loop::SimCurve;
-pub use files::{metrics_json, predictions_csv};
+pub use files::{metrics_json, write_predictions_csv};
 pub use html::report_html;

@@ -23,9 +23,15 @@ pub(super) struct CampaignWriter {
     raw: bool,
     /// Pairs written.
     pub rows: usize,
-    /// Every fault summary (one per faulted run).
+    /// The first [`FAULTS_KEPT`] fault summaries (every one is in `faults.csv`).
     pub faults: Vec<FaultSummary>,
+    /// Fault summaries written to `faults.csv`.
+    pub faults_total: usize,
 }
+
+/// Fault summaries kept in memory for `summary.json` and the printed summary: a campaign with
+/// a fault in each of a million runs stays in bounded memory (`faults.csv` has them all).
+pub const FAULTS_KEPT: usize = 1_000;
 
 impl CampaignWriter {
     /// Start the set in `out`.
@@ -41,6 +47,7 @@ impl CampaignWriter {
             raw,
             rows: 0,
             faults: Vec::new(),
+            faults_total: 0,
         })
     }
 
@@ -55,7 +62,10 @@ impl CampaignWriter {
         }
         for f in host_sim::campaign::summarise_faults(r) {
             write_fault(&mut self.faults_csv, &f)?;
-            self.faults.push(f);
+            self.faults_total += 1;
+            if self.faults.len() < FAULTS_KEPT {
+                self.faults.push(f);
+            }
         }
         self.pairs.flush()?;
         self.faults_csv.flush()?;
@@ -142,7 +152,12 @@ fn warn_about(r: &RunResult) {
 }
 
 /// `summary.json`, and what `--json` prints.
-pub(super) fn campaign_json(s: &CampaignStats, rows: usize, faults: &[FaultSummary]) -> Value {
+pub(super) fn campaign_json(
+    s: &CampaignStats,
+    rows: usize,
+    faults: &[FaultSummary],
+    faults_total: usize,
+) -> Value {
     let faults: Vec<_> = faults
         .iter()
         .map(|f| {
@@ -165,6 +180,8 @@ pub(super) fn campaign_json(s: &CampaignStats, rows: usize, faults: &[FaultSumma
         "realtime_factor": s.realtime_factor(),
         "threads": s.threads,
         "faults": faults,
+        "faults_total": faults_total,
+        "faults_note": format!("the first {} faults; faults.csv lists every one", FAULTS_KEPT),
     })
 }
 
@@ -173,6 +190,7 @@ pub(super) fn print_summary(
     s: &CampaignStats,
     rows: usize,
     faults: &[FaultSummary],
+    faults_total: usize,
     raw: bool,
 ) {
     crate::outln!(
@@ -205,7 +223,10 @@ pub(super) fn print_summary(
             f.pairs_kept
         );
     }
-    if !faults.is_empty() {
+    if faults_total > faults.len() {
+        crate::outln!("... and {} more faults", faults_total - faults.len());
+    }
+    if faults_total > 0 {
         crate::outln!("faults -> {}", out.join("faults.csv").display());
     }
 }
