@@ -1,7 +1,7 @@
 //! Damaged streams: records dropped (gaps counted and located), truncation at any byte,
 //! corruption of any byte, and a board restart told from a gap.
 
-use crate::log_support::{firmware, split, stream};
+use crate::log_support::{firmware, split, stream, Frames};
 use crate::seqs;
 use capstan::log::{decode_all, Event};
 use firmware::record::Record;
@@ -106,6 +106,20 @@ fn a_truncated_stream_keeps_every_whole_frame_and_reports_the_rest() {
     assert_eq!(last, 211);
 }
 
+/// Frame `k` with `side` frames either side (after the stream's lead), and where frame `k`'s
+/// bytes are in it.
+fn window(frames: &Frames, k: usize, side: usize) -> (Vec<u8>, std::ops::Range<usize>) {
+    let mut bytes = frames.lead.clone();
+    let mut at = 0..0;
+    for w in k.saturating_sub(side)..(k + side + 1).min(frames.frames.len()) {
+        if w == k {
+            at = bytes.len()..bytes.len() + frames.frames[w].1.len();
+        }
+        bytes.extend_from_slice(&frames.frames[w].1);
+    }
+    (bytes, at)
+}
+
 #[test]
 fn corrupted_bytes_cost_frames_not_the_stream() {
     let fw = firmware();
@@ -117,19 +131,9 @@ fn corrupted_bytes_cost_frames_not_the_stream() {
     let mut worst = 0;
     let mut cases = 0;
     for k in 0..frames.frames.len() {
-        let window: Vec<usize> = (k.saturating_sub(2)..(k + 3).min(frames.frames.len())).collect();
-        let mut clean = frames.lead.clone();
-        for &w in &window {
-            clean.extend_from_slice(&frames.frames[w].1);
-        }
+        let (clean, bytes_of_k) = window(&frames, k, 2);
         let base = decode_all(&fw, &clean).1.records;
-        let start = frames.lead.len()
-            + window
-                .iter()
-                .take_while(|&&w| w < k)
-                .map(|&w| frames.frames[w].1.len())
-                .sum::<usize>();
-        for i in start..start + frames.frames[k].1.len() {
+        for i in bytes_of_k {
             for v in [0x00, 0xff, clean[i] ^ 0x5a] {
                 if v == clean[i] {
                     continue;
@@ -180,20 +184,10 @@ fn every_single_bit_flip_of_a_record_is_detected_or_harmless() {
     let frames = split(&stream());
     let (mut cases, mut seen) = (0, 0);
     for k in 0..frames.frames.len() {
-        let window: Vec<usize> = (k.saturating_sub(1)..(k + 2).min(frames.frames.len())).collect();
-        let mut clean = frames.lead.clone();
-        for &w in &window {
-            clean.extend_from_slice(&frames.frames[w].1);
-        }
+        let (clean, bytes_of_k) = window(&frames, k, 1);
         let (base, damaged) = records(&fw, &clean);
         assert!(!damaged);
-        let start = frames.lead.len()
-            + window
-                .iter()
-                .take_while(|&&w| w < k)
-                .map(|&w| frames.frames[w].1.len())
-                .sum::<usize>();
-        for i in start..start + frames.frames[k].1.len() {
+        for i in bytes_of_k {
             for bit in 0..8 {
                 let mut b = clean.clone();
                 b[i] ^= 1 << bit;
