@@ -283,8 +283,8 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 const MAX_DRIVE_V: f64 = 1000.0;
 /// |run|, |step| at most this.
 const MAX_INDEX: f64 = 1e9;
-/// |time_s| at most this (a year), s.
-const MAX_TIME_S: f64 = 3.2e7;
+/// |time_s| at most this (beyond Unix-epoch timestamps for centuries), s.
+const MAX_TIME_S: f64 = 1e10;
 
 /// A CSV error with the line it is at; a line over [`MAX_LINE_BYTES`] is named as such.
 fn line_error(e: csv::Error, path: &str) -> DataError {
@@ -356,7 +356,7 @@ impl<R: Read> Read for LineLimit<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
         for &b in &buf[..n] {
-            if b == b'\n' {
+            if b == b'\n' || b == b'\r' {
                 self.since_newline = 0;
             } else {
                 self.since_newline += 1;
@@ -411,7 +411,7 @@ fn parse_cell(raw: &str, rule: Rule) -> Result<f64, &'static str> {
         }),
         Rule::Bounded(max) if v.abs() > max => Err(match max {
             MAX_DRIVE_V => "must be within ±1000 V",
-            MAX_TIME_S => "must be within ±3.2e7 s (a year)",
+            MAX_TIME_S => "must be within ±1e10 s",
             _ => "must be within ±1e9",
         }),
         Rule::Tension if v.abs() > MAX_TENSION_N => {

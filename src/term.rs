@@ -7,35 +7,37 @@
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-static CLOSED: AtomicBool = AtomicBool::new(false);
+static OUT_CLOSED: AtomicBool = AtomicBool::new(false);
+static ERR_CLOSED: AtomicBool = AtomicBool::new(false);
 
 /// The exit status of a command whose output pipe was closed by its reader.
 pub const BROKEN_PIPE_STATUS: u8 = 141;
 
 /// Whether a reader closed stdout or stderr before the output was written.
 pub fn pipe_closed() -> bool {
-    CLOSED.load(Ordering::Relaxed)
+    OUT_CLOSED.load(Ordering::Relaxed) || ERR_CLOSED.load(Ordering::Relaxed)
 }
 
-fn note(r: std::io::Result<()>) {
+/// Any failure to print (a closed pipe, mostly) ends printing on that stream, never the
+/// command; the other stream goes on.
+fn note(closed: &AtomicBool, r: std::io::Result<()>) {
     if r.is_err() {
-        // Any failure to print (a closed pipe, mostly) ends printing, never the command.
-        CLOSED.store(true, Ordering::Relaxed);
+        closed.store(true, Ordering::Relaxed);
     }
 }
 
-/// Print to stdout (once a pipe is closed, nothing more is written).
+/// Print to stdout (once its pipe is closed, nothing more is written there).
 pub fn out(args: std::fmt::Arguments<'_>) {
-    if !pipe_closed() {
+    if !OUT_CLOSED.load(Ordering::Relaxed) {
         let mut o = std::io::stdout().lock();
-        note(o.write_fmt(args).and_then(|()| o.flush()));
+        note(&OUT_CLOSED, o.write_fmt(args).and_then(|()| o.flush()));
     }
 }
 
 /// Print to stderr.
 pub fn err(args: std::fmt::Arguments<'_>) {
-    if !pipe_closed() {
-        note(std::io::stderr().lock().write_fmt(args));
+    if !ERR_CLOSED.load(Ordering::Relaxed) {
+        note(&ERR_CLOSED, std::io::stderr().lock().write_fmt(args));
     }
 }
 

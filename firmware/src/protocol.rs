@@ -197,7 +197,7 @@ impl Protocol {
         }
         if self.raw_log_hz == 0
             || self.raw_log_hz > self.sample_hz
-            || self.sample_hz % self.raw_log_hz != 0
+            || !self.sample_hz.is_multiple_of(self.raw_log_hz)
         {
             return Err(ProtocolError::RawLogRate);
         }

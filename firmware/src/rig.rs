@@ -219,7 +219,7 @@ impl Rig {
                     500
                 };
                 let mut out = self.idle_outputs();
-                out.led = (inp.now_us / 1000 / blink_ms) % 2 == 0;
+                out.led = (inp.now_us / 1000 / blink_ms).is_multiple_of(2);
                 out
             }
             _ => self.step_running(inp, pressed, sink),
@@ -331,7 +331,7 @@ impl Rig {
         // Decimated raw samples for the log, from the run start on.
         let decimation = p.sample_hz / p.raw_log_hz;
         let taring = matches!(self.phase, Phase::Tare { .. });
-        if !taring && self.samples % decimation == 0 {
+        if !taring && self.samples.is_multiple_of(decimation) {
             let raw = RawSample {
                 t_us,
                 counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],

@@ -163,6 +163,9 @@ pub enum CampaignError {
     FaultRun(u32, u32),
     /// The firmware or the plant refuses the setup.
     Setup(SetupError),
+    /// The simulation of a run panicked (a bug in the simulator or the firmware): the run
+    /// and the message. The runs before it were handed over.
+    Panicked(u32, String),
 }
 
 impl fmt::Display for CampaignError {
@@ -174,6 +177,9 @@ impl fmt::Display for CampaignError {
                 write!(f, "fault on run {r}, but the campaign has {n} runs")
             }
             CampaignError::Setup(e) => write!(f, "{e}"),
+            CampaignError::Panicked(run, why) => {
+                write!(f, "the simulation of run {run} panicked: {why}")
+            }
         }
     }
 }

@@ -38,7 +38,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t0 = Instant::now();
     // Lock the output directory and prove it writable before the analysis, not after it.
-    let mut set = super::open_out(&args.out)?.stage()?;
+    let names = ["report.html", "metrics.json", "predictions.csv"];
+    let mut set = super::open_out(&args.out, "analyze", &names)?.stage()?;
     let ds = match &args.data {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
@@ -93,7 +94,7 @@ fn validate(args: &Args) -> anyhow::Result<()> {
         crate::analysis::validate::cases(args.seed).len(),
         args.seed
     );
-    let mut set = super::open_out(&args.out)?.stage()?;
+    let mut set = super::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
     let v = crate::analysis::validate::validate(args.seed, 1, threads)?;
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;

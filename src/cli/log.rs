@@ -133,6 +133,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.drive_v.is_some_and(|v| !v.is_finite()) {
         bail!("--drive-v must be a number");
     }
+    if let Some(from) = args.from.as_deref().filter(|f| *f != "-") {
+        let inside = std::fs::canonicalize(from).ok().and_then(|f| {
+            let out = std::fs::canonicalize(&args.out).ok()?;
+            Some(f == out.join(crate::log::output::STREAM_FILE))
+        });
+        if inside == Some(true) {
+            bail!(
+                "--from {from} is the saved stream of the session in --out {}: decoding it \
+                 there would replace it; choose another --out",
+                args.out.display()
+            );
+        }
+    }
     let fw = Firmware::load(&args.elf)?;
     let opts = LogOptions {
         out_dir: args.out.clone(),
@@ -204,7 +217,8 @@ fn limit_reached(logger: &Logger, args: &Args, started: std::time::Instant) -> O
 }
 
 /// Feed a chunk; with `--runs`, frame by frame, so the session stops right after the record
-/// that completes the last run wanted (a chunk may hold dozens of runs).
+/// that completes the last run wanted (a chunk of a saved stream may hold dozens of runs;
+/// from a board, records arrive as they are made, so its chunks are small anyway).
 fn feed(
     logger: &mut Logger,
     chunk: &[u8],
@@ -216,11 +230,13 @@ fn feed(
         return Ok(None);
     }
     for frame in chunk.split_inclusive(|&b| b == 0) {
-        logger.feed(frame)?;
+        logger.push(frame)?;
         if let Some(s) = limit_reached(logger, args, started) {
+            logger.flush()?;
             return Ok(Some(s));
         }
     }
+    logger.flush()?;
     Ok(None)
 }
 

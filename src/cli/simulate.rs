@@ -261,7 +261,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     cfg.plant.disturbances = noise.disturbances();
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let out = super::open_out(&args.out)?;
+    let out = super::open_out(
+        &args.out,
+        "simulate",
+        &["pairs.csv", "faults.csv", "summary.json"],
+    )?;
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
     let bar = progress_bar(&args, cfg.run_count());
     let stop = super::signal::stop_flag("simulate");
@@ -282,6 +286,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Err(StreamError::Campaign(e)) => bail!("{e}"),
         Err(StreamError::Sink(e)) => return Err(e),
     };
+    if stats.done == 0 {
+        // Stopped before a single run was made: nothing to replace the previous results with.
+        drop(files);
+        return Err(super::signal::Interrupted(format!(
+            "interrupted before the first run was made; {} is as it was",
+            args.out.display()
+        ))
+        .into());
+    }
     let summary = output::campaign_json(&stats, files.rows, &files.faults, files.faults_total);
     let (rows, faults, faults_total) = (
         files.rows,

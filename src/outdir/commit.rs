@@ -1,6 +1,6 @@
 //! The commit journal: publish a staged set, and roll an interrupted commit forward.
 
-use super::{COMMIT, MANIFEST};
+use super::{manifest_name, COMMIT, JOURNAL_MANIFEST, MANIFEST_PREFIX};
 use anyhow::{bail, Context};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
@@ -22,9 +22,11 @@ impl Crash for NoCrash {
     }
 }
 
-/// What a set holds.
+/// What a set holds, and which command wrote it.
 #[derive(Serialize, Deserialize, Debug, Default)]
 struct Manifest {
+    #[serde(default)]
+    kind: String,
     written_by: String,
     files: Vec<String>,
 }
@@ -39,20 +41,44 @@ pub(crate) fn check_name(rel: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Write the manifest, turn the staging directory into the journal, and roll it forward.
+/// The set `files` of command `kind`: make it durable, check that every file can be moved
+/// into place, write the manifest, turn the staging directory into the journal, and roll it
+/// forward. `unsynced`: files written by streaming writers (the others were synced whole).
 pub(crate) fn publish(
     staging: &Path,
     dir: &Path,
+    kind: &str,
     files: &[String],
+    unsynced: &[String],
     crash: &mut dyn Crash,
 ) -> anyhow::Result<()> {
+    refuse_others(dir, kind, files)?;
+    for f in unsynced {
+        sync(&staging.join(f))?;
+    }
+    let mut dirs: BTreeSet<&Path> = files.iter().filter_map(|f| Path::new(f).parent()).collect();
+    dirs.insert(Path::new(""));
+    for d in dirs {
+        sync_dir(&staging.join(d));
+    }
+    // Everything that could stop the moves is checked before the point of no return.
+    for f in files {
+        ensure_parents(dir, f)?;
+        let target = dir.join(f);
+        if std::fs::symlink_metadata(&target).is_ok_and(|m| m.is_dir()) {
+            bail!(
+                "{} is a directory: it cannot be replaced by a file",
+                target.display()
+            );
+        }
+    }
     let m = Manifest {
+        kind: kind.to_string(),
         written_by: std::env::args().collect::<Vec<_>>().join(" "),
         files: files.to_vec(),
     };
-    // Files written whole were synced by `Staged::write`; streamed ones by their writers.
     crash.step()?;
-    let mpath = staging.join(MANIFEST);
+    let mpath = staging.join(JOURNAL_MANIFEST);
     std::fs::write(&mpath, serde_json::to_string_pretty(&m)? + "\n")
         .with_context(|| format!("cannot write {}", mpath.display()))?;
     sync(&mpath)?;
@@ -67,7 +93,7 @@ pub(crate) fn publish(
 /// interrupted at any step is finished by running this again.
 pub(crate) fn roll_forward(dir: &Path, crash: &mut dyn Crash) -> anyhow::Result<()> {
     let journal = dir.join(COMMIT);
-    let new = match read_manifest(&journal.join(MANIFEST)) {
+    let new = match read_manifest(&journal.join(JOURNAL_MANIFEST)) {
         Some(m) => m,
         None => {
             // The manifest was moved: only (empty) directories are left.
@@ -77,7 +103,8 @@ pub(crate) fn roll_forward(dir: &Path, crash: &mut dyn Crash) -> anyhow::Result<
             return Ok(());
         }
     };
-    let old = read_manifest(&dir.join(MANIFEST)).unwrap_or_default();
+    let current = dir.join(manifest_name(&new.kind));
+    let old = read_manifest(&current).unwrap_or_default();
     for f in &new.files {
         let src = journal.join(f);
         if std::fs::symlink_metadata(&src).is_err() {
@@ -98,12 +125,40 @@ pub(crate) fn roll_forward(dir: &Path, crash: &mut dyn Crash) -> anyhow::Result<
         }
     }
     crash.step()?;
-    std::fs::rename(journal.join(MANIFEST), dir.join(MANIFEST))
-        .with_context(|| format!("cannot write {}", dir.join(MANIFEST).display()))?;
+    std::fs::rename(journal.join(JOURNAL_MANIFEST), &current)
+        .with_context(|| format!("cannot write {}", current.display()))?;
     sync_dir(dir);
     crash.step()?;
     std::fs::remove_dir_all(&journal)
         .with_context(|| format!("cannot remove {}", journal.display()))?;
+    Ok(())
+}
+
+/// Another command's results in `dir` that this set would replace: refused, naming them (a
+/// logged session cannot be made again; a campaign's pairs are another command's input).
+pub(crate) fn refuse_others(dir: &Path, kind: &str, names: &[String]) -> anyhow::Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if !name.starts_with(MANIFEST_PREFIX) || name == manifest_name(kind) {
+            continue;
+        }
+        let Some(m) = read_manifest(&e.path()) else {
+            continue;
+        };
+        let clash: Vec<&String> = names.iter().filter(|n| m.files.contains(n)).collect();
+        if let Some(first) = clash.first() {
+            bail!(
+                "{} holds the results of `capstan {}` ({first}{}): `capstan {kind}` would replace \
+                 them; choose another output directory",
+                dir.display(),
+                m.kind,
+                if clash.len() > 1 { ", ..." } else { "" }
+            );
+        }
+    }
     Ok(())
 }
 

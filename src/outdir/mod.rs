@@ -12,8 +12,11 @@
 //! Commit protocol (a small write-ahead journal, `commit`): the complete set, with a manifest
 //! naming its files, is renamed to `.capstan-commit` (one atomic rename: from here on the new
 //! set is the truth); then each file is renamed over its old version, the previous set's files
-//! that the new one lacks are removed (only files the previous manifest names: files we
-//! wrote), and the manifest is moved to `.capstan-manifest.json` last. Any interruption before
+//! that the new one lacks are removed (only files the same command's previous manifest names:
+//! files it wrote), and the manifest is moved to `.capstan-manifest-<command>.json` last.
+//! Before the journal's rename every move is checked (parents, a directory in the way), and a
+//! set that would replace another command's files (a logged session, a campaign's pairs) is
+//! refused. Any interruption before
 //! the first rename leaves the old set; any after it is rolled forward by the next `open`.
 //! Renames replace a symbolic link at the target name; they never write through it, and a
 //! symbolic link where a sub-directory of ours should be is refused.
@@ -38,8 +41,16 @@ use std::path::{Path, PathBuf};
 
 /// The lock file's name.
 pub const LOCK: &str = ".capstan.lock";
-/// The manifest of the current set.
-pub const MANIFEST: &str = ".capstan-manifest.json";
+/// Prefix of the manifests of the current sets, one per command (`analyze`, `simulate`, ...):
+/// a command replaces and removes only what the same command wrote.
+pub const MANIFEST_PREFIX: &str = ".capstan-manifest-";
+/// The manifest's name inside the journal.
+pub const JOURNAL_MANIFEST: &str = ".capstan-journal.json";
+
+/// The manifest of `kind`'s current set.
+pub fn manifest_name(kind: &str) -> String {
+    format!("{MANIFEST_PREFIX}{kind}.json")
+}
 /// The set being committed (the journal).
 pub const COMMIT: &str = ".capstan-commit";
 /// Prefix of staging directories.
@@ -51,20 +62,23 @@ pub const INCOMPLETE_PREFIX: &str = "incomplete-";
 #[derive(Debug)]
 pub struct OutputDir {
     dir: PathBuf,
+    kind: &'static str,
     _lock: File,
     /// What `open` found and did (an interrupted commit finished, an abandoned set kept).
     pub recovered: Vec<String>,
 }
 
 impl OutputDir {
-    /// Create `dir` if needed, lock it, recover what an earlier process left, and check that
-    /// it can be written to.
-    pub fn open(dir: &Path) -> anyhow::Result<OutputDir> {
+    /// Create `dir` if needed, lock it, recover what an earlier process left, and refuse it
+    /// if another command's results there carry one of `names` (the files `kind`, e.g.
+    /// "analyze", will write at the top of the directory) — before any work is done.
+    pub fn open(dir: &Path, kind: &'static str, names: &[&str]) -> anyhow::Result<OutputDir> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
         let lock = take_lock(dir)?;
         let mut out = OutputDir {
             dir: dir.to_path_buf(),
+            kind,
             _lock: lock,
             recovered: Vec::new(),
         };
@@ -77,12 +91,19 @@ impl OutputDir {
             ));
         }
         out.keep_abandoned()?;
+        let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+        commit::refuse_others(dir, kind, &names)?;
         Ok(out)
     }
 
     /// The directory.
     pub fn path(&self) -> &Path {
         &self.dir
+    }
+
+    /// The command writing it.
+    pub fn kind(&self) -> &'static str {
+        self.kind
     }
 
     /// Start a new output set (a staging directory, created now: an unwritable directory
@@ -123,6 +144,12 @@ impl OutputDir {
 /// Lock `dir` for this process, or say who holds it.
 fn take_lock(dir: &Path) -> anyhow::Result<File> {
     let path = dir.join(LOCK);
+    if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_file()) {
+        anyhow::bail!(
+            "{} is not a plain file (a symbolic link?): capstan does not write through it",
+            path.display()
+        );
+    }
     let mut f = OpenOptions::new()
         .read(true)
         .write(true)

@@ -16,6 +16,8 @@ pub struct Staged {
     path: PathBuf,
     id: String,
     files: BTreeSet<String>,
+    /// Files written by streaming writers, synced at the commit.
+    streamed: BTreeSet<String>,
     done: bool,
     keep_on_failure: bool,
 }
@@ -38,6 +40,7 @@ impl Staged {
             path,
             id,
             files: BTreeSet::new(),
+            streamed: BTreeSet::new(),
             done: false,
             keep_on_failure: false,
         })
@@ -66,6 +69,7 @@ impl Staged {
     /// Create `rel` in the set, buffered.
     pub fn create(&mut self, rel: &str) -> anyhow::Result<BufWriter<File>> {
         let p = self.path_of(rel)?;
+        self.streamed.insert(rel.to_string());
         let f = File::create(&p).with_context(|| format!("cannot write {}", p.display()))?;
         Ok(BufWriter::new(f))
     }
@@ -73,6 +77,7 @@ impl Staged {
     /// Write `rel` whole.
     pub fn write(&mut self, rel: &str, bytes: &[u8]) -> anyhow::Result<()> {
         let p = self.path_of(rel)?;
+        self.streamed.remove(rel);
         let mut f = File::create(&p).with_context(|| format!("cannot write {}", p.display()))?;
         f.write_all(bytes)
             .and_then(|()| f.sync_all())
@@ -96,7 +101,9 @@ impl Staged {
 
     pub(super) fn commit_with(&mut self, crash: &mut dyn commit::Crash) -> anyhow::Result<()> {
         let files: Vec<String> = self.files.iter().cloned().collect();
-        let r = commit::publish(&self.path, self.out.path(), &files, crash);
+        let unsynced: Vec<String> = self.streamed.iter().cloned().collect();
+        let (dir, kind) = (self.out.path(), self.out.kind());
+        let r = commit::publish(&self.path, dir, kind, &files, &unsynced, crash);
         // Past the journal's rename the staging directory is gone: nothing to clean up.
         if r.is_ok() || !self.path.exists() {
             self.done = true;

@@ -61,7 +61,7 @@ fn set(tag: &str, names: &[String]) -> BTreeMap<String, String> {
 }
 
 fn write_set(dir: &Path, files: &BTreeMap<String, String>, crash: usize) -> anyhow::Result<()> {
-    let mut s = OutputDir::open(dir)?.stage()?;
+    let mut s = OutputDir::open(dir, "test", &[])?.stage()?;
     for (n, c) in files {
         s.write(n, c.as_bytes())?;
     }
@@ -108,7 +108,7 @@ proptest! {
         let new = set("new", &pick(new_mask));
         write_set(&dir, &old, usize::MAX).unwrap();
         let crashed = write_set(&dir, &new, crash).is_err();
-        drop(OutputDir::open(&dir).unwrap()); // the next run recovers
+        drop(OutputDir::open(&dir, "test", &[]).unwrap()); // the next run recovers
         let now = visible(&dir);
         let is_old = now == with_user_files(old.clone());
         let is_new = now == with_user_files(new.clone());
@@ -123,12 +123,12 @@ proptest! {
 #[test]
 fn a_second_writer_is_refused_with_the_holder_named() {
     let dir = scratch();
-    let first = OutputDir::open(&dir).unwrap();
-    let e = OutputDir::open(&dir).unwrap_err().to_string();
+    let first = OutputDir::open(&dir, "test", &[]).unwrap();
+    let e = OutputDir::open(&dir, "test", &[]).unwrap_err().to_string();
     assert!(e.contains("in use by another capstan process"), "{e}");
     assert!(e.contains(&format!("pid {}", std::process::id())), "{e}");
     drop(first);
-    OutputDir::open(&dir).unwrap();
+    OutputDir::open(&dir, "test", &[]).unwrap();
 }
 
 #[cfg(unix)]
@@ -161,10 +161,10 @@ fn links_are_replaced_never_written_through() {
 #[test]
 fn an_abandoned_staging_directory_is_kept_not_deleted() {
     let dir = scratch();
-    let mut s = OutputDir::open(&dir).unwrap().stage().unwrap();
+    let mut s = OutputDir::open(&dir, "test", &[]).unwrap().stage().unwrap();
     s.write("pairs.csv", b"run,step\n1,1\n").unwrap();
     s.abandon(); // killed: the lock goes with the process
-    let out = OutputDir::open(&dir).unwrap();
+    let out = OutputDir::open(&dir, "test", &[]).unwrap();
     assert_eq!(out.recovered.len(), 1, "{:?}", out.recovered);
     let kept: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
@@ -187,7 +187,7 @@ fn a_failed_set_leaves_the_old_one_and_no_staging() {
     let dir = scratch();
     write_set(&dir, &set("old", &["a.csv".into()]), usize::MAX).unwrap();
     {
-        let mut s = OutputDir::open(&dir).unwrap().stage().unwrap();
+        let mut s = OutputDir::open(&dir, "test", &[]).unwrap().stage().unwrap();
         s.write("a.csv", b"half").unwrap();
         // an error: the set is dropped
     }
@@ -213,10 +213,81 @@ fn an_unwritable_directory_fails_before_any_work() {
     if std::fs::write(&probe, "").is_ok() {
         return; // running as root: permissions do not bind
     }
-    let e = OutputDir::open(&dir).unwrap_err();
+    let e = OutputDir::open(&dir, "test", &[]).unwrap_err();
     assert!(
         format!("{e:#}").contains("cannot write to the output directory"),
         "{e:#}"
     );
     std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).unwrap();
+}
+
+#[test]
+fn another_commands_results_are_neither_replaced_nor_removed() {
+    let dir = scratch();
+    let logged = set("log", &["pairs.csv".into(), "raw.csv".into()]);
+    let mut s = OutputDir::open(&dir, "log", &[]).unwrap().stage().unwrap();
+    for (n, c) in &logged {
+        s.write(n, c.as_bytes()).unwrap();
+    }
+    s.commit().unwrap();
+    // A campaign into the session's directory: refused before any work.
+    let e = OutputDir::open(&dir, "simulate", &["pairs.csv"]).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("holds the results of `capstan log`"),
+        "{e:#}"
+    );
+    // A report beside it replaces nothing of the session's, and removes nothing of it later.
+    write_kind(&dir, "analyze", &["report.html"]);
+    write_kind(&dir, "analyze", &["metrics.json"]);
+    let mut want = logged.clone();
+    want.insert("metrics.json".into(), "analyze:metrics.json".into());
+    assert_eq!(visible(&dir), want);
+}
+
+fn write_kind(dir: &Path, kind: &'static str, names: &[&str]) {
+    let mut s = OutputDir::open(dir, kind, names).unwrap().stage().unwrap();
+    for n in names {
+        s.write(n, format!("{kind}:{n}").as_bytes()).unwrap();
+    }
+    s.commit().unwrap();
+}
+
+#[test]
+fn a_move_that_cannot_happen_is_refused_before_the_journal() {
+    let dir = scratch();
+    write_set(
+        &dir,
+        &set("old", &["a.csv".into(), "b.csv".into()]),
+        usize::MAX,
+    )
+    .unwrap();
+    // A directory where the new set has a file: found before anything is moved.
+    std::fs::create_dir_all(dir.join("c.csv")).unwrap();
+    let e = write_set(
+        &dir,
+        &set("new", &["a.csv".into(), "c.csv".into()]),
+        usize::MAX,
+    );
+    assert!(format!("{:#}", e.unwrap_err()).contains("is a directory"));
+    assert!(!dir.join(COMMIT).exists());
+    std::fs::remove_dir(dir.join("c.csv")).unwrap();
+    assert_eq!(visible(&dir), set("old", &["a.csv".into(), "b.csv".into()]));
+    // And the directory is usable at once.
+    write_set(&dir, &set("new", &["a.csv".into()]), usize::MAX).unwrap();
+    assert_eq!(visible(&dir), set("new", &["a.csv".into()]));
+}
+
+#[cfg(unix)]
+#[test]
+fn a_linked_lock_file_is_refused_not_written_through() {
+    let dir = scratch();
+    let outside = scratch();
+    std::fs::write(outside.join("precious.txt"), "keep me").unwrap();
+    std::os::unix::fs::symlink(outside.join("precious.txt"), dir.join(LOCK)).unwrap();
+    let e = OutputDir::open(&dir, "test", &[]).unwrap_err();
+    assert!(format!("{e:#}").contains("not a plain file"), "{e:#}");
+    assert_eq!(
+        std::fs::read_to_string(outside.join("precious.txt")).unwrap(),
+        "keep me"
+    );
 }

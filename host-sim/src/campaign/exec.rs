@@ -123,7 +123,10 @@ pub fn stream_campaign<E>(
     };
     let mut failure: Option<StreamError<E>> = None;
     std::thread::scope(|s| {
-        let (tx, rx) = mpsc::channel::<(usize, Result<RunResult, SetupError>)>();
+        // If this thread unwinds (a panicking sink), the workers must stop waiting for room
+        // that will never come, or the scope would never end.
+        let _halt_on_unwind = HaltOnDrop(&halt);
+        let (tx, rx) = mpsc::channel::<(usize, Result<RunResult, RunError>)>();
         for _ in 0..threads {
             let tx = tx.clone();
             let (next, handed, stopped) = (&next, &handed, &stopped);
@@ -134,7 +137,7 @@ pub fn stream_campaign<E>(
                         break;
                     }
                     let job: Job = cfg.job(i);
-                    if tx.send((i, run_job(&job))).is_err() {
+                    if tx.send((i, run_caught(&job))).is_err() {
                         break;
                     }
                 }
@@ -151,7 +154,10 @@ pub fn stream_campaign<E>(
                         sink(run).map(|()| simulated_s).map_err(StreamError::Sink)
                     }
                     Ok(_) => break,
-                    Err(e) => Err(StreamError::Campaign(CampaignError::Setup(e))),
+                    Err(RunError::Setup(e)) => Err(StreamError::Campaign(CampaignError::Setup(e))),
+                    Err(RunError::Panicked(why)) => Err(StreamError::Campaign(
+                        CampaignError::Panicked(i_of(&stats), why),
+                    )),
                 };
                 match step {
                     Ok(sim_s) => stats.simulated_s += sim_s,
@@ -195,6 +201,43 @@ fn wait_for_room(
             .0;
     }
     true
+}
+
+/// Sets the flag when dropped while its thread unwinds.
+struct HaltOnDrop<'a>(&'a AtomicBool);
+
+impl Drop for HaltOnDrop<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+/// Why a run gave no result.
+enum RunError {
+    Setup(SetupError),
+    /// The simulation panicked (a bug): the message.
+    Panicked(String),
+}
+
+/// The campaign position (from 1) of the next run to hand over.
+fn i_of(stats: &CampaignStats) -> u32 {
+    stats.done as u32 + 1
+}
+
+/// Run a job; a panic in it is caught and reported as that run's failure, so the campaign
+/// stops cleanly and keeps the runs before it instead of hanging its other workers.
+fn run_caught(job: &Job) -> Result<RunResult, RunError> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_job(job))) {
+        Ok(r) => r.map_err(RunError::Setup),
+        Err(p) => Err(RunError::Panicked(
+            p.downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic".into()),
+        )),
+    }
 }
 
 fn run_job(job: &Job) -> Result<RunResult, SetupError> {

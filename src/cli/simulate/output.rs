@@ -73,15 +73,17 @@ impl CampaignWriter {
         Ok(())
     }
 
-    /// Close the set: `summary.json`, then replace the previous results.
+    /// Close the set: `summary.json`, then replace the previous results (the writers closed
+    /// first: a directory with open files cannot be renamed everywhere).
     pub fn finish(mut self, summary: &Value) -> anyhow::Result<()> {
         self.pairs.flush()?;
         self.faults_csv.flush()?;
+        let mut set = self.set;
+        drop((self.pairs, self.faults_csv));
         let text = serde_json::to_string_pretty(summary)? + "\n";
-        self.set.write("summary.json", text.as_bytes())?;
-        let dir = self.set.target().display().to_string();
-        self.set
-            .commit()
+        set.write("summary.json", text.as_bytes())?;
+        let dir = set.target().display().to_string();
+        set.commit()
             .with_context(|| format!("writing the campaign into {dir}"))
     }
 }

@@ -89,7 +89,12 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     };
     // The same ranges as a campaign's (diameter, wraps, drive voltage).
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mut set = crate::cli::open_out(&args.out)?.stage()?;
+    let mut set = crate::cli::open_out(
+        &args.out,
+        "two-control",
+        &["two_control.csv", "crosstalk.csv"],
+    )?
+    .stage()?;
     let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
     write_two(&mut set, &cfg, &r)?;
     set.commit()?;

@@ -60,21 +60,19 @@ impl Files {
     /// directory that holds another session's files unless `overwrite` is set.
     pub fn create(opts: &LogOptions) -> anyhow::Result<Files> {
         let dir = &opts.out_dir;
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+        let names = [
+            RAW_CSV,
+            PAIRS_CSV,
+            PAIRS_INCOMPLETE_CSV,
+            FAULTS_CSV,
+            SUMMARY_JSON,
+            STREAM_FILE,
+            MESSAGES_TXT,
+        ];
+        // Locked and recovered first, so the check sees what is really there.
+        let out = crate::cli::open_out(dir, "log", &names)?;
         if !opts.overwrite {
-            let existing: Vec<&str> = [
-                RAW_CSV,
-                PAIRS_CSV,
-                PAIRS_INCOMPLETE_CSV,
-                FAULTS_CSV,
-                SUMMARY_JSON,
-                STREAM_FILE,
-                MESSAGES_TXT,
-            ]
-            .into_iter()
-            .filter(|n| dir.join(n).exists())
-            .collect();
+            let existing: Vec<&str> = names.into_iter().filter(|n| dir.join(n).exists()).collect();
             if !existing.is_empty() {
                 anyhow::bail!(
                     "{} already holds a logged session ({}): choose another --out, or pass \
@@ -84,7 +82,7 @@ impl Files {
                 );
             }
         }
-        let mut set = crate::cli::open_out(dir)?.stage()?;
+        let mut set = out.stage()?;
         set.keep_on_failure();
         Ok(Files {
             raw: create(&mut set, RAW_CSV, Some(RAW_HEADER))?,

@@ -32,6 +32,8 @@ pub struct Logger<'f> {
     runs: Vec<RunSummary>,
     current: Option<Current>,
     pairs_incomplete: u64,
+    /// Runs whose run-end record has arrived.
+    completed: usize,
     events: Vec<Located>,
     bad: Vec<BadFrame>,
 }
@@ -57,6 +59,7 @@ impl<'f> Logger<'f> {
             runs: Vec::new(),
             current: None,
             pairs_incomplete: 0,
+            completed: 0,
             events: Vec::new(),
             bad: Vec::new(),
         })
@@ -64,7 +67,7 @@ impl<'f> Logger<'f> {
 
     /// Runs whose run-end record has arrived.
     pub fn completed_runs(&self) -> usize {
-        self.runs.iter().filter(|r| r.complete).count()
+        self.completed
     }
 
     /// Bytes received so far.
@@ -74,6 +77,17 @@ impl<'f> Logger<'f> {
 
     /// Take a chunk of the stream: decode it, write what it completes, flush every file.
     pub fn feed(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        self.push(bytes)?;
+        self.files.flush()
+    }
+
+    /// Flush every file.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        self.files.flush()
+    }
+
+    /// [`Logger::feed`] without the flush (a chunk fed in pieces, flushed once).
+    pub fn push(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         self.files.stream(bytes)?;
         let mut events = std::mem::take(&mut self.events);
         let mut bad = std::mem::take(&mut self.bad);
@@ -93,7 +107,7 @@ impl<'f> Logger<'f> {
         }
         self.events = events;
         self.bad = bad;
-        self.files.flush()
+        Ok(())
     }
 
     /// The run under way, opened as a run of unknown number if its run-start record was lost
@@ -292,6 +306,9 @@ impl<'f> Logger<'f> {
         self.current_run(seq);
         let c = self.current.take().expect("set");
         let rs = &mut self.runs[c.index];
+        if !rs.complete {
+            self.completed += 1;
+        }
         rs.complete = true;
         rs.pairs_reported = Some(e.pairs);
         rs.ended_by_fault = e.fault.map(|k| k.name());
