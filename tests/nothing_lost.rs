@@ -317,37 +317,14 @@ fn a_long_stream_stops_at_its_run_limit_with_no_false_truncation() {
     let rep = write(&dir, "rep.defmt", "");
     std::fs::write(&rep, one.repeat(40)).unwrap();
     let out = dir.join("out");
-    let o = capstan(&[
-        "log",
-        "--elf",
-        "tests/data/qemu-fw.elf",
-        "--from",
-        s(&rep),
-        "--out",
-        s(&out),
-        "--runs",
-        "3",
-        "--strict",
-        "-q",
-    ]);
+    let o = log_from(&rep, &out, &["--runs", "3", "--strict", "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["runs"].as_array().unwrap().len(), 3, "{summary}");
     assert!(summary["truncated_tail"].is_null(), "{summary}");
     // The whole stream, strictly: 80 runs, every frame whole.
-    let o = capstan(&[
-        "log",
-        "--elf",
-        "tests/data/qemu-fw.elf",
-        "--from",
-        s(&rep),
-        "--out",
-        s(&out),
-        "--overwrite",
-        "--strict",
-        "-q",
-    ]);
+    let o = log_from(&rep, &out, &["--overwrite", "--strict", "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("80 run(s) (80 complete)"),
@@ -356,15 +333,21 @@ fn a_long_stream_stops_at_its_run_limit_with_no_false_truncation() {
     );
     // Empty: refused under --strict.
     let empty = write(&dir, "empty.defmt", "");
-    let o = capstan(&[
+    let o = log_from(&empty, &dir.join("out-empty"), &["--strict"]);
+    assert!(stderr(&o).contains("the stream is empty"), "{}", stderr(&o));
+}
+
+/// `capstan log` decoding the saved stream `from` (recorded QEMU firmware) into `out`.
+fn log_from(from: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
         "log",
         "--elf",
         "tests/data/qemu-fw.elf",
         "--from",
-        s(&empty),
+        s(from),
         "--out",
-        s(&dir.join("out-empty")),
-        "--strict",
-    ]);
-    assert!(stderr(&o).contains("the stream is empty"), "{}", stderr(&o));
+        s(out),
+    ];
+    args.extend(extra);
+    capstan(&args)
 }
