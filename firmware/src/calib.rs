@@ -183,6 +183,73 @@ impl Default for Calibration {
     }
 }
 
+/// Why a calibration is refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub enum CalibrationError {
+    /// A channel's sensitivity must be above 0 and at most 1 N per count.
+    Sensitivity,
+    /// A channel's zero must be within the ADC's 0..=4095 counts.
+    Zero,
+    /// The tare reference must be 0..10 N.
+    TareReference,
+    /// The servo map needs two different pulses within 400..=2600 µs and 0 < max ≤ 360°.
+    ServoMap,
+    /// The amplifier needs a full scale of 0..=5 V and a gain of 0..=100.
+    AmpMap,
+}
+
+impl CalibrationError {
+    /// What is wrong, for a person.
+    pub const fn message(self) -> &'static str {
+        match self {
+            CalibrationError::Sensitivity => "n_per_count must be above 0 and at most 1 N/count",
+            CalibrationError::Zero => "a zero must be within 0..=4095 counts",
+            CalibrationError::TareReference => "the tare reference must be 0 to 10 N",
+            CalibrationError::ServoMap => {
+                "the servo pulses must differ and lie in 400..=2600 µs, max_deg in (0, 360]"
+            }
+            CalibrationError::AmpMap => {
+                "the amplifier full scale must be in (0, 5] V and its gain in (0, 100]"
+            }
+        }
+    }
+}
+
+fn within(v: f32, lo: f32, hi: f32) -> bool {
+    v.is_finite() && v >= lo && v <= hi
+}
+
+impl Calibration {
+    /// Refuse a calibration the rig cannot work with, with the reason.
+    pub fn validate(&self) -> Result<(), CalibrationError> {
+        for ch in [&self.t1, &self.t2] {
+            if !(within(ch.n_per_count, 0.0, 1.0) && ch.n_per_count > 0.0) {
+                return Err(CalibrationError::Sensitivity);
+            }
+            if !within(ch.zero_counts, 0.0, 4095.0) {
+                return Err(CalibrationError::Zero);
+            }
+        }
+        if !within(self.tare_reference_n, 0.0, 10.0) {
+            return Err(CalibrationError::TareReference);
+        }
+        let s = &self.servo;
+        let pulses_ok = within(s.pulse_at_min_us, 400.0, 2600.0)
+            && within(s.pulse_at_max_us, 400.0, 2600.0)
+            && (s.pulse_at_max_us - s.pulse_at_min_us).abs() >= 1.0;
+        if !(pulses_ok && within(s.max_deg, 0.0, 360.0) && s.max_deg > 0.0) {
+            return Err(CalibrationError::ServoMap);
+        }
+        let a = &self.amp;
+        let positive_within = |v: f32, hi: f32| within(v, 0.0, hi) && v > 0.0;
+        if !(positive_within(a.full_scale_v, 5.0) && positive_within(a.amp_gain, 100.0)) {
+            return Err(CalibrationError::AmpMap);
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

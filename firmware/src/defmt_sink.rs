@@ -17,7 +17,7 @@ impl LogSink for DefmtSink {
                 let p = &s.protocol;
                 let c = &s.calibration;
                 defmt::info!(
-                    "run_start seq={=u32} run={=u32} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32} pre_trigger_ms={=u32} trigger_ms={=u32} tare_ms={=u32} amp_control_v={=f32} sample_hz={=u32} raw_log_hz={=u32} window_after_ms={=u32} window_before_ms={=u32} diameter_mm={=f32} wrap_deg={=f32} amp_gain={=f32} t1_zero={=f32} t1_n_per_count={=f32} t2_zero={=f32} t2_n_per_count={=f32} crc={=u32}",
+                    "run_start seq={=u32} run={=u32} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32} pre_trigger_ms={=u32} trigger_ms={=u32} tare_ms={=u32} amp_control_v={=f32} sample_hz={=u32} raw_log_hz={=u32} window_after_ms={=u32} window_before_ms={=u32} diameter_mm={=f32} wrap_deg={=f32} amp_gain={=f32} t1_zero={=f32} t1_n_per_count={=f32} t2_zero={=f32} t2_n_per_count={=f32} tare_reference_n={=f32} servo_min_us={=f32} servo_max_us={=f32} servo_max_deg={=f32} amp_full_scale_v={=f32} crc={=u32}",
                     seq,
                     s.run,
                     p.order.code(),
@@ -40,9 +40,69 @@ impl LogSink for DefmtSink {
                     c.t1.n_per_count,
                     c.t2.zero_counts,
                     c.t2.n_per_count,
+                    c.tare_reference_n,
+                    c.servo.pulse_at_min_us,
+                    c.servo.pulse_at_max_us,
+                    c.servo.max_deg,
+                    c.amp.full_scale_v,
                     crc
                 );
             }
+            Record::Settings(r) => {
+                let p = &r.settings.protocol;
+                let c = &r.settings.calibration;
+                defmt::info!(
+                    "settings seq={=u32} source={=u8} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32} pre_trigger_ms={=u32} trigger_ms={=u32} tare_ms={=u32} amp_control_v={=f32} sample_hz={=u32} raw_log_hz={=u32} window_after_ms={=u32} window_before_ms={=u32} diameter_mm={=f32} wrap_deg={=f32} amp_gain={=f32} t1_zero={=f32} t1_n_per_count={=f32} t2_zero={=f32} t2_n_per_count={=f32} tare_reference_n={=f32} servo_min_us={=f32} servo_max_us={=f32} servo_max_deg={=f32} amp_full_scale_v={=f32} crc={=u32}",
+                    seq,
+                    r.source.code(),
+                    p.order.code(),
+                    p.rest_deg,
+                    p.step_deg,
+                    p.final_deg,
+                    p.dwell_ms,
+                    p.pre_trigger_ms,
+                    p.trigger_ms,
+                    p.tare_ms,
+                    p.amp_control_v,
+                    p.sample_hz,
+                    p.raw_log_hz,
+                    p.window_after_change_ms,
+                    p.window_before_next_ms,
+                    p.capstan_diameter_mm,
+                    p.wrap_deg,
+                    c.amp.amp_gain,
+                    c.t1.zero_counts,
+                    c.t1.n_per_count,
+                    c.t2.zero_counts,
+                    c.t2.n_per_count,
+                    c.tare_reference_n,
+                    c.servo.pulse_at_min_us,
+                    c.servo.pulse_at_max_us,
+                    c.servo.max_deg,
+                    c.amp.full_scale_v,
+                    crc
+                );
+            }
+            Record::Live(l) => defmt::info!(
+                "live seq={=u32} t_ms={=u32} c1={=u16} c2={=u16} t1_n={=f32} t2_n={=f32} servo_deg={=f32} crc={=u32}",
+                seq,
+                l.t_ms,
+                l.counts[0],
+                l.counts[1],
+                l.force_n[0],
+                l.force_n[1],
+                l.servo_deg,
+                crc
+            ),
+            Record::Reply(r) => defmt::info!(
+                "reply seq={=u32} command={=u8} error={=u8} v1={=f32} v2={=f32} crc={=u32}",
+                seq,
+                r.command.code(),
+                r.error.map_or(0, |e| e.code()),
+                r.values[0],
+                r.values[1],
+                crc
+            ),
             Record::Raw(r) => defmt::info!(
                 "raw seq={=u32} t_us={=i64} c1={=u16} c2={=u16} t1_n={=f32} t2_n={=f32} crc={=u32}",
                 seq,

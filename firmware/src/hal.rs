@@ -33,11 +33,56 @@ pub trait ForceAdc {
 pub trait Watchdog {
     /// Called once per sample period by the runner.
     fn feed(&mut self);
+
+    /// Feed it once with room for an operation that holds the loop for up to `ms` (a flash
+    /// write); the next [`Watchdog::feed`] restores the usual timeout.
+    fn allow_ms(&mut self, ms: u32) {
+        let _ = ms;
+        self.feed();
+    }
 }
 
 /// No watchdog.
 impl Watchdog for () {
     fn feed(&mut self) {}
+}
+
+/// Where host commands arrive: a byte stream, read without waiting (the RTT down channel on
+/// the board).
+pub trait Console {
+    /// The next byte the host sent, if one is there.
+    fn read_byte(&mut self) -> Option<u8>;
+}
+
+/// No host.
+impl Console for () {
+    fn read_byte(&mut self) -> Option<u8> {
+        None
+    }
+}
+
+/// Where the settings are kept ([`crate::store::SettingsStore`] on a flash).
+#[allow(async_fn_in_trait)]
+pub trait SettingsFlash {
+    /// Keep `settings`; false if the write failed (the stored settings are then unchanged).
+    async fn save(&mut self, settings: &crate::settings::Settings) -> bool;
+}
+
+/// No flash: nothing can be stored.
+impl SettingsFlash for () {
+    async fn save(&mut self, _: &crate::settings::Settings) -> bool {
+        false
+    }
+}
+
+impl<F: embedded_storage_async::nor_flash::NorFlash> SettingsFlash
+    for crate::store::SettingsStore<F>
+{
+    async fn save(&mut self, settings: &crate::settings::Settings) -> bool {
+        crate::store::SettingsStore::save(self, settings)
+            .await
+            .is_ok()
+    }
 }
 
 impl<T: ForceAdc + ?Sized> ForceAdc for &mut T {
@@ -49,5 +94,8 @@ impl<T: ForceAdc + ?Sized> ForceAdc for &mut T {
 impl<T: Watchdog + ?Sized> Watchdog for &mut T {
     fn feed(&mut self) {
         (**self).feed()
+    }
+    fn allow_ms(&mut self, ms: u32) {
+        (**self).allow_ms(ms)
     }
 }

@@ -23,6 +23,7 @@ mod fmt;
 
 pub mod button;
 pub mod calib;
+pub mod command;
 pub mod condition;
 #[cfg(target_os = "none")]
 pub mod defmt_sink;
@@ -35,10 +36,15 @@ mod rig_tests;
 pub mod runner;
 pub mod safe_state;
 pub mod safety;
+pub mod settings;
+pub mod setup;
+pub mod store;
 
-pub use calib::{AmpMap, Calibration, ChannelCal, ServoMap};
+pub use calib::{AmpMap, Calibration, CalibrationError, ChannelCal, ServoMap};
+pub use command::{Command, CommandError};
 pub use protocol::{Protocol, ProtocolError, StepOrder};
 pub use record::{FaultKind, LogSink, Record};
 pub use rig::Rig;
 pub use runner::{run_once, RigIo, RunError};
 pub use safe_state::{force_safe, ForceOutputs, SafeDuties};
+pub use settings::{Settings, SettingsError};

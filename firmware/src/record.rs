@@ -8,9 +8,11 @@
 //! the thesis's logger.
 
 use crate::calib::Calibration;
+use crate::command::{CommandError, CommandKind};
 use crate::condition::ChannelStats;
 use crate::hal::Channel;
 use crate::protocol::Protocol;
+use crate::settings::Settings;
 
 /// Wire value of "no channel" / "no fault" in the defmt records (the host decoder reads it too).
 pub const NONE_CODE: u8 = 0xff;
@@ -131,9 +133,107 @@ pub struct RunEnd {
     pub fault: Option<FaultKind>,
 }
 
+/// Live values in setup mode, ~10 a second.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Live {
+    /// ms since boot.
+    pub t_ms: u32,
+    /// ADC counts, T1 then T2 (0 where a conversion failed).
+    pub counts: [u16; 2],
+    /// Calibrated forces, N, T1 then T2.
+    pub force_n: [f32; 2],
+    /// Servo angle commanded, deg.
+    pub servo_deg: f32,
+}
+
+/// The answer to one host command.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reply {
+    /// The command answered.
+    pub command: CommandKind,
+    /// Why it was refused; `None` = done.
+    pub error: Option<CommandError>,
+    /// What it produced: `jog`/`servo` the angle; `zero` the zeros of T1 and T2, counts;
+    /// `weigh` n_per_count and the mean counts; `set` the key's code and its value; else 0.
+    pub values: [f32; 2],
+}
+
+/// Where the settings in force came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SettingsSource {
+    /// Asked for (`show`): what the rig runs with now.
+    Current = 0,
+    /// Just written to flash (`store`).
+    Stored = 1,
+    /// Read from flash at boot.
+    Loaded = 2,
+    /// Built-in defaults: nothing stored yet.
+    DefaultsNoRecord = 3,
+    /// Built-in defaults: the newest stored record is corrupt, so none is used.
+    DefaultsCorrupt = 4,
+    /// Built-in defaults: the stored record does not validate (another version, bad values).
+    DefaultsInvalid = 5,
+    /// Built-in defaults: the flash could not be read.
+    DefaultsFlashError = 6,
+    /// Built-in defaults restored by `defaults` (not yet stored).
+    DefaultsAsked = 7,
+}
+
+impl SettingsSource {
+    /// Every source.
+    pub const ALL: [SettingsSource; 8] = [
+        SettingsSource::Current,
+        SettingsSource::Stored,
+        SettingsSource::Loaded,
+        SettingsSource::DefaultsNoRecord,
+        SettingsSource::DefaultsCorrupt,
+        SettingsSource::DefaultsInvalid,
+        SettingsSource::DefaultsFlashError,
+        SettingsSource::DefaultsAsked,
+    ];
+
+    /// Wire code.
+    pub const fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// Inverse of [`SettingsSource::code`].
+    pub fn from_code(code: u8) -> Option<SettingsSource> {
+        SettingsSource::ALL.get(code as usize).copied()
+    }
+
+    /// What it means, for a person.
+    pub const fn message(self) -> &'static str {
+        match self {
+            SettingsSource::Current => "the settings in force",
+            SettingsSource::Stored => "stored in flash",
+            SettingsSource::Loaded => "loaded from flash at boot",
+            SettingsSource::DefaultsNoRecord => "no settings stored: using the built-in defaults",
+            SettingsSource::DefaultsCorrupt => {
+                "the stored settings are corrupt: using the built-in defaults"
+            }
+            SettingsSource::DefaultsInvalid => {
+                "the stored settings are of another version or invalid: using the built-in defaults"
+            }
+            SettingsSource::DefaultsFlashError => {
+                "the flash could not be read: using the built-in defaults"
+            }
+            SettingsSource::DefaultsAsked => "built-in defaults restored (send store to keep them)",
+        }
+    }
+}
+
+/// The settings in force, and where they came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SettingsReport {
+    /// Where they came from.
+    pub source: SettingsSource,
+    /// The settings.
+    pub settings: Settings,
+}
+
 /// One log record.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub enum Record {
     /// Run start (protocol, calibration).
     RunStart(RunStart),
@@ -145,6 +245,12 @@ pub enum Record {
     Fault(Fault),
     /// Run end.
     RunEnd(RunEnd),
+    /// Live values (setup mode).
+    Live(Live),
+    /// The answer to a host command.
+    Reply(Reply),
+    /// The settings in force.
+    Settings(SettingsReport),
 }
 
 /// Where records go.
@@ -229,35 +335,58 @@ impl Default for CrcFields {
     }
 }
 
+/// The protocol and calibration fields of `run_start` and `settings`, in their order.
+fn settings_crc(c: CrcFields, p: &Protocol, k: &Calibration) -> CrcFields {
+    c.u8(p.order.code())
+        .f32(p.rest_deg)
+        .f32(p.step_deg)
+        .f32(p.final_deg)
+        .u32(p.dwell_ms)
+        .u32(p.pre_trigger_ms)
+        .u32(p.trigger_ms)
+        .u32(p.tare_ms)
+        .f32(p.amp_control_v)
+        .u32(p.sample_hz)
+        .u32(p.raw_log_hz)
+        .u32(p.window_after_change_ms)
+        .u32(p.window_before_next_ms)
+        .f32(p.capstan_diameter_mm)
+        .f32(p.wrap_deg)
+        .f32(k.amp.amp_gain)
+        .f32(k.t1.zero_counts)
+        .f32(k.t1.n_per_count)
+        .f32(k.t2.zero_counts)
+        .f32(k.t2.n_per_count)
+        .f32(k.tare_reference_n)
+        .f32(k.servo.pulse_at_min_us)
+        .f32(k.servo.pulse_at_max_us)
+        .f32(k.servo.max_deg)
+        .f32(k.amp.full_scale_v)
+}
+
 /// The checksum a record is logged with (`crc=` in its format string): over its sequence
 /// number and every field, in the format string's order.
 pub fn record_crc(seq: u32, record: &Record) -> u32 {
     let c = CrcFields::new().u32(seq);
     match record {
-        Record::RunStart(s) => {
-            let (p, k) = (&s.protocol, &s.calibration);
-            c.u32(s.run)
-                .u8(p.order.code())
-                .f32(p.rest_deg)
-                .f32(p.step_deg)
-                .f32(p.final_deg)
-                .u32(p.dwell_ms)
-                .u32(p.pre_trigger_ms)
-                .u32(p.trigger_ms)
-                .u32(p.tare_ms)
-                .f32(p.amp_control_v)
-                .u32(p.sample_hz)
-                .u32(p.raw_log_hz)
-                .u32(p.window_after_change_ms)
-                .u32(p.window_before_next_ms)
-                .f32(p.capstan_diameter_mm)
-                .f32(p.wrap_deg)
-                .f32(k.amp.amp_gain)
-                .f32(k.t1.zero_counts)
-                .f32(k.t1.n_per_count)
-                .f32(k.t2.zero_counts)
-                .f32(k.t2.n_per_count)
-        }
+        Record::RunStart(s) => settings_crc(c.u32(s.run), &s.protocol, &s.calibration),
+        Record::Settings(s) => settings_crc(
+            c.u8(s.source.code()),
+            &s.settings.protocol,
+            &s.settings.calibration,
+        ),
+        Record::Live(l) => c
+            .u32(l.t_ms)
+            .u16(l.counts[0])
+            .u16(l.counts[1])
+            .f32(l.force_n[0])
+            .f32(l.force_n[1])
+            .f32(l.servo_deg),
+        Record::Reply(r) => c
+            .u8(r.command.code())
+            .u8(r.error.map_or(0, |e| e.code()))
+            .f32(r.values[0])
+            .f32(r.values[1]),
         Record::Raw(r) => c
             .i64(r.t_us)
             .u16(r.counts[0])

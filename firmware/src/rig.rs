@@ -3,6 +3,7 @@
 
 use crate::button::Debouncer;
 use crate::calib::Calibration;
+use crate::command::{Command, CommandError};
 use crate::condition::Window;
 use crate::hal::AdcError;
 use crate::protocol::{Protocol, ProtocolError};
@@ -10,6 +11,10 @@ use crate::record::{
     Fault, FaultKind, LogSink, RawSample, Record, RunEnd, RunStart, Sequencer, StepPair,
 };
 use crate::safety::{SafetyInput, SafetyLimits, Supervisor};
+use crate::settings::Settings;
+use crate::setup::Measure;
+
+mod commands;
 
 /// Debounce time of the button, ms.
 /// (10 ms: longer than contact bounce, short enough that an abort is safe well inside 20 ms.)
@@ -33,6 +38,8 @@ pub struct Inputs {
     pub counts: [Result<u16, AdcError>; 2],
     /// The button's raw level: true = pressed.
     pub button_pressed: bool,
+    /// A command line from the host, parsed, if one arrived this period.
+    pub command: Option<Result<Command, CommandError>>,
 }
 
 /// What the rig commands each sample period.
@@ -48,6 +55,9 @@ pub struct Outputs {
     pub led: bool,
     /// Set on the sample the run ended (normally or by a fault).
     pub finished: Option<RunEnd>,
+    /// The host asked to keep these settings in flash: the runner writes them, then reports
+    /// with [`Rig::stored`].
+    pub store: Option<Settings>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,6 +67,12 @@ enum Phase {
     Idle { latched: Option<FaultKind> },
     /// Sampling the preloaded cord with the capstan stopped.
     Tare { sum: [u64; 2], n: u32 },
+    /// Setup mode: the servo where the host jogged it, amplifier at 0 V, live values.
+    Setup {
+        servo_deg: f32,
+        measure: Option<Measure>,
+        next_live_us: u64,
+    },
     /// Running the protocol; `step` is the step being held, `window` its conditioning.
     Run {
         step: u32,
@@ -68,6 +84,8 @@ enum Phase {
 /// The rig: protocol, calibration and the state of the current run.
 #[derive(Clone, Debug)]
 pub struct Rig {
+    /// The firmware's built-in settings (`defaults` goes back to them).
+    defaults: Settings,
     protocol: Protocol,
     cal: Calibration,
     limits: SafetyLimits,
@@ -93,6 +111,10 @@ impl Rig {
         protocol.validate()?;
         let debounce = (DEBOUNCE_MS * protocol.sample_hz / 1000) as u16;
         Ok(Rig {
+            defaults: Settings {
+                protocol,
+                calibration: cal,
+            },
             protocol,
             cal,
             limits,
@@ -158,7 +180,12 @@ impl Rig {
 
     /// True while a run is in progress (tare included).
     pub fn is_running(&self) -> bool {
-        !matches!(self.phase, Phase::Idle { .. })
+        matches!(self.phase, Phase::Tare { .. } | Phase::Run { .. })
+    }
+
+    /// True in setup mode.
+    pub fn is_in_setup(&self) -> bool {
+        matches!(self.phase, Phase::Setup { .. })
     }
 
     /// What the idle rig commands now: [`Rig::safe_outputs`] with the servo where homing has
@@ -179,12 +206,32 @@ impl Rig {
             trigger: false,
             led: false,
             finished: None,
+            store: None,
         }
     }
 
     /// One sample period.
     pub fn step(&mut self, inp: &Inputs, sink: &mut impl LogSink) -> Outputs {
         let pressed = self.button.step(inp.button_pressed);
+        let mut abort = pressed;
+        let mut store = None;
+        match inp.command {
+            Some(Ok(Command::Abort)) if self.is_running() => abort = true,
+            Some(cmd) => store = self.command(cmd, inp.now_us, sink),
+            None => {}
+        }
+        let mut out = self.step_phase(inp, pressed, abort, sink);
+        out.store = store;
+        out
+    }
+
+    fn step_phase(
+        &mut self,
+        inp: &Inputs,
+        pressed: bool,
+        abort: bool,
+        sink: &mut impl LogSink,
+    ) -> Outputs {
         match self.phase {
             Phase::Idle { latched } => {
                 if self.is_homing() {
@@ -222,7 +269,8 @@ impl Rig {
                 out.led = (inp.now_us / 1000 / blink_ms).is_multiple_of(2);
                 out
             }
-            _ => self.step_running(inp, pressed, sink),
+            Phase::Setup { .. } => self.step_setup(inp, pressed, sink),
+            _ => self.step_running(inp, abort, sink),
         }
     }
 
@@ -247,6 +295,14 @@ impl Rig {
             }
             _ => false,
         }
+    }
+
+    /// Both channels in newtons (NaN where a conversion failed).
+    fn forces(&self, inp: &Inputs) -> [f32; 2] {
+        [
+            inp.counts[0].map_or(f32::NAN, |c| self.cal.t1.newtons(c as f32)),
+            inp.counts[1].map_or(f32::NAN, |c| self.cal.t2.newtons(c as f32)),
+        ]
     }
 
     fn emit(&mut self, sink: &mut impl LogSink, record: Record) {
@@ -276,10 +332,7 @@ impl Rig {
         let elapsed_us = inp.now_us.saturating_sub(self.press_us);
         let elapsed_ms = (elapsed_us / 1000) as u32;
         let t_us = self.since_trigger_us(elapsed_us);
-        let force_n = [
-            inp.counts[0].map_or(f32::NAN, |c| self.cal.t1.newtons(c as f32)),
-            inp.counts[1].map_or(f32::NAN, |c| self.cal.t2.newtons(c as f32)),
-        ];
+        let force_n = self.forces(inp);
         let counts_ok = match inp.counts {
             [Ok(a), Ok(b)] => Some([a, b]),
             _ => None,
@@ -404,6 +457,7 @@ impl Rig {
                 trigger: elapsed_ms >= p.trigger_at_ms() && trigger_ms < p.trigger_ms,
                 led: true,
                 finished: None,
+                store: None,
             };
         }
         // Taring: capstan stopped, servo at rest.

@@ -61,6 +61,7 @@ fn drive(rig: &mut Rig, script: &Script<'_>, skip: Option<(u64, u64)>) -> Trace 
                 now_us: t,
                 counts,
                 button_pressed,
+                command: None,
             },
             &mut sink,
         );
@@ -326,6 +327,7 @@ fn fault_case(kind: FaultKind) {
             now_us: t_end + 1000,
             counts,
             button_pressed: false,
+            command: None,
         },
         &mut sink,
     );

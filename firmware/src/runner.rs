@@ -2,7 +2,8 @@
 //! values between it and the hardware. The RP2040 binary, the emulated-ARM build and the host
 //! simulator all run this very function; only the `RigIo` they hand it differs.
 
-use crate::hal::{Channel, ForceAdc, Watchdog};
+use crate::command::LineBuffer;
+use crate::hal::{Channel, Console, ForceAdc, SettingsFlash, Watchdog};
 use crate::record::{LogSink, RunEnd};
 use crate::rig::{Inputs, Outputs, Rig};
 use embassy_time::{Duration, Instant, Ticker};
@@ -77,6 +78,7 @@ where
 {
     fn read(&mut self, now_us: u64) -> Result<Inputs, RunError> {
         Ok(Inputs {
+            command: None,
             now_us,
             counts: [
                 self.adc.read_counts(Channel::T1),
@@ -136,11 +138,12 @@ where
     }
 }
 
-/// Wait for the button, run the protocol once, return how it ended.
-///
-/// Samples both channels every `1/sample_hz` on an embassy-time [`Ticker`] (a late tick is
-/// caught by the supervisor's watchdog check). On a hardware error the rig is made safe
-/// (best effort) and the error returned.
+/// The watchdog's allowance while the flash is written, ms: a 4 KiB erase takes ~45 ms and
+/// at most ~400 ms on the Pico's W25Q16, and a save may erase a page or two.
+pub const STORE_WATCHDOG_MS: u32 = 2_000;
+
+/// Wait for the button, run the protocol once, return how it ended (no host commands, no
+/// flash: the simulator's campaigns).
 pub async fn run_once<S, A, T, L, B, D, W>(
     io: &mut RigIo<S, A, T, L, B, D, W>,
     rig: &mut Rig,
@@ -155,22 +158,57 @@ where
     D: ForceAdc,
     W: Watchdog,
 {
+    serve(io, rig, sink, &mut (), &mut (), |out| out.finished).await
+}
+
+/// Serve the rig: sample every `1/sample_hz` on an embassy-time [`Ticker`] (a late tick is
+/// caught by the supervisor's watchdog check), take at most one host command line per sample
+/// from `console`, write the settings to `flash` when asked, until `until` returns a value for
+/// the outputs of a sample. On a hardware error the rig is made safe (best effort) and the
+/// error returned.
+pub async fn serve<S, A, T, L, B, D, W, R>(
+    io: &mut RigIo<S, A, T, L, B, D, W>,
+    rig: &mut Rig,
+    sink: &mut impl LogSink,
+    console: &mut impl Console,
+    flash: &mut impl SettingsFlash,
+    mut until: impl FnMut(&Outputs) -> Option<R>,
+) -> Result<R, RunError>
+where
+    S: SetDutyCycle,
+    A: SetDutyCycle,
+    T: OutputPin,
+    L: OutputPin,
+    B: InputPin,
+    D: ForceAdc,
+    W: Watchdog,
+{
     let period = Duration::from_micros(rig.protocol().sample_period_us() as u64);
     let mut ticker = Ticker::every(period);
     let mut written = Written::default();
+    let mut line = LineBuffer::default();
     let result = loop {
         ticker.next().await;
         io.watchdog.feed();
-        let inputs = match io.read(Instant::now().as_micros()) {
+        let mut inputs = match io.read(Instant::now().as_micros()) {
             Ok(i) => i,
             Err(e) => break Err(e),
         };
+        inputs.command = core::iter::from_fn(|| console.read_byte()).find_map(|b| line.push(b));
         let out = rig.step(&inputs, sink);
         if let Err(e) = io.apply(rig, &out, &mut written) {
             break Err(e);
         }
-        if let Some(end) = out.finished {
-            break Ok(end);
+        if let Some(settings) = out.store {
+            io.watchdog.allow_ms(STORE_WATCHDOG_MS);
+            let ok = flash.save(&settings).await;
+            io.watchdog.feed();
+            rig.stored(ok, sink);
+            // No burst of catch-up ticks after the write.
+            ticker.reset();
+        }
+        if let Some(r) = until(&out) {
+            break Ok(r);
         }
     };
     if result.is_err() {

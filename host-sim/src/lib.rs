@@ -6,6 +6,8 @@
 //! * [`panic`](mod@panic): one run in which the firmware panics, and the board's panic path on the plant.
 //! * [`setup`]: a cord's ranges, protocol and plant constants (campaigns and two-control).
 //! * [`noise`]: the quiet simulator or the thesis rig's scatter ([`noise::NoiseProfile`]).
+//! * [`flash`]: a NOR flash in RAM, the board's flash traits, for the settings store.
+//! * [`session`]: a bench session: boot from flash, host commands, weights, presses, resets.
 //! * [`campaign`]: many runs over diameters, wraps and voltages, in parallel threads.
 //! * [`two_control`]: several cords, each with its own servo and firmware, on one capstan and
 //!   one drive motor (the thesis's two-control, single-drive rig).
@@ -14,9 +16,11 @@
 #![deny(missing_docs)]
 
 pub mod campaign;
+pub mod flash;
 pub mod noise;
 pub mod panic;
 pub mod run;
+pub mod session;
 pub mod setup;
 pub mod time;
 pub mod two_control;

@@ -113,6 +113,8 @@ impl LogSink for VecSink {
             Record::Pair(p) => self.log.pairs.push(*p),
             Record::Fault(f) => self.log.faults.push(*f),
             Record::RunEnd(e) => self.log.end = Some(*e),
+            // Setup mode and host commands: not part of a run.
+            Record::Live(_) | Record::Reply(_) | Record::Settings(_) => {}
         }
     }
 }

@@ -25,6 +25,7 @@ use crate::disturb::DisturbState;
 use crate::injection::{Injection, InjectionReport};
 use crate::rng::Rng;
 use capstan_friction::{LoadMemory, Operating};
+use firmware::hal::Channel;
 use heapless::Vec;
 
 /// Most cords (servos) one plant can carry on its capstan.
@@ -65,6 +66,8 @@ struct CordState {
     broken: bool,
     snag: bool,
     unplugged: [bool; 2],
+    /// A known weight hanging on each sensor (bench calibration), N.
+    hanging_n: [f64; 2],
     // sensors
     zero: [f64; 2],
     counts_per_n: [f64; 2],
@@ -170,6 +173,12 @@ impl Plant {
     /// Press cord's button from `at_us` (plant µs, absolute) for `for_us`.
     pub fn press(&mut self, cord: usize, at_us: u64, for_us: u64) {
         self.cords[cord].press = Some((at_us, at_us + for_us));
+    }
+
+    /// Hang a known weight of `newtons` on cord's sensor `channel` (0 takes it off): the sensor
+    /// reads it on top of the cord's tension, as a weight hung from it at the bench does.
+    pub fn hang(&mut self, cord: usize, channel: Channel, newtons: f64) {
+        self.cords[cord].hanging_n[channel as usize] = newtons;
     }
 
     /// Bring the plant to `now_us` (no-op if it is there already or past it).

@@ -15,6 +15,7 @@ fn idle_steps(rig: &mut Rig, t0: u64, ms: u64, press: (u64, u64)) -> Vec<(u64, O
                     now_us: t,
                     counts: [Ok(407), Ok(407)],
                     button_pressed: (press.0..press.1).contains(&t),
+                    command: None,
                 },
                 &mut sink,
             );
