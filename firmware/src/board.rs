@@ -1,7 +1,8 @@
 //! The rig's configuration on the Raspberry Pi Pico: pins, PWM timing, watchdog, protocol and
-//! calibration. Compiled into the RP2040 binary only (`main.rs` declares it for
-//! `target_os = "none"`); the rig core (`lib.rs`) never sees it. Everything an operator may
-//! want to change before flashing is in this file. The wiring itself is in
+//! built-in protocol and calibration (the defaults until settings are stored from the host).
+//! Compiled into the RP2040 binary only (`main.rs` declares it for `target_os = "none"`); the
+//! rig core (`lib.rs`) never sees it. Calibration and protocol are set at the bench without a
+//! rebuild (`capstan rig`, README "Setting up the rig"); what needs one is in this file. The wiring itself is in
 //! the README (section "Firmware on a Raspberry Pi Pico").
 //!
 //! Pin map (Pico header pin in brackets; every signal is 3.3 V logic):
@@ -35,9 +36,10 @@
 //! [`TRIGGER_GPIO`]: the panic path writes those registers directly (`main` checks at boot that
 //! they are the pins of [`Pins`]).
 
+use core::ops::Range;
 use embassy_rp::peripherals::{
-    ADC, PIN_16, PIN_18, PIN_20, PIN_21, PIN_23, PIN_25, PIN_26, PIN_27, PWM_SLICE0, PWM_SLICE1,
-    WATCHDOG,
+    ADC, FLASH, PIN_16, PIN_18, PIN_20, PIN_21, PIN_23, PIN_25, PIN_26, PIN_27, PWM_SLICE0,
+    PWM_SLICE1, WATCHDOG,
 };
 use embassy_rp::{Peri, Peripherals};
 use embassy_time::Duration;
@@ -70,6 +72,8 @@ pub struct Pins {
     pub watchdog: Peri<'static, WATCHDOG>,
     /// The Pico's SMPS power-save pin (driven high: PWM mode, quieter ADC reference).
     pub smps_mode: Peri<'static, PIN_23>,
+    /// The QSPI flash (the settings store).
+    pub flash: Peri<'static, FLASH>,
 }
 
 impl Pins {
@@ -88,6 +92,7 @@ impl Pins {
             t2: p.PIN_27,
             watchdog: p.WATCHDOG,
             smps_mode: p.PIN_23,
+            flash: p.FLASH,
         }
     }
 }
@@ -140,13 +145,29 @@ pub const WATCHDOG_TIMEOUT: Duration = Duration::from_millis(250);
 /// on a rig whose drive motor and servo are unpowered.
 pub const WATCHDOG_PAUSES_WHILE_HALTED: bool = false;
 
-/// The test protocol: the thesis's protocol (`Protocol::default()`).
+/// Size of the Pico's flash chip (W25Q16JV: 2 MiB).
+pub const FLASH_BYTES: usize = 2 * 1024 * 1024;
+
+/// Where the settings store lives: the top four 4 KiB sectors of the flash, as offsets from its
+/// start (memory.x keeps the program below them). `sequential-storage` needs at least two
+/// sectors; four spread the wear (a save, settings and generation, is ~130 bytes: ~30 saves fill
+/// a sector, and the W25Q16 endures 100 000 erases of each).
+pub const SETTINGS_FLASH: Range<u32> = (FLASH_BYTES as u32 - 16 * 1024)..FLASH_BYTES as u32;
+
+/// RTT buffer of the host's command lines, bytes (a line is at most 64).
+pub const COMMAND_BUFFER_BYTES: usize = 128;
+
+/// RTT buffer of the defmt log, bytes (~0.3 s of a run's records at ~3 KB/s).
+pub const LOG_BUFFER_BYTES: usize = 1024;
+
+/// The built-in test protocol: the thesis's protocol (`Protocol::default()`), used until
+/// settings are stored from the host (`capstan rig set ...` then `capstan rig store`: README,
+/// "Setting up the rig") and again after `capstan rig defaults`.
 ///
 /// The capstan diameter and wrap angle are metadata only (they go into every `run_start`
-/// record so the log says what was on the rig): set them to the current setup before
-/// flashing, e.g. `capstan_diameter_mm: 25.4, wrap_deg: 360.0`. 0 means "not given". Any other
-/// field (angles, dwell, sample rate, step order, ...) can be overridden the same way;
-/// `Rig::new` refuses an invalid protocol at boot.
+/// record so the log says what was on the rig): set them from the host (`set diameter_mm`,
+/// `set wrap_deg`). 0 means "not given". The sample and raw-log rates can only be changed
+/// here (a rebuild): the host cannot set them. `Rig::new` refuses an invalid protocol at boot.
 pub fn protocol() -> Protocol {
     Protocol {
         capstan_diameter_mm: 0.0,
@@ -155,7 +176,8 @@ pub fn protocol() -> Protocol {
     }
 }
 
-/// The calibration: the defaults (50 N sensors, zero at 400 counts, 0.015 N/count; servo
+/// The built-in calibration, used until one is stored from the host (`capstan rig zero`,
+/// `weigh`, `set ...`, `store`): the defaults (50 N sensors, zero at 400 counts, 0.015 N/count; servo
 /// angles as the thesis's Arduino Servo library meant them, 544-2400 µs over 0-180°, so 125°
 /// is 1833 µs and 65° 1214 µs; amplifier 3.3 V full scale, gain 4). Each run re-zeroes both
 /// channels during its tare, so only the sensitivities (`n_per_count`, measured through the

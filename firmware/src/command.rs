@@ -133,6 +133,35 @@ impl Key {
         }
     }
 
+    /// Its index in [`crate::settings::Settings::fields`].
+    pub const fn field(self) -> usize {
+        match self {
+            Key::Order => 0,
+            Key::RestDeg => 1,
+            Key::StepDeg => 2,
+            Key::FinalDeg => 3,
+            Key::DwellMs => 4,
+            Key::PreTriggerMs => 5,
+            Key::TriggerMs => 6,
+            Key::TareMs => 7,
+            Key::AmpControlV => 8,
+            Key::WindowAfterMs => 11,
+            Key::WindowBeforeMs => 12,
+            Key::DiameterMm => 13,
+            Key::WrapDeg => 14,
+            Key::AmpGain => 15,
+            Key::T1Zero => 16,
+            Key::T1NPerCount => 17,
+            Key::T2Zero => 18,
+            Key::T2NPerCount => 19,
+            Key::TareReferenceN => 20,
+            Key::ServoMinUs => 21,
+            Key::ServoMaxUs => 22,
+            Key::ServoMaxDeg => 23,
+            Key::AmpFullScaleV => 24,
+        }
+    }
+
     /// Wire code in the `reply` record.
     pub fn code(self) -> u8 {
         Key::ALL.iter().position(|&k| k == self).unwrap_or(0) as u8
@@ -320,60 +349,174 @@ impl Command {
 
     /// Parse one line (surrounding blanks ignored, words separated by blanks).
     pub fn parse(line: &str) -> Result<Command, CommandError> {
-        let mut words = line.split_ascii_whitespace();
-        let word = words.next().ok_or(CommandError::Unknown)?;
-        let cmd = match word {
-            "setup" => Command::Setup,
-            "leave" => Command::Leave,
-            "jog" => Command::Jog(number(&mut words)?),
-            "servo" => Command::Servo(number(&mut words)?),
-            "zero" => Command::Zero,
-            "weigh" => {
-                let ch = match words.next() {
-                    Some("t1") => Channel::T1,
-                    Some("t2") => Channel::T2,
-                    _ => return Err(CommandError::Argument),
-                };
-                Command::Weigh(ch, number(&mut words)?)
-            }
-            "set" => {
-                let key = words.next().ok_or(CommandError::Argument)?;
-                let key = Key::from_name(key).ok_or(CommandError::UnknownKey)?;
-                if key == Key::Order {
-                    let order = match words.next() {
-                        Some("monotone") => StepOrder::Monotone,
-                        Some("updown") => StepOrder::UpDown,
-                        Some("pulse") => StepOrder::Pulse,
-                        _ => return Err(CommandError::Argument),
-                    };
-                    Command::Set(key, order.code() as f32)
-                } else {
-                    Command::Set(key, number(&mut words)?)
-                }
-            }
-            "show" => Command::Show,
-            "store" => Command::Store,
-            "defaults" => Command::Defaults,
-            "run" => Command::Run,
-            "abort" => Command::Abort,
-            "ack" => Command::Ack,
-            _ => return Err(CommandError::Unknown),
-        };
-        if words.next().is_some() {
+        Command::parse_bytes(line.as_bytes())
+    }
+
+    /// [`Command::parse`] on the line's bytes. Bytes, not `str`: no UTF-8 check and no string
+    /// slicing, whose panic paths link ~4 KiB of formatting into the board image.
+    pub fn parse_bytes(line: &[u8]) -> Result<Command, CommandError> {
+        let [word, a, b, extra] = words(line);
+        if !extra.is_empty() {
             return Err(CommandError::Argument);
         }
+        let arity = |n: usize| {
+            let given = [a, b].iter().filter(|w| !w.is_empty()).count();
+            (given == n).then_some(()).ok_or(CommandError::Argument)
+        };
+        if let Some((_, cmd)) = SIMPLE.iter().find(|(w, _)| *w == word) {
+            arity(0)?;
+            return Ok(*cmd);
+        }
+        let cmd = match word {
+            b"jog" | b"servo" => {
+                arity(1)?;
+                let v = number(a)?;
+                if word == b"jog" {
+                    Command::Jog(v)
+                } else {
+                    Command::Servo(v)
+                }
+            }
+            b"weigh" => {
+                let ch = match a {
+                    b"t1" => Channel::T1,
+                    b"t2" => Channel::T2,
+                    _ => return Err(CommandError::Argument),
+                };
+                Command::Weigh(ch, number(b)?)
+            }
+            b"set" => {
+                let key = Key::ALL
+                    .into_iter()
+                    .find(|k| k.name().as_bytes() == a)
+                    .ok_or(if a.is_empty() {
+                        CommandError::Argument
+                    } else {
+                        CommandError::UnknownKey
+                    })?;
+                let value = match (key, b) {
+                    (Key::Order, b"monotone") => StepOrder::Monotone.code() as f32,
+                    (Key::Order, b"updown") => StepOrder::UpDown.code() as f32,
+                    (Key::Order, b"pulse") => StepOrder::Pulse.code() as f32,
+                    (Key::Order, _) => return Err(CommandError::Argument),
+                    _ => number(b)?,
+                };
+                Command::Set(key, value)
+            }
+            _ => return Err(CommandError::Unknown),
+        };
         Ok(cmd)
     }
 }
 
-/// The next word as a finite number.
-fn number<'a>(words: &mut impl Iterator<Item = &'a str>) -> Result<f32, CommandError> {
-    let v: f32 = words
-        .next()
-        .ok_or(CommandError::Argument)?
-        .parse()
-        .map_err(|_| CommandError::Argument)?;
-    v.is_finite().then_some(v).ok_or(CommandError::Argument)
+/// The first three blank-separated words of a line and whatever follows them (empty where
+/// there are fewer).
+fn words(line: &[u8]) -> [&[u8]; 4] {
+    let mut out: [&[u8]; 4] = [&[]; 4];
+    let mut rest = line;
+    for slot in out.iter_mut().take(3) {
+        let start = rest.iter().position(|b| !b.is_ascii_whitespace());
+        rest = start.and_then(|s| rest.get(s..)).unwrap_or(&[]);
+        let end = rest
+            .iter()
+            .position(|b| b.is_ascii_whitespace())
+            .unwrap_or(rest.len());
+        let (word, tail) = rest.split_at(end);
+        *slot = word;
+        rest = tail;
+    }
+    out[3] = match rest.iter().position(|b| !b.is_ascii_whitespace()) {
+        Some(s) => rest.get(s..).unwrap_or(&[]),
+        None => &[],
+    };
+    out
+}
+
+/// The commands without arguments, by their word.
+const SIMPLE: [(&[u8], Command); 9] = [
+    (b"setup", Command::Setup),
+    (b"leave", Command::Leave),
+    (b"zero", Command::Zero),
+    (b"show", Command::Show),
+    (b"store", Command::Store),
+    (b"defaults", Command::Defaults),
+    (b"run", Command::Run),
+    (b"abort", Command::Abort),
+    (b"ack", Command::Ack),
+];
+
+/// A word as a number.
+fn number(word: &[u8]) -> Result<f32, CommandError> {
+    decimal_bytes(word).ok_or(CommandError::Argument)
+}
+
+/// Exact powers of ten in f32 (each literal rounds once, at compile time).
+const POW10: [f32; 39] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22, 1e23, 1e24, 1e25, 1e26, 1e27, 1e28, 1e29, 1e30, 1e31, 1e32,
+    1e33, 1e34, 1e35, 1e36, 1e37, 1e38,
+];
+
+/// A decimal number: `[+-]digits[.digits][e[+-]digits]`, at most 18 significant digits.
+///
+/// By hand because core's `f32::from_str` brings 16 KiB of flash (its power-of-five table)
+/// into a 64 KiB budget. Exact for what a person types: the digits form an exact integer and
+/// one multiplication or division by a power of ten rounds once more (within one ulp of the
+/// correctly rounded value; the tests compare with core's parser).
+pub fn decimal(word: &str) -> Option<f32> {
+    decimal_bytes(word.as_bytes())
+}
+
+fn decimal_bytes(word: &[u8]) -> Option<f32> {
+    let (negative, rest) = sign(word);
+    let (mantissa, exp) = match rest.iter().position(|&b| b == b'e' || b == b'E') {
+        Some(i) => (rest.get(..i)?, exponent(rest.get(i + 1..)?)?),
+        None => (rest, 0),
+    };
+    let dot = mantissa.iter().position(|&b| b == b'.');
+    let frac_len = dot.map_or(0, |d| mantissa.len() - d - 1);
+    let mut digits: u64 = 0;
+    let mut count = 0;
+    for (i, &b) in mantissa.iter().enumerate() {
+        if Some(i) == dot {
+            continue;
+        }
+        if !b.is_ascii_digit() || count >= 18 {
+            return None;
+        }
+        digits = digits * 10 + (b - b'0') as u64;
+        count += 1;
+    }
+    if count == 0 {
+        return None;
+    }
+    let scale = exp - frac_len as i32;
+    let power = *POW10.get(scale.unsigned_abs() as usize)?;
+    let magnitude = if scale >= 0 {
+        digits as f32 * power
+    } else {
+        digits as f32 / power
+    };
+    let v = if negative { -magnitude } else { magnitude };
+    v.is_finite().then_some(v)
+}
+
+/// A leading sign, and the rest.
+fn sign(word: &[u8]) -> (bool, &[u8]) {
+    match word.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, word),
+    }
+}
+
+fn exponent(s: &[u8]) -> Option<i32> {
+    let (negative, digits) = sign(s);
+    if digits.is_empty() || digits.len() > 3 || !digits.iter().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let e = digits.iter().fold(0i32, |e, b| e * 10 + (b - b'0') as i32);
+    Some(if negative { -e } else { e })
 }
 
 /// Gathers the bytes a host sends into lines. A line longer than [`MAX_LINE`] is dropped whole
@@ -399,23 +542,22 @@ impl LineBuffer {
     /// Take one byte; at a newline, the command of the line ended (`None` for a blank line).
     pub fn push(&mut self, byte: u8) -> Option<Result<Command, CommandError>> {
         if byte != b'\n' {
-            if self.len < MAX_LINE {
-                self.buf[self.len] = byte;
-                self.len += 1;
-            } else {
-                self.overflow = true;
+            match self.buf.get_mut(self.len) {
+                Some(slot) => {
+                    *slot = byte;
+                    self.len += 1;
+                }
+                None => self.overflow = true,
             }
             return None;
         }
-        let line = &self.buf[..self.len];
+        let line = self.buf.get(..self.len).unwrap_or(&[]);
         let result = if self.overflow {
             Some(Err(CommandError::TooLong))
+        } else if line.iter().all(|b| b.is_ascii_whitespace()) {
+            None
         } else {
-            match core::str::from_utf8(line) {
-                Ok(s) if s.trim().is_empty() => None,
-                Ok(s) => Some(Command::parse(s)),
-                Err(_) => Some(Err(CommandError::Unknown)),
-            }
+            Some(Command::parse_bytes(line))
         };
         self.len = 0;
         self.overflow = false;
@@ -446,6 +588,41 @@ mod tests {
         );
         for k in Key::ALL {
             assert_eq!(Key::from_name(k.name()), Some(k));
+        }
+    }
+
+    #[test]
+    fn numbers_read_as_the_standard_parser_reads_them() {
+        for s in [
+            "0",
+            "-0",
+            "5",
+            "-2.5",
+            "9.80665",
+            "0.0163",
+            "1833",
+            "1e3",
+            "2.5E-2",
+            ".5",
+            "5.",
+            "+7",
+            "125.000",
+            "0.015",
+            "1214.2",
+            "3.3",
+            "12.7",
+            "-180",
+            "0.000123456",
+        ] {
+            let want: f32 = s.parse().unwrap();
+            let got = decimal(s).unwrap_or(f32::NAN);
+            let ulps = (got.to_bits() as i64 - want.to_bits() as i64).abs();
+            assert!(ulps <= 1, "{s}: {got} vs {want}");
+        }
+        for s in [
+            "", "-", ".", "1.2.3", "1e", "1e999", "e5", "0x10", "nan", "inf", "1,5", "--1",
+        ] {
+            assert_eq!(decimal(s), None, "{s:?}");
         }
     }
 

@@ -4,12 +4,39 @@
 
 use crate::record::{record_crc, LogSink, Record, NONE_CODE};
 
+/// Records held back in one sample period at most (a run's end: the last pair and `run_end`).
+const HELD: usize = 3;
+
 /// Sends records as defmt frames on whatever global logger the binary links (RTT on the
-/// Pico, semihosting on QEMU).
-pub struct DefmtSink;
+/// Pico, semihosting on QEMU). Records emitted during a sample are held until the runner has
+/// applied that sample's outputs ([`LogSink::flush`]): a run's end or a fault reaches the pins
+/// before the records that tell of it are encoded.
+#[derive(Default)]
+pub struct DefmtSink {
+    held: [Option<(u32, Record)>; HELD],
+}
 
 impl LogSink for DefmtSink {
     fn emit(&mut self, seq: u32, record: &Record) {
+        match self.held.iter_mut().find(|h| h.is_none()) {
+            Some(slot) => *slot = Some((seq, *record)),
+            None => {
+                self.flush();
+                write(seq, record);
+            }
+        }
+    }
+
+    fn flush(&mut self) {
+        for (seq, record) in self.held.iter_mut().filter_map(Option::take) {
+            write(seq, &record);
+        }
+    }
+}
+
+/// One record as one defmt frame.
+fn write(seq: u32, record: &Record) {
+    {
         // Each record ends with the CRC-32 of its fields, in the order written here.
         let crc = record_crc(seq, record);
         match record {

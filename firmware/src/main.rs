@@ -1,7 +1,8 @@
 //! RP2040 (Raspberry Pi Pico) board binary: wires the Pico's pins to the rig core and serves
 //! runs forever. All behaviour (protocol, tare, conditioning, safety, records) is in the
-//! library; this file only builds the drivers, adapts the two things embedded-hal has no trait
-//! for (the ADC and the watchdog) and calls [`firmware::run_once`] in a loop. The pins, PWM
+//! library; this file only builds the drivers, adapts what embedded-hal has no trait for (the
+//! ADC, the watchdog, the RTT command channel), loads the stored settings and calls
+//! [`firmware::runner::serve`]. The pins, PWM
 //! timing, protocol and calibration are in `board.rs`; the panic and HardFault handlers, which
 //! drive the outputs safe through the registers, in `board_safe.rs`.
 //!
@@ -31,16 +32,19 @@ fn main() {
 mod pico {
     use crate::board::{self, Pins};
     use crate::board_safe::{self, PeriodPwm, RememberingServo};
-    use defmt_rtt as _;
+    use embassy_embedded_hal::adapter::BlockingAsync;
     use embassy_executor::Spawner;
     use embassy_rp::adc::{self, Adc, Blocking};
+    use embassy_rp::flash::Flash;
     use embassy_rp::gpio::{Input, Level, Output, Pin, Pull};
     use embassy_rp::pwm::{self, Pwm, Slice};
     use embassy_rp::watchdog::{ResetReason, Watchdog};
     use embassy_time::Duration;
     use firmware::defmt_sink::DefmtSink;
-    use firmware::hal::{AdcError, Channel, ForceAdc};
-    use firmware::{run_once, RigIo, SafeDuties};
+    use firmware::hal::{AdcError, Channel, Console, ForceAdc};
+    use firmware::store::SettingsStore;
+    use firmware::{RigIo, SafeDuties};
+    use rtt_target::{ChannelMode, DownChannel, UpChannel};
 
     /// Both force sensors on the RP2040's ADC, read by blocking conversions (2 µs each at
     /// 500 ksps: nothing to gain from the async driver at 1 kHz).
@@ -72,6 +76,42 @@ mod pico {
         fn feed(&mut self) {
             self.dog.feed(self.timeout);
         }
+        fn allow_ms(&mut self, ms: u32) {
+            self.dog.feed(Duration::from_millis(ms as u64));
+        }
+    }
+
+    /// The host's command lines on RTT down channel 0. Each read also puts the defmt up
+    /// channel back to non-blocking: a host (probe-rs run) may have set it to block when full,
+    /// and a blocked log write would stall the safety loop.
+    struct RttConsole {
+        commands: DownChannel,
+        log: UpChannel,
+    }
+
+    impl Console for RttConsole {
+        fn read_byte(&mut self) -> Option<u8> {
+            if self.log.mode() != ChannelMode::NoBlockSkip {
+                self.log.set_mode(ChannelMode::NoBlockSkip);
+            }
+            let mut b = [0u8];
+            (self.commands.read(&mut b) == 1).then_some(b[0])
+        }
+    }
+
+    /// RTT: defmt on up channel 0, the host's commands on down channel 0.
+    fn rtt() -> RttConsole {
+        let channels = rtt_target::rtt_init! {
+            up: { 0: { size: board::LOG_BUFFER_BYTES, mode: ChannelMode::NoBlockSkip, name: "defmt" } }
+            down: { 0: { size: board::COMMAND_BUFFER_BYTES, name: "commands" } }
+        };
+        rtt_target::set_defmt_channel(channels.up.0);
+        // SAFETY: channel 0 was just initialised; this second handle only sets its mode.
+        let log = unsafe { UpChannel::conjure(0) };
+        RttConsole {
+            commands: channels.down.0,
+            log: defmt::unwrap!(log),
+        }
     }
 
     fn pwm_config(divider: u8, top: u16) -> pwm::Config {
@@ -85,6 +125,7 @@ mod pico {
 
     #[embassy_executor::main]
     async fn main(_spawner: Spawner) {
+        let mut console = rtt();
         let p = embassy_rp::init(Default::default());
         let clk = embassy_rp::clocks::clk_sys_freq();
         defmt::assert_eq!(
@@ -125,6 +166,17 @@ mod pico {
             board::calibration(),
             board::safety_limits(),
         ));
+        // The settings stored from the host, or the built-in ones (logged either way).
+        let flash = Flash::<_, embassy_rp::flash::Blocking, { board::FLASH_BYTES }>::new_blocking(
+            pins.flash,
+        );
+        let mut store = defmt::unwrap!(SettingsStore::new(
+            BlockingAsync::new(flash),
+            board::SETTINGS_FLASH
+        ));
+        let mut sink = DefmtSink::default();
+        store.load_into(&mut rig, &mut sink).await;
+        firmware::LogSink::flush(&mut sink);
         // From here a panic puts the servo at rest (before: no pulses at all).
         board_safe::arm(SafeDuties::for_rig(&rig, board::SERVO_FULL_SCALE));
         // After a reset that left the horn away from rest, bring it back slowly.
@@ -179,22 +231,27 @@ mod pico {
 
         io.watchdog.dog.start(board::WATCHDOG_TIMEOUT);
         defmt::info!(
-            "capstan rig ready: {=u32} Hz sampling, watchdog {=u64} ms; press the button to run",
+            "capstan rig ready: {=u32} Hz sampling, watchdog {=u64} ms; press the button to run, or set it up with capstan rig",
             rig.protocol().sample_hz,
             board::WATCHDOG_TIMEOUT.as_millis()
         );
 
-        let mut sink = DefmtSink;
-        loop {
-            // Waits for the press (LED blinking), runs the protocol, returns when it ends.
-            match run_once(&mut io, &mut rig, &mut sink).await {
-                // The rig has logged `run_end` and is back to idle: wait for the next press.
-                Ok(_) => {}
-                // Cannot happen with this HAL (its pins are infallible, duties are clamped to
-                // top). The runner has already commanded the safe state; the panic handler
-                // forces it again through the registers and the chip resets.
-                Err(e) => defmt::panic!("hardware error {}: outputs made safe", e),
-            }
+        // Runs, setup mode and host commands, forever: `serve` returns only on a hardware
+        // error, which cannot happen with this HAL (its pins are infallible, duties are clamped
+        // to top). The runner has then already commanded the safe state; the panic handler
+        // forces it again through the registers and the chip resets.
+        let never = |_: &firmware::rig::Outputs| None::<()>;
+        let served = firmware::runner::serve(
+            &mut io,
+            &mut rig,
+            &mut sink,
+            &mut console,
+            &mut store,
+            never,
+        )
+        .await;
+        if let Err(e) = served {
+            defmt::panic!("hardware error {}: outputs made safe", e);
         }
     }
 }

@@ -216,7 +216,11 @@ impl Rig {
         let mut abort = pressed;
         let mut store = None;
         match inp.command {
-            Some(Ok(Command::Abort)) if self.is_running() => abort = true,
+            Some(Ok(Command::Abort)) if self.is_running() => {
+                // Answered now; the run then ends as by the button (fault `abort`, `run_end`).
+                self.reply(sink, crate::command::CommandKind::Abort, Ok([0.0; 2]));
+                abort = true;
+            }
             Some(cmd) => store = self.command(cmd, inp.now_us, sink),
             None => {}
         }
@@ -329,7 +333,12 @@ impl Rig {
 
     fn step_running(&mut self, inp: &Inputs, pressed: bool, sink: &mut impl LogSink) -> Outputs {
         let p = self.protocol;
-        let elapsed_us = inp.now_us.saturating_sub(self.press_us);
+        // On the sample grid: the clock is read a few tens of µs after each tick, and that
+        // latency wanders by a µs or so from sample to sample (the work before the read
+        // varies). Unrounded, a step, the trigger or the end could slip by a whole sample.
+        let period_us = p.sample_period_us() as u64;
+        let raw_us = inp.now_us.saturating_sub(self.press_us);
+        let elapsed_us = (raw_us + period_us / 2) / period_us * period_us;
         let elapsed_ms = (elapsed_us / 1000) as u32;
         let t_us = self.since_trigger_us(elapsed_us);
         let force_n = self.forces(inp);

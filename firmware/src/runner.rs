@@ -196,7 +196,9 @@ where
         };
         inputs.command = core::iter::from_fn(|| console.read_byte()).find_map(|b| line.push(b));
         let out = rig.step(&inputs, sink);
-        if let Err(e) = io.apply(rig, &out, &mut written) {
+        let applied = io.apply(rig, &out, &mut written);
+        sink.flush();
+        if let Err(e) = applied {
             break Err(e);
         }
         if let Some(settings) = out.store {
@@ -204,6 +206,7 @@ where
             let ok = flash.save(&settings).await;
             io.watchdog.feed();
             rig.stored(ok, sink);
+            sink.flush();
             // No burst of catch-up ticks after the write.
             ticker.reset();
         }

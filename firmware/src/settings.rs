@@ -6,15 +6,18 @@
 //! record of another version, of the wrong length, or whose values do not validate, is never
 //! used: [`Settings::decode`] refuses it and the rig keeps its defaults.
 
-use crate::calib::{Calibration, CalibrationError};
+use crate::calib::{AmpMap, Calibration, CalibrationError, ChannelCal, ServoMap};
 use crate::command::Key;
 use crate::protocol::{Protocol, ProtocolError, StepOrder};
 
 /// Version of the byte layout below. Change it whenever the layout changes.
 pub const SETTINGS_VERSION: u8 = 1;
 
-/// Encoded length, bytes: version, generation, 15 protocol values, 10 calibration values.
-pub const SETTINGS_BYTES: usize = 1 + 4 + 12 + 1 + 16 + 4 + 16 + 8 + 40;
+/// Values in [`Settings::fields`]: 15 of the protocol, 10 of the calibration.
+pub const FIELDS: usize = 25;
+
+/// Encoded length, bytes: version, generation, the order's code, 24 values of 4 bytes.
+pub const SETTINGS_BYTES: usize = 1 + 4 + 1 + 4 * (FIELDS - 1);
 
 /// What the rig runs with: the protocol and the calibration.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,41 +78,23 @@ impl Settings {
     /// These settings with one value changed, if they stay valid (`order` takes the step
     /// order's code; a count of ms must be a whole number).
     pub fn with(&self, key: Key, value: f32) -> Result<Settings, SettingsError> {
-        let mut s = *self;
-        let (p, c) = (&mut s.protocol, &mut s.calibration);
-        let ms = || -> Result<u32, SettingsError> {
-            let whole = (0.0..=1.0e9).contains(&value) && libm::truncf(value) == value;
-            whole.then_some(value as u32).ok_or(SettingsError::NotWhole)
-        };
-        match key {
-            Key::RestDeg => p.rest_deg = value,
-            Key::StepDeg => p.step_deg = value,
-            Key::FinalDeg => p.final_deg = value,
-            Key::Order => {
-                p.order = StepOrder::from_code(value as u8)
-                    .filter(|o| o.code() as f32 == value)
-                    .ok_or(SettingsError::Order)?
+        let i = key.field();
+        let bits = match FIELD_KINDS[i] {
+            Kind::F32 => value.to_bits(),
+            Kind::U32 => {
+                let whole = (0.0..=1.0e9).contains(&value) && libm::truncf(value) == value;
+                whole
+                    .then_some(value as u32)
+                    .ok_or(SettingsError::NotWhole)?
             }
-            Key::DwellMs => p.dwell_ms = ms()?,
-            Key::PreTriggerMs => p.pre_trigger_ms = ms()?,
-            Key::TriggerMs => p.trigger_ms = ms()?,
-            Key::TareMs => p.tare_ms = ms()?,
-            Key::AmpControlV => p.amp_control_v = value,
-            Key::WindowAfterMs => p.window_after_change_ms = ms()?,
-            Key::WindowBeforeMs => p.window_before_next_ms = ms()?,
-            Key::DiameterMm => p.capstan_diameter_mm = value,
-            Key::WrapDeg => p.wrap_deg = value,
-            Key::T1Zero => c.t1.zero_counts = value,
-            Key::T1NPerCount => c.t1.n_per_count = value,
-            Key::T2Zero => c.t2.zero_counts = value,
-            Key::T2NPerCount => c.t2.n_per_count = value,
-            Key::TareReferenceN => c.tare_reference_n = value,
-            Key::ServoMinUs => c.servo.pulse_at_min_us = value,
-            Key::ServoMaxUs => c.servo.pulse_at_max_us = value,
-            Key::ServoMaxDeg => c.servo.max_deg = value,
-            Key::AmpFullScaleV => c.amp.full_scale_v = value,
-            Key::AmpGain => c.amp.amp_gain = value,
-        }
+            Kind::Order => StepOrder::from_code(value as u8)
+                .filter(|o| o.code() as f32 == value)
+                .ok_or(SettingsError::Order)?
+                .code() as u32,
+        };
+        let mut fields = self.fields();
+        fields[i] = bits;
+        let s = Settings::from_fields(&fields).ok_or(SettingsError::Order)?;
         let metadata_ok = |v: f32| v.is_finite() && (0.0..=3600.0).contains(&v);
         if !metadata_ok(s.protocol.capstan_diameter_mm) || !metadata_ok(s.protocol.wrap_deg) {
             return Err(SettingsError::Metadata);
@@ -118,26 +103,99 @@ impl Settings {
         Ok(s)
     }
 
-    /// The bytes stored in flash, with the store's `generation` (which save this is).
-    pub fn encode(&self, generation: u32) -> [u8; SETTINGS_BYTES] {
+    /// Every value, in the order of the `run_start` and `settings` records' fields (and of the
+    /// flash layout): each as 32 bits, an f32 by its bits (NaN canonical), `order` by its code.
+    // Not inlined (here and below): five callers, ~0.5 KiB of flash each time.
+    #[inline(never)]
+    pub fn fields(&self) -> [u32; FIELDS] {
         let (p, c) = (&self.protocol, &self.calibration);
-        let mut w = Writer::default();
-        w.u8(SETTINGS_VERSION).u32(generation);
-        w.f32(p.rest_deg).f32(p.step_deg).f32(p.final_deg);
-        w.u8(p.order.code());
-        w.u32(p.dwell_ms).u32(p.pre_trigger_ms).u32(p.trigger_ms);
-        w.u32(p.tare_ms);
-        w.f32(p.amp_control_v);
-        w.u32(p.sample_hz).u32(p.raw_log_hz);
-        w.u32(p.window_after_change_ms).u32(p.window_before_next_ms);
-        w.f32(p.capstan_diameter_mm).f32(p.wrap_deg);
-        w.f32(c.t1.zero_counts).f32(c.t1.n_per_count);
-        w.f32(c.t2.zero_counts).f32(c.t2.n_per_count);
-        w.f32(c.tare_reference_n);
-        w.f32(c.servo.pulse_at_min_us).f32(c.servo.pulse_at_max_us);
-        w.f32(c.servo.max_deg);
-        w.f32(c.amp.full_scale_v).f32(c.amp.amp_gain);
-        w.buf
+        let f = |v: f32| if v.is_nan() { f32::NAN } else { v }.to_bits();
+        [
+            p.order.code() as u32,
+            f(p.rest_deg),
+            f(p.step_deg),
+            f(p.final_deg),
+            p.dwell_ms,
+            p.pre_trigger_ms,
+            p.trigger_ms,
+            p.tare_ms,
+            f(p.amp_control_v),
+            p.sample_hz,
+            p.raw_log_hz,
+            p.window_after_change_ms,
+            p.window_before_next_ms,
+            f(p.capstan_diameter_mm),
+            f(p.wrap_deg),
+            f(c.amp.amp_gain),
+            f(c.t1.zero_counts),
+            f(c.t1.n_per_count),
+            f(c.t2.zero_counts),
+            f(c.t2.n_per_count),
+            f(c.tare_reference_n),
+            f(c.servo.pulse_at_min_us),
+            f(c.servo.pulse_at_max_us),
+            f(c.servo.max_deg),
+            f(c.amp.full_scale_v),
+        ]
+    }
+
+    /// Inverse of [`Settings::fields`] (`None` for an unknown step order; not validated).
+    #[inline(never)]
+    pub fn from_fields(v: &[u32; FIELDS]) -> Option<Settings> {
+        let f = f32::from_bits;
+        let protocol = Protocol {
+            order: StepOrder::from_code(u8::try_from(v[0]).ok()?)?,
+            rest_deg: f(v[1]),
+            step_deg: f(v[2]),
+            final_deg: f(v[3]),
+            dwell_ms: v[4],
+            pre_trigger_ms: v[5],
+            trigger_ms: v[6],
+            tare_ms: v[7],
+            amp_control_v: f(v[8]),
+            sample_hz: v[9],
+            raw_log_hz: v[10],
+            window_after_change_ms: v[11],
+            window_before_next_ms: v[12],
+            capstan_diameter_mm: f(v[13]),
+            wrap_deg: f(v[14]),
+        };
+        let ch = |zero: u32, npc: u32| ChannelCal {
+            zero_counts: f(zero),
+            n_per_count: f(npc),
+        };
+        let calibration = Calibration {
+            amp: AmpMap {
+                amp_gain: f(v[15]),
+                full_scale_v: f(v[24]),
+            },
+            t1: ch(v[16], v[17]),
+            t2: ch(v[18], v[19]),
+            tare_reference_n: f(v[20]),
+            servo: ServoMap {
+                pulse_at_min_us: f(v[21]),
+                pulse_at_max_us: f(v[22]),
+                max_deg: f(v[23]),
+            },
+        };
+        Some(Settings {
+            protocol,
+            calibration,
+        })
+    }
+
+    /// The bytes stored in flash, with the store's `generation` (which save this is): the
+    /// version, the generation, then [`Settings::fields`] little-endian (`order` as 1 byte).
+    pub fn encode(&self, generation: u32) -> [u8; SETTINGS_BYTES] {
+        let mut buf = [0; SETTINGS_BYTES];
+        buf[0] = SETTINGS_VERSION;
+        buf[1..5].copy_from_slice(&generation.to_le_bytes());
+        let fields = self.fields();
+        buf[5] = fields[0] as u8;
+        for (chunk, v) in buf[6..].chunks_exact_mut(4).zip(&fields[1..]) {
+            chunk.copy_from_slice(&v.to_le_bytes());
+        }
+        buf
     }
 
     /// Settings and generation from stored bytes; refused unless of this version and valid.
@@ -149,102 +207,35 @@ impl Settings {
         if bytes.len() != SETTINGS_BYTES {
             return Err(SettingsError::Length);
         }
-        let mut r = Reader { bytes, at: 1 };
-        let generation = r.u32();
-        let mut p = Protocol {
-            rest_deg: r.f32(),
-            step_deg: r.f32(),
-            final_deg: r.f32(),
-            ..Protocol::default()
-        };
-        p.order = StepOrder::from_code(r.u8()).ok_or(SettingsError::Order)?;
-        p.dwell_ms = r.u32();
-        p.pre_trigger_ms = r.u32();
-        p.trigger_ms = r.u32();
-        p.tare_ms = r.u32();
-        p.amp_control_v = r.f32();
-        p.sample_hz = r.u32();
-        p.raw_log_hz = r.u32();
-        p.window_after_change_ms = r.u32();
-        p.window_before_next_ms = r.u32();
-        p.capstan_diameter_mm = r.f32();
-        p.wrap_deg = r.f32();
-        let mut c = Calibration::default();
-        c.t1.zero_counts = r.f32();
-        c.t1.n_per_count = r.f32();
-        c.t2.zero_counts = r.f32();
-        c.t2.n_per_count = r.f32();
-        c.tare_reference_n = r.f32();
-        c.servo.pulse_at_min_us = r.f32();
-        c.servo.pulse_at_max_us = r.f32();
-        c.servo.max_deg = r.f32();
-        c.amp.full_scale_v = r.f32();
-        c.amp.amp_gain = r.f32();
-        let s = Settings {
-            protocol: p,
-            calibration: c,
-        };
+        let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        let generation = word(&bytes[1..5]);
+        let mut fields = [0u32; FIELDS];
+        fields[0] = bytes[5] as u32;
+        for (v, chunk) in fields[1..].iter_mut().zip(bytes[6..].chunks_exact(4)) {
+            *v = word(chunk);
+        }
+        let s = Settings::from_fields(&fields).ok_or(SettingsError::Order)?;
         s.validate()?;
         Ok((s, generation))
     }
 }
 
-/// Writes fields little-endian into the fixed-size record. The layout is short and ours, so
-/// no serialisation crate: a serde format would add flash for nothing this needs.
-struct Writer {
-    buf: [u8; SETTINGS_BYTES],
-    at: usize,
+/// How a field is held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    F32,
+    U32,
+    Order,
 }
 
-impl Default for Writer {
-    fn default() -> Self {
-        Writer {
-            buf: [0; SETTINGS_BYTES],
-            at: 0,
-        }
-    }
-}
-
-impl Writer {
-    fn put(&mut self, b: &[u8]) -> &mut Self {
-        self.buf[self.at..self.at + b.len()].copy_from_slice(b);
-        self.at += b.len();
-        self
-    }
-    fn u8(&mut self, v: u8) -> &mut Self {
-        self.put(&[v])
-    }
-    fn u32(&mut self, v: u32) -> &mut Self {
-        self.put(&v.to_le_bytes())
-    }
-    fn f32(&mut self, v: f32) -> &mut Self {
-        self.put(&v.to_le_bytes())
-    }
-}
-
-/// Reads fields back; the length was checked first, so every read is in bounds.
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
-}
-
-impl Reader<'_> {
-    fn take<const N: usize>(&mut self) -> [u8; N] {
-        let mut b = [0; N];
-        b.copy_from_slice(&self.bytes[self.at..self.at + N]);
-        self.at += N;
-        b
-    }
-    fn u8(&mut self) -> u8 {
-        self.take::<1>()[0]
-    }
-    fn u32(&mut self) -> u32 {
-        u32::from_le_bytes(self.take())
-    }
-    fn f32(&mut self) -> f32 {
-        f32::from_le_bytes(self.take())
-    }
-}
+/// The kind of each of [`Settings::fields`].
+const FIELD_KINDS: [Kind; FIELDS] = {
+    use Kind::*;
+    [
+        Order, F32, F32, F32, U32, U32, U32, U32, F32, U32, U32, U32, U32, F32, F32, F32, F32, F32,
+        F32, F32, F32, F32, F32, F32, F32,
+    ]
+};
 
 #[cfg(test)]
 mod tests {
@@ -291,6 +282,35 @@ mod tests {
         assert!(s.with(Key::WrapDeg, f32::NAN).is_err());
         let t = s.with(Key::ServoMaxUs, 2500.0).unwrap();
         assert_eq!(t.calibration.servo.pulse_at_max_us, 2500.0);
+    }
+
+    #[test]
+    fn each_key_sets_its_own_field_and_no_other() {
+        let s = bench_settings();
+        for key in Key::ALL {
+            let i = key.field();
+            let value = match FIELD_KINDS[i] {
+                Kind::Order => 2.0,
+                // A valid change of each: the ms keys and every calibration value by a little.
+                Kind::U32 => s.fields()[i] as f32 + 1000.0,
+                Kind::F32 => f32::from_bits(s.fields()[i]) * 1.01 + 0.5,
+            };
+            let value = match key {
+                Key::RestDeg => 125.0 + 5.0,
+                Key::StepDeg => 6.0,
+                Key::FinalDeg => 65.0 + 5.0,
+                Key::TareMs => 900.0,
+                Key::AmpControlV => 3.0,
+                _ => value,
+            };
+            let t = s
+                .with(key, value)
+                .unwrap_or_else(|e| panic!("{}: {e:?}", key.name()));
+            let (a, b) = (s.fields(), t.fields());
+            for j in 0..FIELDS {
+                assert_eq!(a[j] != b[j], j == i, "{} changed field {j}", key.name());
+            }
+        }
     }
 
     #[test]

@@ -25,6 +25,9 @@ pub const MIN_WEIGH_COUNTS: f32 = 20.0;
 /// counts (0.02 N at 0.015 N/count).
 pub const MAX_SCATTER_COUNTS: f32 = 4.0;
 
+/// [`MAX_SCATTER_COUNTS`] squared: the variance is compared, so no square root is linked.
+const MAX_VARIANCE: f32 = MAX_SCATTER_COUNTS * MAX_SCATTER_COUNTS;
+
 /// What is being measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Measuring {
@@ -77,16 +80,17 @@ impl Measure {
         if self.n == 0 {
             return Some(Err(CommandError::NoLoad));
         }
-        let n = self.n as f64;
+        // In integers: n·Σx² − (Σx)² is exact (< 2⁶³ for a window of 10⁵ 12-bit samples).
+        let n = self.n as u64;
         let stat = |k: usize| {
-            let mean = self.sum[k] as f64 / n;
-            let var = (self.sum_sq[k] as f64 / n - mean * mean).max(0.0);
-            (mean as f32, libm::sqrt(var) as f32)
+            let spread = (n * self.sum_sq[k]).saturating_sub(self.sum[k] * self.sum[k]);
+            let var = spread as f32 / (n * n) as f32;
+            (self.sum[k] as f32 / n as f32, var)
         };
         let [(m1, s1), (m2, s2)] = [stat(0), stat(1)];
         Some(Ok(Means {
             counts: [m1, m2],
-            scatter: [s1, s2],
+            variance: [s1, s2],
         }))
     }
 }
@@ -96,8 +100,8 @@ impl Measure {
 pub struct Means {
     /// Mean counts.
     pub counts: [f32; 2],
-    /// Standard deviation of the readings, counts.
-    pub scatter: [f32; 2],
+    /// Variance of the readings, counts².
+    pub variance: [f32; 2],
 }
 
 /// Put a finished measurement into the calibration; the reply's two values, or why not.
@@ -112,7 +116,7 @@ pub fn apply(what: Measuring, m: Means, cal: &mut Calibration) -> Result<[f32; 2
     };
     if channels
         .iter()
-        .any(|&k| m.scatter[k].is_nan() || m.scatter[k] > MAX_SCATTER_COUNTS)
+        .any(|&k| m.variance[k].is_nan() || m.variance[k] > MAX_VARIANCE)
     {
         return Err(CommandError::Unsteady);
     }
@@ -160,13 +164,13 @@ mod tests {
         assert_eq!(t, 1_000 + 501_000);
         let m = out.unwrap().unwrap();
         assert_eq!(m.counts, [400.0, 402.0]);
-        assert_eq!(m.scatter, [0.0, 0.0]);
+        assert_eq!(m.variance, [0.0, 0.0]);
     }
 
     fn steady(counts: [f32; 2]) -> Means {
         Means {
             counts,
-            scatter: [1.3, 1.3],
+            variance: [1.7, 1.7],
         }
     }
 
@@ -193,7 +197,7 @@ mod tests {
         // A swinging weight is refused too.
         let swinging = Means {
             counts: [420.0, 1188.0],
-            scatter: [1.3, 9.0],
+            variance: [1.7, 81.0],
         };
         assert_eq!(apply(w, swinging, &mut cal), Err(CommandError::Unsteady));
         assert_eq!(cal, before);

@@ -32,7 +32,7 @@ pub enum Step {
     Send(String),
     /// Time passes, ms.
     Wait(u32),
-    /// A known weight (N) is hung on a sensor (0 takes it off).
+    /// A known weight (N) hangs on a sensor from now on (0: nothing hangs there).
     Hang(Channel, f64),
     /// The button is pressed for this long, ms.
     Press(u32),
@@ -223,6 +223,7 @@ async fn host(
 ) -> usize {
     // Let the board boot and settle (and a homing servo reach rest) first.
     Timer::after(Duration::from_millis(50)).await;
+    let mut hung = [0.0f64; 2];
     for (i, step) in steps.iter().enumerate() {
         match step {
             Step::Send(line) => {
@@ -240,7 +241,11 @@ async fn host(
                 }
             }
             Step::Wait(ms) => Timer::after(Duration::from_millis(*ms as u64)).await,
-            Step::Hang(ch, n) => plant.borrow_mut().hang(0, *ch, *n),
+            Step::Hang(ch, n) => {
+                let k = *ch as usize;
+                plant.borrow_mut().hang(0, *ch, n - hung[k]);
+                hung[k] = *n;
+            }
             Step::Press(ms) => {
                 let now = time::now_us();
                 plant.borrow_mut().press(0, now, *ms as u64 * 1000);

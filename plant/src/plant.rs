@@ -66,8 +66,6 @@ struct CordState {
     broken: bool,
     snag: bool,
     unplugged: [bool; 2],
-    /// A known weight hanging on each sensor (bench calibration), N.
-    hanging_n: [f64; 2],
     // sensors
     zero: [f64; 2],
     counts_per_n: [f64; 2],
@@ -175,10 +173,14 @@ impl Plant {
         self.cords[cord].press = Some((at_us, at_us + for_us));
     }
 
-    /// Hang a known weight of `newtons` on cord's sensor `channel` (0 takes it off): the sensor
-    /// reads it on top of the cord's tension, as a weight hung from it at the bench does.
+    /// Hang `newtons` more on cord's sensor `channel` (negative: take it off): the sensor reads
+    /// it on top of the cord's tension, as a known weight hung from it at the bench does. (It
+    /// shifts the sensor's output at no cord tension: no state of its own, so the plant stays
+    /// small enough for the QEMU build's RAM.)
     pub fn hang(&mut self, cord: usize, channel: Channel, newtons: f64) {
-        self.cords[cord].hanging_n[channel as usize] = newtons;
+        let c = &mut self.cords[cord];
+        let k = channel as usize;
+        c.zero[k] += newtons * c.counts_per_n[k];
     }
 
     /// Bring the plant to `now_us` (no-op if it is there already or past it).

@@ -113,7 +113,7 @@ async fn rig() {
         &seeds[..],
         qemu_fw::protocol()
     );
-    let code = match qemu_fw::scenario(&mut DefmtSink).await {
+    let code = match qemu_fw::scenario(&mut DefmtSink::default()).await {
         Ok(_) => 0,
         Err(ScenarioError::Plant(_)) => {
             defmt::error!("qemu-fw: the plant refused its configuration");

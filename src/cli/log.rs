@@ -23,15 +23,22 @@ LOGGING A RUN ON THE PICO
        raw.csv       time, T1/T2 in ADC counts and newtons
        pairs.csv     capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n
        faults.csv    safety faults
-       messages.txt  the firmware's other log lines
+       messages.txt  the firmware's other log lines, and each command reply (REPLY seq=N ...)
        stream.defmt  the received bytes (decode again with --from)
-       summary.json  runs, counts, lost records (sequence gaps), bad frames, why it stopped
+       summary.json  runs (with their calibration), counts, lost records (sequence gaps),
+                     bad frames, why it stopped
+     and, when the rig was in setup mode (capstan rig), which belongs to no run:
+       settings.csv  each settings report: seq, source (stored, loaded, defaults_..., ...),
+                     then every setting by name
+       live.csv      setup mode's live values: seq, time_s since boot, counts, N, servo_deg
+     A fault in setup mode goes to faults.csv with an empty run and its time since boot.
   4. Stop with Ctrl-C (or --runs N / --duration S). Everything received is kept, files
      flushed; a lost probe (cable pulled) also keeps everything and exits with an error.
 
   Records are numbered by the firmware; a jump in the numbers is reported (how many records,
   after which one, at which byte), on stderr as it happens and in summary.json. --strict
-  turns any loss into a failing exit status.
+  turns any loss into a failing exit status. A `capstan rig` run while logging reads the
+  same RTT channel: the records it takes show here as a gap.
 
   --no-flash attaches to the firmware already running (it is not reset; a frame cut by the
   attach counts as one bad frame). The ELF must be the exact build that is running: its

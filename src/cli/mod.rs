@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod analyze;
 pub mod diagnose;
 pub mod log;
+pub mod rig;
 pub mod signal;
 pub mod simulate;
 
@@ -28,6 +29,9 @@ pub enum Command {
     Diagnose(diagnose::Args),
     /// Record a real run from the board over defmt/RTT (or decode a saved stream).
     Log(log::Args),
+    /// Set up the rig from the host: live forces, jog the servo, calibrate, set the protocol,
+    /// store it on the board, start a run.
+    Rig(rig::Args),
 }
 
 /// Run a parsed command line.
@@ -37,6 +41,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Log(a) => log::run(a),
+        Command::Rig(a) => rig::run(a),
     }
 }
 

@@ -1,17 +1,20 @@
 //! From a frame to an event: an rzCOBS-decoded, pre-validated frame decoded with the
 //! firmware's defmt table (defmt-decoder) into a rig record, its fields read by name from the
 //! record's format (`elf::RecordLayout`), or into a text message.
+//!
+//! A record decodes into the firmware's own [`Record`] (`build`), whatever its kind: the run
+//! records, and the setup-mode records `settings`, `live` and `reply` that are not part of a
+//! run. Every record's `crc` is checked against its fields as received, in format order.
 
-use super::elf::{Firmware, Prim, RecordKind, RecordLayout};
+mod build;
+#[cfg(test)]
+mod tests;
+
+use super::elf::{Firmware, Prim, RecordLayout};
 use super::stream::rzcobs_decode;
+use build::{build, Fields};
 use defmt_parser::Fragment;
-use firmware::calib::{AmpMap, Calibration, ChannelCal};
-use firmware::condition::ChannelStats;
-use firmware::hal::Channel;
-use firmware::record::{
-    CrcFields, Fault, FaultKind, RawSample, Record, RunEnd, RunStart, StepPair,
-};
-use firmware::{Protocol, StepOrder};
+use firmware::record::{CrcFields, Record};
 use std::panic::AssertUnwindSafe;
 
 /// What one frame was.
@@ -31,6 +34,16 @@ pub enum Event {
         /// The text.
         text: String,
     },
+}
+
+impl Event {
+    /// The typed record and its sequence number, if this event is a record.
+    pub fn record(&self) -> Option<(u32, &Record)> {
+        match self {
+            Event::Record { seq, record } => Some((*seq, record)),
+            Event::Message { .. } => None,
+        }
+    }
 }
 
 /// Decode one encoded frame. The error says what is wrong with it (not where: the caller
@@ -70,49 +83,11 @@ pub fn decode_frame(fw: &Firmware, encoded: &[u8]) -> Result<Event, String> {
     }
 }
 
-/// Field values of one record, by name.
-struct Fields<'a> {
-    layout: &'a RecordLayout,
-    values: &'a [String],
-}
-
-impl Fields<'_> {
-    fn raw(&self, name: &str) -> Result<&str, String> {
-        let i = self
-            .layout
-            .position(name)
-            .ok_or_else(|| format!("no field `{name}`"))?;
-        self.values
-            .get(i)
-            .map(String::as_str)
-            .ok_or_else(|| format!("field `{name}` missing from the frame"))
-    }
-
-    fn u(&self, name: &str) -> Result<u32, String> {
-        let v = self.raw(name)?;
-        v.parse()
-            .map_err(|_| format!("field `{name}`: `{v}` is not an unsigned integer"))
-    }
-
-    fn u8(&self, name: &str) -> Result<u8, String> {
-        let v = self.u(name)?;
-        u8::try_from(v).map_err(|_| format!("field `{name}`: {v} does not fit a byte"))
-    }
-
-    fn i64(&self, name: &str) -> Result<i64, String> {
-        let v = self.raw(name)?;
-        v.parse()
-            .map_err(|_| format!("field `{name}`: `{v}` is not an integer"))
-    }
-
-    fn f32(&self, name: &str) -> Result<f32, String> {
-        let v = self.raw(name)?;
-        v.parse()
-            .map_err(|_| format!("field `{name}`: `{v}` is not a number"))
-    }
-}
-
-fn record_from_values(layout: &RecordLayout, values: &[String]) -> Result<Event, String> {
+/// A record from its field values as defmt-decoder renders them, in the layout's order.
+pub(crate) fn record_from_values(
+    layout: &RecordLayout,
+    values: &[String],
+) -> Result<Event, String> {
     if values.len() != layout.fields.len() {
         return Err(format!(
             "`{}` record with {} values for {} fields",
@@ -136,7 +111,9 @@ fn record_from_values(layout: &RecordLayout, values: &[String]) -> Result<Event,
 /// The record's `crc` field (firmware since the records carry one) against the CRC-32 of its
 /// other fields as received (`firmware::record::CrcFields`, the firmware's own code): a
 /// mismatch is a corrupted record, refused rather than decoded into wrong numbers. Records of
-/// a firmware without the field are not checked (`Firmware::records_checked` says which).
+/// a firmware without the field are not checked (the setup-mode records always have it: their
+/// layout requires it). The fields are fed in format order, whichever they are, so the check
+/// covers every field the firmware sent, the optional ones included.
 fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), String> {
     let Some(at) = layout.position("crc") else {
         return Ok(());
@@ -168,106 +145,4 @@ fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-fn build(kind: RecordKind, f: &Fields) -> Result<Record, String> {
-    Ok(match kind {
-        RecordKind::RunStart => {
-            let order = f.u8("order")?;
-            let protocol = Protocol {
-                rest_deg: f.f32("rest_deg")?,
-                step_deg: f.f32("step_deg")?,
-                final_deg: f.f32("final_deg")?,
-                order: StepOrder::from_code(order)
-                    .ok_or_else(|| format!("unknown step order code {order}"))?,
-                dwell_ms: f.u("dwell_ms")?,
-                pre_trigger_ms: f.u("pre_trigger_ms")?,
-                trigger_ms: f.u("trigger_ms")?,
-                tare_ms: f.u("tare_ms")?,
-                amp_control_v: f.f32("amp_control_v")?,
-                sample_hz: f.u("sample_hz")?,
-                raw_log_hz: f.u("raw_log_hz")?,
-                window_after_change_ms: f.u("window_after_ms")?,
-                window_before_next_ms: f.u("window_before_ms")?,
-                capstan_diameter_mm: f.f32("diameter_mm")?,
-                wrap_deg: f.f32("wrap_deg")?,
-            };
-            // The record carries what the log needs; the rest of the calibration (servo map,
-            // amplifier full scale, tare reference) stays at its defaults.
-            let calibration = Calibration {
-                t1: ChannelCal {
-                    zero_counts: f.f32("t1_zero")?,
-                    n_per_count: f.f32("t1_n_per_count")?,
-                },
-                t2: ChannelCal {
-                    zero_counts: f.f32("t2_zero")?,
-                    n_per_count: f.f32("t2_n_per_count")?,
-                },
-                amp: AmpMap {
-                    amp_gain: f.f32("amp_gain")?,
-                    ..AmpMap::default()
-                },
-                ..Calibration::default()
-            };
-            Record::RunStart(RunStart {
-                run: f.u("run")?,
-                protocol,
-                calibration,
-            })
-        }
-        RecordKind::Raw => Record::Raw(RawSample {
-            t_us: f.i64("t_us")?,
-            counts: [f.u("c1")? as u16, f.u("c2")? as u16],
-            force_n: [f.f32("t1_n")?, f.f32("t2_n")?],
-        }),
-        RecordKind::Pair => Record::Pair(StepPair {
-            step: f.u("step")?,
-            level: f.u("level")?,
-            angle_deg: f.f32("angle_deg")?,
-            t_mid_ms: f.u("t_mid_ms")?,
-            t1: ChannelStats {
-                mean_n: f.f32("t1_mean_n")?,
-                std_n: f.f32("t1_std_n")?,
-                count: f.u("t1_count")?,
-            },
-            t2: ChannelStats {
-                mean_n: f.f32("t2_mean_n")?,
-                std_n: f.f32("t2_std_n")?,
-                count: f.u("t2_count")?,
-            },
-        }),
-        RecordKind::Fault => {
-            let code = f.u8("kind")?;
-            Record::Fault(Fault {
-                kind: FaultKind::from_code(code)
-                    .ok_or_else(|| format!("unknown fault kind code {code}"))?,
-                channel: channel(f.u8("channel")?)?,
-                value: f.f32("value")?,
-                t_us: f.i64("t_us")?,
-            })
-        }
-        RecordKind::RunEnd => {
-            let code = f.u8("fault")?;
-            Record::RunEnd(RunEnd {
-                t_us: f.i64("t_us")?,
-                pairs: f.u("pairs")?,
-                fault: match code {
-                    NONE_CODE => None,
-                    c => Some(
-                        FaultKind::from_code(c)
-                            .ok_or_else(|| format!("unknown fault kind code {c}"))?,
-                    ),
-                },
-            })
-        }
-    })
-}
-
 pub use firmware::record::NONE_CODE;
-
-fn channel(code: u8) -> Result<Option<Channel>, String> {
-    match code {
-        0 => Ok(Some(Channel::T1)),
-        1 => Ok(Some(Channel::T2)),
-        NONE_CODE => Ok(None),
-        c => Err(format!("unknown channel code {c}")),
-    }
-}

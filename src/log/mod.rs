@@ -6,7 +6,8 @@
 //! Layers: `stream` cuts bytes into frames (rzCOBS), `elf` knows the firmware's table and
 //! pre-validates frames, `frame` decodes one frame into a record or a message, `seq` follows the
 //! sequence numbers, `decoder` puts these together over a stream, and `output` writes a
-//! session's files.
+//! session's files. `words` says the setup-mode records (`settings`, `live`, `reply`) in
+//! words, for `capstan log` and `capstan rig` alike.
 //!
 //! The bytes come from a debug probe reading RTT ([`probe`], feature `probe`), from a saved
 //! stream, or from a pipe (QEMU's semihosting output in the end-to-end test); the decoding is
@@ -20,6 +21,7 @@ pub mod output;
 pub mod probe;
 pub mod seq;
 pub mod stream;
+pub mod words;
 
 pub use decoder::{decode_all, BadFrame, Decoder, Located};
 pub use elf::Firmware;

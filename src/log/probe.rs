@@ -1,10 +1,11 @@
 //! The real board: flash (or attach to) the chip through a debug probe with the probe-rs
 //! library, find the firmware's RTT control block, and feed the defmt up-channel to a
-//! [`Logger`] until Ctrl-C, a limit, or the probe goes away.
+//! [`Logger`] until Ctrl-C, a limit, or the probe goes away. `capstan rig` attaches the same
+//! way (never flashing) and also writes command lines into the RTT down channel.
 //!
-//! The RTT channel stays in the firmware's mode (defmt-rtt's default: never block, drop what
-//! does not fit). The rig's sample loop must not stall on a slow host; a record that is dropped
-//! instead shows up as a sequence gap in the summary.
+//! The RTT channel stays in the firmware's mode (never block, drop what does not fit). The
+//! rig's sample loop must not stall on a slow host; a record that is dropped instead shows up
+//! as a sequence gap in the summary.
 
 use super::output::{Logger, Stop};
 use anyhow::{anyhow, bail, Context};
@@ -105,12 +106,26 @@ pub struct Connection {
 /// `opts.flash` is off), and find the RTT control block. Every failure here is an error that
 /// says what is missing; nothing has been logged yet.
 pub fn connect(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connection> {
+    let mut conn = attach(elf_path, opts)?;
+    let size = conn.up_buffer_size();
+    crate::errln!(
+        "capstan log: reading defmt from RTT channel {} ({size} bytes buffer); Ctrl-C stops and \
+         keeps everything",
+        conn.channel
+    );
+    Ok(conn)
+}
+
+/// [`connect`] without a word on stderr unless it flashes: the board reached, its RTT control
+/// block found, and its up-channel `opts.rtt_channel` checked to exist.
+pub fn attach(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connection> {
     let elf = std::fs::read(elf_path)
         .with_context(|| format!("cannot read the firmware ELF {}", elf_path.display()))?;
     let region = match find_rtt_control_block_in_raw_file(&elf) {
         Ok(Some(addr)) => ScanRegion::Exact(addr),
         Ok(None) => bail!(
-            "{} has no `_SEGGER_RTT` symbol: the firmware does not log over RTT (link defmt-rtt)",
+            "{} has no `_SEGGER_RTT` symbol: the firmware does not log over RTT (build it from \
+             this repository)",
             elf_path.display()
         ),
         Err(e) => bail!("{}: {e}", elf_path.display()),
@@ -153,25 +168,50 @@ pub fn connect(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connectio
         channel: opts.rtt_channel,
         probe_name,
     };
-    let size = conn
-        .rtt
-        .up_channel(conn.channel)
-        .ok_or_else(|| {
-            anyhow!(
-                "the firmware has no RTT up-channel {} (defmt-rtt uses 0)",
-                opts.rtt_channel
-            )
-        })?
-        .buffer_size();
-    crate::errln!(
-        "capstan log: reading defmt from RTT channel {} ({size} bytes buffer); Ctrl-C stops and \
-         keeps everything",
-        conn.channel
-    );
+    if conn.rtt.up_channel(conn.channel).is_none() {
+        bail!(
+            "the firmware has no RTT up-channel {} (defmt uses 0)",
+            opts.rtt_channel
+        );
+    }
     Ok(conn)
 }
 
 impl Connection {
+    fn up_buffer_size(&mut self) -> usize {
+        self.rtt
+            .up_channel(self.channel)
+            .map_or(0, |c| c.buffer_size())
+    }
+
+    /// Read what the defmt up-channel holds (0 bytes: nothing yet). An error is a probe or
+    /// target that stopped answering.
+    pub fn read_up(&mut self, buf: &mut [u8]) -> Result<usize, String> {
+        let mut core = self.session.core(0).map_err(|e| e.to_string())?;
+        let channel = self
+            .rtt
+            .up_channel(self.channel)
+            .ok_or("the RTT up-channel went away")?;
+        channel.read(&mut core, buf).map_err(|e| e.to_string())
+    }
+
+    /// The size of down-channel `n`'s buffer, if the firmware has that channel.
+    pub fn down_buffer_size(&mut self, n: usize) -> Option<usize> {
+        self.rtt.down_channel(n).map(|c| c.buffer_size())
+    }
+
+    /// Write `bytes` into down-channel `n`, as much as its buffer takes now; how much it took.
+    pub fn write_down(&mut self, n: usize, bytes: &[u8]) -> anyhow::Result<usize> {
+        let mut core = self.session.core(0).context("cannot reach core 0")?;
+        let channel = self
+            .rtt
+            .down_channel(n)
+            .ok_or_else(|| anyhow!("the firmware has no RTT down channel {n}"))?;
+        channel
+            .write(&mut core, bytes)
+            .with_context(|| format!("cannot write RTT down channel {n}"))
+    }
+
     /// Feed the defmt up-channel to `logger` until Ctrl-C (`stop`), a limit, or a probe
     /// failure, which ends the stream as [`Stop::ProbeLost`] (the logger keeps what it has).
     /// Only a failure to write the files is an error.
@@ -193,18 +233,7 @@ impl Connection {
             if let Some(d) = limits.duration.filter(|&d| started.elapsed() >= d) {
                 return Ok(Stop::Limit(format!("{} s (--duration)", d.as_secs_f64())));
             }
-            let read = self
-                .session
-                .core(0)
-                .map_err(|e| e.to_string())
-                .and_then(|mut core| {
-                    let channel = self
-                        .rtt
-                        .up_channel(self.channel)
-                        .expect("checked in connect");
-                    channel.read(&mut core, &mut buf).map_err(|e| e.to_string())
-                });
-            match read {
+            match self.read_up(&mut buf) {
                 Ok(0) => std::thread::sleep(Duration::from_millis(5)),
                 Ok(n) => logger.feed(&buf[..n])?,
                 Err(e) => return Ok(Stop::ProbeLost(e)),

@@ -41,8 +41,23 @@ impl Rig {
     /// Log the settings in force and where they came from (at boot: stored or defaults, and
     /// why).
     pub fn report_settings(&mut self, source: SettingsSource, sink: &mut impl LogSink) {
-        if source.code() >= SettingsSource::DefaultsNoRecord.code() {
-            warn!("{=str}", source.message());
+        // Literal messages: defmt keeps them off the chip (SettingsSource::message is the
+        // host's copy of the same words).
+        match source {
+            SettingsSource::DefaultsNoRecord => {
+                warn!("no settings stored: using the built-in defaults")
+            }
+            SettingsSource::DefaultsCorrupt => {
+                warn!("the stored settings are corrupt: using the built-in defaults")
+            }
+            SettingsSource::DefaultsInvalid => warn!(
+                "the stored settings are of another version or invalid: using the built-in defaults"
+            ),
+            SettingsSource::DefaultsFlashError => {
+                warn!("the flash could not be read: using the built-in defaults")
+            }
+            SettingsSource::Loaded => info!("settings loaded from flash"),
+            _ => {}
         }
         let report = SettingsReport {
             source,
@@ -63,7 +78,7 @@ impl Rig {
         }
     }
 
-    fn reply(
+    pub(super) fn reply(
         &mut self,
         sink: &mut impl LogSink,
         command: CommandKind,
@@ -233,6 +248,8 @@ impl Rig {
         };
         if pressed {
             self.leave_setup();
+            // Logged as a `leave`, so the log shows where setup mode ended.
+            self.reply(sink, CommandKind::Leave, Ok([0.0; 2]));
             return self.idle_outputs();
         }
         let force_n = self.forces(inp);

@@ -212,7 +212,6 @@ impl Plant {
                 broken: false,
                 snag: false,
                 unplugged: [false; 2],
-                hanging_n: [0.0; 2],
                 zero,
                 counts_per_n: [cpn, cpn],
                 trigger: false,

@@ -140,7 +140,6 @@ impl Plant {
             Channel::T1 => c.t1,
             Channel::T2 => t2,
         };
-        reading += c.hanging_n[k];
         if let (true, Some(d)) = (drive_on, c.disturb.as_ref()) {
             reading += d.zero_error_n[k];
         }

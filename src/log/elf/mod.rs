@@ -19,6 +19,8 @@ mod check;
 mod records;
 
 pub use check::MAX_PADDING;
+#[cfg(test)]
+pub(crate) use records::record_layout;
 pub use records::{Prim, RecordKind, RecordLayout};
 
 use anyhow::{anyhow, bail, Context};
@@ -47,6 +49,18 @@ struct Entry {
 }
 
 impl Entry {
+    fn new(tag: &str, format: String) -> Entry {
+        let variants = format
+            .contains('|')
+            .then(|| format.split('|').map(prepared_params).collect());
+        Entry {
+            tag: tag.to_string(),
+            params: prepared_params(&format),
+            format,
+            variants,
+        }
+    }
+
     /// True for log statements (they have a level); false for formats nested in arguments.
     fn has_level(&self) -> bool {
         matches!(
@@ -135,19 +149,7 @@ impl Firmware {
             if tag == "bitflags_value" {
                 continue;
             }
-            let variants = raw
-                .data
-                .contains('|')
-                .then(|| raw.data.split('|').map(prepared_params).collect());
-            entries.insert(
-                sym.address(),
-                Entry {
-                    tag: tag.to_string(),
-                    params: prepared_params(&raw.data),
-                    format: raw.data,
-                    variants,
-                },
-            );
+            entries.insert(sym.address(), Entry::new(tag, raw.data));
         }
         let records = find_records(&entries, path)?;
         Ok(Firmware {
@@ -155,6 +157,47 @@ impl Firmware {
             table,
             entries,
             timestamp,
+            records,
+        })
+    }
+
+    /// A firmware known by its log statements alone, without an ELF: `(index, level, format)`
+    /// each, `level` one of `trace`, `debug`, `info`, `warn`, `error`; no timestamp, rzCOBS
+    /// encoding. For tests and tools that make a stream themselves (a frame is the index, u16
+    /// little-endian, then the arguments at their wire widths). Checked like an ELF's table.
+    pub fn from_formats(name: &str, formats: &[(u16, &str, &str)]) -> anyhow::Result<Firmware> {
+        let mut json = serde_json::Map::new();
+        let mut entries = HashMap::new();
+        for &(index, level, format) in formats {
+            let tag = match level {
+                "trace" => "Trace",
+                "debug" => "Debug",
+                "info" => "Info",
+                "warn" => "Warn",
+                "error" => "Error",
+                other => bail!("{name}: `{other}` is not a log level"),
+            };
+            let entry = serde_json::json!({
+                "string": { "tag": tag, "string": format },
+                "raw_symbol": format!("{{\"tag\":\"defmt_{level}\",\"data\":{format:?}}}"),
+            });
+            json.insert(index.to_string(), entry);
+            entries.insert(index as u64, Entry::new(level, format.to_string()));
+        }
+        let table = serde_json::json!({
+            "timestamp": null,
+            "entries": json,
+            "bitflags": {},
+            "encoding": "Rzcobs",
+        });
+        let table: Table =
+            serde_json::from_value(table).map_err(|e| anyhow!("{name}: defmt table: {e}"))?;
+        let records = find_records(&entries, name)?;
+        Ok(Firmware {
+            path: name.to_string(),
+            table,
+            entries,
+            timestamp: None,
             records,
         })
     }
@@ -167,6 +210,14 @@ impl Firmware {
     /// The record layout for a format index, if it is a rig record.
     pub fn record_layout(&self, index: u64) -> Option<&RecordLayout> {
         self.records.get(&index)
+    }
+
+    /// Whether this firmware's records of `kind` carry the field `name` (an optional field,
+    /// `RecordKind::optional_fields`, is decoded as its default when they do not).
+    pub fn record_has_field(&self, kind: RecordKind, name: &str) -> bool {
+        self.records
+            .values()
+            .any(|l| l.kind == kind && l.position(name).is_some())
     }
 
     /// The format string of an index, if the table has it.

@@ -2,6 +2,10 @@
 //! the leading word of their format string (`firmware/src/defmt_sink.rs`), each
 //! `WORD name={=type} name={=type} ...`, so fields are read by name and type; and the check,
 //! when the ELF is loaded, that every record has the fields this decoder needs.
+//!
+//! The run records (`run_start`, `raw`, `pair`, `fault`, `run_end`) must all be there; the
+//! setup-mode records (`settings`, `live`, `reply`) and the calibration fields `run_start`
+//! gained with them are read when present, so an ELF built before them still decodes.
 
 use super::Entry;
 use anyhow::bail;
@@ -21,11 +25,30 @@ pub enum RecordKind {
     Fault,
     /// `run_end`
     RunEnd,
+    /// `settings` (setup mode, at boot and on request: not part of a run)
+    Settings,
+    /// `live` (setup mode)
+    Live,
+    /// `reply` (the answer to a host command)
+    Reply,
 }
 
 impl RecordKind {
     /// All kinds.
-    pub const ALL: [RecordKind; 5] = [
+    pub const ALL: [RecordKind; 8] = [
+        RecordKind::RunStart,
+        RecordKind::Raw,
+        RecordKind::Pair,
+        RecordKind::Fault,
+        RecordKind::RunEnd,
+        RecordKind::Settings,
+        RecordKind::Live,
+        RecordKind::Reply,
+    ];
+
+    /// The kinds every rig firmware has: an ELF lacking one is refused. The setup-mode kinds
+    /// (`settings`, `live`, `reply`) came later; an ELF without them still decodes.
+    pub const RUN_KINDS: [RecordKind; 5] = [
         RecordKind::RunStart,
         RecordKind::Raw,
         RecordKind::Pair,
@@ -41,6 +64,9 @@ impl RecordKind {
             RecordKind::Pair => "pair",
             RecordKind::Fault => "fault",
             RecordKind::RunEnd => "run_end",
+            RecordKind::Settings => "settings",
+            RecordKind::Live => "live",
+            RecordKind::Reply => "reply",
         }
     }
 
@@ -49,33 +75,11 @@ impl RecordKind {
     }
 
     /// The fields this decoder needs, with their wire types.
-    pub fn required_fields(self) -> &'static [(&'static str, Prim)] {
+    pub fn required_fields(self) -> Vec<(&'static str, Prim)> {
         use Prim::*;
-        match self {
-            RecordKind::RunStart => &[
-                ("seq", U32),
-                ("run", U32),
-                ("order", U8),
-                ("rest_deg", F32),
-                ("step_deg", F32),
-                ("final_deg", F32),
-                ("dwell_ms", U32),
-                ("pre_trigger_ms", U32),
-                ("trigger_ms", U32),
-                ("tare_ms", U32),
-                ("amp_control_v", F32),
-                ("sample_hz", U32),
-                ("raw_log_hz", U32),
-                ("window_after_ms", U32),
-                ("window_before_ms", U32),
-                ("diameter_mm", F32),
-                ("wrap_deg", F32),
-                ("amp_gain", F32),
-                ("t1_zero", F32),
-                ("t1_n_per_count", F32),
-                ("t2_zero", F32),
-                ("t2_n_per_count", F32),
-            ],
+        let lead: &[(&str, Prim)] = match self {
+            RecordKind::RunStart => &[("seq", U32), ("run", U32)],
+            RecordKind::Settings => &[("seq", U32), ("source", U8)],
             RecordKind::Raw => &[
                 ("seq", U32),
                 ("t_us", I64),
@@ -105,9 +109,82 @@ impl RecordKind {
                 ("t_us", I64),
             ],
             RecordKind::RunEnd => &[("seq", U32), ("t_us", I64), ("pairs", U32), ("fault", U8)],
+            RecordKind::Live => &[
+                ("seq", U32),
+                ("t_ms", U32),
+                ("c1", U16),
+                ("c2", U16),
+                ("t1_n", F32),
+                ("t2_n", F32),
+                ("servo_deg", F32),
+                ("crc", U32),
+            ],
+            RecordKind::Reply => &[
+                ("seq", U32),
+                ("command", U8),
+                ("error", U8),
+                ("v1", F32),
+                ("v2", F32),
+                ("crc", U32),
+            ],
+        };
+        let mut fields = lead.to_vec();
+        match self {
+            RecordKind::RunStart => fields.extend_from_slice(SETTINGS_FIELDS),
+            RecordKind::Settings => {
+                fields.extend_from_slice(SETTINGS_FIELDS);
+                fields.extend_from_slice(CALIBRATION_EXTRA_FIELDS);
+                fields.push(("crc", U32));
+            }
+            _ => {}
+        }
+        fields
+    }
+
+    /// Fields read when the record has them (firmware built before them lacks them): checked
+    /// for their type when present. `crc` of the run records is optional the same way.
+    pub fn optional_fields(self) -> &'static [(&'static str, Prim)] {
+        match self {
+            RecordKind::RunStart => CALIBRATION_EXTRA_FIELDS,
+            _ => &[],
         }
     }
 }
+
+/// The protocol and calibration fields `run_start` and `settings` share (after their leading
+/// fields), in the firmware's order.
+const SETTINGS_FIELDS: &[(&str, Prim)] = &[
+    ("order", Prim::U8),
+    ("rest_deg", Prim::F32),
+    ("step_deg", Prim::F32),
+    ("final_deg", Prim::F32),
+    ("dwell_ms", Prim::U32),
+    ("pre_trigger_ms", Prim::U32),
+    ("trigger_ms", Prim::U32),
+    ("tare_ms", Prim::U32),
+    ("amp_control_v", Prim::F32),
+    ("sample_hz", Prim::U32),
+    ("raw_log_hz", Prim::U32),
+    ("window_after_ms", Prim::U32),
+    ("window_before_ms", Prim::U32),
+    ("diameter_mm", Prim::F32),
+    ("wrap_deg", Prim::F32),
+    ("amp_gain", Prim::F32),
+    ("t1_zero", Prim::F32),
+    ("t1_n_per_count", Prim::F32),
+    ("t2_zero", Prim::F32),
+    ("t2_n_per_count", Prim::F32),
+];
+
+/// The rest of the calibration (tare reference, servo map, amplifier full scale): always in
+/// `settings`, in `run_start` since setup mode.
+const CALIBRATION_EXTRA_FIELDS: &[(&str, Prim)] = &[
+    ("tare_reference_n", Prim::F32),
+    ("servo_min_us", Prim::F32),
+    ("servo_max_us", Prim::F32),
+    ("servo_max_deg", Prim::F32),
+    ("amp_full_scale_v", Prim::F32),
+];
 
 /// The primitive wire types the records use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -154,7 +231,7 @@ impl RecordLayout {
 }
 
 /// A record format: `WORD name={=type} name={=type} ...` → its kind and fields.
-fn record_layout(format: &str) -> Option<Result<RecordLayout, String>> {
+pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, String>> {
     let kind = RecordKind::from_word(format.split(' ').next()?)?;
     if !format.starts_with(&format!("{} seq=", kind.word())) {
         return None;
@@ -189,13 +266,22 @@ fn record_layout(format: &str) -> Option<Result<RecordLayout, String>> {
         }
     }
     let layout = RecordLayout { kind, fields };
-    for (need, ty) in kind.required_fields() {
-        match layout.fields.iter().find(|(n, _)| n == need) {
-            None => return Some(Err(format!("no field `{need}`"))),
-            Some((_, t)) if t != ty => {
-                return Some(Err(format!("field `{need}` is {t:?}, expected {ty:?}")))
+    let optional = kind
+        .optional_fields()
+        .iter()
+        .chain(&[("crc", Prim::U32)])
+        .map(|&(n, t)| (n, t, false));
+    let required = kind
+        .required_fields()
+        .into_iter()
+        .map(|(n, t)| (n, t, true));
+    for (name, ty, needed) in required.chain(optional) {
+        match layout.fields.iter().find(|(n, _)| n == name) {
+            None if needed => return Some(Err(format!("no field `{name}`"))),
+            Some((_, t)) if *t != ty => {
+                return Some(Err(format!("field `{name}` is {t:?}, expected {ty:?}")))
             }
-            Some(_) => {}
+            _ => {}
         }
     }
     Some(Ok(layout))
@@ -223,12 +309,12 @@ pub(super) fn find_records(
             ),
         }
     }
-    let missing: Vec<&str> = RecordKind::ALL
+    let missing: Vec<&str> = RecordKind::RUN_KINDS
         .into_iter()
         .filter(|k| !records.values().any(|l| l.kind == *k))
         .map(|k| k.word())
         .collect();
-    if missing.len() == RecordKind::ALL.len() {
+    if missing.len() == RecordKind::RUN_KINDS.len() {
         bail!(
             "ELF {path} is not the capstan rig firmware: its defmt table has none of the rig's \
              records (run_start, raw, pair, fault, run_end)"

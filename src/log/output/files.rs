@@ -4,14 +4,15 @@
 //! the session does.
 
 use super::{
-    LogOptions, FAULTS_CSV, FAULTS_HEADER, MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, RAW_CSV,
-    RAW_HEADER, STREAM_FILE, SUMMARY_JSON,
+    LogOptions, FAULTS_CSV, FAULTS_HEADER, LIVE_CSV, LIVE_HEADER, MESSAGES_TXT, PAIRS_CSV,
+    PAIRS_INCOMPLETE_CSV, RAW_CSV, RAW_HEADER, SETTINGS_CSV, STREAM_FILE, SUMMARY_JSON,
 };
 use crate::data::{Pair, PairsWriter};
+use crate::log::words::{setting_values, source_name};
 use crate::outdir::Staged;
 use anyhow::Context;
 use firmware::hal::Channel;
-use firmware::record::{Fault, RawSample};
+use firmware::record::{Fault, Live, RawSample, SettingsReport};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
@@ -29,6 +30,10 @@ pub(super) struct Files {
     stream: Option<BufWriter<File>>,
     /// `pairs-incomplete.csv`, created when its first row arrives.
     incomplete: Option<PairsWriter<BufWriter<File>>>,
+    /// `settings.csv`, created when its first row arrives.
+    settings: Option<BufWriter<File>>,
+    /// `live.csv`, created when its first row arrives.
+    live: Option<BufWriter<File>>,
 }
 
 fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<BufWriter<File>> {
@@ -65,6 +70,8 @@ impl Files {
             PAIRS_CSV,
             PAIRS_INCOMPLETE_CSV,
             FAULTS_CSV,
+            SETTINGS_CSV,
+            LIVE_CSV,
             SUMMARY_JSON,
             STREAM_FILE,
             MESSAGES_TXT,
@@ -95,6 +102,8 @@ impl Files {
                 None
             },
             incomplete: None,
+            settings: None,
+            live: None,
             set,
             dir: dir.clone(),
         })
@@ -165,6 +174,39 @@ impl Files {
         w.write(p).context("cannot write pairs-incomplete.csv")
     }
 
+    /// A settings report, to `settings.csv` (created with its header by the first).
+    pub fn settings(&mut self, seq: u32, r: &SettingsReport) -> anyhow::Result<()> {
+        let values = setting_values(&r.settings);
+        if self.settings.is_none() {
+            let names: Vec<&str> = values.iter().map(|v| v.name).collect();
+            let header = format!("seq,source,{}", names.join(","));
+            self.settings = Some(create(&mut self.set, SETTINGS_CSV, Some(&header))?);
+        }
+        let w = self.settings.as_mut().expect("just created");
+        let cells: Vec<&str> = values.iter().map(|v| v.value.as_str()).collect();
+        writeln!(w, "{seq},{},{}", source_name(r.source), cells.join(","))
+            .context("cannot write settings.csv")
+    }
+
+    /// A live reading of setup mode, to `live.csv` (created with its header by the first).
+    pub fn live(&mut self, seq: u32, l: &Live) -> anyhow::Result<()> {
+        if self.live.is_none() {
+            self.live = Some(create(&mut self.set, LIVE_CSV, Some(LIVE_HEADER))?);
+        }
+        let w = self.live.as_mut().expect("just created");
+        writeln!(
+            w,
+            "{seq},{},{},{},{},{},{}",
+            l.t_ms as f64 / 1e3,
+            l.counts[0],
+            l.counts[1],
+            f(l.force_n[0]),
+            f(l.force_n[1]),
+            f(l.servo_deg)
+        )
+        .context("cannot write live.csv")
+    }
+
     /// Flush every file.
     pub fn flush(&mut self) -> anyhow::Result<()> {
         let dir = self.dir.display().to_string();
@@ -179,6 +221,12 @@ impl Files {
         if let Some(w) = &mut self.incomplete {
             w.flush().with_context(|| at(PAIRS_INCOMPLETE_CSV))?;
         }
+        if let Some(w) = &mut self.settings {
+            w.flush().with_context(|| at(SETTINGS_CSV))?;
+        }
+        if let Some(w) = &mut self.live {
+            w.flush().with_context(|| at(LIVE_CSV))?;
+        }
         Ok(())
     }
 
@@ -192,6 +240,8 @@ impl Files {
             self.messages,
             self.stream,
             self.incomplete,
+            self.settings,
+            self.live,
         ));
         self.set.write(SUMMARY_JSON, summary_json.as_bytes())?;
         self.set.commit()

@@ -7,11 +7,18 @@
 //! | `pairs.csv` | the conditioned pairs, in the schema of `data.rs` (`analyze` reads it) |
 //! | `pairs-incomplete.csv` | only if needed: pairs whose set-up (wrap, diameter, drive voltage) or run number is unknown, same schema with those cells empty |
 //! | `faults.csv` | `run,seq,time_s,kind,channel,value` |
-//! | `messages.txt` | the firmware's other log lines (`LEVEL text`) |
+//! | `messages.txt` | the firmware's other log lines (`LEVEL text`), and each command reply as `REPLY seq=N sentence` |
+//! | `settings.csv` | only if needed: each `settings` record (`seq,source,` then every setting by name) |
+//! | `live.csv` | only if needed: setup mode's live values `seq,time_s,t1_counts,t2_counts,t1_n,t2_n,servo_deg` (time since boot) |
 //! | `stream.defmt` | the bytes as received (for `capstan log --from`), unless read from a file |
 //! | `summary.json` | counts, runs, sequence gaps, bad frames, why the session stopped |
 //!
-//! Times are seconds since the logger trigger's rising edge (negative before it).
+//! Times are seconds since the logger trigger's rising edge (negative before it), except in
+//! `live.csv` and for a fault in setup mode (no trigger there): seconds since boot.
+//!
+//! The setup-mode records (`settings`, `live`, `reply`) belong to no run: they never open or
+//! close one, a fault among them is a setup-mode fault (`faults.csv` with an empty run), and
+//! they are counted in `summary.json` and in the sequence numbers like every record.
 //!
 //! [`Logger`] (`session`) keeps the session's state (the run under way, counts, the runs
 //! seen) and reports progress; `files` writes the rows; [`Summary`] (`summary`) is what
@@ -22,7 +29,7 @@ mod session;
 mod summary;
 
 pub use session::Logger;
-pub use summary::{RecordCounts, RunSummary, Sourced, Summary, TruncatedTail};
+pub use summary::{RecordCounts, RunCalibration, RunSummary, Sourced, Summary, TruncatedTail};
 
 use std::path::PathBuf;
 
@@ -38,6 +45,10 @@ pub const FAULTS_CSV: &str = "faults.csv";
 pub const MESSAGES_TXT: &str = "messages.txt";
 /// The received bytes.
 pub const STREAM_FILE: &str = "stream.defmt";
+/// Settings reports (created only when one arrives).
+pub const SETTINGS_CSV: &str = "settings.csv";
+/// Setup mode's live values (created only when one arrives).
+pub const LIVE_CSV: &str = "live.csv";
 /// The summary.
 pub const SUMMARY_JSON: &str = "summary.json";
 
@@ -45,6 +56,8 @@ pub const SUMMARY_JSON: &str = "summary.json";
 pub const RAW_HEADER: &str = "run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n";
 /// Header of `faults.csv`.
 pub const FAULTS_HEADER: &str = "run,seq,time_s,kind,channel,value";
+/// Header of `live.csv`.
+pub const LIVE_HEADER: &str = "seq,time_s,t1_counts,t2_counts,t1_n,t2_n,servo_deg";
 
 /// Rig set-up given on the command line; each overrides the run-start record's value.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

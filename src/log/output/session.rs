@@ -1,13 +1,15 @@
 //! One logging session: bytes in, decoded records routed to the files as they arrive, the run
 //! under way and its set-up values tracked, progress reported on stderr, and the summary at
-//! the end.
+//! the end. The setup-mode records, which belong to no run, are `setup`'s.
+
+mod setup;
 
 use super::files::{decimal, Files};
-use super::summary::{RecordCounts, RunSummary, Sourced, Summary, TruncatedTail};
+use super::summary::{RecordCounts, RunCalibration, RunSummary, Sourced, Summary, TruncatedTail};
 use super::{LogOptions, Stop, PAIRS_INCOMPLETE_CSV};
 use crate::data::Pair;
 use crate::log::decoder::{BadFrame, Decoder, Located};
-use crate::log::elf::Firmware;
+use crate::log::elf::{Firmware, RecordKind};
 use crate::log::frame::Event;
 use crate::log::seq::SeqEvent;
 use firmware::record::{Fault, RawSample, Record, RunEnd, RunStart, StepPair};
@@ -34,6 +36,10 @@ pub struct Logger<'f> {
     pairs_incomplete: u64,
     /// Runs whose run-end record has arrived.
     completed: usize,
+    /// The rig is in setup mode as far as the records tell (`setup::keeps_setup`): a fault
+    /// while no run is under way is a setup-mode fault, not the start of a run whose
+    /// run_start was lost.
+    in_setup: bool,
     events: Vec<Located>,
     bad: Vec<BadFrame>,
 }
@@ -60,6 +66,7 @@ impl<'f> Logger<'f> {
             current: None,
             pairs_incomplete: 0,
             completed: 0,
+            in_setup: false,
             events: Vec::new(),
             bad: Vec::new(),
         })
@@ -158,19 +165,29 @@ impl<'f> Logger<'f> {
         }
         match located.event {
             Event::Message { level, text } => self.files.message(&level, &text),
-            Event::Record { seq, record } => match record {
-                Record::RunStart(s) => {
-                    self.run_start(seq, &s);
-                    Ok(())
-                }
-                Record::Raw(r) => self.raw(seq, &r),
-                Record::Pair(p) => self.pair(seq, &p),
-                Record::Fault(f) => self.fault(seq, &f),
-                Record::RunEnd(e) => {
-                    self.run_end(seq, &e);
-                    Ok(())
-                }
-            },
+            Event::Record { seq, record } => self.record(seq, &record),
+        }
+    }
+
+    fn record(&mut self, seq: u32, record: &Record) -> anyhow::Result<()> {
+        let setup_fault = self.in_setup && self.current.is_none();
+        self.in_setup = setup::keeps_setup(record, self.in_setup);
+        match record {
+            Record::RunStart(s) => {
+                self.run_start(seq, s);
+                Ok(())
+            }
+            Record::Raw(r) => self.raw(seq, r),
+            Record::Pair(p) => self.pair(seq, p),
+            Record::Fault(f) if setup_fault => self.setup_fault(seq, f),
+            Record::Fault(f) => self.fault(seq, f),
+            Record::RunEnd(e) => {
+                self.run_end(seq, e);
+                Ok(())
+            }
+            Record::Settings(r) => self.settings(seq, r),
+            Record::Live(l) => self.live(seq, l),
+            Record::Reply(r) => self.reply(seq, r),
         }
     }
 
@@ -181,7 +198,7 @@ impl<'f> Logger<'f> {
         // 0 (or garbage) in the record means "not given".
         let given = |v: f32| (v.is_finite() && v > 0.0).then_some(decimal(v));
         let drive = s.calibration.amp.drive_v(p.amp_control_v);
-        let summary = RunSummary::new(
+        let mut summary = RunSummary::new(
             Some(s.run),
             seq,
             Sourced::choose(flags.capstan_diameter_mm, given(p.capstan_diameter_mm)),
@@ -191,6 +208,9 @@ impl<'f> Logger<'f> {
                 Some(decimal(drive)).filter(|v| v.is_finite()),
             ),
         );
+        let fw = self.decoder.firmware();
+        let sent = |field: &str| fw.record_has_field(RecordKind::RunStart, field);
+        summary.calibration = Some(RunCalibration::of(&s.calibration, sent));
         self.current = Some(Current {
             index: self.runs.len(),
             diameter: summary.capstan_diameter_mm.value,

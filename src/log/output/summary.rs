@@ -1,8 +1,9 @@
 //! What a session saw, as `summary.json` and the closing lines on stderr say it: counts by
-//! record kind, each run (complete or not, where its set-up values came from), sequence gaps,
+//! record kind, each run (complete or not, where its set-up values came from, its
+//! calibration), sequence gaps,
 //! restarts, bad frames and an unfinished frame at the end.
 
-use super::{PAIRS_CSV, PAIRS_INCOMPLETE_CSV, STREAM_FILE};
+use super::{LIVE_CSV, MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, SETTINGS_CSV, STREAM_FILE};
 use crate::log::decoder::BadFrame;
 use crate::log::seq::{Backwards, Gap, Restart};
 use serde::Serialize;
@@ -48,6 +49,57 @@ pub struct RunSummary {
     pub wrap_deg: Sourced,
     /// Drive voltage written to pairs.csv.
     pub drive_v: Sourced,
+    /// The calibration the run used, from its run-start record (`None` if it was lost).
+    pub calibration: Option<RunCalibration>,
+}
+
+/// The calibration of a run, as its run-start record gives it. A value is `None` (null) when
+/// the record does not carry it (the tare reference, servo map and amplifier full scale came
+/// with setup mode: a firmware built before it does not send them) or is not a number.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RunCalibration {
+    /// T1 zero (after the tare), ADC counts.
+    pub t1_zero: Option<f64>,
+    /// T1 sensitivity, N per count.
+    pub t1_n_per_count: Option<f64>,
+    /// T2 zero (after the tare), ADC counts.
+    pub t2_zero: Option<f64>,
+    /// T2 sensitivity, N per count.
+    pub t2_n_per_count: Option<f64>,
+    /// Force both channels carry during the tare, N.
+    pub tare_reference_n: Option<f64>,
+    /// Servo pulse at 0°, µs.
+    pub servo_min_us: Option<f64>,
+    /// Servo pulse at `servo_max_deg`, µs.
+    pub servo_max_us: Option<f64>,
+    /// Servo angle at `servo_max_us`, deg.
+    pub servo_max_deg: Option<f64>,
+    /// Amplifier gain, V per V of control.
+    pub amp_gain: Option<f64>,
+    /// Amplifier control voltage at full duty, V.
+    pub amp_full_scale_v: Option<f64>,
+}
+
+impl RunCalibration {
+    /// From a run-start record's calibration; `sent(field)` says whether the record carries
+    /// that field (by its name in the record).
+    pub fn of(c: &firmware::Calibration, sent: impl Fn(&str) -> bool) -> RunCalibration {
+        let v = |name: &str, x: f32| {
+            Some(super::files::decimal(x)).filter(|d| d.is_finite() && sent(name))
+        };
+        RunCalibration {
+            t1_zero: v("t1_zero", c.t1.zero_counts),
+            t1_n_per_count: v("t1_n_per_count", c.t1.n_per_count),
+            t2_zero: v("t2_zero", c.t2.zero_counts),
+            t2_n_per_count: v("t2_n_per_count", c.t2.n_per_count),
+            tare_reference_n: v("tare_reference_n", c.tare_reference_n),
+            servo_min_us: v("servo_min_us", c.servo.pulse_at_min_us),
+            servo_max_us: v("servo_max_us", c.servo.pulse_at_max_us),
+            servo_max_deg: v("servo_max_deg", c.servo.max_deg),
+            amp_gain: v("amp_gain", c.amp.amp_gain),
+            amp_full_scale_v: v("amp_full_scale_v", c.amp.full_scale_v),
+        }
+    }
 }
 
 /// Counts by record kind.
@@ -63,6 +115,12 @@ pub struct RecordCounts {
     pub fault: u64,
     /// run_end
     pub run_end: u64,
+    /// settings (setup mode; not part of a run)
+    pub settings: u64,
+    /// live (setup mode)
+    pub live: u64,
+    /// reply (answers to host commands)
+    pub reply: u64,
 }
 
 /// Everything `summary.json` says.
@@ -141,6 +199,13 @@ impl Summary {
             self.stopped,
             dir.display()
         );
+        if r.setup() > 0 {
+            s += &format!(
+                "\ncapstan log: setup mode: {} settings report(s) ({SETTINGS_CSV}), {} live \
+                 reading(s) ({LIVE_CSV}), {} command reply record(s) ({MESSAGES_TXT})",
+                r.settings, r.live, r.reply
+            );
+        }
         if self.missing_records > 0 {
             let places: Vec<String> = self
                 .gaps
@@ -252,6 +317,7 @@ impl RunSummary {
             capstan_diameter_mm,
             wrap_deg,
             drive_v,
+            calibration: None,
         }
     }
 }
@@ -259,6 +325,11 @@ impl RunSummary {
 impl RecordCounts {
     /// Records of every kind.
     pub fn total(&self) -> u64 {
-        self.run_start + self.raw + self.pair + self.fault + self.run_end
+        self.run_start + self.raw + self.pair + self.fault + self.run_end + self.setup()
+    }
+
+    /// Records of the setup-mode kinds (settings, live, reply).
+    pub fn setup(&self) -> u64 {
+        self.settings + self.live + self.reply
     }
 }

@@ -1,0 +1,215 @@
+//! `capstan rig`: set the rig up from the host. One command line of the firmware's
+//! (`firmware/src/command.rs`) per call, checked here first, sent to the board (RTT down
+//! channel through a debug probe), and answered from the `reply` record the firmware logs;
+//! plus two host verbs, `live` and `keys`. (The simulated rig takes the same lines through
+//! `host_sim::session`, in the tests.)
+//!
+//! `check` refuses bad input before anything is sent, `link` is the [`RigLink`] trait and the
+//! wait for an answer, `say` what is printed, `live` the live view, `probe_link` the board.
+
+mod check;
+mod link;
+mod live;
+#[cfg(feature = "probe")]
+mod probe_link;
+mod say;
+
+pub use check::{check_set, command_line, CheckError};
+pub use link::{exchange, exchange_within, take, timeout_for, Answer, NoReply, RigLink};
+pub use live::{watch as watch_live, NotInSetup};
+pub use say::{answer_lines, fault_line, key_lines, live_line, reply_line, Refused};
+
+use crate::log::Firmware;
+use anyhow::bail;
+use firmware::command::Command;
+use std::path::{Path, PathBuf};
+
+const AFTER_HELP: &str = "\
+SETTING UP THE RIG AT THE BENCH
+  The board runs this repository's firmware, with a debug probe wired as for `capstan log`.
+  Options first, then one command as separate words:
+    R=\"capstan rig --chip RP2040 --elf target/thumbv6m-none-eabi/release/firmware\"
+    $R setup                    setup mode: amplifier at 0 V, the servo moves only when told
+    $R live 10                  T1/T2 in N and counts, servo angle, ~10 a second (Ctrl-C stops)
+    $R jog 5                    move the servo 5° (jog -5 back)
+    $R zero                     cord slack, nothing hanging: both zeros (0.5 s mean)
+    $R weigh t1 9.80665         a 1 kg weight hanging on T1: its N/count
+    $R weigh t2 9.80665         the same weight on T2
+    $R servo 125                check the rest angle, then servo 65 for the final one
+    $R set diameter_mm 12.7     and set wrap_deg 360 (capstan rig keys: every key, its unit)
+    $R show                     every setting with its unit, and where it came from
+    $R store                    keep the settings in flash (they survive a power-off)
+    $R leave                    leave setup mode: the servo homes to rest
+    $R run                      start a run, as the button does (record it with capstan log)
+
+  Every command is checked here first, with the firmware's own parser and settings rules: a
+  typo never reaches the board. Then it waits for the board's reply (3 s; store 5 s) and
+  says it, with the numbers the board sent. Faults and firmware messages go to stderr.
+  Exit status: 0 done; 1 refused by the board, no reply, or no probe; 2 refused here.
+
+  capstan rig never flashes or resets the board. It reads the RTT channel `capstan log`
+  reads: the records it takes are not seen by a `capstan log` running at the same time
+  (that log reports them as a sequence gap). Stop the log while setting up, or accept the gap.";
+
+/// Arguments of `capstan rig`.
+#[derive(clap::Args, Debug)]
+#[command(
+    long_about = "Set up the rig from the host: live forces, jog the servo, calibrate, set the \
+                  protocol, store it on the board, start a run. Sends one of the firmware's \
+                  command lines and prints the board's answer.",
+    after_long_help = AFTER_HELP
+)]
+pub struct Args {
+    /// Board: the probe-rs chip name (RP2040 for the Pico). Attaches without flashing.
+    #[arg(long, value_name = "CHIP", requires = "elf")]
+    pub chip: Option<String>,
+
+    /// The firmware ELF running on the board: its defmt table decodes the replies.
+    #[arg(long, value_name = "FIRMWARE_ELF")]
+    pub elf: Option<PathBuf>,
+
+    /// Board: which probe, as VID:PID[:SERIAL] (needed when several are plugged in).
+    #[arg(long, value_name = "VID:PID[:SERIAL]")]
+    pub probe: Option<String>,
+
+    /// Board: hold the chip in reset while attaching (this restarts the firmware: it leaves
+    /// setup mode).
+    #[arg(long)]
+    pub connect_under_reset: bool,
+
+    /// Board: SWD clock, kHz.
+    #[arg(long, value_name = "KHZ")]
+    pub speed: Option<u32>,
+
+    /// The command: setup | leave | jog DEG | servo DEG | zero | weigh t1|t2 NEWTONS |
+    /// set KEY VALUE | show | store | defaults | run | abort | ack; or on the host:
+    /// live [SECONDS] | keys.
+    #[arg(value_name = "COMMAND", required = true, num_args = 1.., allow_negative_numbers = true)]
+    pub words: Vec<String>,
+}
+
+/// Run `capstan rig`. A command refused here exits with status 2, one the board refuses with
+/// status 1 (`refused: REASON` on stderr).
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let e = match rig(&args) {
+        Ok(()) => return Ok(()),
+        Err(e) => e,
+    };
+    if let Some(c) = e.downcast_ref::<CheckError>() {
+        crate::errln!("error: {c}");
+        std::process::exit(2);
+    }
+    if let Some(r) = e.downcast_ref::<Refused>() {
+        crate::errln!("{r}");
+        std::process::exit(1);
+    }
+    Err(e)
+}
+
+fn rig(args: &Args) -> anyhow::Result<()> {
+    let (verb, rest) = args.words.split_first().ok_or(CheckError::Empty)?;
+    match verb.as_str() {
+        "keys" => {
+            if !rest.is_empty() {
+                bail!(CheckError::Usage("keys takes no words".into()));
+            }
+            for line in key_lines() {
+                crate::outln!("{line}");
+            }
+            Ok(())
+        }
+        "live" => {
+            let how_long = live::seconds(rest).map_err(CheckError::Usage)?;
+            with_link(args, |link| {
+                let stop = super::signal::stop_flag("rig");
+                live::watch(link, how_long, stop, &mut out, &mut note).map(|_| ())
+            })
+        }
+        _ => {
+            let (line, cmd) = command_line(&args.words)?;
+            with_link(args, |link| send(link, &line, &cmd, &mut out, &mut note))
+        }
+    }
+}
+
+fn out(line: String) {
+    crate::outln!("{line}");
+}
+
+fn note(line: String) {
+    crate::errln!("{line}");
+}
+
+/// Send one checked command (`line`, from [`command_line`]) and say its answer to `out`;
+/// faults and messages meanwhile go to `note`. A `set` is first checked against the settings
+/// the rig reports (a `show`), and not sent if it would make them invalid ([`CheckError`]).
+/// A refusal by the rig is [`Refused`].
+pub fn send(
+    link: &mut dyn RigLink,
+    line: &str,
+    cmd: &Command,
+    out: &mut dyn FnMut(String),
+    note: &mut dyn FnMut(String),
+) -> anyhow::Result<()> {
+    if matches!(cmd, Command::Set(..)) {
+        let current = exchange(link, "show", &Command::Show, note)?;
+        if let Some(s) = current.settings {
+            check_set(cmd, &s.settings)?;
+        }
+    }
+    let answer = exchange(link, line, cmd, note)?;
+    for l in answer_lines(&answer, cmd)? {
+        out(l);
+    }
+    Ok(())
+}
+
+/// Reach the rig the options name and hand it to `work`.
+fn with_link(
+    args: &Args,
+    work: impl FnOnce(&mut dyn RigLink) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let (Some(chip), Some(elf)) = (&args.chip, &args.elf) else {
+        bail!(
+            "say which board: --chip CHIP --elf FIRMWARE_ELF (through a debug probe); \
+             `capstan rig keys` needs neither"
+        );
+    };
+    let fw = Firmware::load(elf)?;
+    board(&fw, chip, elf, args, work)
+}
+
+#[cfg(feature = "probe")]
+fn board(
+    fw: &Firmware,
+    chip: &str,
+    elf: &Path,
+    args: &Args,
+    work: impl FnOnce(&mut dyn RigLink) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let opts = crate::log::probe::ProbeOptions {
+        chip: chip.to_string(),
+        probe: args.probe.clone(),
+        flash: false,
+        connect_under_reset: args.connect_under_reset,
+        speed_khz: args.speed,
+        rtt_channel: 0,
+        rtt_timeout: std::time::Duration::from_secs(5),
+    };
+    let mut link = probe_link::open(fw, elf, opts)?;
+    work(&mut link)
+}
+
+#[cfg(not(feature = "probe"))]
+fn board(
+    _fw: &Firmware,
+    _chip: &str,
+    _elf: &Path,
+    _args: &Args,
+    _work: impl FnOnce(&mut dyn RigLink) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    bail!(
+        "this `capstan` was built without the `probe` feature: it cannot reach a board. \
+         Rebuild with default features."
+    )
+}

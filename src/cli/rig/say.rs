@@ -1,0 +1,246 @@
+//! What `capstan rig` prints: the answer to a command (a sentence from its reply record, the
+//! settings from a settings record), live values, faults, and the settable keys. Every number
+//! comes from a record; the wording of replies and settings is `log::words`, shared with
+//! `capstan log`.
+
+use super::link::Answer;
+use crate::log::words::{reply_sentence, settings_lines, unit};
+use firmware::command::{Command, CommandKind, Key};
+use firmware::hal::Channel;
+use firmware::record::{Fault, Live, Reply};
+
+/// The firmware refused the command.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refused(pub String);
+
+impl std::fmt::Display for Refused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Refused {}
+
+/// One reply as a line: its sentence, and the command word before a refusal.
+pub fn reply_line(r: &Reply, sent: Option<&Command>) -> String {
+    let sentence = reply_sentence(r, sent);
+    match r.error {
+        Some(_) => format!("{}: {sentence}", r.command.word()),
+        None => sentence,
+    }
+}
+
+/// The lines answering `cmd` (stdout), or the firmware's refusal (`refused: REASON`).
+pub fn answer_lines(answer: &Answer, cmd: &Command) -> Result<Vec<String>, Refused> {
+    if let Some(e) = answer.run_end {
+        let fault = e
+            .fault
+            .map_or(String::new(), |k| format!(" ({})", k.name()));
+        return Ok(vec![format!(
+            "abort: the run stopped at {:.1} s after {} pair(s){fault}",
+            e.t_us as f64 / 1e6,
+            e.pairs
+        )]);
+    }
+    let Some(reply) = answer.reply else {
+        return Ok(Vec::new());
+    };
+    if reply.error.is_some() {
+        return Err(Refused(reply_sentence(&reply, Some(cmd))));
+    }
+    let mut lines = vec![reply_sentence(&reply, Some(cmd))];
+    let reports_settings = matches!(
+        reply.command,
+        CommandKind::Show | CommandKind::Store | CommandKind::Defaults
+    );
+    if let Some(s) = answer.settings.filter(|_| reports_settings) {
+        if reply.command != CommandKind::Store {
+            // The settings' own first line says it all (`show`, `defaults`).
+            lines.clear();
+        }
+        lines.extend(settings_lines(&s));
+    }
+    Ok(lines)
+}
+
+/// A fault, for stderr.
+pub fn fault_line(f: &Fault) -> String {
+    let channel = match f.channel {
+        Some(Channel::T1) => " on T1",
+        Some(Channel::T2) => " on T2",
+        None => "",
+    };
+    format!(
+        "FAULT {}{channel} (value {}): the rig's outputs are safe; press the button or send \
+         `ack` to go on",
+        f.kind.name(),
+        f.value
+    )
+}
+
+/// Header of the live table.
+pub const LIVE_HEADER: &str = "    time_s      T1_N  T1_counts      T2_N  T2_counts  servo_deg";
+
+/// One live reading as a row of the table.
+pub fn live_line(l: &Live) -> String {
+    format!(
+        "{:>10.1} {:>9.3} {:>10} {:>9.3} {:>10} {:>10.1}",
+        l.t_ms as f64 / 1e3,
+        l.force_n[0],
+        l.counts[0],
+        l.force_n[1],
+        l.counts[1],
+        l.servo_deg
+    )
+}
+
+/// What a key sets, in a few words.
+fn key_meaning(key: Key) -> &'static str {
+    match key {
+        Key::RestDeg => "servo angle at rest and for step 0",
+        Key::StepDeg => "servo angle change per tension level",
+        Key::FinalDeg => "servo angle of the highest level",
+        Key::Order => "order of the levels: monotone, updown or pulse",
+        Key::DwellMs => "time each level is held",
+        Key::PreTriggerMs => "from the button (or run) to the logger trigger",
+        Key::TriggerMs => "logger trigger pulse length",
+        Key::TareMs => "tare window before the trigger (0: keep the zeros)",
+        Key::AmpControlV => "amplifier control voltage during a run",
+        Key::WindowAfterMs => "conditioning window starts this long after a change",
+        Key::WindowBeforeMs => "conditioning window ends this long before the next",
+        Key::DiameterMm => "capstan diameter (for the log; 0 = not given)",
+        Key::WrapDeg => "wrap angle (for the log; 0 = not given)",
+        Key::T1Zero => "T1 reading at no load (zero sets it)",
+        Key::T1NPerCount => "T1 sensitivity (weigh t1 sets it)",
+        Key::T2Zero => "T2 reading at no load (zero sets it)",
+        Key::T2NPerCount => "T2 sensitivity (weigh t2 sets it)",
+        Key::TareReferenceN => "force both channels carry during the tare",
+        Key::ServoMinUs => "servo pulse at 0°",
+        Key::ServoMaxUs => "servo pulse at servo_max_deg",
+        Key::ServoMaxDeg => "servo angle reached at servo_max_us",
+        Key::AmpFullScaleV => "amplifier control voltage at full PWM duty",
+        Key::AmpGain => "drive volts per control volt",
+    }
+}
+
+/// The settable keys with their units, one a line.
+pub fn key_lines() -> Vec<String> {
+    Key::ALL
+        .iter()
+        .map(|&k| {
+            let unit = match unit(k.name()) {
+                "" => "-",
+                u => u,
+            };
+            format!("{:<18} {:<8} {}", k.name(), unit, key_meaning(k))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use firmware::command::CommandError;
+    use firmware::record::{FaultKind, RunEnd, SettingsReport, SettingsSource};
+    use firmware::{Calibration, Protocol, Settings};
+
+    fn reply(command: CommandKind, error: Option<CommandError>, values: [f32; 2]) -> Answer {
+        Answer {
+            reply: Some(Reply {
+                command,
+                error,
+                values,
+            }),
+            ..Answer::default()
+        }
+    }
+
+    #[test]
+    fn the_answer_is_said_with_the_numbers_of_the_reply() {
+        let a = reply(CommandKind::Weigh, None, [0.0163, 1012.4]);
+        let cmd = Command::Weigh(Channel::T1, 9.80665);
+        assert_eq!(
+            answer_lines(&a, &cmd).unwrap(),
+            ["weigh t1: 0.01630 N/count (mean 1012.4 counts)"]
+        );
+        let a = reply(CommandKind::Zero, None, [412.3, 388.1]);
+        assert_eq!(
+            answer_lines(&a, &Command::Zero).unwrap(),
+            ["zero: T1 zero 412.3 counts, T2 zero 388.1 counts"]
+        );
+        let a = reply(CommandKind::Jog, Some(CommandError::NotInSetup), [0.0; 2]);
+        let e = answer_lines(&a, &Command::Jog(5.0)).unwrap_err();
+        assert_eq!(
+            e.0,
+            format!("refused: {}", CommandError::NotInSetup.message())
+        );
+    }
+
+    #[test]
+    fn show_and_store_print_the_settings_of_their_record() {
+        let mut s = Settings {
+            protocol: Protocol::default(),
+            calibration: Calibration::default(),
+        };
+        s.protocol.wrap_deg = 540.0;
+        let mut a = reply(CommandKind::Show, None, [0.0; 2]);
+        a.settings = Some(SettingsReport {
+            source: SettingsSource::Current,
+            settings: s,
+        });
+        let lines = answer_lines(&a, &Command::Show).unwrap();
+        assert_eq!(lines[0], "settings: the settings in force");
+        assert!(
+            lines.contains(&format!("  {:<18} 540 °", "wrap_deg")),
+            "{lines:#?}"
+        );
+        let mut a = reply(CommandKind::Store, None, [0.0; 2]);
+        a.settings = Some(SettingsReport {
+            source: SettingsSource::Stored,
+            settings: s,
+        });
+        let lines = answer_lines(&a, &Command::Store).unwrap();
+        assert_eq!(lines[0], "store: the settings are stored in flash");
+        assert_eq!(lines[1], "settings: stored in flash");
+    }
+
+    #[test]
+    fn an_abort_during_a_run_is_answered_by_the_run_end() {
+        let a = Answer {
+            run_end: Some(RunEnd {
+                t_us: 12_500_000,
+                pairs: 2,
+                fault: Some(FaultKind::Abort),
+            }),
+            ..Answer::default()
+        };
+        assert_eq!(
+            answer_lines(&a, &Command::Abort).unwrap(),
+            ["abort: the run stopped at 12.5 s after 2 pair(s) (abort)"]
+        );
+    }
+
+    #[test]
+    fn faults_live_values_and_keys_are_said_with_their_units() {
+        let f = Fault {
+            kind: FaultKind::OverForce,
+            channel: Some(Channel::T2),
+            value: 61.5,
+            t_us: 1_000,
+        };
+        assert!(fault_line(&f).starts_with("FAULT over_force on T2 (value 61.5)"));
+        let l = Live {
+            t_ms: 12_345,
+            counts: [1012, 388],
+            force_n: [9.80665, -0.02],
+            servo_deg: 95.0,
+        };
+        let row = live_line(&l);
+        assert_eq!(row.len(), LIVE_HEADER.len(), "{row}\n{LIVE_HEADER}");
+        assert!(row.contains("9.807") && row.contains("1012") && row.contains("95.0"));
+        let keys = key_lines();
+        assert_eq!(keys.len(), Key::ALL.len());
+        assert!(keys[0].starts_with("rest_deg           °"), "{}", keys[0]);
+        assert!(keys.iter().any(|k| k.starts_with("order              -")));
+    }
+}
