@@ -7,7 +7,8 @@
 //   each ADC conversion -> bench_adc, whose code the ADC returns 2 us later,
 //   the operator's button (GP21), the case's chip fault and the end <- bench_deadline/bench_wake,
 //   every busy stretch of the core (wake to sleep) -> bench_burst (the loop budget).
-// The defmt stream is read from the RTT up-buffer every 1 ms, as a debug probe does.
+// The defmt stream is read from the RTT up-buffer every 1 ms, as a debug probe does, and the
+// job's host command lines are written into the RTT down-buffer when due.
 // What rp2040js lacks, the harness does, as the hardware would: a UDF (or BKPT) raises a
 // HardFault, and a watchdog bite or trigger resets the chip (a fresh chip, with the watchdog's
 // REASON and SCRATCH registers carried over).
@@ -63,7 +64,18 @@ let mcu, core, clock, benchAlarm, benchAlarmAt = -1;
 let epoch = 0; // emulator time at which the present chip's clock started (each reset restarts it)
 const now = () => epoch + clock.nanos;
 const stream = [];
-let streamBytes = 0;
+let streamBytes = 0, lastReadBytes = 0;
+// Each poll that read bytes: [emulated ns, bytes read so far] (when a record reached the host).
+const rttReads = [];
+const commands = (job.commands ?? []).map((c) => ({
+  at_s: c.at_s,
+  line: c.line,
+  at_ns: Math.round(c.at_s * 1e9),
+  bytes: Buffer.from(c.line + '\n', 'utf8'),
+  sent: 0,
+  written_ns: null,
+}));
+let nextCommand = 0;
 const resets = [], breaks = [];
 // Writes that changed a PWM compare (servo slice 0, amplifier slice 1): when the firmware
 // commanded a pulse width or duty, as opposed to when the pin shows it.
@@ -96,10 +108,18 @@ function wake() {
   syncBench();
 }
 
-// Read the defmt-rtt up channel 0 like a probe: bytes from the read to the write offset.
-function pollRtt() {
+// The RTT control block (rtt-target sets it up at the start of main, the header after the
+// channels and the id's first byte last): its max_up, or 0 while it is not set up.
+function rttUpChannels() {
   const base = job.rtt - RAM;
-  if (mcu.sram[base] !== 0x53) return; // "SEGGER RTT" not written yet (boot)
+  if (mcu.sram[base] !== 0x53) return 0; // "SEGGER RTT" not written yet (boot)
+  return mcu.sramView.getUint32(base + 16, true);
+}
+
+// Read the defmt up channel 0 like a probe: bytes from the read to the write offset.
+function pollRtt() {
+  if (rttUpChannels() === 0) return;
+  const base = job.rtt - RAM;
   const sv = mcu.sramView;
   const up = base + 24;
   const buf = sv.getUint32(up + 4, true) - RAM;
@@ -114,6 +134,40 @@ function pollRtt() {
     rd = end === size ? 0 : end;
   }
   sv.setUint32(up + 16, rd, true);
+  if (streamBytes !== lastReadBytes) {
+    rttReads.push([now(), streamBytes]);
+    lastReadBytes = streamBytes;
+  }
+}
+
+// The host's command lines (job.commands), written into RTT down channel 0 like a debug probe
+// does once each is due: after the up channels' descriptors, from the write offset, at most
+// the free space (one byte stays empty), wrapping at the buffer's size, the write offset
+// stored last. What does not fit waits for the next poll.
+function writeCommands() {
+  const maxUp = rttUpChannels();
+  if (maxUp === 0 || nextCommand >= commands.length || commands[nextCommand].at_ns > now()) return;
+  const base = job.rtt - RAM;
+  const sv = mcu.sramView;
+  if (sv.getUint32(base + 20, true) === 0) throw new Error('the RTT control block has no down channel');
+  const down = base + 24 + 24 * maxUp;
+  const buf = sv.getUint32(down + 4, true) - RAM;
+  const size = sv.getUint32(down + 8, true);
+  let wr = sv.getUint32(down + 12, true);
+  const rd = sv.getUint32(down + 16, true);
+  if (wr >= size || rd >= size) throw new Error(`bad RTT down offsets ${rd} ${wr} of ${size}`);
+  let free = (rd - wr - 1 + size) % size;
+  while (nextCommand < commands.length && commands[nextCommand].at_ns <= now() && free > 0) {
+    const c = commands[nextCommand];
+    for (; c.sent < c.bytes.length && free > 0; c.sent++, free--) {
+      mcu.sram[buf + wr] = c.bytes[c.sent];
+      wr = (wr + 1) % size;
+    }
+    if (c.sent < c.bytes.length) break;
+    c.written_ns = now();
+    nextCommand++;
+  }
+  sv.setUint32(down + 12, wr, true);
 }
 
 function boot(carried) {
@@ -162,6 +216,7 @@ function boot(carried) {
   };
   const rtt = clock.createAlarm(() => {
     pollRtt();
+    writeCommands();
     rtt.schedule(1e6);
   });
   rtt.schedule(1e6);
@@ -265,6 +320,8 @@ const summary = {
   cycles,
   mips: instructions / wallS / 1e6,
   rtt_bytes: streamBytes,
+  rtt_reads: rttReads,
+  commands: commands.map(({ at_s, line, written_ns }) => ({ at_s, line, written_ns })),
   resets,
   breaks,
   pwm_writes: pwmWrites,

@@ -29,6 +29,16 @@ pub const CORD_CHECK_SETTLE_MS: u32 = 200;
 /// the HS-322HD alone would swing there in 0.2 s.
 pub const HOMING_DEG_PER_S: f32 = 10.0;
 
+/// `now_us` on the sample grid that runs through `origin_us` (the nearest sample instant).
+/// The clock is read a few tens of µs after each tick, and that latency wanders by a µs or so
+/// from sample to sample (the work before the read varies): unrounded, a step, the trigger,
+/// the end of a run or a live record could slip by a whole sample.
+pub(crate) fn on_grid(now_us: u64, origin_us: u64, period_us: u32) -> u64 {
+    let period_us = period_us as u64;
+    let since = now_us.saturating_sub(origin_us);
+    origin_us + (since + period_us / 2) / period_us * period_us
+}
+
 /// What the rig reads each sample period.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inputs {
@@ -71,6 +81,8 @@ enum Phase {
     Setup {
         servo_deg: f32,
         measure: Option<Measure>,
+        /// The sample on which setup mode began: the origin of its sample grid.
+        origin_us: u64,
         next_live_us: u64,
     },
     /// Running the protocol; `step` is the step being held, `window` its conditioning.
@@ -333,12 +345,7 @@ impl Rig {
 
     fn step_running(&mut self, inp: &Inputs, pressed: bool, sink: &mut impl LogSink) -> Outputs {
         let p = self.protocol;
-        // On the sample grid: the clock is read a few tens of µs after each tick, and that
-        // latency wanders by a µs or so from sample to sample (the work before the read
-        // varies). Unrounded, a step, the trigger or the end could slip by a whole sample.
-        let period_us = p.sample_period_us() as u64;
-        let raw_us = inp.now_us.saturating_sub(self.press_us);
-        let elapsed_us = (raw_us + period_us / 2) / period_us * period_us;
+        let elapsed_us = on_grid(inp.now_us, self.press_us, p.sample_period_us()) - self.press_us;
         let elapsed_ms = (elapsed_us / 1000) as u32;
         let t_us = self.since_trigger_us(elapsed_us);
         let force_n = self.forces(inp);

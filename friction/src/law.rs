@@ -1,31 +1,7 @@
 //! The friction law of a cord on a rotating capstan.
 
+use crate::math::{exp, log, pow, sqrt};
 use crate::{Operating, REF_DIAMETER_MM, REF_DRIVE_V, REF_TENSION_N, REF_WRAP_RAD};
-use math::{exp, log, pow, sqrt};
-
-/// The elementary functions: the platform's with `std` (the host's are 2-3x faster than
-/// `libm`'s, which dominate the analysis's fits), `libm`'s on bare metal and WebAssembly. The
-/// two differ by an ulp at most; the simulated sensors quantise long before that shows (the
-/// emulated board's and the QEMU image's counts equal host-sim's).
-#[cfg(feature = "std")]
-mod math {
-    pub fn exp(x: f64) -> f64 {
-        x.exp()
-    }
-    pub fn log(x: f64) -> f64 {
-        x.ln()
-    }
-    pub fn pow(x: f64, y: f64) -> f64 {
-        x.powf(y)
-    }
-    pub fn sqrt(x: f64) -> f64 {
-        x.sqrt()
-    }
-}
-#[cfg(not(feature = "std"))]
-mod math {
-    pub use libm::{exp, log, pow, sqrt};
-}
 
 /// How tension grows around the capstan, with every effect of the catalogue as a parameter.
 ///

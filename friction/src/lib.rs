@@ -14,6 +14,36 @@ mod effect;
 mod law;
 mod sensor;
 
+/// The elementary functions, shared by the friction law and the plant's hot path: the
+/// platform's with `std` (the host's are 2-3x faster than `libm`'s, which dominate the
+/// analysis's fits and the simulated cord's stretch), `libm`'s on bare metal and WebAssembly.
+/// The two differ by an ulp at most; the simulated sensors quantise long before that shows (the
+/// emulated board's and the QEMU image's counts equal host-sim's).
+#[cfg(feature = "std")]
+pub mod math {
+    /// e^x.
+    pub fn exp(x: f64) -> f64 {
+        x.exp()
+    }
+    /// ln x.
+    pub fn log(x: f64) -> f64 {
+        x.ln()
+    }
+    /// x^y.
+    pub fn pow(x: f64, y: f64) -> f64 {
+        x.powf(y)
+    }
+    /// √x.
+    pub fn sqrt(x: f64) -> f64 {
+        x.sqrt()
+    }
+}
+/// The elementary functions: `libm`'s (no `std` here).
+#[cfg(not(feature = "std"))]
+pub mod math {
+    pub use libm::{exp, log, pow, sqrt};
+}
+
 pub use effect::{Effect, EffectKind, ParseEffectError, HEAT_TAU_S};
 pub use law::{FrictionLaw, LoadMemory};
 pub use sensor::{SensorArtefacts, SLACK_T1_N};

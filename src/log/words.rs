@@ -278,7 +278,10 @@ mod tests {
         // Every settable key is among the settings, with a unit unless it is the order.
         let values = setting_values(&s);
         for k in Key::ALL {
-            let v = values.iter().find(|v| v.name == k.name()).unwrap_or_else(|| panic!("{}", k.name()));
+            let v = values
+                .iter()
+                .find(|v| v.name == k.name())
+                .unwrap_or_else(|| panic!("{}", k.name()));
             assert_eq!(v.unit.is_empty(), k == Key::Order, "{}", k.name());
         }
     }

@@ -11,15 +11,19 @@
 //!   the fault in the log;
 //! * `a_hung_loop...`: the watchdog resets the chip and the firmware reports it after reboot;
 //! * `a_panic...` (issue 12): the panic handler makes the outputs safe within 1 ms, with and
-//!   without a debug probe attached.
+//!   without a debug probe attached;
+//! * `setup_mode...` (`setup_mode.rs`): host command lines over RTT's down channel, setup mode
+//!   at the pins and in the log, against host-sim's session with the same lines.
 //!
-//! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort and the panic, ~10 s);
-//! `CAPSTAN_EMU=full` runs every case (`.ci/run` does; ~1 min on two cores). Needs node ≥ 18,
-//! `npm ci --prefix emu`, and the `thumbv6m-none-eabi` and `wasm32-unknown-unknown` targets;
-//! where one is missing the test says why and passes, except with `CI=true`, where it fails.
+//! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort, the panic and the setup
+//! session, ~10 s); `CAPSTAN_EMU=full` runs every case (`.ci/run` does; ~2 min on two cores).
+//! Needs node ≥ 18, `npm ci --prefix emu`, and the `thumbv6m-none-eabi` and
+//! `wasm32-unknown-unknown` targets; where one is missing the test says why and passes, except
+//! with `CI=true`, where it fails.
 
 mod pins;
 mod setup;
+mod setup_mode;
 
 use emu_bench::case::{self, board_calibration, board_limits, board_protocol, Case};
 use firmware::rig::DEBOUNCE_MS;

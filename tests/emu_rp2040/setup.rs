@@ -251,6 +251,10 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
         "boot": {"pc": 0x1000_0000u32, "sp": 0x2004_1f00u32},
         "wall_limit_s": 600,
         "emulated_limit_s": 200,
+        // The host's command lines, written into RTT down channel 0 when due.
+        "commands": case.commands.iter()
+            .map(|c| json!({"at_s": c.at_us as f64 / 1e6, "line": c.line}))
+            .collect::<Vec<_>>(),
     });
     let job_path = dir.join("job.json");
     std::fs::write(&job_path, serde_json::to_vec_pretty(&job).unwrap()).unwrap();
@@ -272,8 +276,10 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
     let emulation = read_json(&dir.join("emulation.json"));
     let log_dir = dir.join("log");
     // Every frame whole and no record lost; a run that a chip fault cut short never
-    // completes, which `--strict` would refuse on its own (checked from summary.json below).
-    let strict = case.core_fault.is_none().then_some("--strict");
+    // completes, and a case without a press has no run, which `--strict` would refuse on its
+    // own (checked from summary.json below).
+    let strict =
+        (case.core_fault.is_none() && case.cord.press_at_us.is_some()).then_some("--strict");
     let log = Command::new(env!("CARGO_BIN_EXE_capstan"))
         .args(["log", "--quiet"])
         .args(strict)

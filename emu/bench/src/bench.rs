@@ -231,6 +231,9 @@ pub struct Report {
     pub budget: Budget,
     /// Servo commands as the plant received them.
     pub plant_servo: Vec<PlantServoEvent>,
+    /// Every sample's codes, if the case keeps them (`Case::keep_samples`): (when the T1
+    /// conversion started, ns; the T1 code; the T2 code).
+    pub samples: Vec<(f64, u16, u16)>,
 }
 
 /// The rig around the emulated chip. See the module documentation.
@@ -271,6 +274,7 @@ pub struct Bench {
     cycles: u64,
     stopped: bool,
     now_ns: f64,
+    samples: Vec<(f64, u16, u16)>,
 }
 
 impl Bench {
@@ -314,6 +318,7 @@ impl Bench {
             cycles: 0,
             stopped: false,
             now_ns: 0.0,
+            samples: Vec::new(),
         }
     }
 
@@ -555,6 +560,12 @@ impl Bench {
                 self.mismatch_examples.push((t_ns, counts));
             }
         }
+        if self.case.keep_samples {
+            match (ch, self.samples.last_mut()) {
+                (Channel::T2, Some(last)) => last.2 = code,
+                _ => self.samples.push((t_ns, code, 0)),
+            }
+        }
         Some(code)
     }
 
@@ -786,6 +797,7 @@ impl Bench {
                 cycles: self.cycles,
             },
             plant_servo,
+            samples: self.samples.clone(),
         }
     }
 }

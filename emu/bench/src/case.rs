@@ -101,6 +101,30 @@ pub struct Case {
     pub probe_attached: bool,
     /// In the fixed slice plain `cargo test` runs (the rest only with `CAPSTAN_EMU=full`).
     pub quick: bool,
+    /// Command lines the host sends over RTT (the harness writes them into down channel 0).
+    pub commands: Vec<HostLine>,
+    /// The bench keeps every sample's two ADC codes for the report (`Report::samples`).
+    pub keep_samples: bool,
+}
+
+/// A command line from the host, as `capstan rig` sends it through a debug probe.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HostLine {
+    /// When it is due: emulated µs since power-up (the emulator's time zero, not the plant's,
+    /// which starts when the firmware starts sampling, about 0.6 ms later).
+    pub at_us: u64,
+    /// The line, without its `\n`.
+    pub line: &'static str,
+}
+
+impl HostLine {
+    /// `line`, due `ms` after power-up.
+    pub const fn at_ms(ms: u64, line: &'static str) -> HostLine {
+        HostLine {
+            at_us: ms * 1_000,
+            line,
+        }
+    }
 }
 
 impl Case {
@@ -141,6 +165,8 @@ fn fault_case(name: &'static str, about: &'static str, kind: InjectionKind, quic
         stop: Stop::AfterTrigger(FAULT_AFTER_TRIGGER_US + 200_000),
         probe_attached: false,
         quick,
+        commands: Vec::new(),
+        keep_samples: false,
     }
 }
 
@@ -164,10 +190,57 @@ fn core_case(
         stop: Stop::AfterReset(900_000),
         probe_attached,
         quick,
+        commands: Vec::new(),
+        keep_samples: false,
     }
 }
 
-/// Every case, the full protocol run first.
+/// When the setup case's host sends what (emulated time since power-up): setup mode, a zero with
+/// the servo at rest (its 500 ms measurement ends before the next line), the servo to 95°, a
+/// jog of -10° (85°), a setting, the settings shown, and out of setup mode, from where the
+/// servo homes to rest (125°) at 10°/s: 4 s, well before the case's end at 8 s.
+pub const SETUP_COMMANDS: [HostLine; 7] = [
+    HostLine::at_ms(300, "setup"),
+    HostLine::at_ms(500, "zero"),
+    HostLine::at_ms(1_200, "servo 95"),
+    HostLine::at_ms(1_800, "jog -10"),
+    HostLine::at_ms(2_200, "set dwell_ms 8000"),
+    HostLine::at_ms(2_400, "show"),
+    HostLine::at_ms(3_000, "leave"),
+];
+
+/// Then, while the servo homes, the host sends this many `show` lines at once, at
+/// [`BURST_AT_MS`]: 150 bytes, more than RTT down channel 0's 128-byte buffer holds, so the
+/// harness writes what fits and the rest at its next polls as the board reads (a line per
+/// sample), wrapping around the buffer, as a probe's RTT host would.
+pub const SHOW_BURST: usize = 30;
+/// When the burst is due, ms after power-up.
+pub const BURST_AT_MS: u64 = 5_000;
+
+/// The setup case: no button press, the host's [`SETUP_COMMANDS`] and the burst.
+fn setup_case() -> Case {
+    let burst = std::iter::repeat_n(HostLine::at_ms(BURST_AT_MS, "show"), SHOW_BURST);
+    Case {
+        name: "setup",
+        about: "setup mode by host command lines over RTT: zero, servo, jog, set, show, leave; \
+                the servo homes to rest; compared with host-sim's session",
+        seed: 21,
+        plant: PlantConfig::default(),
+        cord: CordSetup {
+            press_at_us: None,
+            ..cord()
+        },
+        injections: Vec::new(),
+        core_fault: None,
+        stop: Stop::At(8_000_000),
+        probe_attached: false,
+        quick: true,
+        commands: SETUP_COMMANDS.iter().copied().chain(burst).collect(),
+        keep_samples: true,
+    }
+}
+
+/// Every case, the full protocol run first, the setup session last.
 pub fn all() -> Vec<Case> {
     let protocol = board_protocol();
     // The press is debounced for 10 samples; the run ends `end_ms` after that.
@@ -184,6 +257,8 @@ pub fn all() -> Vec<Case> {
             stop: Stop::At(run_end_us + 300_000),
             probe_attached: false,
             quick: false,
+            commands: Vec::new(),
+            keep_samples: false,
         },
         fault_case(
             "abort",
@@ -237,6 +312,7 @@ pub fn all() -> Vec<Case> {
             true,
             false,
         ),
+        setup_case(),
     ]
 }
 

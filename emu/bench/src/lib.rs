@@ -17,4 +17,4 @@ pub mod meter;
 mod wasm;
 
 pub use bench::{Bench, Report};
-pub use case::{Case, CoreFault, Stop};
+pub use case::{Case, CoreFault, HostLine, Stop};

@@ -1,7 +1,7 @@
 //! The rig's answers to host commands, and setup mode's sample period: what each command may
 //! do in each phase, its `reply` record, and the settings it changes. Pure, like `rig.rs`.
 
-use super::{Inputs, Outputs, Phase, Rig};
+use super::{on_grid, Inputs, Outputs, Phase, Rig};
 use crate::command::{Command, CommandError, CommandKind};
 use crate::record::{Fault, Live, LogSink, Record, Reply, SettingsReport, SettingsSource};
 use crate::safety::{SafetyInput, Supervisor};
@@ -155,6 +155,7 @@ impl Rig {
                 self.phase = Phase::Setup {
                     servo_deg: self.idle_servo_deg,
                     measure: None,
+                    origin_us: now_us,
                     next_live_us: now_us,
                 };
                 info!("setup mode: amplifier at 0 V, servo jogged by the host");
@@ -211,13 +212,17 @@ impl Rig {
     }
 
     fn start_measure(&mut self, what: Measuring, now_us: u64) -> Result<[f32; 2], CommandError> {
-        let Phase::Setup { measure, .. } = &mut self.phase else {
+        let period_us = self.protocol.sample_period_us();
+        let Phase::Setup {
+            measure, origin_us, ..
+        } = &mut self.phase
+        else {
             return Err(CommandError::NotInSetup);
         };
         if measure.is_some() {
             return Err(CommandError::Measuring);
         }
-        *measure = Some(Measure::new(what, now_us));
+        *measure = Some(Measure::new(what, on_grid(now_us, *origin_us, period_us)));
         Ok([0.0; 2])
     }
 
@@ -241,11 +246,13 @@ impl Rig {
         let Phase::Setup {
             servo_deg,
             mut measure,
+            origin_us,
             mut next_live_us,
         } = self.phase
         else {
             return self.safe_outputs();
         };
+        let now_us = on_grid(inp.now_us, origin_us, self.protocol.sample_period_us());
         if pressed {
             self.leave_setup();
             // Logged as a `leave`, so the log shows where setup mode ended.
@@ -266,7 +273,7 @@ impl Rig {
         if let Some(f) = self.supervisor.check(&safety) {
             return self.setup_fault(f, sink);
         }
-        if let Some(done) = measure.as_mut().and_then(|m| m.push(inp.now_us, counts_ok)) {
+        if let Some(done) = measure.as_mut().and_then(|m| m.push(now_us, counts_ok)) {
             let what = measure.map(|m| m.what);
             measure = None;
             let result = match what {
@@ -279,10 +286,10 @@ impl Rig {
             };
             self.reply(sink, kind, result);
         }
-        if inp.now_us >= next_live_us {
-            next_live_us = inp.now_us + LIVE_EVERY_MS as u64 * 1000;
+        if now_us >= next_live_us {
+            next_live_us += LIVE_EVERY_MS as u64 * 1000;
             let live = Live {
-                t_ms: (inp.now_us / 1000) as u32,
+                t_ms: (now_us / 1000) as u32,
                 counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
                 force_n,
                 servo_deg,
@@ -292,6 +299,7 @@ impl Rig {
         self.phase = Phase::Setup {
             servo_deg,
             measure,
+            origin_us,
             next_live_us,
         };
         Outputs {

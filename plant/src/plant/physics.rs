@@ -4,7 +4,7 @@
 
 use super::Plant;
 use crate::injection::InjectionKind;
-use capstan_friction::FrictionLaw;
+use capstan_friction::{math, FrictionLaw};
 
 impl Plant {
     pub(super) fn step(&mut self, dt_us: u32) {
@@ -263,8 +263,10 @@ impl Plant {
         };
         let t1_of = |a_kin: f64| -> f64 {
             let a_eff = 1.0 + s * (a_kin - 1.0);
-            let den = 1.0 + cfg.far_side_ratio * libm::pow(a_eff, inv_p);
-            cfg.stiffness * libm::pow(e / den, cfg.hardening)
+            // The friction crate's pow: the platform's on the host (this is the simulator's
+            // hottest call), libm's on WebAssembly and bare metal.
+            let den = 1.0 + cfg.far_side_ratio * math::pow(a_eff, inv_p);
+            cfg.stiffness * math::pow(e / den, cfg.hardening)
         };
         // Fixed point a -> T1(a) -> a(T1); contracting for the laws of the catalogue, damped
         // after a few rounds in case a law is steep at low tension.
