@@ -4,19 +4,15 @@
 //! Targets: under 0.2 s for 1,000 rows and under 1 s for 10,000 rows.
 //!
 //! `cargo bench --bench diagnose` (release). `--repeat N` takes the best of N (default 3);
-//! `--quick` skips the 10,000-row sets.
+//! `--quick` skips the 10,000-row sets; `--only NAME` times only the sets of that name.
 
 use capstan::data::{thesis_dataset, Dataset};
 use capstan::diagnose::cases::{self, Case, Class};
 use capstan::diagnose::diagnose;
 use std::time::Instant;
 
-/// `case` with as many runs as make about `rows` rows (12 pairs a run).
-fn scaled(mut case: Case, rows: usize) -> (String, Dataset) {
-    let c = &mut case.config;
-    let cords = c.wraps_deg.len() * c.diameters_mm.len() * c.drive_vs.len();
-    c.runs = ((rows as f64 / (12.0 * cords as f64)).round() as u32).clamp(2, 400);
-    c.threads = 0;
+/// The name of a case: its effects (or the physics outside the catalogue), `none` if clean.
+fn name(case: &Case) -> String {
     let name = case
         .effects
         .iter()
@@ -24,9 +20,20 @@ fn scaled(mut case: Case, rows: usize) -> (String, Dataset) {
         .chain(case.outside.map(|o| o.0.to_string()))
         .collect::<Vec<_>>()
         .join("+");
-    let name = if name.is_empty() { "none".into() } else { name };
-    let (d, _) = case.generate().expect("the case simulates");
-    (name, d)
+    if name.is_empty() {
+        "none".into()
+    } else {
+        name
+    }
+}
+
+/// `case` with as many runs as make about `rows` rows (12 pairs a run).
+fn scaled(mut case: Case, rows: usize) -> Dataset {
+    let c = &mut case.config;
+    let cords = c.wraps_deg.len() * c.diameters_mm.len() * c.drive_vs.len();
+    c.runs = ((rows as f64 / (12.0 * cords as f64)).round() as u32).clamp(2, 400);
+    c.threads = 0;
+    case.generate().expect("the case simulates").0
 }
 
 fn main() {
@@ -39,6 +46,12 @@ fn main() {
         .unwrap_or(3)
         .max(1);
     let quick = args.iter().any(|a| a == "--quick");
+    // `--only NAME`: just the sets of that name (e.g. to profile one with `perf record`).
+    let only = args
+        .iter()
+        .position(|a| a == "--only")
+        .and_then(|i| args.get(i + 1))
+        .cloned();
     let mut picks = vec![cases::draw_case(1, Class::Clean, 0)];
     picks.extend((0..10).map(|i| cases::draw_case(1, Class::Single, i)));
     picks.push(cases::draw_case(1, Class::Pair, 0));
@@ -50,9 +63,14 @@ fn main() {
         &[1_000, 10_000][..]
     } {
         for c in &picks {
-            let (name, d) = scaled(c.clone(), rows);
-            sets.push((name, d, rows));
+            let name = name(c);
+            if only.as_ref().is_none_or(|o| *o == name) {
+                sets.push((name, scaled(c.clone(), rows), rows));
+            }
         }
+    }
+    if let Some(only) = &only {
+        sets.retain(|(name, _, _)| name == only);
     }
     println!(
         "{:<32} {:>6} {:>10} {:>12}  diagnosis",

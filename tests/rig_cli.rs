@@ -255,7 +255,10 @@ fn show_prints_the_settings_record_and_weigh_names_its_channel() {
     let mut out = Vec::new();
     let (line, cmd) = command_line(&words("show")).unwrap();
     send(&mut rig, &line, &cmd, &mut |l| out.push(l), &mut |_| {}).unwrap();
-    assert_eq!(out[0], "settings: the settings in force");
+    assert_eq!(
+        out[0],
+        format!("settings: {}", SettingsSource::Current.message())
+    );
     assert_eq!(out.len(), 26);
     assert!(
         out.contains(&format!("  {:<18} 10000 ms", "dwell_ms")),

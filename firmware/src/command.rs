@@ -199,17 +199,20 @@ pub enum CommandError {
     Invalid = 10,
     /// The known weight barely moved the reading: is it on that channel?
     NoLoad = 11,
-    /// Writing the flash failed; the stored settings are unchanged.
+    /// Writing the flash failed (the board uses, after a reset, the newest settings that were
+    /// written whole).
     StoreFailed = 12,
     /// Nothing to do in this state (e.g. `ack` with no fault, `leave` outside setup).
     NotApplicable = 13,
     /// The readings scattered too much to measure: something moved.
     Unsteady = 14,
+    /// Setup mode ended (a fault, the button, `leave`) before the measurement was done.
+    Interrupted = 15,
 }
 
 impl CommandError {
     /// Every error.
-    pub const ALL: [CommandError; 14] = [
+    pub const ALL: [CommandError; 15] = [
         CommandError::Unknown,
         CommandError::Argument,
         CommandError::UnknownKey,
@@ -224,6 +227,7 @@ impl CommandError {
         CommandError::StoreFailed,
         CommandError::NotApplicable,
         CommandError::Unsteady,
+        CommandError::Interrupted,
     ];
 
     /// Wire code (never 0).
@@ -250,9 +254,10 @@ impl CommandError {
             CommandError::Measuring => "a zero or weigh is still being measured",
             CommandError::Invalid => "that value would make the settings invalid; nothing changed",
             CommandError::NoLoad => "the reading moved less than 20 counts: is the weight hanging on that channel?",
-            CommandError::StoreFailed => "writing the flash failed; the stored settings are unchanged",
-            CommandError::NotApplicable => "not in this state (run: from idle; leave: from setup mode; ack: with a fault latched)",
+            CommandError::StoreFailed => "writing the flash failed: send store again (after a reset the board uses the newest settings written whole, or its defaults, and says which)",
+            CommandError::NotApplicable => "not in this state (run: from idle; leave: from setup mode; abort: in setup mode or a run; ack: with a fault latched)",
             CommandError::Unsteady => "the reading was not steady (something moved): let the servo and the weight settle, then repeat",
+            CommandError::Interrupted => "setup mode ended (a fault, the button or leave) before the measurement was done",
         }
     }
 }

@@ -4,8 +4,9 @@
 
 use crate::record::{record_crc, LogSink, Record, NONE_CODE};
 
-/// Records held back in one sample period at most (a run's end: the last pair and `run_end`).
-const HELD: usize = 3;
+/// Records held back in one sample period at most (a run's end: the last pair and `run_end`;
+/// with a host command's reply and settings report, and a fault: five).
+const HELD: usize = 5;
 
 /// Sends records as defmt frames on whatever global logger the binary links (RTT on the
 /// Pico, semihosting on QEMU). Records emitted during a sample are held until the runner has

@@ -240,7 +240,14 @@ mod pico {
         // error, which cannot happen with this HAL (its pins are infallible, duties are clamped
         // to top). The runner has then already commanded the safe state; the panic handler
         // forces it again through the registers and the chip resets.
-        let never = |_: &firmware::rig::Outputs| None::<()>;
+        // New settings may move the rest angle or change the servo map: the panic path's rest
+        // duty follows them.
+        let never = |out: &firmware::rig::Outputs, rig: &firmware::Rig| {
+            if out.settings_changed {
+                board_safe::arm(SafeDuties::for_rig(rig, board::SERVO_FULL_SCALE));
+            }
+            None::<()>
+        };
         let served = firmware::runner::serve(
             &mut io,
             &mut rig,

@@ -161,7 +161,7 @@ pub struct Reply {
 /// Where the settings in force came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SettingsSource {
-    /// Asked for (`show`): what the rig runs with now.
+    /// Changed by `set` since they were loaded, stored or reset to the defaults.
     Current = 0,
     /// Just written to flash (`store`).
     Stored = 1,
@@ -205,7 +205,9 @@ impl SettingsSource {
     /// What it means, for a person.
     pub const fn message(self) -> &'static str {
         match self {
-            SettingsSource::Current => "the settings in force",
+            SettingsSource::Current => {
+                "changed by `set` since they were loaded or stored (send store to keep them)"
+            }
             SettingsSource::Stored => "stored in flash",
             SettingsSource::Loaded => "loaded from flash at boot",
             SettingsSource::DefaultsNoRecord => "no settings stored: using the built-in defaults",

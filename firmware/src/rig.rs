@@ -68,6 +68,8 @@ pub struct Outputs {
     /// The host asked to keep these settings in flash: the runner writes them, then reports
     /// with [`Rig::stored`].
     pub store: Option<Settings>,
+    /// The settings changed this sample (a host command): duties must be recomputed.
+    pub settings_changed: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,7 +81,11 @@ enum Phase {
     Tare { sum: [u64; 2], n: u32 },
     /// Setup mode: the servo where the host jogged it, amplifier at 0 V, live values.
     Setup {
+        /// Servo angle commanded now, deg: on its way to `target_deg` at
+        /// [`crate::setup::SETUP_DEG_PER_S`].
         servo_deg: f32,
+        /// Where the host asked the servo to go, deg.
+        target_deg: f32,
         measure: Option<Measure>,
         /// The sample on which setup mode began: the origin of its sample grid.
         origin_us: u64,
@@ -111,6 +117,12 @@ pub struct Rig {
     samples: u32,
     /// Servo command while idle, deg: the rest angle, or on its way there ([`Rig::home_from`]).
     idle_servo_deg: f32,
+    /// Where the settings in force came from (what `show` reports).
+    settings_source: crate::record::SettingsSource,
+    /// A flash write held the loop: setup mode re-anchors its sample grid on the next sample.
+    reanchor: bool,
+    /// [`Rig::use_settings`] ran since the last sample's outputs.
+    settings_changed: bool,
 }
 
 impl Rig {
@@ -139,6 +151,9 @@ impl Rig {
             press_us: 0,
             samples: 0,
             idle_servo_deg: protocol.rest_deg,
+            settings_source: crate::record::SettingsSource::DefaultsNoRecord,
+            reanchor: false,
+            settings_changed: false,
         })
     }
 
@@ -219,25 +234,36 @@ impl Rig {
             led: false,
             finished: None,
             store: None,
+            settings_changed: false,
         }
     }
 
     /// One sample period.
     pub fn step(&mut self, inp: &Inputs, sink: &mut impl LogSink) -> Outputs {
-        let pressed = self.button.step(inp.button_pressed);
+        let mut pressed = self.button.step(inp.button_pressed);
         let mut abort = pressed;
         let mut store = None;
+        // Only a command changes the mode outside the run's own course.
+        let before = core::mem::discriminant(&self.phase);
         match inp.command {
             Some(Ok(Command::Abort)) if self.is_running() => {
                 // Answered now; the run then ends as by the button (fault `abort`, `run_end`).
-                self.reply(sink, crate::command::CommandKind::Abort, Ok([0.0; 2]));
+                // 1: a run's abort (0 would be setup mode's).
+                self.reply(sink, crate::command::CommandKind::Abort, Ok([1.0, 0.0]));
                 abort = true;
             }
             Some(cmd) => store = self.command(cmd, inp.now_us, sink),
             None => {}
         }
+        let changed_phase = core::mem::discriminant(&self.phase) != before;
+        if (changed_phase || store.is_some()) && !self.is_running() {
+            // A press in the very sample a command changed the mode, or asked for a flash
+            // write, must not start a run on top of it: the person presses again.
+            pressed = false;
+        }
         let mut out = self.step_phase(inp, pressed, abort, sink);
         out.store = store;
+        out.settings_changed = core::mem::take(&mut self.settings_changed);
         out
     }
 
@@ -474,6 +500,7 @@ impl Rig {
                 led: true,
                 finished: None,
                 store: None,
+                settings_changed: false,
             };
         }
         // Taring: capstan stopped, servo at rest.

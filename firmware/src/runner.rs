@@ -89,8 +89,9 @@ where
     }
 
     fn apply(&mut self, rig: &Rig, out: &Outputs, written: &mut Written) -> Result<(), RunError> {
-        // The servo and amplifier maps do not change during a run (the tare only re-zeroes the
-        // force channels), so a command equal to the last one maps to the same duty.
+        // The servo and amplifier maps change only with the settings (never during a run: the
+        // tare only re-zeroes the force channels), and `serve` forgets `written` then; so a
+        // command equal to the last one maps to the same duty.
         let cal = rig.calibration();
         if written.servo_deg != Some(out.servo_deg) {
             let servo = cal.servo.duty(out.servo_deg, self.servo.max_duty_cycle());
@@ -139,8 +140,9 @@ where
 }
 
 /// The watchdog's allowance while the flash is written, ms: a 4 KiB erase takes ~45 ms and
-/// at most ~400 ms on the Pico's W25Q16, and a save may erase a page or two.
-pub const STORE_WATCHDOG_MS: u32 = 2_000;
+/// at most ~400 ms on the Pico's W25Q16, and a save may erase several pages (a repair, a
+/// migration). The RP2040's watchdog takes up to 8.3 s.
+pub const STORE_WATCHDOG_MS: u32 = 5_000;
 
 /// Wait for the button, run the protocol once, return how it ended (no host commands, no
 /// flash: the simulator's campaigns).
@@ -158,13 +160,14 @@ where
     D: ForceAdc,
     W: Watchdog,
 {
-    serve(io, rig, sink, &mut (), &mut (), |out| out.finished).await
+    serve(io, rig, sink, &mut (), &mut (), |out, _| out.finished).await
 }
 
 /// Serve the rig: sample every `1/sample_hz` on an embassy-time [`Ticker`] (a late tick is
 /// caught by the supervisor's watchdog check), take at most one host command line per sample
 /// from `console`, write the settings to `flash` when asked, until `until` returns a value for
-/// the outputs of a sample. On a hardware error the rig is made safe (best effort) and the
+/// the outputs of a sample (it also sees the rig, e.g. to re-arm the board's panic path when
+/// the settings changed). On a hardware error the rig is made safe (best effort) and the
 /// error returned.
 pub async fn serve<S, A, T, L, B, D, W, R>(
     io: &mut RigIo<S, A, T, L, B, D, W>,
@@ -172,7 +175,7 @@ pub async fn serve<S, A, T, L, B, D, W, R>(
     sink: &mut impl LogSink,
     console: &mut impl Console,
     flash: &mut impl SettingsFlash,
-    mut until: impl FnMut(&Outputs) -> Option<R>,
+    mut until: impl FnMut(&Outputs, &Rig) -> Option<R>,
 ) -> Result<R, RunError>
 where
     S: SetDutyCycle,
@@ -196,6 +199,10 @@ where
         };
         inputs.command = core::iter::from_fn(|| console.read_byte()).find_map(|b| line.push(b));
         let out = rig.step(&inputs, sink);
+        if out.settings_changed {
+            // New servo or amplifier maps: the same angle may be another duty now.
+            written = Written::default();
+        }
         let applied = io.apply(rig, &out, &mut written);
         sink.flush();
         if let Err(e) = applied {
@@ -210,7 +217,7 @@ where
             // No burst of catch-up ticks after the write.
             ticker.reset();
         }
-        if let Some(r) = until(&out) {
+        if let Some(r) = until(&out, rig) {
             break Ok(r);
         }
     };

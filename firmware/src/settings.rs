@@ -48,6 +48,10 @@ pub enum SettingsError {
     Order,
     /// The diameter and wrap metadata must be 0..=3600.
     Metadata,
+    /// The rest and final angles must be within the servo map's range (0..=`servo_max_deg`).
+    ServoRange,
+    /// The amplifier control voltage must be within the amplifier's full scale.
+    AmpRange,
 }
 
 impl SettingsError {
@@ -62,6 +66,12 @@ impl SettingsError {
             SettingsError::NotWhole => "a time in ms must be a whole number from 0 to 10⁹",
             SettingsError::Order => "the order must be monotone, updown or pulse",
             SettingsError::Metadata => "the diameter (mm) and wrap (deg) must be 0 to 3600",
+            SettingsError::ServoRange => {
+                "the rest and final angles must be within the servo map (0 to servo_max_deg)"
+            }
+            SettingsError::AmpRange => {
+                "the amplifier control voltage must be within the amplifier's full scale"
+            }
         }
     }
 }
@@ -72,7 +82,17 @@ impl Settings {
         self.protocol.validate().map_err(SettingsError::Protocol)?;
         self.calibration
             .validate()
-            .map_err(SettingsError::Calibration)
+            .map_err(SettingsError::Calibration)?;
+        let (p, c) = (&self.protocol, &self.calibration);
+        // Beyond the map's range every angle would get its end pulse: the levels would merge.
+        if p.rest_deg > c.servo.max_deg || p.final_deg > c.servo.max_deg {
+            return Err(SettingsError::ServoRange);
+        }
+        // Above the full scale the duty clamps at 100 %: the drive would not be what is logged.
+        if p.amp_control_v > c.amp.full_scale_v {
+            return Err(SettingsError::AmpRange);
+        }
+        Ok(())
     }
 
     /// These settings with one value changed, if they stay valid (`order` takes the step
@@ -282,6 +302,16 @@ mod tests {
         assert!(s.with(Key::WrapDeg, f32::NAN).is_err());
         let t = s.with(Key::ServoMaxUs, 2500.0).unwrap();
         assert_eq!(t.calibration.servo.pulse_at_max_us, 2500.0);
+        // Across fields: the rest angle (125°) beyond a 100° servo map, a 2.5 V control
+        // voltage above a 2 V full scale.
+        assert_eq!(
+            s.with(Key::ServoMaxDeg, 100.0),
+            Err(SettingsError::ServoRange)
+        );
+        assert_eq!(
+            s.with(Key::AmpFullScaleV, 2.0),
+            Err(SettingsError::AmpRange)
+        );
     }
 
     #[test]

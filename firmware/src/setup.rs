@@ -16,6 +16,11 @@ pub const MEASURE_MS: u32 = 500;
 /// Live values are reported this often, ms (10 Hz).
 pub const LIVE_EVERY_MS: u32 = 100;
 
+/// How fast setup mode moves the servo to where the host asked, deg/s: a jog of 5° takes
+/// 0.17 s, `servo 65` from rest 2 s, where the HS-322HD alone would swing 60° in 0.2 s and
+/// jerk the cord (a typo like `servo 0` must not do that).
+pub const SETUP_DEG_PER_S: f32 = 30.0;
+
 /// A known weight must move the mean reading at least this much, counts (at 0.015 N/count,
 /// 0.3 N: below that the sensitivity would be mostly noise).
 pub const MIN_WEIGH_COUNTS: f32 = 20.0;

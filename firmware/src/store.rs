@@ -42,6 +42,8 @@ pub struct SettingsStore<F: NorFlash> {
     map: Map<F>,
     /// Generation of the newest save seen (0: none).
     generation: u32,
+    /// The flash could not be read: its generations are unknown, so the first save erases it.
+    erase_first: bool,
     buf: [u8; BUFFER_BYTES],
 }
 
@@ -52,12 +54,21 @@ impl<F: NorFlash> SettingsStore<F> {
         Ok(SettingsStore {
             map: MapStorage::new(flash, config, Cache::new_uncached()),
             generation: 0,
+            erase_first: false,
             buf: [0; BUFFER_BYTES],
         })
     }
 
     /// The stored settings, or why there are none to use.
     pub async fn load(&mut self) -> Result<Settings, SettingsSource> {
+        let read = self.read().await;
+        // Unreadable: no generation is known, so a save starting from 0 could lose to an older
+        // record with a higher one. The first save starts from an erased range instead.
+        self.erase_first = read == Err(SettingsSource::DefaultsFlashError);
+        read
+    }
+
+    async fn read(&mut self) -> Result<Settings, SettingsSource> {
         let generation = self
             .map
             .fetch_item::<u32>(&mut self.buf, &GENERATION_KEY)
@@ -104,6 +115,11 @@ impl<F: NorFlash> SettingsStore<F> {
     /// Keep `settings`: the settings first, then their generation (a reset in between leaves
     /// settings newer than the generation, which load accepts).
     pub async fn save(&mut self, settings: &Settings) -> Result<(), StoreFailed> {
+        if self.erase_first {
+            self.map.erase_all().await.map_err(|_| StoreFailed)?;
+            self.generation = 0;
+            self.erase_first = false;
+        }
         let generation = self.generation.wrapping_add(1).max(1);
         let bytes = settings.encode(generation);
         self.map

@@ -32,6 +32,8 @@ pub struct RamFlash {
     bytes: Vec<u8>,
     /// Page erases so far.
     pub erases: u64,
+    /// The next this many reads fail (a test's flash that cannot be read).
+    pub failing_reads: u32,
 }
 
 impl RamFlash {
@@ -40,13 +42,17 @@ impl RamFlash {
         RamFlash {
             bytes: vec![0xff; pages * ERASE_BYTES],
             erases: 0,
+            failing_reads: 0,
         }
     }
 
     /// A flash holding `bytes` (a saved image); `None` unless whole pages.
     pub fn from_bytes(bytes: Vec<u8>) -> Option<Self> {
-        (!bytes.is_empty() && bytes.len().is_multiple_of(ERASE_BYTES))
-            .then_some(RamFlash { bytes, erases: 0 })
+        (!bytes.is_empty() && bytes.len().is_multiple_of(ERASE_BYTES)).then_some(RamFlash {
+            bytes,
+            erases: 0,
+            failing_reads: 0,
+        })
     }
 
     /// The whole content.
@@ -79,6 +85,10 @@ impl ReadNorFlash for RamFlash {
     const READ_SIZE: usize = 1;
 
     async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), FlashError> {
+        if self.failing_reads > 0 {
+            self.failing_reads -= 1;
+            return Err(FlashError(NorFlashErrorKind::Other));
+        }
         let r = self.range(offset, bytes.len())?;
         bytes.copy_from_slice(&self.bytes[r]);
         Ok(())

@@ -168,7 +168,7 @@ pub fn run_session(
         let board = async {
             store.load_into(&mut rig, &mut sink).await;
             let _ = io.boot(&rig);
-            let never = |_: &firmware::rig::Outputs| None::<()>;
+            let never = |_: &firmware::rig::Outputs, _: &Rig| None::<()>;
             serve(
                 &mut io,
                 &mut rig,

@@ -109,3 +109,38 @@ fn no_flipped_bit_anywhere_brings_up_an_old_or_damaged_record() {
         "only {fell_back} flips fell back to the defaults"
     );
 }
+
+#[test]
+fn after_an_unreadable_flash_the_first_store_starts_afresh() {
+    // The flash held generations 1 and 2 (dwell 8 s, then 9 s); at this boot it cannot be
+    // read. The store that follows must not write "generation 1" beside the old generation 2:
+    // were the new record then damaged, the old one would be loaded as if current. The range
+    // is erased first instead.
+    let spec = SessionSpec::default();
+    let (mut flash, old) = two_saves(&spec);
+    flash.failing_reads = 1;
+    let steps = [send("set dwell_ms 7000"), send("store"), Step::Reset];
+    let out = run_session(&spec, flash, &steps).unwrap();
+    let at_boot = |boot: u32| {
+        out.events
+            .iter()
+            .filter(|e| e.boot == boot)
+            .find_map(|e| match e.record {
+                Record::Settings(s) => Some(s),
+                _ => None,
+            })
+            .unwrap()
+    };
+    assert_eq!(at_boot(1).source, SettingsSource::DefaultsFlashError);
+    let stored = at_boot(2);
+    assert_eq!(stored.source, SettingsSource::Loaded);
+    assert_eq!(stored.settings.protocol.dwell_ms, 7000);
+
+    // Damage the new record: the board must fall back to its defaults, never to dwell 9 s.
+    let mut damaged = out.flash.clone();
+    let at = find(damaged.bytes(), &stored.settings.encode(1)).expect("the new record");
+    damaged.flip(at + 20, 0x01);
+    let r = boot_report(&spec, damaged);
+    assert_ne!(r.settings, old, "the old calibration came back");
+    assert_eq!(r.source, SettingsSource::DefaultsCorrupt);
+}

@@ -7,6 +7,7 @@ use firmware::command::CommandKind;
 use firmware::hal::Channel;
 use firmware::record::{Live, Record, Reply, RunStart, SettingsReport, SettingsSource, StepPair};
 use firmware::runner::STORE_WATCHDOG_MS;
+use firmware::Calibration;
 use host_sim::flash::RamFlash;
 use host_sim::session::{run_session, SessionOutput, SessionSpec, Step, FLASH_PAGES};
 
@@ -51,7 +52,8 @@ fn calibrate_and_store() -> Vec<Step> {
         send("setup"),
         Step::Wait(300),
         send("jog -20"),
-        Step::Wait(200),
+        // 20° at setup mode's 30°/s.
+        Step::Wait(900),
         send("servo 125"),
         Step::Wait(1000),
         send("zero"),
@@ -73,7 +75,7 @@ fn jog_zero_weigh_store_reset_run_uses_the_stored_values() {
     let gain = 0.92;
     let true_npc = 0.015 / gain;
     let mut steps = calibrate_and_store();
-    steps.extend([Step::Reset, send("run"), Step::UntilRunEnd]);
+    steps.extend([Step::Reset, send("show"), send("run"), Step::UntilRunEnd]);
     let out = run_session(&bench(gain), RamFlash::new(FLASH_PAGES), &steps).unwrap();
     assert!(
         out.unanswered.is_empty(),
@@ -104,6 +106,16 @@ fn jog_zero_weigh_store_reset_run_uses_the_stored_values() {
         "live every 100 ms: {gaps:?}"
     );
     assert!(live.iter().any(|l| l.servo_deg == 105.0));
+    // The servo moves at setup mode's 30°/s at most: 3° between live records.
+    let moves: Vec<f32> = live
+        .windows(2)
+        .map(|w| (w[1].servo_deg - w[0].servo_deg).abs())
+        .collect();
+    assert!(moves.iter().all(|&m| m <= 3.0 + 1e-3), "{moves:?}");
+    assert!(
+        moves.iter().any(|&m| m > 2.9),
+        "it moved at the full rate: {moves:?}"
+    );
 
     // The weighed sensitivities are the sensors' true ones, to 0.5 %.
     let weighed: Vec<f32> = r
@@ -120,6 +132,18 @@ fn jog_zero_weigh_store_reset_run_uses_the_stored_values() {
     // After the reset: loaded from flash, and the run announces exactly what was stored.
     let boot2 = settings_at_boot(&out, 2);
     assert_eq!(boot2.source, SettingsSource::Loaded);
+    // `show` after the reset says where its settings came from, as the boot did.
+    let shown: Vec<SettingsReport> = out
+        .events
+        .iter()
+        .filter(|e| e.boot == 2)
+        .filter_map(|e| match e.record {
+            Record::Settings(s) => Some(s),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(shown.len(), 2, "the boot's report and show's");
+    assert_eq!(shown[1], boot2);
     let cal = boot2.settings.calibration;
     assert_eq!(
         [cal.t1.n_per_count, cal.t2.n_per_count],
@@ -199,10 +223,14 @@ fn commands_are_refused_where_they_do_not_belong() {
         send("servo 200"),
         Step::Wait(500),
         send("servo 95"),
+        // Past rest (125°) at 30°/s: the cord is being loaded from here on.
+        Step::Wait(700),
         // Two lines at once: the second arrives while the first is measuring, and the first
-        // measures while the servo swings to 95°, loading the cord.
+        // measures while the servo moves on to 95°, loading the cord.
         send("zero\nzero"),
-        Step::Wait(1500),
+        // A store while measuring: the write would cut the window and miss its result.
+        send("zero\nstore"),
+        Step::Wait(4000),
         send("zero"),
         send("weigh t1 9.8"),
     ];
@@ -226,6 +254,8 @@ fn commands_are_refused_where_they_do_not_belong() {
             ("servo", None),
             ("servo", None),
             ("zero", code(E::Measuring)),
+            ("zero", code(E::Measuring)),
+            ("store", code(E::Measuring)),
             ("zero", code(E::Unsteady)),
             ("zero", None),
             ("weigh", code(E::NoLoad)),
@@ -243,6 +273,8 @@ fn over_force_in_setup_mode_latches_a_fault_and_rests_the_servo() {
     let steps = [
         send("setup"),
         send("jog -10"),
+        // A zero still measuring when the fault strikes (`show` is answered at once).
+        send("zero\nshow"),
         Step::Hang(Channel::T2, 50.0),
         Step::Wait(100),
         send("setup"),
@@ -257,7 +289,78 @@ fn over_force_in_setup_mode_latches_a_fault_and_rests_the_servo() {
     assert_eq!(faults.len(), 1);
     assert_eq!(faults[0].kind, firmware::FaultKind::OverForce);
     let r = replies(&out);
-    let last: Vec<_> = r[r.len() - 3..].iter().map(|x| x.error).collect();
+    let last: Vec<_> = r[r.len() - 4..]
+        .iter()
+        .map(|x| (x.command, x.error))
+        .collect();
     use firmware::command::CommandError as E;
-    assert_eq!(last, vec![Some(E::FaultLatched), None, None]);
+    assert_eq!(
+        last,
+        vec![
+            (CommandKind::Zero, Some(E::Interrupted)),
+            (CommandKind::Setup, Some(E::FaultLatched)),
+            (CommandKind::Ack, None),
+            (CommandKind::Setup, None),
+        ]
+    );
+}
+
+/// The servo pulse the plant is receiving now, µs.
+fn pulse_now_us(out: &SessionOutput) -> f64 {
+    out.plant.truth(0).commanded_pulse_us
+}
+
+#[test]
+fn a_new_servo_map_moves_the_horn_slowly_never_with_a_jump() {
+    // In setup mode: at 90°, then a map whose 180° pulse is 2500 µs instead of 2400.
+    let steps = [
+        send("setup"),
+        send("servo 90"),
+        Step::Wait(1_500),
+        send("set servo_max_us 2500"),
+        Step::Wait(1_500),
+    ];
+    let out = run_session(&bench(1.0), RamFlash::new(FLASH_PAGES), &steps).unwrap();
+    let old = Calibration::default().servo;
+    let mut new = old;
+    new.pulse_at_max_us = 2500.0;
+    assert!((pulse_now_us(&out) - new.pulse_us(90.0) as f64).abs() < 0.5);
+    // The set keeps the pulse (90° on the old map is 85.4° on the new one), then the servo
+    // moves on to 90° at 30°/s: the live records after it climb from there, never jump.
+    let same_place = new.angle_deg(old.pulse_us(90.0));
+    let set_at = out
+        .events
+        .iter()
+        .find(|e| matches!(e.record, Record::Reply(r) if r.command == CommandKind::Set))
+        .unwrap()
+        .t_us;
+    let after: Vec<f32> = out
+        .events
+        .iter()
+        .filter(|e| e.t_us > set_at)
+        .filter_map(|e| match e.record {
+            Record::Live(l) => Some(l.servo_deg),
+            _ => None,
+        })
+        .collect();
+    assert!(
+        after[0] >= same_place && after[0] <= same_place + 3.0,
+        "{after:?}"
+    );
+    assert!(after
+        .windows(2)
+        .all(|w| w[1] >= w[0] && w[1] - w[0] <= 3.0 + 1e-3));
+    assert_eq!(*after.last().unwrap(), 90.0);
+
+    // Idle: a new pulse at 0° homes the horn to the new map's rest, at the homing rate.
+    let steps = [send("set servo_min_us 600"), Step::Wait(3_000)];
+    let out = run_session(&bench(1.0), RamFlash::new(FLASH_PAGES), &steps).unwrap();
+    let mut map = Calibration::default().servo;
+    map.pulse_at_min_us = 600.0;
+    assert!((pulse_now_us(&out) - map.pulse_us(125.0) as f64).abs() < 0.5);
+    let events = out.plant.servo_events(0).0;
+    assert!(
+        events.len() > 10,
+        "homed in steps, not in one jump: {events:?}"
+    );
 }

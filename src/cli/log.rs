@@ -19,7 +19,9 @@ LOGGING A RUN ON THE PICO
        capstan log --chip RP2040 \\
          --elf target/thumbv6m-none-eabi/release/firmware --out runs/2026-06-01-a \\
          --wrap-deg 360 --diameter-mm 12.7
-     then press the rig's button for each run. Each record is written as it arrives:
+     then press the rig's button for each run (or add --start: the first run starts as soon
+     as logging does, e.g. with --no-flash after a setup with `capstan rig`). Each record is
+     written as it arrives:
        raw.csv       time, T1/T2 in ADC counts and newtons
        pairs.csv     capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n
        faults.csv    safety faults
@@ -70,7 +72,7 @@ pub struct Args {
     pub chip: Option<String>,
 
     /// Decode a saved defmt byte stream instead of a board (`-`: stdin).
-    #[arg(long, value_name = "FILE|-", conflicts_with_all = ["chip", "probe", "no_flash", "connect_under_reset", "speed"])]
+    #[arg(long, value_name = "FILE|-", conflicts_with_all = ["chip", "probe", "no_flash", "connect_under_reset", "speed", "start"])]
     pub from: Option<String>,
 
     /// Board: which probe, as VID:PID[:SERIAL] (needed when several are plugged in).
@@ -84,6 +86,11 @@ pub struct Args {
     /// Board: hold the chip in reset while attaching.
     #[arg(long)]
     pub connect_under_reset: bool,
+
+    /// Board: start a run once logging (as the button does, through the firmware's RTT command
+    /// channel), so the run is recorded from its first record. Without it, press the button.
+    #[arg(long)]
+    pub start: bool,
 
     /// Board: SWD clock, kHz.
     #[arg(long, value_name = "KHZ")]
@@ -332,9 +339,31 @@ fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(S
     let mut board = connect(&args.elf, &popts)?;
     let source = format!("{chip} over RTT (probe: {})", board.probe_name);
     let mut logger = Logger::create(fw, opts, &source)?;
+    if args.start {
+        start_run(&mut board)?;
+    }
     let stop = board.stream(limits, &mut logger, super::signal::stop_flag("log"))?;
     let summary = logger.finish(&stop)?;
     Ok((summary, stop))
+}
+
+/// `--start`: the `run` command into the firmware's command channel (the firmware answers
+/// with a `reply` record, which the log keeps like any other).
+#[cfg(feature = "probe")]
+fn start_run(board: &mut crate::log::probe::Connection) -> anyhow::Result<()> {
+    if board.down_buffer_size(0).is_none() {
+        bail!(
+            "--start: this firmware has no RTT command channel (down channel 0): rebuild it \
+             from this repository, or press the rig's button instead"
+        );
+    }
+    let line = b"run\n";
+    let taken = board.write_down(0, line)?;
+    if taken != line.len() {
+        bail!("--start: the firmware's command buffer is full; press the rig's button instead");
+    }
+    crate::errln!("capstan log: run started (--start); its reply and records follow");
+    Ok(())
 }
 
 #[cfg(not(feature = "probe"))]

@@ -40,7 +40,8 @@ SETTING UP THE RIG AT THE BENCH
     $R show                     every setting with its unit, and where it came from
     $R store                    keep the settings in flash (they survive a power-off)
     $R leave                    leave setup mode: the servo homes to rest
-    $R run                      start a run, as the button does (record it with capstan log)
+    $R run                      start a run, as the button does: NOTHING RECORDS IT. To record
+                                it: capstan log ... --no-flash --start (starts it and logs)
 
   Every command is checked here first, with the firmware's own parser and settings rules: a
   typo never reaches the board. Then it waits for the board's reply (3 s; store 5 s) and
@@ -127,6 +128,15 @@ fn rig(args: &Args) -> anyhow::Result<()> {
         }
         _ => {
             let (line, cmd) = command_line(&args.words)?;
+            if cmd == Command::Run {
+                // The probe serves one program at a time and the board's log buffer holds
+                // ~0.3 s: a run started here is not recorded unless capstan log starts it.
+                note(
+                    "note: nothing records this run; to record it, start it with `capstan log \
+                     --chip ... --elf ... --no-flash --start --out DIR` instead"
+                        .into(),
+                );
+            }
             with_link(args, |link| send(link, &line, &cmd, &mut out, &mut note))
         }
     }

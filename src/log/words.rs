@@ -10,7 +10,7 @@ use firmware::{Settings, StepOrder};
 /// A stable name of a settings source, for CSV and JSON.
 pub const fn source_name(source: SettingsSource) -> &'static str {
     match source {
-        SettingsSource::Current => "current",
+        SettingsSource::Current => "changed",
         SettingsSource::Stored => "stored",
         SettingsSource::Loaded => "loaded",
         SettingsSource::DefaultsNoRecord => "defaults_no_record",
@@ -168,6 +168,11 @@ pub fn reply_sentence(reply: &Reply, sent: Option<&Command>) -> String {
             "defaults: built-in defaults in force (send store to keep them)".into()
         }
         CommandKind::Run => format!("run: run {v1:.0} started (taring first)"),
+        // The firmware answers a run's abort with 1 (the run stops, fault `abort`), setup
+        // mode's with 0.
+        CommandKind::Abort if v1 == 1.0 => {
+            "abort: the run stops (fault abort), the outputs go to their safe state".into()
+        }
         CommandKind::Abort => "abort: setup mode left, the servo homes to rest".into(),
         CommandKind::Ack => "ack: fault acknowledged".into(),
         CommandKind::Unparsed => "?: done".into(),

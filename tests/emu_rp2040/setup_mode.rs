@@ -19,6 +19,7 @@ use emu_bench::case::{board_protocol, SHOW_BURST};
 use firmware::command::{CommandKind, Key};
 use firmware::record::{Live, Record, Reply, SettingsSource};
 use firmware::rig::HOMING_DEG_PER_S;
+use firmware::setup::SETUP_DEG_PER_S;
 use host_sim::session::SessionOutput;
 
 fn replies(records: impl Iterator<Item = Record>) -> Vec<Reply> {
@@ -234,14 +235,18 @@ fn live_values(board: &Board, sim: &SessionOutput) -> (usize, usize, usize) {
     assert_eq!(ours.len(), theirs.len());
     let angles = |v: &[Live]| v.iter().map(|l| l.servo_deg).collect::<Vec<_>>();
     assert_eq!(angles(&ours), angles(&theirs));
-    // The board's servo takes a new pulse 20-40 ms later than host-sim's (its frame, then the
-    // plant's), and the cord follows the horn in ~0.1 s: within 200 ms of a move the two
-    // plants' tensions differ.
-    let moves = [board.line("servo 95").sample, board.line("jog -10").sample];
+    // The board's servo takes each new pulse 20-40 ms later than host-sim's (its frame, then
+    // the plant's), and the cord follows the horn in ~0.1 s: while the servo moves (30°/s: 1 s
+    // for `servo 95`, 0.33 s for `jog -10`) and 200 ms after, the two plants' tensions differ.
+    let ramp_ms = |deg: f32| (deg / SETUP_DEG_PER_S * 1000.0) as u64;
+    let moves = [
+        (board.line("servo 95").sample, ramp_ms(30.0)),
+        (board.line("jog -10").sample, ramp_ms(10.0)),
+    ];
     let mut equal = 0;
     for h in &theirs {
         let k = h.t_ms as u64;
-        let moving = moves.iter().any(|&m| k >= m && k < m + 200);
+        let moving = moves.iter().any(|&(m, d)| k >= m && k < m + d + 200);
         let codes = board.codes_at(k);
         equal += (codes == (h.counts[0], h.counts[1])) as usize;
         assert!(
@@ -262,25 +267,36 @@ fn servo_pulses(e: &Emulated, board: &Board) -> String {
     let pulses: Vec<_> = servo.iter().filter(|s| s.switching()).collect();
     assert!(is_rest(pulses[0].high_ns), "{servo:?}");
     let mut said = Vec::new();
-    for (text, deg) in [("servo 95", 95.0), ("jog -10", 85.0)] {
+    // Each move: from the first new pulse after the line, the widths go one way only, by at
+    // most setup mode's 30°/s per 20 ms frame (0.6°), and end at the map's pulse for the
+    // target, |Δ| / 30°/s after the line (+ a frame and a sample).
+    // (+ one 0.32 µs count of the PWM, by which a frame's duty may round up.)
+    let max_step_us = pulse_us(0.6) - pulse_us(0.0) + 0.33;
+    for (text, from, deg) in [("servo 95", 125.0f64, 95.0f32), ("jog -10", 95.0, 85.0)] {
         let l = board.line(text);
-        // The first change of waveform after the line.
-        let next = servo
-            .iter()
-            .find(|s| s.t_ns > l.written_ns && s.switching());
-        let (t, us) = next.map(|s| (s.t_ns, s.high_ns / 1e3)).unwrap();
+        let moving: Vec<(f64, f64)> = widths_after(&servo, l.written_ns)
+            .into_iter()
+            .take_while(|&(_, w)| (w / 1e3 - pulse_us(deg)).abs() > 1.0)
+            .collect();
+        let reached = widths_after(&servo, l.written_ns)
+            .into_iter()
+            .find(|&(_, w)| (w / 1e3 - pulse_us(deg)).abs() <= 1.0);
+        let (t, us) = reached.map(|(t, w)| (t, w / 1e3)).unwrap();
+        let steps: Vec<f64> = moving.windows(2).map(|w| (w[1].1 - w[0].1) / 1e3).collect();
         assert!(
-            (us - pulse_us(deg)).abs() <= 1.0,
-            "{text}: {us} µs, the map says {}",
+            steps.iter().all(|&d| d <= 0.0 && -d <= max_step_us),
+            "{text}: pulse steps {steps:?} µs"
+        );
+        let want_s = (from - deg as f64) / SETUP_DEG_PER_S as f64;
+        let after_s = (t - l.written_ns) / 1e9;
+        assert!(
+            after_s >= want_s - 0.021 && after_s <= want_s + 0.021,
+            "{text}: the map's {} µs {after_s} s after the line; {want_s} s at 30°/s",
             pulse_us(deg)
         );
-        let after_ms = (t - l.written_ns) / MS;
-        assert!(
-            after_ms <= 21.0,
-            "{text}: the new pulse {after_ms} ms after the line"
-        );
         said.push(format!(
-            "{us:.2} µs ({deg}°) {after_ms:.2} ms after `{text}`"
+            "{us:.2} µs ({deg}°) {after_s:.3} s after `{text}` ({} frames on the way)",
+            moving.len()
         ));
     }
     let leave = board.line("leave");

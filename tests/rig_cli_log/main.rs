@@ -232,7 +232,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
         "{}",
         lines[1]
     );
-    assert!(lines[2].starts_with("9,stored,") && lines[3].starts_with("15,current,"));
+    assert!(lines[2].starts_with("9,stored,") && lines[3].starts_with("15,changed,"));
     let live = read("live.csv");
     assert_eq!(live.lines().count(), 1 + 3);
     assert_eq!(live.lines().nth(1), Some("2,1,412,1012,0.01,9.80665,95"));

@@ -196,17 +196,18 @@ fn core_case(
 }
 
 /// When the setup case's host sends what (emulated time since power-up): setup mode, a zero with
-/// the servo at rest (its 500 ms measurement ends before the next line), the servo to 95°, a
-/// jog of -10° (85°), a setting, the settings shown, and out of setup mode, from where the
-/// servo homes to rest (125°) at 10°/s: 4 s, well before the case's end at 8 s.
+/// the servo at rest (its 500 ms measurement ends before the next line), the servo to 95° (1 s
+/// at setup mode's 30°/s), a jog of -10° (85°, 0.33 s), a setting, the settings shown, and out
+/// of setup mode, from where the servo homes to rest (125°) at 10°/s: 4 s, before the case's
+/// end at 8 s.
 pub const SETUP_COMMANDS: [HostLine; 7] = [
     HostLine::at_ms(300, "setup"),
     HostLine::at_ms(500, "zero"),
     HostLine::at_ms(1_200, "servo 95"),
-    HostLine::at_ms(1_800, "jog -10"),
-    HostLine::at_ms(2_200, "set dwell_ms 8000"),
-    HostLine::at_ms(2_400, "show"),
-    HostLine::at_ms(3_000, "leave"),
+    HostLine::at_ms(2_400, "jog -10"),
+    HostLine::at_ms(2_900, "set dwell_ms 8000"),
+    HostLine::at_ms(3_000, "show"),
+    HostLine::at_ms(3_200, "leave"),
 ];
 
 /// Then, while the servo homes, the host sends this many `show` lines at once, at

@@ -6,7 +6,33 @@ use crate::command::{Command, CommandError, CommandKind};
 use crate::record::{Fault, Live, LogSink, Record, Reply, SettingsReport, SettingsSource};
 use crate::safety::{SafetyInput, Supervisor};
 use crate::settings::{Settings, SettingsError};
-use crate::setup::{self, Measure, Measuring, LIVE_EVERY_MS};
+use crate::setup::{self, Measure, Measuring, LIVE_EVERY_MS, SETUP_DEG_PER_S};
+
+/// An angle within the servo's 0..=180°. Not `f32::clamp`: its assertion links ~1 KiB of
+/// float formatting into the board image.
+#[allow(clippy::manual_clamp)]
+fn servo_range(a: f32) -> f32 {
+    if a < 0.0 {
+        0.0
+    } else if a > 180.0 {
+        180.0
+    } else {
+        a
+    }
+}
+
+/// One sample's move from `at` toward `target` at [`SETUP_DEG_PER_S`].
+fn toward(at: f32, target: f32, sample_hz: u32) -> f32 {
+    let step = SETUP_DEG_PER_S / sample_hz as f32;
+    let gap = target - at;
+    if gap.abs() <= step {
+        target
+    } else if gap > 0.0 {
+        at + step
+    } else {
+        at - step
+    }
+}
 
 impl Rig {
     /// The settings in force.
@@ -18,7 +44,9 @@ impl Rig {
     }
 
     /// Run with `s` from now on (refused during a run, or if invalid, or if its sample rates
-    /// differ from the firmware's). While idle, a new rest angle is reached slowly.
+    /// differ from the firmware's). The servo never jumps: with a new servo map its command
+    /// becomes the angle that keeps today's pulse, and from there it moves slowly (idle: homing
+    /// to the new rest angle; setup mode: towards the host's target).
     pub fn use_settings(&mut self, s: Settings) -> Result<(), SettingsError> {
         s.validate()?;
         let (p, d) = (&s.protocol, &self.defaults.protocol);
@@ -28,12 +56,21 @@ impl Rig {
         if self.is_running() {
             return Err(SettingsError::Rates);
         }
-        let servo_at = self.idle_servo_deg;
+        let commanded = match self.phase {
+            Phase::Setup { servo_deg, .. } => servo_deg,
+            _ => self.idle_servo_deg,
+        };
+        let pulse_us = self.cal.servo.pulse_us(commanded);
+        self.settings_changed = true;
         self.protocol = s.protocol;
         self.cal = s.calibration;
-        if !self.is_in_setup() {
-            self.idle_servo_deg = self.protocol.rest_deg;
-            self.home_from(servo_at);
+        let same_place = self.cal.servo.angle_deg(pulse_us);
+        match &mut self.phase {
+            Phase::Setup { servo_deg, .. } => *servo_deg = servo_range(same_place),
+            _ => {
+                self.idle_servo_deg = self.protocol.rest_deg;
+                self.home_from(same_place);
+            }
         }
         Ok(())
     }
@@ -41,6 +78,7 @@ impl Rig {
     /// Log the settings in force and where they came from (at boot: stored or defaults, and
     /// why).
     pub fn report_settings(&mut self, source: SettingsSource, sink: &mut impl LogSink) {
+        self.settings_source = source;
         // Literal messages: defmt keeps them off the chip (SettingsSource::message is the
         // host's copy of the same words).
         match source {
@@ -68,8 +106,10 @@ impl Rig {
 
     /// The runner's report on a `store` request: written (`true`) or not.
     pub fn stored(&mut self, written: bool, sink: &mut impl LogSink) {
-        // The flash write held the loop: the gap is not a fault.
+        // The flash write held the loop: the gap is not a fault, and setup mode's sample grid
+        // starts again from the next sample.
         self.supervisor = Supervisor::new(self.limits);
+        self.reanchor = true;
         if written {
             self.report_settings(SettingsSource::Stored, sink);
             self.reply(sink, CommandKind::Store, Ok([0.0; 2]));
@@ -113,6 +153,12 @@ impl Rig {
             return None;
         }
         if cmd == Command::Store {
+            // A measurement would lose samples to the flash write, and its result would not
+            // be in what was stored.
+            if let Err(e) = self.ensure_not_measuring() {
+                self.reply(sink, kind, Err(e));
+                return None;
+            }
             return Some(self.settings());
         }
         let result = self.act(cmd, now_us, sink);
@@ -132,7 +178,7 @@ impl Rig {
         let latched = self.latched_fault().is_some();
         match cmd {
             Command::Show => {
-                self.report_settings(SettingsSource::Current, sink);
+                self.report_settings(self.settings_source, sink);
                 Ok([0.0; 2])
             }
             Command::Set(key, value) => {
@@ -140,6 +186,7 @@ impl Rig {
                 let s = self.settings().with(key, value);
                 self.use_settings(s.map_err(|_| CommandError::Invalid)?)
                     .map_err(|_| CommandError::Invalid)?;
+                self.settings_source = SettingsSource::Current;
                 Ok([key.code() as f32, value])
             }
             Command::Defaults => {
@@ -154,6 +201,7 @@ impl Rig {
                 self.supervisor = Supervisor::new(self.limits);
                 self.phase = Phase::Setup {
                     servo_deg: self.idle_servo_deg,
+                    target_deg: self.idle_servo_deg,
                     measure: None,
                     origin_us: now_us,
                     next_live_us: now_us,
@@ -162,7 +210,7 @@ impl Rig {
                 Ok([self.idle_servo_deg, 0.0])
             }
             Command::Leave | Command::Abort if self.is_in_setup() => {
-                self.leave_setup();
+                self.leave_setup(sink);
                 Ok([0.0; 2])
             }
             Command::Jog(d) => self.move_servo(|at| at + d),
@@ -193,22 +241,15 @@ impl Rig {
         }
     }
 
+    /// Set where the servo goes (a jog adds to the last target); it moves there at
+    /// [`SETUP_DEG_PER_S`].
     fn move_servo(&mut self, to: impl Fn(f32) -> f32) -> Result<[f32; 2], CommandError> {
-        let Phase::Setup { servo_deg, .. } = &mut self.phase else {
+        let Phase::Setup { target_deg, .. } = &mut self.phase else {
             return Err(CommandError::NotInSetup);
         };
-        let a = to(*servo_deg);
-        // The servo's range; not `f32::clamp` (its assertion links float formatting).
-        #[allow(clippy::manual_clamp)]
-        let a = if a < 0.0 {
-            0.0
-        } else if a > 180.0 {
-            180.0
-        } else {
-            a
-        };
-        *servo_deg = a;
-        Ok([*servo_deg, 0.0])
+        let a = servo_range(to(*target_deg));
+        *target_deg = a;
+        Ok([a, 0.0])
     }
 
     fn start_measure(&mut self, what: Measuring, now_us: u64) -> Result<[f32; 2], CommandError> {
@@ -227,12 +268,27 @@ impl Rig {
     }
 
     /// Back to idle; the servo homes from where it was jogged.
-    fn leave_setup(&mut self) {
+    fn leave_setup(&mut self, sink: &mut impl LogSink) {
         if let Phase::Setup { servo_deg, .. } = self.phase {
+            self.interrupt_measure(sink);
             self.phase = Phase::Idle { latched: None };
             self.idle_servo_deg = self.protocol.rest_deg;
             self.home_from(servo_deg);
             info!("setup mode left: the servo homes to rest");
+        }
+    }
+
+    /// A zero or weigh still measuring when setup mode ends is answered, as interrupted.
+    fn interrupt_measure(&mut self, sink: &mut impl LogSink) {
+        if let Phase::Setup {
+            measure: Some(m), ..
+        } = self.phase
+        {
+            let kind = match m.what {
+                Measuring::Zero => CommandKind::Zero,
+                Measuring::Weigh(..) => CommandKind::Weigh,
+            };
+            self.reply(sink, kind, Err(CommandError::Interrupted));
         }
     }
 
@@ -244,17 +300,21 @@ impl Rig {
         sink: &mut impl LogSink,
     ) -> Outputs {
         let Phase::Setup {
-            servo_deg,
+            mut servo_deg,
+            target_deg,
             mut measure,
-            origin_us,
+            mut origin_us,
             mut next_live_us,
         } = self.phase
         else {
             return self.safe_outputs();
         };
+        if core::mem::take(&mut self.reanchor) {
+            (origin_us, next_live_us) = (inp.now_us, inp.now_us);
+        }
         let now_us = on_grid(inp.now_us, origin_us, self.protocol.sample_period_us());
         if pressed {
-            self.leave_setup();
+            self.leave_setup(sink);
             // Logged as a `leave`, so the log shows where setup mode ended.
             self.reply(sink, CommandKind::Leave, Ok([0.0; 2]));
             return self.idle_outputs();
@@ -296,8 +356,10 @@ impl Rig {
             };
             self.emit(sink, Record::Live(live));
         }
+        servo_deg = toward(servo_deg, target_deg, self.protocol.sample_hz);
         self.phase = Phase::Setup {
             servo_deg,
+            target_deg,
             measure,
             origin_us,
             next_live_us,
@@ -313,6 +375,7 @@ impl Rig {
     fn setup_fault(&mut self, f: Fault, sink: &mut impl LogSink) -> Outputs {
         warn!("fault {} in setup mode: outputs safe", f.kind);
         self.emit(sink, Record::Fault(f));
+        self.interrupt_measure(sink);
         self.phase = Phase::Idle {
             latched: Some(f.kind),
         };

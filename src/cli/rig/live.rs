@@ -75,7 +75,18 @@ pub fn watch(
                 Event::Record {
                     record: Record::Fault(f),
                     ..
-                } => note(fault_line(&f)),
+                } => {
+                    note(fault_line(&f));
+                    note("live: setup mode ended by the fault".into());
+                    return Ok(readings);
+                }
+                Event::Record {
+                    record: Record::Reply(r),
+                    ..
+                } if r.command == firmware::command::CommandKind::Leave && r.error.is_none() => {
+                    note("live: setup mode was left (the button, or another rig command)".into());
+                    return Ok(readings);
+                }
                 Event::Message { level, text } => note(format!("{level} {text}")),
                 Event::Record { .. } => {}
             }

@@ -189,7 +189,10 @@ mod tests {
             settings: s,
         });
         let lines = answer_lines(&a, &Command::Show).unwrap();
-        assert_eq!(lines[0], "settings: the settings in force");
+        assert_eq!(
+            lines[0],
+            format!("settings: {}", SettingsSource::Current.message())
+        );
         assert!(
             lines.contains(&format!("  {:<18} 540 °", "wrap_deg")),
             "{lines:#?}"
