@@ -3,6 +3,7 @@
 //! ```text
 //! cargo run --release --example calibrate -- [SEED] [--every K] [--grid] [--verbose]
 //!                                            [--dump-seed CASE_SEED]
+//!                                            [--dump-outside ROWS | --dump-single ROWS I]
 //! ```
 //! * without `--grid`: the figures of the default decision rule on the cases of SEED (every
 //!   K-th case), with every miss;
@@ -32,13 +33,22 @@ fn main() {
         .filter(|(i, _)| i % every == 0)
         .map(|x| x.1)
         .collect();
-    if let Some(i) = args.iter().position(|a| a == "--dump-outside") {
-        // The benchmark's outside case: case 0 of its class, scaled to about ROWS rows.
+    let dump = ["--dump-outside", "--dump-single"]
+        .iter()
+        .find_map(|f| args.iter().position(|a| a == f));
+    if let Some(i) = dump {
+        // A benchmark case scaled to about ROWS rows: `--dump-outside ROWS` (case 0 of the
+        // outside class) or `--dump-single ROWS INDEX` (single-effect case INDEX).
         let rows: f64 = args
             .get(i + 1)
             .and_then(|v| v.parse().ok())
             .unwrap_or(1000.0);
-        let mut c = cases::draw_case(seed, cases::Class::Outside, 0);
+        let mut c = if args[i] == "--dump-single" {
+            let index = args.get(i + 2).and_then(|v| v.parse().ok()).unwrap_or(0);
+            cases::draw_case(seed, cases::Class::Single, index)
+        } else {
+            cases::draw_case(seed, cases::Class::Outside, 0)
+        };
         let cords =
             c.config.wraps_deg.len() * c.config.diameters_mm.len() * c.config.drive_vs.len();
         c.config.runs = ((rows / (12.0 * cords as f64)).round() as u32).clamp(2, 400);

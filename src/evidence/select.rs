@@ -117,10 +117,13 @@ fn swaps(
         better.sort_by(|&a, &b| fits[a].wrss.total_cmp(&fits[b].wrss));
         let accepted = better.into_iter().find(|&i| {
             let cand = &fits[i];
-            (0..cand.k()).all(|j| {
+            let members: Vec<usize> = (0..cand.k()).collect();
+            par(&members, threads, |&j| {
                 let less = drop(d, cand, j, w);
                 supported(&evidence(d, &less, cand, j))
             })
+            .into_iter()
+            .all(|s| s)
         });
         let Some(b) = accepted else { break };
         current = fits.into_iter().nth(b).expect("index in range");
@@ -212,13 +215,12 @@ pub fn forward(
         current = fits.into_iter().nth(b).expect("index in range");
         // An earlier effect that the new one makes redundant leaves again.
         while current.k() > 1 {
-            let drops: Vec<(WithinFit, Evidence)> = (0..current.k() - 1)
-                .map(|j| {
-                    let less = drop(d, &current, j, w);
-                    let e = evidence(d, &less, &current, j);
-                    (less, e)
-                })
-                .collect();
+            let earlier: Vec<usize> = (0..current.k() - 1).collect();
+            let drops: Vec<(WithinFit, Evidence)> = par(&earlier, threads, |&j| {
+                let less = drop(d, &current, j, w);
+                let e = evidence(d, &less, &current, j);
+                (less, e)
+            });
             let weakest = (0..drops.len())
                 .filter(|&j| !supported(&drops[j].1))
                 .max_by(|&a, &b| drops[a].1.delta_bic.total_cmp(&drops[b].1.delta_bic));
@@ -232,32 +234,39 @@ pub fn forward(
         }
     }
     current = swaps(d, current, candidates, w, &supported, &alone, threads);
-    // Every other candidate added to the final set (recomputed if the last round's were
-    // against another set: the selection stopped at its cap, or an effect left).
-    if last_for != kinds(&current) || last.len() + current.k() < candidates.len() {
-        let pool: Vec<EffectKind> = candidates
-            .iter()
-            .copied()
-            .filter(|&k| !current.maps.iter().any(|m| m.kind == k))
-            .collect();
-        let fits: Vec<WithinFit> = par(&pool, threads, |&k| {
-            add(d, &current, k, w, start_of(&alone, k))
-        });
-        last = fits
-            .iter()
-            .map(|f| evidence(d, &current, f, f.k() - 1))
-            .collect();
+    // The selected effects, each given the others, and every other candidate added to the
+    // final set (recomputed if the last round's were against another set: the selection
+    // stopped at its cap, or an effect left): one batch of fits.
+    let recompute = last_for != kinds(&current) || last.len() + current.k() < candidates.len();
+    let mut jobs: Vec<Option<EffectKind>> = (0..current.k()).map(|_| None).collect();
+    if recompute {
+        jobs.extend(
+            candidates
+                .iter()
+                .filter(|&&k| !current.maps.iter().any(|m| m.kind == k))
+                .map(|&k| Some(k)),
+        );
     }
-    // The selected effects, each given the others.
-    let mut evidence: Vec<Evidence> = (0..current.k())
-        .map(|j| {
-            let less = drop(d, &current, j, w);
-            let mut e = evidence(d, &less, &current, j);
-            e.selected = true;
-            e
-        })
-        .collect();
-    evidence.extend(last);
+    let mut evidence: Vec<Evidence> =
+        par(
+            &(0..jobs.len()).collect::<Vec<_>>(),
+            threads,
+            |&x| match jobs[x] {
+                None => {
+                    let less = drop(d, &current, x, w);
+                    let mut e = evidence(d, &less, &current, x);
+                    e.selected = true;
+                    e
+                }
+                Some(k) => {
+                    let f = add(d, &current, k, w, start_of(&alone, k));
+                    evidence(d, &current, &f, f.k() - 1)
+                }
+            },
+        );
+    if !recompute {
+        evidence.extend(last);
+    }
     for e in &mut evidence {
         e.supported = supported(e);
     }
