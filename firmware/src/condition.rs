@@ -39,6 +39,7 @@ impl Window {
     }
 
     /// Offer a sample taken at `t_us`; it counts only inside the window.
+    #[inline]
     pub fn push(&mut self, t_us: u64, counts: [u16; 2]) {
         if t_us < self.start_us || t_us >= self.end_us {
             return;

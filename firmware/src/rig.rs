@@ -96,6 +96,13 @@ enum Phase {
         step: u32,
         window: Window,
         pair_done: bool,
+        /// When the next step starts, ms from the press (`u32::MAX`: the run is over). The
+        /// step is worked out anew only then, not with a division every sample.
+        next_ms: u32,
+        /// From when the step's level is held ([`Rig::level_held`]), ms (`u32::MAX`: never).
+        armed_ms: u32,
+        /// The step's servo angle, deg.
+        servo_deg: f32,
     },
 }
 
@@ -114,7 +121,12 @@ pub struct Rig {
     runs: u32,
     pairs: u32,
     press_us: u64,
-    samples: u32,
+    /// The run's last sample, µs from the press, on its grid.
+    elapsed_us: u64,
+    /// The sample period, µs: fixed by `new` (settings with other rates are refused).
+    period_us: u32,
+    /// Samples until the next raw record of the run (a countdown, not a division per sample).
+    raw_in: u32,
     /// Servo command while idle, deg: the rest angle, or on its way there ([`Rig::home_from`]).
     idle_servo_deg: f32,
     /// Where the settings in force came from (what `show` reports).
@@ -149,7 +161,9 @@ impl Rig {
             runs: 0,
             pairs: 0,
             press_us: 0,
-            samples: 0,
+            elapsed_us: 0,
+            period_us: protocol.sample_period_us(),
+            raw_in: 0,
             idle_servo_deg: protocol.rest_deg,
             settings_source: crate::record::SettingsSource::DefaultsNoRecord,
             reanchor: false,
@@ -262,7 +276,10 @@ impl Rig {
             pressed = false;
         }
         let mut out = self.step_phase(inp, pressed, abort, sink);
-        out.store = store;
+        // (`step_phase` never asks for a write: the settings are copied only when there are some.)
+        if store.is_some() {
+            out.store = store;
+        }
         out.settings_changed = core::mem::take(&mut self.settings_changed);
         out
     }
@@ -320,7 +337,8 @@ impl Rig {
         self.press_us = now_us;
         self.runs += 1;
         self.pairs = 0;
-        self.samples = 0;
+        self.raw_in = 0;
+        self.elapsed_us = 0;
         self.supervisor = Supervisor::new(self.limits);
         self.phase = Phase::Tare { sum: [0; 2], n: 0 };
         info!("run {=u32}: button pressed, taring", self.runs);
@@ -329,17 +347,11 @@ impl Rig {
     /// A tension level (≥ 1) has been held for `CORD_CHECK_SETTLE_MS`: the cord is loaded.
     /// (The step is the one of the previous sample: at most one sample late at a change.)
     fn level_held(&self, elapsed_ms: u32) -> bool {
-        match self.phase {
-            Phase::Run { step, .. } => {
-                step >= 1
-                    && elapsed_ms >= self.protocol.step_start_ms(step) + CORD_CHECK_SETTLE_MS
-                    && self.protocol.level(step) >= 1
-            }
-            _ => false,
-        }
+        matches!(self.phase, Phase::Run { armed_ms, .. } if elapsed_ms >= armed_ms)
     }
 
     /// Both channels in newtons (NaN where a conversion failed).
+    #[inline]
     fn forces(&self, inp: &Inputs) -> [f32; 2] {
         [
             inp.counts[0].map_or(f32::NAN, |c| self.cal.t1.newtons(c as f32)),
@@ -362,16 +374,31 @@ impl Rig {
             self.cal.t1.tare(sum[0] as f32 / n as f32, r);
             self.cal.t2.tare(sum[1] as f32 / n as f32, r);
         }
+        // Step 0 (rest, no window) until the first step starts.
         Phase::Run {
             step: 0,
             window: Window::new(0, 0),
             pair_done: true,
+            next_ms: self.protocol.step_start_ms(0),
+            armed_ms: u32::MAX,
+            servo_deg: self.protocol.rest_deg,
         }
     }
 
     fn step_running(&mut self, inp: &Inputs, pressed: bool, sink: &mut impl LogSink) -> Outputs {
-        let p = self.protocol;
-        let elapsed_us = on_grid(inp.now_us, self.press_us, p.sample_period_us()) - self.press_us;
+        // Borrowed, not copied: the protocol is ~60 bytes, and a sample needs a few of them.
+        let p = &self.protocol;
+        let period_us = self.period_us as u64;
+        // A sample comes one period after the last, give or take the clock's latency: then it
+        // is on the grid without `on_grid`'s 64-bit division (in software on the board).
+        let since_us = inp.now_us.saturating_sub(self.press_us) + period_us / 2;
+        let next_us = self.elapsed_us + period_us;
+        let elapsed_us = if since_us.wrapping_sub(next_us) < period_us {
+            next_us
+        } else {
+            on_grid(inp.now_us, self.press_us, self.period_us) - self.press_us
+        };
+        self.elapsed_us = elapsed_us;
         let elapsed_ms = (elapsed_us / 1000) as u32;
         let t_us = self.since_trigger_us(elapsed_us);
         let force_n = self.forces(inp);
@@ -381,25 +408,25 @@ impl Rig {
         };
 
         // Tare, then announce the run with the calibration it will use.
-        if let Phase::Tare { mut sum, mut n } = self.phase {
+        if let Phase::Tare { sum, n } = &mut self.phase {
             if let Some(c) = counts_ok {
                 sum[0] += c[0] as u64;
                 sum[1] += c[1] as u64;
-                n += 1;
+                *n += 1;
             }
-            self.phase = Phase::Tare { sum, n };
-            if elapsed_us + p.sample_period_us() as u64 >= p.tare_ms as u64 * 1000 {
+            if elapsed_us + period_us >= p.tare_ms as u64 * 1000 {
                 // tare_ms = 0 keeps the stored zero (the one sample taken is not a tare).
-                let tare = (p.tare_ms > 0).then_some((sum, n));
+                let tare = (p.tare_ms > 0).then_some((*sum, *n));
                 self.phase = self.begin_run(tare);
                 let rec = RunStart {
                     run: self.runs,
-                    protocol: p,
+                    protocol: self.protocol,
                     calibration: self.cal,
                 };
                 self.emit(sink, Record::RunStart(rec));
             }
         }
+        let p = &self.protocol;
 
         // Safety first: a fault ends the run in this very sample.
         let fault = if pressed {
@@ -424,74 +451,76 @@ impl Rig {
         }
 
         // Decimated raw samples for the log, from the run start on.
-        let decimation = p.sample_hz / p.raw_log_hz;
-        let taring = matches!(self.phase, Phase::Tare { .. });
-        if !taring && self.samples.is_multiple_of(decimation) {
-            let raw = RawSample {
-                t_us,
-                counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
-                force_n,
-            };
-            self.emit(sink, Record::Raw(raw));
-        }
-        if !taring {
-            self.samples = self.samples.wrapping_add(1);
+        if !matches!(self.phase, Phase::Tare { .. }) {
+            if self.raw_in == 0 {
+                let raw = RawSample {
+                    t_us,
+                    counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
+                    force_n,
+                };
+                sink.emit(self.seq.next_seq(), &Record::Raw(raw));
+                self.raw_in = p.sample_hz / p.raw_log_hz;
+            }
+            self.raw_in -= 1;
         }
 
+        // The phase is updated in place: a run's window is too large to copy every sample.
         if let Phase::Run {
-            mut step,
-            mut window,
-            mut pair_done,
-        } = self.phase
+            step,
+            window,
+            pair_done,
+            next_ms,
+            armed_ms,
+            servo_deg,
+        } = &mut self.phase
         {
-            // Which step is being held: steps start at step_start_ms(k).
-            let first_ms = p.step_start_ms(0);
-            let k = if elapsed_ms < first_ms {
-                None
-            } else {
-                Some(((elapsed_ms - first_ms) / p.dwell_ms).min(p.levels() + 1))
-            };
-            if let Some(k) = k {
-                if k != step {
-                    step = k;
+            if elapsed_ms >= *next_ms {
+                // Which step is being held: steps start at step_start_ms(k).
+                let n = p.levels();
+                let k = ((elapsed_ms - p.step_start_ms(0)) / p.dwell_ms).min(n + 1);
+                if k != *step {
+                    *step = k;
                     let (a, b) = p.window_ms(k);
-                    window = Window::new(a as u64 * 1000, b as u64 * 1000);
-                    pair_done = k == 0 || k > p.levels();
-                }
-                if let Some(c) = counts_ok {
-                    window.push(elapsed_us, c);
-                }
-                let (_, win_end_ms) = p.window_ms(step);
-                if !pair_done
-                    && elapsed_us + p.sample_period_us() as u64 >= win_end_ms as u64 * 1000
-                {
-                    pair_done = true;
-                    let [t1, t2] = window.stats(&self.cal);
-                    let (a, b) = p.window_ms(step);
-                    let pair = StepPair {
-                        step,
-                        level: p.level(step),
-                        angle_deg: p.angle_deg(step),
-                        t_mid_ms: (a + b) / 2 - p.trigger_at_ms(),
-                        t1,
-                        t2,
+                    *window = Window::new(a as u64 * 1000, b as u64 * 1000);
+                    *pair_done = k == 0 || k > n;
+                    *servo_deg = p.angle_deg(k);
+                    *armed_ms = if k >= 1 && p.level(k) >= 1 {
+                        p.step_start_ms(k) + CORD_CHECK_SETTLE_MS
+                    } else {
+                        u32::MAX
                     };
-                    self.pairs += 1;
-                    self.emit(sink, Record::Pair(pair));
                 }
+                *next_ms = if k > n {
+                    u32::MAX
+                } else {
+                    p.step_start_ms(k + 1)
+                };
             }
-            self.phase = Phase::Run {
-                step,
-                window,
-                pair_done,
-            };
-            if elapsed_ms >= p.end_ms() {
+            if let Some(c) = counts_ok {
+                window.push(elapsed_us, c);
+            }
+            let mut pair = None;
+            let (a, b) = p.window_ms(*step);
+            if !*pair_done && elapsed_us + period_us >= b as u64 * 1000 {
+                *pair_done = true;
+                let [t1, t2] = window.stats(&self.cal);
+                pair = Some(StepPair {
+                    step: *step,
+                    level: p.level(*step),
+                    angle_deg: *servo_deg,
+                    t_mid_ms: (a + b) / 2 - p.trigger_at_ms(),
+                    t1,
+                    t2,
+                });
+            }
+            let (ended, servo_deg) = (*next_ms == u32::MAX, *servo_deg);
+            if let Some(pair) = pair {
+                self.pairs += 1;
+                sink.emit(self.seq.next_seq(), &Record::Pair(pair));
+            }
+            if ended {
                 return self.finish(t_us, None, sink);
             }
-            let servo_deg = match k {
-                Some(k) => p.angle_deg(k),
-                None => p.rest_deg,
-            };
             let trigger_ms = elapsed_ms.wrapping_sub(p.trigger_at_ms());
             return Outputs {
                 servo_deg,

@@ -91,7 +91,7 @@ impl Supervisor {
 
     /// Check one sample; a fault is returned the sample its condition is confirmed.
     pub fn check(&mut self, input: &SafetyInput) -> Option<Fault> {
-        let l = self.limits;
+        let l = &self.limits;
         let fault = |kind, channel, value| {
             Some(Fault {
                 kind,

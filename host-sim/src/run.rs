@@ -5,7 +5,7 @@
 use crate::setup::OutOfRange;
 use crate::time;
 use capstan_plant::{
-    rig_io, CordSetup, Injection, InjectionReport, Plant, PlantConfig, PlantError, ServoEvent,
+    rig_io_on, CordSetup, Injection, InjectionReport, Plant, PlantConfig, PlantError, ServoEvent,
 };
 use core::cell::RefCell;
 use embassy_time::{Duration, Ticker};
@@ -237,11 +237,17 @@ pub fn run(spec: &RunSpec) -> Result<RunOutput, SetupError> {
         plant.inject(*inj).map_err(SetupError::Plant)?;
     }
     let plant = RefCell::new(plant);
-    let mut io = rig_io(&plant, 0);
     let mut sink = VecSink::new(spec.keep_raw);
+    if spec.keep_raw {
+        // The whole run's raw records at once: no regrowth (and copies) of ~300 KiB per run.
+        let p = &spec.protocol;
+        let raw = p.end_ms() as u64 * p.raw_log_hz as u64 / 1000 + 1;
+        sink.log.raw.reserve(raw as usize);
+    }
     let limit = time_limit_us(&spec.protocol, &spec.cord);
     let trace = RefCell::new(Vec::new());
-    let outcome = {
+    let outcome = time::with_clock(|clock| {
+        let mut io = rig_io_on(&plant, 0, clock);
         let runner = firmware::run_once(&mut io, &mut rig, &mut sink);
         if spec.trace_every_ms > 0 {
             let every = Duration::from_millis(spec.trace_every_ms as u64);
@@ -264,7 +270,7 @@ pub fn run(spec: &RunSpec) -> Result<RunOutput, SetupError> {
         } else {
             time::block_on_until(runner, limit)
         }
-    };
+    });
     let end = match outcome {
         Ok(Ok(end)) => Ok(end),
         Ok(Err(e)) => Err(RunFailure::Hardware(e)),

@@ -18,44 +18,38 @@ struct Entry {
     waker: Waker,
 }
 
-/// One thread's clock. The queue is a short vector kept sorted by deadline, latest first
-/// (a rig has one ticker pending, two-control a handful): pushing is a scan from the end,
-/// popping the earliest is `Vec::pop`.
-struct Clock {
-    now: Cell<u64>,
-    woken: Cell<bool>,
-    queue: RefCell<Vec<Entry>>,
-}
-
+// One thread's clock: its time, its "poll again" flag and its timer queue. The queue is a short
+// vector kept sorted by deadline, latest first (a rig has one ticker pending, two-control a
+// handful): pushing is a scan from the end, popping the earliest is `Vec::pop`. Three
+// thread-locals, not one struct: the time and the flag have no destructor, so reading them
+// (several times per simulated sample) checks no lazily registered destructor's state.
 thread_local! {
-    static CLOCK: Clock = const {
-        Clock {
-            now: Cell::new(0),
-            woken: Cell::new(false),
-            queue: RefCell::new(Vec::new()),
-        }
-    };
+    static NOW: Cell<u64> = const { Cell::new(0) };
+    static WOKEN: Cell<bool> = const { Cell::new(false) };
+    static QUEUE: RefCell<Vec<Entry>> = const { RefCell::new(Vec::new()) };
 }
 
 struct VirtualTime;
 
 impl embassy_time_driver::Driver for VirtualTime {
     fn now(&self) -> u64 {
-        CLOCK.with(|c| c.now.get())
+        NOW.get()
     }
 
     fn schedule_wake(&self, at: u64, waker: &Waker) {
-        CLOCK.with(|c| {
-            let mut q = c.queue.borrow_mut();
+        QUEUE.with_borrow_mut(|q| {
             // After the later deadlines, ahead of equal ones: equal deadlines pop in FIFO order.
             let pos = q.iter().rposition(|e| e.at > at).map_or(0, |p| p + 1);
-            q.insert(
-                pos,
-                Entry {
-                    at,
-                    waker: waker.clone(),
-                },
-            );
+            let entry = Entry {
+                at,
+                waker: waker.clone(),
+            };
+            // Usually the queue is empty or the new deadline the earliest: no shifting then.
+            if pos == q.len() {
+                q.push(entry);
+            } else {
+                q.insert(pos, entry);
+            }
         })
     }
 }
@@ -63,17 +57,34 @@ impl embassy_time_driver::Driver for VirtualTime {
 embassy_time_driver::time_driver_impl!(static DRIVER: VirtualTime = VirtualTime);
 
 /// This thread's virtual time, µs (embassy-time ticks at 1 MHz).
+#[inline]
 pub fn now_us() -> u64 {
-    CLOCK.with(|c| c.now.get())
+    NOW.get()
+}
+
+/// This thread's virtual time as the plant adapters read it: the clock `embassy_time::Instant`
+/// reads through this crate's driver, held by reference, so each of the ~5 reads per simulated
+/// sample is a load (not a call to the driver's symbol and the thread-local's accessor).
+#[derive(Clone, Copy, Debug)]
+pub struct VirtualClock<'a>(&'a Cell<u64>);
+
+impl capstan_plant::hal::Clock for VirtualClock<'_> {
+    #[inline]
+    fn now_us(&self) -> u64 {
+        self.0.get()
+    }
+}
+
+/// Run `f` with this thread's [`VirtualClock`].
+pub fn with_clock<R>(f: impl FnOnce(VirtualClock<'_>) -> R) -> R {
+    NOW.with(|now| f(VirtualClock(now)))
 }
 
 /// Start this thread's clock afresh at `now_us` with an empty timer queue.
 pub fn reset(now_us: u64) {
-    CLOCK.with(|c| {
-        c.now.set(now_us);
-        c.woken.set(false);
-        c.queue.borrow_mut().clear();
-    });
+    NOW.set(now_us);
+    WOKEN.set(false);
+    QUEUE.with_borrow_mut(Vec::clear);
 }
 
 // The waker of `block_on`: it only raises this thread's "poll again" flag.
@@ -84,7 +95,7 @@ fn clone_raw(_: *const ()) -> RawWaker {
 }
 
 fn wake_raw(_: *const ()) {
-    CLOCK.with(|c| c.woken.set(true));
+    WOKEN.set(true);
 }
 
 fn drop_raw(_: *const ()) {}
@@ -109,15 +120,15 @@ pub fn block_on_until<F: Future>(fut: F, limit_us: u64) -> Result<F::Output, Sta
     let waker = flag_waker();
     let mut cx = Context::from_waker(&waker);
     let mut fut = pin!(fut);
-    CLOCK.with(|clock| loop {
-        clock.woken.set(false);
+    QUEUE.with(|queue| loop {
+        WOKEN.set(false);
         if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
             return Ok(v);
         }
-        if clock.woken.get() {
+        if WOKEN.get() {
             continue;
         }
-        let mut q = clock.queue.borrow_mut();
+        let mut q = queue.borrow_mut();
         let Some(first) = q.pop() else {
             return Err(Stalled::Deadlock);
         };
@@ -125,9 +136,9 @@ pub fn block_on_until<F: Future>(fut: F, limit_us: u64) -> Result<F::Output, Sta
             q.push(first);
             return Err(Stalled::Limit);
         }
-        let now = clock.now.get().max(first.at);
-        clock.now.set(now);
-        // Our wakers only raise `woken`: waking with the queue borrowed is fine.
+        let now = NOW.get().max(first.at);
+        NOW.set(now);
+        // Our wakers only raise `WOKEN`: waking with the queue borrowed is fine.
         first.waker.wake();
         while q.last().is_some_and(|e| e.at <= now) {
             q.pop().unwrap().waker.wake();

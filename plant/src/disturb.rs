@@ -114,6 +114,11 @@ impl Unmodelled {
 
     /// The T2 sensor's reading of a tension, N.
     pub fn t2_reading_n(&self, t2_n: f64) -> f64 {
+        if self.t2_nonlinearity == 0.0 {
+            // What the sum below gives (T2 is finite, and never −0): without its square root
+            // and two divisions, for every conversion of the T2 channel.
+            return t2_n;
+        }
         let a = 0.5 * NONLINEARITY_REF_N;
         // T(T − a)(T − 2a) peaks at ±2a³/(3√3).
         let peak = 2.0 * a * a * a / (3.0 * libm::sqrt(3.0));

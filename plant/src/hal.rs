@@ -1,8 +1,9 @@
 //! The simulated HAL: the very traits the board implements (embedded-hal 1.0 `SetDutyCycle`,
 //! `OutputPin`, `InputPin`, and the rig core's `ForceAdc` and `Watchdog`), over a shared
-//! `&RefCell<Plant>`. Every call reads `embassy_time::Instant::now()` and first brings the plant
-//! to that instant, so the plant sees only what a real rig would: duty cycles and pin levels out
-//! of the firmware, ADC counts and the button level into it.
+//! `&RefCell<Plant>`. Every call reads the time ([`Clock`]: `embassy_time::Instant::now()`,
+//! unless the harness hands a cheaper read of the same clock) and first brings the plant to that
+//! instant, so the plant sees only what a real rig would: duty cycles and pin levels out of the
+//! firmware, ADC counts and the button level into it.
 
 use crate::plant::Plant;
 use core::cell::RefCell;
@@ -19,27 +20,51 @@ pub const SERVO_MAX_DUTY: u16 = 62_500;
 /// `max_duty_cycle()` of the simulated amplifier PWM: 1 mV of control voltage per count.
 pub const AMP_MAX_DUTY: u16 = 3_300;
 
-fn now_us() -> u64 {
-    embassy_time::Instant::now().as_micros()
+/// Where the adapters read the time, µs on `embassy_time::Instant`'s clock.
+pub trait Clock: Copy {
+    /// Now, µs.
+    fn now_us(&self) -> u64;
+}
+
+/// `embassy_time::Instant::now()`: the board's timer, or a host's driver (host-sim's virtual
+/// time, which also hands its own, inlined read of the same clock: the adapters read it ~5
+/// times per simulated sample).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EmbassyClock;
+
+impl Clock for EmbassyClock {
+    #[inline]
+    fn now_us(&self) -> u64 {
+        embassy_time::Instant::now().as_micros()
+    }
 }
 
 /// A handle on one cord of a shared plant: what every adapter holds.
 #[derive(Clone, Copy)]
-pub struct CordRef<'a> {
+pub struct CordRef<'a, C = EmbassyClock> {
     plant: &'a RefCell<Plant>,
     cord: usize,
+    clock: C,
 }
 
 impl<'a> CordRef<'a> {
     /// Cord `cord` (0-based) of `plant`. Panics if the plant has no such cord.
     pub fn new(plant: &'a RefCell<Plant>, cord: usize) -> Self {
+        Self::with_clock(plant, cord, EmbassyClock)
+    }
+}
+
+impl<'a, C: Clock> CordRef<'a, C> {
+    /// Cord `cord` (0-based) of `plant`, on `clock`. Panics if the plant has no such cord.
+    pub fn with_clock(plant: &'a RefCell<Plant>, cord: usize, clock: C) -> Self {
         assert!(cord < plant.borrow().cord_count(), "no cord {cord}");
-        CordRef { plant, cord }
+        CordRef { plant, cord, clock }
     }
 
+    #[inline]
     fn with<R>(&self, f: impl FnOnce(&mut Plant, usize) -> R) -> R {
         let mut p = self.plant.borrow_mut();
-        p.advance_to(now_us());
+        p.advance_to(self.clock.now_us());
         f(&mut p, self.cord)
     }
 }
@@ -47,7 +72,7 @@ impl<'a> CordRef<'a> {
 macro_rules! adapter {
     ($(#[$doc:meta])* $name:ident) => {
         $(#[$doc])*
-        pub struct $name<'a>(pub CordRef<'a>);
+        pub struct $name<'a, C = EmbassyClock>(pub CordRef<'a, C>);
     };
 }
 
@@ -80,11 +105,11 @@ adapter!(
     SimWatchdog
 );
 
-impl PwmErrorType for ServoPwm<'_> {
+impl<C: Clock> PwmErrorType for ServoPwm<'_, C> {
     type Error = Infallible;
 }
 
-impl SetDutyCycle for ServoPwm<'_> {
+impl<C: Clock> SetDutyCycle for ServoPwm<'_, C> {
     fn max_duty_cycle(&self) -> u16 {
         SERVO_MAX_DUTY
     }
@@ -96,11 +121,11 @@ impl SetDutyCycle for ServoPwm<'_> {
     }
 }
 
-impl PwmErrorType for AmpPwm<'_> {
+impl<C: Clock> PwmErrorType for AmpPwm<'_, C> {
     type Error = Infallible;
 }
 
-impl SetDutyCycle for AmpPwm<'_> {
+impl<C: Clock> SetDutyCycle for AmpPwm<'_, C> {
     fn max_duty_cycle(&self) -> u16 {
         AMP_MAX_DUTY
     }
@@ -111,11 +136,11 @@ impl SetDutyCycle for AmpPwm<'_> {
     }
 }
 
-impl PinErrorType for TriggerPin<'_> {
+impl<C: Clock> PinErrorType for TriggerPin<'_, C> {
     type Error = Infallible;
 }
 
-impl OutputPin for TriggerPin<'_> {
+impl<C: Clock> OutputPin for TriggerPin<'_, C> {
     fn set_low(&mut self) -> Result<(), Infallible> {
         self.0.with(|p, i| p.set_trigger(i, false));
         Ok(())
@@ -127,11 +152,11 @@ impl OutputPin for TriggerPin<'_> {
     }
 }
 
-impl PinErrorType for LedPin<'_> {
+impl<C: Clock> PinErrorType for LedPin<'_, C> {
     type Error = Infallible;
 }
 
-impl OutputPin for LedPin<'_> {
+impl<C: Clock> OutputPin for LedPin<'_, C> {
     fn set_low(&mut self) -> Result<(), Infallible> {
         self.0.with(|p, i| p.set_led(i, false));
         Ok(())
@@ -143,11 +168,11 @@ impl OutputPin for LedPin<'_> {
     }
 }
 
-impl PinErrorType for ButtonPin<'_> {
+impl<C: Clock> PinErrorType for ButtonPin<'_, C> {
     type Error = Infallible;
 }
 
-impl InputPin for ButtonPin<'_> {
+impl<C: Clock> InputPin for ButtonPin<'_, C> {
     fn is_high(&mut self) -> Result<bool, Infallible> {
         Ok(!self.0.with(|p, i| p.button_pressed(i)))
     }
@@ -157,13 +182,13 @@ impl InputPin for ButtonPin<'_> {
     }
 }
 
-impl ForceAdc for SimAdc<'_> {
+impl<C: Clock> ForceAdc for SimAdc<'_, C> {
     fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError> {
         self.0.with(|p, i| p.read_counts(i, channel))
     }
 }
 
-impl Watchdog for SimWatchdog<'_> {
+impl<C: Clock> Watchdog for SimWatchdog<'_, C> {
     fn feed(&mut self) {
         self.0.with(|p, i| p.feed_watchdog(i));
     }
@@ -173,9 +198,9 @@ impl Watchdog for SimWatchdog<'_> {
 /// board: straight to the pins, past the runner and its drivers. [`firmware::force_safe`] on
 /// this is what the RP2040's panic and HardFault handlers do on its registers (host-sim's
 /// `panic` module runs it when the firmware panics).
-pub struct ForcedOutputs<'a>(pub CordRef<'a>);
+pub struct ForcedOutputs<'a, C = EmbassyClock>(pub CordRef<'a, C>);
 
-impl ForceOutputs for ForcedOutputs<'_> {
+impl<C: Clock> ForceOutputs for ForcedOutputs<'_, C> {
     fn force_amp_off(&mut self) {
         self.0.with(|p, i| p.set_amp_duty(i, 0, AMP_MAX_DUTY));
     }
@@ -191,19 +216,24 @@ impl ForceOutputs for ForcedOutputs<'_> {
 }
 
 /// The rig's hardware for cord `cord` of a simulated plant.
-pub type SimRigIo<'a> = RigIo<
-    ServoPwm<'a>,
-    AmpPwm<'a>,
-    TriggerPin<'a>,
-    LedPin<'a>,
-    ButtonPin<'a>,
-    SimAdc<'a>,
-    SimWatchdog<'a>,
+pub type SimRigIo<'a, C = EmbassyClock> = RigIo<
+    ServoPwm<'a, C>,
+    AmpPwm<'a, C>,
+    TriggerPin<'a, C>,
+    LedPin<'a, C>,
+    ButtonPin<'a, C>,
+    SimAdc<'a, C>,
+    SimWatchdog<'a, C>,
 >;
 
 /// Everything `firmware::run_once` needs for cord `cord` (0-based) of `plant`.
 pub fn rig_io(plant: &RefCell<Plant>, cord: usize) -> SimRigIo<'_> {
-    let c = CordRef::new(plant, cord);
+    rig_io_on(plant, cord, EmbassyClock)
+}
+
+/// [`rig_io`], the adapters reading the time from `clock`.
+pub fn rig_io_on<C: Clock>(plant: &RefCell<Plant>, cord: usize, clock: C) -> SimRigIo<'_, C> {
+    let c = CordRef::with_clock(plant, cord, clock);
     RigIo {
         servo: ServoPwm(c),
         amp: AmpPwm(c),

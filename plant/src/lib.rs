@@ -49,7 +49,7 @@ pub use config::{
     ServoCharacteristic, ServoConfig, THESIS_REST_PULSE_US,
 };
 pub use disturb::{Disturbances, Unmodelled};
-pub use hal::{rig_io, ForcedOutputs, SimRigIo, AMP_MAX_DUTY, SERVO_MAX_DUTY};
+pub use hal::{rig_io, rig_io_on, ForcedOutputs, SimRigIo, AMP_MAX_DUTY, SERVO_MAX_DUTY};
 pub use injection::{Injection, InjectionKind, InjectionReport};
 pub use plant::{
     CordTruth, DriveState, Plant, PlantError, ServoEvent, MAX_CORDS, MAX_INJECTIONS,

@@ -113,11 +113,18 @@ pub struct Plant {
     next_refresh_us: u64,
     next_wander_us: u64,
     any_time_dependent: bool,
+    /// Until when (the next frame, wander or refresh, µs) a step only moves the drive: the
+    /// servos are at their targets, the amplifier filters at their inputs, no injection is to
+    /// come and nothing heats (0: not settled; a new amplifier duty or injection clears it).
+    settled_until_us: u64,
     // drive
     drive_v: f64,
     omega: f64,
     transmission: f64,
     load_nm: f64,
+    /// The last drive step of this length (µs) changed nothing, and neither the load nor the
+    /// drive voltage has changed since (0: not so).
+    drive_still_dt_us: u32,
     rng: Rng,
     cords: Vec<CordState, MAX_CORDS>,
     injections: Vec<InjectionReport, MAX_INJECTIONS>,
@@ -154,6 +161,7 @@ impl Plant {
         if injection.cord as usize >= self.cords.len() {
             return Err(PlantError::BadInjection);
         }
+        self.settled_until_us = 0;
         self.injections
             .push(InjectionReport {
                 injection,
@@ -184,7 +192,15 @@ impl Plant {
     }
 
     /// Bring the plant to `now_us` (no-op if it is there already or past it).
+    #[inline]
     pub fn advance_to(&mut self, now_us: u64) {
+        // Every HAL call comes here, and all but the first of a sample find the plant there.
+        if self.t_us < now_us {
+            self.advance_from_past(now_us);
+        }
+    }
+
+    fn advance_from_past(&mut self, now_us: u64) {
         while self.t_us < now_us {
             let dt = (now_us - self.t_us).min(self.cfg.max_step_us as u64);
             self.step(dt as u32);

@@ -88,14 +88,30 @@ impl Rng {
     /// A standard normal deviate (mean 0, sd 1).
     #[inline]
     pub fn normal(&mut self) -> f64 {
+        // The common case (~99 %) inline; the rest, rare, out of line (same draws in the same
+        // order either way).
+        let (i, u) = self.layer_draw();
+        if u.abs() < ZIG_RATIO[i] {
+            return u * ZIG_X[i];
+        }
+        self.normal_outside(i, u)
+    }
+
+    /// One 64-bit draw as a layer and a signed uniform: 53 bits independent of the 8 layer
+    /// bits, u in (−1, 1).
+    #[inline]
+    fn layer_draw(&mut self) -> (usize, f64) {
+        let bits = self.next_u64();
+        let i = (bits & 0xff) as usize;
+        let u = ((bits >> 11) as i64 - (1i64 << 52)) as f64 * (1.0 / (1u64 << 52) as f64);
+        (i, u)
+    }
+
+    /// [`Rng::normal`] when the draw `(i, u)` fell outside layer i's rectangle.
+    #[cold]
+    #[inline(never)]
+    fn normal_outside(&mut self, mut i: usize, mut u: f64) -> f64 {
         loop {
-            let bits = self.next_u64();
-            let i = (bits & 0xff) as usize;
-            // 53 signed bits, independent of the layer bits: u in (−1, 1).
-            let u = ((bits >> 11) as i64 - (1i64 << 52)) as f64 * (1.0 / (1u64 << 52) as f64);
-            if u.abs() < ZIG_RATIO[i] {
-                return u * ZIG_X[i];
-            }
             if i == 0 {
                 return self.tail(u < 0.0);
             }
@@ -106,6 +122,10 @@ impl Rng {
             let f1 = libm::exp(-0.5 * (xj * xj - x * x));
             if f1 + self.uniform() * (f0 - f1) < 1.0 {
                 return x;
+            }
+            (i, u) = self.layer_draw();
+            if u.abs() < ZIG_RATIO[i] {
+                return u * ZIG_X[i];
             }
         }
     }

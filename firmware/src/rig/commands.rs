@@ -253,7 +253,7 @@ impl Rig {
     }
 
     fn start_measure(&mut self, what: Measuring, now_us: u64) -> Result<[f32; 2], CommandError> {
-        let period_us = self.protocol.sample_period_us();
+        let period_us = self.period_us;
         let Phase::Setup {
             measure, origin_us, ..
         } = &mut self.phase
@@ -312,7 +312,7 @@ impl Rig {
         if core::mem::take(&mut self.reanchor) {
             (origin_us, next_live_us) = (inp.now_us, inp.now_us);
         }
-        let now_us = on_grid(inp.now_us, origin_us, self.protocol.sample_period_us());
+        let now_us = on_grid(inp.now_us, origin_us, self.period_us);
         if pressed {
             self.leave_setup(sink);
             // Logged as a `leave`, so the log shows where setup mode ended.

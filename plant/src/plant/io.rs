@@ -51,6 +51,7 @@ impl Plant {
             duty as f64 / max_duty as f64 * m.amp_full_scale_v
         };
         self.cords[i].amp_control_v = v;
+        self.settled_until_us = 0;
         if m.amp_filter_tau_s <= 0.0 {
             self.cords[i].amp_filtered_v = v;
             self.update_drive();
@@ -71,6 +72,7 @@ impl Plant {
         if drive != self.drive_v {
             self.drive_v = drive;
             self.stall_m = m.kt_nm_per_a * drive / m.resistance_ohm - m.coulomb_nm;
+            self.drive_still_dt_us = 0;
             for c in self.cords.iter_mut() {
                 c.dirty = true;
             }
@@ -123,6 +125,7 @@ impl Plant {
     /// noise draw per call, as [`Plant::read_counts`], which rounds and clamps this). An
     /// unplugged sensor reads 0. For a harness with an ADC of its own (the emulated RP2040's):
     /// `volts at the pin = counts × V_ref / 4096`.
+    #[inline]
     pub fn read_analog(&mut self, i: usize, ch: Channel) -> f64 {
         let k = ch as usize;
         let drive_on = self.drive_v > 0.0;
@@ -132,13 +135,19 @@ impl Plant {
         }
         let art = c.setup.model.sensors;
         // The catalogue artefacts ride on the drive (see the crate docs): the tare, done with
-        // the capstan stopped, neither removes the offsets nor sees the gain.
-        let t2 = c.setup.unmodelled.t2_reading_n(c.t2);
+        // the capstan stopped, neither removes the offsets nor sees the gain. (T2's calibration
+        // curve, a function of T2 alone, only for T2.)
         let mut reading = match ch {
             Channel::T1 if drive_on => c.t1 + art.t1_offset_n,
-            Channel::T2 if drive_on => art.t2_gain * t2 + art.t2_offset_n,
             Channel::T1 => c.t1,
-            Channel::T2 => t2,
+            Channel::T2 => {
+                let t2 = c.setup.unmodelled.t2_reading_n(c.t2);
+                if drive_on {
+                    art.t2_gain * t2 + art.t2_offset_n
+                } else {
+                    t2
+                }
+            }
         };
         if let (true, Some(d)) = (drive_on, c.disturb.as_ref()) {
             reading += d.zero_error_n[k];

@@ -9,30 +9,90 @@ use capstan_friction::{math, FrictionLaw};
 impl Plant {
     pub(super) fn step(&mut self, dt_us: u32) {
         let t_end = self.t_us + dt_us as u64;
-        let frame = self.cfg.servo.frame_us as u64;
-        // The servo takes the pulse width present at each frame (none: it stops where it is).
-        if t_end >= self.next_frame_us {
-            let characteristic = self.cfg.servo.characteristic;
-            for c in self.cords.iter_mut() {
-                let target = if c.pending_pulse_us > 0.0 {
-                    characteristic.angle_deg(c.pending_pulse_us)
-                } else {
-                    c.angle_deg
-                };
-                // Releasing (angle rising) lets the tension fall; pulling raises it.
-                if target != c.target_deg {
-                    c.falling = target > c.target_deg;
-                }
-                c.target_deg = target;
-            }
-            while self.next_frame_us <= t_end {
-                self.next_frame_us += frame;
+        // Settled (servos at their targets, filters at their inputs, no injection to come, no
+        // heating) and no frame, wander or refresh due: only the drive may still move, and the
+        // rest of a step would change nothing. Most of a run's 1 ms steps are so.
+        let settled = t_end < self.settled_until_us;
+        if !settled {
+            self.move_inputs(t_end, dt_us);
+        }
+        // A drive step that changed nothing changes nothing the next time either, while the
+        // load, the drive voltage and the step length stay (the drive settles to within an ulp
+        // of its steady state, and stays there, a few ms after every change).
+        if self.drive_still_dt_us != dt_us {
+            self.move_drive(dt_us);
+        }
+        if !settled {
+            self.heat_and_wander(t_end, dt_us);
+        }
+        self.t_us = t_end;
+        let mut solved = false;
+        for i in 0..self.cords.len() {
+            if self.cords[i].dirty {
+                self.solve(i);
+                solved = true;
             }
         }
+        if solved {
+            self.demand_m = self.kinetic_demand_nm() / self.cfg.motor.gear_ratio;
+            self.drive_still_dt_us = 0;
+        }
+        if !settled {
+            let still = self.injections.iter().all(|r| r.at_us.is_some())
+                && self.cords.iter().all(|c| {
+                    !c.heats && c.target_deg == c.angle_deg && c.amp_filtered_v == c.amp_control_v
+                });
+            self.settled_until_us = if still { self.next_event_us() } else { 0 };
+        }
+    }
+
+    /// Frames, injections, the amplifier's filter and the servos. (Out of line: the settled
+    /// steps, most of them, then carry none of its registers and constants.)
+    #[inline(never)]
+    fn move_inputs(&mut self, t_end: u64, dt_us: u32) {
+        self.take_frames(t_end);
         self.activate_injections(t_end);
         self.filter_amp(dt_us);
         self.move_servos(dt_us);
-        self.move_drive(dt_us);
+    }
+
+    /// The next frame, wander or refresh, µs.
+    fn next_event_us(&self) -> u64 {
+        let next = self.next_frame_us.min(self.next_wander_us);
+        if self.any_time_dependent {
+            next.min(self.next_refresh_us)
+        } else {
+            next
+        }
+    }
+
+    /// The servo takes the pulse width present at each frame (none: it stops where it is).
+    fn take_frames(&mut self, t_end: u64) {
+        if t_end < self.next_frame_us {
+            return;
+        }
+        let characteristic = self.cfg.servo.characteristic;
+        for c in self.cords.iter_mut() {
+            let target = if c.pending_pulse_us > 0.0 {
+                characteristic.angle_deg(c.pending_pulse_us)
+            } else {
+                c.angle_deg
+            };
+            // Releasing (angle rising) lets the tension fall; pulling raises it.
+            if target != c.target_deg {
+                c.falling = target > c.target_deg;
+            }
+            c.target_deg = target;
+        }
+        let frame = self.cfg.servo.frame_us as u64;
+        while self.next_frame_us <= t_end {
+            self.next_frame_us += frame;
+        }
+    }
+
+    /// The contact's load memory, the wander of mu, and the refresh of time-dependent laws.
+    #[inline(never)]
+    fn heat_and_wander(&mut self, t_end: u64, dt_us: u32) {
         let dt_s = dt_us as f64 * 1e-6;
         for c in self.cords.iter_mut() {
             if c.heats {
@@ -57,17 +117,6 @@ impl Plant {
                 c.dirty |= c.time_dependent;
             }
             self.next_refresh_us = t_end + self.cfg.refresh_us as u64;
-        }
-        self.t_us = t_end;
-        let mut solved = false;
-        for i in 0..self.cords.len() {
-            if self.cords[i].dirty {
-                self.solve(i);
-                solved = true;
-            }
-        }
-        if solved {
-            self.demand_m = self.kinetic_demand_nm() / self.cfg.motor.gear_ratio;
         }
     }
 
@@ -172,6 +221,7 @@ impl Plant {
     }
 
     fn move_drive(&mut self, dt_us: u32) {
+        let before = self.drive_bits();
         let m = self.cfg.motor;
         let (demand_m, stall_m) = (self.demand_m, self.stall_m);
         if self.omega > 0.0 || stall_m > demand_m {
@@ -210,6 +260,16 @@ impl Plant {
         } else {
             stall_m.max(0.0) * m.gear_ratio
         };
+        self.drive_still_dt_us = if self.drive_bits() == before {
+            dt_us
+        } else {
+            0
+        };
+    }
+
+    /// What a drive step may change, bit for bit.
+    fn drive_bits(&self) -> [u64; 3] {
+        [self.omega, self.transmission, self.load_nm].map(f64::to_bits)
     }
 
     /// Re-solve cord `i`'s tensions for the present lever angle, drive regime and law.
