@@ -103,6 +103,17 @@ impl SessionOutput {
     pub fn records<T>(&self, pick: impl Fn(&Record) -> Option<T>) -> Vec<T> {
         self.events.iter().filter_map(|e| pick(&e.record)).collect()
     }
+
+    /// The settings report of boot `boot` (1 = the first), if it made one.
+    pub fn settings_at_boot(&self, boot: u32) -> Option<firmware::record::SettingsReport> {
+        self.events
+            .iter()
+            .filter(|e| e.boot == boot)
+            .find_map(|e| match e.record {
+                Record::Settings(s) => Some(s),
+                _ => None,
+            })
+    }
 }
 
 /// The records, shared by the board's sink and the host.

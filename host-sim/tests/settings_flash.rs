@@ -121,16 +121,7 @@ fn after_an_unreadable_flash_the_first_store_starts_afresh() {
     flash.failing_reads = 1;
     let steps = [send("set dwell_ms 7000"), send("store"), Step::Reset];
     let out = run_session(&spec, flash, &steps).unwrap();
-    let at_boot = |boot: u32| {
-        out.events
-            .iter()
-            .filter(|e| e.boot == boot)
-            .find_map(|e| match e.record {
-                Record::Settings(s) => Some(s),
-                _ => None,
-            })
-            .unwrap()
-    };
+    let at_boot = |boot: u32| out.settings_at_boot(boot).unwrap();
     assert_eq!(at_boot(1).source, SettingsSource::DefaultsFlashError);
     let stored = at_boot(2);
     assert_eq!(stored.source, SettingsSource::Loaded);

@@ -37,13 +37,7 @@ fn replies(out: &SessionOutput) -> Vec<Reply> {
 }
 
 fn settings_at_boot(out: &SessionOutput, boot: u32) -> SettingsReport {
-    out.events
-        .iter()
-        .filter(|e| e.boot == boot)
-        .find_map(|e| match e.record {
-            Record::Settings(s) => Some(s),
-            _ => None,
-        })
+    out.settings_at_boot(boot)
         .expect("every boot reports its settings")
 }
 
