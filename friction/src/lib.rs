@@ -12,6 +12,7 @@
 
 mod effect;
 mod law;
+mod partials;
 mod sensor;
 
 /// The elementary functions, shared by the friction law and the plant's hot path: the
@@ -46,6 +47,7 @@ pub mod math {
 
 pub use effect::{Effect, EffectKind, ParseEffectError, HEAT_TAU_S};
 pub use law::{FrictionLaw, LoadMemory};
+pub use partials::{LawPartials, MuPartials};
 pub use sensor::{SensorArtefacts, SLACK_T1_N};
 
 /// Reference capstan diameter for [`FrictionLaw::mu_change_per_mm`] (0.5 in), mm.

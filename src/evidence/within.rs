@@ -12,7 +12,8 @@
 //! structure: each residual depends on θ and on its own run's mu only, so the normal equations
 //! reduce (Schur complement) to a k×k system for δθ plus R scalar ones. Predictions come from
 //! `fit::predict::predict_run` (the shared `capstan_friction::Model`, with the contact's load
-//! memory carried along each run); sensitivities are forward differences of it.
+//! memory carried along each run); sensitivities come from the law's closed-form partials
+//! through the chain rule (`within/sens.rs`), checked against forward differences.
 //!
 //! Uncertainty: the model-based covariance σ²S⁻¹ (S the Schur complement of the information)
 //! and the cluster-robust covariance with runs as clusters, built from each run's profile
@@ -25,6 +26,11 @@ use super::candidates::{run_model, ThetaMap};
 use super::design::Design;
 use crate::fit::predict::{predict_run, Hint, RunRows};
 use nalgebra::{DMatrix, DVector};
+
+mod sens;
+
+/// The lowest mu a run is given: a cord that transmits no friction (T2 = T1) fits here.
+const MU_FLOOR: f64 = 1e-4;
 
 /// Weights of the rows: 1/(σ_a² + σ_r²·f²), the variance of a T2 reading that carries an
 /// absolute part (zero errors, sensor noise) and one proportional to the tension (mu's
@@ -316,9 +322,24 @@ impl Sens {
     }
 }
 
+/// Sensitivities at (mu, θ) around the predictions `f0`: analytic ([`sens`]) for the effects
+/// it knows, else forward differences.
+fn jacobian(
+    d: &Design,
+    (maps, strata): (&[ThetaMap], &Strata),
+    (mu, theta): (&[f64], &[f64]),
+    (f0, slope0): (&[f64], &[f64]),
+    s: &mut Sens,
+) {
+    match sens::roles(maps) {
+        Some(roles) => sens::jacobian(d, (maps, strata), (mu, theta), f0, &roles, s),
+        None => jacobian_by_differences(d, (maps, strata), (mu, theta), (f0, slope0), s),
+    }
+}
+
 /// Forward differences at (mu, θ) around the predictions `f0` (with the step equation's
 /// slopes `slope0` there, for the heating's solve).
-fn jacobian(
+fn jacobian_by_differences(
     d: &Design,
     (maps, strata): (&[ThetaMap], &Strata),
     (mu, theta): (&[f64], &[f64]),
@@ -409,14 +430,15 @@ fn normal(d: &Design, k: usize, w: &Weights, resid: &[f64], a: &[f64], b: &[f64]
     nm
 }
 
-/// S = H − Σ c cᵀ/d with the run terms damped by (1 + λ) and H's diagonal by (1 + λ).
-fn schur(nm: &Normal, k: usize, lambda: f64) -> (DMatrix<f64>, DVector<f64>) {
+/// S = H − Σ c cᵀ/d with the run terms damped by (1 + λ) and H's diagonal by (1 + λ); the
+/// runs marked `held` keep their mu (no term: their rows inform θ alone).
+fn schur(nm: &Normal, k: usize, lambda: f64, held: &[bool]) -> (DMatrix<f64>, DVector<f64>) {
     let mut s = nm.h.clone();
     for j in 0..k {
         s[(j, j)] *= 1.0 + lambda;
     }
     let mut rhs = -nm.gb.clone();
-    for u in 0..nm.d.len() {
+    for (u, _) in held.iter().enumerate().filter(|(_, &h)| !h) {
         let du = nm.d[u] * (1.0 + lambda);
         let c = &nm.c[u * k..(u + 1) * k];
         for j in 0..k {
@@ -514,9 +536,15 @@ pub fn fit_strata(
         jacobian(d, (maps, strata), (&mu, &theta), (&f, &slopes), &mut sens);
         let resid: Vec<f64> = (0..n).map(|i| f[i] - d.t2[i]).collect();
         let nm = normal(d, k, w, &resid, &sens.a, &sens.b);
+        // A run whose mu sits on its floor and would go lower is held there (a projected
+        // step): left free, its clamped update would not be the step the system solved for,
+        // and the fit would crawl (a cord worn to no friction, say).
+        let held: Vec<bool> = (0..nu)
+            .map(|u| mu[u] <= MU_FLOOR && nm.g[u] > 0.0)
+            .collect();
         let mut improved = false;
         for _ in 0..30 {
-            let (s, rhs) = schur(&nm, k, lambda);
+            let (s, rhs) = schur(&nm, k, lambda, &held);
             let dtheta = bounded_step(s, rhs, &theta, maps);
             let new_theta: Vec<f64> = (0..k)
                 .map(|j| (theta[j] + dtheta[j]).clamp(maps[j].lo, maps[j].hi))
@@ -524,9 +552,12 @@ pub fn fit_strata(
             let dt: Vec<f64> = (0..k).map(|j| new_theta[j] - theta[j]).collect();
             let new_mu: Vec<f64> = (0..nu)
                 .map(|u| {
+                    if held[u] {
+                        return mu[u];
+                    }
                     let c = &nm.c[u * k..(u + 1) * k];
                     let cd: f64 = c.iter().zip(&dt).map(|(c, t)| c * t).sum();
-                    (mu[u] + (-nm.g[u] - cd) / (nm.d[u] * (1.0 + lambda))).max(1e-4)
+                    (mu[u] + (-nm.g[u] - cd) / (nm.d[u] * (1.0 + lambda))).max(MU_FLOOR)
                 })
                 .collect();
             let (new_wrss, new_rss) = predict(
@@ -593,7 +624,7 @@ fn covariances(
     let (a, b) = (&sens.a, &sens.b);
     let resid: Vec<f64> = (0..n).map(|i| f[i] - d.t2[i]).collect();
     let nm = normal(d, k, w, &resid, a, b);
-    let (s, _) = schur(&nm, k, 0.0);
+    let (s, _) = schur(&nm, k, 0.0, &vec![false; d.units.len()]);
     let Some(s_inv) = s.clone().try_inverse() else {
         return (nan.clone(), nan);
     };
