@@ -9,6 +9,9 @@
 use crate::math::{exp, log, pow, sqrt};
 use crate::{FrictionLaw, Operating, REF_TENSION_N};
 
+// The n → 1 limit and its series below leave out ln(T_ref) terms: they hold for T_ref = 1 N.
+const _: () = assert!(REF_TENSION_N == 1.0);
+
 /// T2's first derivatives at fixed operating conditions (load memory included).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LawPartials {
@@ -52,7 +55,7 @@ impl FrictionLaw {
             return MuPartials::default();
         }
         let drift = 1.0 + self.mu_change_per_100s * op.time_s / 100.0;
-        // k without its drift factor, so a drift that cancels mu exactly still has a slope.
+        // k's other factors (the drift's is not zero: k > 0).
         let rest = k / (self.mu * drift);
         MuPartials {
             k,
@@ -79,7 +82,11 @@ impl FrictionLaw {
         let sqrt_b = sqrt(self.bending_b_nm2.max(0.0));
         // Lift-off per √B at each end, rad/√(N m²).
         let (u1, u2) = (1.0 / (radius_m * sqrt(t1_n)), 1.0 / (radius_m * sqrt(t2_n)));
-        let wrap = op.wrap_rad - sqrt_b * (u1 + u2);
+        let wrap = if sqrt_b > 0.0 {
+            op.wrap_rad - sqrt_b * (u1 + u2)
+        } else {
+            op.wrap_rad
+        };
         let i = self.integrate_partials(t1_n, t2_n, k, wrap);
         // T2 = I(T1, k, β − √B·(u1 + u2)); u2 falls with T2 (∂(√B·u2)/∂T2 = −√B·u2/(2 T2)).
         let denom = 1.0 - i.d_w * sqrt_b * u2 / (2.0 * t2_n);

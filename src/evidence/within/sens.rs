@@ -129,9 +129,10 @@ fn run(
         }
         let t1m = d.t1[i];
         let x = sensors.true_t1_n(t1m);
-        // A reading taken for a slack cord does not move with the offset.
+        // A reading taken for a slack cord does not move with the offset. At an offset of
+        // exactly 0 (a start value) the right-hand slope, as the forward difference takes it.
         let slack =
-            sensors.t1_offset_n > 0.0 && t1m > 0.0 && t1m - sensors.t1_offset_n < SLACK_T1_N;
+            sensors.t1_offset_n >= 0.0 && t1m > 0.0 && t1m - sensors.t1_offset_n < SLACK_T1_N;
         let dx_do = if slack { 0.0 } else { -1.0 };
         let y = (f0[i] - sensors.t2_offset_n) / sensors.t2_gain;
         let load = y - x;
