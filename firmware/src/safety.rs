@@ -75,6 +75,12 @@ pub struct Supervisor {
     rail: [u16; 2],
     cord: u16,
     last_t_us: Option<i64>,
+    /// The last sample went through every check without a fault and left every counter clear
+    /// (so every check needs at least one bad sample): a sample on which no check's condition
+    /// holds then leaves everything as it is and raises nothing (the common case, which
+    /// [`Supervisor::check`] decides without the counters on the host).
+    #[cfg(not(target_os = "none"))]
+    quiet: bool,
 }
 
 impl Supervisor {
@@ -86,11 +92,67 @@ impl Supervisor {
             rail: [0; 2],
             cord: 0,
             last_t_us: None,
+            #[cfg(not(target_os = "none"))]
+            quiet: false,
         }
     }
 
     /// Check one sample; a fault is returned the sample its condition is confirmed.
+    // The host simulator runs this for every simulated sample: there the common case is decided
+    // first, inlined into the sample path, and the counters are out of line. On the board it
+    // stays the one function of every check it always was: the common case would cost it ~250
+    // bytes of flash (soft-float comparisons), and save it no time (the same comparisons).
+    #[cfg_attr(not(target_os = "none"), inline)]
     pub fn check(&mut self, input: &SafetyInput) -> Option<Fault> {
+        if let Some(last) = self.last_t_us.replace(input.t_us) {
+            let gap_us = input.t_us - last;
+            if gap_us > self.limits.max_sample_gap_us as i64 {
+                return Some(Fault {
+                    kind: FaultKind::Watchdog,
+                    channel: None,
+                    value: gap_us as f32 / 1000.0,
+                    t_us: input.t_us,
+                });
+            }
+        }
+        #[cfg(not(target_os = "none"))]
+        if self.quiet && self.healthy(input) {
+            return None;
+        }
+        self.count(input)
+    }
+
+    /// No check's condition holds on this sample: both conversions done and off the rails, no
+    /// force over the limit, the cord not collapsed (the conditions of [`Supervisor::count`]).
+    /// With every counter clear, `count` would then keep them clear and raise nothing.
+    #[cfg(not(target_os = "none"))]
+    #[inline(always)]
+    fn healthy(&self, input: &SafetyInput) -> bool {
+        let [Ok(c1), Ok(c2)] = input.counts else {
+            return false;
+        };
+        let l = &self.limits;
+        let [t1, t2] = input.force_n;
+        let off_rail = |c: u16| c > l.rail_low_counts && c < l.rail_high_counts;
+        let over = |f: f32| f > l.over_force_n;
+        off_rail(c1)
+            && off_rail(c2)
+            && !over(t1)
+            && !over(t2)
+            && !(input.cord_check_armed
+                && ((t1 >= l.cord_break_min_t1_n && t2 < l.cord_break_ratio * t1)
+                    || (t1 < l.cord_slack_n && t2 < l.cord_slack_n)))
+    }
+
+    /// Every check with its counter, after the watchdog check.
+    #[cfg_attr(not(target_os = "none"), inline(never))]
+    #[cfg_attr(target_os = "none", inline)]
+    fn count(&mut self, input: &SafetyInput) -> Option<Fault> {
+        // Not until this sample has gone through without a fault and left every counter clear.
+        #[cfg(not(target_os = "none"))]
+        {
+            self.quiet = false;
+        }
         let l = &self.limits;
         let fault = |kind, channel, value| {
             Some(Fault {
@@ -100,12 +162,6 @@ impl Supervisor {
                 t_us: input.t_us,
             })
         };
-        if let Some(last) = self.last_t_us.replace(input.t_us) {
-            let gap_us = input.t_us - last;
-            if gap_us > l.max_sample_gap_us as i64 {
-                return fault(FaultKind::Watchdog, None, gap_us as f32 / 1000.0);
-            }
-        }
         for ch in Channel::BOTH {
             let i = ch as usize;
             let at_rail = match input.counts[i] {
@@ -132,6 +188,11 @@ impl Supervisor {
         self.cord = if collapsed { self.cord + 1 } else { 0 };
         if self.cord >= l.cord_break_samples {
             return fault(FaultKind::CordBreak, Some(Channel::T2), t2);
+        }
+        // No fault: every sample limit is above its counter, so at least one.
+        #[cfg(not(target_os = "none"))]
+        {
+            self.quiet = self.rail == [0; 2] && self.over == [0; 2] && self.cord == 0;
         }
         None
     }
@@ -229,6 +290,193 @@ mod tests {
         // The lowest level at the smallest wrap is well clear of it.
         let mut s = Supervisor::new(SafetyLimits::default());
         assert_eq!(feed(&mut s, 100, [Ok(420), Ok(435)], [0.3, 0.52]), None);
+    }
+
+    /// The supervisor as it was written before its fast path: one pass over every check and
+    /// counter on every sample. `Supervisor::check` must decide exactly as this does.
+    struct Reference {
+        limits: SafetyLimits,
+        over: [u16; 2],
+        rail: [u16; 2],
+        cord: u16,
+        last_t_us: Option<i64>,
+    }
+
+    impl Reference {
+        fn check(&mut self, input: &SafetyInput) -> Option<Fault> {
+            let l = &self.limits;
+            let fault = |kind, channel, value| {
+                Some(Fault {
+                    kind,
+                    channel,
+                    value,
+                    t_us: input.t_us,
+                })
+            };
+            if let Some(last) = self.last_t_us.replace(input.t_us) {
+                let gap_us = input.t_us - last;
+                if gap_us > l.max_sample_gap_us as i64 {
+                    return fault(FaultKind::Watchdog, None, gap_us as f32 / 1000.0);
+                }
+            }
+            for ch in Channel::BOTH {
+                let i = ch as usize;
+                let at_rail = match input.counts[i] {
+                    Ok(c) => c <= l.rail_low_counts || c >= l.rail_high_counts,
+                    Err(AdcError) => true,
+                };
+                self.rail[i] = if at_rail { self.rail[i] + 1 } else { 0 };
+                if self.rail[i] >= l.rail_samples {
+                    let value = input.counts[i].map(f32::from).unwrap_or(f32::NAN);
+                    return fault(FaultKind::SensorRail, Some(ch), value);
+                }
+                let f = input.force_n[i];
+                let over = !at_rail && f > l.over_force_n;
+                self.over[i] = if over { self.over[i] + 1 } else { 0 };
+                if self.over[i] >= l.over_force_samples {
+                    return fault(FaultKind::OverForce, Some(ch), f);
+                }
+            }
+            let [t1, t2] = input.force_n;
+            let collapsed = input.cord_check_armed
+                && input.counts.iter().all(|c| c.is_ok())
+                && ((t1 >= l.cord_break_min_t1_n && t2 < l.cord_break_ratio * t1)
+                    || (t1 < l.cord_slack_n && t2 < l.cord_slack_n));
+            self.cord = if collapsed { self.cord + 1 } else { 0 };
+            if self.cord >= l.cord_break_samples {
+                return fault(FaultKind::CordBreak, Some(Channel::T2), t2);
+            }
+            None
+        }
+    }
+
+    /// Random streams of samples — healthy ones, and runs of rail, failed, over-force,
+    /// collapsed, slack, NaN and late samples — under the default limits and under odd ones
+    /// (zero sample counts, empty rail windows): the same fault on the same sample, with the
+    /// same counters, as the reference.
+    #[test]
+    fn decides_exactly_as_the_one_pass_reference() {
+        let mut x: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let default = SafetyLimits::default();
+        let limit_sets = [
+            default,
+            SafetyLimits {
+                rail_samples: 0,
+                ..default
+            },
+            SafetyLimits {
+                over_force_samples: 0,
+                ..default
+            },
+            SafetyLimits {
+                cord_break_samples: 0,
+                ..default
+            },
+            SafetyLimits {
+                rail_samples: 1,
+                over_force_samples: 1,
+                cord_break_samples: 1,
+                ..default
+            },
+            SafetyLimits {
+                rail_low_counts: 3000,
+                rail_high_counts: 2000,
+                ..default
+            },
+            SafetyLimits {
+                rail_low_counts: 1999,
+                rail_high_counts: 2000,
+                ..default
+            },
+            SafetyLimits {
+                rail_low_counts: u16::MAX,
+                rail_high_counts: 0,
+                ..default
+            },
+            SafetyLimits {
+                rail_samples: 40,
+                over_force_samples: 40,
+                cord_break_samples: 40,
+                ..default
+            },
+        ];
+        let mut faults = 0;
+        for limits in limit_sets {
+            for _stream in 0..300 {
+                let mut sup = Supervisor::new(limits);
+                let mut reference = Reference {
+                    limits,
+                    over: [0; 2],
+                    rail: [0; 2],
+                    cord: 0,
+                    last_t_us: None,
+                };
+                let mut t_us = 0i64;
+                // Each stream holds one kind of sample for a while, then switches.
+                let mut kind = 0;
+                for _ in 0..400 {
+                    let r = next();
+                    if r % 16 == 0 {
+                        kind = (r >> 8) % 10;
+                    }
+                    t_us += if (r >> 20) % 997 == 0 { 12_000 } else { 1_000 };
+                    let count = |r: u64| -> Result<u16, AdcError> {
+                        match (kind, r % 8) {
+                            (1, 0..=5) => Ok((r >> 3) as u16 % 6),
+                            (2, 0..=5) => Ok(4095 - (r >> 3) as u16 % 6),
+                            (3, 0..=2) => Err(AdcError),
+                            _ => Ok(400 + (r >> 3) as u16 % 3000),
+                        }
+                    };
+                    let counts = [count(next()), count(next())];
+                    let f = |r: u64| (r % 5000) as f32 / 100.0 - 1.0;
+                    let mut force_n = [f(next()), f(next())];
+                    match kind {
+                        4 => force_n[(r >> 30) as usize % 2] = 45.0 + (r >> 40) as f32 % 3.0,
+                        5 => force_n = [9.0, 0.15 + (r >> 40) as f32 % 4.0],
+                        6 => force_n = [0.01, -0.02 + ((r >> 40) % 2) as f32 * 0.07],
+                        7 => force_n[(r >> 30) as usize % 2] = f32::NAN,
+                        8 => force_n = [0.5, 0.15],
+                        _ => {}
+                    }
+                    let input = SafetyInput {
+                        t_us,
+                        counts,
+                        force_n,
+                        cord_check_armed: (r >> 50) % 4 != 0,
+                    };
+                    let got = sup.check(&input);
+                    let want = reference.check(&input);
+                    // NaN values compare by their bits.
+                    let bits = |f: Option<Fault>| {
+                        f.map(|f| (f.kind, f.channel, f.value.to_bits(), f.t_us))
+                    };
+                    assert_eq!(bits(got), bits(want), "{limits:?} {input:?}");
+                    assert_eq!(
+                        (sup.rail, sup.over, sup.cord, sup.last_t_us),
+                        (
+                            reference.rail,
+                            reference.over,
+                            reference.cord,
+                            reference.last_t_us
+                        ),
+                        "{limits:?} {input:?}"
+                    );
+                    if got.is_some() {
+                        faults += 1;
+                        break;
+                    }
+                }
+            }
+        }
+        // The streams reach the faults, not only the healthy path.
+        assert!(faults > 1000, "{faults}");
     }
 
     #[test]
