@@ -95,7 +95,9 @@ enum Phase {
     Run {
         step: u32,
         window: Window,
-        pair_done: bool,
+        /// The step's pair is emitted on the last sample before this, µs from the press (the
+        /// end of its window; `u64::MAX`: no pair to come in this step).
+        pair_due_us: u64,
         /// When the next step starts, ms from the press (`u32::MAX`: the run is over). The
         /// step is worked out anew only then, not with a division every sample.
         next_ms: u32,
@@ -291,8 +293,11 @@ impl Rig {
         abort: bool,
         sink: &mut impl LogSink,
     ) -> Outputs {
-        match self.phase {
+        // One call of `step_running` (the sample path of a run), for the run's samples and the
+        // press that starts one alike: inlined here, and only once on the board.
+        let abort = match self.phase {
             Phase::Idle { latched } => {
+                let mut started = false;
                 if self.is_homing() {
                     let rest = self.protocol.rest_deg;
                     let step = HOMING_DEG_PER_S / self.protocol.sample_hz as f32;
@@ -316,21 +321,26 @@ impl Rig {
                         );
                     } else {
                         self.start(inp.now_us);
-                        return self.step_running(inp, false, sink);
+                        started = true;
                     }
                 }
-                let blink_ms = if self.latched_fault().is_some() {
-                    100
-                } else {
-                    500
-                };
-                let mut out = self.idle_outputs();
-                out.led = (inp.now_us / 1000 / blink_ms).is_multiple_of(2);
-                out
+                if !started {
+                    let blink_ms = if self.latched_fault().is_some() {
+                        100
+                    } else {
+                        500
+                    };
+                    let mut out = self.idle_outputs();
+                    out.led = (inp.now_us / 1000 / blink_ms).is_multiple_of(2);
+                    return out;
+                }
+                // The press that started the run does not abort it.
+                false
             }
-            Phase::Setup { .. } => self.step_setup(inp, pressed, sink),
-            _ => self.step_running(inp, abort, sink),
-        }
+            Phase::Setup { .. } => return self.step_setup(inp, pressed, sink),
+            _ => abort,
+        };
+        self.step_running(inp, abort, sink)
     }
 
     fn start(&mut self, now_us: u64) {
@@ -378,7 +388,7 @@ impl Rig {
         Phase::Run {
             step: 0,
             window: Window::new(0, 0),
-            pair_done: true,
+            pair_due_us: u64::MAX,
             next_ms: self.protocol.step_start_ms(0),
             armed_ms: u32::MAX,
             servo_deg: self.protocol.rest_deg,
@@ -401,10 +411,14 @@ impl Rig {
         self.elapsed_us = elapsed_us;
         let elapsed_ms = (elapsed_us / 1000) as u32;
         let t_us = self.since_trigger_us(elapsed_us);
-        let force_n = self.forces(inp);
         let counts_ok = match inp.counts {
             [Ok(a), Ok(b)] => Some([a, b]),
             _ => None,
+        };
+        // (`forces`, without its NaN cases on the usual sample with both conversions done.)
+        let force_n = match counts_ok {
+            Some([a, b]) => [self.cal.t1.newtons(a as f32), self.cal.t2.newtons(b as f32)],
+            None => self.forces(inp),
         };
 
         // Tare, then announce the run with the calibration it will use.
@@ -468,7 +482,7 @@ impl Rig {
         if let Phase::Run {
             step,
             window,
-            pair_done,
+            pair_due_us,
             next_ms,
             armed_ms,
             servo_deg,
@@ -482,7 +496,11 @@ impl Rig {
                     *step = k;
                     let (a, b) = p.window_ms(k);
                     *window = Window::new(a as u64 * 1000, b as u64 * 1000);
-                    *pair_done = k == 0 || k > n;
+                    *pair_due_us = if k == 0 || k > n {
+                        u64::MAX
+                    } else {
+                        b as u64 * 1000
+                    };
                     *servo_deg = p.angle_deg(k);
                     *armed_ms = if k >= 1 && p.level(k) >= 1 {
                         p.step_start_ms(k) + CORD_CHECK_SETTLE_MS
@@ -500,9 +518,9 @@ impl Rig {
                 window.push(elapsed_us, c);
             }
             let mut pair = None;
-            let (a, b) = p.window_ms(*step);
-            if !*pair_done && elapsed_us + period_us >= b as u64 * 1000 {
-                *pair_done = true;
+            if elapsed_us + period_us >= *pair_due_us {
+                *pair_due_us = u64::MAX;
+                let (a, b) = p.window_ms(*step);
                 let [t1, t2] = window.stats(&self.cal);
                 pair = Some(StepPair {
                     step: *step,

@@ -66,6 +66,18 @@ struct Written {
     led: Option<bool>,
 }
 
+impl Written {
+    /// Every output of `out` is what was last written: [`RigIo::apply`] would do nothing.
+    /// (Most samples: the outputs change at the steps only.)
+    #[inline]
+    fn holds(&self, out: &Outputs) -> bool {
+        self.servo_deg == Some(out.servo_deg)
+            && self.amp_control_v == Some(out.amp_control_v)
+            && self.trigger == Some(out.trigger)
+            && self.led == Some(out.led)
+    }
+}
+
 impl<S, A, T, L, B, D, W> RigIo<S, A, T, L, B, D, W>
 where
     S: SetDutyCycle,
@@ -206,7 +218,11 @@ where
             // New servo or amplifier maps: the same angle may be another duty now.
             written = Written::default();
         }
-        let applied = io.apply(rig, &out, &mut written);
+        let applied = if written.holds(&out) {
+            Ok(())
+        } else {
+            io.apply(rig, &out, &mut written)
+        };
         sink.flush();
         if let Err(e) = applied {
             break Err(e);
