@@ -7,11 +7,27 @@ use crate::injection::InjectionKind;
 use capstan_friction::{math, FrictionLaw};
 
 impl Plant {
+    /// A step of `dt_us` to `t_end` would only move time on: settled (see
+    /// `settled_until_us`), no frame, wander or refresh due, and the drive still (see
+    /// `drive_still_dt_us`). No cord is then due a re-solve either: every step ends with none,
+    /// and between steps only a new amplifier duty can ask for one, and it ends the settled
+    /// spell.
+    #[inline]
+    pub(super) fn only_time_passes(&self, t_end: u64, dt_us: u32) -> bool {
+        t_end < self.settled_until_us && self.drive_still_dt_us == dt_us
+    }
+
     pub(super) fn step(&mut self, dt_us: u32) {
         let t_end = self.t_us + dt_us as u64;
+        // Most of a run's 1 ms steps.
+        if self.only_time_passes(t_end, dt_us) {
+            debug_assert!(self.cords.iter().all(|c| !c.dirty));
+            self.t_us = t_end;
+            return;
+        }
         // Settled (servos at their targets, filters at their inputs, no injection to come, no
         // heating) and no frame, wander or refresh due: only the drive may still move, and the
-        // rest of a step would change nothing. Most of a run's 1 ms steps are so.
+        // rest of a step would change nothing.
         let settled = t_end < self.settled_until_us;
         if !settled {
             self.move_inputs(t_end, dt_us);
