@@ -276,17 +276,16 @@ fn run_rows(d: &Design, u: usize) -> RunRows<'_> {
     }
 }
 
-/// Predict every row for run mu `mu` and shared `theta` (from predictions `near` for nearby
+/// Predict every row for run mu `mu` and shared `theta` (from predictions `hint` for nearby
 /// values, if given); returns (WRSS, RSS).
 fn predict(
     d: &Design,
     (maps, strata): (&[ThetaMap], &Strata),
     (mu, theta): (&[f64], &[f64]),
     w: &Weights,
-    near: Option<&[f64]>,
+    hint: Option<Hint<'_>>,
     (out, slopes): (&mut [f64], &mut [f64]),
 ) -> (f64, f64) {
-    let hint = near.map(|t2| Hint { t2, slope: None });
     for (u, &mu_u) in mu.iter().enumerate().take(d.units.len()) {
         let b = strata.block(u);
         let m = run_model(&maps[b.clone()], mu_u, &theta[b]);
@@ -520,6 +519,7 @@ pub fn fit_strata(
     let mut mu = mu0.to_vec();
     let mut f = vec![0.0; n];
     let mut trial = vec![0.0; n];
+    let mut lin = vec![0.0; n];
     let mut slopes = vec![f64::NAN; n];
     let mut trial_slopes = vec![f64::NAN; n];
     let mut sens = Sens::new(n, k);
@@ -560,12 +560,19 @@ pub fn fit_strata(
                     (mu[u] + (-nm.g[u] - cd) / (nm.d[u] * (1.0 + lambda))).max(MU_FLOOR)
                 })
                 .collect();
+            // The trial's step equations start from the linearised predictions, with the
+            // slopes of the current point: close enough that one evaluation often settles them.
+            linearised(d, &sens, (&f, &mu, &new_mu, &dt), &mut lin);
+            let hint = Hint {
+                t2: &lin,
+                slope: Some(&slopes),
+            };
             let (new_wrss, new_rss) = predict(
                 d,
                 (maps, strata),
                 (&new_mu, &new_theta),
                 w,
-                Some(&f),
+                Some(hint),
                 (&mut trial, &mut trial_slopes),
             );
             if new_wrss < wrss {
@@ -601,6 +608,23 @@ pub fn fit_strata(
         rss,
         cov_model,
         cov_robust,
+    }
+}
+
+/// f + a·δmu + b·δθ: the predictions to first order after a step.
+fn linearised(
+    d: &Design,
+    s: &Sens,
+    (f, mu, new_mu, dt): (&[f64], &[f64], &[f64], &[f64]),
+    out: &mut [f64],
+) {
+    let k = dt.len();
+    for (u, rows) in d.units.iter().enumerate() {
+        let dmu = new_mu[u] - mu[u];
+        for &i in rows {
+            let b = &s.b[i * k..(i + 1) * k];
+            out[i] = f[i] + s.a[i] * dmu + b.iter().zip(dt).map(|(b, t)| b * t).sum::<f64>();
+        }
     }
 }
 

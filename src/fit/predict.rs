@@ -287,7 +287,8 @@ fn solve_step_from(
             if fy.abs() <= 1e-12 * y {
                 return (y, known);
             }
-            let slope = if known.is_finite() && known < 0.0 {
+            let given = known.is_finite() && known < 0.0;
+            let slope = if given {
                 known
             } else {
                 let d = 1e-7 * y;
@@ -297,10 +298,11 @@ fn solve_step_from(
             if !(slope < 0.0 && next.is_finite() && next > x) {
                 break;
             }
-            // From within 1e-5 of the root one Newton step lands within ~1e-10 (the step
-            // equation is smooth, its slope changes by less than that fraction): no need to
-            // evaluate it again.
-            if fy.abs() <= 1e-5 * y {
+            // From within 1e-5 of the root one Newton step on this point's slope lands within
+            // ~1e-10 (the step equation is smooth, its slope changes by less than that
+            // fraction): no need to evaluate it again. A slope given from nearby parameters
+            // (off by up to a few per cent) only from within 1e-9.
+            if fy.abs() <= if given { 1e-9 } else { 1e-5 } * y {
                 return (next, slope);
             }
             y = next;
