@@ -27,6 +27,14 @@ pub struct AdcError;
 pub trait ForceAdc {
     /// Convert one channel now.
     fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError>;
+
+    /// Convert both channels now, T1 then T2 (what the runner reads every sample). The same
+    /// two conversions as two [`ForceAdc::read_counts`] calls, in that order; an ADC that can
+    /// do both in one go (the host simulator's, one access to its plant) says so here.
+    #[inline]
+    fn read_both(&mut self) -> [Result<u16, AdcError>; 2] {
+        [self.read_counts(Channel::T1), self.read_counts(Channel::T2)]
+    }
 }
 
 /// Something that resets the chip unless fed in time (a no-op where there is none).
@@ -88,6 +96,9 @@ impl<F: embedded_storage_async::nor_flash::NorFlash> SettingsFlash
 impl<T: ForceAdc + ?Sized> ForceAdc for &mut T {
     fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError> {
         (**self).read_counts(channel)
+    }
+    fn read_both(&mut self) -> [Result<u16, AdcError>; 2] {
+        (**self).read_both()
     }
 }
 

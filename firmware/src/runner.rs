@@ -3,7 +3,7 @@
 //! simulator all run this very function; only the `RigIo` they hand it differs.
 
 use crate::command::LineBuffer;
-use crate::hal::{Channel, Console, ForceAdc, SettingsFlash, Watchdog};
+use crate::hal::{Console, ForceAdc, SettingsFlash, Watchdog};
 use crate::record::{LogSink, RunEnd};
 use crate::rig::{Inputs, Outputs, Rig};
 use embassy_time::{Duration, Instant, Ticker};
@@ -95,9 +95,14 @@ where
         Ok(Inputs {
             command: None,
             now_us,
+            // (The board converts one channel after the other, as it always did: the same
+            // calls `read_both`'s default makes, and its image stays as it was.)
+            #[cfg(not(target_os = "none"))]
+            counts: self.adc.read_both(),
+            #[cfg(target_os = "none")]
             counts: [
-                self.adc.read_counts(Channel::T1),
-                self.adc.read_counts(Channel::T2),
+                self.adc.read_counts(crate::hal::Channel::T1),
+                self.adc.read_counts(crate::hal::Channel::T2),
             ],
             button_pressed: self.button.is_low().map_err(|_| RunError::Pin)?,
         })

@@ -177,6 +177,7 @@ impl<C: Clock> InputPin for ButtonPin<'_, C> {
         Ok(!self.0.with(|p, i| p.button_pressed(i)))
     }
 
+    #[inline]
     fn is_low(&mut self) -> Result<bool, Infallible> {
         Ok(self.0.with(|p, i| p.button_pressed(i)))
     }
@@ -186,9 +187,18 @@ impl<C: Clock> ForceAdc for SimAdc<'_, C> {
     fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError> {
         self.0.with(|p, i| p.read_counts(i, channel))
     }
+
+    /// Both conversions on one access to the plant (one borrow, one `advance_to`): the same
+    /// conversions in the same order as two `read_counts` calls, at the same instant.
+    #[inline]
+    fn read_both(&mut self) -> [Result<u16, AdcError>; 2] {
+        self.0
+            .with(|p, i| [p.read_counts(i, Channel::T1), p.read_counts(i, Channel::T2)])
+    }
 }
 
 impl<C: Clock> Watchdog for SimWatchdog<'_, C> {
+    #[inline]
     fn feed(&mut self) {
         self.0.with(|p, i| p.feed_watchdog(i));
     }

@@ -99,6 +99,9 @@ impl Plant {
     }
 
     /// Is cord `i`'s button held down now?
+    // (This and `feed_watchdog`, with their adapters, are inlined into host-sim's sample
+    // loop: each is read or called every simulated sample.)
+    #[inline]
     pub fn button_pressed(&self, i: usize) -> bool {
         let c = &self.cords[i];
         let t = self.t_us;
@@ -160,6 +163,7 @@ impl Plant {
     }
 
     /// Cord `i`'s watchdog is fed.
+    #[inline]
     pub fn feed_watchdog(&mut self, i: usize) {
         let now = self.t_us;
         let c = &mut self.cords[i];
