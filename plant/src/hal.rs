@@ -192,8 +192,7 @@ impl<C: Clock> ForceAdc for SimAdc<'_, C> {
     /// conversions in the same order as two `read_counts` calls, at the same instant.
     #[inline]
     fn read_both(&mut self) -> [Result<u16, AdcError>; 2] {
-        self.0
-            .with(|p, i| [p.read_counts(i, Channel::T1), p.read_counts(i, Channel::T2)])
+        self.0.with(|p, i| p.read_both(i))
     }
 }
 

@@ -111,7 +111,20 @@ impl Plant {
 
     /// Convert one force channel of cord `i` now.
     pub fn read_counts(&mut self, i: usize, ch: Channel) -> Result<u16, AdcError> {
-        let counts = self.read_analog(i, ch);
+        self.convert(i, ch)
+    }
+
+    /// Convert both force channels of cord `i` now, T1 then T2: the same two conversions as
+    /// two [`Plant::read_counts`] calls. (One call per simulated sample, each channel's path
+    /// worked out at compile time, the generator's state kept in registers between the two.)
+    pub fn read_both(&mut self, i: usize) -> [Result<u16, AdcError>; 2] {
+        [self.convert(i, Channel::T1), self.convert(i, Channel::T2)]
+    }
+
+    /// [`Plant::read_counts`].
+    #[inline(always)]
+    fn convert(&mut self, i: usize, ch: Channel) -> Result<u16, AdcError> {
+        let counts = self.analog(i, ch);
         // Round half up and clamp to the ADC's range (`as` truncates: floor, as x ≥ 1).
         let x = counts + 0.5;
         Ok(if x < 1.0 {
@@ -130,6 +143,12 @@ impl Plant {
     /// `volts at the pin = counts × V_ref / 4096`.
     #[inline]
     pub fn read_analog(&mut self, i: usize, ch: Channel) -> f64 {
+        self.analog(i, ch)
+    }
+
+    /// [`Plant::read_analog`].
+    #[inline(always)]
+    fn analog(&mut self, i: usize, ch: Channel) -> f64 {
         let k = ch as usize;
         let drive_on = self.drive_v > 0.0;
         let c = &self.cords[i];
