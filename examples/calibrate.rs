@@ -110,10 +110,16 @@ fn main() {
         }
         return;
     }
-    let opts = Options::default();
+    // `--rival-gap G`: report rivals up to G (the figures below for every gap up to it).
+    let rival_gap = arg(&args, "--rival-gap").unwrap_or(capstan::evidence::RIVAL_GAP);
+    let opts = Options {
+        rival_gap,
+        ..Options::default()
+    };
     let out = score::evaluate(&cs, &data, threads, |d| diagnose_with(d, &opts));
     let m = score::Metrics::of(&out);
     print!("{}", m.table());
+    print_rivals(&out, rival_gap);
     for class in [cases::Class::Single, cases::Class::SmallSingle] {
         let pe: Vec<String> = score::per_effect(&out, class)
             .iter()
@@ -129,13 +135,19 @@ fn main() {
                 .iter()
                 .map(|e| format!("{}={:.4}", e.kind, e.value))
                 .collect();
+            let rivals: Vec<String> = o
+                .rivals
+                .iter()
+                .map(|(f, r, b)| format!("{r} for {f} (+{b:.1})"))
+                .collect();
             println!(
-                "{} {} -> {:?} unexplained={} {:?} | {}",
+                "{} {} -> {:?} unexplained={} {:?} rivals {:?} | {}",
                 if o.correct() { "ok  " } else { "MISS" },
                 o.describe,
                 found,
                 o.unexplained,
                 o.pattern,
+                rivals,
                 o.candidates
             );
         }
@@ -146,4 +158,26 @@ fn main() {
         "diagnose: {:.1} ms per 1000 rows on average",
         1e3 * secs / rows as f64 * 1000.0
     );
+}
+
+/// The rival figures of [`score::Metrics`] for each gap up to `max_gap` (the outcomes hold the
+/// rivals up to it): how many right single/pair calls carry a rival, and how many calls of one
+/// effect in place of another report the planted one as its rival.
+fn print_rivals(out: &[score::Outcome], max_gap: f64) {
+    println!("rival gap | right calls with a rival | one in place of another: truth a rival");
+    let mut gap = 2.0;
+    while gap <= max_gap + 1e-9 {
+        let within: Vec<score::Outcome> = out
+            .iter()
+            .cloned()
+            .map(|mut o| {
+                o.rivals.retain(|r| r.2 < gap);
+                o
+            })
+            .collect();
+        let m = score::Metrics::of(&within);
+        let (d, c) = (m.rival_doubts, m.rival_catches);
+        println!("{gap:>9.0} | {:>4}/{:<4} | {:>4}/{:<4}", d.0, d.1, c.0, c.1);
+        gap += 2.0;
+    }
 }

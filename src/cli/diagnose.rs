@@ -92,6 +92,13 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
             words::effect_phrase(f),
             f.level.words()
         );
+        for r in d.rivals.iter().filter(|r| r.instead_of == f.effect) {
+            let _ = writeln!(
+                s,
+                "    or {:<17} set with it in its place: ΔBIC {:+.1} (not ruled out)",
+                r.effect, r.delta_bic
+            );
+        }
     }
     let _ = writeln!(
         s,

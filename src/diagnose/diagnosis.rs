@@ -1,6 +1,6 @@
 //! What `capstan diagnose` answers (`Diagnosis`, serialised as its `--json` object).
 
-use crate::evidence::{Adequacy, Columns, Evidence, Level, NotTestable, RowsUsed, Scatter};
+use crate::evidence::{Adequacy, Columns, Evidence, Level, NotTestable, Rival, RowsUsed, Scatter};
 use capstan_friction::{Effect, EffectKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -96,6 +96,9 @@ pub struct Diagnosis {
     /// The pattern that remains, if any (`step_direction`, `t1_shape`, `time`, `wrap`,
     /// `diameter`, `cells`).
     pub residual_pattern: Option<&'static str>,
+    /// Candidates that, in place of a found effect, explain the data almost as well: the data
+    /// cannot rule them out (with why, where the design says so).
+    pub rivals: Vec<Rival>,
     /// The answer in plain words, generated from the decision.
     pub verdict: String,
     /// The tests of what is left.

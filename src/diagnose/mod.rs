@@ -62,7 +62,7 @@ pub fn from_assessment(a: &Assessment, opts: &Options, t0: Instant) -> Diagnosis
             (e.kind, e.value)
         });
     let (baseline, extended_rmse) = population(a, &found);
-    let verdict = words::verdict(&effects, &a.adequacy);
+    let verdict = words::verdict(&effects, &a.adequacy, &a.rivals);
     Diagnosis {
         effect: kind.name(),
         parameters: found
@@ -72,6 +72,7 @@ pub fn from_assessment(a: &Assessment, opts: &Options, t0: Instant) -> Diagnosis
         effects,
         unexplained: a.adequacy.unexplained,
         residual_pattern: a.adequacy.pattern,
+        rivals: a.rivals.clone(),
         verdict,
         adequacy: a.adequacy.clone(),
         candidates: a.evidence.clone(),

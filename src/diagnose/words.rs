@@ -2,7 +2,7 @@
 //! itself (the effects found and the adequacy decision), never typed in beside it.
 
 use super::Found;
-use crate::evidence::Adequacy;
+use crate::evidence::{Adequacy, Rival};
 
 /// A catalogue parameter with its SE, the value to the SE's precision (two significant
 /// digits of the SE): "n = 0.9017 ± 0.0086".
@@ -49,8 +49,47 @@ pub fn list(items: &[String]) -> String {
     }
 }
 
-/// The verdict: what the data hold, and whether anything is left unexplained.
-pub fn verdict(effects: &[Found], adequacy: &Adequacy) -> String {
+/// The verdict: what the data hold, whether anything is left unexplained, and which found
+/// effects the data cannot tell from a rival.
+pub fn verdict(effects: &[Found], adequacy: &Adequacy, rivals: &[Rival]) -> String {
+    let base = verdict_of_set(effects, adequacy);
+    if effects.is_empty() || rivals.is_empty() {
+        return base;
+    }
+    format!("{base} {}", rival_sentences(rivals))
+}
+
+/// "These data cannot rule out thermal_drift (drift_per_100s = -0.25) in place of
+/// contact_heating: the set with it fits nearly as well (ΔBIC +2.1); in runs whose …"
+pub fn rival_sentences(rivals: &[Rival]) -> String {
+    rivals
+        .iter()
+        .map(|r| {
+            let p = r
+                .parameters
+                .iter()
+                .next()
+                .map_or(String::new(), |(k, v)| format!(" ({k} = {})", sig(*v)));
+            let fit = if r.delta_bic >= 0.0 {
+                format!("fits nearly as well (ΔBIC +{:.1})", r.delta_bic)
+            } else {
+                format!(
+                    "fits better (ΔBIC {:.1}) but is not supported beside the others",
+                    r.delta_bic
+                )
+            };
+            let why = r.reason.map_or(String::new(), |w| format!("; {w}"));
+            format!(
+                "These data cannot rule out {}{p} in place of {}: the set with it {fit}{why}.",
+                r.effect, r.instead_of
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The verdict on the found set and the adequacy decision alone.
+fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
     let names: Vec<String> = effects.iter().map(effect_phrase).collect();
     match (effects.is_empty(), adequacy.unexplained) {
         (true, false) => format!(
@@ -79,5 +118,39 @@ fn capitalised(s: &str) -> String {
     match c.next() {
         Some(f) => f.to_uppercase().collect::<String>() + c.as_str(),
         None => String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use capstan_friction::EffectKind;
+
+    fn rival(delta_bic: f64, reason: Option<&'static str>) -> Rival {
+        Rival {
+            instead_of: "contact_heating",
+            effect: "thermal_drift",
+            parameters: [("mu_change_per_100s", -0.25)].into_iter().collect(),
+            delta_bic,
+            reason,
+            instead_of_kind: EffectKind::ContactHeating,
+            kind: EffectKind::ThermalDrift,
+        }
+    }
+
+    #[test]
+    fn rival_sentences_come_from_the_rival() {
+        let s = rival_sentences(&[rival(
+            2.06,
+            Some("runs that step up and back down separate them"),
+        )]);
+        assert_eq!(
+            s,
+            "These data cannot rule out thermal_drift (mu_change_per_100s = -0.2500) in place of \
+             contact_heating: the set with it fits nearly as well (ΔBIC +2.1); runs that step up \
+             and back down separate them."
+        );
+        let s = rival_sentences(&[rival(-1.5, None)]);
+        assert!(s.contains("fits better (ΔBIC -1.5) but is not supported beside the others."));
     }
 }

@@ -35,12 +35,14 @@ pub mod adequacy;
 pub mod between;
 pub mod candidates;
 pub mod design;
+pub mod rivals;
 pub mod select;
 pub mod within;
 
 pub use adequacy::{Adequacy, AdequacyRule};
 pub use candidates::Level;
 pub use design::{Columns, Cord, Design};
+pub use rivals::{Rival, RIVAL_GAP};
 
 use crate::data::Dataset;
 use crate::fit::stats;
@@ -67,6 +69,9 @@ pub struct Options {
     pub adequacy: AdequacyRule,
     /// Threads for the candidate fits of one selection step.
     pub threads: usize,
+    /// A found within-run effect's rival: a candidate whose set in its place is within this
+    /// many BIC units ([`rivals`]).
+    pub rival_gap: f64,
 }
 
 impl Default for Options {
@@ -77,6 +82,7 @@ impl Default for Options {
             between_threshold: BETWEEN_THRESHOLD,
             adequacy: AdequacyRule::default(),
             threads: std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
+            rival_gap: RIVAL_GAP,
         }
     }
 }
@@ -198,6 +204,8 @@ pub struct Assessment {
     pub path: Vec<(EffectKind, f64)>,
     /// Every testable candidate's evidence alone (no other effect in).
     pub alone: Vec<Evidence>,
+    /// Candidates that, in place of a found within-run effect, explain the data almost as well.
+    pub rivals: Vec<Rival>,
     /// What is left.
     pub adequacy: Adequacy,
     /// Scatter and noise.
@@ -259,6 +267,7 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
     );
     lap("selection");
     let fit = sel.fit;
+    let rivals = rivals::rivals(&d, &fit, &sel.swaps, &sel.alone, opts.rival_gap);
     let w = w0;
     lap("final fit");
     let bt = between::between_tests(&d, &fit.mu, &testable, opts.between_threshold);
@@ -297,6 +306,7 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
         not_testable,
         path: sel.path,
         alone,
+        rivals,
         adequacy,
         scatter,
         rows_used,

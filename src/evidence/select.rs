@@ -85,7 +85,7 @@ fn swaps(
     supported: &(dyn Fn(&Evidence) -> bool + Sync),
     alone: &[(EffectKind, f64)],
     threads: usize,
-) -> WithinFit {
+) -> (WithinFit, Vec<Swap>) {
     for _pass in 0..2 {
         // One effect alone is already the best-fitting single one: only sets can improve.
         let k = current.k();
@@ -125,10 +125,36 @@ fn swaps(
             .into_iter()
             .all(|s| s)
         });
-        let Some(b) = accepted else { break };
+        let Some(b) = accepted else {
+            // No swap is taken: these fits are the final set's alternatives.
+            let alternatives = options
+                .iter()
+                .zip(&fits)
+                .map(|(&(slot, kind), f)| Swap {
+                    slot,
+                    kind,
+                    wrss: f.wrss,
+                    value: f.value(slot),
+                })
+                .collect();
+            return (current, alternatives);
+        };
         current = fits.into_iter().nth(b).expect("index in range");
     }
-    current
+    (current, Vec::new())
+}
+
+/// The final set with one of its within-run effects replaced by another candidate.
+#[derive(Clone, Copy, Debug)]
+pub struct Swap {
+    /// The position (θ index) of the selected effect replaced.
+    pub slot: usize,
+    /// The candidate in its place.
+    pub kind: EffectKind,
+    /// WRSS of that set.
+    pub wrss: f64,
+    /// The candidate's fitted catalogue value there.
+    pub value: f64,
 }
 
 /// The effects of a fit, in θ order.
@@ -151,6 +177,9 @@ pub struct WithinSelection {
     pub path: Vec<(EffectKind, f64)>,
     /// Every candidate's evidence alone (added to every run's own mu, no other effect).
     pub alone: Vec<Evidence>,
+    /// The final set with each selected effect replaced by each other candidate, where known
+    /// (every such set when one effect is selected; the swap search's last pass otherwise).
+    pub swaps: Vec<Swap>,
 }
 
 /// Forward selection from `null` over `candidates`. A candidate is supported when it is
@@ -175,6 +204,7 @@ pub fn forward(
     // Each candidate's θ when fitted alone (from all its starts): later rounds start there.
     let mut alone: Vec<(EffectKind, f64)> = Vec::new();
     let mut alone_evidence: Vec<Evidence> = Vec::new();
+    let mut alone_fits: Vec<Swap> = Vec::new();
     let start_of =
         |alone: &[(EffectKind, f64)], k: EffectKind| alone.iter().find(|a| a.0 == k).map(|a| a.1);
     for _round in 0..=2 * candidates.len() {
@@ -192,6 +222,15 @@ pub fn forward(
         });
         if alone.is_empty() {
             alone = fits.iter().map(|f| (f.maps[0].kind, f.theta[0])).collect();
+            alone_fits = fits
+                .iter()
+                .map(|f| Swap {
+                    slot: 0,
+                    kind: f.maps[0].kind,
+                    wrss: f.wrss,
+                    value: f.value(0),
+                })
+                .collect();
         }
         let first_round = alone_evidence.is_empty();
         last = fits
@@ -233,7 +272,15 @@ pub fn forward(
             }
         }
     }
-    current = swaps(d, current, candidates, w, &supported, &alone, threads);
+    let (fit, mut alternatives) = swaps(d, current, candidates, w, &supported, &alone, threads);
+    current = fit;
+    if current.k() == 1 {
+        // One effect: its alternatives are the other candidates alone.
+        alternatives = alone_fits
+            .into_iter()
+            .filter(|a| a.kind != current.maps[0].kind)
+            .collect();
+    }
     // The selected effects, each given the others, and every other candidate added to the
     // final set (recomputed if the last round's were against another set: the selection
     // stopped at its cap, or an effect left): one batch of fits.
@@ -275,5 +322,6 @@ pub fn forward(
         evidence,
         path,
         alone: alone_evidence,
+        swaps: alternatives,
     }
 }

@@ -39,6 +39,32 @@ fn level(s: &str) -> Level {
     }
 }
 
+/// A mechanism's rival from `metrics.json` (null: none).
+fn rival(r: &Value) -> Option<capstan::evidence::Rival> {
+    if r.is_null() {
+        return None;
+    }
+    let kind = |k: &Value| EffectKind::from_name(k.as_str().unwrap()).unwrap();
+    let (instead_of, effect) = (kind(&r["instead_of"]), kind(&r["effect"]));
+    Some(capstan::evidence::Rival {
+        instead_of: instead_of.name(),
+        effect: effect.name(),
+        parameters: r["parameters"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|v| (effect.parameter().unwrap(), num(v)))
+            .collect(),
+        delta_bic: num(&r["delta_bic"]),
+        // The reasons are the engine's fixed sentences.
+        reason: r["reason"]
+            .as_str()
+            .map(|w| &*Box::leak(w.to_string().into_boxed_str())),
+        instead_of_kind: instead_of,
+        kind: effect,
+    })
+}
+
 fn num(v: &Value) -> f64 {
     v.as_f64().unwrap_or(f64::NAN)
 }
@@ -72,7 +98,11 @@ pub fn check(metrics: &Value, html: &str) {
         });
         let others: Vec<&str> = causes.iter().copied().filter(|c| *c != name).collect();
         let reason = m["not_testable_reason"].as_str().unwrap();
-        let made = words::sentence(kind, v, numbers.as_ref(), &others, reason);
+        let mut made = words::sentence(kind, v, numbers.as_ref(), &others, reason);
+        if let Some(r) = rival(&m["rival"]) {
+            made.push(' ');
+            made += &capstan::diagnose::words::rival_sentences(&[r]);
+        }
         let json = m["summary"].as_str().unwrap();
         // Numbers round-trip through JSON exactly, so the sentence does too.
         assert_eq!(

@@ -8,7 +8,7 @@
 pub mod verdict;
 pub mod words;
 
-use crate::evidence::Assessment;
+use crate::evidence::{Assessment, Rival};
 use capstan_friction::EffectKind;
 use serde::Serialize;
 use serde_json::{json, Value};
@@ -31,6 +31,8 @@ pub struct Mechanism {
     pub evidence: Option<Numbers>,
     /// Why it cannot be tested (empty otherwise).
     pub not_testable_reason: String,
+    /// A named cause it could replace with a fit nearly as good (the engine's rivals), if any.
+    pub rival: Option<Rival>,
     /// The effect.
     #[serde(skip)]
     pub kind: EffectKind,
@@ -92,14 +94,22 @@ pub fn run(a: &Assessment) -> Mechanisms {
                 .copied()
                 .filter(|n| *n != kind.name())
                 .collect();
+            // The strongest rival claim, if it could stand in place of a named cause.
+            let rival = a.rivals.iter().find(|r| r.kind == kind).cloned();
+            let mut summary = words::sentence(kind, v, numbers.as_ref(), &others, &reason);
+            if let Some(r) = &rival {
+                summary.push(' ');
+                summary += &crate::diagnose::words::rival_sentences(std::slice::from_ref(r));
+            }
             Mechanism {
                 name: kind.name(),
                 title: words::title(kind),
                 verdict: v,
                 rule: v.rule(),
-                summary: words::sentence(kind, v, numbers.as_ref(), &others, &reason),
+                summary,
                 evidence: numbers,
                 not_testable_reason: reason,
+                rival,
                 kind,
             }
         })
