@@ -10,6 +10,7 @@
 
 use super::cases::{Case, Class};
 use super::Diagnosis;
+use crate::evidence::Level;
 use capstan_friction::{Effect, EffectKind};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -62,6 +63,15 @@ impl Outcome {
             Class::Outside => self.unexplained,
             _ => !self.unexplained && self.found_kinds() == self.truth_kinds(),
         }
+    }
+
+    /// The planted effects not among those named.
+    pub fn missed(&self) -> Vec<EffectKind> {
+        let found = self.found_kinds();
+        self.truth_kinds()
+            .into_iter()
+            .filter(|k| !found.contains(k))
+            .collect()
     }
 
     /// Every planted effect's value within 25 % (of its departure from neutral for n, gain).
@@ -244,7 +254,8 @@ pub struct Metrics {
     /// Single effects and pairs named right that carry a rival (a doubt they did not need).
     pub rival_doubts: (usize, usize),
     /// Single effects and pairs named wrong with a set of the right size (one effect in
-    /// place of another) whose planted effects are all reported as rivals of the wrong ones.
+    /// place of another), every planted effect missed a within-run one (rivals are within-run
+    /// effects), that report each missed planted effect as a rival of a wrong found one.
     pub rival_catches: (usize, usize),
 }
 
@@ -272,6 +283,11 @@ impl Metrics {
             .iter()
             .copied()
             .filter(|o| !o.correct() && !o.unexplained && o.found.len() == o.truth.len())
+            .filter(|o| {
+                o.missed()
+                    .iter()
+                    .all(|k| crate::evidence::candidates::level(*k) == Level::WithinRun)
+            })
             .collect();
         let count_of = |of: &[&Outcome], f: &dyn Fn(&Outcome) -> bool| {
             (of.iter().filter(|o| f(o)).count(), of.len())
@@ -293,10 +309,10 @@ impl Metrics {
             clean_alarms: count(Class::Clean, &|o| o.unexplained || !o.found.is_empty()),
             rival_doubts: count_of(&right, &|o| !o.rivals.is_empty()),
             rival_catches: count_of(&swapped, &|o| {
-                o.truth.iter().all(|t| {
-                    o.found.iter().any(|f| f.kind == t.kind)
-                        || o.rivals.iter().any(|r| r.1 == t.kind)
-                })
+                let truth = o.truth_kinds();
+                o.missed()
+                    .iter()
+                    .all(|t| o.rivals.iter().any(|r| r.1 == *t && !truth.contains(&r.0)))
             }),
         }
     }

@@ -59,7 +59,7 @@ pub fn verdict(effects: &[Found], adequacy: &Adequacy, rivals: &[Rival]) -> Stri
     format!("{base} {}", rival_sentences(rivals))
 }
 
-/// "These data cannot rule out thermal_drift (drift_per_100s = -0.25) in place of
+/// "These data cannot rule out thermal_drift (mu_change_per_100s = -0.2500) in place of
 /// contact_heating: the set with it fits nearly as well (ΔBIC +2.1); in runs whose …"
 pub fn rival_sentences(rivals: &[Rival]) -> String {
     rivals
@@ -74,11 +74,14 @@ pub fn rival_sentences(rivals: &[Rival]) -> String {
                 format!("fits nearly as well (ΔBIC +{:.1})", r.delta_bic)
             } else {
                 format!(
-                    "fits better (ΔBIC {:.1}) but is not supported beside the others",
+                    "fits better (ΔBIC {:.1}) but was not kept by the stepwise selection",
                     r.delta_bic
                 )
             };
-            let why = r.reason.map_or(String::new(), |w| format!("; {w}"));
+            let why = r
+                .reason
+                .as_ref()
+                .map_or(String::new(), |w| format!("; {w}"));
             format!(
                 "These data cannot rule out {}{p} in place of {}: the set with it {fit}{why}.",
                 r.effect, r.instead_of
@@ -126,13 +129,13 @@ mod tests {
     use super::*;
     use capstan_friction::EffectKind;
 
-    fn rival(delta_bic: f64, reason: Option<&'static str>) -> Rival {
+    fn rival(delta_bic: f64, reason: Option<&str>) -> Rival {
         Rival {
             instead_of: "contact_heating",
             effect: "thermal_drift",
             parameters: [("mu_change_per_100s", -0.25)].into_iter().collect(),
             delta_bic,
-            reason,
+            reason: reason.map(String::from),
             instead_of_kind: EffectKind::ContactHeating,
             kind: EffectKind::ThermalDrift,
         }
@@ -151,6 +154,6 @@ mod tests {
              and back down separate them."
         );
         let s = rival_sentences(&[rival(-1.5, None)]);
-        assert!(s.contains("fits better (ΔBIC -1.5) but is not supported beside the others."));
+        assert!(s.contains("fits better (ΔBIC -1.5) but was not kept by the stepwise selection."));
     }
 }

@@ -38,7 +38,7 @@ pub struct Rival {
     /// enough to rule it out; below 0: it fits better but is not supported beside the others).
     pub delta_bic: f64,
     /// Why this design cannot separate the two, where the design says so.
-    pub reason: Option<&'static str>,
+    pub reason: Option<String>,
     /// The found effect.
     #[serde(skip)]
     pub instead_of_kind: EffectKind,
@@ -66,10 +66,14 @@ pub fn rivals(
             let map = ThetaMap::for_kind(s.kind, d);
             let plausible = practically_relevant(s.kind, s.value, d)
                 && !map.at_physical_limit(map.theta(s.value));
+            // A swap whose fit failed (a non-finite WRSS) is no evidence either way.
             let lr = n * (s.wrss / fit.wrss).ln();
+            if !(lr.is_finite() && fit.wrss > 0.0) {
+                return None;
+            }
             let scaled = lr.abs() / fit.c_hat(s.slot);
             let delta_bic = chi2_of_f(scaled, 1.0, dof).copysign(lr);
-            (supported_alone && plausible && delta_bic.is_finite() && delta_bic < gap).then(|| {
+            (supported_alone && plausible && delta_bic < gap).then(|| {
                 let mut parameters = BTreeMap::new();
                 if let Some(p) = s.kind.parameter() {
                     parameters.insert(p, s.value);
@@ -79,7 +83,7 @@ pub fn rivals(
                     effect: s.kind.name(),
                     parameters,
                     delta_bic,
-                    reason: reason(found, s.kind, d),
+                    reason: reason(found, s.kind, d, &fit.mu),
                     instead_of_kind: found,
                     kind: s.kind,
                 }
@@ -90,17 +94,26 @@ pub fn rivals(
     out
 }
 
-/// Why the design cannot tell `a` from `b`, for the pairs whose reason is known.
-fn reason(a: EffectKind, b: EffectKind, d: &Design) -> Option<&'static str> {
+/// Why the design cannot tell `a` from `b`, for the pairs whose reason is known (`mu`: the
+/// runs' mu, for the wraps' amplification).
+fn reason(a: EffectKind, b: EffectKind, d: &Design, mu: &[f64]) -> Option<String> {
     use EffectKind::{ContactHeating, PressureFriction, T1Offset, T2Offset, ThermalDrift};
     let pair = |x, y| (a == x && b == y) || (a == y && b == x);
     let one_way = !d.has_both_directions();
     if pair(ThermalDrift, ContactHeating) && one_way {
-        Some("in runs whose tension only rises, time and the friction load grow together; runs that step up and back down separate them")
+        Some("in runs whose tension only rises, time and the friction load grow together; runs that step up and back down separate them".into())
     } else if pair(PressureFriction, ContactHeating) && one_way {
-        Some("in runs whose tension only rises, the friction load's history follows the tension; runs that step up and back down separate them")
+        Some("in runs whose tension only rises, the friction load's history follows the tension; runs that step up and back down separate them".into())
     } else if pair(T1Offset, T2Offset) {
-        Some("a T1 and a T2 zero offset differ only in how the wrap amplifies them (the first grows with e^(μβ)); wraps further apart separate them")
+        let mu_bar = crate::fit::stats::mean(mu);
+        let wraps = d.wraps();
+        let amp = |deg: f64| (mu_bar * deg.to_radians()).exp();
+        let (lo, hi) = (wraps.first()?, wraps.last()?);
+        Some(format!(
+            "a T1 and a T2 zero offset differ only in how the wrap amplifies them: a T1 offset by e^(μβ), {:.1} to {:.1} on these wraps, a T2 offset not at all",
+            amp(*lo),
+            amp(*hi)
+        ))
     } else {
         None
     }

@@ -86,7 +86,8 @@ fn swaps(
     alone: &[(EffectKind, f64)],
     threads: usize,
 ) -> (WithinFit, Vec<Swap>) {
-    for _pass in 0..2 {
+    // Two passes may each take a swap; a third only fits the final set's alternatives.
+    for pass in 0..3 {
         // One effect alone is already the best-fitting single one: only sets can improve.
         let k = current.k();
         if k < 2 {
@@ -115,7 +116,7 @@ fn swaps(
             .filter(|&i| fits[i].wrss < current.wrss * (1.0 - 1e-9))
             .collect();
         better.sort_by(|&a, &b| fits[a].wrss.total_cmp(&fits[b].wrss));
-        let accepted = better.into_iter().find(|&i| {
+        let accepted = better.into_iter().filter(|_| pass < 2).find(|&i| {
             let cand = &fits[i];
             let members: Vec<usize> = (0..cand.k()).collect();
             par(&members, threads, |&j| {

@@ -56,10 +56,7 @@ fn rival(r: &Value) -> Option<capstan::evidence::Rival> {
             .map(|v| (effect.parameter().unwrap(), num(v)))
             .collect(),
         delta_bic: num(&r["delta_bic"]),
-        // The reasons are the engine's fixed sentences.
-        reason: r["reason"]
-            .as_str()
-            .map(|w| &*Box::leak(w.to_string().into_boxed_str())),
+        reason: r["reason"].as_str().map(String::from),
         instead_of_kind: instead_of,
         kind: effect,
     })
@@ -99,7 +96,18 @@ pub fn check(metrics: &Value, html: &str) {
         let others: Vec<&str> = causes.iter().copied().filter(|c| *c != name).collect();
         let reason = m["not_testable_reason"].as_str().unwrap();
         let mut made = words::sentence(kind, v, numbers.as_ref(), &others, reason);
+        assert!(
+            m.get("rival").is_some(),
+            "{name}: metrics.json has no rival key"
+        );
         if let Some(r) = rival(&m["rival"]) {
+            // A rival of this mechanism, in place of a cause the report names.
+            assert_eq!(r.effect, name);
+            assert!(
+                causes.contains(&r.instead_of),
+                "{name}: rival of {}",
+                r.instead_of
+            );
             made.push(' ');
             made += &capstan::diagnose::words::rival_sentences(&[r]);
         }
