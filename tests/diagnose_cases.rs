@@ -101,7 +101,7 @@ fn diagnose_names_what_was_planted_and_flags_what_it_cannot_name() {
         // printed above; over three master seeds the diagnosis reaches 85.5-91.8 % on single
         // effects, 75.8-78.8 % on pairs, 93.8-100 % outside and 0-5 % on clean sets
         // (docs/README-diagnose.md). The test holds the line those seeds all clear, rivals
-        // included: 6.0-8.3 % of right calls carry one, and 57-75 % of the calls of one
+        // included: 6.0-8.3 % of right calls carry one, and 57-75 % (4/7-5/7, 3/4) of the calls of one
         // effect in place of another report the planted effect as its rival.
         let why = m.failures_against(&score::Targets::MEASURED);
         assert!(why.is_empty(), "{}", why.join("; "));

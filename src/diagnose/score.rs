@@ -228,7 +228,7 @@ impl Targets {
         pairs: 0.75,
         outside: 0.90,
         clean_alarms: 0.05,
-        // 6.0-8.3 % and 57-75 % on the three seeds.
+        // 6.0-8.3 % and 57-75 % (4/7, 5/7, 3/4) on the three seeds.
         rival_doubts: 0.10,
         rival_catches: 0.50,
     };
