@@ -77,8 +77,6 @@ pub struct Design {
     pub falling: Vec<Option<bool>>,
     /// Per row: its replicate cell (cord × step, shared by the cord's runs), if steps are known.
     pub cell: Vec<Option<usize>>,
-    /// Per row: the measured T1 at which the law's shape is read (see [`shape_t1`]).
-    pub t1_shape: Vec<f64>,
     /// Optional columns present.
     pub columns: Columns,
     /// The arrangement of `src/fit` (cords by diameter and wrap, for the population fits).
@@ -154,7 +152,6 @@ impl Design {
         }
         let falling = directions(&units, &t1, timed);
         let cell = cells(&units, &unit_cord, d, &obs);
-        let t1_shape = shape_t1(&t1, &cell);
         Design {
             t1,
             t2,
@@ -167,7 +164,6 @@ impl Design {
             cords,
             falling,
             cell,
-            t1_shape,
             columns,
             obs,
         }
@@ -258,36 +254,6 @@ fn directions(units: &[Vec<usize>], t1: &[f64], timed: bool) -> Vec<Option<bool>
 
 /// Replicate cells: the rows of a cord at the same step (or the same window time), across
 /// its runs.
-/// The T1 at which each row's friction load is read for the contact's memory: the mean
-/// measured T1 of the other runs in its replicate cell (the row's own where it has no cell or
-/// is alone in it).
-///
-/// The servo sets the lever's travel, not T1: the cord is a spring on both sides of the
-/// capstan, so where mu is momentarily higher (its wander inside a run, a run's own scatter)
-/// the same travel gives less T1 and a little more T2. A load memory built from a row's own T1
-/// follows that noise, and contact heating then takes part of the wander for an effect; a
-/// drift in time, read from the clock, cannot. The other runs' mean at the same step is set by
-/// the lever alone (their wander is independent of this row's): the load is read there
-/// (leave-one-out, so the row's own noise is not in its instrument).
-pub fn shape_t1(t1: &[f64], cell: &[Option<usize>]) -> Vec<f64> {
-    let cells = cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
-    let (mut sum, mut cnt) = (vec![0.0; cells], vec![0usize; cells]);
-    for (i, c) in cell.iter().enumerate() {
-        if let Some(c) = *c {
-            if t1[i].is_finite() {
-                sum[c] += t1[i];
-                cnt[c] += 1;
-            }
-        }
-    }
-    (0..t1.len())
-        .map(|i| match cell[i] {
-            Some(c) if t1[i].is_finite() && cnt[c] >= 2 => (sum[c] - t1[i]) / (cnt[c] - 1) as f64,
-            _ => t1[i],
-        })
-        .collect()
-}
-
 fn cells(
     units: &[Vec<usize>],
     unit_cord: &[usize],

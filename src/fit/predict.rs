@@ -13,7 +13,7 @@
 
 use super::obs::Observations;
 use super::params::{ModelSpec, Param, Role};
-use capstan_friction::{FrictionLaw, LoadMemory, Model, Operating, SLACK_T1_N};
+use capstan_friction::{FrictionLaw, LoadMemory, Model, Operating};
 
 /// Predictions (and optionally the Jacobian) for a set of runs.
 #[derive(Clone, Debug, Default)]
@@ -129,7 +129,6 @@ pub fn predict_run(
 ) {
     let RunRows {
         t1_n,
-        t1_shape_n,
         op,
         timing,
         rows,
@@ -155,9 +154,6 @@ pub fn predict_run(
             _ => h_acc = 0.0,
         }
         let x = model.sensors.true_t1_n(t1_n[i]);
-        // The load the contact remembers is read at the shape point: the row's
-        // amplification on the shape point's T1, (T2 − T1)·x_s/x.
-        let lam = load_scale(model, x, t1_shape_n.map(|s| s[i]));
         let dt_c = tm.centre_s - tm.change_s;
         let near = hint.map(|h| {
             let y0 = (h.t2[i] - model.sensors.t2_offset_n) / model.sensors.t2_gain;
@@ -166,30 +162,16 @@ pub fn predict_run(
         let (y, slope) = match near {
             Some((y0, s0)) => {
                 let a_c = decay.factor(dt_c);
-                solve_step_from(law, (x, lam), &op[i], (h_acc, dt_c, a_c), (y0, s0))
+                solve_step_from(law, x, &op[i], (h_acc, dt_c, a_c), (y0, s0))
             }
-            None => (solve_step(law, (x, lam), &op[i], h_acc, dt_c).0, f64::NAN),
+            None => (solve_step(law, x, &op[i], h_acc, dt_c).0, f64::NAN),
         };
         if let Some(s) = slopes.as_deref_mut() {
             s[i] = slope;
         }
         out[i] = model.sensors.measured_t2_n(y);
-        h_acc = decay.after(h_acc, tm.end_s - tm.change_s, lam * (y - x));
+        h_acc = decay.after(h_acc, tm.end_s - tm.change_s, y - x);
         prev_end = Some(tm.end_s);
-    }
-}
-
-/// The factor x_s/x on a row's friction load in the contact's memory: x its true T1, x_s
-/// the true T1 of its shape reading (see [`RunRows::t1_shape_n`]); 1 without one, or unless
-/// both are loaded (above 5·[`SLACK_T1_N`]).
-pub fn load_scale(model: &Model, x: f64, t1_shape_n: Option<f64>) -> f64 {
-    let Some(t) = t1_shape_n else { return 1.0 };
-    let xs = model.sensors.true_t1_n(t);
-    let loaded = |v: f64| v.is_finite() && v > 5.0 * SLACK_T1_N;
-    if xs != x && loaded(x) && loaded(xs) {
-        xs / x
-    } else {
-        1.0
     }
 }
 
@@ -269,9 +251,6 @@ pub struct Hint<'a> {
 pub struct RunRows<'a> {
     /// Measured T1 per row, N.
     pub t1_n: &'a [f64],
-    /// Measured T1 per row at which the load the contact remembers is read, if not the row's
-    /// own: the evidence engine's instrument (`evidence::design::Design::t1_shape`).
-    pub t1_shape_n: Option<&'a [f64]>,
     /// Operating point per row.
     pub op: &'a [Operating],
     /// Step timing per row.
@@ -284,17 +263,17 @@ pub struct RunRows<'a> {
 /// bracketed search if Newton does not settle at once); `a` is the memory's decay over `dt_c`.
 fn solve_step_from(
     law: &FrictionLaw,
-    (x, lam): (f64, f64),
+    x: f64,
     op: &Operating,
     (h_acc, dt_c, a): (f64, f64, f64),
     (y0, s0): (f64, f64),
 ) -> (f64, f64) {
     let tau = law.heat_tau_s;
-    // The memory after dt_c, linear in the load: H(y) = h_acc·a + τ(1 − a)·λ·max(y − x, 0),
+    // The memory after dt_c, linear in the load: H(y) = h_acc·a + τ(1 − a)·max(y − x, 0),
     // a = exp(−dt_c/τ).
     let h_of = |y: f64| {
         if dt_c > 0.0 && tau > 0.0 {
-            h_acc * a + (lam * (y - x)).max(0.0) * tau * (1.0 - a)
+            h_acc * a + (y - x).max(0.0) * tau * (1.0 - a)
         } else {
             h_acc
         }
@@ -330,19 +309,13 @@ fn solve_step_from(
             known = f64::NAN;
         }
     }
-    (solve_step(law, (x, lam), op, h_acc, dt_c).0, f64::NAN)
+    (solve_step(law, x, op, h_acc, dt_c).0, f64::NAN)
 }
 
 /// Solve y = t2_n(x, H(y)) with H(y) = memory after `dt_c` from `h_acc` under load y − x.
-fn solve_step(
-    law: &FrictionLaw,
-    (x, lam): (f64, f64),
-    op: &Operating,
-    h_acc: f64,
-    dt_c: f64,
-) -> (f64, f64) {
+fn solve_step(law: &FrictionLaw, x: f64, op: &Operating, h_acc: f64, dt_c: f64) -> (f64, f64) {
     let tau = law.heat_tau_s;
-    let h_of = |y: f64| memory_step(h_acc, dt_c, lam * (y - x), tau).0;
+    let h_of = |y: f64| memory_step(h_acc, dt_c, y - x, tau).0;
     let rhs = |y: f64| t2_at(law, x, op, h_of(y));
     let y0 = rhs(x);
     if law.heat_per_ns == 0.0 || x <= 0.0 || !y0.is_finite() {
@@ -437,7 +410,7 @@ fn run_one(
         }
         let x = sensors.true_t1_n(row.t1_n);
         let dt_c = tm.centre_s - tm.change_s;
-        let (y, h_c) = solve_step(law, (x, 1.0), &row.op, h_acc, dt_c);
+        let (y, h_c) = solve_step(law, x, &row.op, h_acc, dt_c);
         let load = y - x;
         let (_, a_c, b_c, dtau_c) = memory_step(h_acc, dt_c, load, tau);
         let dt_s = tm.end_s - tm.change_s;
@@ -582,7 +555,6 @@ mod tests {
         for run in &obs.runs {
             let rows = RunRows {
                 t1_n: &t1,
-                t1_shape_n: None,
                 op: &op,
                 timing: &tm,
                 rows: run,
