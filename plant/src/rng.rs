@@ -97,6 +97,29 @@ impl Rng {
         self.normal_outside(i, u)
     }
 
+    /// The state, for [`Rng::normal_in`] on a copy of it.
+    #[inline(always)]
+    pub(crate) fn state(&self) -> [u64; 4] {
+        self.s
+    }
+
+    /// [`Rng::normal`] on a copy of a generator's state (`state()`, written back with
+    /// `from_state`): the same draw. The copy's address is taken only on the rare path, so a
+    /// caller making several draws keeps the state in registers between them.
+    #[inline(always)]
+    pub(crate) fn normal_in(state: &mut [u64; 4]) -> f64 {
+        let mut fast = Rng { s: *state };
+        let (i, u) = fast.layer_draw();
+        *state = fast.s;
+        if u.abs() < ZIG_RATIO[i] {
+            return u * ZIG_X[i];
+        }
+        let mut slow = Rng { s: *state };
+        let x = slow.normal_outside(i, u);
+        *state = slow.s;
+        x
+    }
+
     /// One 64-bit draw as a layer and a signed uniform: 53 bits independent of the 8 layer
     /// bits, u in (−1, 1).
     #[inline]

@@ -190,6 +190,32 @@ fn the_servo_takes_pulses_at_frames_and_slews_at_its_rated_speed() {
 }
 
 #[test]
+fn read_both_converts_as_two_read_counts() {
+    // `read_both` works out the shared parts once and draws on a copy of the generator's
+    // state: the same counts, and the generator left the same, as two `read_counts` (drive off,
+    // then on; ~1 % of the draws take the ziggurat's rare path).
+    let run = |both: bool| {
+        let mut p = plant(450.0, Model::euler_eytelwein(0.115), 9);
+        let mut v = std::vec::Vec::new();
+        for k in 0..5_000u64 {
+            p.advance_to(k * MS);
+            if k == 100 {
+                p.set_amp_duty(0, 2_500, AMP_MAX_DUTY);
+                p.set_servo_duty(0, duty_for(95.0), SERVO_MAX_DUTY);
+            }
+            if both {
+                v.extend(p.read_both(0).map(Result::unwrap));
+            } else {
+                v.push(p.read_counts(0, Channel::T1).unwrap());
+                v.push(p.read_counts(0, Channel::T2).unwrap());
+            }
+        }
+        v
+    };
+    assert_eq!(run(true), run(false));
+}
+
+#[test]
 fn same_seed_same_counts_and_noise_has_the_configured_spread() {
     let run = |seed| {
         let mut p = plant(450.0, Model::euler_eytelwein(0.115), seed);

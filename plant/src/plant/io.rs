@@ -2,6 +2,7 @@
 //! [`Plant::advance_to`]: PWM duties, pin levels, ADC conversions and watchdog feeds.
 
 use super::{Plant, ServoEvent};
+use crate::rng::Rng;
 use firmware::hal::{AdcError, Channel, ADC_MAX_COUNTS};
 
 impl Plant {
@@ -115,25 +116,41 @@ impl Plant {
     }
 
     /// Convert both force channels of cord `i` now, T1 then T2: the same two conversions as
-    /// two [`Plant::read_counts`] calls. (One call per simulated sample, each channel's path
-    /// worked out at compile time, the generator's state kept in registers between the two.)
+    /// two [`Plant::read_counts`] calls. (One call per simulated sample.)
+    // What two `convert` calls compute, in the same order and to the bit, with what they share
+    // worked out once: the cord and the drive state are looked up once, the noise-free values
+    // of both channels come first (they do not depend on the generator), and the generator's
+    // state is copied into locals for the two draws (kept in registers between them, written
+    // back once). The draws are the same, in the same order (T1's, then T2's), and an unplugged
+    // channel still draws nothing.
     pub fn read_both(&mut self, i: usize) -> [Result<u16, AdcError>; 2] {
-        [self.convert(i, Channel::T1), self.convert(i, Channel::T2)]
+        let drive_on = self.drive_v > 0.0;
+        let c = &self.cords[i];
+        let plugged = [!c.unplugged[0], !c.unplugged[1]];
+        let mut counts = [0.0; 2];
+        if plugged[0] {
+            counts[0] = Self::noiseless_counts(c, Channel::T1, drive_on);
+        }
+        if plugged[1] {
+            counts[1] = Self::noiseless_counts(c, Channel::T2, drive_on);
+        }
+        let sd = self.noise_sd_counts;
+        if sd > 0.0 {
+            let mut state = self.rng.state();
+            for k in 0..2 {
+                if plugged[k] {
+                    counts[k] += sd * Rng::normal_in(&mut state);
+                }
+            }
+            self.rng = Rng::from_state(state);
+        }
+        [Ok(quantise(counts[0])), Ok(quantise(counts[1]))]
     }
 
     /// [`Plant::read_counts`].
     #[inline(always)]
     fn convert(&mut self, i: usize, ch: Channel) -> Result<u16, AdcError> {
-        let counts = self.analog(i, ch);
-        // Round half up and clamp to the ADC's range (`as` truncates: floor, as x ≥ 1).
-        let x = counts + 0.5;
-        Ok(if x < 1.0 {
-            0
-        } else if x >= ADC_MAX_COUNTS as f64 {
-            ADC_MAX_COUNTS
-        } else {
-            x as u16
-        })
+        Ok(quantise(self.analog(i, ch)))
     }
 
     /// The analog value one conversion of cord `i`'s force channel sees now, in ADC counts
@@ -149,12 +166,22 @@ impl Plant {
     /// [`Plant::read_analog`].
     #[inline(always)]
     fn analog(&mut self, i: usize, ch: Channel) -> f64 {
-        let k = ch as usize;
         let drive_on = self.drive_v > 0.0;
         let c = &self.cords[i];
-        if c.unplugged[k] {
+        if c.unplugged[ch as usize] {
             return 0.0;
         }
+        let mut counts = Self::noiseless_counts(c, ch, drive_on);
+        if self.noise_sd_counts > 0.0 {
+            counts += self.noise_sd_counts * self.rng.normal();
+        }
+        counts
+    }
+
+    /// What a plugged channel of cord `c` reads before the noise, in ADC counts.
+    #[inline(always)]
+    fn noiseless_counts(c: &super::CordState, ch: Channel, drive_on: bool) -> f64 {
+        let k = ch as usize;
         let art = c.setup.model.sensors;
         // The catalogue artefacts ride on the drive (see the crate docs): the tare, done with
         // the capstan stopped, neither removes the offsets nor sees the gain. (T2's calibration
@@ -174,11 +201,7 @@ impl Plant {
         if let (true, Some(d)) = (drive_on, c.disturb.as_ref()) {
             reading += d.zero_error_n[k];
         }
-        let mut counts = c.zero[k] + reading * c.counts_per_n[k];
-        if self.noise_sd_counts > 0.0 {
-            counts += self.noise_sd_counts * self.rng.normal();
-        }
-        counts
+        c.zero[k] + reading * c.counts_per_n[k]
     }
 
     /// Cord `i`'s watchdog is fed.
@@ -190,5 +213,22 @@ impl Plant {
             c.max_feed_gap_us = c.max_feed_gap_us.max(now - last);
         }
         c.last_feed_us = Some(now);
+    }
+}
+
+/// One conversion's analog value, ADC counts, as the ADC gives it: rounded half up and clamped
+/// to its range (a NaN reads 0, as `NaN as u16` did).
+#[inline(always)]
+fn quantise(counts: f64) -> u16 {
+    let x = counts + 0.5;
+    if x >= 1.0 {
+        if x >= ADC_MAX_COUNTS as f64 {
+            ADC_MAX_COUNTS
+        } else {
+            // (`as` truncates: the floor, as x ≥ 1.)
+            x as u16
+        }
+    } else {
+        0
     }
 }
