@@ -113,9 +113,10 @@ pub struct Plant {
     next_refresh_us: u64,
     next_wander_us: u64,
     any_time_dependent: bool,
-    /// Until when (the next frame, wander or refresh, µs) a step only moves the drive: the
-    /// servos are at their targets, the amplifier filters at their inputs, no injection is to
-    /// come and nothing heats (0: not settled; a new amplifier duty or injection clears it).
+    /// Until when (the next frame, wander or refresh that can change anything, µs) a step only
+    /// moves the drive: the servos are at their targets, the amplifier filters at their
+    /// inputs, no injection is to come and nothing heats (0: not settled; a new servo or
+    /// amplifier duty or injection clears it).
     settled_until_us: u64,
     // drive
     drive_v: f64,

@@ -17,6 +17,10 @@ impl Plant {
         };
         let now = self.t_us;
         let characteristic = self.cfg.servo.characteristic;
+        // The next frame may have something to do now: the settled spell, which may have
+        // skipped frames, ends, and the frame grid is brought past the present first.
+        self.catch_up_frames();
+        self.settled_until_us = 0;
         let c = &mut self.cords[i];
         // No pulse: the servo is unpowered and its horn stays where it is.
         let angle = if pulse > 0.0 {

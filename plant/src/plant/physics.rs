@@ -72,13 +72,43 @@ impl Plant {
         self.move_servos(dt_us);
     }
 
-    /// The next frame, wander or refresh, µs.
+    /// The next frame, wander or refresh that can change anything, µs (`u64::MAX`: none).
+    ///
+    /// Called with the plant still (see `step`). A frame then changes nothing unless some
+    /// servo's pulse now gives another target than the one it holds: its only effects are the
+    /// targets (and `falling`, only when a target changes) and moving `next_frame_us` on. A
+    /// wander step changes nothing on a plant without wander (no cord has a `disturb`: a quiet
+    /// plant). Such events are skipped over, settled, and their bookkeeping left behind: the
+    /// next unsettled step's `take_frames` and `heat_and_wander` move `next_frame_us` and
+    /// `next_wander_us` on to the same grid points as the skipped events would have, with the
+    /// targets they would have left (the same pulses), and `set_servo_duty`, which can give a
+    /// frame something to do, ends the settled spell and first moves `next_frame_us` on past
+    /// the present (so the new pulse still waits for the next frame on the grid).
     fn next_event_us(&self) -> u64 {
-        let next = self.next_frame_us.min(self.next_wander_us);
+        let characteristic = self.cfg.servo.characteristic;
+        let mut next = u64::MAX;
+        if self
+            .cords
+            .iter()
+            .any(|c| frame_target_deg(characteristic, c) != c.target_deg)
+        {
+            next = self.next_frame_us;
+        }
+        if self.cords.iter().any(|c| c.disturb.is_some()) {
+            next = next.min(self.next_wander_us);
+        }
         if self.any_time_dependent {
-            next.min(self.next_refresh_us)
-        } else {
-            next
+            next = next.min(self.next_refresh_us);
+        }
+        next
+    }
+
+    /// Skip `next_frame_us` past the present (the frames skipped while settled changed
+    /// nothing: see `next_event_us`).
+    pub(super) fn catch_up_frames(&mut self) {
+        let frame = self.cfg.servo.frame_us as u64;
+        while self.next_frame_us <= self.t_us {
+            self.next_frame_us += frame;
         }
     }
 
@@ -89,11 +119,7 @@ impl Plant {
         }
         let characteristic = self.cfg.servo.characteristic;
         for c in self.cords.iter_mut() {
-            let target = if c.pending_pulse_us > 0.0 {
-                characteristic.angle_deg(c.pending_pulse_us)
-            } else {
-                c.angle_deg
-            };
+            let target = frame_target_deg(characteristic, c);
             // Releasing (angle rising) lets the tension fall; pulling raises it.
             if target != c.target_deg {
                 c.falling = target > c.target_deg;
@@ -364,5 +390,15 @@ impl Plant {
         } else {
             t1 * (1.0 + s * (a - 1.0))
         };
+    }
+}
+
+/// The target a frame gives cord `c`'s servo: its pulse's angle (no pulse: it stops where it
+/// is).
+fn frame_target_deg(characteristic: crate::ServoCharacteristic, c: &super::CordState) -> f64 {
+    if c.pending_pulse_us > 0.0 {
+        characteristic.angle_deg(c.pending_pulse_us)
+    } else {
+        c.angle_deg
     }
 }
