@@ -81,6 +81,12 @@ pub struct Supervisor {
     /// [`Supervisor::check`] decides without the counters on the host).
     #[cfg(not(target_os = "none"))]
     quiet: bool,
+    /// The counts off the rails, `rail_low_counts < c < rail_high_counts`, as one unsigned
+    /// comparison: `c - off_rail_from < off_rail_span` (wrapping; see [`Supervisor::new`]).
+    #[cfg(not(target_os = "none"))]
+    off_rail_from: u16,
+    #[cfg(not(target_os = "none"))]
+    off_rail_span: u16,
 }
 
 impl Supervisor {
@@ -94,6 +100,17 @@ impl Supervisor {
             last_t_us: None,
             #[cfg(not(target_os = "none"))]
             quiet: false,
+            // The range low + 1 .. high: `c - (low + 1)`, wrapping, is below its length
+            // exactly for the counts in it (below low + 1 it wraps to at least
+            // 65 536 − (low + 1), which is at least the length). Empty (length 0, nothing off
+            // the rails) when high ≤ low + 1, low = 65 535 (where low + 1 wraps to 0) included.
+            #[cfg(not(target_os = "none"))]
+            off_rail_from: limits.rail_low_counts.wrapping_add(1),
+            #[cfg(not(target_os = "none"))]
+            off_rail_span: limits
+                .rail_high_counts
+                .saturating_sub(limits.rail_low_counts)
+                .saturating_sub(1),
         }
     }
 
@@ -133,7 +150,8 @@ impl Supervisor {
         };
         let l = &self.limits;
         let [t1, t2] = input.force_n;
-        let off_rail = |c: u16| c > l.rail_low_counts && c < l.rail_high_counts;
+        // (`c > l.rail_low_counts && c < l.rail_high_counts`, in one comparison: see `new`.)
+        let off_rail = |c: u16| c.wrapping_sub(self.off_rail_from) < self.off_rail_span;
         let over = |f: f32| f > l.over_force_n;
         off_rail(c1)
             && off_rail(c2)
@@ -218,6 +236,34 @@ mod tests {
         f: [f32; 2],
     ) -> Option<(usize, Fault)> {
         (0..n).find_map(|i| sup.check(&input(i as i64 * 1000, c, f)).map(|x| (i, x)))
+    }
+
+    #[test]
+    fn off_the_rails_in_one_comparison_is_the_two() {
+        for (low, high) in [
+            (4, 4091),
+            (0, u16::MAX),
+            (0, 0),
+            (5, 6),
+            (5, 7),
+            (3000, 2000),
+        ]
+        .into_iter()
+        .chain([
+            (u16::MAX, 0),
+            (u16::MAX, u16::MAX),
+            (u16::MAX - 1, u16::MAX),
+        ]) {
+            let s = Supervisor::new(SafetyLimits {
+                rail_low_counts: low,
+                rail_high_counts: high,
+                ..SafetyLimits::default()
+            });
+            for c in 0..=u16::MAX {
+                let one = c.wrapping_sub(s.off_rail_from) < s.off_rail_span;
+                assert_eq!(one, c > low && c < high, "{c} in {low}..{high}");
+            }
+        }
     }
 
     #[test]
