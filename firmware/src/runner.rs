@@ -213,12 +213,17 @@ where
     let result = loop {
         ticker.next().await;
         io.watchdog.feed();
-        let mut inputs = match io.read(Instant::now().as_micros()) {
-            Ok(i) => i,
-            Err(e) => break Err(e),
+        // (The inputs in a block of their own: dead before the flash write's await below, so
+        // the future does not keep them in its state, where every sample stored and reloaded
+        // them.)
+        let out = {
+            let mut inputs = match io.read(Instant::now().as_micros()) {
+                Ok(i) => i,
+                Err(e) => break Err(e),
+            };
+            inputs.command = core::iter::from_fn(|| console.read_byte()).find_map(|b| line.push(b));
+            rig.step(&inputs, sink)
         };
-        inputs.command = core::iter::from_fn(|| console.read_byte()).find_map(|b| line.push(b));
-        let out = rig.step(&inputs, sink);
         if out.settings_changed {
             // New servo or amplifier maps: the same angle may be another duty now.
             written = Written::default();
