@@ -7,7 +7,8 @@
 //! wander of mu and nothing else (no scatter between cords or runs, no zero errors), monotone
 //! runs. Prints each candidate's WRSS alone (every run's own mu, the engine's weights) and what
 //! is named, under three conditions:
-//! * the data as measured;
+//! * the data as measured (the engine reads the law's shape at the other runs' T1 only above
+//!   `fit::predict::SHAPE_MIN_T1_N`, 8 N: at 630° most steps are below it);
 //! * every T1 replaced by the mean T1 of all runs at its step, T2 scaled to keep T2/T1 (T1 then
 //!   no longer carries the row's own wander);
 //! * the wander switched off.

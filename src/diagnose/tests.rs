@@ -49,6 +49,7 @@ fn synthetic_on(effect: Effect, wraps_deg: &[f64], noise_n: f64) -> Dataset {
     for run in &obs.runs {
         let rows = crate::fit::predict::RunRows {
             t1_n: &t1,
+            t1_shape_n: None,
             op: &op,
             timing: &timing,
             rows: run,

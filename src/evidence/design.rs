@@ -77,6 +77,8 @@ pub struct Design {
     pub falling: Vec<Option<bool>>,
     /// Per row: its replicate cell (cord × step, shared by the cord's runs), if steps are known.
     pub cell: Vec<Option<usize>>,
+    /// Per row: the measured T1 at which the law's shape is read (see [`shape_t1`]).
+    pub t1_shape: Vec<f64>,
     /// Optional columns present.
     pub columns: Columns,
     /// The arrangement of `src/fit` (cords by diameter and wrap, for the population fits).
@@ -152,6 +154,7 @@ impl Design {
         }
         let falling = directions(&units, &t1, timed);
         let cell = cells(&units, &unit_cord, d, &obs);
+        let t1_shape = shape_t1(&t1, &cell);
         Design {
             t1,
             t2,
@@ -164,6 +167,7 @@ impl Design {
             cords,
             falling,
             cell,
+            t1_shape,
             columns,
             obs,
         }
@@ -252,6 +256,39 @@ fn directions(units: &[Vec<usize>], t1: &[f64], timed: bool) -> Vec<Option<bool>
     out
 }
 
+/// The T1 at which each row's law is read (its shape in tension, and the load the contact
+/// remembers): the mean measured T1 of the other runs in its replicate cell; the row's own
+/// where it has no cell or is alone in it (and, in the predictor, below
+/// `fit::predict::SHAPE_MIN_T1_N`).
+///
+/// The servo sets the lever's travel, not T1: the cord is a spring on both sides of the
+/// capstan, so where mu is momentarily higher (its wander inside a run) the same travel gives
+/// less T1 and a little more T2. A shape read at a row's own T1 — the load memory of contact
+/// heating, a power law in tension — follows that noise and takes part of the wander for an
+/// effect; a drift in time, read from the clock, cannot. The other runs' mean at the same step
+/// is set by the lever alone (their wander is independent of this row's): the law is read
+/// there and its amplification applied to the row's own T1, the instrumental-variable fit of
+/// the shape (leave-one-out, so the row's own noise is not in its instrument).
+/// docs/README-diagnose.md has the measurements.
+pub fn shape_t1(t1: &[f64], cell: &[Option<usize>]) -> Vec<f64> {
+    let cells = cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
+    let (mut sum, mut cnt) = (vec![0.0; cells], vec![0usize; cells]);
+    for (i, c) in cell.iter().enumerate() {
+        if let Some(c) = *c {
+            if t1[i].is_finite() {
+                sum[c] += t1[i];
+                cnt[c] += 1;
+            }
+        }
+    }
+    (0..t1.len())
+        .map(|i| match cell[i] {
+            Some(c) if t1[i].is_finite() && cnt[c] >= 2 => (sum[c] - t1[i]) / (cnt[c] - 1) as f64,
+            _ => t1[i],
+        })
+        .collect()
+}
+
 /// Replicate cells: the rows of a cord at the same step (or the same window time), across
 /// its runs.
 fn cells(
@@ -280,4 +317,23 @@ fn cells(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shape_t1;
+
+    #[test]
+    fn the_shape_reading_is_the_other_runs_mean_at_the_step() {
+        // Cell 0 holds three runs, cell 1 one, the last row has no cell.
+        let t1 = [10.0, 11.0, 12.5, 4.0, 7.0];
+        let cell = [Some(0), Some(0), Some(0), Some(1), None];
+        let s = shape_t1(&t1, &cell);
+        assert_eq!(s, vec![11.75, 11.25, 10.5, 4.0, 7.0]);
+        // A non-finite reading is nobody's instrument and keeps its own value.
+        let t1 = [10.0, f64::NAN, 12.0];
+        let s = shape_t1(&t1, &[Some(0), Some(0), Some(0)]);
+        assert_eq!((s[0], s[2]), (12.0, 10.0));
+        assert!(s[1].is_nan());
+    }
 }

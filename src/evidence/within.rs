@@ -270,6 +270,7 @@ impl WithinFit {
 fn run_rows(d: &Design, u: usize) -> RunRows<'_> {
     RunRows {
         t1_n: &d.t1,
+        t1_shape_n: Some(&d.t1_shape),
         op: &d.op,
         timing: &d.timing,
         rows: &d.units[u],

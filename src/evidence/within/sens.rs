@@ -20,6 +20,7 @@
 use super::{Sens, Strata};
 use crate::evidence::candidates::{run_model, ThetaMap};
 use crate::evidence::design::Design;
+use crate::fit::predict::shape_point;
 use capstan_friction::{EffectKind, Operating, HEAT_TAU_S, SLACK_T1_N};
 
 /// What a θ moves, for the chain rule.
@@ -128,13 +129,17 @@ fn run(
             }
         }
         let t1m = d.t1[i];
-        let x = sensors.true_t1_n(t1m);
+        let x_row = sensors.true_t1_n(t1m);
         // A reading taken for a slack cord does not move with the offset. At an offset of
         // exactly 0 (a start value) the right-hand slope, as the forward difference takes it.
         let slack =
             sensors.t1_offset_n >= 0.0 && t1m > 0.0 && t1m - sensors.t1_offset_n < SLACK_T1_N;
         let dx_do = if slack { 0.0 } else { -1.0 };
-        let y = (f0[i] - sensors.t2_offset_n) / sensors.t2_gain;
+        // The law is read at the shape point x (both loaded there, so both move with the
+        // offset) and its amplification applied to the row's T1: y_row = x_row·y/x.
+        let x = shape_point(model, x_row, Some(d.t1_shape[i]));
+        let scale = x_row / x;
+        let y = (f0[i] - sensors.t2_offset_n) / sensors.t2_gain / scale;
         let load = y - x;
         let (a_c, b_c) = decay(tm.centre_s - tm.change_s, tau);
         let h_c = h_acc * a_c + load.max(0.0) * b_c;
@@ -146,13 +151,16 @@ fn run(
         let b_c = if load > 0.0 { b_c } else { 0.0 };
         let k_h = g.d_k * m.d_memory;
         let denom = 1.0 - k_h * b_c;
-        for p in 0..np {
-            let role = (p > 0).then(|| roles[p - 1]);
-            let dx = if role == Some(Role::T1Offset) {
+        let dx_of = |p: usize| {
+            if p > 0 && roles[p - 1] == Role::T1Offset {
                 dx_do
             } else {
                 0.0
-            };
+            }
+        };
+        for p in 0..np {
+            let role = (p > 0).then(|| roles[p - 1]);
+            let dx = dx_of(p);
             let direct = match role {
                 None => g.d_k * m.d_mu,
                 Some(Role::Exponent) => g.d_n,
@@ -162,7 +170,9 @@ fn run(
                 Some(Role::T1Offset | Role::T2Offset) => 0.0,
             };
             dy[p] = (direct + k_h * (a_c * dh[p] - b_c * dx) + g.d_t1 * dx) / denom;
-            let df = sensors.t2_gain * dy[p]
+            // d(x_row·y/x), x_row and x moving alike with the offset.
+            let dy_row = scale * dy[p] + (y / x) * (dx - scale * dx);
+            let df = sensors.t2_gain * dy_row
                 + if role == Some(Role::T2Offset) {
                     1.0
                 } else {
@@ -176,12 +186,7 @@ fn run(
         let (a_s, b_s) = decay(tm.end_s - tm.change_s, tau);
         let b_s_on = if load > 0.0 { b_s } else { 0.0 };
         for p in 0..np {
-            let dx = if p > 0 && roles[p - 1] == Role::T1Offset {
-                dx_do
-            } else {
-                0.0
-            };
-            dh[p] = a_s * dh[p] + b_s_on * (dy[p] - dx);
+            dh[p] = a_s * dh[p] + b_s_on * (dy[p] - dx_of(p));
         }
         h_acc = h_acc * a_s + load.max(0.0) * b_s;
         prev_end = Some(tm.end_s);
@@ -202,7 +207,11 @@ mod tests {
         for w in [270.0, 450.0, 720.0] {
             for run in 1..=2 {
                 for step in 1..=10 {
-                    let t1 = [-0.1, 0.15, 0.5, 1.0, 2.0, 4.0, 7.0, 11.0, 15.0, 20.0][step - 1];
+                    // Run 2 pulls 4 % less T1 from step 5 on (a higher mu): above the
+                    // shape point's floor (steps 8-10) its law is read at run 1's T1 and run
+                    // 1's at its.
+                    let t1 = [-0.1, 0.15, 0.5, 1.0, 2.0, 4.0, 7.0, 11.0, 15.0, 20.0][step - 1]
+                        * if run == 2 && step > 4 { 0.96 } else { 1.0 };
                     pairs.push(Pair {
                         capstan_diameter_mm: Some(12.7),
                         wrap_deg: w,
@@ -220,6 +229,8 @@ mod tests {
         let mut csv = Vec::new();
         write_pairs_to(&mut csv, &pairs).unwrap();
         let mut d = Design::new(&read_pairs(csv.as_slice(), "sens").unwrap(), false);
+        assert!(d.t1.iter().zip(&d.t1_shape).filter(|(a, b)| a != b).count() >= 30);
+        assert!(d.t1_shape.iter().filter(|&&t| t >= 8.2).count() >= 18);
         // Steps of 0.2 s (the rig's are ≥ 1 s): the memory (τ = 0.25 s) then carries from
         // step to step, and its chain rule shows.
         for rows in &d.units {
