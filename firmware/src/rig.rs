@@ -342,6 +342,11 @@ impl Rig {
                 // The press that started the run does not abort it.
                 false
             }
+            // (On the host, a copy for the out-of-line setup step: the sample loop's inputs are
+            // then only read, and stay in registers.)
+            #[cfg(not(target_os = "none"))]
+            Phase::Setup { .. } => return self.step_setup(&{ *inp }, pressed, sink),
+            #[cfg(target_os = "none")]
             Phase::Setup { .. } => return self.step_setup(inp, pressed, sink),
             _ => abort,
         };
