@@ -25,7 +25,8 @@ pub enum Command {
     Simulate(simulate::Args),
     /// Analyse measured pairs against the models and write the report.
     Analyze(analyze::Args),
-    /// Say which single effect makes a data set depart from Euler-Eytelwein.
+    /// Say which catalogue effects a data set holds (several, or none), or that it holds
+    /// structure no catalogue effect explains.
     Diagnose(diagnose::Args),
     /// Record a real run from the board over defmt/RTT (or decode a saved stream).
     Log(log::Args),
