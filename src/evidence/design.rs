@@ -77,7 +77,8 @@ pub struct Design {
     pub falling: Vec<Option<bool>>,
     /// Per row: its replicate cell (cord × step, shared by the cord's runs), if steps are known.
     pub cell: Vec<Option<usize>>,
-    /// Per row: the measured T1 at which the law's shape is read (see [`shape_t1`]).
+    /// Per row: the measured T1 at which the law's shape is read, NaN where the row keeps its
+    /// own (see [`shape_t1`]).
     pub t1_shape: Vec<f64>,
     /// Optional columns present.
     pub columns: Columns,
@@ -154,7 +155,7 @@ impl Design {
         }
         let falling = directions(&units, &t1, timed);
         let cell = cells(&units, &unit_cord, d, &obs);
-        let t1_shape = shape_t1(&t1, &cell);
+        let t1_shape = shape_t1(&t1, &cell, &units);
         Design {
             t1,
             t2,
@@ -256,37 +257,69 @@ fn directions(units: &[Vec<usize>], t1: &[f64], timed: bool) -> Vec<Option<bool>
     out
 }
 
-/// The T1 at which each row's law is read (its shape in tension, and the load the contact
-/// remembers): the mean measured T1 of the other runs in its replicate cell; the row's own
-/// where it has no cell or is alone in it (and, in the predictor, below
-/// `fit::predict::SHAPE_MIN_T1_N`).
+/// Rows whose measured T1, or whose shape reading, is below this (N) keep their own T1 (NaN in
+/// [`Design::t1_shape`]). At low tension a run's zero error (~0.1 N on the thesis rig) moves T1
+/// by more than the wander does, and the shapes that live there (the lift-off of a stiff cord,
+/// offsets) are better read at the row's own reading; the wander's pull on a shape read at the
+/// row's T1 is largest late in rising runs, at high tension. Chosen on the calibration seed (99)
+/// from 2, 4 and 8 N, for this rig's tensions (docs/README-diagnose.md). Decided on the
+/// measured readings, so whether a row is read at its shape point does not move with a fitted
+/// T1 offset.
+pub const SHAPE_MIN_T1_N: f64 = 8.0;
+
+/// The measured T1 at which each row's law is read (its shape in tension, and the load the
+/// contact remembers), NaN where the row keeps its own: the mean T1 of the *other runs* in its
+/// replicate cell, brought to the row's run's own level (times exp of the run's mean of
+/// ln(T1/that mean) over its rows read this way).
 ///
 /// The servo sets the lever's travel, not T1: the cord is a spring on both sides of the
 /// capstan, so where mu is momentarily higher (its wander inside a run) the same travel gives
 /// less T1 and a little more T2. A shape read at a row's own T1 — the load memory of contact
 /// heating, a power law in tension — follows that noise and takes part of the wander for an
-/// effect; a drift in time, read from the clock, cannot. The other runs' mean at the same step
-/// is set by the lever alone (their wander is independent of this row's): the law is read
-/// there and its amplification applied to the row's own T1, the instrumental-variable fit of
-/// the shape (leave-one-out, so the row's own noise is not in its instrument).
-/// docs/README-diagnose.md has the measurements.
-pub fn shape_t1(t1: &[f64], cell: &[Option<usize>]) -> Vec<f64> {
+/// effect; a drift in time, read from the clock, cannot. The other runs at the same step are
+/// moved by the lever alone as far as this row's wander goes; the run's own level is kept (a
+/// run's mu, and a real rig's setup, set it; every run has its own mu anyway). The law is read
+/// there and its amplification applied to the row's own T1. (A nonlinear law evaluated at a
+/// substitute regressor is not a textbook instrumental-variable estimator; it is measured on
+/// planted truth in docs/README-diagnose.md.)
+pub fn shape_t1(t1: &[f64], cell: &[Option<usize>], units: &[Vec<usize>]) -> Vec<f64> {
     let cells = cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
     let (mut sum, mut cnt) = (vec![0.0; cells], vec![0usize; cells]);
-    for (i, c) in cell.iter().enumerate() {
-        if let Some(c) = *c {
-            if t1[i].is_finite() {
+    // The same sums per run, to leave the row's whole run out (a step number may repeat).
+    let mut own: HashMap<(usize, usize), (f64, usize)> = HashMap::new();
+    for (u, rows) in units.iter().enumerate() {
+        for &i in rows {
+            if let (Some(c), true) = (cell[i], t1[i].is_finite()) {
                 sum[c] += t1[i];
                 cnt[c] += 1;
+                let e = own.entry((c, u)).or_insert((0.0, 0));
+                e.0 += t1[i];
+                e.1 += 1;
             }
         }
     }
-    (0..t1.len())
-        .map(|i| match cell[i] {
-            Some(c) if t1[i].is_finite() && cnt[c] >= 2 => (sum[c] - t1[i]) / (cnt[c] - 1) as f64,
-            _ => t1[i],
-        })
-        .collect()
+    let mut out = vec![f64::NAN; t1.len()];
+    for (u, rows) in units.iter().enumerate() {
+        let others = |i: usize| -> Option<f64> {
+            let c = cell[i]?;
+            let (s, n) = own.get(&(c, u)).copied().unwrap_or((0.0, 0));
+            let m = cnt[c].checked_sub(n).filter(|&m| m > 0)?;
+            let mean = (sum[c] - s) / m as f64;
+            (t1[i] >= SHAPE_MIN_T1_N && mean >= SHAPE_MIN_T1_N).then_some(mean)
+        };
+        let read: Vec<(usize, f64)> = rows
+            .iter()
+            .filter_map(|&i| others(i).map(|m| (i, m)))
+            .collect();
+        if read.is_empty() {
+            continue;
+        }
+        let level = read.iter().map(|&(i, m)| (t1[i] / m).ln()).sum::<f64>() / read.len() as f64;
+        for (i, m) in read {
+            out[i] = m * level.exp();
+        }
+    }
+    out
 }
 
 /// Replicate cells: the rows of a cord at the same step (or the same window time), across
@@ -324,16 +357,36 @@ mod tests {
     use super::shape_t1;
 
     #[test]
-    fn the_shape_reading_is_the_other_runs_mean_at_the_step() {
-        // Cell 0 holds three runs, cell 1 one, the last row has no cell.
-        let t1 = [10.0, 11.0, 12.5, 4.0, 7.0];
-        let cell = [Some(0), Some(0), Some(0), Some(1), None];
-        let s = shape_t1(&t1, &cell);
-        assert_eq!(s, vec![11.75, 11.25, 10.5, 4.0, 7.0]);
-        // A non-finite reading is nobody's instrument and keeps its own value.
-        let t1 = [10.0, f64::NAN, 12.0];
-        let s = shape_t1(&t1, &[Some(0), Some(0), Some(0)]);
-        assert_eq!((s[0], s[2]), (12.0, 10.0));
-        assert!(s[1].is_nan());
+    fn the_shape_reading_is_the_other_runs_mean_at_the_runs_own_level() {
+        // Three runs over two steps (cells 0 and 1); run 2 repeats step 1 (a repeated step
+        // number); run 3 sits ~10 % low.
+        let t1 = [10.0, 20.0, 10.0, 10.4, 20.0, 9.0, 17.64];
+        let cell = [
+            Some(0),
+            Some(1),
+            Some(0),
+            Some(0),
+            Some(1),
+            Some(0),
+            Some(1),
+        ];
+        let units = vec![vec![0, 1], vec![2, 3, 4], vec![5, 6]];
+        let s = shape_t1(&t1, &cell, &units);
+        // Run 2's own rows at step 1 are not in its instrument: runs 1 and 3 give 9.5.
+        let level2 = ((10.0f64 / 9.5).ln() + (10.4f64 / 9.5).ln() + (20.0f64 / 18.82).ln()) / 3.0;
+        assert!((s[2] - 9.5 * level2.exp()).abs() < 1e-12);
+        // Run 3: the other runs' means, at its own level (its mean ln(T1/mean) is 0 after).
+        let m: [f64; 2] = [(10.0 + 10.0 + 10.4) / 3.0, 20.0];
+        let level3 = ((9.0 / m[0]).ln() + (17.64 / m[1]).ln()) / 2.0;
+        assert!((s[5] - m[0] * level3.exp()).abs() < 1e-12);
+        assert!((s[6] - m[1] * level3.exp()).abs() < 1e-12);
+        assert!(((t1[5] / s[5]).ln() + (t1[6] / s[6]).ln()).abs() < 1e-12);
+        // A row below the floor, or alone in its cell, keeps its own T1 (NaN).
+        assert!(s.iter().all(|v| v.is_finite()));
+        let cells = [Some(0), Some(1), Some(0), Some(1)];
+        let low = shape_t1(&[5.0, 20.0, 5.0, 20.0], &cells, &[vec![0, 1], vec![2, 3]]);
+        assert!(low[0].is_nan() && low[2].is_nan() && low[1] == 20.0 && low[3] == 20.0);
+        let alone = shape_t1(&[20.0, 20.0], &[Some(0), None], &[vec![0], vec![1]]);
+        assert!(alone.iter().all(|v| v.is_nan()));
     }
 }

@@ -1,7 +1,8 @@
 //! Within-run fits: every run has its own mu, and a set of effects shares its parameters θ
 //! across runs.
 //!
-//! T2ᵢ = Model(mu_r(i), θ).predict(T1ᵢ, opᵢ), weighted least squares in T2 (N) with the
+//! T2ᵢ = Model(mu_r(i), θ).predict(T1ᵢ, opᵢ) — its shape in tension read at the row's shape
+//! point where it has one ([`super::design::shape_t1`]) — weighted least squares in T2 (N) with the
 //! weights of the noise's variance function ([`Weights`]). Giving every run its own mu
 //! conditions out everything that varies between runs and cords (their scatter of mu, their
 //! tare, wear, diameter and speed dependence, a gain error): what is left to θ is the shape of

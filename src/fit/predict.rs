@@ -2,7 +2,9 @@
 //! and the sensitivities (Jacobian) of every prediction with respect to θ.
 //!
 //! Every T2 comes from [`capstan_friction::FrictionLaw::t2_n`] and the model's
-//! [`capstan_friction::SensorArtefacts`] exactly as in `Model::predict_t2_n`; the load memory H
+//! [`capstan_friction::SensorArtefacts`] exactly as in `Model::predict_t2_n` — at the row's own
+//! T1, or (the evidence engine's within-run fits, [`RunRows::t1_shape_n`]) with the law read at
+//! a shape point and its amplification applied to the row's T1; the load memory H
 //! comes from [`LoadMemory::advance`] over the step timing. Within a step the load
 //! L = T2 − T1 (true tensions) is held constant, so the window-centre memory depends on the
 //! step's own T2: T2 = t2_n(T1, H(T2)) is solved as a scalar fixed point (bracketed
@@ -113,7 +115,7 @@ pub fn predict_model(model: &Model, obs: &Observations) -> (Vec<f64>, Vec<f64>) 
 /// Predicted measured T2 of one run's rows (`rows`, in time order) with `model`, written to
 /// `out[i]`. With contact heating (h ≠ 0) the load memory is carried from step to step when
 /// `carry` (the run's step timing is known); otherwise each row starts from a cold contact at
-/// its step change. Without heating every row is `model.predict_t2_n`.
+/// its step change. Without heating and shape points every row is `model.predict_t2_n`.
 ///
 /// `hint`, if given, holds predictions for nearby parameters (measured T2 per row, and maybe
 /// the step equation's slope there): the step equation is then polished by Newton's method
@@ -166,7 +168,6 @@ pub fn predict_run(
         let x_row = model.sensors.true_t1_n(t1_n[i]);
         let x = shape(i, x_row);
         let scale = if x == x_row { 1.0 } else { x_row / x };
-        let lam = 1.0;
         let dt_c = tm.centre_s - tm.change_s;
         let near = hint.map(|h| {
             let y0 = (h.t2[i] - model.sensors.t2_offset_n) / model.sensors.t2_gain;
@@ -175,9 +176,9 @@ pub fn predict_run(
         let (y, slope) = match near {
             Some((y0, s0)) => {
                 let a_c = decay.factor(dt_c);
-                solve_step_from(law, (x, lam), &op[i], (h_acc, dt_c, a_c), (y0, s0))
+                solve_step_from(law, x, &op[i], (h_acc, dt_c, a_c), (y0, s0))
             }
-            None => (solve_step(law, (x, lam), &op[i], h_acc, dt_c).0, f64::NAN),
+            None => (solve_step(law, x, &op[i], h_acc, dt_c).0, f64::NAN),
         };
         if let Some(s) = slopes.as_deref_mut() {
             s[i] = slope;
@@ -188,22 +189,15 @@ pub fn predict_run(
     }
 }
 
-/// Below this T1 (N, the row's or its shape reading's) a row's law is read at its own T1. At
-/// low tension a run's zero error (~0.1 N) moves T1 by more than the wander does, and the
-/// shapes that live there (the lift-off of a stiff cord, offsets) are better read at the row's
-/// own reading; the wander's pull on a shape read at the row's T1 is largest late in rising
-/// runs, at high tension. Chosen on the calibration seed (99) from 2, 4 and 8 N (single effects
-/// 100/100/101 of 110, pairs 51/52/52 of 66; docs/README-diagnose.md).
-pub const SHAPE_MIN_T1_N: f64 = 8.0;
-
-/// The true T1 at which a row's law is read: `x`, the row's own, unless a shape T1 (a measured
-/// reading, see [`RunRows::t1_shape_n`]) is given and both are at least [`SHAPE_MIN_T1_N`];
-/// the law's amplification there is then applied to `x`.
+/// The true T1 at which a row's law is read: the true T1 of its shape reading (see
+/// [`RunRows::t1_shape_n`]; NaN: none) where both that and the row's own `x` are above zero,
+/// else `x`; the law's amplification there is then applied to `x`.
 pub fn shape_point(model: &Model, x: f64, t1_shape_n: Option<f64>) -> f64 {
-    let Some(t) = t1_shape_n else { return x };
+    let Some(t) = t1_shape_n.filter(|t| t.is_finite()) else {
+        return x;
+    };
     let xs = model.sensors.true_t1_n(t);
-    let loaded = |v: f64| v.is_finite() && v >= SHAPE_MIN_T1_N;
-    if xs != x && loaded(x) && loaded(xs) {
+    if x > 0.0 && xs > 0.0 {
         xs
     } else {
         x
@@ -287,8 +281,9 @@ pub struct RunRows<'a> {
     /// Measured T1 per row, N.
     pub t1_n: &'a [f64],
     /// Measured T1 per row at which the law's shape (its dependence on tension and the load
-    /// the contact remembers) is read, if not the row's own: the evidence engine's instrument
-    /// (`evidence::design::Design::t1_shape`).
+    /// the contact remembers) is read, NaN where the row's own: the evidence engine's
+    /// (`evidence::design::Design::t1_shape`). `None` (the population fits of `capstan
+    /// analyze`, which predict new cords): every row at its own T1.
     pub t1_shape_n: Option<&'a [f64]>,
     /// Operating point per row.
     pub op: &'a [Operating],
@@ -302,17 +297,17 @@ pub struct RunRows<'a> {
 /// bracketed search if Newton does not settle at once); `a` is the memory's decay over `dt_c`.
 fn solve_step_from(
     law: &FrictionLaw,
-    (x, lam): (f64, f64),
+    x: f64,
     op: &Operating,
     (h_acc, dt_c, a): (f64, f64, f64),
     (y0, s0): (f64, f64),
 ) -> (f64, f64) {
     let tau = law.heat_tau_s;
-    // The memory after dt_c, linear in the load: H(y) = h_acc·a + τ(1 − a)·λ·max(y − x, 0),
+    // The memory after dt_c, linear in the load: H(y) = h_acc·a + τ(1 − a)·max(y − x, 0),
     // a = exp(−dt_c/τ).
     let h_of = |y: f64| {
         if dt_c > 0.0 && tau > 0.0 {
-            h_acc * a + (lam * (y - x)).max(0.0) * tau * (1.0 - a)
+            h_acc * a + (y - x).max(0.0) * tau * (1.0 - a)
         } else {
             h_acc
         }
@@ -348,19 +343,13 @@ fn solve_step_from(
             known = f64::NAN;
         }
     }
-    (solve_step(law, (x, lam), op, h_acc, dt_c).0, f64::NAN)
+    (solve_step(law, x, op, h_acc, dt_c).0, f64::NAN)
 }
 
 /// Solve y = t2_n(x, H(y)) with H(y) = memory after `dt_c` from `h_acc` under load y − x.
-fn solve_step(
-    law: &FrictionLaw,
-    (x, lam): (f64, f64),
-    op: &Operating,
-    h_acc: f64,
-    dt_c: f64,
-) -> (f64, f64) {
+fn solve_step(law: &FrictionLaw, x: f64, op: &Operating, h_acc: f64, dt_c: f64) -> (f64, f64) {
     let tau = law.heat_tau_s;
-    let h_of = |y: f64| memory_step(h_acc, dt_c, lam * (y - x), tau).0;
+    let h_of = |y: f64| memory_step(h_acc, dt_c, y - x, tau).0;
     let rhs = |y: f64| t2_at(law, x, op, h_of(y));
     let y0 = rhs(x);
     if law.heat_per_ns == 0.0 || x <= 0.0 || !y0.is_finite() {
@@ -455,7 +444,7 @@ fn run_one(
         }
         let x = sensors.true_t1_n(row.t1_n);
         let dt_c = tm.centre_s - tm.change_s;
-        let (y, h_c) = solve_step(law, (x, 1.0), &row.op, h_acc, dt_c);
+        let (y, h_c) = solve_step(law, x, &row.op, h_acc, dt_c);
         let load = y - x;
         let (_, a_c, b_c, dtau_c) = memory_step(h_acc, dt_c, load, tau);
         let dt_s = tm.end_s - tm.change_s;
@@ -539,15 +528,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_law_is_read_at_the_shape_point_only_above_its_floor() {
+    fn the_law_is_read_at_the_shape_point_where_one_is_given() {
         let m = Model::euler_eytelwein(0.1);
-        // Both loaded: the shape reading's true T1.
+        // A shape reading: its true T1 (with the model's T1 offset).
         assert_eq!(shape_point(&m, 9.0, Some(10.0)), 10.0);
-        // Either below the floor, or no shape reading: the row's own.
-        assert_eq!(shape_point(&m, 7.9, Some(10.0)), 7.9);
-        assert_eq!(shape_point(&m, 9.0, Some(7.9)), 9.0);
+        let mut o = m;
+        o.sensors.t1_offset_n = 0.5;
+        assert_eq!(shape_point(&o, 9.0, Some(10.0)), 9.5);
+        // None, NaN (the design's "own"), or either side not above zero: the row's own.
         assert_eq!(shape_point(&m, 9.0, None), 9.0);
         assert_eq!(shape_point(&m, 9.0, Some(f64::NAN)), 9.0);
+        assert_eq!(shape_point(&m, 0.0, Some(10.0)), 0.0);
+        assert_eq!(shape_point(&m, 9.0, Some(-1.0)), 9.0);
         // Euler-Eytelwein has no shape in tension: the prediction does not change.
         let op = [Operating::from_wrap_deg(540.0)];
         let tm = [super::super::obs::StepTiming {
