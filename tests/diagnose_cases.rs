@@ -97,13 +97,18 @@ fn diagnose_names_what_was_planted_and_flags_what_it_cannot_name() {
         1e3 * secs / rows as f64 * 1000.0
     );
     if full() {
-        // The issue's targets (≥ 90 % single, ≥ 75 % pairs, ≥ 80 % outside, ≤ 5 % clean) are
-        // printed above; over three master seeds the diagnosis reaches 85.5-91.8 % on single
-        // effects, 75.8-78.8 % on pairs, 93.8-100 % outside and 0-5 % on clean sets
-        // (docs/README-diagnose.md). The test holds the line those seeds all clear, rivals
-        // included: 6.0-8.3 % of right calls carry one, and 57-75 % (4/7-5/7, 3/4) of the calls of one
-        // effect in place of another report the planted effect as its rival.
-        let why = m.failures_against(&score::Targets::MEASURED);
+        // On the test seed, the issue's targets (≥ 90 % single with ≥ 90 % of their parameters
+        // within 25 %, ≥ 75 % pairs, ≥ 80 % outside, ≤ 5 % clean): the thresholds were
+        // calibrated on seed 99 and are judged here on cases they never saw. On any seed
+        // (`CAPSTAN_DIAGNOSE_SEED`), the line the three seeds measured all clear: single
+        // effects reach 87.3-91.8 % there (the fresh seed 2718281828 is the low one), pairs
+        // 78.8-80.3 %, outside 91.7-100 %, clean 0-5 % (docs/README-diagnose.md), and the
+        // rivals: 5.9-8.1 % of right calls carry one, 75-100 % of the calls of one effect in
+        // place of another report the planted effect as its rival.
+        let mut why = m.failures_against(&score::Targets::MEASURED);
+        if master_seed() == MASTER_SEED {
+            why.extend(m.failures_against(&score::Targets::ISSUE));
+        }
         assert!(why.is_empty(), "{}", why.join("; "));
     } else {
         // The slice has too few cases per class for the targets' percentages; it asserts the
