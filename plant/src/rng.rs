@@ -90,11 +90,10 @@ impl Rng {
     pub fn normal(&mut self) -> f64 {
         // The common case (~99 %) inline; the rest, rare, out of line (same draws in the same
         // order either way).
-        let (i, u) = self.layer_draw();
-        if u.abs() < ZIG_RATIO[i] {
-            return u * ZIG_X[i];
-        }
-        self.normal_outside(i, u)
+        let mut state = self.s;
+        let x = Self::normal_in(&mut state);
+        self.s = state;
+        x
     }
 
     /// The state, for [`Rng::normal_in`] on a copy of it.

@@ -106,9 +106,15 @@ impl Plant {
     /// Skip `next_frame_us` past the present (the frames skipped while settled changed
     /// nothing: see `next_event_us`).
     pub(super) fn catch_up_frames(&mut self) {
-        let frame = self.cfg.servo.frame_us as u64;
-        while self.next_frame_us <= self.t_us {
-            self.next_frame_us += frame;
+        self.frames_past(self.t_us);
+    }
+
+    /// Move `next_frame_us` to the first frame of its grid after `t_us` (in one step however
+    /// long the plant was settled; `frame_us` > 0 is checked when the plant is built).
+    fn frames_past(&mut self, t_us: u64) {
+        if self.next_frame_us <= t_us {
+            let frame = self.cfg.servo.frame_us as u64;
+            self.next_frame_us += ((t_us - self.next_frame_us) / frame + 1) * frame;
         }
     }
 
@@ -126,10 +132,7 @@ impl Plant {
             }
             c.target_deg = target;
         }
-        let frame = self.cfg.servo.frame_us as u64;
-        while self.next_frame_us <= t_end {
-            self.next_frame_us += frame;
-        }
+        self.frames_past(t_end);
     }
 
     /// The contact's load memory, the wander of mu, and the refresh of time-dependent laws.
