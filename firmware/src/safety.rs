@@ -1,11 +1,16 @@
-//! The safety supervisor: decides, sample by sample, whether the run must stop.
+//! The safety supervisor: decides, sample by sample, whether the rig must go safe.
 //!
 //! It only decides; the rig (`rig.rs`) puts the hardware in its safe state (servo to rest,
-//! amplifier to 0 V, trigger low) in the same sample period the fault is raised. Every check
+//! amplifier to 0 V, trigger low) in the same sample period the fault is raised. It runs in
+//! every state: runs, idle (homing and a latched fault included) and setup mode. Every check
 //! needs a few consecutive bad samples, so one noisy conversion never stops a run, and the
 //! longest of them (5 samples at 1 kHz) keeps detection well inside 20 ms.
+//!
+//! Also here: [`SafetyLimits::visible`], the condition a calibration must meet for the
+//! over-force check to hold by construction (the limit reads below the rail check), checked
+//! wherever a calibration comes in (`set`, `weigh`, `zero`, the flash) and after every tare.
 
-use crate::hal::{AdcError, Channel, ADC_MAX_COUNTS};
+use crate::hal::{AdcError, Channel};
 use crate::record::{Fault, FaultKind};
 
 /// Thresholds of the supervisor.
@@ -18,7 +23,11 @@ pub struct SafetyLimits {
     pub over_force_samples: u16,
     /// A channel at or below this many counts is at the low rail (unplugged).
     pub rail_low_counts: u16,
-    /// A channel at or above this many counts is at the high rail (shorted / saturated).
+    /// A channel at or above this many counts is at the high rail (shorted or saturated).
+    /// Must be below the highest reading a sensor can produce: a 0-5 V sensor behind the
+    /// board's 10k/18k divider saturates at ~3990 counts (3.21 V; 3910 with a 2 % high
+    /// ADC_VREF), so the default 3900 makes a sensor pinned at its output's rail a rail
+    /// fault, never a blind spot between saturation and the check (default 3900).
     pub rail_high_counts: u16,
     /// Consecutive rail (or failed) conversions before the fault (default 5).
     pub rail_samples: u16,
@@ -35,6 +44,26 @@ pub struct SafetyLimits {
     pub cord_slack_n: f32,
     /// Largest gap between two samples before the watchdog fault, µs (default 10 ms).
     pub max_sample_gap_us: u32,
+    /// A channel reading below −this, N, for `over_force_samples` samples is a fault
+    /// (`negative_force`): a cord cannot push, so the sensor is reversed or its zero is wrong,
+    /// and a reversed sensor would hide any over-force (default 3).
+    pub negative_force_n: f32,
+}
+
+/// The over-force limit must read at least this many counts below the rail check
+/// ([`SafetyLimits::visible`]): 1 % of the ADC's range.
+pub const VISIBLE_MARGIN_COUNTS: f32 = 41.0;
+
+/// A calibration under which the over-force check could not trip: on `channel`, the highest
+/// force the rig can read before the rail check is `readable_n`, below the limit (with
+/// [`VISIBLE_MARGIN_COUNTS`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct Blind {
+    /// The channel that cannot show the limit.
+    pub channel: Channel,
+    /// The force it reads at the rail check less the margin, N.
+    pub readable_n: f32,
 }
 
 impl Default for SafetyLimits {
@@ -43,14 +72,38 @@ impl Default for SafetyLimits {
             over_force_n: 45.0,
             over_force_samples: 3,
             rail_low_counts: 4,
-            rail_high_counts: ADC_MAX_COUNTS - 4,
+            rail_high_counts: 3_900,
             rail_samples: 5,
             cord_break_ratio: 0.3,
             cord_break_min_t1_n: 0.5,
             cord_break_samples: 5,
             cord_slack_n: 0.05,
             max_sample_gap_us: 10_000,
+            negative_force_n: 3.0,
         }
+    }
+}
+
+impl SafetyLimits {
+    /// The over-force check holds by construction under `cal`: on each channel the limit
+    /// reads at least [`VISIBLE_MARGIN_COUNTS`] below the rail check, so a force at the limit
+    /// is either read as one (over-force) or pins the sensor (rail). `Err` names the first
+    /// channel where it does not (a sensitivity typed too low, a zero too high, a sensor whose
+    /// range ends below the limit). Only a true calibration makes the reading true: `weigh`
+    /// measures the sensitivity, the tare checks the zero ([`crate::rig::TARE_MAX_N`]).
+    pub fn visible(&self, cal: &crate::calib::Calibration) -> Result<(), Blind> {
+        let top = self.rail_high_counts as f32 - VISIBLE_MARGIN_COUNTS;
+        for (channel, ch) in [(Channel::T1, &cal.t1), (Channel::T2, &cal.t2)] {
+            let readable_n = (top - ch.zero_counts) * ch.n_per_count;
+            // (NaN compares false: refused too.)
+            if !(readable_n >= self.over_force_n) {
+                return Err(Blind {
+                    channel,
+                    readable_n,
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -72,6 +125,7 @@ pub struct SafetyInput {
 pub struct Supervisor {
     limits: SafetyLimits,
     over: [u16; 2],
+    neg: [u16; 2],
     rail: [u16; 2],
     cord: u16,
     last_t_us: Option<i64>,
@@ -95,6 +149,7 @@ impl Supervisor {
         Supervisor {
             limits,
             over: [0; 2],
+            neg: [0; 2],
             rail: [0; 2],
             cord: 0,
             last_t_us: None,
@@ -160,7 +215,7 @@ impl Supervisor {
         let [t1, t2] = input.force_n;
         // (`c > l.rail_low_counts && c < l.rail_high_counts`, in one comparison: see `new`.)
         let off_rail = |c: u16| c.wrapping_sub(self.off_rail_from) < self.off_rail_span;
-        let over = |f: f32| f > l.over_force_n;
+        let over = |f: f32| f > l.over_force_n || f < -l.negative_force_n;
         off_rail(c1)
             && off_rail(c2)
             && !over(t1)
@@ -205,6 +260,11 @@ impl Supervisor {
             if self.over[i] >= l.over_force_samples {
                 return fault(FaultKind::OverForce, Some(ch), f);
             }
+            let negative = !at_rail && f < -l.negative_force_n;
+            self.neg[i] = if negative { self.neg[i] + 1 } else { 0 };
+            if self.neg[i] >= l.over_force_samples {
+                return fault(FaultKind::NegativeForce, Some(ch), f);
+            }
         }
         let [t1, t2] = input.force_n;
         let collapsed = input.cord_check_armed
@@ -218,7 +278,10 @@ impl Supervisor {
         // No fault: every sample limit is above its counter, so at least one.
         #[cfg(not(target_os = "none"))]
         {
-            self.quiet = self.rail == [0; 2] && self.over == [0; 2] && self.cord == 0;
+            self.quiet = self.rail == [0; 2]
+                && self.over == [0; 2]
+                && self.neg == [0; 2]
+                && self.cord == 0;
         }
         None
     }
@@ -351,6 +414,7 @@ mod tests {
     struct Reference {
         limits: SafetyLimits,
         over: [u16; 2],
+        neg: [u16; 2],
         rail: [u16; 2],
         cord: u16,
         last_t_us: Option<i64>,
@@ -389,6 +453,11 @@ mod tests {
                 self.over[i] = if over { self.over[i] + 1 } else { 0 };
                 if self.over[i] >= l.over_force_samples {
                     return fault(FaultKind::OverForce, Some(ch), f);
+                }
+                let negative = !at_rail && f < -l.negative_force_n;
+                self.neg[i] = if negative { self.neg[i] + 1 } else { 0 };
+                if self.neg[i] >= l.over_force_samples {
+                    return fault(FaultKind::NegativeForce, Some(ch), f);
                 }
             }
             let [t1, t2] = input.force_n;
@@ -467,6 +536,7 @@ mod tests {
                 let mut reference = Reference {
                     limits,
                     over: [0; 2],
+                    neg: [0; 2],
                     rail: [0; 2],
                     cord: 0,
                     last_t_us: None,
@@ -477,7 +547,7 @@ mod tests {
                 for _ in 0..400 {
                     let r = next();
                     if r % 16 == 0 {
-                        kind = (r >> 8) % 10;
+                        kind = (r >> 8) % 11;
                     }
                     t_us += if (r >> 20) % 997 == 0 { 12_000 } else { 1_000 };
                     let count = |r: u64| -> Result<u16, AdcError> {
@@ -493,6 +563,7 @@ mod tests {
                     let mut force_n = [f(next()), f(next())];
                     match kind {
                         4 => force_n[(r >> 30) as usize % 2] = 45.0 + (r >> 40) as f32 % 3.0,
+                        9 => force_n[(r >> 30) as usize % 2] = -2.0 - (r >> 40) as f32 % 3.0,
                         5 => force_n = [9.0, 0.15 + (r >> 40) as f32 % 4.0],
                         6 => force_n = [0.01, -0.02 + ((r >> 40) % 2) as f32 * 0.07],
                         7 => force_n[(r >> 30) as usize % 2] = f32::NAN,
@@ -513,10 +584,11 @@ mod tests {
                     };
                     assert_eq!(bits(got), bits(want), "{limits:?} {input:?}");
                     assert_eq!(
-                        (sup.rail, sup.over, sup.cord, sup.last_t_us),
+                        (sup.rail, sup.over, sup.neg, sup.cord, sup.last_t_us),
                         (
                             reference.rail,
                             reference.over,
+                            reference.neg,
                             reference.cord,
                             reference.last_t_us
                         ),
@@ -542,5 +614,63 @@ mod tests {
         let f = s.check(&input(16_000, ok, [9.0, 24.0])).unwrap();
         assert_eq!(f.kind, FaultKind::Watchdog);
         assert_eq!(f.value, 15.0);
+    }
+
+    #[test]
+    fn a_reading_far_below_zero_is_a_fault() {
+        // A reversed sensor reads a rising tension as a falling one: over-force blind.
+        let mut s = Supervisor::new(SafetyLimits::default());
+        let got = feed(&mut s, 10, [Ok(150), Ok(2000)], [-3.75, 24.0]).unwrap();
+        assert_eq!(
+            (got.0, got.1.kind, got.1.channel),
+            (2, FaultKind::NegativeForce, Some(Channel::T1))
+        );
+        // Offsets and noise around zero are not.
+        let mut s = Supervisor::new(SafetyLimits::default());
+        assert_eq!(feed(&mut s, 100, [Ok(330), Ok(530)], [-1.2, 2.0]), None);
+    }
+
+    #[test]
+    fn a_calibration_is_visible_only_if_the_limit_reads_below_the_rail_check() {
+        use crate::calib::{Calibration, ChannelCal};
+        let l = SafetyLimits::default();
+        // The default: 45 N at 3400 counts, rail check at 3900.
+        assert_eq!(l.visible(&Calibration::default()), Ok(()));
+        let with = |t1: ChannelCal| Calibration {
+            t1,
+            ..Calibration::default()
+        };
+        // The README's 0.01253 N/count with a 0.5 V zero (400 counts): 45 N at 3991 counts,
+        // above where the divider saturates: blind.
+        let readme = ChannelCal {
+            zero_counts: 400.0,
+            n_per_count: 0.01253,
+        };
+        let b = l.visible(&with(readme)).unwrap_err();
+        assert_eq!(b.channel, Channel::T1);
+        assert!((b.readable_n - 43.34).abs() < 0.01, "{b:?}");
+        // A sensitivity typed ten times low.
+        let typo = ChannelCal {
+            zero_counts: 400.0,
+            n_per_count: 0.0015,
+        };
+        assert!(l.visible(&with(typo)).is_err());
+        // A zero moved up by a preload of 6 N at 0.015 N/count.
+        let preloaded = ChannelCal {
+            zero_counts: 800.0,
+            n_per_count: 0.015,
+        };
+        assert!(l.visible(&with(preloaded)).is_ok());
+        let preloaded = ChannelCal {
+            zero_counts: 900.0,
+            n_per_count: 0.015,
+        };
+        assert!(l.visible(&with(preloaded)).is_err());
+        // NaN never passes.
+        let nan = ChannelCal {
+            zero_counts: f32::NAN,
+            n_per_count: 0.015,
+        };
+        assert!(l.visible(&with(nan)).is_err());
     }
 }
