@@ -63,6 +63,8 @@ struct CordState {
     disturb: Option<DisturbState>,
     /// The servo last moved to release the cord (tension falling).
     falling: bool,
+    /// The servo took a pulse at its last frame (false: unpowered, back-driven by the cord).
+    powered: bool,
     broken: bool,
     snag: bool,
     unplugged: [bool; 2],
