@@ -169,6 +169,12 @@ where
     }
 }
 
+/// The hardware watchdog's timeout while the loop samples, ms (the board's
+/// `WATCHDOG_TIMEOUT`; host-sim resets its simulated board this long after a frozen loop's last
+/// feed). Ten samples: a loop that has stopped leaves the outputs as they were for at most this
+/// long before the chip resets and releases every pin.
+pub const WATCHDOG_MS: u32 = 10;
+
 /// The watchdog's allowance while the flash is written, ms: a 4 KiB erase takes ~45 ms and
 /// at most ~400 ms on the Pico's W25Q16, and a save may erase several pages (a repair, a
 /// migration). The RP2040's watchdog takes up to 8.3 s. Only then, and only with the outputs

@@ -136,6 +136,21 @@ pub struct TraceSample {
     pub current_a: f64,
 }
 
+impl TraceSample {
+    /// Cord 0 of `p` now.
+    pub fn of(p: &Plant) -> TraceSample {
+        let (c, d) = (p.truth(0), p.drive());
+        TraceSample {
+            t_us: p.now_us(),
+            t1_n: c.t1_n,
+            t2_n: c.t2_n,
+            angle_deg: c.angle_deg,
+            capstan_rpm: d.capstan_rpm,
+            current_a: d.current_a,
+        }
+    }
+}
+
 /// How a run went wrong (beyond a fault the firmware handled).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RunFailure {
@@ -251,17 +266,7 @@ pub fn run(spec: &RunSpec) -> Result<RunOutput, SetupError> {
         let runner = firmware::run_once(&mut io, &mut rig, &mut sink);
         if spec.trace_every_ms > 0 {
             let every = Duration::from_millis(spec.trace_every_ms as u64);
-            let probe = sample_plant(&plant, every, |p| {
-                let (c, d) = (p.truth(0), p.drive());
-                trace.borrow_mut().push(TraceSample {
-                    t_us: p.now_us(),
-                    t1_n: c.t1_n,
-                    t2_n: c.t2_n,
-                    angle_deg: c.angle_deg,
-                    capstan_rpm: d.capstan_rpm,
-                    current_a: d.current_a,
-                });
-            });
+            let probe = sample_plant(&plant, every, |p| trace.borrow_mut().push(TraceSample::of(p)));
             let both = embassy_futures::select::select(runner, probe);
             time::block_on_until(both, limit).map(|e| match e {
                 embassy_futures::select::Either::First(r) => r,
