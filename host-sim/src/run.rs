@@ -130,8 +130,12 @@ pub struct TraceSample {
     pub t2_n: f64,
     /// Servo angle, deg.
     pub angle_deg: f64,
+    /// The servo pulse commanded, µs (0: none).
+    pub pulse_us: f64,
     /// Capstan speed, rpm.
     pub capstan_rpm: f64,
+    /// The drive motor's voltage (after the amplifier control's RC filter), V.
+    pub drive_v: f64,
     /// Drive current, A.
     pub current_a: f64,
 }
@@ -145,7 +149,9 @@ impl TraceSample {
             t1_n: c.t1_n,
             t2_n: c.t2_n,
             angle_deg: c.angle_deg,
+            pulse_us: c.commanded_pulse_us,
             capstan_rpm: d.capstan_rpm,
+            drive_v: d.drive_v,
             current_a: d.current_a,
         }
     }
@@ -266,7 +272,9 @@ pub fn run(spec: &RunSpec) -> Result<RunOutput, SetupError> {
         let runner = firmware::run_once(&mut io, &mut rig, &mut sink);
         if spec.trace_every_ms > 0 {
             let every = Duration::from_millis(spec.trace_every_ms as u64);
-            let probe = sample_plant(&plant, every, |p| trace.borrow_mut().push(TraceSample::of(p)));
+            let probe = sample_plant(&plant, every, |p| {
+                trace.borrow_mut().push(TraceSample::of(p))
+            });
             let both = embassy_futures::select::select(runner, probe);
             time::block_on_until(both, limit).map(|e| match e {
                 embassy_futures::select::Either::First(r) => r,

@@ -55,6 +55,8 @@ pub enum Step {
     /// The button is held down from now for this long, ms, and the next step follows at once
     /// (a button held across a reset, or stuck).
     HoldButton(u32),
+    /// A sensor is fitted the wrong way round from now on: a tension lowers its reading.
+    ReverseSensor(Channel),
 }
 
 /// From a reset to the firmware's first sample on the simulated board, ms (the RP2040 boots
@@ -281,7 +283,10 @@ async fn probe(plant: &RefCell<Plant>, every_ms: u32, trace: &RefCell<Vec<TraceS
         return core::future::pending().await;
     }
     let every = Duration::from_millis(every_ms as u64);
-    sample_plant(plant, every, |p| trace.borrow_mut().push(TraceSample::of(p))).await
+    sample_plant(plant, every, |p| {
+        trace.borrow_mut().push(TraceSample::of(p))
+    })
+    .await
 }
 
 /// Nothing drives the plant for `ms` (a hung loop, a chip booting): time passes, traced.
@@ -362,6 +367,7 @@ async fn host(
                 plant.borrow_mut().press(0, now, *ms as u64 * 1000);
                 Timer::after(Duration::from_millis(*ms as u64)).await;
             }
+            Step::ReverseSensor(ch) => plant.borrow_mut().reverse_sensor(0, *ch),
             Step::HoldButton(ms) => {
                 let now = time::now_us();
                 plant.borrow_mut().press(0, now, *ms as u64 * 1000);

@@ -194,6 +194,14 @@ impl Plant {
         c.zero[k] += newtons * c.counts_per_n[k];
     }
 
+    /// Mount cord's sensor `channel` the wrong way round: a tension lowers its reading (the
+    /// same sensitivity, the other sign), as a sensor fitted or wired reversed does.
+    pub fn reverse_sensor(&mut self, cord: usize, channel: Channel) {
+        let c = &mut self.cords[cord];
+        let k = channel as usize;
+        c.counts_per_n[k] = -c.counts_per_n[k];
+    }
+
     /// Bring the plant to `now_us` (no-op if it is there already or past it).
     #[inline]
     pub fn advance_to(&mut self, now_us: u64) {

@@ -36,7 +36,10 @@ fn the_cord_back_drives_an_unpowered_horn_toward_release_only() {
     // T1 = 0.47 N), on the tension side of rest (0.1 N at 123.3° of horn).
     let hold_n = p.config().servo.unpowered_hold_nm / p.config().servo.lever_m;
     assert!((t.t1_n - hold_n).abs() < 0.05, "{t:?}");
-    assert!(t.angle_deg > held + 40.0 && t.angle_deg < horn_deg(125.0), "{t:?}");
+    assert!(
+        t.angle_deg > held + 40.0 && t.angle_deg < horn_deg(125.0),
+        "{t:?}"
+    );
     // At the preload nothing moves: the gear train holds it.
     let (mut p, held) = unpowered_at(125.0);
     p.advance_to(p.now_us() + 500 * MS);
