@@ -140,8 +140,7 @@ pub const AMP_PWM_TOP: u16 = 4_095;
 /// servo at rest and the amplifier off. A panic or HardFault does not wait for it: its handler
 /// drives the outputs safe first (`board_safe.rs`). The software supervisor's 10 ms sample-gap
 /// fault catches a merely slow loop.
-pub const WATCHDOG_TIMEOUT: Duration =
-    Duration::from_millis(firmware::runner::WATCHDOG_MS as u64);
+pub const WATCHDOG_TIMEOUT: Duration = Duration::from_millis(firmware::runner::WATCHDOG_MS as u64);
 
 /// Does the watchdog pause while a debugger halts the core? Not on the rig (`false`): a core
 /// halted by the probe — probe-rs stopping it on a HardFault, or a breakpoint — is reset within

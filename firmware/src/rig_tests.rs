@@ -9,11 +9,11 @@ use crate::rig::{Inputs, Outputs, Rig};
 use crate::safety::SafetyLimits;
 use std::vec::Vec;
 
-/// Between runs: fault latching and acknowledgement, slow homing after a reset.
-mod idle;
 /// What must never blind a check or move the rig without a person: a loaded tare, a mistyped
 /// sensitivity, a held button, a fault while idle, a reset, a store away from rest.
 mod guard;
+/// Between runs: fault latching and acknowledgement, slow homing after a reset.
+mod idle;
 
 #[derive(Default)]
 struct VecSink(Vec<(u32, Record)>);

@@ -115,7 +115,8 @@ where
         // tare only re-zeroes the force channels), and `serve` forgets `written` then; so a
         // command equal to the last one maps to the same duty.
         let cal = rig.calibration();
-        if written.servo_deg != Some(out.servo_deg) || written.servo_pulses != Some(out.servo_pulses)
+        if written.servo_deg != Some(out.servo_deg)
+            || written.servo_pulses != Some(out.servo_pulses)
         {
             // Duty 0: no pulses at all (the servo is unpowered).
             let servo = if out.servo_pulses {

@@ -278,10 +278,8 @@ impl Supervisor {
         // No fault: every sample limit is above its counter, so at least one.
         #[cfg(not(target_os = "none"))]
         {
-            self.quiet = self.rail == [0; 2]
-                && self.over == [0; 2]
-                && self.neg == [0; 2]
-                && self.cord == 0;
+            self.quiet =
+                self.rail == [0; 2] && self.over == [0; 2] && self.neg == [0; 2] && self.cord == 0;
         }
         None
     }

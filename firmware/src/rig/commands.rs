@@ -423,12 +423,14 @@ impl Rig {
 
     /// A zero or weigh put into the calibration, if the over-force limit stays visible under
     /// the result (else nothing changes). A zero moves the zeros a run's tare is held to.
-    fn apply_measure(&mut self, what: Measuring, m: setup::Means) -> Result<[f32; 2], CommandError> {
+    fn apply_measure(
+        &mut self,
+        what: Measuring,
+        m: setup::Means,
+    ) -> Result<[f32; 2], CommandError> {
         let mut cal = self.cal;
         let values = setup::apply(what, m, &mut cal)?;
-        self.limits
-            .visible(&cal)
-            .map_err(|_| CommandError::Blind)?;
+        self.limits.visible(&cal).map_err(|_| CommandError::Blind)?;
         self.cal = cal;
         self.zeros = [cal.t1.zero_counts, cal.t2.zero_counts];
         Ok(values)

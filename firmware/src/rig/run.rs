@@ -78,7 +78,12 @@ impl Rig {
     }
 
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    pub(super) fn step_running(&mut self, inp: &Inputs, pressed: bool, sink: &mut impl LogSink) -> Outputs {
+    pub(super) fn step_running(
+        &mut self,
+        inp: &Inputs,
+        pressed: bool,
+        sink: &mut impl LogSink,
+    ) -> Outputs {
         // Borrowed, not copied: the protocol is ~60 bytes, and a sample needs a few of them.
         let p = &self.protocol;
         let period_us = self.period_us as u64;

@@ -108,16 +108,29 @@ fn a_sensitivity_that_would_blind_the_check_is_refused_wherever_it_comes_in() {
     let rest = rest_counts();
     let lines = [
         // Typed ten times low: out of the plausible range.
-        (Command::Set(Key::T1NPerCount, 0.00125), CommandError::Invalid),
+        (
+            Command::Set(Key::T1NPerCount, 0.00125),
+            CommandError::Invalid,
+        ),
         // The README's 0.01253 N/count with zero 400: 45 N reads at 3991 counts.
         (Command::Set(Key::T2NPerCount, 0.01253), CommandError::Blind),
         // A zero far too high: 45 N would read at 4000 counts.
         (Command::Set(Key::T1Zero, 1000.0), CommandError::Blind),
         // A sign: a reversed sensor.
-        (Command::Set(Key::T1NPerCount, -0.015), CommandError::Invalid),
+        (
+            Command::Set(Key::T1NPerCount, -0.015),
+            CommandError::Invalid,
+        ),
     ];
     for (k, (cmd, _)) in lines.iter().enumerate() {
-        one(&mut rig, &mut sink, k as u64 * 1000, rest, false, Some(*cmd));
+        one(
+            &mut rig,
+            &mut sink,
+            k as u64 * 1000,
+            rest,
+            false,
+            Some(*cmd),
+        );
     }
     let got: Vec<_> = replies(&sink).iter().map(|r| r.error).collect();
     let want: Vec<_> = lines.iter().map(|(_, e)| Some(*e)).collect();
@@ -177,7 +190,10 @@ fn a_weight_that_lowers_the_reading_or_a_negative_weight_is_refused() {
     for _ in 0..600 {
         step(&mut rig, hung, None);
     }
-    let errors: Vec<_> = replies(&sink).iter().map(|r| (r.command, r.error)).collect();
+    let errors: Vec<_> = replies(&sink)
+        .iter()
+        .map(|r| (r.command, r.error))
+        .collect();
     assert_eq!(
         errors,
         [
@@ -235,7 +251,10 @@ fn a_fault_while_idle_is_latched_and_recorded_once() {
     assert_eq!(first, Some(12_000), "three samples over the limit");
     let f = faults(&sink);
     assert_eq!(f.len(), 1, "recorded once while it persists: {f:?}");
-    assert_eq!((f[0].kind, f[0].channel), (FaultKind::OverForce, Some(Channel::T2)));
+    assert_eq!(
+        (f[0].kind, f[0].channel),
+        (FaultKind::OverForce, Some(Channel::T2))
+    );
     // A press acknowledges it; still there, it latches again.
     for k in 0..40 {
         one(&mut rig, &mut sink, t, over, (10..30).contains(&k), None);
@@ -280,7 +299,10 @@ fn homing_is_supervised_and_a_latched_fault_stops_it() {
     for _ in 0..2_000 {
         let out = one(&mut rig, &mut sink, t, over, false, None);
         // (Three samples to confirm the fault, at 0.01° each.)
-        assert!(out.servo_deg >= before - 0.031, "moved toward tension while latched");
+        assert!(
+            out.servo_deg >= before - 0.031,
+            "moved toward tension while latched"
+        );
         t += 1000;
     }
     assert_eq!(rig.latched_fault(), Some(FaultKind::OverForce));
@@ -296,7 +318,10 @@ fn after_a_reset_the_servo_gets_no_pulse_until_a_person_acknowledges() {
     assert_eq!(faults(&sink)[0].kind, FaultKind::Watchdog);
     assert!(!rig.idle_outputs().servo_pulses);
     // The panic path too: no pulses while limp.
-    assert_eq!(SafeDuties::for_rig(&rig, 62_500), SafeDuties::NO_SERVO_PULSES);
+    assert_eq!(
+        SafeDuties::for_rig(&rig, 62_500),
+        SafeDuties::NO_SERVO_PULSES
+    );
     let mut t = 0;
     // The host cannot start a run, nor setup mode.
     for cmd in [Command::Run, Command::Setup, Command::Store] {
@@ -331,13 +356,23 @@ fn after_a_reset_the_servo_gets_no_pulse_until_a_person_acknowledges() {
     }
     assert_eq!(first_pulse, Some(125.0));
     assert!(!rig.is_running() && rig.latched_fault().is_none());
-    assert_ne!(SafeDuties::for_rig(&rig, 62_500), SafeDuties::NO_SERVO_PULSES);
+    assert_ne!(
+        SafeDuties::for_rig(&rig, 62_500),
+        SafeDuties::NO_SERVO_PULSES
+    );
     // The host's `ack` works the same; then `run` starts a run.
     let mut rig = thesis_rig();
     rig.boot_latched(FaultKind::Panic, &mut sink);
     one(&mut rig, &mut sink, t, rest, false, Some(Command::Ack));
     assert!(rig.idle_outputs().servo_pulses);
-    one(&mut rig, &mut sink, t + 1000, rest, false, Some(Command::Run));
+    one(
+        &mut rig,
+        &mut sink,
+        t + 1000,
+        rest,
+        false,
+        Some(Command::Run),
+    );
     assert!(rig.is_running());
 }
 
@@ -380,7 +415,14 @@ fn a_fault_in_setup_mode_never_pulls_the_servo_toward_tension() {
     let rest = rest_counts();
     let mut t = 0;
     one(&mut rig, &mut sink, t, rest, false, Some(Command::Setup));
-    one(&mut rig, &mut sink, 1000, rest, false, Some(Command::Jog(15.0)));
+    one(
+        &mut rig,
+        &mut sink,
+        1000,
+        rest,
+        false,
+        Some(Command::Jog(15.0)),
+    );
     t += 2000;
     for _ in 0..1_000 {
         one(&mut rig, &mut sink, t, rest, false, None);
@@ -398,7 +440,14 @@ fn a_fault_in_setup_mode_never_pulls_the_servo_toward_tension() {
     // Jogged toward tension (110°) instead: the fault sends it to rest (release).
     let mut rig = thesis_rig();
     one(&mut rig, &mut sink, t, rest, false, Some(Command::Setup));
-    one(&mut rig, &mut sink, t + 1000, rest, false, Some(Command::Jog(-15.0)));
+    one(
+        &mut rig,
+        &mut sink,
+        t + 1000,
+        rest,
+        false,
+        Some(Command::Jog(-15.0)),
+    );
     t += 2000;
     for _ in 0..1_000 {
         one(&mut rig, &mut sink, t, rest, false, None);
