@@ -58,6 +58,8 @@ pub const WAKE_BUTTON: u32 = 1;
 pub const WAKE_PANIC: u32 = 2;
 /// [`Bench::wake`]: the emulation is over.
 pub const WAKE_STOP: u32 = 4;
+/// [`Bench::wake`]: put the core's stack pointer at the bottom of SRAM now.
+pub const WAKE_STACK_OVERFLOW: u32 = 8;
 
 /// Why the chip was reset (the watchdog's REASON register).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -234,6 +236,11 @@ pub struct Report {
     /// Every sample's codes, if the case keeps them (`Case::keep_samples`): (when the T1
     /// conversion started, ns; the T1 code; the T2 code).
     pub samples: Vec<(f64, u16, u16)>,
+    /// From the chip's first reset on, at each T1 conversion: (ns, the horn's angle, deg, the
+    /// true T1, N, the servo pulse the plant is given, µs (0: none), the drive's voltage, V).
+    pub after_reset: Vec<(f64, f64, f64, f64, f64)>,
+    /// The drive's voltage at the first reset, V.
+    pub drive_v_at_reset: Option<f64>,
 }
 
 /// The rig around the emulated chip. See the module documentation.
@@ -275,6 +282,8 @@ pub struct Bench {
     stopped: bool,
     now_ns: f64,
     samples: Vec<(f64, u16, u16)>,
+    after_reset: Vec<(f64, f64, f64, f64, f64)>,
+    drive_v_at_reset: Option<f64>,
 }
 
 impl Bench {
@@ -319,6 +328,8 @@ impl Bench {
             stopped: false,
             now_ns: 0.0,
             samples: Vec::new(),
+            after_reset: Vec::new(),
+            drive_v_at_reset: None,
         }
     }
 
@@ -353,6 +364,11 @@ impl Bench {
         let mut plant = Plant::new_at(self.case.plant, &[self.case.cord], self.case.seed, 0)?;
         for inj in &self.case.injections {
             plant.inject(*inj)?;
+        }
+        for (ch, n) in [Channel::T1, Channel::T2].into_iter().zip(self.case.hung_n) {
+            if n != 0.0 {
+                plant.hang(0, ch, n);
+            }
         }
         self.plant = Some(plant);
         // What the pins show already (before the plant existed nothing was forwarded).
@@ -546,13 +562,22 @@ impl Bench {
         }
         let pressed = self.button_pressed;
         let fe = self.front_end;
+        let after_reset = !self.resets.is_empty();
+        let own_presses = !after_reset && t_ns >= self.case.held_from_power_up_us as f64 * 1e3;
         let p = self.plant_at(t_ns).expect("made above");
         let plant_pressed = p.button_pressed(0);
         let counts = p.read_analog(0, ch);
-        // The firmware reads the button just after its T2 conversion.
-        if ch == Channel::T2 && plant_pressed != pressed {
+        let row = (ch == Channel::T1 && after_reset).then(|| {
+            let (t, d) = (p.truth(0), p.drive());
+            (t_ns, t.angle_deg, t.t1_n, t.commanded_pulse_us, d.drive_v)
+        });
+        // The firmware reads the button just after its T2 conversion. (The plant models the
+        // cord's own press and the aborts; the operator's other presses, from power-up or
+        // after a reset, are the bench's alone.)
+        if ch == Channel::T2 && own_presses && plant_pressed != pressed {
             self.button_mismatches += 1;
         }
+        self.after_reset.extend(row);
         let code = fe.code(fe.pin_v(fe.sensor_v(counts)));
         if code != quantise(counts) {
             self.rounding_mismatches += 1;
@@ -589,6 +614,9 @@ impl Bench {
     /// drives it again.
     pub fn reset(&mut self, t_ns: f64, reason: ResetReason) {
         self.settle(t_ns);
+        if self.resets.is_empty() {
+            self.drive_v_at_reset = self.plant_at(t_ns).map(|p| p.drive().drive_v);
+        }
         self.resets.push(Reset { t_ns, reason });
         self.hang = false;
         self.releasing = true;
@@ -610,19 +638,30 @@ impl Bench {
         self.button_pressed
     }
 
-    /// The operator's presses, [start, end) in plant µs, as far as they are known.
-    fn press_windows(&self) -> Vec<(u64, u64)> {
+    /// The operator's presses, [start, end) in emulator ns, as far as they are known: held
+    /// from power-up, the cord's start press, the aborts, and the one after the first reset.
+    fn press_windows(&self) -> Vec<(f64, f64)> {
         let mut w = Vec::new();
-        if let Some(at) = self.case.cord.press_at_us {
-            w.push((at, at + self.case.cord.press_us));
+        let held = self.case.held_from_power_up_us;
+        if held > 0 {
+            w.push((0.0, held as f64 * 1e3));
         }
-        let rise = self.plant.as_ref().and_then(|p| p.trigger_rise_us(0));
-        if let Some(rise) = rise {
+        if let (Some(after), Some(r)) = (self.case.press_after_reset_us, self.resets.first()) {
+            let at = r.t_ns + after as f64 * 1e3;
+            w.push((at, at + crate::case::PRESS_US as f64 * 1e3));
+        }
+        let Some(p) = self.plant.as_ref() else {
+            return w;
+        };
+        if let Some(at) = self.case.cord.press_at_us {
+            w.push((self.ns(at), self.ns(at + self.case.cord.press_us)));
+        }
+        if let Some(rise) = p.trigger_rise_us(0) {
             let hold = self.case.plant.faults.abort_press_ms as u64 * 1_000;
             for inj in &self.case.injections {
                 if inj.kind == InjectionKind::Abort {
                     let at = rise + inj.after_trigger_us;
-                    w.push((at, at + hold));
+                    w.push((self.ns(at), self.ns(at + hold)));
                 }
             }
         }
@@ -630,23 +669,15 @@ impl Bench {
     }
 
     fn pressed_at(&self, t_ns: f64) -> bool {
-        if self.plant.is_none() {
-            return false;
-        }
         self.press_windows()
             .iter()
-            .any(|&(a, b)| t_ns >= self.ns(a) && t_ns < self.ns(b))
+            .any(|&(a, b)| t_ns >= a && t_ns < b)
     }
 
     fn core_fault_due(&self) -> Option<f64> {
         let fault = self.case.core_fault?;
         let rise = self.plant.as_ref()?.trigger_rise_us(0)?;
-        let after = match fault {
-            CoreFault::Hang { after_trigger_us } | CoreFault::Panic { after_trigger_us } => {
-                after_trigger_us
-            }
-        };
-        Some(self.ns(rise + after))
+        Some(self.ns(rise + fault.after_trigger_us()))
     }
 
     fn stop_at(&self) -> Option<f64> {
@@ -667,11 +698,9 @@ impl Bench {
                 next = Some(t);
             }
         };
-        if self.plant.is_some() {
-            for (a, b) in self.press_windows() {
-                consider(self.ns(a));
-                consider(self.ns(b));
-            }
+        for (a, b) in self.press_windows() {
+            consider(a);
+            consider(b);
         }
         if !self.core_fault_done {
             if let Some(t) = self.core_fault_due() {
@@ -692,7 +721,8 @@ impl Bench {
         if pressed != self.button_pressed {
             self.button_pressed = pressed;
             self.button.push((t_ns, pressed));
-            if pressed && self.run_since_ns.is_none() && self.button.len() == 1 {
+            let start_press = self.case.held_from_power_up_us == 0 && self.button.len() == 1;
+            if pressed && self.run_since_ns.is_none() && start_press {
                 // The start press: the run begins once it is debounced (10 samples).
                 self.run_since_ns = Some(t_ns + 10e6);
             }
@@ -705,6 +735,8 @@ impl Bench {
                 Some(CoreFault::Hang { .. }) => self.hang = true,
                 // Struck when the harness has diverted the core (`panicked`).
                 Some(CoreFault::Panic { .. }) => out |= WAKE_PANIC,
+                // Struck when the harness has moved the stack pointer (`panicked` too).
+                Some(CoreFault::StackOverflow { .. }) => out |= WAKE_STACK_OVERFLOW,
                 None => {}
             }
         }
@@ -781,10 +813,7 @@ impl Bench {
             trigger_rise_ns: rise,
             injections,
             core_fault: self.case.core_fault.map(|f| CoreFaultOut {
-                kind: match f {
-                    CoreFault::Hang { .. } => "hang",
-                    CoreFault::Panic { .. } => "panic",
-                },
+                kind: f.name(),
                 due_ns: self.core_fault_due(),
                 struck_ns: self.core_fault_struck_ns,
             }),
@@ -798,6 +827,8 @@ impl Bench {
             },
             plant_servo,
             samples: self.samples.clone(),
+            after_reset: self.after_reset.clone(),
+            drive_v_at_reset: self.drive_v_at_reset,
         }
     }
 }
