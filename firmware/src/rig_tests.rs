@@ -12,7 +12,7 @@ use std::vec::Vec;
 /// What must never blind a check or move the rig without a person: a loaded tare, a mistyped
 /// sensitivity, a held button, a fault while idle, a reset, a store away from rest.
 mod guard;
-/// Between runs: fault latching and acknowledgement, slow homing after a reset.
+/// Between runs: fault latching and acknowledgement, slow homing.
 mod idle;
 
 #[derive(Default)]

@@ -95,8 +95,7 @@ impl SafetyLimits {
         let top = self.rail_high_counts as f32 - VISIBLE_MARGIN_COUNTS;
         for (channel, ch) in [(Channel::T1, &cal.t1), (Channel::T2, &cal.t2)] {
             let readable_n = (top - ch.zero_counts) * ch.n_per_count;
-            // (NaN compares false: refused too.)
-            if !(readable_n >= self.over_force_n) {
+            if readable_n.is_nan() || readable_n < self.over_force_n {
                 return Err(Blind {
                     channel,
                     readable_n,

@@ -264,7 +264,7 @@ impl Rig {
             Command::Servo(a) => self.move_servo(|_| a),
             Command::Zero => self.start_measure(Measuring::Zero, now_us),
             // A weight pulls: its force is above 0.
-            Command::Weigh(_, n) if !(n > 0.0) => Err(CommandError::Invalid),
+            Command::Weigh(_, n) if n.is_nan() || n <= 0.0 => Err(CommandError::Invalid),
             Command::Weigh(ch, n) => self.start_measure(Measuring::Weigh(ch, n), now_us),
             Command::Run if latched => Err(CommandError::FaultLatched),
             Command::Run if self.is_homing() => Err(CommandError::Homing),

@@ -36,8 +36,7 @@ impl Rig {
                     ..self.channel(ch)
                 };
                 let load_n = stored.newtons(means[k]) - r;
-                // (NaN is refused too.)
-                if fault.is_none() && !(load_n.abs() <= TARE_MAX_N) {
+                if fault.is_none() && (load_n.is_nan() || load_n.abs() > TARE_MAX_N) {
                     fault = Some((FaultKind::TareLoad, ch, load_n));
                 }
             }

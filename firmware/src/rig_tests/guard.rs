@@ -58,7 +58,7 @@ fn a_tare_under_load_refuses_the_run_before_the_drive_is_on() {
     let cal = Calibration::default();
     for load_n in [8.0, 1.2, -2.0] {
         let mut rig = thesis_rig();
-        let shift = (load_n / cal.t1.n_per_count) as f32;
+        let shift = load_n / cal.t1.n_per_count;
         let tr = drive(
             &mut rig,
             &move |_, o| (plant_counts(o, &cal, shift), false),
@@ -68,7 +68,7 @@ fn a_tare_under_load_refuses_the_run_before_the_drive_is_on() {
         assert_eq!(end.fault, Some(FaultKind::TareLoad), "{load_n} N");
         let f = faults(&tr.sink)[0];
         assert_eq!(f.channel, Some(Channel::T1));
-        assert!((f.value - load_n as f32).abs() < 0.02, "{f:?}");
+        assert!((f.value - load_n).abs() < 0.02, "{f:?}");
         // Refused at the end of the tare: the amplifier never on, no trigger, no step.
         assert!(tr
             .outputs
