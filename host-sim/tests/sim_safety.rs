@@ -387,3 +387,43 @@ fn a_power_cycle_at_rest_boots_clean_with_the_stored_rest_as_first_pulse() {
         "every pulse after the boot is the stored rest's: {pulses:?}"
     );
 }
+
+#[test]
+fn a_servo_mounted_the_wrong_way_round_is_caught_at_the_first_level() {
+    // The firmware's rest is its longest pulse, the release end for a servo mounted as the
+    // thesis's; mounted the other way round, every level releases the cord instead (and rest
+    // is the tension end). The first level then goes slack: a cord-break fault 200 ms into it
+    // (the check's settling time), safe at the pins in the same sample.
+    let mut spec = SessionSpec {
+        trace_every_ms: 1,
+        ..SessionSpec::default()
+    };
+    spec.plant.servo.characteristic.deg_per_us = -spec.plant.servo.characteristic.deg_per_us;
+    let out = run_session(
+        &spec,
+        RamFlash::new(FLASH_PAGES),
+        &[send("run"), Step::UntilRunEnd],
+    )
+    .unwrap();
+    let f = faults(&out);
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].1.kind, FaultKind::CordBreak);
+    let p = firmware::Protocol::default();
+    let level_1_us = (p.step_start_ms(1) - p.trigger_at_ms()) as i64 * 1000;
+    let late = f[0].1.t_us - level_1_us;
+    assert!(
+        (200_000..=206_000).contains(&late),
+        "{late} µs into level 1"
+    );
+    assert_eq!(
+        out.records(|r| matches!(r, Record::Pair(_)).then_some(()))
+            .len(),
+        0
+    );
+    let end = out.plant.truth(0);
+    assert_eq!(end.amp_control_v, 0.0);
+    eprintln!(
+        "servo mounted reversed: caught {:.1} ms into the first level (cord slack), no pair",
+        late as f64 / 1e3
+    );
+}

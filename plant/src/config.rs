@@ -24,7 +24,9 @@ use capstan_friction::Model;
 pub struct ServoCharacteristic {
     /// Pulse of the centre of travel, µs.
     pub neutral_pulse_us: f64,
-    /// Horn travel per µs of pulse, deg/µs (a longer pulse turns clockwise: angle up).
+    /// Horn travel per µs of pulse, deg/µs (a longer pulse turns clockwise: angle up, which
+    /// releases the cord). Negative: the servo is mounted the other way round, so a longer
+    /// pulse pulls (the firmware's rest, its longest pulse, is then the tension end).
     pub deg_per_us: f64,
     /// Horn angle at the neutral pulse, deg.
     pub neutral_deg: f64,

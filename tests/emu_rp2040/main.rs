@@ -18,8 +18,9 @@
 //! * `guard.rs` (issue 24): a loaded tare, a button held from power-up, a stack overflow, a
 //!   host that stops reading the log: each safe at the pins.
 //!
-//! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort, the panic and the setup
-//! session, ~10 s); `CAPSTAN_EMU=full` runs every case (`.ci/run` does; ~2 min on two cores).
+//! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort, the hang, the panic, the
+//! setup session, the loaded tare, the held button and the stack overflow, ~40 s);
+//! `CAPSTAN_EMU=full` runs every case (`.ci/run` does; ~2-3 min on two cores).
 //! Needs node ≥ 18, `npm ci --prefix emu`, and the `thumbv6m-none-eabi` and
 //! `wasm32-unknown-unknown` targets; where one is missing the test says why and passes, except
 //! with `CI=true`, where it fails.

@@ -72,7 +72,10 @@ impl Plant {
             sc.neutral_pulse_us.is_finite(),
             "servo.characteristic.neutral_pulse_us",
         )?;
-        check(positive(sc.deg_per_us), "servo.characteristic.deg_per_us")?;
+        check(
+            sc.deg_per_us.is_finite() && sc.deg_per_us != 0.0,
+            "servo.characteristic.deg_per_us",
+        )?;
         check(
             sc.min_deg.is_finite()
                 && sc.max_deg.is_finite()
