@@ -427,3 +427,30 @@ fn a_servo_mounted_the_wrong_way_round_is_caught_at_the_first_level() {
         late as f64 / 1e3
     );
 }
+
+#[test]
+fn a_latched_fault_survives_a_watchdog_reset_and_only_a_person_clears_it() {
+    // An over-force latched while idle; the load comes off; the loop hangs and the watchdog
+    // resets the chip. The boot latches the same fault again (the reason kept in the scratch
+    // register), and `run` is refused until `ack`.
+    let out = session(&[
+        Step::Wait(200),
+        Step::Hang(Channel::T2, 50.0),
+        Step::Wait(100),
+        Step::Hang(Channel::T2, 0.0),
+        Step::Wait(100),
+        Step::Freeze,
+        send("run"),
+        send("ack"),
+        send("run"),
+    ]);
+    let kinds: Vec<_> = faults(&out).iter().map(|f| f.1.kind).collect();
+    assert_eq!(kinds, [FaultKind::OverForce, FaultKind::OverForce]);
+    let word = out.resets[0].2;
+    assert_eq!(
+        firmware::reset::read_latch_word(word),
+        Some((Some(FaultKind::OverForce), false))
+    );
+    let got: Vec<_> = replies(&out).iter().map(|r| r.error).collect();
+    assert_eq!(got, [Some(CommandError::FaultLatched), None, None]);
+}
