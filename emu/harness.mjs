@@ -10,8 +10,10 @@
 // The defmt stream is read from the RTT up-buffer every 1 ms, as a debug probe does, and the
 // job's host command lines are written into the RTT down-buffer when due.
 // What rp2040js lacks, the harness does, as the hardware would: a UDF (or BKPT) raises a
-// HardFault, and a watchdog bite or trigger resets the chip (a fresh chip, with the watchdog's
-// REASON and SCRATCH registers carried over).
+// HardFault, a watchdog bite or trigger resets the chip (a fresh chip, with the watchdog's
+// REASON and SCRATCH registers carried over), and an access just below SRAM (a stack run off
+// its bottom, where memory.x puts it) locks the core up, as a Cortex-M0+ whose HardFault cannot
+// stack its frame does.
 import { RP2040 } from 'rp2040js';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -37,7 +39,10 @@ function text(ptr, len) {
 // With a debug probe attached, probe-rs halts the core on HardFault entry (vector catch); the
 // clock, the peripherals and the watchdog go on.
 const probeAttached = B.bench_probe_attached() !== 0;
-const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4;
+const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4, WAKE_STACK_OVERFLOW = 8;
+// Below SRAM nothing is mapped: an access there is a bus fault, and one made by a stack that
+// ran off the bottom of SRAM leaves the HardFault no room to stack its frame: lockup.
+const BELOW_RAM = 0x1fff0000;
 const SERVO = 16, AMP = 18, TRIGGER = 20, BUTTON = 21, LED = 25;
 const FUNCSEL_PWM = 4, HIGH = 1, HARDFAULT = 3;
 const WATCHDOG_BASE = 0x40058000, RAM = 0x20000000;
@@ -50,6 +55,12 @@ const logger = {
   debug() {},
   info() {},
   warn(who, msg) {
+    const bad = /(?:undefined|invalid memory) address: ([0-9a-f]+)/i.exec(msg);
+    if (bad && parseInt(bad[1], 16) >= BELOW_RAM && parseInt(bad[1], 16) < RAM) {
+      if (!lockup) lockup = { t_ns: now(), pc: core.PC, address: parseInt(bad[1], 16), ipsr: core.IPSR };
+      halted = true;
+      return;
+    }
     const key = warnings.size < 100 ? `${who}: ${msg}` : 'other warnings';
     warnings.set(key, (warnings.get(key) ?? 0) + 1);
     if (/invalid|undefined address|not implemented/i.test(msg) && badAccesses++ < 10) errors.push({ t_ns: now(), pc: core.PC, msg: `${who}: ${msg}` });
@@ -80,10 +91,15 @@ const resets = [], breaks = [];
 // Writes that changed a PWM compare (servo slice 0, amplifier slice 1): when the firmware
 // commanded a pulse width or duty, as opposed to when the pin shows it.
 const pwmWrites = [];
-let panicInjected = null;
-let pendingPanic = false, pendingBreak = null, pendingReset = false, stop = false;
+let panicInjected = null, stackInjected = null, lockup = null;
+let pendingPanic = false, pendingStack = false, pendingBreak = null, pendingReset = false, stop = false;
 let halted = false;
+// The host's stall of the log (job.rtt_stall): [from, to) ns, and when the firmware put the up
+// channel back to non-blocking after the harness set it to block.
+const stall = job.rtt_stall ? { from_ns: job.rtt_stall[0] * 1e3, to_ns: job.rtt_stall[1] * 1e3, blocking_set_ns: null, mode_restored_ns: null } : null;
 let instructions = 0, cycles = 0;
+// The lowest the stack pointer went (before an injected stack overflow): the stack's use.
+let minSp = 0xffffffff;
 
 function pwmTickNs(gpio) {
   if (mcu.gpio[gpio].functionSelect !== FUNCSEL_PWM) return 0;
@@ -104,6 +120,7 @@ function wake() {
   const flags = B.bench_wake(now());
   if (flags & WAKE_BUTTON) mcu.gpio[BUTTON].setInputValue(!B.bench_button()); // pull-up; pressed = low
   if (flags & WAKE_PANIC) pendingPanic = true;
+  if (flags & WAKE_STACK_OVERFLOW) pendingStack = true;
   if (flags & WAKE_STOP) stop = true;
   syncBench();
 }
@@ -116,12 +133,24 @@ function rttUpChannels() {
   return mcu.sramView.getUint32(base + 16, true);
 }
 
-// Read the defmt up channel 0 like a probe: bytes from the read to the write offset.
-function pollRtt() {
+// Read the defmt up channel 0 like a probe: bytes from the read to the write offset. During the
+// job's stall the host reads nothing, and sets the channel to block when full at its start
+// (mode bits of its flags: 2), as `probe-rs run` may.
+function pollRtt(final = false) {
   if (rttUpChannels() === 0) return;
   const base = job.rtt - RAM;
   const sv = mcu.sramView;
   const up = base + 24;
+  if (stall && !final && now() >= stall.from_ns && now() < stall.to_ns) {
+    const flags = sv.getUint32(up + 20, true);
+    if (stall.blocking_set_ns === null) {
+      sv.setUint32(up + 20, (flags & ~3) | 2, true);
+      stall.blocking_set_ns = now();
+    } else if (stall.mode_restored_ns === null && (flags & 3) !== 2) {
+      stall.mode_restored_ns = now();
+    }
+    return;
+  }
   const buf = sv.getUint32(up + 4, true) - RAM;
   const size = sv.getUint32(up + 8, true);
   const wr = sv.getUint32(up + 12, true);
@@ -227,7 +256,7 @@ function boot(carried) {
 
 function reset() {
   pendingReset = false;
-  pollRtt();
+  pollRtt(true);
   const dog = mcu.findPeripheral(WATCHDOG_BASE);
   const carried = { reason: dog.reason, scratch: Uint32Array.from(dog.scratchData) };
   const t = now();
@@ -236,7 +265,7 @@ function reset() {
     [SERVO, AMP, TRIGGER].map((g) => [g, { funcsel: mcu.gpio[g].functionSelect, out: mcu.gpio[g].outputValue, oe: mcu.gpio[g].outputEnable }]),
   );
   const cc = [0, 1].map((slice) => mcu.pwm.channels[slice].cc & 0xffff);
-  resets.push({ t_ns: t, reason: carried.reason, scratch0: carried.scratch[0], halted, pins, pwm_cc_a: cc });
+  resets.push({ t_ns: t, reason: carried.reason, scratch0: carried.scratch[0], scratch1: carried.scratch[1], halted, pins, pwm_cc_a: cc });
   halted = false;
   B.bench_reset(t, carried.reason);
   epoch = t;
@@ -265,6 +294,15 @@ function injectPanic() {
   B.bench_panicked(now());
 }
 
+// The stack run off the bottom of SRAM, now: SP 16 bytes above it, where memory.x ends the
+// image's stack. The core's next pushes (the timer interrupt's frame, a call) fall below it.
+function injectStackOverflow() {
+  pendingStack = false;
+  stackInjected = { t_ns: now(), sp_before: core.SP, pc: core.PC, was_waiting: core.waiting };
+  core.SP = RAM + 16;
+  B.bench_panicked(now());
+}
+
 boot(null);
 const wall0 = Date.now();
 const wallLimitMs = job.wall_limit_s * 1000;
@@ -273,6 +311,7 @@ let burst = 0, burstStart = 0;
 while (!stop) {
   for (let i = 0; i < 200000 && !stop; i++) {
     if (pendingPanic && core.IPSR === 0) injectPanic();
+    if (pendingStack && core.IPSR === 0) injectStackOverflow();
     if (core.waiting || halted) {
       if (burst) {
         B.bench_burst(burstStart, burst);
@@ -283,6 +322,7 @@ while (!stop) {
     } else {
       if (!burst) burstStart = now();
       const c = core.executeInstruction();
+      if (core.SP < minSp && !stackInjected) minSp = core.SP;
       instructions++;
       burst += c;
       cycles += c;
@@ -304,7 +344,7 @@ while (!stop) {
   if (Date.now() - wall0 > wallLimitMs) throw new Error(`wall-clock limit of ${job.wall_limit_s} s reached at ${now() / 1e9} s emulated`);
   if (now() > emulatedLimitNs) throw new Error(`emulated-time limit of ${job.emulated_limit_s} s reached without the case's end`);
 }
-pollRtt();
+pollRtt(true);
 const wallS = (Date.now() - wall0) / 1000;
 const end = now();
 const reportLen = B.bench_report(end);
@@ -326,6 +366,10 @@ const summary = {
   breaks,
   pwm_writes: pwmWrites,
   panic: panicInjected,
+  stack_overflow: stackInjected,
+  min_sp: minSp,
+  lockup,
+  rtt_stall: stall,
   probe_attached: probeAttached,
   warnings: Object.fromEntries(warnings),
   errors,

@@ -129,13 +129,18 @@ pub const AMP_PWM_DIVIDER: u8 = 1;
 /// The duty's full scale is the period, 4096 counts (as for the servo, [`SERVO_FULL_SCALE`]).
 pub const AMP_PWM_TOP: u16 = 4_095;
 
-/// Hardware watchdog timeout. The runner feeds it every sample (1 ms), so only a loop that has
-/// stopped (a hang, or a core halted by the debugger) lets it run out; the chip then resets
-/// and every output pin falls back to an input (servo pulses stop, amplifier control and
-/// trigger are pulled low by their resistors). A panic or HardFault does not wait for it: its
-/// handler drives the outputs safe first (`board_panic.rs`). The software supervisor's 10 ms
-/// sample-gap fault catches a merely slow loop long before this.
-pub const WATCHDOG_TIMEOUT: Duration = Duration::from_millis(250);
+/// Hardware watchdog timeout while the loop samples (idle, setup mode and runs alike). The
+/// runner feeds it every sample (1 ms; the busiest sample takes ~0.5 ms), so only a loop that
+/// has stopped — a hang, a conversion that never completes, a write that blocks, a lockup
+/// (a stack overflow: `memory.x`), or a core halted by the debugger — lets it run out; the chip
+/// then resets within this of the last feed, and every output pin falls back to an input
+/// (servo pulses stop, amplifier control and trigger are pulled low by their resistors), and
+/// the next boot latches the reset as a fault (`firmware::reset`). It is widened only around a
+/// flash write (`firmware::runner::STORE_WATCHDOG_MS`), which the rig asks for only with the
+/// servo at rest and the amplifier off. A panic or HardFault does not wait for it: its handler
+/// drives the outputs safe first (`board_safe.rs`). The software supervisor's 10 ms sample-gap
+/// fault catches a merely slow loop.
+pub const WATCHDOG_TIMEOUT: Duration = Duration::from_millis(firmware::runner::WATCHDOG_MS as u64);
 
 /// Does the watchdog pause while a debugger halts the core? Not on the rig (`false`): a core
 /// halted by the probe — probe-rs stopping it on a HardFault, or a breakpoint — is reset within
@@ -187,7 +192,10 @@ pub fn calibration() -> Calibration {
     Calibration::default()
 }
 
-/// The safety supervisor's thresholds (45 N over-force, rails, cord break, 10 ms sample gap).
+/// The safety supervisor's thresholds (45 N over-force, rails, cord break, 10 ms sample gap,
+/// −3 N). `rail_high_counts` (3900) must stay below where a saturated sensor sits behind the
+/// divider (~3990 counts for a 0-5 V sensor on the README's 10k/18k): with other sensors or
+/// another divider, measure that reading and set it lower.
 pub fn safety_limits() -> SafetyLimits {
     SafetyLimits::default()
 }

@@ -1,6 +1,7 @@
 //! The RP2040 board's safety below the rig core: the panic and HardFault handlers, which drive
-//! the outputs safe through the registers before anything else, and the servo's last command
-//! kept across resets. Compiled into the board binary only.
+//! the outputs safe through the registers before anything else, and what is kept across resets
+//! in the watchdog's scratch registers (the fault latch, the servo's last command:
+//! `firmware::reset`). Compiled into the board binary only.
 //!
 //! Why here and not in the drivers: a panic can strike in the middle of a driver call, before
 //! the drivers exist, or with the rig's state half-updated. The handlers therefore use only
@@ -33,7 +34,7 @@ use cortex_m_rt::{exception, ExceptionFrame};
 use embassy_rp::pac;
 use embassy_rp::pwm::{Pwm, PwmError};
 use embedded_hal::pwm::{ErrorType, SetDutyCycle};
-use firmware::safe_state::{recall_servo_duty, remembered_servo_word};
+use firmware::reset::{recall_servo_duty, remembered_servo_word};
 use firmware::{force_safe, ForceOutputs, SafeDuties};
 
 /// IO_BANK0 function select: the pin is driven by SIO (software).
@@ -130,7 +131,7 @@ impl ForceOutputs for Registers {
 }
 
 /// Keep the servo's command in watchdog scratch register 0, which survives a watchdog reset
-/// (not a power cycle), so the next boot knows where the horn was.
+/// (not a power cycle), so the next boot can say where the horn was told to be.
 fn remember_servo_duty(duty: u16) {
     pac::WATCHDOG
         .scratch0()
@@ -140,6 +141,17 @@ fn remember_servo_duty(duty: u16) {
 /// The servo duty the firmware last commanded before this boot's reset, if it survived.
 pub fn servo_duty_before_reset() -> Option<u16> {
     recall_servo_duty(pac::WATCHDOG.scratch0().read(), board::SERVO_FULL_SCALE)
+}
+
+/// Keep the rig's latch word (`firmware::reset::latch_word`) in watchdog scratch register 1:
+/// written every sample, read at the next boot. (Registers 4-7 belong to the boot ROM.)
+pub fn remember_latch(word: u32) {
+    pac::WATCHDOG.scratch1().write_value(word);
+}
+
+/// The latch word kept before this boot's reset (0 after a power cycle).
+pub fn latch_word_before_reset() -> u32 {
+    pac::WATCHDOG.scratch1().read()
 }
 
 /// An RP2040 PWM output on channel A whose duty is counted against the whole period: the

@@ -187,13 +187,15 @@ impl Default for Calibration {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub enum CalibrationError {
-    /// A channel's sensitivity must be above 0 and at most 1 N per count.
+    /// A channel's sensitivity must be within [`N_PER_COUNT_RANGE`] (positive: a tension
+    /// raises the reading).
     Sensitivity,
     /// A channel's zero must be within the ADC's 0..=4095 counts.
     Zero,
     /// The tare reference must be 0..10 N.
     TareReference,
-    /// The servo map needs two different pulses within 400..=2600 µs and 0 < max ≤ 360°.
+    /// The servo map needs a longer pulse at `max_deg` than at 0° (not reversed), both within
+    /// 400..=2600 µs, and 0 < max ≤ 360°.
     ServoMap,
     /// The amplifier needs a full scale of 0..=5 V and a gain of 0..=100.
     AmpMap,
@@ -203,11 +205,13 @@ impl CalibrationError {
     /// What is wrong, for a person.
     pub const fn message(self) -> &'static str {
         match self {
-            CalibrationError::Sensitivity => "n_per_count must be above 0 and at most 1 N/count",
+            CalibrationError::Sensitivity => {
+                "n_per_count must be 0.002 to 0.1 N/count (positive: a tension raises the reading)"
+            }
             CalibrationError::Zero => "a zero must be within 0..=4095 counts",
             CalibrationError::TareReference => "the tare reference must be 0 to 10 N",
             CalibrationError::ServoMap => {
-                "the servo pulses must differ and lie in 400..=2600 µs, max_deg in (0, 360]"
+                "the servo pulse at servo_max_deg must be longer than at 0° (no reversed map), both in 400..=2600 µs, max_deg in (0, 360]"
             }
             CalibrationError::AmpMap => {
                 "the amplifier full scale must be in (0, 5] V and its gain in (0, 100]"
@@ -215,6 +219,10 @@ impl CalibrationError {
         }
     }
 }
+
+/// Plausible sensitivities of a force channel, N per count: a 12-bit reading spans 8 N to
+/// 400 N. Outside, a value is a typo (a factor of ten, a sign) that would misread every force.
+pub const N_PER_COUNT_RANGE: (f32, f32) = (0.002, 0.1);
 
 fn within(v: f32, lo: f32, hi: f32) -> bool {
     v.is_finite() && v >= lo && v <= hi
@@ -224,7 +232,8 @@ impl Calibration {
     /// Refuse a calibration the rig cannot work with, with the reason.
     pub fn validate(&self) -> Result<(), CalibrationError> {
         for ch in [&self.t1, &self.t2] {
-            if !(within(ch.n_per_count, 0.0, 1.0) && ch.n_per_count > 0.0) {
+            let (lo, hi) = N_PER_COUNT_RANGE;
+            if !within(ch.n_per_count, lo, hi) {
                 return Err(CalibrationError::Sensitivity);
             }
             if !within(ch.zero_counts, 0.0, 4095.0) {
@@ -237,7 +246,7 @@ impl Calibration {
         let s = &self.servo;
         let pulses_ok = within(s.pulse_at_min_us, 400.0, 2600.0)
             && within(s.pulse_at_max_us, 400.0, 2600.0)
-            && (s.pulse_at_max_us - s.pulse_at_min_us).abs() >= 1.0;
+            && s.pulse_at_max_us - s.pulse_at_min_us >= 1.0;
         if !(pulses_ok && within(s.max_deg, 0.0, 360.0) && s.max_deg > 0.0) {
             return Err(CalibrationError::ServoMap);
         }
@@ -308,5 +317,23 @@ mod tests {
         ch.tare(preload_counts, 0.1);
         assert!((ch.zero_counts - 420.0).abs() < 1e-3);
         assert!((ch.newtons(420.0 + 10.0 / 0.015) - 10.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn implausible_sensitivities_and_reversed_servo_maps_are_refused() {
+        let ok = Calibration::default();
+        assert_eq!(ok.validate(), Ok(()));
+        for npc in [0.0015, -0.015, 0.0, 0.2, f32::NAN] {
+            let mut c = ok;
+            c.t2.n_per_count = npc;
+            assert_eq!(c.validate(), Err(CalibrationError::Sensitivity), "{npc}");
+        }
+        let mut c = ok;
+        c.servo = ServoMap {
+            pulse_at_min_us: 2400.0,
+            pulse_at_max_us: 544.0,
+            max_deg: 180.0,
+        };
+        assert_eq!(c.validate(), Err(CalibrationError::ServoMap));
     }
 }

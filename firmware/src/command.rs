@@ -43,7 +43,8 @@ pub enum Command {
     Run,
     /// Stop the run, as the button does (or leave setup mode).
     Abort,
-    /// Acknowledge a latched fault, as the button does.
+    /// Acknowledge a latched fault, as the button does (a host-started run after a fault
+    /// needs it: `run` is refused while one is latched).
     Ack,
 }
 
@@ -208,11 +209,18 @@ pub enum CommandError {
     Unsteady = 14,
     /// Setup mode ended (a fault, the button, `leave`) before the measurement was done.
     Interrupted = 15,
+    /// The reading fell under the weight: the sensor is reversed (a tension must raise it).
+    Reversed = 16,
+    /// With the result the over-force limit would read above the rail check: the check could
+    /// never trip (nothing changed).
+    Blind = 17,
+    /// `store` holds the loop for the flash write: only with the servo at rest.
+    NotAtRest = 18,
 }
 
 impl CommandError {
     /// Every error.
-    pub const ALL: [CommandError; 15] = [
+    pub const ALL: [CommandError; 18] = [
         CommandError::Unknown,
         CommandError::Argument,
         CommandError::UnknownKey,
@@ -228,6 +236,9 @@ impl CommandError {
         CommandError::NotApplicable,
         CommandError::Unsteady,
         CommandError::Interrupted,
+        CommandError::Reversed,
+        CommandError::Blind,
+        CommandError::NotAtRest,
     ];
 
     /// Wire code (never 0).
@@ -249,7 +260,7 @@ impl CommandError {
             CommandError::TooLong => "the line is longer than 64 bytes",
             CommandError::Running => "a run is in progress: only abort and show are taken",
             CommandError::NotInSetup => "this works in setup mode only (send setup first)",
-            CommandError::FaultLatched => "a fault is latched: press the button once or send ack",
+            CommandError::FaultLatched => "a fault is latched: press the button once (after releasing it) or send ack",
             CommandError::Homing => "the servo is still on its way to rest: try again in a few seconds",
             CommandError::Measuring => "a zero or weigh is still being measured",
             CommandError::Invalid => "that value would make the settings invalid; nothing changed",
@@ -258,6 +269,9 @@ impl CommandError {
             CommandError::NotApplicable => "not in this state (run: from idle; leave: from setup mode; abort: in setup mode or a run; ack: with a fault latched)",
             CommandError::Unsteady => "the reading was not steady (something moved): let the servo and the weight settle, then repeat",
             CommandError::Interrupted => "setup mode ended (a fault, the button or leave) before the measurement was done",
+            CommandError::Reversed => "the reading fell under the weight: the sensor is reversed or wired to the other input (a tension must raise the counts); nothing changed",
+            CommandError::Blind => "with that calibration the over-force limit would read above the rail check, so it could never trip (the sensor's range, or the value, is wrong); nothing changed",
+            CommandError::NotAtRest => "store only with the servo at rest: the flash write holds the safety loop (send servo <rest> and wait, or leave setup mode and let it home)",
         }
     }
 }

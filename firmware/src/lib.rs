@@ -30,6 +30,7 @@ pub mod defmt_sink;
 pub mod hal;
 pub mod protocol;
 pub mod record;
+pub mod reset;
 pub mod rig;
 #[cfg(test)]
 mod rig_tests;

@@ -42,6 +42,7 @@ mod pico {
     use embassy_time::Duration;
     use firmware::defmt_sink::DefmtSink;
     use firmware::hal::{AdcError, Channel, Console, ForceAdc};
+    use firmware::reset::ResetCause;
     use firmware::store::SettingsStore;
     use firmware::{RigIo, SafeDuties};
     use rtt_target::{ChannelMode, DownChannel, UpChannel};
@@ -148,15 +149,21 @@ mod pico {
         // Output would release the pin).
         let _smps_pwm_mode = Output::new(pins.smps_mode, Level::High);
         let mut dog = Watchdog::new(pins.watchdog);
-        match dog.reset_reason() {
-            Some(ResetReason::TimedOut) => defmt::warn!(
-                "the hardware watchdog reset the chip: the loop stopped, or a debugger held the core halted"
-            ),
-            Some(ResetReason::Forced) => defmt::warn!(
-                "reset by the panic/HardFault handler, after it had made the outputs safe"
-            ),
-            None => {}
-        }
+        let cause = match dog.reset_reason() {
+            Some(ResetReason::TimedOut) => {
+                defmt::warn!(
+                    "the hardware watchdog reset the chip: the loop stopped (a hang, a lockup, a stack overflow), or a debugger held the core halted"
+                );
+                ResetCause::Watchdog
+            }
+            Some(ResetReason::Forced) => {
+                defmt::warn!(
+                    "reset by the panic/HardFault handler, after it had made the outputs safe"
+                );
+                ResetCause::Forced
+            }
+            None => ResetCause::PowerUp,
+        };
         // Not paused while a debugger halts the core (see board::WATCHDOG_PAUSES_WHILE_HALTED),
         // set before anything can halt.
         dog.pause_on_debug(board::WATCHDOG_PAUSES_WHILE_HALTED);
@@ -166,7 +173,8 @@ mod pico {
             board::calibration(),
             board::safety_limits(),
         ));
-        // The settings stored from the host, or the built-in ones (logged either way).
+        // The settings stored from the host, or the built-in ones (logged either way), before
+        // the servo's first pulse: that pulse is the stored rest.
         let flash = Flash::<_, embassy_rp::flash::Blocking, { board::FLASH_BYTES }>::new_blocking(
             pins.flash,
         );
@@ -176,24 +184,29 @@ mod pico {
         ));
         let mut sink = DefmtSink::default();
         store.load_into(&mut rig, &mut sink).await;
-        firmware::LogSink::flush(&mut sink);
-        // From here a panic puts the servo at rest (before: no pulses at all).
-        board_safe::arm(SafeDuties::for_rig(&rig, board::SERVO_FULL_SCALE));
-        // After a reset that left the horn away from rest, bring it back slowly.
-        if let Some(duty) = board_safe::servo_duty_before_reset() {
+        // A reset that was not a clean power-up at rest latches a fault (kept across it), and
+        // the servo gets no pulses until a person acknowledges it: nothing moves by itself.
+        let latched = firmware::reset::boot(
+            &mut rig,
+            cause,
+            board_safe::latch_word_before_reset(),
+            &mut sink,
+        );
+        board_safe::remember_latch(firmware::reset::latch_word(&rig));
+        if let (Some(_), Some(duty)) = (latched, board_safe::servo_duty_before_reset()) {
             let angle = rig
                 .calibration()
                 .servo
                 .angle_for_duty(duty, board::SERVO_FULL_SCALE);
-            rig.home_from(angle);
-            if rig.is_homing() {
-                defmt::info!(
-                    "servo was at {=f32} deg before the reset: homing to rest at {=f32} deg/s",
-                    angle,
-                    firmware::rig::HOMING_DEG_PER_S
-                );
-            }
+            defmt::warn!(
+                "the servo was commanded to {=f32} deg before the reset: no pulses until a press (after a release) or `ack`; the first is the rest pulse",
+                angle
+            );
         }
+        firmware::LogSink::flush(&mut sink);
+        // From here a panic puts the servo at rest (before: no pulses at all; and none while
+        // the rig holds the servo without pulses).
+        board_safe::arm(SafeDuties::for_rig(&rig, board::SERVO_FULL_SCALE));
 
         let servo = Pwm::new_output_a(
             pins.servo_slice,
@@ -224,9 +237,8 @@ mod pico {
                 timeout: board::WATCHDOG_TIMEOUT,
             },
         };
-        // Amplifier to 0 V, trigger low, servo where the rig believes it is (at rest, or where
-        // it was before a reset: the idle rig then brings it to rest slowly), before anything
-        // runs.
+        // Amplifier to 0 V, trigger low, the servo at the stored rest (or without pulses after
+        // a reset that latched a fault), before anything runs.
         defmt::unwrap!(io.boot(&rig));
 
         io.watchdog.dog.start(board::WATCHDOG_TIMEOUT);
@@ -240,9 +252,11 @@ mod pico {
         // error, which cannot happen with this HAL (its pins are infallible, duties are clamped
         // to top). The runner has then already commanded the safe state; the panic handler
         // forces it again through the registers and the chip resets.
-        // New settings may move the rest angle or change the servo map: the panic path's rest
-        // duty follows them.
+        // New settings may move the rest angle or change the servo map, and an acknowledged
+        // reset gives the servo its pulses back: the panic path's rest duty follows them. The
+        // latch word is kept every sample for the next boot.
         let never = |out: &firmware::rig::Outputs, rig: &firmware::Rig| {
+            board_safe::remember_latch(firmware::reset::latch_word(rig));
             if out.settings_changed {
                 board_safe::arm(SafeDuties::for_rig(rig, board::SERVO_FULL_SCALE));
             }

@@ -29,18 +29,39 @@ pub enum FaultKind {
     SensorRail,
     /// The button was pressed during the run.
     Abort,
-    /// The sample loop missed its deadline.
+    /// The sample loop missed its deadline, or (latched at boot) the hardware watchdog reset
+    /// the chip.
     Watchdog,
+    /// The tare saw a load beyond [`crate::rig::TARE_MAX_N`] on a channel: a weight or a
+    /// preload on the cord, or a zero that is wrong. Taken as zero, it would blind the
+    /// over-force check.
+    TareLoad,
+    /// The calibration cannot show the over-force limit below the rail check
+    /// ([`crate::safety::SafetyLimits::visible`]).
+    Blind,
+    /// A channel read far below zero ([`crate::safety::SafetyLimits::negative_force_n`]): a
+    /// reversed sensor or a wrong zero.
+    NegativeForce,
+    /// Latched at boot: the panic or HardFault handler reset the chip.
+    Panic,
+    /// Latched at boot: the chip was reset (a debugger, the RUN pin) while the rig was not at
+    /// rest.
+    Reset,
 }
 
 impl FaultKind {
     /// Every fault.
-    pub const ALL: [FaultKind; 5] = [
+    pub const ALL: [FaultKind; 10] = [
         FaultKind::OverForce,
         FaultKind::CordBreak,
         FaultKind::SensorRail,
         FaultKind::Abort,
         FaultKind::Watchdog,
+        FaultKind::TareLoad,
+        FaultKind::Blind,
+        FaultKind::NegativeForce,
+        FaultKind::Panic,
+        FaultKind::Reset,
     ];
 
     /// Stable name, as used by the CLI (`--fault NAME@SECONDS`) and in CSV/JSON.
@@ -51,6 +72,11 @@ impl FaultKind {
             FaultKind::SensorRail => "sensor_unplugged",
             FaultKind::Abort => "abort",
             FaultKind::Watchdog => "watchdog",
+            FaultKind::TareLoad => "tare_load",
+            FaultKind::Blind => "blind_calibration",
+            FaultKind::NegativeForce => "negative_force",
+            FaultKind::Panic => "panic",
+            FaultKind::Reset => "reset",
         }
     }
 
@@ -115,7 +141,9 @@ pub struct Fault {
     pub kind: FaultKind,
     /// The channel concerned, if any.
     pub channel: Option<Channel>,
-    /// The offending value: N for force faults, counts for rail faults, ms for the watchdog.
+    /// The offending value: N for force faults (the load the tare saw for `tare_load`, the
+    /// force readable at the rail check for `blind_calibration`), counts for rail faults, ms
+    /// for the watchdog (NaN for one latched at boot: the gap is unknown), 0 for the others.
     pub value: f32,
     /// µs since the trigger when it was detected (and the safe state commanded).
     pub t_us: i64,

@@ -1,20 +1,30 @@
 //! The rig as a pure state machine: one call per sample period, inputs in, actuator commands
 //! out, records to a sink. No hardware, no clock, no async: `runner.rs` does that.
+//!
+//! * this file: the state, what the rig commands when nothing runs, one sample's dispatch;
+//! * `rig/run.rs`: a run (tare and its bound, steps, conditioning, the end);
+//! * `rig/idle.rs`: between runs (supervision, homing, the fault latch and its
+//!   acknowledgement, the latch a reset leaves);
+//! * `rig/commands.rs`: host commands and setup mode.
+//!
+//! The safety supervisor runs in every phase. Outside a run the servo never moves toward
+//! tension without a person: a latched fault freezes homing, and a fault moves the servo only
+//! toward release (rest is the end of a run's travel that releases the cord).
 
 use crate::button::Debouncer;
 use crate::calib::Calibration;
-use crate::command::{Command, CommandError};
+use crate::command::Command;
 use crate::condition::Window;
 use crate::hal::AdcError;
 use crate::protocol::{Protocol, ProtocolError};
-use crate::record::{
-    Fault, FaultKind, LogSink, RawSample, Record, RunEnd, RunStart, Sequencer, StepPair,
-};
-use crate::safety::{SafetyInput, SafetyLimits, Supervisor};
+use crate::record::{FaultKind, LogSink, Record, RunEnd, Sequencer};
+use crate::safety::{SafetyLimits, Supervisor};
 use crate::settings::Settings;
 use crate::setup::Measure;
 
 mod commands;
+mod idle;
+mod run;
 
 /// Debounce time of the button, ms.
 /// (10 ms: longer than contact bounce, short enough that an abort is safe well inside 20 ms.)
@@ -24,10 +34,18 @@ pub const DEBOUNCE_MS: u32 = 10;
 /// moved and the tensions settled by then).
 pub const CORD_CHECK_SETTLE_MS: u32 = 200;
 
-/// How fast the idle rig brings the servo command to rest when it starts away from it (after a
-/// reset that left the horn elsewhere: [`Rig::home_from`]), deg/s. 60° then take 6 s, where
-/// the HS-322HD alone would swing there in 0.2 s.
+/// How fast the idle rig brings the servo command to rest when it starts away from it (after
+/// setup mode, or new settings that moved rest: [`Rig::home_from`]), deg/s. 60° then take 6 s,
+/// where the HS-322HD alone would swing there in 0.2 s. Homing is supervised like a run and
+/// stops (latched) at a fault.
 pub const HOMING_DEG_PER_S: f32 = 10.0;
+
+/// Largest load a tare may take as zero, N: the mean reading during the tare may differ from
+/// the stored zero by at most this (beyond the cord's `tare_reference_n`). More is a weight or a
+/// preload on the cord, or a wrong zero, and taken as zero it would hide that much of every
+/// force from the over-force check: the run is refused (`tare_load`). 1 N is ~70 counts at
+/// 0.015 N/count, far beyond a sensor's drift between calibrations.
+pub const TARE_MAX_N: f32 = 1.0;
 
 /// `now_us` on the sample grid that runs through `origin_us` (the nearest sample instant).
 /// The clock is read a few tens of µs after each tick, and that latency wanders by a µs or so
@@ -49,7 +67,7 @@ pub struct Inputs {
     /// The button's raw level: true = pressed.
     pub button_pressed: bool,
     /// A command line from the host, parsed, if one arrived this period.
-    pub command: Option<Result<Command, CommandError>>,
+    pub command: Option<Result<Command, crate::command::CommandError>>,
 }
 
 /// What the rig commands each sample period.
@@ -57,6 +75,10 @@ pub struct Inputs {
 pub struct Outputs {
     /// Servo angle, deg.
     pub servo_deg: f32,
+    /// The servo gets pulses. False: none at all (the servo is unpowered and holds nothing:
+    /// the cord back-drives it toward release), after a reset that was not a clean power-up,
+    /// until a person acknowledges it.
+    pub servo_pulses: bool,
     /// Power amplifier control voltage, V.
     pub amp_control_v: f32,
     /// Logger trigger line.
@@ -68,7 +90,8 @@ pub struct Outputs {
     /// The host asked to keep these settings in flash: the runner writes them, then reports
     /// with [`Rig::stored`].
     pub store: Option<Settings>,
-    /// The settings changed this sample (a host command): duties must be recomputed.
+    /// The settings changed this sample (a host command), or the servo's pulses were switched
+    /// on or off: duties must be recomputed.
     pub settings_changed: bool,
 }
 
@@ -115,6 +138,9 @@ pub struct Rig {
     defaults: Settings,
     protocol: Protocol,
     cal: Calibration,
+    /// The zeros of the settings in force: a run's tare may move them by [`TARE_MAX_N`] for
+    /// that run only.
+    zeros: [f32; 2],
     limits: SafetyLimits,
     phase: Phase,
     button: Debouncer,
@@ -131,6 +157,9 @@ pub struct Rig {
     raw_in: u32,
     /// Servo command while idle, deg: the rest angle, or on its way there ([`Rig::home_from`]).
     idle_servo_deg: f32,
+    /// No servo pulses: set at a boot after a reset that was not a clean power-up
+    /// ([`Rig::boot_latched`]), cleared by the person who acknowledges the fault.
+    limp: bool,
     /// Where the settings in force came from (what `show` reports).
     settings_source: crate::record::SettingsSource,
     /// A flash write held the loop: setup mode re-anchors its sample grid on the next sample.
@@ -140,7 +169,8 @@ pub struct Rig {
 }
 
 impl Rig {
-    /// A rig ready to run `protocol`; refused if the protocol is invalid.
+    /// A rig ready to run `protocol`; refused if the protocol is invalid. (A calibration under
+    /// which the over-force check could not trip is refused at each run's tare.)
     pub fn new(
         protocol: Protocol,
         cal: Calibration,
@@ -155,6 +185,7 @@ impl Rig {
             },
             protocol,
             cal,
+            zeros: [cal.t1.zero_counts, cal.t2.zero_counts],
             limits,
             phase: Phase::Idle { latched: None },
             button: Debouncer::new(debounce),
@@ -167,16 +198,17 @@ impl Rig {
             period_us: protocol.sample_period_us(),
             raw_in: 0,
             idle_servo_deg: protocol.rest_deg,
+            limp: false,
             settings_source: crate::record::SettingsSource::DefaultsNoRecord,
             reanchor: false,
             settings_changed: false,
         })
     }
 
-    /// The servo is believed to be at `angle_deg` (e.g. the last command before a reset): the
-    /// idle rig starts its command there and brings it to rest at [`HOMING_DEG_PER_S`]; a press
-    /// is not accepted until it is there. Ignored during a run. Without this call the rig
-    /// assumes the servo is at rest (where every run, fault and panic leaves it).
+    /// The servo command is at `angle_deg` (e.g. where setup mode left it): the idle rig
+    /// brings it to rest at [`HOMING_DEG_PER_S`], supervised, and takes no press until it is
+    /// there. Ignored during a run. Without this call the rig assumes the servo is at rest
+    /// (where every run, fault and panic leaves it).
     pub fn home_from(&mut self, angle_deg: f32) {
         if self.is_running() || !angle_deg.is_finite() {
             return;
@@ -203,7 +235,8 @@ impl Rig {
         self.idle_servo_deg != self.protocol.rest_deg
     }
 
-    /// The fault that ended the last run, while it waits to be acknowledged by a press.
+    /// The fault latched until a person acknowledges it (a run's, one seen while idle or in
+    /// setup mode, or one a reset left).
     pub fn latched_fault(&self) -> Option<FaultKind> {
         match self.phase {
             Phase::Idle { latched } => latched,
@@ -211,14 +244,24 @@ impl Rig {
         }
     }
 
+    /// True while the servo gets no pulses (after a reset, until acknowledged).
+    pub fn is_limp(&self) -> bool {
+        self.limp
+    }
+
     /// The protocol in force.
     pub fn protocol(&self) -> &Protocol {
         &self.protocol
     }
 
-    /// The calibration in force (changed by each tare).
+    /// The calibration in force (during a run, with the zeros of its tare).
     pub fn calibration(&self) -> &Calibration {
         &self.cal
+    }
+
+    /// The safety limits.
+    pub fn limits(&self) -> &SafetyLimits {
+        &self.limits
     }
 
     /// True while a run is in progress (tare included).
@@ -231,6 +274,11 @@ impl Rig {
         matches!(self.phase, Phase::Setup { .. })
     }
 
+    /// True when nothing moves: idle, the servo commanded to rest (not homing, not limp).
+    pub fn is_at_rest(&self) -> bool {
+        matches!(self.phase, Phase::Idle { .. }) && !self.is_homing() && !self.limp
+    }
+
     /// What the idle rig commands now: [`Rig::safe_outputs`] with the servo where homing has
     /// brought it (at rest unless [`Rig::home_from`] was called). The runner writes this at
     /// boot, before the first sample.
@@ -241,10 +289,12 @@ impl Rig {
         }
     }
 
-    /// The state outputs hold when nothing runs: servo at rest, amplifier off, trigger low.
+    /// The state outputs hold when nothing runs: servo at rest (no pulses while limp),
+    /// amplifier off, trigger low.
     pub fn safe_outputs(&self) -> Outputs {
         Outputs {
             servo_deg: self.protocol.rest_deg,
+            servo_pulses: !self.limp,
             amp_control_v: 0.0,
             trigger: false,
             led: false,
@@ -301,47 +351,11 @@ impl Rig {
         // One call of `step_running` (the sample path of a run), for the run's samples and the
         // press that starts one alike: inlined here, and only once on the board.
         let abort = match self.phase {
-            Phase::Idle { latched } => {
-                let mut started = false;
-                if self.is_homing() {
-                    let rest = self.protocol.rest_deg;
-                    let step = HOMING_DEG_PER_S / self.protocol.sample_hz as f32;
-                    let gap = rest - self.idle_servo_deg;
-                    self.idle_servo_deg = if gap.abs() <= step {
-                        rest
-                    } else if gap > 0.0 {
-                        self.idle_servo_deg + step
-                    } else {
-                        self.idle_servo_deg - step
-                    };
-                    if pressed {
-                        info!("press ignored: the servo is still on its way to rest");
-                    }
-                } else if pressed {
-                    if latched.is_some() {
-                        self.phase = Phase::Idle { latched: None };
-                        info!(
-                            "fault acknowledged; press again to start run {=u32}",
-                            self.runs + 1
-                        );
-                    } else {
-                        self.start(inp.now_us);
-                        started = true;
-                    }
-                }
-                if !started {
-                    let blink_ms = if self.latched_fault().is_some() {
-                        100
-                    } else {
-                        500
-                    };
-                    let mut out = self.idle_outputs();
-                    out.led = (inp.now_us / 1000 / blink_ms).is_multiple_of(2);
-                    return out;
-                }
+            Phase::Idle { latched } => match self.step_idle(inp, latched, pressed, sink) {
+                Some(out) => return out,
                 // The press that started the run does not abort it.
-                false
-            }
+                None => false,
+            },
             // (On the host, a copy for the out-of-line setup step: the sample loop's inputs are
             // then only read, and stay in registers.)
             #[cfg(not(target_os = "none"))]
@@ -351,17 +365,6 @@ impl Rig {
             _ => abort,
         };
         self.step_running(inp, abort, sink)
-    }
-
-    fn start(&mut self, now_us: u64) {
-        self.press_us = now_us;
-        self.runs += 1;
-        self.pairs = 0;
-        self.raw_in = 0;
-        self.elapsed_us = 0;
-        self.supervisor = Supervisor::new(self.limits);
-        self.phase = Phase::Tare { sum: [0; 2], n: 0 };
-        info!("run {=u32}: button pressed, taring", self.runs);
     }
 
     /// A tension level (≥ 1) has been held for `CORD_CHECK_SETTLE_MS`: the cord is loaded.
@@ -388,203 +391,13 @@ impl Rig {
         elapsed_us as i64 - self.protocol.trigger_at_ms() as i64 * 1000
     }
 
-    fn begin_run(&mut self, tare: Option<([u64; 2], u32)>) -> Phase {
-        if let Some((sum, n)) = tare.filter(|&(_, n)| n > 0) {
-            let r = self.cal.tare_reference_n;
-            self.cal.t1.tare(sum[0] as f32 / n as f32, r);
-            self.cal.t2.tare(sum[1] as f32 / n as f32, r);
-        }
-        // Step 0 (rest, no window) until the first step starts.
-        Phase::Run {
-            step: 0,
-            window: Window::new(0, 0),
-            pair_due_us: u64::MAX,
-            next_ms: self.protocol.step_start_ms(0),
-            armed_ms: u32::MAX,
-            servo_deg: self.protocol.rest_deg,
-        }
-    }
-
-    #[cfg_attr(not(target_os = "none"), inline(always))]
-    fn step_running(&mut self, inp: &Inputs, pressed: bool, sink: &mut impl LogSink) -> Outputs {
-        // Borrowed, not copied: the protocol is ~60 bytes, and a sample needs a few of them.
-        let p = &self.protocol;
-        let period_us = self.period_us as u64;
-        // A sample comes one period after the last, give or take the clock's latency: then it
-        // is on the grid without `on_grid`'s 64-bit division (in software on the board).
-        let since_us = inp.now_us.saturating_sub(self.press_us) + period_us / 2;
-        let next_us = self.elapsed_us + period_us;
-        let elapsed_us = if since_us.wrapping_sub(next_us) < period_us {
-            next_us
+    /// The servo command moved only toward release: `angle_deg` or rest, whichever releases
+    /// more (rest is the longest pulse of a run: a larger angle releases).
+    fn toward_release(&self, angle_deg: f32) -> f32 {
+        if angle_deg > self.protocol.rest_deg {
+            angle_deg
         } else {
-            on_grid(inp.now_us, self.press_us, self.period_us) - self.press_us
-        };
-        self.elapsed_us = elapsed_us;
-        let elapsed_ms = (elapsed_us / 1000) as u32;
-        let t_us = self.since_trigger_us(elapsed_us);
-        let counts_ok = match inp.counts {
-            [Ok(a), Ok(b)] => Some([a, b]),
-            _ => None,
-        };
-        // (`forces`, without its NaN cases on the usual sample with both conversions done.)
-        let force_n = match counts_ok {
-            Some([a, b]) => [self.cal.t1.newtons(a as f32), self.cal.t2.newtons(b as f32)],
-            None => self.forces(inp),
-        };
-
-        // Tare, then announce the run with the calibration it will use.
-        if let Phase::Tare { sum, n } = &mut self.phase {
-            if let Some(c) = counts_ok {
-                sum[0] += c[0] as u64;
-                sum[1] += c[1] as u64;
-                *n += 1;
-            }
-            if elapsed_us + period_us >= p.tare_ms as u64 * 1000 {
-                // tare_ms = 0 keeps the stored zero (the one sample taken is not a tare).
-                let tare = (p.tare_ms > 0).then_some((*sum, *n));
-                self.phase = self.begin_run(tare);
-                let rec = RunStart {
-                    run: self.runs,
-                    protocol: self.protocol,
-                    calibration: self.cal,
-                };
-                self.emit(sink, Record::RunStart(rec));
-            }
+            self.protocol.rest_deg
         }
-        let p = &self.protocol;
-
-        // Safety first: a fault ends the run in this very sample.
-        let fault = if pressed {
-            Some(Fault {
-                kind: FaultKind::Abort,
-                channel: None,
-                value: 0.0,
-                t_us,
-            })
-        } else {
-            self.supervisor.check(&SafetyInput {
-                t_us,
-                counts: inp.counts,
-                force_n,
-                cord_check_armed: self.level_held(elapsed_ms),
-            })
-        };
-        if let Some(f) = fault {
-            warn!("fault {}", f.kind);
-            self.emit(sink, Record::Fault(f));
-            return self.finish(t_us, Some(f.kind), sink);
-        }
-
-        // Decimated raw samples for the log, from the run start on.
-        if !matches!(self.phase, Phase::Tare { .. }) {
-            if self.raw_in == 0 {
-                let raw = RawSample {
-                    t_us,
-                    counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
-                    force_n,
-                };
-                sink.emit(self.seq.next_seq(), &Record::Raw(raw));
-                self.raw_in = p.sample_hz / p.raw_log_hz;
-            }
-            self.raw_in -= 1;
-        }
-
-        // The phase is updated in place: a run's window is too large to copy every sample.
-        if let Phase::Run {
-            step,
-            window,
-            pair_due_us,
-            next_ms,
-            armed_ms,
-            servo_deg,
-        } = &mut self.phase
-        {
-            if elapsed_ms >= *next_ms {
-                // Which step is being held: steps start at step_start_ms(k).
-                let n = p.levels();
-                let k = ((elapsed_ms - p.step_start_ms(0)) / p.dwell_ms).min(n + 1);
-                if k != *step {
-                    *step = k;
-                    let (a, b) = p.window_ms(k);
-                    *window = Window::new(a as u64 * 1000, b as u64 * 1000);
-                    *pair_due_us = if k == 0 || k > n {
-                        u64::MAX
-                    } else {
-                        b as u64 * 1000
-                    };
-                    *servo_deg = p.angle_deg(k);
-                    *armed_ms = if k >= 1 && p.level(k) >= 1 {
-                        p.step_start_ms(k) + CORD_CHECK_SETTLE_MS
-                    } else {
-                        u32::MAX
-                    };
-                }
-                *next_ms = if k > n {
-                    u32::MAX
-                } else {
-                    p.step_start_ms(k + 1)
-                };
-            }
-            if let Some(c) = counts_ok {
-                window.push(elapsed_us, c);
-            }
-            let mut pair = None;
-            if elapsed_us + period_us >= *pair_due_us {
-                *pair_due_us = u64::MAX;
-                let (a, b) = p.window_ms(*step);
-                let [t1, t2] = window.stats(&self.cal);
-                pair = Some(StepPair {
-                    step: *step,
-                    level: p.level(*step),
-                    angle_deg: *servo_deg,
-                    t_mid_ms: (a + b) / 2 - p.trigger_at_ms(),
-                    t1,
-                    t2,
-                });
-            }
-            let (ended, servo_deg) = (*next_ms == u32::MAX, *servo_deg);
-            if let Some(pair) = pair {
-                self.pairs += 1;
-                sink.emit(self.seq.next_seq(), &Record::Pair(pair));
-            }
-            if ended {
-                return self.finish(t_us, None, sink);
-            }
-            let trigger_ms = elapsed_ms.wrapping_sub(p.trigger_at_ms());
-            return Outputs {
-                servo_deg,
-                amp_control_v: p.amp_control_v,
-                trigger: elapsed_ms >= p.trigger_at_ms() && trigger_ms < p.trigger_ms,
-                led: true,
-                finished: None,
-                store: None,
-                settings_changed: false,
-            };
-        }
-        // Taring: capstan stopped, servo at rest.
-        let mut out = self.safe_outputs();
-        out.led = true;
-        out
-    }
-
-    fn finish(&mut self, t_us: i64, fault: Option<FaultKind>, sink: &mut impl LogSink) -> Outputs {
-        let end = RunEnd {
-            t_us,
-            pairs: self.pairs,
-            fault,
-        };
-        self.emit(sink, Record::RunEnd(end));
-        info!("run {=u32} ended: {=u32} pairs", self.runs, self.pairs);
-        self.phase = Phase::Idle { latched: fault };
-        self.idle_servo_deg = self.protocol.rest_deg;
-        if fault.is_some() {
-            warn!(
-                "run {=u32}: fault latched; press once to acknowledge it",
-                self.runs
-            );
-        }
-        let mut out = self.safe_outputs();
-        out.finished = Some(end);
-        out
     }
 }

@@ -9,7 +9,10 @@ use crate::rig::{Inputs, Outputs, Rig};
 use crate::safety::SafetyLimits;
 use std::vec::Vec;
 
-/// Between runs: fault latching and acknowledgement, slow homing after a reset.
+/// What must never blind a check or move the rig without a person: a loaded tare, a mistyped
+/// sensitivity, a held button, a fault while idle, a reset, a store away from rest.
+mod guard;
+/// Between runs: fault latching and acknowledgement, slow homing.
 mod idle;
 
 #[derive(Default)]
@@ -285,7 +288,8 @@ fn fault_case(kind: FaultKind) {
                 FaultKind::CordBreak => c[1] = Ok(cal.t2.counts(0.0) as u16),
                 FaultKind::SensorRail => c[0] = Ok(0),
                 FaultKind::Abort => press = t < at + 40_000,
-                FaultKind::Watchdog => {}
+                FaultKind::NegativeForce => c[0] = Ok(cal.t1.counts(-4.0) as u16),
+                _ => {}
             }
         }
         (c, press)
@@ -353,6 +357,11 @@ fn unplugged_sensor_makes_the_rig_safe() {
 #[test]
 fn abort_button_makes_the_rig_safe() {
     fault_case(FaultKind::Abort);
+}
+
+#[test]
+fn a_reversed_reading_makes_the_rig_safe() {
+    fault_case(FaultKind::NegativeForce);
 }
 
 #[test]

@@ -61,6 +61,7 @@ struct Written {
     servo: Option<u16>,
     amp: Option<u16>,
     servo_deg: Option<f32>,
+    servo_pulses: Option<bool>,
     amp_control_v: Option<f32>,
     trigger: Option<bool>,
     led: Option<bool>,
@@ -72,6 +73,7 @@ impl Written {
     #[inline]
     fn holds(&self, out: &Outputs) -> bool {
         self.servo_deg == Some(out.servo_deg)
+            && self.servo_pulses == Some(out.servo_pulses)
             && self.amp_control_v == Some(out.amp_control_v)
             && self.trigger == Some(out.trigger)
             && self.led == Some(out.led)
@@ -113,8 +115,15 @@ where
         // tare only re-zeroes the force channels), and `serve` forgets `written` then; so a
         // command equal to the last one maps to the same duty.
         let cal = rig.calibration();
-        if written.servo_deg != Some(out.servo_deg) {
-            let servo = cal.servo.duty(out.servo_deg, self.servo.max_duty_cycle());
+        if written.servo_deg != Some(out.servo_deg)
+            || written.servo_pulses != Some(out.servo_pulses)
+        {
+            // Duty 0: no pulses at all (the servo is unpowered).
+            let servo = if out.servo_pulses {
+                cal.servo.duty(out.servo_deg, self.servo.max_duty_cycle())
+            } else {
+                0
+            };
             if written.servo != Some(servo) {
                 self.servo
                     .set_duty_cycle(servo)
@@ -122,6 +131,7 @@ where
                 written.servo = Some(servo);
             }
             written.servo_deg = Some(out.servo_deg);
+            written.servo_pulses = Some(out.servo_pulses);
         }
         if written.amp_control_v != Some(out.amp_control_v) {
             let amp = cal.amp.duty(out.amp_control_v, self.amp.max_duty_cycle());
@@ -146,22 +156,31 @@ where
         Ok(())
     }
 
-    /// Put the hardware in its safe state: servo at rest, amplifier 0 V, trigger low.
+    /// Put the hardware in its safe state: servo at rest (no pulses while the rig holds it
+    /// limp), amplifier 0 V, trigger low.
     pub fn make_safe(&mut self, rig: &Rig) -> Result<(), RunError> {
         self.apply(rig, &rig.safe_outputs(), &mut Written::default())
     }
 
     /// The outputs at boot, before the first sample: amplifier 0 V, trigger low, LED off, and
-    /// the servo where the rig believes it is ([`Rig::idle_outputs`]: at rest, or where
-    /// [`Rig::home_from`] said, from where the idle rig brings it to rest slowly).
+    /// the servo at the rest of the settings in force, or without pulses after a reset that
+    /// latched a fault ([`Rig::idle_outputs`]).
     pub fn boot(&mut self, rig: &Rig) -> Result<(), RunError> {
         self.apply(rig, &rig.idle_outputs(), &mut Written::default())
     }
 }
 
+/// The hardware watchdog's timeout while the loop samples, ms (the board's
+/// `WATCHDOG_TIMEOUT`; host-sim resets its simulated board this long after a frozen loop's last
+/// feed). Ten samples: a loop that has stopped leaves the outputs as they were for at most this
+/// long before the chip resets and releases every pin.
+pub const WATCHDOG_MS: u32 = 10;
+
 /// The watchdog's allowance while the flash is written, ms: a 4 KiB erase takes ~45 ms and
 /// at most ~400 ms on the Pico's W25Q16, and a save may erase several pages (a repair, a
-/// migration). The RP2040's watchdog takes up to 8.3 s.
+/// migration). The RP2040's watchdog takes up to 8.3 s. Only then, and only with the outputs
+/// already safe: the rig asks for a write only with the servo at rest and the amplifier off
+/// (`store` is refused otherwise), and the write holds the loop and its checks.
 pub const STORE_WATCHDOG_MS: u32 = 5_000;
 
 /// Wait for the button, run the protocol once, return how it ended (no host commands, no

@@ -12,9 +12,7 @@
 //! The only number the handlers need, the servo's rest duty, is computed once at boot while
 //! everything works ([`SafeDuties::for_rig`]) and kept where a handler can read it.
 //!
-//! Also here: the servo's last command kept across a reset ([`remembered_servo_word`],
-//! [`recall_servo_duty`]), so that after a watchdog or panic reset the rig knows where the horn
-//! was and can bring it home slowly (`Rig::home_from`).
+//! What survives a reset (the fault latch, the servo's last command) is in [`crate::reset`].
 
 use crate::rig::Rig;
 
@@ -43,8 +41,13 @@ impl SafeDuties {
     pub const NO_SERVO_PULSES: SafeDuties = SafeDuties { servo_rest: 0 };
 
     /// The rig's rest angle through its calibration, on a servo PWM whose top is
-    /// `servo_max_duty`: the same duty the runner writes for the rest angle.
+    /// `servo_max_duty`: the same duty the runner writes for the rest angle. No pulses while
+    /// the rig holds the servo without them ([`Rig::is_limp`]: after a reset, until a person
+    /// acknowledges it): a panic then must not be what moves the servo.
     pub fn for_rig(rig: &Rig, servo_max_duty: u16) -> SafeDuties {
+        if rig.is_limp() {
+            return SafeDuties::NO_SERVO_PULSES;
+        }
         let cal = rig.calibration();
         SafeDuties {
             servo_rest: cal.servo.duty(rig.protocol().rest_deg, servo_max_duty),
@@ -58,26 +61,6 @@ pub fn force_safe(out: &mut impl ForceOutputs, duties: SafeDuties) {
     out.force_amp_off();
     out.force_servo_duty(duties.servo_rest);
     out.force_trigger_low();
-}
-
-/// Tag of a servo duty kept across a reset (upper 16 bits of the word).
-const SERVO_WORD_TAG: u32 = 0xCA57_0000;
-
-/// The word that keeps a servo duty across a reset (e.g. in the RP2040's watchdog scratch
-/// register, which survives a watchdog reset but not a power cycle).
-pub const fn remembered_servo_word(duty: u16) -> u32 {
-    SERVO_WORD_TAG | duty as u32
-}
-
-/// The servo duty a word kept across a reset holds, if it is one of ours and a pulse within
-/// the PWM's range (`None` after a power cycle, or for anything else).
-pub const fn recall_servo_duty(word: u32, max_duty: u16) -> Option<u16> {
-    let duty = (word & 0xFFFF) as u16;
-    if word & 0xFFFF_0000 == SERVO_WORD_TAG && duty > 0 && duty <= max_duty {
-        Some(duty)
-    } else {
-        None
-    }
 }
 
 #[cfg(test)]
@@ -125,17 +108,5 @@ mod tests {
         let mut pins = Pins::default();
         force_safe(&mut pins, SafeDuties::NO_SERVO_PULSES);
         assert_eq!(pins.1, [0]);
-    }
-
-    #[test]
-    fn a_servo_duty_survives_a_reset_only_as_our_word() {
-        assert_eq!(
-            recall_servo_duty(remembered_servo_word(5_728), 62_500),
-            Some(5_728)
-        );
-        // Power-on value, someone else's word, no pulse, a duty beyond the top.
-        for w in [0, 0xB007_C0D3, remembered_servo_word(0), 0xCA57_FFFF] {
-            assert_eq!(recall_servo_duty(w, 62_500), None, "{w:#x}");
-        }
     }
 }

@@ -1,11 +1,16 @@
-//! The safety supervisor: decides, sample by sample, whether the run must stop.
+//! The safety supervisor: decides, sample by sample, whether the rig must go safe.
 //!
 //! It only decides; the rig (`rig.rs`) puts the hardware in its safe state (servo to rest,
-//! amplifier to 0 V, trigger low) in the same sample period the fault is raised. Every check
+//! amplifier to 0 V, trigger low) in the same sample period the fault is raised. It runs in
+//! every state: runs, idle (homing and a latched fault included) and setup mode. Every check
 //! needs a few consecutive bad samples, so one noisy conversion never stops a run, and the
 //! longest of them (5 samples at 1 kHz) keeps detection well inside 20 ms.
+//!
+//! Also here: [`SafetyLimits::visible`], the condition a calibration must meet for the
+//! over-force check to hold by construction (the limit reads below the rail check), checked
+//! wherever a calibration comes in (`set`, `weigh`, `zero`, the flash) and after every tare.
 
-use crate::hal::{AdcError, Channel, ADC_MAX_COUNTS};
+use crate::hal::{AdcError, Channel};
 use crate::record::{Fault, FaultKind};
 
 /// Thresholds of the supervisor.
@@ -18,7 +23,11 @@ pub struct SafetyLimits {
     pub over_force_samples: u16,
     /// A channel at or below this many counts is at the low rail (unplugged).
     pub rail_low_counts: u16,
-    /// A channel at or above this many counts is at the high rail (shorted / saturated).
+    /// A channel at or above this many counts is at the high rail (shorted or saturated).
+    /// Must be below the highest reading a sensor can produce: a 0-5 V sensor behind the
+    /// board's 10k/18k divider saturates at ~3990 counts (3.21 V; 3910 with a 2 % high
+    /// ADC_VREF), so the default 3900 makes a sensor pinned at its output's rail a rail
+    /// fault, never a blind spot between saturation and the check (default 3900).
     pub rail_high_counts: u16,
     /// Consecutive rail (or failed) conversions before the fault (default 5).
     pub rail_samples: u16,
@@ -35,6 +44,26 @@ pub struct SafetyLimits {
     pub cord_slack_n: f32,
     /// Largest gap between two samples before the watchdog fault, µs (default 10 ms).
     pub max_sample_gap_us: u32,
+    /// A channel reading below −this, N, for `over_force_samples` samples is a fault
+    /// (`negative_force`): a cord cannot push, so the sensor is reversed or its zero is wrong,
+    /// and a reversed sensor would hide any over-force (default 3).
+    pub negative_force_n: f32,
+}
+
+/// The over-force limit must read at least this many counts below the rail check
+/// ([`SafetyLimits::visible`]): 1 % of the ADC's range.
+pub const VISIBLE_MARGIN_COUNTS: f32 = 41.0;
+
+/// A calibration under which the over-force check could not trip: on `channel`, the highest
+/// force the rig can read before the rail check is `readable_n`, below the limit (with
+/// [`VISIBLE_MARGIN_COUNTS`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct Blind {
+    /// The channel that cannot show the limit.
+    pub channel: Channel,
+    /// The force it reads at the rail check less the margin, N.
+    pub readable_n: f32,
 }
 
 impl Default for SafetyLimits {
@@ -43,14 +72,37 @@ impl Default for SafetyLimits {
             over_force_n: 45.0,
             over_force_samples: 3,
             rail_low_counts: 4,
-            rail_high_counts: ADC_MAX_COUNTS - 4,
+            rail_high_counts: 3_900,
             rail_samples: 5,
             cord_break_ratio: 0.3,
             cord_break_min_t1_n: 0.5,
             cord_break_samples: 5,
             cord_slack_n: 0.05,
             max_sample_gap_us: 10_000,
+            negative_force_n: 3.0,
         }
+    }
+}
+
+impl SafetyLimits {
+    /// The over-force check holds by construction under `cal`: on each channel the limit
+    /// reads at least [`VISIBLE_MARGIN_COUNTS`] below the rail check, so a force at the limit
+    /// is either read as one (over-force) or pins the sensor (rail). `Err` names the first
+    /// channel where it does not (a sensitivity typed too low, a zero too high, a sensor whose
+    /// range ends below the limit). Only a true calibration makes the reading true: `weigh`
+    /// measures the sensitivity, the tare checks the zero ([`crate::rig::TARE_MAX_N`]).
+    pub fn visible(&self, cal: &crate::calib::Calibration) -> Result<(), Blind> {
+        let top = self.rail_high_counts as f32 - VISIBLE_MARGIN_COUNTS;
+        for (channel, ch) in [(Channel::T1, &cal.t1), (Channel::T2, &cal.t2)] {
+            let readable_n = (top - ch.zero_counts) * ch.n_per_count;
+            if readable_n.is_nan() || readable_n < self.over_force_n {
+                return Err(Blind {
+                    channel,
+                    readable_n,
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -72,6 +124,7 @@ pub struct SafetyInput {
 pub struct Supervisor {
     limits: SafetyLimits,
     over: [u16; 2],
+    neg: [u16; 2],
     rail: [u16; 2],
     cord: u16,
     last_t_us: Option<i64>,
@@ -95,6 +148,7 @@ impl Supervisor {
         Supervisor {
             limits,
             over: [0; 2],
+            neg: [0; 2],
             rail: [0; 2],
             cord: 0,
             last_t_us: None,
@@ -160,7 +214,7 @@ impl Supervisor {
         let [t1, t2] = input.force_n;
         // (`c > l.rail_low_counts && c < l.rail_high_counts`, in one comparison: see `new`.)
         let off_rail = |c: u16| c.wrapping_sub(self.off_rail_from) < self.off_rail_span;
-        let over = |f: f32| f > l.over_force_n;
+        let over = |f: f32| f > l.over_force_n || f < -l.negative_force_n;
         off_rail(c1)
             && off_rail(c2)
             && !over(t1)
@@ -205,6 +259,11 @@ impl Supervisor {
             if self.over[i] >= l.over_force_samples {
                 return fault(FaultKind::OverForce, Some(ch), f);
             }
+            let negative = !at_rail && f < -l.negative_force_n;
+            self.neg[i] = if negative { self.neg[i] + 1 } else { 0 };
+            if self.neg[i] >= l.over_force_samples {
+                return fault(FaultKind::NegativeForce, Some(ch), f);
+            }
         }
         let [t1, t2] = input.force_n;
         let collapsed = input.cord_check_armed
@@ -218,329 +277,12 @@ impl Supervisor {
         // No fault: every sample limit is above its counter, so at least one.
         #[cfg(not(target_os = "none"))]
         {
-            self.quiet = self.rail == [0; 2] && self.over == [0; 2] && self.cord == 0;
+            self.quiet =
+                self.rail == [0; 2] && self.over == [0; 2] && self.neg == [0; 2] && self.cord == 0;
         }
         None
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn input(t_us: i64, counts: [Result<u16, AdcError>; 2], force_n: [f32; 2]) -> SafetyInput {
-        SafetyInput {
-            t_us,
-            counts,
-            force_n,
-            cord_check_armed: true,
-        }
-    }
-
-    fn feed(
-        sup: &mut Supervisor,
-        n: usize,
-        c: [Result<u16, AdcError>; 2],
-        f: [f32; 2],
-    ) -> Option<(usize, Fault)> {
-        (0..n).find_map(|i| sup.check(&input(i as i64 * 1000, c, f)).map(|x| (i, x)))
-    }
-
-    #[test]
-    fn off_the_rails_in_one_comparison_is_the_two() {
-        for (low, high) in [
-            (4, 4091),
-            (0, u16::MAX),
-            (0, 0),
-            (5, 6),
-            (5, 7),
-            (3000, 2000),
-        ]
-        .into_iter()
-        .chain([
-            (u16::MAX, 0),
-            (u16::MAX, u16::MAX),
-            (u16::MAX - 1, u16::MAX),
-        ]) {
-            let s = Supervisor::new(SafetyLimits {
-                rail_low_counts: low,
-                rail_high_counts: high,
-                ..SafetyLimits::default()
-            });
-            for c in 0..=u16::MAX {
-                let one = c.wrapping_sub(s.off_rail_from) < s.off_rail_span;
-                assert_eq!(one, c > low && c < high, "{c} in {low}..{high}");
-            }
-        }
-    }
-
-    #[test]
-    fn healthy_samples_raise_nothing() {
-        let mut s = Supervisor::new(SafetyLimits::default());
-        assert_eq!(
-            feed(&mut s, 10_000, [Ok(1000), Ok(2000)], [9.0, 24.0]),
-            None
-        );
-    }
-
-    #[test]
-    fn over_force_needs_three_samples() {
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let got = feed(&mut s, 10, [Ok(1000), Ok(3500)], [9.0, 46.5]).unwrap();
-        assert_eq!(got.0, 2);
-        assert_eq!(got.1.kind, FaultKind::OverForce);
-        assert_eq!(got.1.channel, Some(Channel::T2));
-        assert_eq!(got.1.value, 46.5);
-    }
-
-    #[test]
-    fn unplugged_or_failing_sensor_is_a_rail_fault() {
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let got = feed(&mut s, 10, [Ok(0), Ok(2000)], [-6.0, 24.0]).unwrap();
-        assert_eq!(
-            (got.0, got.1.kind, got.1.channel),
-            (4, FaultKind::SensorRail, Some(Channel::T1))
-        );
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let got = feed(&mut s, 10, [Ok(1000), Err(AdcError)], [9.0, 0.0]).unwrap();
-        assert_eq!(
-            (got.1.kind, got.1.channel),
-            (FaultKind::SensorRail, Some(Channel::T2))
-        );
-    }
-
-    #[test]
-    fn cord_break_when_t2_collapses_under_held_t1() {
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let got = feed(&mut s, 10, [Ok(1000), Ok(410)], [9.0, 0.15]).unwrap();
-        assert_eq!((got.0, got.1.kind), (4, FaultKind::CordBreak));
-        // Not armed (capstan stopped, tare): no fault.
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let mut i = input(0, [Ok(1000), Ok(410)], [9.0, 0.15]);
-        i.cord_check_armed = false;
-        for t in 0..10 {
-            i.t_us = t * 1000;
-            assert_eq!(s.check(&i), None);
-        }
-        // Low tension with amplification near one is not a break.
-        let mut s = Supervisor::new(SafetyLimits::default());
-        assert_eq!(feed(&mut s, 100, [Ok(430), Ok(428)], [0.45, 0.42]), None);
-    }
-
-    #[test]
-    fn cord_break_when_both_sides_go_slack_under_a_held_level() {
-        // The cord parted: neither side carries anything (± noise).
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let got = feed(&mut s, 10, [Ok(401), Ok(399)], [0.01, -0.02]).unwrap();
-        assert_eq!((got.0, got.1.kind), (4, FaultKind::CordBreak));
-        // Not while no level is held (rest, tare, between runs).
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let mut i = input(0, [Ok(401), Ok(399)], [0.01, -0.02]);
-        i.cord_check_armed = false;
-        for t in 0..10 {
-            i.t_us = t * 1000;
-            assert_eq!(s.check(&i), None);
-        }
-        // The lowest level at the smallest wrap is well clear of it.
-        let mut s = Supervisor::new(SafetyLimits::default());
-        assert_eq!(feed(&mut s, 100, [Ok(420), Ok(435)], [0.3, 0.52]), None);
-    }
-
-    /// The supervisor as it was written before its fast path: one pass over every check and
-    /// counter on every sample. `Supervisor::check` must decide exactly as this does.
-    struct Reference {
-        limits: SafetyLimits,
-        over: [u16; 2],
-        rail: [u16; 2],
-        cord: u16,
-        last_t_us: Option<i64>,
-    }
-
-    impl Reference {
-        fn check(&mut self, input: &SafetyInput) -> Option<Fault> {
-            let l = &self.limits;
-            let fault = |kind, channel, value| {
-                Some(Fault {
-                    kind,
-                    channel,
-                    value,
-                    t_us: input.t_us,
-                })
-            };
-            if let Some(last) = self.last_t_us.replace(input.t_us) {
-                let gap_us = input.t_us - last;
-                if gap_us > l.max_sample_gap_us as i64 {
-                    return fault(FaultKind::Watchdog, None, gap_us as f32 / 1000.0);
-                }
-            }
-            for ch in Channel::BOTH {
-                let i = ch as usize;
-                let at_rail = match input.counts[i] {
-                    Ok(c) => c <= l.rail_low_counts || c >= l.rail_high_counts,
-                    Err(AdcError) => true,
-                };
-                self.rail[i] = if at_rail { self.rail[i] + 1 } else { 0 };
-                if self.rail[i] >= l.rail_samples {
-                    let value = input.counts[i].map(f32::from).unwrap_or(f32::NAN);
-                    return fault(FaultKind::SensorRail, Some(ch), value);
-                }
-                let f = input.force_n[i];
-                let over = !at_rail && f > l.over_force_n;
-                self.over[i] = if over { self.over[i] + 1 } else { 0 };
-                if self.over[i] >= l.over_force_samples {
-                    return fault(FaultKind::OverForce, Some(ch), f);
-                }
-            }
-            let [t1, t2] = input.force_n;
-            let collapsed = input.cord_check_armed
-                && input.counts.iter().all(|c| c.is_ok())
-                && ((t1 >= l.cord_break_min_t1_n && t2 < l.cord_break_ratio * t1)
-                    || (t1 < l.cord_slack_n && t2 < l.cord_slack_n));
-            self.cord = if collapsed { self.cord + 1 } else { 0 };
-            if self.cord >= l.cord_break_samples {
-                return fault(FaultKind::CordBreak, Some(Channel::T2), t2);
-            }
-            None
-        }
-    }
-
-    /// Random streams of samples — healthy ones, and runs of rail, failed, over-force,
-    /// collapsed, slack, NaN and late samples — under the default limits and under odd ones
-    /// (zero sample counts, empty rail windows): the same fault on the same sample, with the
-    /// same counters, as the reference.
-    #[test]
-    fn decides_exactly_as_the_one_pass_reference() {
-        let mut x: u64 = 0x2545_f491_4f6c_dd1d;
-        let mut next = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
-        let default = SafetyLimits::default();
-        let limit_sets = [
-            default,
-            SafetyLimits {
-                rail_samples: 0,
-                ..default
-            },
-            SafetyLimits {
-                over_force_samples: 0,
-                ..default
-            },
-            SafetyLimits {
-                cord_break_samples: 0,
-                ..default
-            },
-            SafetyLimits {
-                rail_samples: 1,
-                over_force_samples: 1,
-                cord_break_samples: 1,
-                ..default
-            },
-            SafetyLimits {
-                rail_low_counts: 3000,
-                rail_high_counts: 2000,
-                ..default
-            },
-            SafetyLimits {
-                rail_low_counts: 1999,
-                rail_high_counts: 2000,
-                ..default
-            },
-            SafetyLimits {
-                rail_low_counts: u16::MAX,
-                rail_high_counts: 0,
-                ..default
-            },
-            SafetyLimits {
-                rail_samples: 40,
-                over_force_samples: 40,
-                cord_break_samples: 40,
-                ..default
-            },
-        ];
-        let mut faults = 0;
-        for limits in limit_sets {
-            for _stream in 0..300 {
-                let mut sup = Supervisor::new(limits);
-                let mut reference = Reference {
-                    limits,
-                    over: [0; 2],
-                    rail: [0; 2],
-                    cord: 0,
-                    last_t_us: None,
-                };
-                let mut t_us = 0i64;
-                // Each stream holds one kind of sample for a while, then switches.
-                let mut kind = 0;
-                for _ in 0..400 {
-                    let r = next();
-                    if r % 16 == 0 {
-                        kind = (r >> 8) % 10;
-                    }
-                    t_us += if (r >> 20) % 997 == 0 { 12_000 } else { 1_000 };
-                    let count = |r: u64| -> Result<u16, AdcError> {
-                        match (kind, r % 8) {
-                            (1, 0..=5) => Ok((r >> 3) as u16 % 6),
-                            (2, 0..=5) => Ok(4095 - (r >> 3) as u16 % 6),
-                            (3, 0..=2) => Err(AdcError),
-                            _ => Ok(400 + (r >> 3) as u16 % 3000),
-                        }
-                    };
-                    let counts = [count(next()), count(next())];
-                    let f = |r: u64| (r % 5000) as f32 / 100.0 - 1.0;
-                    let mut force_n = [f(next()), f(next())];
-                    match kind {
-                        4 => force_n[(r >> 30) as usize % 2] = 45.0 + (r >> 40) as f32 % 3.0,
-                        5 => force_n = [9.0, 0.15 + (r >> 40) as f32 % 4.0],
-                        6 => force_n = [0.01, -0.02 + ((r >> 40) % 2) as f32 * 0.07],
-                        7 => force_n[(r >> 30) as usize % 2] = f32::NAN,
-                        8 => force_n = [0.5, 0.15],
-                        _ => {}
-                    }
-                    let input = SafetyInput {
-                        t_us,
-                        counts,
-                        force_n,
-                        cord_check_armed: (r >> 50) % 4 != 0,
-                    };
-                    let got = sup.check(&input);
-                    let want = reference.check(&input);
-                    // NaN values compare by their bits.
-                    let bits = |f: Option<Fault>| {
-                        f.map(|f| (f.kind, f.channel, f.value.to_bits(), f.t_us))
-                    };
-                    assert_eq!(bits(got), bits(want), "{limits:?} {input:?}");
-                    assert_eq!(
-                        (sup.rail, sup.over, sup.cord, sup.last_t_us),
-                        (
-                            reference.rail,
-                            reference.over,
-                            reference.cord,
-                            reference.last_t_us
-                        ),
-                        "{limits:?} {input:?}"
-                    );
-                    if got.is_some() {
-                        faults += 1;
-                        break;
-                    }
-                }
-            }
-        }
-        // The streams reach the faults, not only the healthy path.
-        assert!(faults > 1000, "{faults}");
-    }
-
-    #[test]
-    fn a_late_sample_trips_the_watchdog() {
-        let mut s = Supervisor::new(SafetyLimits::default());
-        let ok = [Ok(1000), Ok(2000)];
-        assert_eq!(s.check(&input(0, ok, [9.0, 24.0])), None);
-        assert_eq!(s.check(&input(1_000, ok, [9.0, 24.0])), None);
-        let f = s.check(&input(16_000, ok, [9.0, 24.0])).unwrap();
-        assert_eq!(f.kind, FaultKind::Watchdog);
-        assert_eq!(f.value, 15.0);
-    }
-}
+mod tests;

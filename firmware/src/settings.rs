@@ -48,11 +48,20 @@ pub enum SettingsError {
     Order,
     /// The diameter and wrap metadata must be 0..=3600.
     Metadata,
-    /// The rest and final angles must be within the servo map's range (0..=`servo_max_deg`).
+    /// The rest and final angles must be [`END_STOP_MARGIN_DEG`] inside the servo map's
+    /// range (0..=`servo_max_deg`): the servo is never driven into its end stops.
     ServoRange,
     /// The amplifier control voltage must be within the amplifier's full scale.
     AmpRange,
+    /// Under this calibration the over-force limit would read above the rail check: the
+    /// over-force check could not trip ([`crate::safety::SafetyLimits::visible`]).
+    Blind,
 }
+
+/// How far inside the servo map's 0..=`servo_max_deg` the protocol's angles must stay, deg: the
+/// ends of a map are where a servo meets its end stops (the Arduino map's 0° is 544 µs, beyond
+/// the HS-322HD's 600 µs end), and a servo held there stalls against them.
+pub const END_STOP_MARGIN_DEG: f32 = 5.0;
 
 impl SettingsError {
     /// What is wrong, for a person.
@@ -67,10 +76,13 @@ impl SettingsError {
             SettingsError::Order => "the order must be monotone, updown or pulse",
             SettingsError::Metadata => "the diameter (mm) and wrap (deg) must be 0 to 3600",
             SettingsError::ServoRange => {
-                "the rest and final angles must be within the servo map (0 to servo_max_deg)"
+                "the rest and final angles must be at least 5° inside the servo map (5 to servo_max_deg - 5): no end stops"
             }
             SettingsError::AmpRange => {
                 "the amplifier control voltage must be within the amplifier's full scale"
+            }
+            SettingsError::Blind => {
+                "with this calibration the over-force limit would read above the rail check (the sensor's range ends first): the check could never trip"
             }
         }
     }
@@ -84,8 +96,11 @@ impl Settings {
             .validate()
             .map_err(SettingsError::Calibration)?;
         let (p, c) = (&self.protocol, &self.calibration);
-        // Beyond the map's range every angle would get its end pulse: the levels would merge.
-        if p.rest_deg > c.servo.max_deg || p.final_deg > c.servo.max_deg {
+        // Beyond the map's range every angle would get its end pulse: the levels would merge;
+        // at its ends the servo stalls against its stops. (`final_deg < rest_deg` is the
+        // protocol's own rule: rest is the longest pulse of a run, the end that releases.)
+        let m = END_STOP_MARGIN_DEG;
+        if p.final_deg < m || p.rest_deg > c.servo.max_deg - m {
             return Err(SettingsError::ServoRange);
         }
         // Above the full scale the duty clamps at 100 %: the drive would not be what is logged.
@@ -331,6 +346,7 @@ mod tests {
                 Key::FinalDeg => 65.0 + 5.0,
                 Key::TareMs => 900.0,
                 Key::AmpControlV => 3.0,
+                Key::T1NPerCount | Key::T2NPerCount => 0.016,
                 _ => value,
             };
             let t = s

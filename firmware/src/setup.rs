@@ -142,8 +142,14 @@ pub fn apply(what: Measuring, m: Means, cal: &mut Calibration) -> Result<[f32; 2
             if delta.abs() < MIN_WEIGH_COUNTS {
                 return Err(CommandError::NoLoad);
             }
+            // A weight pulls (the rig refuses a force ≤ 0 before measuring): a reading that
+            // fell is a reversed sensor, whose sensitivity would come out of the wrong sign.
+            if delta < 0.0 {
+                return Err(CommandError::Reversed);
+            }
             let n_per_count = force_n / delta;
-            if !(n_per_count > 0.0 && n_per_count <= 1.0) {
+            let (lo, hi) = crate::calib::N_PER_COUNT_RANGE;
+            if !(n_per_count >= lo && n_per_count <= hi) {
                 return Err(CommandError::Invalid);
             }
             ch.n_per_count = n_per_count;
@@ -199,6 +205,15 @@ mod tests {
             &mut cal,
         );
         assert_eq!(r, Err(CommandError::NoLoad));
+        // A reversed sensor: the weight lowered the reading.
+        assert_eq!(
+            apply(
+                Measuring::Weigh(Channel::T1, 9.8),
+                steady([200.0, 1188.0]),
+                &mut cal
+            ),
+            Err(CommandError::Reversed)
+        );
         // A swinging weight is refused too.
         let swinging = Means {
             counts: [420.0, 1188.0],

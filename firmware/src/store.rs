@@ -98,11 +98,14 @@ impl<F: NorFlash> SettingsStore<F> {
         Ok(settings)
     }
 
-    /// At boot: the stored settings into `rig`, or it keeps its built-in defaults; either way a
-    /// `settings` record says which, and why (a warning too, on the board's log, for defaults).
+    /// At boot, before the servo's first pulse: the stored settings into `rig`, or it keeps
+    /// its built-in defaults; either way a `settings` record says which, and why (a warning
+    /// too, on the board's log, for defaults). The first pulse is then the stored rest.
+    /// Settings under which the over-force check could not trip are not used
+    /// (`DefaultsInvalid`).
     pub async fn load_into(&mut self, rig: &mut Rig, sink: &mut impl LogSink) -> SettingsSource {
         let source = match self.load().await {
-            Ok(s) => match rig.use_settings(s) {
+            Ok(s) => match rig.use_stored_settings(s) {
                 Ok(()) => SettingsSource::Loaded,
                 Err(_) => SettingsSource::DefaultsInvalid,
             },

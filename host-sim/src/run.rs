@@ -130,10 +130,31 @@ pub struct TraceSample {
     pub t2_n: f64,
     /// Servo angle, deg.
     pub angle_deg: f64,
+    /// The servo pulse commanded, µs (0: none).
+    pub pulse_us: f64,
     /// Capstan speed, rpm.
     pub capstan_rpm: f64,
+    /// The drive motor's voltage (after the amplifier control's RC filter), V.
+    pub drive_v: f64,
     /// Drive current, A.
     pub current_a: f64,
+}
+
+impl TraceSample {
+    /// Cord 0 of `p` now.
+    pub fn of(p: &Plant) -> TraceSample {
+        let (c, d) = (p.truth(0), p.drive());
+        TraceSample {
+            t_us: p.now_us(),
+            t1_n: c.t1_n,
+            t2_n: c.t2_n,
+            angle_deg: c.angle_deg,
+            pulse_us: c.commanded_pulse_us,
+            capstan_rpm: d.capstan_rpm,
+            drive_v: d.drive_v,
+            current_a: d.current_a,
+        }
+    }
 }
 
 /// How a run went wrong (beyond a fault the firmware handled).
@@ -252,15 +273,7 @@ pub fn run(spec: &RunSpec) -> Result<RunOutput, SetupError> {
         if spec.trace_every_ms > 0 {
             let every = Duration::from_millis(spec.trace_every_ms as u64);
             let probe = sample_plant(&plant, every, |p| {
-                let (c, d) = (p.truth(0), p.drive());
-                trace.borrow_mut().push(TraceSample {
-                    t_us: p.now_us(),
-                    t1_n: c.t1_n,
-                    t2_n: c.t2_n,
-                    angle_deg: c.angle_deg,
-                    capstan_rpm: d.capstan_rpm,
-                    current_a: d.current_a,
-                });
+                trace.borrow_mut().push(TraceSample::of(p))
             });
             let both = embassy_futures::select::select(runner, probe);
             time::block_on_until(both, limit).map(|e| match e {

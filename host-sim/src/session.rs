@@ -1,19 +1,25 @@
 //! A bench session on the simulated board: the board's boot (settings from flash, or the
-//! defaults, said in a `settings` record), then `firmware::runner::serve` with a host sending
-//! command lines, a person hanging known weights and pressing the button, and resets, all on
-//! one plant and one flash, in virtual time. It is what `capstan rig --sim` drives and what the
-//! setup tests run: the same commands the board takes over RTT.
+//! defaults, said in a `settings` record; the latch a reset left, `firmware::reset`), then
+//! `firmware::runner::serve` with a host sending command lines, a person hanging known weights
+//! and pressing the button, power cycles and a loop that hangs until the watchdog resets the
+//! chip, all on one plant and one flash, in virtual time. It is what `capstan rig --sim` drives
+//! and what the setup and safety tests run: the same commands the board takes over RTT.
+//!
+//! A reset releases every pin (no servo pulses, amplifier and trigger low), as on the board;
+//! what survives it is the board's: the flash, and across a watchdog reset (not a power cycle)
+//! the watchdog's scratch registers, here [`SessionOutput::resets`]' latch words.
 
 use crate::flash::RamFlash;
-use crate::run::{time_limit_us, SetupError};
+use crate::run::{sample_plant, time_limit_us, SetupError, TraceSample};
 use crate::time;
-use capstan_plant::{rig_io, CordSetup, Plant, PlantConfig};
-use core::cell::RefCell;
-use embassy_futures::select::{select, Either};
+use capstan_plant::{rig_io, CordSetup, Plant, PlantConfig, AMP_MAX_DUTY, SERVO_MAX_DUTY};
+use core::cell::{Cell, RefCell};
+use embassy_futures::select::{select3, Either3};
 use embassy_time::{Duration, Timer};
 use firmware::hal::{Channel, Console};
 use firmware::record::{LogSink, Record};
-use firmware::runner::serve;
+use firmware::reset::{latch_word, ResetCause};
+use firmware::runner::{serve, WATCHDOG_MS};
 use firmware::safety::SafetyLimits;
 use firmware::store::SettingsStore;
 use firmware::{Calibration, Protocol, Rig};
@@ -38,9 +44,24 @@ pub enum Step {
     Press(u32),
     /// Wait for the run in progress to end (or for the limit of its protocol).
     UntilRunEnd,
-    /// The board resets (power cycle, or the reset button): the flash and the plant stay.
+    /// The board is power cycled: every pin released, the flash and the plant stay, the
+    /// watchdog's scratch registers are lost; it boots again at once.
     Reset,
+    /// The firmware's loop hangs (a conversion that never completes, a lockup): the pins keep
+    /// what they had until the watchdog resets the chip [`WATCHDOG_MS`] later (the worst case:
+    /// the hang right after a feed), which releases them; the board boots [`BOOT_MS`] later
+    /// with the scratch registers kept.
+    Freeze,
+    /// The button is held down from now for this long, ms, and the next step follows at once
+    /// (a button held across a reset, or stuck).
+    HoldButton(u32),
+    /// A sensor is fitted the wrong way round from now on: a tension lowers its reading.
+    ReverseSensor(Channel),
 }
+
+/// From a reset to the firmware's first sample on the simulated board, ms (the RP2040 boots
+/// its clocks and loads the settings in ~1 ms; the pins stay released meanwhile).
+pub const BOOT_MS: u64 = 2;
 
 /// The simulated bench.
 #[derive(Clone, Debug)]
@@ -57,6 +78,9 @@ pub struct SessionSpec {
     pub limits: SafetyLimits,
     /// Seed of the plant.
     pub seed: u64,
+    /// Sample the plant's true state every this many ms into [`SessionOutput::trace`] (0 =
+    /// never).
+    pub trace_every_ms: u32,
 }
 
 impl Default for SessionSpec {
@@ -68,6 +92,7 @@ impl Default for SessionSpec {
             calibration: Calibration::default(),
             limits: SafetyLimits::default(),
             seed: 1,
+            trace_every_ms: 0,
         }
     }
 }
@@ -96,6 +121,10 @@ pub struct SessionOutput {
     pub unanswered: Vec<String>,
     /// The plant afterwards (its truth, servo events, sensor zeros).
     pub plant: Plant,
+    /// Each reset: when (µs), why the next boot saw it, and the latch word it found.
+    pub resets: Vec<(u64, ResetCause, u32)>,
+    /// The plant's true state every `trace_every_ms`, through resets too.
+    pub trace: Vec<TraceSample>,
 }
 
 impl SessionOutput {
@@ -168,40 +197,42 @@ pub fn run_session(
     let mut store = SettingsStore::new(flash, range).expect("whole pages");
     let mut unanswered = Vec::new();
     let run_limit_us = time_limit_us(&spec.protocol, &cord);
+    let trace = RefCell::new(Vec::new());
+    // The watchdog's scratch register 1: the latch word, kept across a watchdog reset.
+    let scratch = Cell::new(0u32);
+    let mut cause = ResetCause::PowerUp;
+    let mut resets = Vec::new();
     let mut rest = steps;
     loop {
         shared.boot.set(shared.boot.get() + 1);
         shared.console.borrow_mut().clear();
         let mut rig =
             Rig::new(spec.protocol, spec.calibration, spec.limits).map_err(SetupError::Protocol)?;
-        let mut sink = Sink(&shared);
-        let mut io = rig_io(&plant, 0);
-        let board = async {
-            store.load_into(&mut rig, &mut sink).await;
-            let _ = io.boot(&rig);
-            let never = |_: &firmware::rig::Outputs, _: &Rig| None::<()>;
-            serve(
-                &mut io,
-                &mut rig,
-                &mut sink,
-                &mut HostConsole(&shared),
-                &mut store,
-                never,
-            )
-            .await
-        };
+        let board = board(&plant, &shared, &mut store, &mut rig, cause, &scratch);
         let host = host(&shared, &plant, rest, &mut unanswered, run_limit_us);
+        let probe = probe(&plant, spec.trace_every_ms, &trace);
         let limit = time::now_us() + steps_limit_us(rest, run_limit_us);
-        let done = match time::block_on_until(select(board, host), limit) {
-            Ok(Either::Second(done)) => done,
+        let done = match time::block_on_until(select3(board, host, probe), limit) {
+            Ok(Either3::Second(done)) => done,
             _ => rest.len(),
         };
         rest = &rest[done..];
-        if rest.first() == Some(&Step::Reset) {
-            rest = &rest[1..];
-            continue;
-        }
-        break;
+        cause = match rest.first() {
+            Some(Step::Reset) => {
+                release_pins(&plant);
+                scratch.set(0);
+                ResetCause::PowerUp
+            }
+            Some(Step::Freeze) => {
+                watch(&plant, WATCHDOG_MS as u64, spec.trace_every_ms, &trace);
+                release_pins(&plant);
+                watch(&plant, BOOT_MS, spec.trace_every_ms, &trace);
+                ResetCause::Watchdog
+            }
+            _ => break,
+        };
+        resets.push((time::now_us(), cause, scratch.get()));
+        rest = &rest[1..];
     }
     let mut plant = plant.into_inner();
     plant.advance_to(time::now_us());
@@ -210,7 +241,80 @@ pub fn run_session(
         flash: store.into_flash(),
         unanswered,
         plant,
+        resets,
+        trace: trace.into_inner(),
     })
+}
+
+/// The board from a reset on: its settings, the latch the reset left, then `serve`, keeping
+/// the latch word in its scratch register every sample (as `firmware/src/main.rs` does).
+async fn board(
+    plant: &RefCell<Plant>,
+    shared: &Shared,
+    store: &mut SettingsStore<RamFlash>,
+    rig: &mut Rig,
+    cause: ResetCause,
+    scratch: &Cell<u32>,
+) {
+    let mut sink = Sink(shared);
+    let mut io = rig_io(plant, 0);
+    store.load_into(rig, &mut sink).await;
+    firmware::reset::boot(rig, cause, scratch.get(), &mut sink);
+    scratch.set(latch_word(rig));
+    let _ = io.boot(rig);
+    let keep = |_: &firmware::rig::Outputs, rig: &Rig| {
+        scratch.set(latch_word(rig));
+        None::<()>
+    };
+    let _ = serve(
+        &mut io,
+        rig,
+        &mut sink,
+        &mut HostConsole(shared),
+        store,
+        keep,
+    )
+    .await;
+}
+
+/// The plant's truth every `every_ms` into `trace` (never ends; nothing if 0).
+async fn probe(plant: &RefCell<Plant>, every_ms: u32, trace: &RefCell<Vec<TraceSample>>) {
+    if every_ms == 0 {
+        return core::future::pending().await;
+    }
+    let every = Duration::from_millis(every_ms as u64);
+    sample_plant(plant, every, |p| {
+        trace.borrow_mut().push(TraceSample::of(p))
+    })
+    .await
+}
+
+/// Nothing drives the plant for `ms` (a hung loop, a chip booting): time passes, traced.
+fn watch(plant: &RefCell<Plant>, ms: u64, every_ms: u32, trace: &RefCell<Vec<TraceSample>>) {
+    let end = time::now_us() + ms * 1000;
+    let _ = time::block_on_until(Timer::at(embassy_time::Instant::from_micros(end)), end);
+    if every_ms > 0 {
+        // (The probe samples on the session's grid: fill the gap on the same grid.)
+        let mut p = plant.borrow_mut();
+        let last = trace.borrow().last().map_or(0, |s| s.t_us);
+        let mut t = last + every_ms as u64 * 1000;
+        while t <= end {
+            p.advance_to(t);
+            trace.borrow_mut().push(TraceSample::of(&p));
+            t += every_ms as u64 * 1000;
+        }
+    }
+    plant.borrow_mut().advance_to(end);
+}
+
+/// A reset: every output pin an input. The servo gets no pulses; the pull-downs hold the
+/// amplifier's control input and the trigger low.
+fn release_pins(plant: &RefCell<Plant>) {
+    let mut p = plant.borrow_mut();
+    p.advance_to(time::now_us());
+    p.set_servo_duty(0, 0, SERVO_MAX_DUTY);
+    p.set_amp_duty(0, 0, AMP_MAX_DUTY);
+    p.set_trigger(0, false);
 }
 
 /// Virtual time the steps may take at most.
@@ -218,6 +322,7 @@ fn steps_limit_us(steps: &[Step], run_limit_us: u64) -> u64 {
     let each = |s: &Step| match s {
         Step::Send(_) => REPLY_TIMEOUT_MS * 1000,
         Step::Wait(ms) | Step::Press(ms) => *ms as u64 * 1000,
+        Step::Freeze => (WATCHDOG_MS as u64 + BOOT_MS) * 1000,
         Step::UntilRunEnd => run_limit_us,
         _ => 0,
     };
@@ -262,6 +367,11 @@ async fn host(
                 plant.borrow_mut().press(0, now, *ms as u64 * 1000);
                 Timer::after(Duration::from_millis(*ms as u64)).await;
             }
+            Step::ReverseSensor(ch) => plant.borrow_mut().reverse_sensor(0, *ch),
+            Step::HoldButton(ms) => {
+                let now = time::now_us();
+                plant.borrow_mut().press(0, now, *ms as u64 * 1000);
+            }
             Step::UntilRunEnd => {
                 let seen = shared.events.borrow().len();
                 until(shared, seen, run_limit_us, |r| {
@@ -269,7 +379,7 @@ async fn host(
                 })
                 .await;
             }
-            Step::Reset => return i,
+            Step::Reset | Step::Freeze => return i,
         }
     }
     steps.len()

@@ -24,7 +24,9 @@ use capstan_friction::Model;
 pub struct ServoCharacteristic {
     /// Pulse of the centre of travel, µs.
     pub neutral_pulse_us: f64,
-    /// Horn travel per µs of pulse, deg/µs (a longer pulse turns clockwise: angle up).
+    /// Horn travel per µs of pulse, deg/µs (a longer pulse turns clockwise: angle up, which
+    /// releases the cord). Negative: the servo is mounted the other way round, so a longer
+    /// pulse pulls (the firmware's rest, its longest pulse, is then the tension end).
     pub deg_per_us: f64,
     /// Horn angle at the neutral pulse, deg.
     pub neutral_deg: f64,
@@ -75,7 +77,8 @@ pub struct ServoConfig {
     /// Pulse width to horn angle: the servo's own (HS-322HD data sheet).
     pub characteristic: ServoCharacteristic,
     /// PWM frame, µs: a new pulse width is taken at the next frame (50 Hz). A frame without a
-    /// pulse (duty 0) leaves the servo unpowered: the horn stays where it is.
+    /// pulse (duty 0) leaves the servo unpowered: its motor drives nothing, and the cord
+    /// back-drives the horn toward release (`unpowered_hold_nm`, `backdrive_deg_per_s_per_nm`).
     pub frame_us: u32,
     /// The pulse the rig holds at rest, µs: where the operator tightened the tension bolt to
     /// the cord's preload, and what "servo at rest" means for [`crate::Plant::is_safe`]
@@ -87,6 +90,16 @@ pub struct ServoConfig {
     pub stall_torque_nm: f64,
     /// Lever radius from the servo axis to the cord, m (the thesis's 6.35 mm).
     pub lever_m: f64,
+    /// Unpowered (no pulses), the gear train holds the horn against the cord up to this
+    /// torque, N m; above it the cord turns the horn toward release. Assumed, not measured:
+    /// 0.003 N m (1 % of the stall torque; T1 ≈ 0.47 N on the 6.35 mm lever), so that even
+    /// the first level's 0.75 N back-drives it, as the issue reports of the rig. 0 with
+    /// `backdrive_deg_per_s_per_nm` 0: an unpowered horn holds still (the plant before).
+    pub unpowered_hold_nm: f64,
+    /// How fast the cord back-drives an unpowered horn per N m above the hold, deg/s
+    /// (assumed: 2000, so 21 N on the lever swings it at ~260 deg/s; capped at the no-load
+    /// slew rate).
+    pub backdrive_deg_per_s_per_nm: f64,
 }
 
 impl Default for ServoConfig {
@@ -98,6 +111,8 @@ impl Default for ServoConfig {
             no_load_deg_per_s: 60.0 / 0.19,
             stall_torque_nm: 3.0 * 9.81e-2,
             lever_m: 6.35e-3,
+            unpowered_hold_nm: 0.003,
+            backdrive_deg_per_s_per_nm: 2_000.0,
         }
     }
 }
@@ -218,7 +233,15 @@ pub struct SensorConfig {
     pub zero_spread_counts: f64,
     /// Gaussian noise per conversion, N (standard deviation; 0 = none).
     pub noise_sd_n: f64,
+    /// The highest reading the sensor can produce at the ADC, counts: its output saturates
+    /// at its supply, and a 0-5 V sensor behind the board's 10k/18k divider reads 3989.6
+    /// counts there (5 V × 18/28 of a 3.3 V, 4096-count ADC). A force beyond that reads as
+    /// this, pinned. `f64::INFINITY`: no saturation below the ADC's own 4095.
+    pub saturation_counts: f64,
 }
+
+/// Where a 0-5 V sensor saturates behind the README's 10 kΩ / 18 kΩ divider, ADC counts.
+pub const DIVIDER_SATURATION_COUNTS: f64 = 5.0 * 18.0 / 28.0 / 3.3 * 4096.0;
 
 impl Default for SensorConfig {
     fn default() -> Self {
@@ -228,6 +251,7 @@ impl Default for SensorConfig {
             gain: 1.0,
             zero_spread_counts: 10.0,
             noise_sd_n: 0.02,
+            saturation_counts: DIVIDER_SATURATION_COUNTS,
         }
     }
 }

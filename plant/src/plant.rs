@@ -63,6 +63,8 @@ struct CordState {
     disturb: Option<DisturbState>,
     /// The servo last moved to release the cord (tension falling).
     falling: bool,
+    /// The servo took a pulse at its last frame (false: unpowered, back-driven by the cord).
+    powered: bool,
     broken: bool,
     snag: bool,
     unplugged: [bool; 2],
@@ -190,6 +192,14 @@ impl Plant {
         let c = &mut self.cords[cord];
         let k = channel as usize;
         c.zero[k] += newtons * c.counts_per_n[k];
+    }
+
+    /// Mount cord's sensor `channel` the wrong way round: a tension lowers its reading (the
+    /// same sensitivity, the other sign), as a sensor fitted or wired reversed does.
+    pub fn reverse_sensor(&mut self, cord: usize, channel: Channel) {
+        let c = &mut self.cords[cord];
+        let k = channel as usize;
+        c.counts_per_n[k] = -c.counts_per_n[k];
     }
 
     /// Bring the plant to `now_us` (no-op if it is there already or past it).

@@ -7,6 +7,9 @@ use firmware::hal::Channel;
 
 const MS: u64 = 1_000;
 
+/// A servo without pulses, the cord back-driving it; a sensor pinned at its saturation.
+mod unpowered;
+
 /// The duty the firmware writes for a protocol angle (its default map: the Arduino Servo's).
 fn duty_for(angle_deg: f64) -> u16 {
     firmware::ServoMap::default().duty(angle_deg as f32, SERVO_MAX_DUTY)
@@ -390,9 +393,10 @@ fn bad_constants_are_refused_by_name() {
 
 #[test]
 fn the_plant_fits_a_small_microcontroller() {
-    // The QEMU build keeps one in RAM (lm3s6965: 64 KiB).
+    // The QEMU build keeps one in RAM (lm3s6965: 64 KiB). (6.0 KiB before issue 24's servo
+    // back-drive and sensor saturation constants and the servos' power state.)
     let size = core::mem::size_of::<Plant>();
-    assert!(size < 6 * 1024, "{size} bytes");
+    assert!(size < 6 * 1024 + 512, "{size} bytes");
 }
 
 #[test]
@@ -435,21 +439,6 @@ fn the_servo_is_an_hs322hd_whatever_the_firmware_means() {
     hold(&mut p, 65.0, 10.0);
     let last = p.truth(0).t1_n;
     assert!((0.6..0.9).contains(&first) && (19.0..23.0).contains(&last));
-}
-
-#[test]
-fn a_frame_without_a_pulse_leaves_the_horn_where_it_is() {
-    let mut p = plant(360.0, Model::euler_eytelwein(0.115), 6);
-    hold(&mut p, 95.0, 0.0);
-    let held = p.truth(0).angle_deg;
-    p.set_servo_duty(0, 0, SERVO_MAX_DUTY);
-    p.advance_to(p.now_us() + 500 * MS);
-    let t = p.truth(0);
-    assert_eq!((t.angle_deg, t.target_deg), (held, held));
-    assert_eq!(t.commanded_pulse_us, 0.0);
-    assert!(!p.is_safe(0));
-    let (events, _) = p.servo_events(0);
-    assert_eq!(events.last().unwrap().pulse_us, 0.0);
 }
 
 #[test]

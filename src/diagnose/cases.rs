@@ -233,13 +233,17 @@ fn design(rng: &mut Rng, kinds: &[EffectKind], force_updown: bool) -> CampaignCo
         threads: 1,
         keep_raw: false,
         // The highest T2 reading (mu up to 0.13 and +25 %, or a +20 % gain, at 720°) can pass
-        // the default 45 N over-force limit; the ADC's top rail is at 55.4 N.
+        // the default 45 N over-force limit; these rigs' sensors read up to the ADC's top rail
+        // (55.4 N: no 5 V saturation below it), so the rail check sits there and the 54 N
+        // limit reads below it.
         limits: firmware::safety::SafetyLimits {
             over_force_n: 54.0,
+            rail_high_counts: firmware::hal::ADC_MAX_COUNTS - 4,
             ..firmware::safety::SafetyLimits::default()
         },
         ..CampaignConfig::default()
     };
+    cfg.plant.sensor.saturation_counts = f64::INFINITY;
     NoiseProfile::Thesis.apply(&mut cfg);
     // The thesis rig's noise, ±20 %, its wander's memory scaled to the shorter steps.
     let level = uniform(rng, 0.8, 1.2);

@@ -9,18 +9,23 @@
 //!   the loop budget;
 //! * `faults...`: abort, over-force, cord break, sensor unplugged: safe at the pins within 20 ms,
 //!   the fault in the log;
-//! * `a_hung_loop...`: the watchdog resets the chip and the firmware reports it after reboot;
+//! * `a_hung_loop...`: the watchdog resets the chip within 10 ms; after the reboot the fault is
+//!   latched and the servo gets no pulse until a person presses the button;
 //! * `a_panic...` (issue 12): the panic handler makes the outputs safe within 1 ms, with and
 //!   without a debug probe attached;
 //! * `setup_mode...` (`setup_mode.rs`): host command lines over RTT's down channel, setup mode
-//!   at the pins and in the log, against host-sim's session with the same lines.
+//!   at the pins and in the log, against host-sim's session with the same lines;
+//! * `guard.rs` (issue 24): a loaded tare, a button held from power-up, a stack overflow, a
+//!   host that stops reading the log: each safe at the pins.
 //!
-//! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort, the panic and the setup
-//! session, ~10 s); `CAPSTAN_EMU=full` runs every case (`.ci/run` does; ~2 min on two cores).
+//! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort, the hang, the panic, the
+//! setup session, the loaded tare, the held button and the stack overflow, ~40 s);
+//! `CAPSTAN_EMU=full` runs every case (`.ci/run` does; ~2-3 min on two cores).
 //! Needs node ≥ 18, `npm ci --prefix emu`, and the `thumbv6m-none-eabi` and
 //! `wasm32-unknown-unknown` targets; where one is missing the test says why and passes, except
 //! with `CI=true`, where it fails.
 
+mod guard;
 mod pins;
 mod setup;
 mod setup_mode;
@@ -34,14 +39,14 @@ use serde_json::Value;
 use setup::{emulate, Emulated, Setup, PANIC_FILE, PANIC_LINE, PANIC_MESSAGE};
 
 /// One millisecond in the emulator's ns.
-const MS: f64 = 1e6;
+pub(crate) const MS: f64 = 1e6;
 /// The watchdog's REASON bits.
-const REASON_TIMER: u64 = 1;
+pub(crate) const REASON_TIMER: u64 = 1;
 const REASON_FORCE: u64 = 2;
 /// The board's servo PWM full scale (`board::SERVO_FULL_SCALE`).
 const SERVO_FULL_SCALE: u16 = 62_500;
 
-fn ready() -> Option<&'static Setup> {
+pub(crate) fn ready() -> Option<&'static Setup> {
     match setup::setup() {
         Ok(s) => Some(s),
         Err(why) => {
@@ -51,12 +56,12 @@ fn ready() -> Option<&'static Setup> {
     }
 }
 
-fn case(name: &str) -> Case {
+pub(crate) fn case(name: &str) -> Case {
     case::by_name(name).unwrap_or_else(|| panic!("no case {name}"))
 }
 
 /// Is the case in this run's set? Says so when it is not.
-fn selected(c: &Case) -> bool {
+pub(crate) fn selected(c: &Case) -> bool {
     let yes = c.quick || setup::full();
     if !yes {
         eprintln!(
@@ -67,7 +72,7 @@ fn selected(c: &Case) -> bool {
     yes
 }
 
-fn f(v: &Value) -> f64 {
+pub(crate) fn f(v: &Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
 
@@ -96,7 +101,7 @@ fn rest_pulse_us() -> f64 {
     pulse_us(board_protocol().rest_deg)
 }
 
-fn is_rest(width_ns: f64) -> bool {
+pub(crate) fn is_rest(width_ns: f64) -> bool {
     (width_ns / 1e3 - rest_pulse_us()).abs() <= 1.0
 }
 
@@ -119,7 +124,7 @@ fn pwm_write(e: &Emulated, slice: u64, cc: u16, from_ns: f64) -> Option<f64> {
 
 /// Checks every case shares: the emulator saw nothing wrong, the bench's own consistency
 /// checks hold, the stream decoded without loss.
-fn common(e: &Emulated) {
+pub(crate) fn common(e: &Emulated) {
     let em = &e.emulation;
     assert_eq!(
         em["errors"],
@@ -157,14 +162,24 @@ fn common(e: &Emulated) {
         e.case.name,
         b["late_t1"]
     );
+    // The stack (memory.x: 64 KiB at the bottom of SRAM, its top at 0x2001_0000) never came
+    // near its end.
+    let stack_used = 0x2001_0000 - em["min_sp"].as_u64().unwrap() as i64;
+    assert!(
+        (0..16 * 1024).contains(&stack_used),
+        "{}: {stack_used} bytes of stack",
+        e.case.name
+    );
     let s = &e.log;
-    assert_eq!(s["missing_records"], 0, "{}: {s:#}", e.case.name);
-    assert_eq!(s["bad_frames"], 0, "{}: {s:#}", e.case.name);
-    assert_eq!(s["truncated_tail"], Value::Null, "{}: {s:#}", e.case.name);
+    if e.case.rtt_stall_us.is_none() {
+        assert_eq!(s["missing_records"], 0, "{}: {s:#}", e.case.name);
+        assert_eq!(s["bad_frames"], 0, "{}: {s:#}", e.case.name);
+        assert_eq!(s["truncated_tail"], Value::Null, "{}: {s:#}", e.case.name);
+    }
     eprintln!(
         "emulated board, case {}: {:.2} s emulated in {:.1} s wall ({:.2}x real time; harness \
          {:.1} s), {} bytes of defmt; loop budget during the run: mean {:.0}, max {} of {} \
-         cycles per sample; files in {}",
+         cycles per sample; stack used {stack_used} bytes; files in {}",
         e.case.name,
         f(&e.emulation["emulated_s"]),
         e.wall.as_secs_f64(),
@@ -261,9 +276,10 @@ fn whole_protocol_run_on_the_emulated_board_agrees_with_host_sim() {
     );
     let off = amp.iter().find(|s| s.t_ns > on[0].t_ns).unwrap();
     assert!(off.static_low());
+    // (The last sample closes a window and ends the run before it writes the pins: ~0.1 ms.)
     let off_ms = (off.t_ns - accepted_sample) / MS;
     assert!(
-        off_ms >= p.end_ms() as f64 - 1.1 && off_ms <= p.end_ms() as f64 + 0.1,
+        off_ms >= p.end_ms() as f64 - 1.1 && off_ms <= p.end_ms() as f64 + 0.2,
         "amplifier off {off_ms} ms after the press"
     );
 
@@ -356,7 +372,9 @@ fn whole_protocol_run_on_the_emulated_board_agrees_with_host_sim() {
 #[test]
 fn faults_on_the_emulated_board_reach_the_safe_state_at_the_pins_within_20_ms() {
     let Some(setup) = ready() else { return };
-    for c in case::all().into_iter().filter(|c| !c.injections.is_empty()) {
+    // (The RTT case's host loses records by design: `guard.rs` checks it.)
+    let cases = case::all().into_iter().filter(|c| c.rtt_stall_us.is_none());
+    for c in cases.filter(|c| !c.injections.is_empty()) {
         if selected(&c) {
             fault_case(setup, c);
         }
@@ -443,7 +461,7 @@ fn fault_case(setup: &Setup, c: Case) {
 }
 
 #[test]
-fn a_hung_loop_on_the_emulated_board_is_reset_by_the_watchdog_and_reported() {
+fn a_hung_loop_on_the_emulated_board_is_reset_within_10_ms_and_nothing_moves_until_a_press() {
     let Some(setup) = ready() else { return };
     let c = case("hang");
     if !selected(&c) {
@@ -452,77 +470,116 @@ fn a_hung_loop_on_the_emulated_board_is_reset_by_the_watchdog_and_reported() {
     let e = emulate(setup, c);
     common(&e);
     let b = e.bench();
-    let p = board_protocol();
     let resets = e.emulation["resets"].as_array().unwrap();
     assert_eq!(resets.len(), 1, "{resets:?}");
     assert_eq!(resets[0]["reason"], REASON_TIMER, "a watchdog timeout");
     let reset = f(&resets[0]["t_ns"]);
-    // The watchdog was fed at the start of the sample whose conversion hung; 250 ms later
-    // (board::WATCHDOG_TIMEOUT) it bites.
+    // The watchdog was fed at the start of the sample whose conversion hung; 10 ms later
+    // (board::WATCHDOG_TIMEOUT) it bites. (Before issue 24: 250 ms.)
     let hung = f(&b["core_fault"]["struck_ns"]);
     let bite_ms = (reset - hung) / MS;
     assert!(
-        (249.9..=250.0).contains(&bite_ms),
+        (9.9..=10.0).contains(&bite_ms),
         "reset {bite_ms} ms after the hang"
     );
-    // Until then the hung loop left the amplifier driven and the servo pulling: what the
-    // watchdog is there for. The reset releases every pin (the pull-down holds the amplifier
-    // input low; the servo gets no pulses).
+    // Until then the hung loop left the amplifier driven; the reset releases every pin.
     let amp = segments(&b["amp"]);
     assert!(at(&amp, reset - MS).switching(), "{amp:?}");
     assert!(at(&amp, reset).static_low() && at(&amp, reset).t_ns == reset);
-    // After the reboot the servo starts where the firmware kept its last command (the level
-    // 1 pulse, in the watchdog's scratch register) and homes to rest at 10°/s.
-    let level1 = pulse_us(p.angle_deg(1));
-    assert_eq!(
-        resets[0]["scratch0"].as_u64(),
-        Some(firmware::safe_state::remembered_servo_word(
-            board_calibration()
-                .servo
-                .duty(p.angle_deg(1), SERVO_FULL_SCALE)
-        ) as u64)
-    );
+    // The latch word kept across the reset: nothing latched, not at rest (a run).
+    let word = resets[0]["scratch1"].as_u64().unwrap() as u32;
+    assert_eq!(firmware::reset::read_latch_word(word), Some((None, false)));
+    // After the reboot: no servo pulse at all until the operator's press (1 s after the
+    // reset, debounced 10 ms), then the rest pulse. The old firmware re-sent the last tension
+    // pulse at once and homed from it: a re-pull of a horn the cord had pulled back.
     let servo = segments(&b["servo"]);
-    assert!(at(&servo, reset).static_low(), "no pulses after the reset");
+    let press = press_after(b, reset).expect("the operator's press after the reset");
+    assert!(
+        press - reset >= 999.0 * MS,
+        "the press after the reset at {press}"
+    );
+    assert!(
+        servo
+            .iter()
+            .filter(|s| s.t_ns >= reset && s.t_ns < press)
+            .all(|s| s.static_low()),
+        "a pulse before the press: {servo:?}"
+    );
     let after = widths_after(&servo, reset);
-    // The first frame goes out 20 ms after the PWM starts, by when homing has moved the
-    // command on by 20 ms × 10°/s (10.3 µs of pulse per degree under the Arduino map).
-    let homing = firmware::rig::HOMING_DEG_PER_S as f64;
-    let us_per_deg = pulse_us(1.0) - pulse_us(0.0);
-    let moved_us = (after[0].0 - reset) / 1e9 * homing * us_per_deg;
+    assert!(!after.is_empty(), "pulses after the press: {servo:?}");
+    assert!(after[0].0 > press, "{after:?}");
     assert!(
-        (after[0].1 / 1e3 - level1) >= -1.0 && (after[0].1 / 1e3 - level1) <= moved_us + 1.0,
-        "first pulse after the reboot {} µs, level 1 is {level1} µs (+{moved_us} µs of homing)",
-        after[0].1 / 1e3
+        after.iter().all(|w| is_rest(w.1)),
+        "only the rest pulse after the acknowledgement: {after:?}"
     );
+    // The plant: no pulse, the horn back-driven toward release only.
+    let horn: Vec<(f64, f64, f64, f64)> = b["after_reset"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| (f(&r[0]), f(&r[1]), f(&r[2]), f(&r[3])))
+        .collect();
+    let limp: Vec<_> = horn.iter().filter(|r| r.0 < press).collect();
+    assert!(limp.iter().all(|r| r.3 == 0.0), "the plant got a pulse");
+    assert!(limp.windows(2).all(|w| w[1].1 >= w[0].1), "the horn pulled");
+    let (first, last) = (limp[0], limp[limp.len() - 1]);
     assert!(
-        after.windows(2).all(|w| w[1].1 >= w[0].1),
-        "homing: {after:?}"
+        last.1 > first.1 && last.2 < first.2,
+        "{first:?} -> {last:?}"
     );
-    let (home, last) = after.last().copied().unwrap();
-    assert!(is_rest(last), "the servo ends at rest: {after:?}");
-    let homing_s = (home - reset) / 1e9;
-    let expected_s = (p.rest_deg - p.angle_deg(1)) as f64 / homing;
-    assert!(
-        homing_s >= expected_s && homing_s <= expected_s + 0.041,
-        "at rest {homing_s} s after the reset, homing takes {expected_s} s (+ one or two frames)"
-    );
-    // The firmware reports the watchdog reset, and the homing, after the reboot.
+    // The log: the reset reported and latched; no run after it.
     assert!(
         e.messages.contains("the hardware watchdog reset the chip"),
         "{}",
         e.messages
     );
-    assert!(
-        e.messages.contains("before the reset: homing to rest"),
-        "{}",
-        e.messages
+    assert!(e.messages.contains("latched at boot"), "{}", e.messages);
+    assert!(e.messages.contains("fault acknowledged"), "{}", e.messages);
+    // (The boot's fault, outside any run, is listed as a run without a number.)
+    let runs = e.log["runs"].as_array().unwrap();
+    assert_eq!(runs.iter().filter(|r| !r["run"].is_null()).count(), 1);
+    assert_eq!(runs[0]["complete"], false);
+    assert_eq!(
+        e.faults.iter().map(|x| x.2.as_str()).collect::<Vec<_>>(),
+        ["watchdog"]
     );
-    assert_eq!(e.log["runs"][0]["complete"], false);
+    assert_eq!(b["trigger"].as_array().unwrap().len(), 2, "no second run");
+    let drive = drive_times(b, hung);
     eprintln!(
-        "emulated board, hang: watchdog reset {bite_ms:.3} ms after the loop hung; servo homed \
-         from {level1:.1} µs to rest in {homing_s:.3} s after the reboot"
+        "emulated board, hang: watchdog reset {bite_ms:.3} ms after the loop hung (pins safe); \
+         drive below the motor's friction {:.1} ms and below 1 % {:.1} ms after it; no servo \
+         pulse for {:.3} s until the press, the horn back-driven {:.2}° (T1 {:.2} -> {:.2} N); \
+         then the rest pulse",
+        drive.0,
+        drive.1,
+        (after[0].0 - reset) / 1e9,
+        last.1 - first.1,
+        first.2,
+        last.2
     );
+}
+
+/// When the operator pressed the button first after `t_ns`, ns.
+pub(crate) fn press_after(b: &Value, t_ns: f64) -> Option<f64> {
+    b["button"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e[1] == Value::Bool(true) && f(&e[0]) > t_ns)
+        .map(|e| f(&e[0]))
+}
+
+/// From `from_ns`: when the drive's voltage fell below the motor's own friction (0.30 V: no
+/// torque at the capstan) and below 1 % of what it was at the first reset, ms.
+pub(crate) fn drive_times(b: &Value, from_ns: f64) -> (f64, f64) {
+    let v0 = f(&b["drive_v_at_reset"]);
+    let rows = b["after_reset"].as_array().unwrap();
+    let when = |below: f64| {
+        rows.iter()
+            .find(|r| f(&r[4]) < below)
+            .map_or(f64::NAN, |r| (f(&r[0]) - from_ns) / MS)
+    };
+    (when(0.304), when(0.01 * v0))
 }
 
 #[test]
@@ -558,12 +615,12 @@ fn panic_case(setup: &Setup, c: Case) {
     let reset = f(&resets[0]["t_ns"]);
     if probe {
         // probe-rs halts the core on the HardFault; the watchdog, not paused by the halt,
-        // resets the chip 250 ms after the last feed (the sample before the panic).
+        // resets the chip 10 ms after the last feed (the sample before the panic).
         assert_eq!(resets[0]["halted"], true);
         assert_eq!(resets[0]["reason"], REASON_TIMER, "{name}");
         let ms = (reset - panic) / MS;
         assert!(
-            (249.0..250.0).contains(&ms),
+            (9.0..10.0).contains(&ms),
             "{name}: reset {ms} ms after the panic"
         );
     } else {
@@ -615,10 +672,24 @@ fn panic_case(setup: &Setup, c: Case) {
         !after.is_empty() && after.iter().all(|w| is_rest(w.1)),
         "{name}: {servo:?}"
     );
-    if probe {
-        // The core halted, the rest pulse goes out from the servo's next frame.
-        assert!(after[0].0 < panic + 20.0 * MS, "{name}: {after:?}");
-    }
+    // The reset comes before the servo's next frame (the forced one at once, the watchdog's
+    // 10 ms after the last feed), and the boot latches the panic: no pulse at all until the
+    // operator's press, then the rest pulse.
+    let press = press_after(b, reset).expect("the press after the reset");
+    assert!(
+        servo
+            .iter()
+            .filter(|s| s.t_ns >= reset && s.t_ns < press)
+            .all(|s| s.static_low()),
+        "{name}: {servo:?}"
+    );
+    assert!(after[0].0 > press, "{name}: {after:?}");
+    let latched = if probe { "watchdog" } else { "panic" };
+    assert_eq!(
+        e.faults.last().map(|x| x.2.as_str()),
+        Some(latched),
+        "{name}"
+    );
     // The log: the panic message with the harness's location, and after the reboot the reset's
     // report.
     let said = format!("panicked at {PANIC_FILE}:{PANIC_LINE}:1");

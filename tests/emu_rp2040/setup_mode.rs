@@ -138,7 +138,10 @@ fn the_replies(board: &Board, sim: &SessionOutput) -> [f32; 2] {
 }
 
 /// host-sim replied at the sample the board took each line (the zero 500 ms later); on the
-/// board each reply reached the host by the next 1 ms RTT poll after that sample. Returns the
+/// board each reply reached the host by the first or second 1 ms RTT poll after that sample
+/// (the polls have a fixed phase against the samples; a `show`'s sample, which encodes a
+/// 110-byte settings record, can end after the first since the idle samples run the safety
+/// checks too). Returns the
 /// longest time from a line's writing to its reply, ms, but the zero's and the queued burst's.
 fn reply_times(board: &Board, sim: &SessionOutput) -> f64 {
     let sim_at: Vec<u64> = sim
@@ -160,7 +163,7 @@ fn reply_times(board: &Board, sim: &SessionOutput) -> f64 {
         assert_eq!(sim_us, k * 1_000, "host-sim: {}", l.text);
         let after_ms = (at_ns - (board.origin_ns + k as f64 * MS)) / MS;
         assert!(
-            (0.0..=1.0).contains(&after_ms),
+            (0.0..=2.0).contains(&after_ms),
             "{}: read {after_ms} ms after its sample",
             l.text
         );

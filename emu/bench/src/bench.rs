@@ -34,10 +34,12 @@
 
 use crate::case::{Case, CoreFault, Stop};
 use crate::front_end::{quantise, FrontEnd};
-use crate::meter::{Event, PwmMeter, Segment};
+use crate::meter::{Event, PwmMeter};
+pub use crate::report::{
+    Budget, CoreFaultOut, InjectionOut, PlantServoEvent, Report, Reset, ResetReason, Stats,
+};
 use capstan_plant::{InjectionKind, Plant, PlantError, ServoEvent};
 use firmware::hal::Channel;
-use serde::Serialize;
 
 /// GPIO of the servo signal.
 pub const SERVO_GPIO: u32 = 16;
@@ -58,183 +60,8 @@ pub const WAKE_BUTTON: u32 = 1;
 pub const WAKE_PANIC: u32 = 2;
 /// [`Bench::wake`]: the emulation is over.
 pub const WAKE_STOP: u32 = 4;
-
-/// Why the chip was reset (the watchdog's REASON register).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ResetReason {
-    /// The watchdog timed out.
-    Timeout,
-    /// Software triggered the watchdog (the HardFault handler does).
-    Forced,
-}
-
-/// A chip reset.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Reset {
-    /// When, ns.
-    pub t_ns: f64,
-    /// Why.
-    pub reason: ResetReason,
-}
-
-/// Busy cycles per wake of the core: statistics.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct Stats {
-    /// Busy stretches (one per sample: the timer interrupt wakes the core, the sample runs,
-    /// the core sleeps).
-    pub bursts: u64,
-    /// Mean cycles.
-    pub mean: f64,
-    /// Median.
-    pub p50: u32,
-    /// 99th percentile.
-    pub p99: u32,
-    /// 99.9th percentile.
-    pub p999: u32,
-    /// Largest.
-    pub max: u32,
-    /// When the largest began, ns.
-    pub max_at_ns: f64,
-    /// Largest as a fraction of the 125 000 cycles of a 1 ms sample.
-    pub max_fraction: f64,
-}
-
-impl Stats {
-    fn of(bursts: &mut [(f64, u32)]) -> Stats {
-        if bursts.is_empty() {
-            return Stats::default();
-        }
-        let n = bursts.len();
-        let sum: u64 = bursts.iter().map(|b| b.1 as u64).sum();
-        let (max_at_ns, max) = bursts
-            .iter()
-            .copied()
-            .max_by_key(|b| b.1)
-            .expect("not empty");
-        bursts.sort_by_key(|b| b.1);
-        let q = |f: f64| bursts[((n as f64 - 1.0) * f).round() as usize].1;
-        Stats {
-            bursts: n as u64,
-            mean: sum as f64 / n as f64,
-            p50: q(0.5),
-            p99: q(0.99),
-            p999: q(0.999),
-            max,
-            max_at_ns,
-            max_fraction: max as f64 / CYCLES_PER_SAMPLE as f64,
-        }
-    }
-}
-
-/// The loop budget: busy cycles per sample against the 125 000 a 1 ms sample has at 125 MHz.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Budget {
-    /// Cycles available per sample.
-    pub available_per_sample: u32,
-    /// During runs: from the press (after its 10 ms debounce) to the amplifier's stop or a
-    /// reset.
-    pub run: Stats,
-    /// The rest (boot, idle, after the run).
-    pub idle: Stats,
-    /// The five busiest stretches of the runs: (start, ns since the trigger's rising edge,
-    /// cycles).
-    pub run_worst: Vec<(f64, u32)>,
-    /// Busy cycles in all.
-    pub cycles: u64,
-}
-
-/// What became of a plant injection.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct InjectionOut {
-    /// The fault's name (`cord_break`, ...).
-    pub kind: &'static str,
-    /// When it took effect, emulator ns.
-    pub at_ns: Option<f64>,
-    /// When the plant saw the rig command the safe state (servo at rest, amplifier 0) after
-    /// it, emulator ns (at the plant's µs resolution).
-    pub plant_safe_at_ns: Option<f64>,
-}
-
-/// The chip fault of the case.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CoreFaultOut {
-    /// `hang` or `panic`.
-    pub kind: &'static str,
-    /// When it was due, ns.
-    pub due_ns: Option<f64>,
-    /// When it struck: the first conversion that never completed, or the instant the harness
-    /// diverted the core, ns.
-    pub struck_ns: Option<f64>,
-}
-
-/// A servo command as the plant received it, in emulator ns.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct PlantServoEvent {
-    /// When the plant received it, ns.
-    pub t_ns: f64,
-    /// The pulse the plant made of it, µs.
-    pub pulse_us: f32,
-    /// The horn angle that pulse holds, deg.
-    pub angle_deg: f32,
-}
-
-/// Everything the bench saw: the JSON the harness writes next to the stream.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Report {
-    /// The case.
-    pub case: String,
-    /// The plant's time zero, emulator ns.
-    pub origin_ns: Option<f64>,
-    /// When the emulation ended, ns.
-    pub end_ns: f64,
-    /// The servo signal (GP16), one segment per change of waveform.
-    pub servo: Vec<Segment>,
-    /// Pulses seen on GP16.
-    pub servo_pulses: u64,
-    /// PWM high times that were not a whole number of the PWM's counter ticks (none expected).
-    pub pwm_off_grid: u64,
-    /// The amplifier control PWM (GP18), one segment per change of waveform.
-    pub amp: Vec<Segment>,
-    /// Periods seen on GP18.
-    pub amp_periods: u64,
-    /// Trigger (GP20) edges: (ns, level).
-    pub trigger: Vec<(f64, bool)>,
-    /// LED (GP25) edges.
-    pub led_edges: u64,
-    /// The operator's button (GP21) edges: (ns, pressed).
-    pub button: Vec<(f64, bool)>,
-    /// Conversions where the plant's own button model disagreed with the pin (none
-    /// expected).
-    pub button_mismatches: u64,
-    /// Conversions served.
-    pub conversions: u64,
-    /// Conversions where divider + ADC gave another code than the plant's own ADC would
-    /// have (none expected: see `front_end`).
-    pub rounding_mismatches: u64,
-    /// The first of them: (ns, the plant's reading in counts).
-    pub mismatch_examples: Vec<(f64, f64)>,
-    /// T1 conversions' offset from the plant's whole milliseconds until the first run ended
-    /// (the next `run_once` starts a ticker of its own, on another phase): (min, max), ns.
-    pub t1_phase_ns: Option<(f64, f64)>,
-    /// The first ten of those conversions more than 2 µs off: (ns, offset ns).
-    pub late_t1: Vec<(f64, f64)>,
-    /// The trigger's first rising edge (the logger's time zero), ns.
-    pub trigger_rise_ns: Option<f64>,
-    /// The plant's faults.
-    pub injections: Vec<InjectionOut>,
-    /// The chip fault.
-    pub core_fault: Option<CoreFaultOut>,
-    /// Chip resets.
-    pub resets: Vec<Reset>,
-    /// The loop budget.
-    pub budget: Budget,
-    /// Servo commands as the plant received them.
-    pub plant_servo: Vec<PlantServoEvent>,
-    /// Every sample's codes, if the case keeps them (`Case::keep_samples`): (when the T1
-    /// conversion started, ns; the T1 code; the T2 code).
-    pub samples: Vec<(f64, u16, u16)>,
-}
+/// [`Bench::wake`]: put the core's stack pointer at the bottom of SRAM now.
+pub const WAKE_STACK_OVERFLOW: u32 = 8;
 
 /// The rig around the emulated chip. See the module documentation.
 pub struct Bench {
@@ -275,6 +102,8 @@ pub struct Bench {
     stopped: bool,
     now_ns: f64,
     samples: Vec<(f64, u16, u16)>,
+    after_reset: Vec<(f64, f64, f64, f64, f64)>,
+    drive_v_at_reset: Option<f64>,
 }
 
 impl Bench {
@@ -319,6 +148,8 @@ impl Bench {
             stopped: false,
             now_ns: 0.0,
             samples: Vec::new(),
+            after_reset: Vec::new(),
+            drive_v_at_reset: None,
         }
     }
 
@@ -353,6 +184,11 @@ impl Bench {
         let mut plant = Plant::new_at(self.case.plant, &[self.case.cord], self.case.seed, 0)?;
         for inj in &self.case.injections {
             plant.inject(*inj)?;
+        }
+        for (ch, n) in [Channel::T1, Channel::T2].into_iter().zip(self.case.hung_n) {
+            if n != 0.0 {
+                plant.hang(0, ch, n);
+            }
         }
         self.plant = Some(plant);
         // What the pins show already (before the plant existed nothing was forwarded).
@@ -546,13 +382,22 @@ impl Bench {
         }
         let pressed = self.button_pressed;
         let fe = self.front_end;
+        let after_reset = !self.resets.is_empty();
+        let own_presses = !after_reset && t_ns >= self.case.held_from_power_up_us as f64 * 1e3;
         let p = self.plant_at(t_ns).expect("made above");
         let plant_pressed = p.button_pressed(0);
         let counts = p.read_analog(0, ch);
-        // The firmware reads the button just after its T2 conversion.
-        if ch == Channel::T2 && plant_pressed != pressed {
+        let row = (ch == Channel::T1 && after_reset).then(|| {
+            let (t, d) = (p.truth(0), p.drive());
+            (t_ns, t.angle_deg, t.t1_n, t.commanded_pulse_us, d.drive_v)
+        });
+        // The firmware reads the button just after its T2 conversion. (The plant models the
+        // cord's own press and the aborts; the operator's other presses, from power-up or
+        // after a reset, are the bench's alone.)
+        if ch == Channel::T2 && own_presses && plant_pressed != pressed {
             self.button_mismatches += 1;
         }
+        self.after_reset.extend(row);
         let code = fe.code(fe.pin_v(fe.sensor_v(counts)));
         if code != quantise(counts) {
             self.rounding_mismatches += 1;
@@ -589,6 +434,9 @@ impl Bench {
     /// drives it again.
     pub fn reset(&mut self, t_ns: f64, reason: ResetReason) {
         self.settle(t_ns);
+        if self.resets.is_empty() {
+            self.drive_v_at_reset = self.plant_at(t_ns).map(|p| p.drive().drive_v);
+        }
         self.resets.push(Reset { t_ns, reason });
         self.hang = false;
         self.releasing = true;
@@ -610,19 +458,30 @@ impl Bench {
         self.button_pressed
     }
 
-    /// The operator's presses, [start, end) in plant µs, as far as they are known.
-    fn press_windows(&self) -> Vec<(u64, u64)> {
+    /// The operator's presses, [start, end) in emulator ns, as far as they are known: held
+    /// from power-up, the cord's start press, the aborts, and the one after the first reset.
+    fn press_windows(&self) -> Vec<(f64, f64)> {
         let mut w = Vec::new();
-        if let Some(at) = self.case.cord.press_at_us {
-            w.push((at, at + self.case.cord.press_us));
+        let held = self.case.held_from_power_up_us;
+        if held > 0 {
+            w.push((0.0, held as f64 * 1e3));
         }
-        let rise = self.plant.as_ref().and_then(|p| p.trigger_rise_us(0));
-        if let Some(rise) = rise {
+        if let (Some(after), Some(r)) = (self.case.press_after_reset_us, self.resets.first()) {
+            let at = r.t_ns + after as f64 * 1e3;
+            w.push((at, at + crate::case::PRESS_US as f64 * 1e3));
+        }
+        let Some(p) = self.plant.as_ref() else {
+            return w;
+        };
+        if let Some(at) = self.case.cord.press_at_us {
+            w.push((self.ns(at), self.ns(at + self.case.cord.press_us)));
+        }
+        if let Some(rise) = p.trigger_rise_us(0) {
             let hold = self.case.plant.faults.abort_press_ms as u64 * 1_000;
             for inj in &self.case.injections {
                 if inj.kind == InjectionKind::Abort {
                     let at = rise + inj.after_trigger_us;
-                    w.push((at, at + hold));
+                    w.push((self.ns(at), self.ns(at + hold)));
                 }
             }
         }
@@ -630,23 +489,15 @@ impl Bench {
     }
 
     fn pressed_at(&self, t_ns: f64) -> bool {
-        if self.plant.is_none() {
-            return false;
-        }
         self.press_windows()
             .iter()
-            .any(|&(a, b)| t_ns >= self.ns(a) && t_ns < self.ns(b))
+            .any(|&(a, b)| t_ns >= a && t_ns < b)
     }
 
     fn core_fault_due(&self) -> Option<f64> {
         let fault = self.case.core_fault?;
         let rise = self.plant.as_ref()?.trigger_rise_us(0)?;
-        let after = match fault {
-            CoreFault::Hang { after_trigger_us } | CoreFault::Panic { after_trigger_us } => {
-                after_trigger_us
-            }
-        };
-        Some(self.ns(rise + after))
+        Some(self.ns(rise + fault.after_trigger_us()))
     }
 
     fn stop_at(&self) -> Option<f64> {
@@ -667,11 +518,9 @@ impl Bench {
                 next = Some(t);
             }
         };
-        if self.plant.is_some() {
-            for (a, b) in self.press_windows() {
-                consider(self.ns(a));
-                consider(self.ns(b));
-            }
+        for (a, b) in self.press_windows() {
+            consider(a);
+            consider(b);
         }
         if !self.core_fault_done {
             if let Some(t) = self.core_fault_due() {
@@ -692,7 +541,8 @@ impl Bench {
         if pressed != self.button_pressed {
             self.button_pressed = pressed;
             self.button.push((t_ns, pressed));
-            if pressed && self.run_since_ns.is_none() && self.button.len() == 1 {
+            let start_press = self.case.held_from_power_up_us == 0 && self.button.len() == 1;
+            if pressed && self.run_since_ns.is_none() && start_press {
                 // The start press: the run begins once it is debounced (10 samples).
                 self.run_since_ns = Some(t_ns + 10e6);
             }
@@ -705,6 +555,8 @@ impl Bench {
                 Some(CoreFault::Hang { .. }) => self.hang = true,
                 // Struck when the harness has diverted the core (`panicked`).
                 Some(CoreFault::Panic { .. }) => out |= WAKE_PANIC,
+                // Struck when the harness has moved the stack pointer (`panicked` too).
+                Some(CoreFault::StackOverflow { .. }) => out |= WAKE_STACK_OVERFLOW,
                 None => {}
             }
         }
@@ -781,10 +633,7 @@ impl Bench {
             trigger_rise_ns: rise,
             injections,
             core_fault: self.case.core_fault.map(|f| CoreFaultOut {
-                kind: match f {
-                    CoreFault::Hang { .. } => "hang",
-                    CoreFault::Panic { .. } => "panic",
-                },
+                kind: f.name(),
                 due_ns: self.core_fault_due(),
                 struck_ns: self.core_fault_struck_ns,
             }),
@@ -798,6 +647,8 @@ impl Bench {
             },
             plant_servo,
             samples: self.samples.clone(),
+            after_reset: self.after_reset.clone(),
+            drive_v_at_reset: self.drive_v_at_reset,
         }
     }
 }

@@ -63,6 +63,33 @@ pub enum CoreFault {
         /// When, µs after the trigger's rising edge.
         after_trigger_us: u64,
     },
+    /// At this instant the stack pointer of the core, in thread mode, is put 16 bytes above
+    /// the bottom of SRAM, where the image's stack ends (`memory.x`): the next pushes run off
+    /// it, as a stack that overflowed would.
+    StackOverflow {
+        /// When, µs after the trigger's rising edge.
+        after_trigger_us: u64,
+    },
+}
+
+impl CoreFault {
+    /// When it strikes, µs after the trigger's rising edge.
+    pub fn after_trigger_us(self) -> u64 {
+        match self {
+            CoreFault::Hang { after_trigger_us }
+            | CoreFault::Panic { after_trigger_us }
+            | CoreFault::StackOverflow { after_trigger_us } => after_trigger_us,
+        }
+    }
+
+    /// Its name in the report.
+    pub fn name(self) -> &'static str {
+        match self {
+            CoreFault::Hang { .. } => "hang",
+            CoreFault::Panic { .. } => "panic",
+            CoreFault::StackOverflow { .. } => "stack_overflow",
+        }
+    }
 }
 
 /// When the emulation stops.
@@ -105,6 +132,17 @@ pub struct Case {
     pub commands: Vec<HostLine>,
     /// The bench keeps every sample's two ADC codes for the report (`Report::samples`).
     pub keep_samples: bool,
+    /// Weights hung on the T1 and T2 sensors from the start, N (a load during the tare).
+    pub hung_n: [f64; 2],
+    /// The operator holds the button down from power-up for this long, emulator µs (0: no).
+    pub held_from_power_up_us: u64,
+    /// After the chip's first reset, the operator presses the button this long after it, µs,
+    /// for [`PRESS_US`] (to acknowledge the fault the reset latched).
+    pub press_after_reset_us: Option<u64>,
+    /// The host stops reading the log over this window, emulator µs since power-up, and sets
+    /// RTT up channel 0 to block when full at its start (as `probe-rs run` may): the buffer
+    /// fills.
+    pub rtt_stall_us: Option<(u64, u64)>,
 }
 
 /// A command line from the host, as `capstan rig` sends it through a debug probe.
@@ -128,6 +166,29 @@ impl HostLine {
 }
 
 impl Case {
+    /// A case of the thesis's cord, pressed at [`PRESS_AT_US`], with nothing going wrong,
+    /// stopping at `stop`, in the full set only.
+    fn base(name: &'static str, about: &'static str, seed: u64, stop: Stop) -> Case {
+        Case {
+            name,
+            about,
+            seed,
+            plant: PlantConfig::default(),
+            cord: cord(),
+            injections: Vec::new(),
+            core_fault: None,
+            stop,
+            probe_attached: false,
+            quick: false,
+            commands: Vec::new(),
+            keep_samples: false,
+            hung_n: [0.0; 2],
+            held_from_power_up_us: 0,
+            press_after_reset_us: None,
+            rtt_stall_us: None,
+        }
+    }
+
     /// Capstan diameter of the case's plant, mm.
     pub fn diameter_mm(&self) -> f64 {
         self.plant.capstan_diameter_mm
@@ -151,22 +212,18 @@ fn cord() -> CordSetup {
 
 fn fault_case(name: &'static str, about: &'static str, kind: InjectionKind, quick: bool) -> Case {
     Case {
-        name,
-        about,
-        seed: 11,
-        plant: PlantConfig::default(),
-        cord: cord(),
         injections: vec![Injection {
             kind,
             cord: 0,
             after_trigger_us: FAULT_AFTER_TRIGGER_US,
         }],
-        core_fault: None,
-        stop: Stop::AfterTrigger(FAULT_AFTER_TRIGGER_US + 200_000),
-        probe_attached: false,
         quick,
-        commands: Vec::new(),
-        keep_samples: false,
+        ..Case::base(
+            name,
+            about,
+            11,
+            Stop::AfterTrigger(FAULT_AFTER_TRIGGER_US + 200_000),
+        )
     }
 }
 
@@ -178,20 +235,13 @@ fn core_case(
     quick: bool,
 ) -> Case {
     Case {
-        name,
-        about,
-        seed: 12,
-        plant: PlantConfig::default(),
-        cord: cord(),
-        injections: Vec::new(),
         core_fault: Some(fault),
-        // Long enough after the reset for the boot, its reports and the servo's homing from
-        // 120° to rest (5° at 10°/s) when it starts away from rest.
-        stop: Stop::AfterReset(900_000),
         probe_attached,
         quick,
-        commands: Vec::new(),
-        keep_samples: false,
+        // Long enough after the reset for the boot, its reports, and a person who
+        // acknowledges the latched reset a second later.
+        press_after_reset_us: Some(1_000_000),
+        ..Case::base(name, about, 12, Stop::AfterReset(1_500_000))
     }
 }
 
@@ -222,23 +272,89 @@ pub const BURST_AT_MS: u64 = 5_000;
 fn setup_case() -> Case {
     let burst = std::iter::repeat_n(HostLine::at_ms(BURST_AT_MS, "show"), SHOW_BURST);
     Case {
-        name: "setup",
-        about: "setup mode by host command lines over RTT: zero, servo, jog, set, show, leave; \
-                the servo homes to rest; compared with host-sim's session",
-        seed: 21,
-        plant: PlantConfig::default(),
         cord: CordSetup {
             press_at_us: None,
             ..cord()
         },
-        injections: Vec::new(),
-        core_fault: None,
-        stop: Stop::At(8_000_000),
-        probe_attached: false,
         quick: true,
         commands: SETUP_COMMANDS.iter().copied().chain(burst).collect(),
         keep_samples: true,
+        ..Case::base(
+            "setup",
+            "setup mode by host command lines over RTT: zero, servo, jog, set, show, leave; \
+             the servo homes to rest; compared with host-sim's session",
+            21,
+            Stop::At(8_000_000),
+        )
     }
+}
+
+/// When the RTT case's host stops reading, and for how long, emulator µs since power-up: from
+/// 1 s before its fault (the press at 0.5 s of plant time, ~0.6 ms after power-up, the
+/// trigger 1.01 s later) to 1 s after it; 2 s of records (~5 KB) for a 1 KiB buffer.
+pub const RTT_STALL_US: (u64, u64) = (
+    PRESS_AT_US + 1_010_000 + FAULT_AFTER_TRIGGER_US - 1_000_000,
+    PRESS_AT_US + 1_010_000 + FAULT_AFTER_TRIGGER_US + 1_000_000,
+);
+
+/// The cases of issue 24's negative tests (where the pins matter).
+fn guard_cases() -> Vec<Case> {
+    vec![
+        Case {
+            hung_n: [8.0, 8.0],
+            quick: true,
+            ..Case::base(
+                "tare_under_load",
+                "8 N hangs on both sensors during the tare: the run is refused before the \
+                 drive is on (issue 24)",
+                13,
+                Stop::At(PRESS_AT_US + 2_000_000),
+            )
+        },
+        Case {
+            held_from_power_up_us: 5_000_000,
+            cord: CordSetup {
+                press_at_us: Some(6_000_000),
+                ..cord()
+            },
+            quick: true,
+            ..Case::base(
+                "held_button",
+                "the button held from power-up for 5 s starts nothing; pressed after a \
+                 release, a run starts (issue 24)",
+                14,
+                Stop::At(8_000_000),
+            )
+        },
+        core_case(
+            "stack_overflow",
+            "the stack runs off the bottom of SRAM during step 1: the core locks up, the \
+             watchdog resets the chip within 10 ms (issue 24)",
+            CoreFault::StackOverflow {
+                after_trigger_us: PANIC_AFTER_TRIGGER_US,
+            },
+            false,
+            true,
+        ),
+        Case {
+            rtt_stall_us: Some(RTT_STALL_US),
+            // Past the stall's end: the host reads again, and a `show` after it gives a record
+            // whose sequence number shows the gap (the idle rig logs nothing by itself).
+            stop: Stop::AfterTrigger(FAULT_AFTER_TRIGGER_US + 1_500_000),
+            commands: vec![HostLine {
+                at_us: RTT_STALL_US.1 + 200_000,
+                line: "show",
+            }],
+            ..fault_case(
+                "rtt_full",
+                "the host stops reading the log (its buffer set to block) for 2 s, and the \
+                 cord snags meanwhile: the loop never blocks, the fault is safe within 20 ms \
+                 (issue 24)",
+                InjectionKind::OverForce,
+                false,
+            )
+        },
+    ]
 }
 
 /// Every case, the full protocol run first, the setup session last.
@@ -246,21 +362,13 @@ pub fn all() -> Vec<Case> {
     let protocol = board_protocol();
     // The press is debounced for 10 samples; the run ends `end_ms` after that.
     let run_end_us = PRESS_AT_US + 10_000 + protocol.end_ms() as u64 * 1_000;
-    vec![
-        Case {
-            name: "run",
-            about: "a whole protocol run through the button, compared with host-sim",
-            seed: 1,
-            plant: PlantConfig::default(),
-            cord: cord(),
-            injections: Vec::new(),
-            core_fault: None,
-            stop: Stop::At(run_end_us + 300_000),
-            probe_attached: false,
-            quick: false,
-            commands: Vec::new(),
-            keep_samples: false,
-        },
+    let mut all = vec![Case::base(
+        "run",
+        "a whole protocol run through the button, compared with host-sim",
+        1,
+        Stop::At(run_end_us + 300_000),
+    )];
+    all.extend([
         fault_case(
             "abort",
             "the operator presses the button again during step 1",
@@ -287,12 +395,14 @@ pub fn all() -> Vec<Case> {
         ),
         core_case(
             "hang",
-            "the sampling loop hangs during step 1; the watchdog resets the chip",
+            "the sampling loop hangs during step 1: the watchdog resets the chip within \
+             10 ms; the servo gets no pulse (the cord back-drives the horn) until a person \
+             presses the button, then the rest pulse (issue 24)",
             CoreFault::Hang {
                 after_trigger_us: FAULT_AFTER_TRIGGER_US,
             },
             false,
-            false,
+            true,
         ),
         core_case(
             "panic",
@@ -314,7 +424,9 @@ pub fn all() -> Vec<Case> {
             false,
         ),
         setup_case(),
-    ]
+    ]);
+    all.extend(guard_cases());
+    all
 }
 
 /// The case called `name`.

@@ -6,6 +6,7 @@
 //! * [`case`]: the cases (rig, operator, faults, end);
 //! * [`bench`]: the plant on the pins, the pin meters' records, the loop budget;
 //! * [`meter`]: a PWM measured from its pin's edges;
+//! * [`report`]: what the bench saw, for the harness's JSON;
 //! * [`front_end`]: a force sensor through the board's divider into the RP2040's ADC.
 #![deny(missing_docs)]
 
@@ -13,6 +14,7 @@ pub mod bench;
 pub mod case;
 pub mod front_end;
 pub mod meter;
+pub mod report;
 #[cfg(target_arch = "wasm32")]
 mod wasm;
 

@@ -5,17 +5,19 @@ use super::{on_grid, Inputs, Outputs, Phase, Rig};
 use crate::command::{Command, CommandError, CommandKind};
 use crate::record::{Fault, Live, LogSink, Record, Reply, SettingsReport, SettingsSource};
 use crate::safety::{SafetyInput, Supervisor};
-use crate::settings::{Settings, SettingsError};
+use crate::settings::{Settings, SettingsError, END_STOP_MARGIN_DEG};
 use crate::setup::{self, Measure, Measuring, LIVE_EVERY_MS, SETUP_DEG_PER_S};
 
-/// An angle within the servo's 0..=180°. Not `f32::clamp`: its assertion links ~1 KiB of
-/// float formatting into the board image.
+/// An angle within the servo map's travel, [`END_STOP_MARGIN_DEG`] clear of its ends (a jog
+/// or a typo never drives the servo into its end stops). Not `f32::clamp`: its assertion links
+/// ~1 KiB of float formatting into the board image.
 #[allow(clippy::manual_clamp)]
-fn servo_range(a: f32) -> f32 {
-    if a < 0.0 {
-        0.0
-    } else if a > 180.0 {
-        180.0
+fn servo_range(a: f32, max_deg: f32) -> f32 {
+    let (lo, hi) = (END_STOP_MARGIN_DEG, max_deg - END_STOP_MARGIN_DEG);
+    if a < lo {
+        lo
+    } else if a > hi {
+        hi
     } else {
         a
     }
@@ -44,35 +46,70 @@ impl Rig {
     }
 
     /// Run with `s` from now on (refused during a run, or if invalid, or if its sample rates
-    /// differ from the firmware's). The servo never jumps: with a new servo map its command
-    /// becomes the angle that keeps today's pulse, and from there it moves slowly (idle: homing
-    /// to the new rest angle; setup mode: towards the host's target).
+    /// differ from the firmware's, or if under its calibration the over-force check could not
+    /// trip). The servo never jumps: with a new servo map its command becomes the angle that
+    /// keeps today's pulse, and from there it moves slowly (idle: homing to the new rest angle,
+    /// supervised, not while a fault is latched; setup mode: towards the host's target).
     pub fn use_settings(&mut self, s: Settings) -> Result<(), SettingsError> {
-        s.validate()?;
-        let (p, d) = (&s.protocol, &self.defaults.protocol);
-        if p.sample_hz != d.sample_hz || p.raw_log_hz != d.raw_log_hz {
-            return Err(SettingsError::Rates);
-        }
-        if self.is_running() {
-            return Err(SettingsError::Rates);
-        }
+        self.check_settings(&s)?;
         let commanded = match self.phase {
             Phase::Setup { servo_deg, .. } => servo_deg,
             _ => self.idle_servo_deg,
         };
         let pulse_us = self.cal.servo.pulse_us(commanded);
-        self.settings_changed = true;
-        self.protocol = s.protocol;
-        self.cal = s.calibration;
+        self.adopt(s);
         let same_place = self.cal.servo.angle_deg(pulse_us);
+        let max_deg = self.cal.servo.max_deg;
         match &mut self.phase {
-            Phase::Setup { servo_deg, .. } => *servo_deg = servo_range(same_place),
+            Phase::Setup { servo_deg, .. } => *servo_deg = servo_range(same_place, max_deg),
             _ => {
                 self.idle_servo_deg = self.protocol.rest_deg;
                 self.home_from(same_place);
             }
         }
         Ok(())
+    }
+
+    /// At boot, before the servo has had a pulse: run with `s` (the stored settings), as
+    /// [`Rig::use_settings`] but with nothing to home from: the first pulse is `s`'s rest.
+    pub fn use_stored_settings(&mut self, s: Settings) -> Result<(), SettingsError> {
+        self.check_settings(&s)?;
+        self.adopt(s);
+        self.idle_servo_deg = self.protocol.rest_deg;
+        Ok(())
+    }
+
+    fn check_settings(&self, s: &Settings) -> Result<(), SettingsError> {
+        s.validate()?;
+        let (p, d) = (&s.protocol, &self.defaults.protocol);
+        if p.sample_hz != d.sample_hz || p.raw_log_hz != d.raw_log_hz || self.is_running() {
+            return Err(SettingsError::Rates);
+        }
+        self.limits
+            .visible(&s.calibration)
+            .map_err(|_| SettingsError::Blind)
+    }
+
+    fn adopt(&mut self, s: Settings) {
+        self.settings_changed = true;
+        self.protocol = s.protocol;
+        self.cal = s.calibration;
+        self.zeros = [self.cal.t1.zero_counts, self.cal.t2.zero_counts];
+    }
+
+    /// True when the servo is commanded to rest and stays there (idle at rest, or setup mode
+    /// with the servo at rest and no move asked): a flash write, which holds the loop, may
+    /// only come then.
+    fn servo_at_rest(&self) -> bool {
+        let rest = self.protocol.rest_deg;
+        match self.phase {
+            Phase::Setup {
+                servo_deg,
+                target_deg,
+                ..
+            } => servo_deg == rest && target_deg == rest,
+            _ => self.is_at_rest(),
+        }
     }
 
     /// Log the settings in force and where they came from (at boot: stored or defaults, and
@@ -154,8 +191,15 @@ impl Rig {
         }
         if cmd == Command::Store {
             // A measurement would lose samples to the flash write, and its result would not
-            // be in what was stored.
-            if let Err(e) = self.ensure_not_measuring() {
+            // be in what was stored. The write holds the loop (and its checks) for up to
+            // ~0.4 s a sector: only with the servo at rest (and the amplifier off, as always
+            // outside a run).
+            let ready = self.ensure_not_measuring().and_then(|()| {
+                self.servo_at_rest()
+                    .then_some(())
+                    .ok_or(CommandError::NotAtRest)
+            });
+            if let Err(e) = ready {
                 self.reply(sink, kind, Err(e));
                 return None;
             }
@@ -185,7 +229,10 @@ impl Rig {
                 self.ensure_not_measuring()?;
                 let s = self.settings().with(key, value);
                 self.use_settings(s.map_err(|_| CommandError::Invalid)?)
-                    .map_err(|_| CommandError::Invalid)?;
+                    .map_err(|e| match e {
+                        SettingsError::Blind => CommandError::Blind,
+                        _ => CommandError::Invalid,
+                    })?;
                 self.settings_source = SettingsSource::Current;
                 Ok([key.code() as f32, value])
             }
@@ -216,6 +263,8 @@ impl Rig {
             Command::Jog(d) => self.move_servo(|at| at + d),
             Command::Servo(a) => self.move_servo(|_| a),
             Command::Zero => self.start_measure(Measuring::Zero, now_us),
+            // A weight pulls: its force is above 0.
+            Command::Weigh(_, n) if n.is_nan() || n <= 0.0 => Err(CommandError::Invalid),
             Command::Weigh(ch, n) => self.start_measure(Measuring::Weigh(ch, n), now_us),
             Command::Run if latched => Err(CommandError::FaultLatched),
             Command::Run if self.is_homing() => Err(CommandError::Homing),
@@ -224,7 +273,7 @@ impl Rig {
                 Ok([self.runs as f32, 0.0])
             }
             Command::Ack if latched => {
-                self.phase = Phase::Idle { latched: None };
+                self.acknowledge();
                 info!("fault acknowledged by the host");
                 Ok([0.0; 2])
             }
@@ -244,10 +293,11 @@ impl Rig {
     /// Set where the servo goes (a jog adds to the last target); it moves there at
     /// [`SETUP_DEG_PER_S`].
     fn move_servo(&mut self, to: impl Fn(f32) -> f32) -> Result<[f32; 2], CommandError> {
+        let max_deg = self.cal.servo.max_deg;
         let Phase::Setup { target_deg, .. } = &mut self.phase else {
             return Err(CommandError::NotInSetup);
         };
-        let a = servo_range(to(*target_deg));
+        let a = servo_range(to(*target_deg), max_deg);
         *target_deg = a;
         Ok([a, 0.0])
     }
@@ -331,13 +381,13 @@ impl Rig {
             cord_check_armed: false,
         };
         if let Some(f) = self.supervisor.check(&safety) {
-            return self.setup_fault(f, sink);
+            return self.setup_fault(f, servo_deg, sink);
         }
         if let Some(done) = measure.as_mut().and_then(|m| m.push(now_us, counts_ok)) {
             let what = measure.map(|m| m.what);
             measure = None;
             let result = match what {
-                Some(w) => done.and_then(|m| setup::apply(w, m, &mut self.cal)),
+                Some(w) => done.and_then(|m| self.apply_measure(w, m)),
                 None => Err(CommandError::NoLoad),
             };
             let kind = match what {
@@ -371,15 +421,32 @@ impl Rig {
         }
     }
 
-    /// A safety fault in setup mode: logged, latched, servo straight to rest.
-    fn setup_fault(&mut self, f: Fault, sink: &mut impl LogSink) -> Outputs {
+    /// A zero or weigh put into the calibration, if the over-force limit stays visible under
+    /// the result (else nothing changes). A zero moves the zeros a run's tare is held to.
+    fn apply_measure(
+        &mut self,
+        what: Measuring,
+        m: setup::Means,
+    ) -> Result<[f32; 2], CommandError> {
+        let mut cal = self.cal;
+        let values = setup::apply(what, m, &mut cal)?;
+        self.limits.visible(&cal).map_err(|_| CommandError::Blind)?;
+        self.cal = cal;
+        self.zeros = [cal.t1.zero_counts, cal.t2.zero_counts];
+        Ok(values)
+    }
+
+    /// A safety fault in setup mode: logged, latched; the servo goes to rest if that releases,
+    /// or stays where it is (jogged beyond rest, to the release side).
+    fn setup_fault(&mut self, f: Fault, servo_deg: f32, sink: &mut impl LogSink) -> Outputs {
         warn!("fault {} in setup mode: outputs safe", f.kind);
         self.emit(sink, Record::Fault(f));
         self.interrupt_measure(sink);
         self.phase = Phase::Idle {
             latched: Some(f.kind),
         };
-        self.idle_servo_deg = self.protocol.rest_deg;
-        self.safe_outputs()
+        self.supervisor = Supervisor::new(self.limits);
+        self.idle_servo_deg = self.toward_release(servo_deg);
+        self.idle_outputs()
     }
 }

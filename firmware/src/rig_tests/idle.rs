@@ -1,5 +1,5 @@
-//! The idle rig between runs: a fault stays latched until a press acknowledges it, and after
-//! a reset the servo command is brought to rest slowly.
+//! The idle rig between runs: a fault stays latched until a press acknowledges it, and a
+//! servo command away from rest (setup mode left, a new rest angle) is brought there slowly.
 
 use super::*;
 
@@ -84,9 +84,9 @@ fn after_a_clean_run_one_press_starts_the_next() {
 }
 
 #[test]
-fn after_a_reset_the_servo_is_brought_to_rest_slowly() {
+fn homing_brings_the_servo_to_rest_slowly() {
     let mut rig = thesis_rig();
-    // The horn was left at the last level (65°) when the chip reset.
+    // Setup mode left the servo at the last level (65°).
     rig.home_from(65.0);
     assert!(rig.is_homing());
     assert_eq!(rig.idle_outputs().servo_deg, 65.0);

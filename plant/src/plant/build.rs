@@ -72,7 +72,10 @@ impl Plant {
             sc.neutral_pulse_us.is_finite(),
             "servo.characteristic.neutral_pulse_us",
         )?;
-        check(positive(sc.deg_per_us), "servo.characteristic.deg_per_us")?;
+        check(
+            sc.deg_per_us.is_finite() && sc.deg_per_us != 0.0,
+            "servo.characteristic.deg_per_us",
+        )?;
         check(
             sc.min_deg.is_finite()
                 && sc.max_deg.is_finite()
@@ -130,6 +133,15 @@ impl Plant {
         check(
             n.noise_sd_n.is_finite() && n.noise_sd_n >= 0.0,
             "sensor.noise_sd_n",
+        )?;
+        check(n.saturation_counts > 0.0, "sensor.saturation_counts")?;
+        check(
+            s.unpowered_hold_nm.is_finite() && s.unpowered_hold_nm >= 0.0,
+            "servo.unpowered_hold_nm",
+        )?;
+        check(
+            s.backdrive_deg_per_s_per_nm.is_finite() && s.backdrive_deg_per_s_per_nm >= 0.0,
+            "servo.backdrive_deg_per_s_per_nm",
         )?;
         check(cfg.max_step_us > 0, "max_step_us")?;
         check(cfg.refresh_us > 0, "refresh_us")?;
@@ -209,6 +221,7 @@ impl Plant {
                 memory: LoadMemory::default(),
                 disturb,
                 falling: false,
+                powered: true,
                 broken: false,
                 snag: false,
                 unplugged: [false; 2],

@@ -150,7 +150,11 @@ impl Plant {
             }
             self.rng = Rng::from_state(state);
         }
-        [Ok(quantise(counts[0])), Ok(quantise(counts[1]))]
+        let sat = self.cfg.sensor.saturation_counts;
+        [
+            Ok(quantise(saturate(counts[0], sat))),
+            Ok(quantise(saturate(counts[1], sat))),
+        ]
     }
 
     /// [`Plant::read_counts`].
@@ -181,7 +185,7 @@ impl Plant {
         if self.noise_sd_counts > 0.0 {
             counts += self.noise_sd_counts * self.rng.normal();
         }
-        counts
+        saturate(counts, self.cfg.sensor.saturation_counts)
     }
 
     /// What a plugged channel of cord `c` reads before the noise, in ADC counts.
@@ -219,6 +223,16 @@ impl Plant {
             c.max_feed_gap_us = c.max_feed_gap_us.max(now - last);
         }
         c.last_feed_us = Some(now);
+    }
+}
+
+/// A sensor's output cannot rise above its saturation (a reading in counts at the ADC).
+#[inline(always)]
+fn saturate(counts: f64, saturation_counts: f64) -> f64 {
+    if counts > saturation_counts {
+        saturation_counts
+    } else {
+        counts
     }
 }
 

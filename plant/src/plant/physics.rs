@@ -54,9 +54,13 @@ impl Plant {
             self.drive_still_dt_us = 0;
         }
         if !settled {
+            let s = &self.cfg.servo;
             let still = self.injections.iter().all(|r| r.at_us.is_some())
                 && self.cords.iter().all(|c| {
-                    !c.heats && c.target_deg == c.angle_deg && c.amp_filtered_v == c.amp_control_v
+                    !c.heats
+                        && c.target_deg == c.angle_deg
+                        && c.amp_filtered_v == c.amp_control_v
+                        && backdrive_deg_per_s(s, c) == 0.0
                 });
             self.settled_until_us = if still { self.next_event_us() } else { 0 };
         }
@@ -87,11 +91,11 @@ impl Plant {
     fn next_event_us(&self) -> u64 {
         let characteristic = self.cfg.servo.characteristic;
         let mut next = u64::MAX;
-        if self
-            .cords
-            .iter()
-            .any(|c| frame_target_deg(characteristic, c) != c.target_deg)
-        {
+        // (A frame that takes a servo's power away, or gives it back, changes it too.)
+        if self.cords.iter().any(|c| {
+            frame_target_deg(characteristic, c) != c.target_deg
+                || c.powered != (c.pending_pulse_us > 0.0)
+        }) {
             next = self.next_frame_us;
         }
         if self.cords.iter().any(|c| c.disturb.is_some()) {
@@ -131,6 +135,7 @@ impl Plant {
                 c.falling = target > c.target_deg;
             }
             c.target_deg = target;
+            c.powered = c.pending_pulse_us > 0.0;
         }
         self.frames_past(t_end);
     }
@@ -227,6 +232,16 @@ impl Plant {
         let s = self.cfg.servo;
         let dt_s = dt_us as f64 * 1e-6;
         for c in self.cords.iter_mut() {
+            // Unpowered: the cord turns the horn toward release (angle rising) while its torque
+            // on the lever beats the gear train's hold; the servo's own target follows it.
+            let backdrive = backdrive_deg_per_s(&s, c);
+            if backdrive > 0.0 {
+                c.angle_deg += backdrive * dt_s;
+                c.target_deg = c.angle_deg;
+                c.falling = true;
+                c.dirty = true;
+                continue;
+            }
             let gap = c.target_deg - c.angle_deg;
             if gap == 0.0 {
                 continue;
@@ -396,8 +411,21 @@ impl Plant {
     }
 }
 
+/// How fast the cord back-drives cord `c`'s unpowered horn, deg/s (0: powered, or the gear
+/// train holds it).
+fn backdrive_deg_per_s(s: &crate::ServoConfig, c: &super::CordState) -> f64 {
+    if c.powered {
+        return 0.0;
+    }
+    let excess_nm = c.t1 * s.lever_m - s.unpowered_hold_nm;
+    if excess_nm <= 0.0 {
+        return 0.0;
+    }
+    (excess_nm * s.backdrive_deg_per_s_per_nm).min(s.no_load_deg_per_s)
+}
+
 /// The target a frame gives cord `c`'s servo: its pulse's angle (no pulse: it stops where it
-/// is).
+/// is, unless the cord back-drives it).
 fn frame_target_deg(characteristic: crate::ServoCharacteristic, c: &super::CordState) -> f64 {
     if c.pending_pulse_us > 0.0 {
         characteristic.angle_deg(c.pending_pulse_us)

@@ -70,11 +70,16 @@ pub fn fault_line(f: &Fault) -> String {
         Some(Channel::T2) => " on T2",
         None => "",
     };
+    // (A fault latched at boot after a reset has no value: NaN.)
+    let value = if f.value.is_nan() {
+        String::new()
+    } else {
+        format!(" (value {})", f.value)
+    };
     format!(
-        "FAULT {}{channel} (value {}): the rig's outputs are safe; press the button or send \
-         `ack` to go on",
+        "FAULT {}{channel}{value}: the rig's outputs are safe; press the button or send `ack` to \
+         go on",
         f.kind.name(),
-        f.value
     )
 }
 
