@@ -193,7 +193,7 @@ pub struct MotorConfig {
     /// Amplifier supply: the drive voltage saturates here, V.
     pub amp_supply_v: f64,
     /// Time constant of the RC filter between the PWM pin and the amplifier's control input, s
-    /// (the README's 10 kΩ and 1 µF: 10 ms; a step settles to 1 % in 46 ms, so after a fault
+    /// (the README's 4.7 kΩ and 1 µF: 4.7 ms; a step settles to 1 % in 22 ms, so after a fault
     /// the drive needs that long to fall below 1 %). 0 = no filter.
     pub amp_filter_tau_s: f64,
 }
@@ -210,7 +210,7 @@ impl Default for MotorConfig {
             amp_gain: 4.0,
             amp_full_scale_v: 3.3,
             amp_supply_v: 24.0,
-            amp_filter_tau_s: 0.010,
+            amp_filter_tau_s: 0.0047,
         }
     }
 }

@@ -114,6 +114,8 @@ fn a_stack_overflow_on_the_emulated_board_locks_up_and_the_watchdog_resets_withi
     assert!(!after.is_empty() && after.iter().all(|w| is_rest(w.1)));
     assert!(e.messages.contains("latched at boot"), "{}", e.messages);
     let drive = drive_times(b, struck);
+    // No fault but loss of power leaves the drive on for more than 50 ms (to 1 %).
+    assert!(drive.1 <= 50.0, "drive above 1 % for {:.1} ms", drive.1);
     eprintln!(
         "emulated board, stack_overflow: lockup at {addr:#x} {:.3} ms after SP reached the \
          bottom of SRAM; watchdog reset {ms:.3} ms after it (pins safe); drive below the motor's \

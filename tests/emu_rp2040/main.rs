@@ -545,6 +545,8 @@ fn a_hung_loop_on_the_emulated_board_is_reset_within_10_ms_and_nothing_moves_unt
     );
     assert_eq!(b["trigger"].as_array().unwrap().len(), 2, "no second run");
     let drive = drive_times(b, hung);
+    // No fault but loss of power leaves the drive on for more than 50 ms (to 1 %).
+    assert!(drive.1 <= 50.0, "drive above 1 % for {:.1} ms", drive.1);
     eprintln!(
         "emulated board, hang: watchdog reset {bite_ms:.3} ms after the loop hung (pins safe); \
          drive below the motor's friction {:.1} ms and below 1 % {:.1} ms after it; no servo \
