@@ -6,7 +6,9 @@
 use super::{models, thesis};
 use crate::fit::par::par_map;
 use crate::fit::predict::evaluate;
-use crate::fit::solve::{fit_fixed, fit_mixed, fit_mixed_from, loco, Fit, Loco, MixedOptions};
+use crate::fit::solve::{
+    fit_fixed, fit_fixed_with, fit_mixed, fit_mixed_from, loco, Budget, Fit, Loco, MixedOptions,
+};
 use crate::fit::stats::mean;
 use crate::fit::Observations;
 use std::time::Instant;
@@ -14,6 +16,18 @@ use std::time::Instant;
 /// The parameter budget of the extended model, counted strictly: fixed values + the effective
 /// degrees of freedom of the cord effects.
 pub const STRICT_BUDGET: f64 = 12.0;
+
+/// Work units all the per-cord fits of one family may spend together (the per-cord
+/// baseline, the leave-one-cord-out refits of each model), at least: split evenly among the
+/// cords, so many cords get small fits each and the whole stays bounded
+/// ([`crate::fit::solve::budget`]). The thesis's ten extended refits use ~1.7 M units.
+pub const FAMILY_UNITS: u64 = 3_000_000;
+
+/// What one family of per-cord fits may spend on `rows` rows: [`FAMILY_UNITS`], or
+/// 1,500 units a row on large data sets.
+pub fn family_units(rows: usize) -> u64 {
+    FAMILY_UNITS.max(1_500 * rows as u64)
+}
 
 /// Per-row predictions of every model (N), NaN where a model has no prediction.
 #[derive(Clone, Debug, Default)]
@@ -62,6 +76,9 @@ pub struct Fits {
     pub fits_s: f64,
     /// Wall time of the leave-one-cord-out refits, s.
     pub loco_s: f64,
+    /// Fits that did not converge, in words (the analysis went on without them, or, for the
+    /// in-sample fits, with their last iterate).
+    pub notes: Vec<String>,
 }
 
 /// Fit every model of the gain table to `obs`; `ext_spec` is the extended model
@@ -74,8 +91,19 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     let base_spec = models::baseline();
     let baseline = fit_fixed(&base_spec, obs, &all, None);
     let groups: Vec<usize> = (0..obs.groups.len()).collect();
+    // Each family of fits shares its units: the per-cord fits split them among the cords, the
+    // leave-one-cord-out refits among their folds (at most `loco::MAX_FOLDS`). One mu per fit
+    // costs far less a unit than the extended model: those families get a third as many.
+    let units = family_units(obs.len());
+    let per_cord_share = (units / 3) / groups.len().max(1) as u64;
+    let fold_count = crate::fit::solve::loco::folds(groups.len()).len().max(1) as u64;
+    let fold_share_1 = (units / 3) / fold_count;
+    let fold_share = units / fold_count;
     let per_cord_fits: Vec<Fit> = par_map(&groups, threads, |&g| {
-        fit_fixed(&base_spec, obs, &obs.runs_of_group(g), None)
+        let runs = obs.runs_of_group(g);
+        let rows = obs.rows_of(&runs).len();
+        let budget = Budget::for_fit_within(rows, 1, per_cord_share);
+        fit_fixed_with(&base_spec, obs, &runs, None, &budget)
     });
     let mut per_cord_pred = vec![f64::NAN; obs.len()];
     for f in &per_cord_fits {
@@ -116,17 +144,25 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     // Leave one cord out.
     let t1 = Instant::now();
     let baseline_loco = loco(obs, threads, |train| {
-        fit_fixed(&base_spec, obs, train, None)
+        let budget = Budget::for_fit_within(obs.rows_of(train).len(), 1, fold_share_1);
+        fit_fixed_with(&base_spec, obs, train, None, &budget)
     });
     let (th, u0) = (extended.theta.clone(), extended.u.clone());
     let l0 = extended.lambda.unwrap_or(200.0);
-    let extended_loco = loco(obs, threads, |train| {
-        let opts = MixedOptions {
-            lambda0: l0,
-            ..budget
-        };
-        fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
-    });
+    // Refits warm-started from an in-sample fit that did not converge would not either: they
+    // are not run, and no cord gets a held-out prediction of the extended model.
+    let extended_loco = if extended.converged {
+        loco(obs, threads, |train| {
+            let opts = MixedOptions {
+                lambda0: l0,
+                max_units: Some(fold_share),
+                ..budget
+            };
+            fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
+        })
+    } else {
+        Loco::skipped(obs)
+    };
     // Per-cord baseline on a new cord: the mean log-mu of the other cords.
     let mut per_cord_loco = vec![f64::NAN; obs.len()];
     for g in 0..obs.groups.len() {
@@ -143,6 +179,13 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     let per_cord_loco_rmse = obs.rmse_t2(&per_cord_loco);
     let loco_s = t1.elapsed().as_secs_f64();
 
+    let notes = notes(
+        obs,
+        &baseline,
+        &extended,
+        &per_cord_fits,
+        [&baseline_loco, &extended_loco],
+    );
     let pred = Predictions {
         baseline: baseline.t2_n.clone(),
         baseline_per_cord: per_cord_pred,
@@ -165,5 +208,62 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         pred,
         fits_s,
         loco_s,
+        notes,
     }
+}
+
+/// The fits that did not converge, in words, one line per family.
+fn notes(
+    obs: &Observations,
+    baseline: &Fit,
+    extended: &Fit,
+    per_cord: &[Fit],
+    locos: [&Loco; 2],
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    for (what, f) in [
+        ("Euler-Eytelwein (one mu)", baseline),
+        ("the extended model", extended),
+    ] {
+        if let Some(why) = &f.stopped {
+            notes.push(format!("{what}: {why}; its last iterate is reported"));
+        }
+    }
+    let cords = |list: Vec<(usize, &String)>| -> Option<String> {
+        let (_, why) = list.first()?;
+        let names: Vec<&str> = list
+            .iter()
+            .take(3)
+            .map(|(g, _)| obs.groups[*g].label.as_str())
+            .collect();
+        let more = if list.len() > 3 { ", ..." } else { "" };
+        Some(format!(
+            "{} of {} cords ({}{more}); the first {why}",
+            list.len(),
+            obs.groups.len(),
+            names.join(", ")
+        ))
+    };
+    let stopped: Vec<(usize, &String)> = per_cord
+        .iter()
+        .enumerate()
+        .filter_map(|(g, f)| f.stopped.as_ref().map(|w| (g, w)))
+        .collect();
+    if let Some(s) = cords(stopped) {
+        notes.push(format!(
+            "Euler-Eytelwein with one mu per cord: the fit of {s}"
+        ));
+    }
+    for (what, l) in [
+        ("Euler-Eytelwein", locos[0]),
+        ("the extended model", locos[1]),
+    ] {
+        let list: Vec<(usize, &String)> = l.did_not_converge.iter().map(|(g, w)| (*g, w)).collect();
+        if let Some(s) = cords(list) {
+            notes.push(format!(
+                "{what}, leave one cord out: the refit without each of {s}: those cords have no held-out prediction"
+            ));
+        }
+    }
+    notes
 }

@@ -50,7 +50,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         opts.threads = t.max(1);
     }
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
+    crate::errln!("{}", ds.structure.describe());
     let mut a = crate::analysis::run(&ds, opts)?;
+    for note in &a.fit_notes {
+        crate::errln!("warning: {note}");
+    }
     let t_report = Instant::now();
     let t_cl = Instant::now();
     let (curves, closed, note) = match crate::analysis::closed_loop::run(&a, opts.threads) {

@@ -346,6 +346,7 @@ pub fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
             t1_n: r.t1_n,
             t2_n: r.t2_n,
             extra: Vec::new(),
+            labels: Vec::new(),
         })
         .collect()
 }

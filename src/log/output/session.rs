@@ -269,6 +269,7 @@ impl<'f> Logger<'f> {
             t1_n: decimal(p.t1.mean_n),
             t2_n: decimal(p.t2.mean_n),
             extra: Vec::new(),
+            labels: Vec::new(),
         };
         let complete =
             c.diameter.is_some() && c.wrap.is_some() && c.drive.is_some() && rs.run.is_some();
