@@ -131,7 +131,7 @@ fn values_no_sensor_produces_and_data_without_friction_are_refused() {
         (
             "huge.csv",
             "wrap_deg,t1_n,t2_n\n360,1,2\n360,1e154,2\n",
-            "huge.csv:3:2: column `t1_n`: is beyond any force sensor",
+            "huge.csv:3:2: column `t1_n`: must be within ±10000 N",
         ),
         (
             "time.csv",
@@ -331,10 +331,15 @@ fn a_long_stream_stops_at_its_run_limit_with_no_false_truncation() {
         "{}",
         stderr(&o)
     );
-    // Empty: refused under --strict.
+    // Empty: refused, with or without --strict (nothing replaced, nothing kept).
     let empty = write(&dir, "empty.defmt", "");
     let o = log_from(&empty, &dir.join("out-empty"), &["--strict"]);
-    assert!(stderr(&o).contains("the stream is empty"), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("nothing was received"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// `capstan log` decoding the saved stream `from` (recorded QEMU firmware) into `out`.

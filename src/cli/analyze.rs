@@ -52,6 +52,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     crate::errln!("{}", ds.structure.describe());
     let mut a = crate::analysis::run(&ds, opts)?;
+    // From here on the set holds work: a late failure keeps it and says where.
+    set.keep_on_failure();
     for note in &a.fit_notes {
         crate::errln!("warning: {note}");
     }
@@ -101,6 +103,7 @@ fn validate(args: &Args) -> anyhow::Result<()> {
     let mut set = super::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
     let v = crate::analysis::validate::validate(args.seed, 1, threads)?;
+    set.keep_on_failure();
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
     crate::outln!(
         "causes named exactly (clean, single, heating + T1 loss): {}/{} ({:.0} %, target ≥ 90 %)",

@@ -1,6 +1,6 @@
 //! `capstan log`: record runs from the board over defmt/RTT, or decode a saved defmt stream.
 
-use crate::log::output::{LogOptions, Logger, SetupFlags, Stop, Summary};
+use crate::log::output::{LogOptions, Logger, Outcome, SetupFlags, Stop, Summary};
 use crate::log::Firmware;
 use anyhow::{bail, Context};
 use std::io::Read;
@@ -97,28 +97,35 @@ pub struct Args {
     pub speed: Option<u32>,
 
     /// Capstan diameter for pairs.csv, mm (default: the run-start record's, if set there).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub diameter_mm: Option<f64>,
 
     /// Wrap angle for pairs.csv, deg (default: the run-start record's, if set there).
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub wrap_deg: Option<f64>,
 
     /// Drive-motor voltage for pairs.csv, V (default: amplifier gain × control voltage).
-    #[arg(long, value_name = "V")]
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
 
     /// Stop after this many complete runs.
     #[arg(long, value_name = "N")]
     pub runs: Option<usize>,
 
-    /// Stop after this many seconds.
-    #[arg(long, value_name = "S")]
+    /// Stop after this many seconds (wall clock, whether or not anything arrives).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub duration: Option<f64>,
 
-    /// Replace the files of an earlier session in DIR.
+    /// Replace the files of an earlier session in DIR (only by a session with a complete run,
+    /// unless --allow-empty).
     #[arg(long)]
     pub overwrite: bool,
+
+    /// Keep a session without a complete run (nothing received, a run cut short) as DIR's
+    /// files. Without it such a session replaces nothing: what was received is kept in
+    /// DIR/incomplete-<id>, and the exit status is 1 (130 if stopped by a signal).
+    #[arg(long)]
+    pub allow_empty: bool,
 
     /// Fail (exit status 1) if any record was lost or any frame did not decode.
     #[arg(long)]
@@ -129,37 +136,48 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// The command line's values against the physical ranges (`data::ranges`), and `--from`
+/// checked, before anything is opened or written.
+fn check_args(args: &Args) -> anyhow::Result<()> {
+    use crate::data::ranges;
+    if let Some(d) = args.duration {
+        ranges::LOG_DURATION_S.option("--duration", d)?;
+    }
+    for (flag, v, r) in [
+        ("--diameter-mm", args.diameter_mm, &ranges::DIAMETER_MM),
+        ("--wrap-deg", args.wrap_deg, &ranges::WRAP_DEG),
+        ("--drive-v", args.drive_v, &ranges::DRIVE_V),
+    ] {
+        if let Some(v) = v {
+            r.option(flag, v)?;
+        }
+    }
+    if args.runs == Some(0) {
+        bail!("--runs 0: must be 1 or more (the number of complete runs to log)");
+    }
+    let Some(from) = args.from.as_deref().filter(|f| *f != "-") else {
+        return Ok(());
+    };
+    if std::path::Path::new(from).is_dir() {
+        bail!("--from {from} is a directory: give the saved stream file (e.g. DIR/stream.defmt)");
+    }
+    let inside = std::fs::canonicalize(from).ok().and_then(|f| {
+        let out = std::fs::canonicalize(&args.out).ok()?;
+        Some(f == out.join(crate::log::output::STREAM_FILE))
+    });
+    if inside == Some(true) {
+        bail!(
+            "--from {from} is the saved stream of the session in --out {}: decoding it \
+             there would replace it; choose another --out",
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
 /// Run `capstan log`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if let Some(d) = args.duration {
-        if !(d.is_finite() && d > 0.0) {
-            bail!("--duration must be a positive number of seconds (got {d})");
-        }
-    }
-    for (name, v) in [
-        ("--diameter-mm", args.diameter_mm),
-        ("--wrap-deg", args.wrap_deg),
-    ] {
-        if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
-            bail!("{name} must be a positive number");
-        }
-    }
-    if args.drive_v.is_some_and(|v| !v.is_finite()) {
-        bail!("--drive-v must be a number");
-    }
-    if let Some(from) = args.from.as_deref().filter(|f| *f != "-") {
-        let inside = std::fs::canonicalize(from).ok().and_then(|f| {
-            let out = std::fs::canonicalize(&args.out).ok()?;
-            Some(f == out.join(crate::log::output::STREAM_FILE))
-        });
-        if inside == Some(true) {
-            bail!(
-                "--from {from} is the saved stream of the session in --out {}: decoding it \
-                 there would replace it; choose another --out",
-                args.out.display()
-            );
-        }
-    }
+    check_args(&args)?;
     let fw = Firmware::load(&args.elf)?;
     let opts = LogOptions {
         out_dir: args.out.clone(),
@@ -171,14 +189,65 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             drive_v: args.drive_v,
         },
         progress: !args.quiet,
+        allow_empty: args.allow_empty,
     };
     super::signal::stop_flag("log"); // Ctrl-C and SIGTERM end the session, keeping it
-    let (summary, stop) = match &args.from {
+    let (summary, stop, outcome) = match &args.from {
         Some(from) => from_stream(&fw, opts, from, &args)?,
         None => from_board(&fw, opts, &args)?,
     };
-    crate::errln!("{}", summary.human(&args.out));
+    let at = match &outcome {
+        Outcome::Kept(p) => p.clone(),
+        _ => args.out.clone(),
+    };
+    crate::errln!("{}", summary.human(&at));
+    if outcome != Outcome::Committed {
+        return not_committed(&summary, &stop, &outcome, &args);
+    }
     verdict(&summary, &stop, &args)
+}
+
+/// A session without a complete run: it replaced nothing; say why, where what was received
+/// is, and what to do.
+fn not_committed(
+    summary: &Summary,
+    stop: &Stop,
+    outcome: &Outcome,
+    args: &Args,
+) -> anyhow::Result<()> {
+    let dir = args.out.display();
+    let why = if summary.bytes == 0 {
+        "nothing was received".to_string()
+    } else if summary.records.total() == 0 {
+        format!(
+            "no rig records in {} bytes ({} frames, {} did not decode): is the stream from the \
+             firmware built as {}?",
+            summary.bytes,
+            summary.frames,
+            summary.bad_frames,
+            args.elf.display()
+        )
+    } else {
+        format!(
+            "no complete run in {} records (a run ends with its run_end record)",
+            summary.records.total()
+        )
+    };
+    let kept = match outcome {
+        Outcome::Kept(p) => format!("what was received is kept in {}", p.display()),
+        _ => "nothing was kept".to_string(),
+    };
+    let msg = format!(
+        "{why}; {dir} is as it was (a session replaces files only with a complete run), {kept}; \
+         pass --allow-empty to keep such a session as {dir}'s files"
+    );
+    if let Stop::ProbeLost(e) = stop {
+        bail!("lost the probe while logging ({e}): {msg}");
+    }
+    if matches!(stop, Stop::Interrupted(_)) {
+        return Err(super::signal::Interrupted(format!("interrupted: {msg}")).into());
+    }
+    bail!("{msg}")
 }
 
 fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Result<()> {
@@ -261,7 +330,7 @@ fn from_stream(
     opts: LogOptions,
     from: &str,
     args: &Args,
-) -> anyhow::Result<(Summary, Stop)> {
+) -> anyhow::Result<(Summary, Stop, Outcome)> {
     let (source, reader): (String, Box<dyn Read + Send>) = if from == "-" {
         ("stdin".to_string(), Box::new(std::io::stdin()))
     } else {
@@ -290,7 +359,7 @@ fn from_stream(
     let started = std::time::Instant::now();
     let stop = loop {
         if super::signal::stop_flag("log").load(Ordering::SeqCst) {
-            break Stop::Interrupted;
+            break Stop::Interrupted(super::signal::stop_reason().unwrap_or("Ctrl-C"));
         }
         if let Some(s) = limit_reached(&logger, args, started) {
             break s;
@@ -303,20 +372,38 @@ fn from_stream(
             }
             Ok(Err(e)) => {
                 let at = logger.bytes_seen();
-                let summary = logger.finish(&Stop::EndOfStream)?;
-                crate::errln!("{}", summary.human(&args.out));
-                return Err(e).with_context(|| format!("reading {source} failed at byte {at}"));
+                let (summary, outcome) = logger.finish_with(&Stop::EndOfStream)?;
+                let place = match &outcome {
+                    Outcome::Kept(p) => p.clone(),
+                    _ => args.out.clone(),
+                };
+                crate::errln!("{}", summary.human(&place));
+                let kept = match outcome {
+                    Outcome::Committed => format!("what was received is in {}", place.display()),
+                    Outcome::Kept(p) => format!(
+                        "{} is as it was; what was received is kept in {}",
+                        args.out.display(),
+                        p.display()
+                    ),
+                    Outcome::Discarded => format!("{} is as it was", args.out.display()),
+                };
+                return Err(e)
+                    .with_context(|| format!("reading {source} failed at byte {at} ({kept})"));
             }
             Err(mpsc::RecvTimeoutError::Timeout) => {}
             Err(mpsc::RecvTimeoutError::Disconnected) => break Stop::EndOfStream,
         }
     };
-    let summary = logger.finish(&stop)?;
-    Ok((summary, stop))
+    let (summary, outcome) = logger.finish_with(&stop)?;
+    Ok((summary, stop, outcome))
 }
 
 #[cfg(feature = "probe")]
-fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(Summary, Stop)> {
+fn from_board(
+    fw: &Firmware,
+    opts: LogOptions,
+    args: &Args,
+) -> anyhow::Result<(Summary, Stop, Outcome)> {
     use crate::log::probe::{connect, Limits, ProbeOptions};
     let chip = args
         .chip
@@ -343,8 +430,8 @@ fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(S
         start_run(&mut board)?;
     }
     let stop = board.stream(limits, &mut logger, super::signal::stop_flag("log"))?;
-    let summary = logger.finish(&stop)?;
-    Ok((summary, stop))
+    let (summary, outcome) = logger.finish_with(&stop)?;
+    Ok((summary, stop, outcome))
 }
 
 /// `--start`: the `run` command into the firmware's command channel (the firmware answers
@@ -367,7 +454,11 @@ fn start_run(board: &mut crate::log::probe::Connection) -> anyhow::Result<()> {
 }
 
 #[cfg(not(feature = "probe"))]
-fn from_board(_fw: &Firmware, _opts: LogOptions, _args: &Args) -> anyhow::Result<(Summary, Stop)> {
+fn from_board(
+    _fw: &Firmware,
+    _opts: LogOptions,
+    _args: &Args,
+) -> anyhow::Result<(Summary, Stop, Outcome)> {
     bail!(
         "this `capstan` was built without the `probe` feature: it can only decode saved streams \
          (--from). Rebuild with default features to log from a board."
@@ -435,7 +526,7 @@ mod tests {
         };
         let ok = summary(some.clone(), 100, 0);
         assert!(verdict(&ok, &Stop::EndOfStream, &args(&[])).is_ok());
-        assert!(verdict(&ok, &Stop::Interrupted, &args(&[])).is_ok());
+        assert!(verdict(&ok, &Stop::Interrupted("Ctrl-C"), &args(&[])).is_ok());
         let lost = verdict(&ok, &Stop::ProbeLost("USB gone".into()), &args(&[]));
         assert!(lost
             .unwrap_err()

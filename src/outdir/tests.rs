@@ -133,29 +133,72 @@ fn a_second_writer_is_refused_with_the_holder_named() {
 
 #[cfg(unix)]
 #[test]
-fn links_are_replaced_never_written_through() {
+fn links_and_files_we_did_not_write_are_refused_never_replaced_or_written_through() {
     let dir = scratch();
     let outside = scratch();
     std::fs::write(outside.join("precious.html"), "keep me").unwrap();
     std::os::unix::fs::symlink(outside.join("precious.html"), dir.join("report.html")).unwrap();
-    write_set(&dir, &set("new", &["report.html".into()]), usize::MAX).unwrap();
+    // Refused when the directory is opened, before any work ...
+    let e = OutputDir::open(&dir, "test", &["report.html"]).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("is a symbolic link that `capstan test` did not write"),
+        "{e:#}"
+    );
+    // ... and at the commit, for a set that did not name it up front.
+    let e = write_set(&dir, &set("new", &["report.html".into()]), usize::MAX).unwrap_err();
+    assert!(format!("{e:#}").contains("did not write"), "{e:#}");
     assert_eq!(
         std::fs::read_to_string(outside.join("precious.html")).unwrap(),
         "keep me"
     );
-    assert_eq!(
-        std::fs::read_to_string(dir.join("report.html")).unwrap(),
-        "new:report.html"
-    );
-    assert!(!std::fs::symlink_metadata(dir.join("report.html"))
+    assert!(std::fs::symlink_metadata(dir.join("report.html"))
         .unwrap()
         .file_type()
         .is_symlink());
-    // A linked sub-directory is refused, and nothing lands outside.
+    // The user's own file under a name we write: refused the same way, and kept.
+    std::fs::write(dir.join("metrics.json"), "the user's").unwrap();
+    let e = OutputDir::open(&dir, "test", &["metrics.json"]).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("is a file that `capstan test` did not write"),
+        "{e:#}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("metrics.json")).unwrap(),
+        "the user's"
+    );
+    // A linked or plain-file sub-directory is refused before any work, and nothing lands
+    // outside.
     std::os::unix::fs::symlink(&outside, dir.join("raw")).unwrap();
+    let never = |_: &str| false;
+    let e = OutputDir::open_with(&dir, "test", &[], &[("raw", &never)]).unwrap_err();
+    assert!(format!("{e:#}").contains("symbolic link"), "{e:#}");
     let e = write_set(&dir, &set("new", &["raw/x.csv".into()]), usize::MAX).unwrap_err();
     assert!(format!("{e:#}").contains("symbolic link"), "{e:#}");
     assert!(!outside.join("x.csv").exists());
+    std::fs::remove_file(dir.join("raw")).unwrap();
+    std::fs::write(dir.join("raw"), "a file").unwrap();
+    let e = OutputDir::open_with(&dir, "test", &[], &[("raw", &never)]).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("is a file where capstan test writes a directory"),
+        "{e:#}"
+    );
+}
+
+#[test]
+fn a_set_that_fails_late_is_kept_and_the_error_says_where() {
+    let dir = scratch();
+    let mut s = OutputDir::open(&dir, "test", &[]).unwrap().stage().unwrap();
+    s.write("pairs.csv", b"run,step\n1,1\n").unwrap();
+    s.keep_on_failure();
+    // Something in the way appears while the work runs: the commit is refused.
+    std::fs::create_dir_all(dir.join("pairs.csv")).unwrap();
+    let e = format!("{:#}", s.commit().unwrap_err());
+    let kept = e.rsplit("the results are kept in ").next().unwrap();
+    assert_eq!(
+        std::fs::read_to_string(Path::new(kept).join("pairs.csv")).unwrap(),
+        "run,step\n1,1\n",
+        "{e}"
+    );
 }
 
 #[test]

@@ -51,8 +51,10 @@ impl CampaignWriter {
         })
     }
 
-    /// Write one finished run (in campaign order), flushed.
+    /// Write one finished run (in campaign order), flushed. From the first run on, the set is
+    /// work worth keeping: a late failure keeps it as `incomplete-<id>` and says where.
     pub fn add(&mut self, r: &RunResult) -> anyhow::Result<()> {
+        self.set.keep_on_failure();
         for row in pair_rows(r) {
             self.pairs.write(&super::to_pairs(&[row])[0])?;
             self.rows += 1;

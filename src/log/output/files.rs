@@ -230,8 +230,14 @@ impl Files {
         Ok(())
     }
 
-    /// Close the session: flush, add `summary.json`, and replace the previous session's files.
-    pub fn close(mut self, summary_json: &str) -> anyhow::Result<()> {
+    /// Close the session: flush, add `summary.json`, and, if `commit`, replace the previous
+    /// session's files; otherwise keep the files apart (if `received` anything) or drop them.
+    pub fn close(
+        mut self,
+        summary_json: &str,
+        commit: bool,
+        received: bool,
+    ) -> anyhow::Result<super::Outcome> {
         self.flush()?;
         drop((
             self.raw,
@@ -244,6 +250,14 @@ impl Files {
             self.live,
         ));
         self.set.write(SUMMARY_JSON, summary_json.as_bytes())?;
-        self.set.commit()
+        if commit {
+            self.set.commit()?;
+            Ok(super::Outcome::Committed)
+        } else if received {
+            Ok(super::Outcome::Kept(self.set.keep()?))
+        } else {
+            self.set.discard();
+            Ok(super::Outcome::Discarded)
+        }
     }
 }

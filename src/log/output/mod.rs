@@ -83,6 +83,20 @@ pub struct LogOptions {
     pub setup: SetupFlags,
     /// Report runs, pairs, faults and gaps on stderr as they arrive.
     pub progress: bool,
+    /// Keep a session without a complete run as the directory's set (otherwise it replaces
+    /// nothing: it is kept as `incomplete-<id>`, or dropped if nothing was received).
+    pub allow_empty: bool,
+}
+
+/// What became of a session's files when it ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// They are the directory's set now (the previous session's, if any, replaced).
+    Committed,
+    /// Not committed (no complete run): kept here; the directory is as it was.
+    Kept(PathBuf),
+    /// Not committed, and nothing was received: nothing kept; the directory is as it was.
+    Discarded,
 }
 
 /// Why a session ended.
@@ -90,8 +104,8 @@ pub struct LogOptions {
 pub enum Stop {
     /// The stream (file, pipe) ended.
     EndOfStream,
-    /// Ctrl-C.
-    Interrupted,
+    /// A signal: Ctrl-C, SIGTERM, SIGHUP (which, in words).
+    Interrupted(&'static str),
     /// The probe or the target stopped answering.
     ProbeLost(String),
     /// A limit given on the command line was reached.
@@ -102,7 +116,7 @@ impl std::fmt::Display for Stop {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Stop::EndOfStream => f.write_str("end of stream"),
-            Stop::Interrupted => f.write_str("interrupted (Ctrl-C)"),
+            Stop::Interrupted(why) => write!(f, "interrupted ({why})"),
             Stop::ProbeLost(e) => write!(f, "probe lost: {e}"),
             Stop::Limit(l) => write!(f, "limit reached: {l}"),
         }
