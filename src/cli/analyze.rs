@@ -68,7 +68,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut csv = set.create("predictions.csv")?;
     crate::report::write_predictions_csv(&mut csv, &ds, &a)
         .and_then(|()| csv.flush())
-        .context("writing predictions.csv")?;
+        .with_context(|| format!("cannot write {}", args.out.join("predictions.csv").display()))?;
     drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();

@@ -218,10 +218,11 @@ fn take_lock(dir: &Path) -> anyhow::Result<File> {
             return Err(e).with_context(|| format!("cannot lock {}", path.display()));
         }
     }
-    f.set_len(0)?;
-    f.rewind()?;
     let args: Vec<String> = std::env::args().collect();
-    write!(f, "pid {}: {}", std::process::id(), args.join(" "))?;
+    f.set_len(0)
+        .and_then(|()| f.rewind())
+        .and_then(|_| write!(f, "pid {}: {}", std::process::id(), args.join(" ")))
+        .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(f)
 }
 

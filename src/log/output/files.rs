@@ -112,14 +112,14 @@ impl Files {
     /// Keep received bytes (if the session keeps them).
     pub fn stream(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         if let Some(s) = &mut self.stream {
-            s.write_all(bytes).context("cannot write stream.defmt")?;
+            s.write_all(bytes).with_context(|| self.at("stream.defmt"))?;
         }
         Ok(())
     }
 
     /// One of the firmware's other log lines.
     pub fn message(&mut self, level: &str, text: &str) -> anyhow::Result<()> {
-        writeln!(self.messages, "{level} {text}").context("cannot write messages.txt")
+        writeln!(self.messages, "{level} {text}").with_context(|| self.at("messages.txt"))
     }
 
     /// A raw sample of run `run` (empty: unknown).
@@ -133,7 +133,7 @@ impl Files {
             f(r.force_n[0]),
             f(r.force_n[1])
         )
-        .context("cannot write raw.csv")
+        .with_context(|| self.at("raw.csv"))
     }
 
     /// A fault of run `run` (empty: unknown).
@@ -150,12 +150,12 @@ impl Files {
             flt.kind.name(),
             f(flt.value)
         )
-        .context("cannot write faults.csv")
+        .with_context(|| self.at("faults.csv"))
     }
 
     /// A complete pair, to `pairs.csv`.
     pub fn pair(&mut self, p: &Pair) -> anyhow::Result<()> {
-        self.pairs.write(p).context("cannot write pairs.csv")
+        self.pairs.write(p).with_context(|| self.at("pairs.csv"))
     }
 
     /// Make sure `pairs-incomplete.csv` exists; true if this call created it.
@@ -171,7 +171,7 @@ impl Files {
     /// [`Files::open_incomplete`]).
     pub fn incomplete_pair(&mut self, p: &Pair) -> anyhow::Result<()> {
         let w = self.incomplete.as_mut().expect("opened first");
-        w.write(p).context("cannot write pairs-incomplete.csv")
+        w.write(p).with_context(|| self.at("pairs-incomplete.csv"))
     }
 
     /// A settings report, to `settings.csv` (created with its header by the first).
@@ -185,7 +185,7 @@ impl Files {
         let w = self.settings.as_mut().expect("just created");
         let cells: Vec<&str> = values.iter().map(|v| v.value.as_str()).collect();
         writeln!(w, "{seq},{},{}", source_name(r.source), cells.join(","))
-            .context("cannot write settings.csv")
+            .with_context(|| self.at("settings.csv"))
     }
 
     /// A live reading of setup mode, to `live.csv` (created with its header by the first).
@@ -204,7 +204,12 @@ impl Files {
             f(l.force_n[1]),
             f(l.servo_deg)
         )
-        .context("cannot write live.csv")
+        .with_context(|| self.at("live.csv"))
+    }
+
+    /// The message of a failed write of `name`: the final path, where the user looks.
+    fn at(&self, name: &str) -> String {
+        format!("cannot write {}", self.dir.join(name).display())
     }
 
     /// Flush every file.
