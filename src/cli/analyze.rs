@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Threads for independent fits (default: up to 4).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// Instead of analysing DATA: validate the cause-naming on 40 data sets with planted truths,
     /// simulated end to end (firmware in the loop, the thesis rig's noise); prints the figures
@@ -33,6 +33,9 @@ pub struct Args {
 
 /// Run `capstan analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(t) = args.threads {
+        crate::data::ranges::THREADS.option("--threads", t as f64)?;
+    }
     if args.validate {
         return validate(&args);
     }
@@ -68,7 +71,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut csv = set.create("predictions.csv")?;
     crate::report::write_predictions_csv(&mut csv, &ds, &a)
         .and_then(|()| csv.flush())
-        .with_context(|| format!("cannot write {}", args.out.join("predictions.csv").display()))?;
+        .with_context(|| {
+            format!(
+                "cannot write {}",
+                args.out.join("predictions.csv").display()
+            )
+        })?;
     drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();

@@ -21,10 +21,10 @@ pub struct Args {
     #[arg(long)]
     pub protocol_times: bool,
     /// A within-run (shape) effect is reported when its ΔBIC is below minus this.
-    #[arg(long, default_value_t = diagnose::WITHIN_THRESHOLD)]
+    #[arg(long, default_value_t = diagnose::WITHIN_THRESHOLD, allow_negative_numbers = true)]
     pub within_threshold: f64,
     /// A between-run or between-cord effect is reported when its ΔBIC is below minus this.
-    #[arg(long, default_value_t = diagnose::BETWEEN_THRESHOLD)]
+    #[arg(long, default_value_t = diagnose::BETWEEN_THRESHOLD, allow_negative_numbers = true)]
     pub between_threshold: f64,
 }
 

@@ -25,12 +25,21 @@ fn open_sets() -> std::sync::MutexGuard<'static, Vec<(PathBuf, PathBuf)>> {
 /// signal); returns where each went. A set being committed (its staging directory already
 /// the journal) is not moved: the next run into its directory finishes the commit.
 pub fn keep_open_sets() -> Vec<PathBuf> {
+    keep_sets(|_| true)
+}
+
+/// [`keep_open_sets`] for the sets whose staging directory `which` selects.
+pub(super) fn keep_sets(which: impl Fn(&Path) -> bool) -> Vec<PathBuf> {
     let mut kept = Vec::new();
-    for (staging, to) in open_sets().drain(..) {
-        if std::fs::rename(&staging, &to).is_ok() {
-            kept.push(to);
+    open_sets().retain(|(staging, to)| {
+        if !which(staging) {
+            return true;
         }
-    }
+        if std::fs::rename(staging, to).is_ok() {
+            kept.push(to.clone());
+        }
+        false
+    });
     kept
 }
 

@@ -334,3 +334,24 @@ fn a_linked_lock_file_is_refused_not_written_through() {
         "keep me"
     );
 }
+
+#[test]
+fn a_process_exiting_at_once_keeps_its_open_sets_where_it_says() {
+    let dir = scratch();
+    let mut s = OutputDir::open(&dir, "test", &[]).unwrap().stage().unwrap();
+    s.write("pairs.csv", b"run,step\n1,1\n").unwrap();
+    // What a second signal does before `exit`: the staging directory, visible, named.
+    let kept = staged::keep_sets(|p| p.starts_with(&dir));
+    assert_eq!(kept.len(), 1);
+    let name = kept[0].file_name().unwrap().to_string_lossy().into_owned();
+    assert!(kept[0].parent() == Some(dir.as_path()) && name.starts_with(INCOMPLETE_PREFIX));
+    assert_eq!(
+        std::fs::read_to_string(kept[0].join("pairs.csv")).unwrap(),
+        "run,step\n1,1\n"
+    );
+    s.abandon(); // the process is gone: no destructor runs
+                 // The next run into the directory finds nothing to recover and the kept work in place.
+    let out = OutputDir::open(&dir, "test", &[]).unwrap();
+    assert!(out.recovered.is_empty(), "{:?}", out.recovered);
+    assert!(kept[0].join("pairs.csv").exists());
+}

@@ -149,7 +149,10 @@ mod tests {
         // The set-up values pairs.csv carries stay inside the reader's ranges.
         let (_, dia) = command_line(&words("set diameter_mm 2000")).unwrap();
         let e = check_set(&dia, &s).unwrap_err().to_string();
-        assert!(e.starts_with("not sent: set diameter_mm 2000: must be greater than 0"), "{e}");
+        assert!(
+            e.starts_with("not sent: set diameter_mm 2000: must be greater than 0"),
+            "{e}"
+        );
         let (_, none) = command_line(&words("set diameter_mm 0")).unwrap();
         assert_eq!(check_set(&none, &s), Ok(()));
         let (_, ok) = command_line(&words("set dwell_ms 8000")).unwrap();

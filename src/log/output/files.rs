@@ -112,7 +112,8 @@ impl Files {
     /// Keep received bytes (if the session keeps them).
     pub fn stream(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         if let Some(s) = &mut self.stream {
-            s.write_all(bytes).with_context(|| self.at("stream.defmt"))?;
+            s.write_all(bytes)
+                .with_context(|| self.at("stream.defmt"))?;
         }
         Ok(())
     }
