@@ -97,7 +97,7 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
     let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert_eq!(
         pairs.header.join(","),
-        capstan::data::PAIRS_HEADER.join(",")
+        capstan::data::PAIRS_HEADER.join(",") + ",boot"
     );
     assert_eq!(pairs.pairs.len(), 4);
     // Running again into the same directory is refused unless --overwrite.

@@ -42,7 +42,7 @@ fuzz_target!(|data: &[u8]| {
             "beyond any force sensor",
             "must be within",
             "must be at most",
-            "must be greater than zero",
+            "must be greater than 0",
         ];
         assert!(allowed.iter().any(|a| e.contains(a)), "{e}");
     }

@@ -23,7 +23,8 @@ LOGGING A RUN ON THE PICO
      as logging does, e.g. with --no-flash after a setup with `capstan rig`). Each record is
      written as it arrives:
        raw.csv       time, T1/T2 in ADC counts and newtons
-       pairs.csv     capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n
+       pairs.csv     capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n,boot
+                     (boot: 1, then 2 after the board restarts, as its run numbers do)
        faults.csv    safety faults
        messages.txt  the firmware's other log lines, and each command reply (REPLY seq=N ...)
        stream.defmt  the received bytes (decode again with --from)
@@ -36,6 +37,10 @@ LOGGING A RUN ON THE PICO
      A fault in setup mode goes to faults.csv with an empty run and its time since boot.
   4. Stop with Ctrl-C (or --runs N / --duration S). Everything received is kept, files
      flushed; a lost probe (cable pulled) also keeps everything and exits with an error.
+     A session becomes DIR's files only with at least one complete run (or --allow-empty):
+     otherwise what was received is kept in DIR/incomplete-<id>, DIR stays as it was (a
+     recorded session there is never replaced by an empty or broken one), and the exit
+     status is 1 (130 after Ctrl-C).
 
   Records are numbered by the firmware; a jump in the numbers is reported (how many records,
   after which one, at which byte), on stderr as it happens and in summary.json. --strict

@@ -5,7 +5,8 @@
 //! Schema: `capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n`. Reading needs
 //! only `wrap_deg,t1_n,t2_n`; the other known columns are optional. Text columns are read as
 //! labels under the names of [`read::CORD_LABELS`] (they separate cords), [`read::RUN_LABELS`]
-//! (they separate runs: two sessions with the same run numbers) and [`read::NOTE_COLUMNS`]
+//! (they separate runs: two sessions, or two boots of the board, with the same run numbers)
+//! and [`read::NOTE_COLUMNS`]
 //! (kept, not used); any further column must be numeric and is kept (by name).
 //!
 //! * `records`: the CSV records, each cell with its exact line (LF, CRLF, CR, blank lines),
@@ -30,7 +31,7 @@ mod write;
 pub use error::{quote, DataError, QUOTE_CHARS};
 pub use records::MAX_RECORD_BYTES;
 pub use structure::{Basis, Structure};
-pub use write::{write_pairs, write_pairs_to, PairsWriter};
+pub use write::{text_cell, write_pairs, write_pairs_to, PairsWriter};
 
 use serde::Serialize;
 use std::io::Read;

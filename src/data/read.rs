@@ -11,8 +11,9 @@ use std::io::Read;
 /// Text columns that name the cord: rows that differ in one are on different cords.
 pub const CORD_LABELS: [&str; 2] = ["cord", "material"];
 /// Text columns that name the session: rows that differ in one are in different runs (two
-/// sessions with the same run numbers stay apart).
-pub const RUN_LABELS: [&str; 2] = ["session", "date"];
+/// sessions with the same run numbers stay apart). `boot` is written by `capstan log`: the
+/// board's start a run belongs to (its run numbers start again after a reset).
+pub const RUN_LABELS: [&str; 3] = ["session", "date", "boot"];
 /// Free-text columns, kept but not used.
 pub const NOTE_COLUMNS: [&str; 2] = ["note", "comment"];
 

@@ -41,7 +41,7 @@ pub(super) fn columns_of(pairs: &[Pair]) -> Vec<usize> {
 /// that the pairs do not all carry (so what is written reads back as it was).
 pub fn write_pairs_to(w: &mut impl Write, pairs: &[Pair]) -> std::io::Result<()> {
     let columns = columns_of(pairs);
-    let mut out = PairsWriter::with_columns(w, columns)?;
+    let mut out = PairsWriter::with_columns(w, columns, &[])?;
     pairs.iter().try_for_each(|p| out.write(p))
 }
 
@@ -55,28 +55,43 @@ pub struct PairsWriter<W: Write> {
     inner: W,
     /// Indices into [`PAIRS_HEADER`], in order.
     columns: Vec<usize>,
+    /// Text (label) columns after them: each pair's [`Pair::labels`], in order.
+    labels: usize,
 }
 
 impl<W: Write> PairsWriter<W> {
     /// Start the CSV with every column: write the header.
     pub fn new(inner: W) -> std::io::Result<Self> {
-        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect())
+        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect(), &[])
+    }
+
+    /// Start the CSV with every column and the text columns `labels` after them (e.g.
+    /// `boot`, a run label of [`super::read::RUN_LABELS`]); each pair written carries their
+    /// values in [`Pair::labels`].
+    pub fn with_labels(inner: W, labels: &[&str]) -> std::io::Result<Self> {
+        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect(), labels)
     }
 
     /// Start the CSV with these columns of [`PAIRS_HEADER`] (indices, in order).
-    fn with_columns(mut inner: W, columns: Vec<usize>) -> std::io::Result<Self> {
-        let names: Vec<&str> = columns.iter().map(|&i| PAIRS_HEADER[i]).collect();
+    fn with_columns(mut inner: W, columns: Vec<usize>, labels: &[&str]) -> std::io::Result<Self> {
+        let mut names: Vec<&str> = columns.iter().map(|&i| PAIRS_HEADER[i]).collect();
+        names.extend_from_slice(labels);
         writeln!(inner, "{}", names.join(","))?;
-        Ok(PairsWriter { inner, columns })
+        Ok(PairsWriter {
+            inner,
+            columns,
+            labels: labels.len(),
+        })
     }
 
     /// Write one pair (not flushed).
     pub fn write(&mut self, p: &Pair) -> std::io::Result<()> {
-        let cells: Vec<String> = self
+        let mut cells: Vec<String> = self
             .columns
             .iter()
             .map(|&i| column_value(p, i).map_or(String::new(), |v| v.to_string()))
             .collect();
+        cells.extend((0..self.labels).map(|k| text_cell(p.labels.get(k).map_or("", |l| l))));
         writeln!(self.inner, "{}", cells.join(","))
     }
 
@@ -88,5 +103,14 @@ impl<W: Write> PairsWriter<W> {
     /// The underlying writer.
     pub fn into_inner(self) -> W {
         self.inner
+    }
+}
+
+/// A text cell, quoted when it holds a comma, a quote or a line break.
+pub fn text_cell(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
     }
 }

@@ -49,15 +49,6 @@ fn num(v: f64) -> String {
     }
 }
 
-/// A text cell, quoted when it holds a comma, a quote or a line break.
-fn csv_text(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 /// `predictions.csv`: the input rows (columns as read) plus the cord and run of the data set's
 /// structure (`run_id`: 1, 2, ... in the order the runs first appear), the step timing used, and
 /// every model's prediction, written row by row (a million rows are ~230 MB: not held).
@@ -100,7 +91,7 @@ pub fn write_predictions_csv(
                 "t1_n" => num(pair.t1_n),
                 "t2_n" => num(pair.t2_n),
                 other => match ds.label_columns.iter().position(|c| c.name == other) {
-                    Some(k) => csv_text(&pair.labels[k]),
+                    Some(k) => crate::data::text_cell(&pair.labels[k]),
                     None => ds
                         .extra_columns
                         .iter()
@@ -110,7 +101,7 @@ pub fn write_predictions_csv(
             })
             .collect();
         let row = &a.obs.rows[i];
-        cells.push(csv_text(&a.obs.groups[row.group].label));
+        cells.push(crate::data::text_cell(&a.obs.groups[row.group].label));
         cells.push((row.run + 1).to_string());
         cells.push(num(row.timing.centre_s));
         for v in [

@@ -258,6 +258,30 @@ fn output_directories_holding_what_capstan_did_not_write_are_refused_before_any_
 }
 
 #[test]
+fn a_session_across_a_board_restart_reads_back_with_its_runs_apart() {
+    // The recorded stream twice: the board's sequence numbers and run numbers start again.
+    let dir = scratch("restart");
+    let stream = dir.join("twice.defmt");
+    let one = std::fs::read(STREAM).unwrap();
+    std::fs::write(&stream, [one.clone(), one].concat()).unwrap();
+    let o = capstan(&[
+        "log",
+        "--elf",
+        ELF,
+        "--from",
+        s(&stream),
+        "--out",
+        s(&dir.join("o")),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", err(&o));
+    let d = capstan::data::load_pairs(&dir.join("o/pairs.csv")).unwrap();
+    assert_eq!(d.structure.run_level.columns, ["run", "boot"]);
+    assert_eq!(d.structure.run_cord.len(), 4, "{}", d.structure.describe());
+    checked();
+}
+
+#[test]
 fn stdout_errors_are_errors_and_a_closed_pipe_is_quiet() {
     // Case 12: a full disk is not a closed pipe.
     let full = std::fs::File::create("/dev/full");

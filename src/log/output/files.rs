@@ -44,9 +44,12 @@ fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<
     Ok(w)
 }
 
+/// A pairs CSV of the session: the schema's columns and `boot`, the board's start each run
+/// belongs to (a reset starts the run numbers again; `boot` keeps those runs apart for the
+/// reader).
 fn create_pairs(set: &mut Staged, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
     let w = create(set, name, None)?;
-    PairsWriter::new(w).with_context(|| format!("cannot write {name}"))
+    PairsWriter::with_labels(w, &["boot"]).with_context(|| format!("cannot write {name}"))
 }
 
 /// f32 as written: the shortest decimal that reads back to the same f32.

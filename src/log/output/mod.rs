@@ -4,7 +4,7 @@
 //! | file | what |
 //! |---|---|
 //! | `raw.csv` | `run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n`: the decimated raw samples |
-//! | `pairs.csv` | the conditioned pairs, in the schema of `data.rs` (`analyze` reads it) |
+//! | `pairs.csv` | the conditioned pairs, in the schema of `data` (`analyze` reads it), and `boot`: 1, then one more at every restart of the board (its run numbers start again) |
 //! | `pairs-incomplete.csv` | only if needed: pairs whose set-up (wrap, diameter, drive voltage) or run number is unknown, same schema with those cells empty |
 //! | `faults.csv` | `run,seq,time_s,kind,channel,value` |
 //! | `messages.txt` | the firmware's other log lines (`LEVEL text`), and each command reply as `REPLY seq=N sentence` |
@@ -12,6 +12,10 @@
 //! | `live.csv` | only if needed: setup mode's live values `seq,time_s,t1_counts,t2_counts,t1_n,t2_n,servo_deg` (time since boot) |
 //! | `stream.defmt` | the bytes as received (for `capstan log --from`), unless read from a file |
 //! | `summary.json` | counts, runs, sequence gaps, bad frames, why the session stopped |
+//!
+//! The files become the directory's set only when the session holds a complete run (or
+//! [`LogOptions::allow_empty`]): a recorded session is never replaced by an empty or broken
+//! one ([`Outcome`]).
 //!
 //! Times are seconds since the logger trigger's rising edge (negative before it), except in
 //! `live.csv` and for a fault in setup mode (no trigger there): seconds since boot.

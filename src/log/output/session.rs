@@ -42,6 +42,9 @@ pub struct Logger<'f> {
     in_setup: bool,
     events: Vec<Located>,
     bad: Vec<BadFrame>,
+    /// The board's starts seen so far (1, then one more at every restart): the `boot` label
+    /// of the pairs.
+    boot: u32,
 }
 
 /// A run number for messages: `?` when unknown.
@@ -69,6 +72,7 @@ impl<'f> Logger<'f> {
             in_setup: false,
             events: Vec::new(),
             bad: Vec::new(),
+            boot: 1,
         })
     }
 
@@ -160,6 +164,7 @@ impl<'f> Logger<'f> {
                     );
                 }
                 self.current = None;
+                self.boot += 1;
             }
             _ => {}
         }
@@ -269,7 +274,7 @@ impl<'f> Logger<'f> {
             t1_n: decimal(p.t1.mean_n),
             t2_n: decimal(p.t2.mean_n),
             extra: Vec::new(),
-            labels: Vec::new(),
+            labels: vec![self.boot.to_string()],
         };
         let complete =
             c.diameter.is_some() && c.wrap.is_some() && c.drive.is_some() && rs.run.is_some();
