@@ -17,17 +17,15 @@ use std::time::Instant;
 /// degrees of freedom of the cord effects.
 pub const STRICT_BUDGET: f64 = 12.0;
 
-/// Work units all the per-cord fits of one family may spend together (the per-cord
-/// baseline, the leave-one-cord-out refits of each model), at least: split evenly among the
-/// cords, so many cords get small fits each and the whole stays bounded
-/// ([`crate::fit::solve::budget`]). The thesis's ten extended refits use ~1.7 M units.
-pub const FAMILY_UNITS: u64 = 3_000_000;
-
-/// What one family of per-cord fits may spend on `rows` rows: [`FAMILY_UNITS`], or
-/// 1,500 units a row on large data sets.
-pub fn family_units(rows: usize) -> u64 {
-    FAMILY_UNITS.max(1_500 * rows as u64)
-}
+/// Work units a one-mu fit of a family (the per-cord baseline, the baseline's
+/// leave-one-cord-out refits) may spend per row: ~20 evaluations with their Jacobians, where
+/// the thesis's need ~1.
+pub const ONE_MU_UNITS_PER_ROW: u64 = 60;
+/// Work units a leave-one-cord-out refit of the extended model may spend per training row:
+/// 1.7 times what the thesis's ten refits use (~265 a row, warm-started from the in-sample
+/// fit). With at most 12 folds ([`crate::fit::solve::loco::MAX_FOLDS`]) the refits of a
+/// 1,000-row data set stay within ~5 M units (~1 s on two cores) whatever they meet.
+pub const LOCO_UNITS_PER_ROW: u64 = 450;
 
 /// Per-row predictions of every model (N), NaN where a model has no prediction.
 #[derive(Clone, Debug, Default)]
@@ -91,18 +89,10 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     let base_spec = models::baseline();
     let baseline = fit_fixed(&base_spec, obs, &all, None);
     let groups: Vec<usize> = (0..obs.groups.len()).collect();
-    // Each family of fits shares its units: the per-cord fits split them among the cords, the
-    // leave-one-cord-out refits among their folds (at most `loco::MAX_FOLDS`). One mu per fit
-    // costs far less a unit than the extended model: those families get a third as many.
-    let units = family_units(obs.len());
-    let per_cord_share = (units / 3) / groups.len().max(1) as u64;
-    let fold_count = crate::fit::solve::loco::folds(groups.len()).len().max(1) as u64;
-    let fold_share_1 = (units / 3) / fold_count;
-    let fold_share = units / fold_count;
     let per_cord_fits: Vec<Fit> = par_map(&groups, threads, |&g| {
         let runs = obs.runs_of_group(g);
         let rows = obs.rows_of(&runs).len();
-        let budget = Budget::for_fit_within(rows, 1, per_cord_share);
+        let budget = Budget::for_fit_within(rows, 1, ONE_MU_UNITS_PER_ROW * rows as u64);
         fit_fixed_with(&base_spec, obs, &runs, None, &budget)
     });
     let mut per_cord_pred = vec![f64::NAN; obs.len()];
@@ -144,7 +134,8 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     // Leave one cord out.
     let t1 = Instant::now();
     let baseline_loco = loco(obs, threads, |train| {
-        let budget = Budget::for_fit_within(obs.rows_of(train).len(), 1, fold_share_1);
+        let rows = obs.rows_of(train).len() as u64;
+        let budget = Budget::for_fit_within(rows as usize, 1, ONE_MU_UNITS_PER_ROW * rows);
         fit_fixed_with(&base_spec, obs, train, None, &budget)
     });
     let (th, u0) = (extended.theta.clone(), extended.u.clone());
@@ -155,7 +146,7 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         loco(obs, threads, |train| {
             let opts = MixedOptions {
                 lambda0: l0,
-                max_units: Some(fold_share),
+                max_units: Some(LOCO_UNITS_PER_ROW * obs.rows_of(train).len() as u64),
                 ..budget
             };
             fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)

@@ -60,7 +60,7 @@ impl Loco {
 /// The most folds: with more groups than this, fold k leaves out the groups g with
 /// g mod [`MAX_FOLDS`] = k (every group is still held out once, predicted by a fit without
 /// it), so the number of refits, and the work, stays bounded whatever the number of cords.
-pub const MAX_FOLDS: usize = 30;
+pub const MAX_FOLDS: usize = 12;
 
 /// The folds of `groups` groups: each fold's held-out groups.
 pub fn folds(groups: usize) -> Vec<Vec<usize>> {
@@ -120,6 +120,8 @@ mod tests {
     fn folds_hold_every_group_once_and_are_bounded() {
         assert_eq!(super::folds(3), vec![vec![0], vec![1], vec![2]]);
         let f = super::folds(305);
+        assert_eq!(super::folds(12).len(), 12);
+        assert_eq!(super::folds(13)[0], vec![0, 12]);
         assert_eq!(f.len(), super::MAX_FOLDS);
         let mut all: Vec<usize> = f.concat();
         all.sort();
