@@ -22,10 +22,10 @@ pub const STRICT_BUDGET: f64 = 12.0;
 /// the thesis's need ~1.
 pub const ONE_MU_UNITS_PER_ROW: u64 = 60;
 /// Work units a leave-one-cord-out refit of the extended model may spend per training row:
-/// 1.7 times what the thesis's ten refits use (~265 a row, warm-started from the in-sample
+/// 2.6 times what the thesis's ten refits use (~97 a row, warm-started from the in-sample
 /// fit). With at most 12 folds ([`crate::fit::solve::loco::MAX_FOLDS`]) the refits of a
-/// 1,000-row data set stay within ~5 M units (~1 s on two cores) whatever they meet.
-pub const LOCO_UNITS_PER_ROW: u64 = 450;
+/// 1,000-row data set stay within 3 M units (~1.3 s on two cores) whatever they meet.
+pub const LOCO_UNITS_PER_ROW: u64 = 250;
 
 /// Per-row predictions of every model (N), NaN where a model has no prediction.
 #[derive(Clone, Debug, Default)]
@@ -222,6 +222,7 @@ fn notes(
     }
     let cords = |list: Vec<(usize, &String)>| -> Option<String> {
         let (_, why) = list.first()?;
+        let why = why.trim_start_matches("did not converge: ");
         let names: Vec<&str> = list
             .iter()
             .take(3)
@@ -229,7 +230,7 @@ fn notes(
             .collect();
         let more = if list.len() > 3 { ", ..." } else { "" };
         Some(format!(
-            "{} of {} cords ({}{more}); the first {why}",
+            "{} of {} cords ({}{more}; the first: {why})",
             list.len(),
             obs.groups.len(),
             names.join(", ")
@@ -242,7 +243,7 @@ fn notes(
         .collect();
     if let Some(s) = cords(stopped) {
         notes.push(format!(
-            "Euler-Eytelwein with one mu per cord: the fit of {s}"
+            "Euler-Eytelwein with one mu per cord: the fit did not converge on {s}"
         ));
     }
     for (what, l) in [
@@ -252,7 +253,7 @@ fn notes(
         let list: Vec<(usize, &String)> = l.did_not_converge.iter().map(|(g, w)| (*g, w)).collect();
         if let Some(s) = cords(list) {
             notes.push(format!(
-                "{what}, leave one cord out: the refit without each of {s}: those cords have no held-out prediction"
+                "{what}, leave one cord out: the refit did not converge without {s}: those cords have no held-out prediction"
             ));
         }
     }

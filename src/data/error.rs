@@ -249,8 +249,9 @@ impl fmt::Display for DataError {
             } => write!(
                 f,
                 "{path}:{line}: {key} again (first on line {first_line}): two sessions \
-                 concatenated with the same run numbers? Give each its own run numbers, or a \
-                 `session` column that tells them apart"
+                 concatenated with the same run numbers, or two cords no column tells apart? \
+                 Give each its own run numbers, a `session` column, or the column that \
+                 separates the cords (capstan_diameter_mm, or a `cord` label)"
             ),
             NoFriction { path, rows } => write!(
                 f,

@@ -175,6 +175,13 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         }
     };
     let constancy = constancy(d, fit, w);
+    if fit.k() > 0 && d.wraps().len() > MAX_CONSTANCY_WRAPS {
+        not_identified.push(format!(
+            "one size per wrap: {} wraps are more than the {MAX_CONSTANCY_WRAPS} this test \
+             refits",
+            d.wraps().len()
+        ));
+    }
     let inconstant = constancy
         .as_ref()
         .is_some_and(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
@@ -389,11 +396,20 @@ fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     })
 }
 
+/// The most wraps the constancy test refits one size per wrap for: beyond, it is not
+/// identified (a data set of a few rows at each of hundreds of wraps cannot say an effect's
+/// size per wrap, and the refit would grow with the square of their number).
+pub const MAX_CONSTANCY_WRAPS: usize = 24;
+
 /// Refit the selected effects with one size per wrap and test that the sizes agree.
 fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
     let k = fit.k();
     let wraps = d.wraps();
-    if k == 0 || wraps.len() < 2 {
+    if k == 0 || wraps.len() < 2 || wraps.len() > MAX_CONSTANCY_WRAPS {
+        return None;
+    }
+    // Too few runs for the contrasts: decided before the refit, which it would not change.
+    if d.units.len() < k * (wraps.len() - 1) + 2 {
         return None;
     }
     let of_unit: Vec<usize> = d

@@ -7,26 +7,27 @@
 //! One unit is one row's T2 prediction at given parameters; a Jacobian costs a prediction and
 //! one more per free parameter for every row, and its QR factorisation m·n²/[`QR_FLOPS`] units
 //! (m rows and group penalties, n parameters). On this project's 2-core machine a unit is
-//! ~0.1–0.5 µs in a release build, so [`MAX_FIT_UNITS`] is well under a second.
+//! ~0.1–0.9 µs in a release build (a row with contact heating solves its step equation), so
+//! [`MAX_FIT_UNITS`] is under a second.
 
 use std::cell::Cell;
 
 /// Units a fit may spend per row and parameter (room for ~100 solver iterations with their
 /// Jacobians, far more than a fit that converges needs: the thesis's extended fit, 720 rows
-/// and 14 parameters, uses ~0.2 M units of its 1.5 M).
+/// and 14 parameters, uses ~0.07 M units of its 0.8 M).
 pub const UNITS_PER_ROW_PARAM: u64 = 600;
 /// The least any fit gets.
 pub const MIN_FIT_UNITS: u64 = 200_000;
 /// The most one fit of up to [`ROWS_AT_CAP`] rows gets, whatever its number of parameters
-/// (about a second of one core at the slowest unit measured, 0.5 µs).
-pub const MAX_FIT_UNITS: u64 = 1_500_000;
+/// (under a second of one core at the slowest unit measured, ~0.9 µs).
+pub const MAX_FIT_UNITS: u64 = 800_000;
 /// Above this many rows the most a fit gets grows with them, [`UNITS_PER_ROW`] a row (as much
-/// a row as [`MAX_FIT_UNITS`] gives the thesis's 720; its extended fit needs ~280).
+/// a row as [`MAX_FIT_UNITS`] gives the thesis's 720; its extended fit needs ~100).
 pub const ROWS_AT_CAP: u64 = MAX_FIT_UNITS / UNITS_PER_ROW;
 /// See [`ROWS_AT_CAP`].
-pub const UNITS_PER_ROW: u64 = 2_000;
+pub const UNITS_PER_ROW: u64 = 1_000;
 /// Floating-point operations of a QR factorisation per unit.
-pub const QR_FLOPS: u64 = 16;
+pub const QR_FLOPS: u64 = 400;
 
 /// A fit's work budget. Not shared between threads: each fit owns its own, so where it stops
 /// does not depend on what runs beside it.
@@ -105,8 +106,8 @@ mod tests {
         assert_eq!(Budget::for_fit(200, 3).limit(), 600 * 200 * 3);
         assert!(Budget::for_fit(400, 3).limit() > Budget::for_fit(200, 3).limit());
         assert_eq!(Budget::for_fit(720, 14).limit(), MAX_FIT_UNITS);
-        assert_eq!(Budget::for_fit(100_000, 14).limit(), 200_000_000);
-        assert_eq!(Budget::for_fit(1_000_000, 300).limit(), 2_000_000_000);
+        assert_eq!(Budget::for_fit(100_000, 14).limit(), 100_000_000);
+        assert_eq!(Budget::for_fit(1_000_000, 300).limit(), 1_000_000_000);
         assert_eq!(Budget::for_fit_within(720, 14, 1000).limit(), 1000);
         let b = Budget::new(10);
         b.charge(6);
