@@ -12,7 +12,7 @@
 //! Reproducible and bounded: a fixed seed (`PROPTEST_RNG_SEED` is ignored), failures persisted
 //! next to this file (`diagnose_any_input.proptest-regressions`, replayed first), shrinking
 //! stopped after 60 s, and every analysis bounded by the fits' budgets.
-//! `PROPTEST_CASES=N` draws more (default 40 for diagnose, 16 for analyze).
+//! `PROPTEST_CASES=N` draws more (default 40 for diagnose, 8 for analyze).
 
 use capstan::data::{check_capstan_data, read_pairs, Dataset};
 use capstan::diagnose::diagnose;
@@ -177,7 +177,7 @@ proptest! {
 
 proptest! {
     // Each analysis fits every model with leave-one-cord-out folds: fewer cases by default.
-    #![proptest_config(config(16, 0x0023_a7a1))]
+    #![proptest_config(config(8, 0x0023_a7a1))]
 
     #[test]
     fn analyze_and_diagnose_agree_on_any_accepted_data_set(

@@ -64,6 +64,9 @@ pub const STAGING_PREFIX: &str = ".capstan-staging-";
 /// Prefix under which an abandoned staging directory's work is kept.
 pub const INCOMPLETE_PREFIX: &str = "incomplete-";
 
+/// A sub-directory a command writes into, with which of its files (`"sub/name"`) it writes.
+pub type Subdir<'a> = (&'a str, &'a dyn Fn(&str) -> bool);
+
 /// An output directory, locked for this process.
 #[derive(Debug)]
 pub struct OutputDir {
@@ -90,7 +93,7 @@ impl OutputDir {
         dir: &Path,
         kind: &'static str,
         names: &[&str],
-        subdirs: &[(&str, &dyn Fn(&str) -> bool)],
+        subdirs: &[Subdir<'_>],
     ) -> anyhow::Result<OutputDir> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;

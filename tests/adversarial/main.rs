@@ -27,7 +27,7 @@ pub static CHECKED: AtomicUsize = AtomicUsize::new(0);
 /// Count one checked case (`--nocapture` shows the running total).
 pub fn checked() {
     let n = CHECKED.fetch_add(1, Ordering::Relaxed) + 1;
-    if n % 25 == 0 {
+    if n.is_multiple_of(25) {
         eprintln!("adversarial: {n} cases checked");
     }
 }
