@@ -98,7 +98,7 @@ fn bad_input_names_file_line_and_column() {
     assert!(err("wrap_deg,t1_n,t1_n,t2_n\n")
         .starts_with("x.csv:1:3: column `t1_n` appears twice (also column 2)"));
     assert!(err("wrap_deg,t1_n,t2_n,humidity\n270,1,2,wet\n")
-        .starts_with("x.csv:2:4: column `humidity`: not a number; a text column is read only under a label name (cord, material, session, date, note, comment) (found `wet`)"));
+        .starts_with("x.csv:2:4: column `humidity`: not a number; a text column is read only under a label name (cord, material, session, date, boot, note, comment) (found `wet`)"));
 }
 
 #[test]

@@ -88,7 +88,15 @@ const NAMES: [&str; 6] = [
 ];
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    // Reproducible: a fixed seed, failures persisted beside this file.
+    #![proptest_config(ProptestConfig {
+        cases: 64,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x0023_0d1e),
+        failure_persistence: Some(Box::new(
+            proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"),
+        )),
+        ..ProptestConfig::default()
+    })]
 
     /// For any old set, any new set and any point of interruption, the directory holds the
     /// complete old set or the complete new set once it is opened again, and the user's own
