@@ -198,8 +198,8 @@ mod tests {
         let none = summary(RecordCounts::default(), 100, 0);
         let e = verdict(&none, &Stop::EndOfStream, &args(&[])).unwrap_err();
         assert!(e.to_string().contains("no rig records in 100 bytes"));
-        // An empty stream is not an error (nothing was sent), except under --strict; nor is a
-        // stream without a complete run.
+        // A session committed without a complete run (only with --allow-empty: otherwise
+        // `not_committed` judges it) is not an error, except under --strict.
         let empty = summary(RecordCounts::default(), 0, 0);
         assert!(verdict(&empty, &Stop::EndOfStream, &args(&[])).is_ok());
         let e = verdict(&empty, &Stop::EndOfStream, &args(&["--strict"])).unwrap_err();
