@@ -22,11 +22,7 @@ fn repeated(base: &Dataset, k: usize) -> Dataset {
             })
         })
         .collect();
-    Dataset {
-        pairs,
-        source: format!("{} ×{k}", base.source),
-        ..base.clone()
-    }
+    Dataset::from_pairs(&format!("{} ×{k}", base.source), pairs).expect("new run numbers")
 }
 
 /// Peak resident memory of this process so far, MB (Linux; NaN elsewhere).

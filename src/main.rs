@@ -6,15 +6,26 @@ fn main() -> std::process::ExitCode {
     if let Err(e) = &r {
         capstan::errln!("error: {e:#}");
     }
-    if r.is_ok() && capstan::term::pipe_closed() {
-        // The reader went away (`| head`): end quietly, as a process ended by SIGPIPE does.
-        return std::process::ExitCode::from(capstan::term::BROKEN_PIPE_STATUS);
+    let write_error = capstan::term::out_error();
+    if let Some(why) = &write_error {
+        // Not a reader that went away: the output was lost (a full disk, an I/O error).
+        capstan::errln!(
+            "error: cannot write to standard output: {why}; what it should hold is incomplete \
+             (the output files, if any, are written)"
+        );
     }
     match r {
-        Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) if e.is::<capstan::cli::signal::Interrupted>() => {
             std::process::ExitCode::from(capstan::cli::signal::INTERRUPTED_STATUS)
         }
         Err(_) => std::process::ExitCode::FAILURE,
+        Ok(()) if write_error.is_some() => {
+            std::process::ExitCode::from(capstan::term::WRITE_ERROR_STATUS)
+        }
+        // The reader went away (`| head`): end quietly, as a process ended by SIGPIPE does.
+        Ok(()) if capstan::term::pipe_closed() => {
+            std::process::ExitCode::from(capstan::term::BROKEN_PIPE_STATUS)
+        }
+        Ok(()) => std::process::ExitCode::SUCCESS,
     }
 }

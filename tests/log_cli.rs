@@ -97,7 +97,7 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
     let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert_eq!(
         pairs.header.join(","),
-        capstan::data::PAIRS_HEADER.join(",")
+        capstan::data::PAIRS_HEADER.join(",") + ",boot"
     );
     assert_eq!(pairs.pairs.len(), 4);
     // Running again into the same directory is refused unless --overwrite.
@@ -264,18 +264,27 @@ fn ctrl_c_keeps_everything_received_and_says_so() {
     let o = child.wait_with_output().unwrap();
     drop(pipe);
     let err = stderr(&o);
-    assert!(o.status.success(), "{err}");
+    // Half the stream holds no complete run: the session replaces nothing (the directory was
+    // empty and stays so), and everything received is kept where the message says.
+    assert_eq!(o.status.code(), Some(130), "{err}");
     assert!(err.contains("interrupted (Ctrl-C)"), "{err}");
+    let kept = err
+        .split("what was received is kept in ")
+        .nth(1)
+        .and_then(|r| r.split(';').next())
+        .unwrap_or_else(|| panic!("{err}"));
+    let kept = Path::new(kept);
+    assert!(!dir.join("summary.json").exists());
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(kept.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["stopped"], "interrupted (Ctrl-C)");
-    let raw = std::fs::read_to_string(dir.join("raw.csv")).unwrap();
+    let raw = std::fs::read_to_string(kept.join("raw.csv")).unwrap();
     assert_eq!(
         raw.lines().count() as u64 - 1,
         summary["records"]["raw"].as_u64().unwrap()
     );
     assert_eq!(
-        std::fs::read(dir.join("stream.defmt")).unwrap(),
+        std::fs::read(kept.join("stream.defmt")).unwrap(),
         &bytes[..bytes.len() / 2]
     );
 }

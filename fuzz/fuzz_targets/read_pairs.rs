@@ -12,7 +12,11 @@ fuzz_target!(|data: &[u8]| {
     };
     let _ = check_capstan_data(&ds);
     // Written with the schema's writer (standard columns only), it reads back to the same
-    // numbers.
+    // numbers; text labels (which may be what tells two runs apart) are not written, so a set
+    // with them is not written back.
+    if !ds.label_columns.is_empty() {
+        return;
+    }
     let mut out = Vec::new();
     write_pairs_to(&mut out, &ds.pairs).expect("writing to memory");
     let again = read_pairs(&out[..], "again.csv").expect("what was written reads back");

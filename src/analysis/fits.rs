@@ -6,7 +6,9 @@
 use super::{models, thesis};
 use crate::fit::par::par_map;
 use crate::fit::predict::evaluate;
-use crate::fit::solve::{fit_fixed, fit_mixed, fit_mixed_from, loco, Fit, Loco, MixedOptions};
+use crate::fit::solve::{
+    fit_fixed, fit_fixed_with, fit_mixed, fit_mixed_from, loco, Budget, Fit, Loco, MixedOptions,
+};
 use crate::fit::stats::mean;
 use crate::fit::Observations;
 use std::time::Instant;
@@ -14,6 +16,16 @@ use std::time::Instant;
 /// The parameter budget of the extended model, counted strictly: fixed values + the effective
 /// degrees of freedom of the cord effects.
 pub const STRICT_BUDGET: f64 = 12.0;
+
+/// Work units a one-mu fit of a family (the per-cord baseline, the baseline's
+/// leave-one-cord-out refits) may spend per row: ~20 evaluations with their Jacobians, where
+/// the thesis's need ~1.
+pub const ONE_MU_UNITS_PER_ROW: u64 = 60;
+/// Work units a leave-one-cord-out refit of the extended model may spend per training row:
+/// 2.6 times what the thesis's ten refits use (~97 a row, warm-started from the in-sample
+/// fit). With at most 12 folds ([`crate::fit::solve::loco::MAX_FOLDS`]) the refits of a
+/// 1,000-row data set stay within 3 M units (~1.3 s on two cores) whatever they meet.
+pub const LOCO_UNITS_PER_ROW: u64 = 250;
 
 /// Per-row predictions of every model (N), NaN where a model has no prediction.
 #[derive(Clone, Debug, Default)]
@@ -62,6 +74,9 @@ pub struct Fits {
     pub fits_s: f64,
     /// Wall time of the leave-one-cord-out refits, s.
     pub loco_s: f64,
+    /// Fits that did not converge, in words (the analysis went on without them, or, for the
+    /// in-sample fits, with their last iterate).
+    pub notes: Vec<String>,
 }
 
 /// Fit every model of the gain table to `obs`; `ext_spec` is the extended model
@@ -75,7 +90,10 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     let baseline = fit_fixed(&base_spec, obs, &all, None);
     let groups: Vec<usize> = (0..obs.groups.len()).collect();
     let per_cord_fits: Vec<Fit> = par_map(&groups, threads, |&g| {
-        fit_fixed(&base_spec, obs, &obs.runs_of_group(g), None)
+        let runs = obs.runs_of_group(g);
+        let rows = obs.rows_of(&runs).len();
+        let budget = Budget::for_fit_within(rows, 1, ONE_MU_UNITS_PER_ROW * rows as u64);
+        fit_fixed_with(&base_spec, obs, &runs, None, &budget)
     });
     let mut per_cord_pred = vec![f64::NAN; obs.len()];
     for f in &per_cord_fits {
@@ -116,17 +134,26 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     // Leave one cord out.
     let t1 = Instant::now();
     let baseline_loco = loco(obs, threads, |train| {
-        fit_fixed(&base_spec, obs, train, None)
+        let rows = obs.rows_of(train).len() as u64;
+        let budget = Budget::for_fit_within(rows as usize, 1, ONE_MU_UNITS_PER_ROW * rows);
+        fit_fixed_with(&base_spec, obs, train, None, &budget)
     });
     let (th, u0) = (extended.theta.clone(), extended.u.clone());
     let l0 = extended.lambda.unwrap_or(200.0);
-    let extended_loco = loco(obs, threads, |train| {
-        let opts = MixedOptions {
-            lambda0: l0,
-            ..budget
-        };
-        fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
-    });
+    // Refits warm-started from an in-sample fit that did not converge would not either: they
+    // are not run, and no cord gets a held-out prediction of the extended model.
+    let extended_loco = if extended.converged {
+        loco(obs, threads, |train| {
+            let opts = MixedOptions {
+                lambda0: l0,
+                max_units: Some(LOCO_UNITS_PER_ROW * obs.rows_of(train).len() as u64),
+                ..budget
+            };
+            fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
+        })
+    } else {
+        Loco::skipped(obs)
+    };
     // Per-cord baseline on a new cord: the mean log-mu of the other cords.
     let mut per_cord_loco = vec![f64::NAN; obs.len()];
     for g in 0..obs.groups.len() {
@@ -143,6 +170,13 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
     let per_cord_loco_rmse = obs.rmse_t2(&per_cord_loco);
     let loco_s = t1.elapsed().as_secs_f64();
 
+    let notes = notes(
+        obs,
+        &baseline,
+        &extended,
+        &per_cord_fits,
+        [&baseline_loco, &extended_loco],
+    );
     let pred = Predictions {
         baseline: baseline.t2_n.clone(),
         baseline_per_cord: per_cord_pred,
@@ -165,5 +199,63 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         pred,
         fits_s,
         loco_s,
+        notes,
     }
+}
+
+/// The fits that did not converge, in words, one line per family.
+fn notes(
+    obs: &Observations,
+    baseline: &Fit,
+    extended: &Fit,
+    per_cord: &[Fit],
+    locos: [&Loco; 2],
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    for (what, f) in [
+        ("Euler-Eytelwein (one mu)", baseline),
+        ("the extended model", extended),
+    ] {
+        if let Some(why) = &f.stopped {
+            notes.push(format!("{what}: {why}; its last iterate is reported"));
+        }
+    }
+    let cords = |list: Vec<(usize, &String)>| -> Option<String> {
+        let (_, why) = list.first()?;
+        let why = why.trim_start_matches("did not converge: ");
+        let names: Vec<&str> = list
+            .iter()
+            .take(3)
+            .map(|(g, _)| obs.groups[*g].label.as_str())
+            .collect();
+        let more = if list.len() > 3 { ", ..." } else { "" };
+        Some(format!(
+            "{} of {} cords ({}{more}; the first: {why})",
+            list.len(),
+            obs.groups.len(),
+            names.join(", ")
+        ))
+    };
+    let stopped: Vec<(usize, &String)> = per_cord
+        .iter()
+        .enumerate()
+        .filter_map(|(g, f)| f.stopped.as_ref().map(|w| (g, w)))
+        .collect();
+    if let Some(s) = cords(stopped) {
+        notes.push(format!(
+            "Euler-Eytelwein with one mu per cord: the fit did not converge on {s}"
+        ));
+    }
+    for (what, l) in [
+        ("Euler-Eytelwein", locos[0]),
+        ("the extended model", locos[1]),
+    ] {
+        let list: Vec<(usize, &String)> = l.did_not_converge.iter().map(|(g, w)| (*g, w)).collect();
+        if let Some(s) = cords(list) {
+            notes.push(format!(
+                "{what}, leave one cord out: the refit did not converge without {s}: those cords have no held-out prediction"
+            ));
+        }
+    }
+    notes
 }

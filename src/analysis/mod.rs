@@ -105,6 +105,8 @@ pub struct Analysis {
     pub baseline_fit: Fit,
     /// Timing.
     pub elapsed: Elapsed,
+    /// Fits that did not converge, in words (empty when every fit did).
+    pub fit_notes: Vec<String>,
 }
 
 /// The named causes in words, for the extended model's description.
@@ -183,6 +185,7 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
             tables_s,
             ..Elapsed::default()
         },
+        fit_notes: f.notes,
         pred: f.pred,
         extended_fit: f.extended,
         baseline_fit: f.baseline,

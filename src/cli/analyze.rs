@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Threads for independent fits (default: up to 4).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// Instead of analysing DATA: validate the cause-naming on 40 data sets with planted truths,
     /// simulated end to end (firmware in the loop, the thesis rig's noise); prints the figures
@@ -33,6 +33,9 @@ pub struct Args {
 
 /// Run `capstan analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(t) = args.threads {
+        crate::data::ranges::THREADS.option("--threads", t as f64)?;
+    }
     if args.validate {
         return validate(&args);
     }
@@ -50,7 +53,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         opts.threads = t.max(1);
     }
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
+    crate::errln!("{}", ds.structure.describe());
     let mut a = crate::analysis::run(&ds, opts)?;
+    // From here on the set holds work: a late failure keeps it and says where.
+    set.keep_on_failure();
+    for note in &a.fit_notes {
+        crate::errln!("warning: {note}");
+    }
     let t_report = Instant::now();
     let t_cl = Instant::now();
     let (curves, closed, note) = match crate::analysis::closed_loop::run(&a, opts.threads) {
@@ -62,7 +71,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut csv = set.create("predictions.csv")?;
     crate::report::write_predictions_csv(&mut csv, &ds, &a)
         .and_then(|()| csv.flush())
-        .context("writing predictions.csv")?;
+        .with_context(|| {
+            format!(
+                "cannot write {}",
+                args.out.join("predictions.csv").display()
+            )
+        })?;
     drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
@@ -97,6 +111,7 @@ fn validate(args: &Args) -> anyhow::Result<()> {
     let mut set = super::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
     let v = crate::analysis::validate::validate(args.seed, 1, threads)?;
+    set.keep_on_failure();
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
     crate::outln!(
         "causes named exactly (clean, single, heating + T1 loss): {}/{} ({:.0} %, target ≥ 90 %)",

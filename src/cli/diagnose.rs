@@ -2,6 +2,7 @@
 //! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`crate::diagnose`].
 
 use crate::data::{load_pairs, thesis_dataset};
+use crate::diagnose::words::fixed;
 use crate::diagnose::{self, words, Diagnosis, Options};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -20,10 +21,10 @@ pub struct Args {
     #[arg(long)]
     pub protocol_times: bool,
     /// A within-run (shape) effect is reported when its ΔBIC is below minus this.
-    #[arg(long, default_value_t = diagnose::WITHIN_THRESHOLD)]
+    #[arg(long, default_value_t = diagnose::WITHIN_THRESHOLD, allow_negative_numbers = true)]
     pub within_threshold: f64,
     /// A between-run or between-cord effect is reported when its ΔBIC is below minus this.
-    #[arg(long, default_value_t = diagnose::BETWEEN_THRESHOLD)]
+    #[arg(long, default_value_t = diagnose::BETWEEN_THRESHOLD, allow_negative_numbers = true)]
     pub between_threshold: f64,
 }
 
@@ -67,6 +68,7 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
         "{source}: {} rows, {} cords, {} runs; wraps {:?} deg, diameters {:?} mm, drive {:?} V",
         g.rows, g.cords, g.runs, g.wraps_deg, g.diameters_mm, g.drive_v
     );
+    let _ = writeln!(s, "{}", d.data.structure.statement);
     let _ = writeln!(s, "{}", d.verdict);
     if d.unexplained {
         let _ = writeln!(
@@ -100,40 +102,57 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
             );
         }
     }
+    let b = &d.baseline;
     let _ = writeln!(
         s,
-        "Euler-Eytelwein: mu = {:.4}, RMSE(T2) {:.3} N with one mu, {:.3} N with every run's own mu",
-        d.baseline.mu, d.baseline.rmse_t2_n, d.baseline.rmse_t2_run_mu_n
+        "Euler-Eytelwein: mu = {}, RMSE(T2) {} N with one mu, {} N with every run's own mu",
+        fixed(b.mu, 4),
+        fixed(b.rmse_t2_n, 3),
+        fixed(b.rmse_t2_run_mu_n, 3)
     );
     if !d.effects.is_empty() {
         let _ = writeln!(
             s,
-            "with the effects found: RMSE(T2) {:.3} N with one mu, {:.3} N with every run's own mu",
-            d.extended.rmse_t2_n, d.extended.rmse_t2_run_mu_n
+            "with the effects found: RMSE(T2) {} N with one mu, {} N with every run's own mu",
+            fixed(d.extended.rmse_t2_n, 3),
+            fixed(d.extended.rmse_t2_run_mu_n, 3)
         );
     }
     let sc = &d.scatter;
     let _ = writeln!(
         s,
-        "scatter of mu: {:.2} % cord to cord, {:.2} % run to run; noise {:.3} N + {:.2} % of T2, lag-1 autocorrelation {:.2}",
-        sc.cord_pct, sc.run_pct, sc.noise_abs_n, 100.0 * sc.noise_rel, sc.lag1_autocorrelation
+        "scatter of mu: {} % cord to cord, {} % run to run; noise {} N + {} % of T2, lag-1 autocorrelation {}",
+        fixed(sc.cord_pct, 2),
+        fixed(sc.run_pct, 2),
+        fixed(sc.noise_abs_n, 3),
+        fixed(100.0 * sc.noise_rel, 2),
+        if sc.lag1_autocorrelation.is_finite() {
+            fixed(sc.lag1_autocorrelation, 2)
+        } else {
+            "not identified (no time order inside runs)".to_string()
+        }
     );
     let _ = writeln!(
         s,
         "candidates (ΔBIC given the effects found; named if below the threshold of its level and large enough to matter):"
     );
     for c in &d.candidates {
-        let (name, v) = c
+        let value = c
             .parameters
             .iter()
             .next()
-            .map_or(("-", f64::NAN), |(k, v)| (*k, *v));
+            .map_or("-".to_string(), |(k, v)| {
+                if c.parameter_se.is_finite() {
+                    format!("{k} = {v:.4e} ± {:.1e}", c.parameter_se)
+                } else {
+                    format!("{k} = {v:.4e} (standard error not identified)")
+                }
+            });
         let _ = writeln!(
             s,
-            "  {:<20} {:>10.1}  {name} = {v:.4e} ± {:.1e}  [{}]{}",
+            "  {:<20} {:>10.1}  {value}  [{}]{}",
             c.effect,
             c.delta_bic,
-            c.parameter_se,
             c.level.words(),
             if c.selected {
                 "  found"
@@ -146,6 +165,9 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
     }
     for n in &d.not_testable {
         let _ = writeln!(s, "  {:<20} not testable: {}", n.effect, n.reason);
+    }
+    for n in &d.adequacy.not_identified {
+        let _ = writeln!(s, "  not identified: {n}");
     }
     let _ = writeln!(
         s,

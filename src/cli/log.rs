@@ -1,8 +1,11 @@
 //! `capstan log`: record runs from the board over defmt/RTT, or decode a saved defmt stream.
 
-use crate::log::output::{LogOptions, Logger, SetupFlags, Stop, Summary};
+mod judge;
+
+use crate::log::output::{LogOptions, Logger, Outcome, SetupFlags, Stop, Summary};
 use crate::log::Firmware;
 use anyhow::{bail, Context};
+use judge::{check_args, not_committed, verdict};
 use std::io::Read;
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
@@ -23,7 +26,8 @@ LOGGING A RUN ON THE PICO
      as logging does, e.g. with --no-flash after a setup with `capstan rig`). Each record is
      written as it arrives:
        raw.csv       time, T1/T2 in ADC counts and newtons
-       pairs.csv     capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n
+       pairs.csv     capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n,boot
+                     (boot: 1, then 2 after the board restarts, as its run numbers do)
        faults.csv    safety faults
        messages.txt  the firmware's other log lines, and each command reply (REPLY seq=N ...)
        stream.defmt  the received bytes (decode again with --from)
@@ -36,6 +40,10 @@ LOGGING A RUN ON THE PICO
      A fault in setup mode goes to faults.csv with an empty run and its time since boot.
   4. Stop with Ctrl-C (or --runs N / --duration S). Everything received is kept, files
      flushed; a lost probe (cable pulled) also keeps everything and exits with an error.
+     A session becomes DIR's files only with at least one complete run (or --allow-empty):
+     otherwise what was received is kept in DIR/incomplete-<id>, DIR stays as it was (a
+     recorded session there is never replaced by an empty or broken one), and the exit
+     status is 1 (130 after Ctrl-C).
 
   Records are numbered by the firmware; a jump in the numbers is reported (how many records,
   after which one, at which byte), on stderr as it happens and in summary.json. --strict
@@ -97,28 +105,35 @@ pub struct Args {
     pub speed: Option<u32>,
 
     /// Capstan diameter for pairs.csv, mm (default: the run-start record's, if set there).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub diameter_mm: Option<f64>,
 
     /// Wrap angle for pairs.csv, deg (default: the run-start record's, if set there).
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub wrap_deg: Option<f64>,
 
     /// Drive-motor voltage for pairs.csv, V (default: amplifier gain × control voltage).
-    #[arg(long, value_name = "V")]
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
 
     /// Stop after this many complete runs.
     #[arg(long, value_name = "N")]
     pub runs: Option<usize>,
 
-    /// Stop after this many seconds.
-    #[arg(long, value_name = "S")]
+    /// Stop after this many seconds (wall clock, whether or not anything arrives).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub duration: Option<f64>,
 
-    /// Replace the files of an earlier session in DIR.
+    /// Replace the files of an earlier session in DIR (only by a session with a complete run,
+    /// unless --allow-empty).
     #[arg(long)]
     pub overwrite: bool,
+
+    /// Keep a session without a complete run (nothing received, a run cut short) as DIR's
+    /// files. Without it such a session replaces nothing: what was received is kept in
+    /// DIR/incomplete-<id>, and the exit status is 1 (130 if stopped by a signal).
+    #[arg(long)]
+    pub allow_empty: bool,
 
     /// Fail (exit status 1) if any record was lost or any frame did not decode.
     #[arg(long)]
@@ -131,35 +146,7 @@ pub struct Args {
 
 /// Run `capstan log`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if let Some(d) = args.duration {
-        if !(d.is_finite() && d > 0.0) {
-            bail!("--duration must be a positive number of seconds (got {d})");
-        }
-    }
-    for (name, v) in [
-        ("--diameter-mm", args.diameter_mm),
-        ("--wrap-deg", args.wrap_deg),
-    ] {
-        if v.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
-            bail!("{name} must be a positive number");
-        }
-    }
-    if args.drive_v.is_some_and(|v| !v.is_finite()) {
-        bail!("--drive-v must be a number");
-    }
-    if let Some(from) = args.from.as_deref().filter(|f| *f != "-") {
-        let inside = std::fs::canonicalize(from).ok().and_then(|f| {
-            let out = std::fs::canonicalize(&args.out).ok()?;
-            Some(f == out.join(crate::log::output::STREAM_FILE))
-        });
-        if inside == Some(true) {
-            bail!(
-                "--from {from} is the saved stream of the session in --out {}: decoding it \
-                 there would replace it; choose another --out",
-                args.out.display()
-            );
-        }
-    }
+    check_args(&args)?;
     let fw = Firmware::load(&args.elf)?;
     let opts = LogOptions {
         out_dir: args.out.clone(),
@@ -171,50 +158,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             drive_v: args.drive_v,
         },
         progress: !args.quiet,
+        allow_empty: args.allow_empty,
     };
     super::signal::stop_flag("log"); // Ctrl-C and SIGTERM end the session, keeping it
-    let (summary, stop) = match &args.from {
+    let (summary, stop, outcome) = match &args.from {
         Some(from) => from_stream(&fw, opts, from, &args)?,
         None => from_board(&fw, opts, &args)?,
     };
-    crate::errln!("{}", summary.human(&args.out));
+    let at = match &outcome {
+        Outcome::Kept(p) => p.clone(),
+        _ => args.out.clone(),
+    };
+    crate::errln!("{}", summary.human(&at));
+    if outcome != Outcome::Committed {
+        return not_committed(&summary, &stop, &outcome, &args);
+    }
     verdict(&summary, &stop, &args)
-}
-
-fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Result<()> {
-    let dir = args.out.display();
-    if let Stop::ProbeLost(e) = stop {
-        bail!("lost the probe while logging ({e}); everything received until then is in {dir}");
-    }
-    if summary.records.total() == 0 && summary.bytes > 0 {
-        bail!(
-            "no rig records in {} bytes ({} frames, {} did not decode): is the stream from the \
-             firmware built as {}?",
-            summary.bytes,
-            summary.frames,
-            summary.bad_frames,
-            args.elf.display()
-        );
-    }
-    if args.strict && summary.bytes == 0 {
-        bail!("--strict: the stream is empty (no byte received)");
-    }
-    if args.strict && summary.runs.iter().all(|r| !r.complete) {
-        bail!("--strict: no complete run in the stream (see {dir}/summary.json)");
-    }
-    if args.strict && !summary.is_clean() {
-        bail!(
-            "--strict: {} record(s) lost, {} bad frame(s){} (see {dir}/summary.json)",
-            summary.missing_records,
-            summary.bad_frames,
-            if summary.truncated_tail.is_some() {
-                ", stream truncated"
-            } else {
-                ""
-            }
-        );
-    }
-    Ok(())
 }
 
 fn limit_reached(logger: &Logger, args: &Args, started: std::time::Instant) -> Option<Stop> {
@@ -261,7 +220,7 @@ fn from_stream(
     opts: LogOptions,
     from: &str,
     args: &Args,
-) -> anyhow::Result<(Summary, Stop)> {
+) -> anyhow::Result<(Summary, Stop, Outcome)> {
     let (source, reader): (String, Box<dyn Read + Send>) = if from == "-" {
         ("stdin".to_string(), Box::new(std::io::stdin()))
     } else {
@@ -290,7 +249,7 @@ fn from_stream(
     let started = std::time::Instant::now();
     let stop = loop {
         if super::signal::stop_flag("log").load(Ordering::SeqCst) {
-            break Stop::Interrupted;
+            break Stop::Interrupted(super::signal::stop_reason().unwrap_or("Ctrl-C"));
         }
         if let Some(s) = limit_reached(&logger, args, started) {
             break s;
@@ -303,20 +262,38 @@ fn from_stream(
             }
             Ok(Err(e)) => {
                 let at = logger.bytes_seen();
-                let summary = logger.finish(&Stop::EndOfStream)?;
-                crate::errln!("{}", summary.human(&args.out));
-                return Err(e).with_context(|| format!("reading {source} failed at byte {at}"));
+                let (summary, outcome) = logger.finish_with(&Stop::EndOfStream)?;
+                let place = match &outcome {
+                    Outcome::Kept(p) => p.clone(),
+                    _ => args.out.clone(),
+                };
+                crate::errln!("{}", summary.human(&place));
+                let kept = match outcome {
+                    Outcome::Committed => format!("what was received is in {}", place.display()),
+                    Outcome::Kept(p) => format!(
+                        "{} is as it was; what was received is kept in {}",
+                        args.out.display(),
+                        p.display()
+                    ),
+                    Outcome::Discarded => format!("{} is as it was", args.out.display()),
+                };
+                return Err(e)
+                    .with_context(|| format!("reading {source} failed at byte {at} ({kept})"));
             }
             Err(mpsc::RecvTimeoutError::Timeout) => {}
             Err(mpsc::RecvTimeoutError::Disconnected) => break Stop::EndOfStream,
         }
     };
-    let summary = logger.finish(&stop)?;
-    Ok((summary, stop))
+    let (summary, outcome) = logger.finish_with(&stop)?;
+    Ok((summary, stop, outcome))
 }
 
 #[cfg(feature = "probe")]
-fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(Summary, Stop)> {
+fn from_board(
+    fw: &Firmware,
+    opts: LogOptions,
+    args: &Args,
+) -> anyhow::Result<(Summary, Stop, Outcome)> {
     use crate::log::probe::{connect, Limits, ProbeOptions};
     let chip = args
         .chip
@@ -343,8 +320,8 @@ fn from_board(fw: &Firmware, opts: LogOptions, args: &Args) -> anyhow::Result<(S
         start_run(&mut board)?;
     }
     let stop = board.stream(limits, &mut logger, super::signal::stop_flag("log"))?;
-    let summary = logger.finish(&stop)?;
-    Ok((summary, stop))
+    let (summary, outcome) = logger.finish_with(&stop)?;
+    Ok((summary, stop, outcome))
 }
 
 /// `--start`: the `run` command into the firmware's command channel (the firmware answers
@@ -367,104 +344,13 @@ fn start_run(board: &mut crate::log::probe::Connection) -> anyhow::Result<()> {
 }
 
 #[cfg(not(feature = "probe"))]
-fn from_board(_fw: &Firmware, _opts: LogOptions, _args: &Args) -> anyhow::Result<(Summary, Stop)> {
+fn from_board(
+    _fw: &Firmware,
+    _opts: LogOptions,
+    _args: &Args,
+) -> anyhow::Result<(Summary, Stop, Outcome)> {
     bail!(
         "this `capstan` was built without the `probe` feature: it can only decode saved streams \
          (--from). Rebuild with default features to log from a board."
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::log::output::RecordCounts;
-    use clap::Parser;
-
-    fn summary(records: RecordCounts, bytes: u64, missing: u64) -> Summary {
-        Summary {
-            source: "test".into(),
-            elf: "fw.elf".into(),
-            stopped: "end of stream".into(),
-            bytes,
-            frames: 3,
-            records,
-            messages: 0,
-            first_seq: Some(0),
-            last_seq: Some(9),
-            missing_records: missing,
-            gaps: Vec::new(),
-            restarts: Vec::new(),
-            backwards: Vec::new(),
-            bad_frames: 0,
-            bad_frame_examples: Vec::new(),
-            truncated_tail: None,
-            runs: vec![complete_run()],
-            pairs_incomplete: 0,
-        }
-    }
-
-    fn complete_run() -> crate::log::output::RunSummary {
-        use crate::log::output::{RunSummary, Sourced};
-        let mut r = RunSummary::new(
-            Some(1),
-            0,
-            Sourced::choose(None, None),
-            Sourced::choose(None, None),
-            Sourced::choose(None, None),
-        );
-        r.complete = true;
-        r
-    }
-
-    fn args(extra: &[&str]) -> Args {
-        let mut argv = vec![
-            "capstan", "log", "--elf", "fw.elf", "--out", "d", "--from", "-",
-        ];
-        argv.extend(extra);
-        match crate::cli::Cli::parse_from(argv).command {
-            crate::cli::Command::Log(a) => a,
-            _ => unreachable!(),
-        }
-    }
-
-    #[test]
-    fn exit_status_says_what_went_wrong() {
-        let some = RecordCounts {
-            raw: 10,
-            ..RecordCounts::default()
-        };
-        let ok = summary(some.clone(), 100, 0);
-        assert!(verdict(&ok, &Stop::EndOfStream, &args(&[])).is_ok());
-        assert!(verdict(&ok, &Stop::Interrupted, &args(&[])).is_ok());
-        let lost = verdict(&ok, &Stop::ProbeLost("USB gone".into()), &args(&[]));
-        assert!(lost
-            .unwrap_err()
-            .to_string()
-            .contains("lost the probe while logging (USB gone)"));
-        let gaps = summary(some, 100, 2);
-        assert!(verdict(&gaps, &Stop::EndOfStream, &args(&[])).is_ok());
-        let strict = verdict(&gaps, &Stop::EndOfStream, &args(&["--strict"]));
-        assert!(strict.unwrap_err().to_string().contains("2 record(s) lost"));
-        let none = summary(RecordCounts::default(), 100, 0);
-        let e = verdict(&none, &Stop::EndOfStream, &args(&[])).unwrap_err();
-        assert!(e.to_string().contains("no rig records in 100 bytes"));
-        // An empty stream is not an error (nothing was sent), except under --strict; nor is a
-        // stream without a complete run.
-        let empty = summary(RecordCounts::default(), 0, 0);
-        assert!(verdict(&empty, &Stop::EndOfStream, &args(&[])).is_ok());
-        let e = verdict(&empty, &Stop::EndOfStream, &args(&["--strict"])).unwrap_err();
-        assert!(e.to_string().contains("the stream is empty"), "{e}");
-        let mut unfinished = summary(
-            RecordCounts {
-                raw: 10,
-                ..RecordCounts::default()
-            },
-            100,
-            0,
-        );
-        unfinished.runs[0].complete = false;
-        assert!(verdict(&unfinished, &Stop::EndOfStream, &args(&[])).is_ok());
-        let e = verdict(&unfinished, &Stop::EndOfStream, &args(&["--strict"])).unwrap_err();
-        assert!(e.to_string().contains("no complete run"), "{e}");
-    }
 }

@@ -1,9 +1,11 @@
 //! `capstan simulate`: the rig's firmware against the simulated plant, a whole campaign in
 //! virtual time (or the two-control, single-drive rig with `--two-control`).//!
 //! * this module: the arguments, and a campaign run from them;
+//! * `checks`: the arguments against the physical ranges, and the files a campaign writes;
 //! * `output`: a campaign's files (`pairs.csv`, raw logs, `faults.csv`), JSON and summary;
 //! * `two`: the two-control rig (`--two-control`) and its files.
 
+mod checks;
 mod output;
 mod two;
 
@@ -11,7 +13,7 @@ use crate::data::Pair;
 use anyhow::{bail, Context};
 use capstan_friction::{Effect, Model};
 use firmware::StepOrder;
-use host_sim::campaign::{stream_campaign, CampaignConfig, FaultSpec, PairRow, StreamError};
+use host_sim::campaign::{stream_campaign, CampaignConfig, PairRow, StreamError};
 use host_sim::noise::NoiseProfile;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -71,7 +73,7 @@ pub struct Args {
     )]
     pub wraps: Option<Vec<f64>>,
     /// Repeat runs per cord [default: 6].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub runs: Option<u32>,
     /// Drive voltages, V (at most 13.2: 3.3 V of control x the amplifier's gain of 4).
     #[arg(long = "drive-v", value_delimiter = ',', value_name = "V", default_values_t = [10.0], allow_negative_numbers = true)]
@@ -112,13 +114,13 @@ pub struct Args {
     #[arg(long)]
     pub no_noise: bool,
     /// Protocol: time per step, ms.
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", allow_negative_numbers = true)]
     pub dwell_ms: Option<u32>,
     /// Protocol: conditioning starts this long after a change, ms.
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", allow_negative_numbers = true)]
     pub window_after_ms: Option<u32>,
     /// Protocol: conditioning ends this long before the next change, ms.
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", allow_negative_numbers = true)]
     pub window_before_ms: Option<u32>,
     /// Worker threads [default: one per core].
     #[arg(long)]
@@ -136,10 +138,15 @@ pub struct Args {
     #[arg(long, value_enum, value_delimiter = ',')]
     pub orders: Option<Vec<Order>>,
     /// Two-control: extra wait before each channel's trigger, ms [default: 0,5000].
-    #[arg(long = "delays-ms", value_delimiter = ',', value_name = "MS")]
+    #[arg(
+        long = "delays-ms",
+        value_delimiter = ',',
+        value_name = "MS",
+        allow_negative_numbers = true
+    )]
     pub delays_ms: Option<Vec<u32>>,
     /// Drive motor winding resistance, Ω [default: 4.65; the thesis m-file says 46.5].
-    #[arg(long, value_name = "OHM")]
+    #[arg(long, value_name = "OHM", allow_negative_numbers = true)]
     pub motor_ohm: Option<f64>,
 }
 
@@ -214,6 +221,7 @@ fn plant(args: &Args) -> anyhow::Result<host_sim::plant::PlantConfig> {
 
 /// Run `capstan simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    checks::check_ranges(&args)?;
     if args.two_control {
         return two::run_two(&args);
     }
@@ -228,10 +236,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (model, effects) = model(&args)?;
     let mut faults = Vec::new();
     for f in &args.faults {
-        faults.push(
-            f.parse::<FaultSpec>()
-                .map_err(|e| anyhow::anyhow!("--fault {e}"))?,
-        );
+        faults.push(checks::fault(f)?);
     }
     let noise: NoiseProfile = args
         .noise
@@ -261,11 +266,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     cfg.plant.disturbances = noise.disturbances();
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let out = super::open_out(
+    // Every file the campaign will write is checked before it runs: none may be the user's
+    // own (or a link), `raw` must be a directory of ours.
+    let writes = |rel: &str| checks::writes_raw(&cfg, rel);
+    let out = crate::outdir::OutputDir::open_with(
         &args.out,
         "simulate",
         &["pairs.csv", "faults.csv", "summary.json"],
+        &[("raw", &writes)],
     )?;
+    for r in &out.recovered {
+        crate::errln!("note: {r}");
+    }
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
     let bar = progress_bar(&args, cfg.run_count());
     let stop = super::signal::stop_flag("simulate");
@@ -346,6 +358,7 @@ pub fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
             t1_n: r.t1_n,
             t2_n: r.t2_n,
             extra: Vec::new(),
+            labels: Vec::new(),
         })
         .collect()
 }

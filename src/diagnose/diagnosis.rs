@@ -1,5 +1,6 @@
 //! What `capstan diagnose` answers (`Diagnosis`, serialised as its `--json` object).
 
+use crate::data::structure::StructureSummary;
 use crate::evidence::{Adequacy, Columns, Evidence, Level, NotTestable, Rival, RowsUsed, Scatter};
 use capstan_friction::{Effect, EffectKind};
 use serde::Serialize;
@@ -82,9 +83,20 @@ pub struct Thresholds {
     pub between: f64,
 }
 
+/// The data set read: where from, and how its rows map to cords and runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct DataInfo {
+    /// Where it came from.
+    pub source: String,
+    /// Its structure, and how each level was found (from columns, inferred, assumed).
+    pub structure: StructureSummary,
+}
+
 /// The answer.
 #[derive(Clone, Debug, Serialize)]
 pub struct Diagnosis {
+    /// The data set and its structure.
+    pub data: DataInfo,
     /// The strongest effect found (`none` if nothing is supported).
     pub effect: &'static str,
     /// Its parameter (empty for `none`).

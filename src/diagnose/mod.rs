@@ -16,7 +16,9 @@ pub mod score;
 pub mod words;
 
 pub use crate::evidence::{Level, NotTestable, BETWEEN_THRESHOLD, WITHIN_THRESHOLD};
-pub use diagnosis::{Baseline, DesignSummary, Diagnosis, Extended, Found, PathStep, Thresholds};
+pub use diagnosis::{
+    Baseline, DataInfo, DesignSummary, Diagnosis, Extended, Found, PathStep, Thresholds,
+};
 
 use crate::data::Dataset;
 use crate::evidence::{self, Assessment};
@@ -62,8 +64,15 @@ pub fn from_assessment(a: &Assessment, opts: &Options, t0: Instant) -> Diagnosis
             (e.kind, e.value)
         });
     let (baseline, extended_rmse) = population(a, &found);
-    let verdict = words::verdict(&effects, &a.adequacy, &a.rivals);
+    let mut verdict = words::verdict(&effects, &a.adequacy, &a.rivals);
+    if let Some(caveat) = words::structure_caveat(&des.structure) {
+        verdict = format!("{verdict} {caveat}");
+    }
     Diagnosis {
+        data: DataInfo {
+            source: des.source.clone(),
+            structure: des.structure.clone(),
+        },
         effect: kind.name(),
         parameters: found
             .first()

@@ -33,6 +33,7 @@ fn synthetic_on(effect: Effect, wraps_deg: &[f64], noise_n: f64) -> Dataset {
                         t1_n: t1,
                         t2_n: t1,
                         extra: Vec::new(),
+                        labels: Vec::new(),
                     });
                 }
             }

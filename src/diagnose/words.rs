@@ -2,11 +2,28 @@
 //! itself (the effects found and the adequacy decision), never typed in beside it.
 
 use super::Found;
+use crate::data::structure::StructureSummary;
+use crate::data::Basis;
 use crate::evidence::{Adequacy, Rival};
+
+/// What a number that could not be computed is shown as.
+pub const NOT_IDENTIFIED: &str = "not identified";
+
+/// `v` with `decimals` decimals, or "not identified" if it could not be computed.
+pub fn fixed(v: f64, decimals: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.decimals$}")
+    } else {
+        NOT_IDENTIFIED.to_string()
+    }
+}
 
 /// A catalogue parameter with its SE, the value to the SE's precision (two significant
 /// digits of the SE): "n = 0.9017 ± 0.0086".
 pub fn parameter(name: &str, v: f64, se: f64) -> String {
+    if !v.is_finite() {
+        return format!("{name} {NOT_IDENTIFIED}");
+    }
     if !(se.is_finite() && se > 0.0) {
         return format!("{name} = {}", sig(v));
     }
@@ -19,8 +36,11 @@ pub fn parameter(name: &str, v: f64, se: f64) -> String {
 
 /// Four significant digits (scientific for very small or large magnitudes).
 pub fn sig(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
+    if !v.is_finite() {
+        return NOT_IDENTIFIED.to_string();
+    }
+    if v == 0.0 {
+        return "0".to_string();
     }
     let e = v.abs().log10().floor();
     if (-3.0..5.0).contains(&e) {
@@ -95,6 +115,10 @@ pub fn rival_sentences(rivals: &[Rival]) -> String {
 fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
     let names: Vec<String> = effects.iter().map(effect_phrase).collect();
     match (effects.is_empty(), adequacy.unexplained) {
+        (true, false) if !adequacy.tested => format!(
+            "Not identified: no catalogue effect is supported, but these data are too few to tell whether Euler-Eytelwein explains them. {}",
+            adequacy.sentence
+        ),
         (true, false) => format!(
             "No catalogue effect is supported: Euler-Eytelwein, with every run's own mu, explains the data within their noise. {}",
             adequacy.sentence
@@ -116,7 +140,36 @@ fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
     }
 }
 
-fn capitalised(s: &str) -> String {
+/// The sentence a verdict on a structure not read from columns ends with (None when cords and
+/// runs both come from columns).
+pub fn structure_caveat(s: &StructureSummary) -> Option<String> {
+    let mut parts = Vec::new();
+    if s.cords.from == Basis::Assumed {
+        parts.push(
+            "the rows at one wrap are taken as one cord (no capstan_diameter_mm or cord column)"
+                .to_string(),
+        );
+    }
+    match s.runs.from {
+        Basis::Inferred => parts.push(format!(
+            "the runs are inferred from {} restarting (no run column)",
+            s.runs.columns.first().map_or("step", String::as_str)
+        )),
+        Basis::Assumed => {
+            parts.push("each cord is taken as one run (no run, step or time_s column)".to_string())
+        }
+        Basis::Columns => {}
+    }
+    (!parts.is_empty()).then(|| {
+        format!(
+            "This is a verdict on a structure not read from columns: {}.",
+            list(&parts)
+        )
+    })
+}
+
+/// `s` with its first letter in upper case.
+pub fn capitalised(s: &str) -> String {
     let mut c = s.chars();
     match c.next() {
         Some(f) => f.to_uppercase().collect::<String>() + c.as_str(),

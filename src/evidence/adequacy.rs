@@ -114,6 +114,11 @@ pub struct Adequacy {
     /// The structure that explains most of what remains (`step_direction`, `t1_shape`,
     /// `time`, `wrap`, `diameter`, or `cells` when none of them does), if any is significant.
     pub pattern: Option<&'static str>,
+    /// Any test of what is left could be made (replicate runs, or runs enough for a directed
+    /// test).
+    pub tested: bool,
+    /// The tests that could not be computed on these data, and why.
+    pub not_identified: Vec<String>,
     /// The decision in one sentence.
     pub sentence: String,
     /// Selected effects whose best fit sits on the edge of their physical range, with the
@@ -135,8 +140,24 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
     let z: Vec<f64> = (0..d.n())
         .map(|i| (d.t2[i] - fit.fitted[i]) * w.w[i].sqrt())
         .collect();
-    let lack_of_fit = pure_error(d, &z, fit.k());
+    let mut not_identified = Vec::new();
+    let lack_of_fit = pure_error(d, &z, fit.k()).filter(|l| {
+        let ok = [l.f, l.p, l.systematic_ratio].iter().all(|v| v.is_finite());
+        if !ok {
+            not_identified.push(
+                "lack of fit: the replicate runs agree exactly (no pure error to compare with)"
+                    .to_string(),
+            );
+        }
+        ok
+    });
     let directed = directed_tests(d, &z);
+    if lack_of_fit.is_none() && directed.is_empty() {
+        not_identified.push(format!(
+            "what is left: {} run(s) are too few for any test of the residuals",
+            d.units.len()
+        ));
+    }
     let significant: Vec<&Directed> = directed.iter().filter(|t| t.p < rule.alpha).collect();
     let best = significant
         .iter()
@@ -154,6 +175,13 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         }
     };
     let constancy = constancy(d, fit, w);
+    if fit.k() > 0 && d.wraps().len() > MAX_CONSTANCY_WRAPS {
+        not_identified.push(format!(
+            "one size per wrap: {} wraps are more than the {MAX_CONSTANCY_WRAPS} this test \
+             refits",
+            d.wraps().len()
+        ));
+    }
     let inconstant = constancy
         .as_ref()
         .is_some_and(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
@@ -171,6 +199,14 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         _ => None,
     };
     let mut sentence = sentence(lack, pattern, lack_of_fit.as_ref(), &directed);
+    if lack_of_fit.is_none() && directed.is_empty() {
+        sentence = format!(
+            "What is left is not identified: with {} run(s) no test of it can be made (no \
+             replicate runs, and too few runs for a test of the residuals against T1, time or \
+             wrap).",
+            d.units.len()
+        );
+    }
     if !at_physical_limit.is_empty() {
         let list: Vec<String> = at_physical_limit
             .iter()
@@ -213,6 +249,8 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
     Adequacy {
         unexplained,
         pattern,
+        tested: lack_of_fit.is_some() || !directed.is_empty(),
+        not_identified,
         sentence,
         at_physical_limit,
         constancy,
@@ -358,11 +396,20 @@ fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     })
 }
 
+/// The most wraps the constancy test refits one size per wrap for: beyond, it is not
+/// identified (a data set of a few rows at each of hundreds of wraps cannot say an effect's
+/// size per wrap, and the refit would grow with the square of their number).
+pub const MAX_CONSTANCY_WRAPS: usize = 24;
+
 /// Refit the selected effects with one size per wrap and test that the sizes agree.
 fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
     let k = fit.k();
     let wraps = d.wraps();
-    if k == 0 || wraps.len() < 2 {
+    if k == 0 || wraps.len() < 2 || wraps.len() > MAX_CONSTANCY_WRAPS {
+        return None;
+    }
+    // Too few runs for the contrasts: decided before the refit, which it would not change.
+    if d.units.len() < k * (wraps.len() - 1) + 2 {
         return None;
     }
     let of_unit: Vec<usize> = d
@@ -406,7 +453,7 @@ fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
         return None;
     }
     let mut spread: f64 = 0.0;
-    let by_wrap = (0..k)
+    let by_wrap: Vec<(&str, Vec<(f64, f64)>)> = (0..k)
         .map(|j| {
             let common = fit.value(j);
             let scale = (common - fit.maps[j].kind.neutral_value()).abs();
@@ -421,6 +468,13 @@ fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
             (fit.maps[j].kind.name(), vals)
         })
         .collect();
+    let finite = spread.is_finite()
+        && by_wrap
+            .iter()
+            .all(|(_, v)| v.iter().all(|x| x.1.is_finite()));
+    if !finite {
+        return None;
+    }
     Some(Constancy {
         by_wrap,
         f,

@@ -230,7 +230,7 @@ pub fn relevance_width(kind: EffectKind, d: &Design) -> f64 {
 /// Is an effect of this size more than the rig can resolve (outside the region of practical
 /// equivalence, [`relevance_width`])?
 pub fn practically_relevant(kind: EffectKind, value: f64, d: &Design) -> bool {
-    (value - kind.neutral_value()).abs() >= relevance_width(kind, d)
+    value.is_finite() && (value - kind.neutral_value()).abs() >= relevance_width(kind, d)
 }
 
 /// Does the robust 95 % interval of an estimate lie inside the region of practical

@@ -3,14 +3,16 @@
 //! time order and step direction inside runs, the replicate cells that give the pure error,
 //! and which optional columns are there.
 
-use crate::data::Dataset;
+use crate::data::structure::StructureSummary;
+use crate::data::{Basis, Dataset};
 use crate::fit::obs::{Observations, StepTiming, TimingSource};
 use crate::fit::stats::distinct;
 use capstan_friction::Operating;
 use serde::Serialize;
 use std::collections::HashMap;
 
-/// A cord: one (capstan diameter, drive voltage, wrap) combination, reused for its runs.
+/// A cord: one (capstan diameter, drive voltage, wrap) combination (and its cord labels, see
+/// [`crate::data::Structure`]), reused for its runs.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Cord {
     /// Capstan diameter, mm (12.7 if the column is absent).
@@ -64,8 +66,9 @@ pub struct Design {
     /// The rows of each run carry their load memory from step to step (their time order and
     /// step timing are known).
     pub timed: bool,
-    /// Row indices of each run, in time order (file order when times are not known). Without
-    /// a `run` column a cord is one run.
+    /// Row indices of each run, in time order (file order when times are not known): the runs
+    /// of the data set's structure (without a `run` column inferred from `step` or `time_s`
+    /// restarting, or each cord taken as one run).
     pub units: Vec<Vec<usize>>,
     /// Cord of each run.
     pub unit_cord: Vec<usize>,
@@ -84,15 +87,10 @@ pub struct Design {
     pub columns: Columns,
     /// The arrangement of `src/fit` (cords by diameter and wrap, for the population fits).
     pub obs: Observations,
-}
-
-/// The index of `key` in `list`, added if new (a hash map keeps it linear in the rows).
-fn index_of<K: std::hash::Hash + Eq + Copy>(
-    map: &mut HashMap<K, usize>,
-    key: K,
-    add: impl FnMut() -> usize,
-) -> usize {
-    *map.entry(key).or_insert_with(add)
+    /// Where the data set came from.
+    pub source: String,
+    /// How its rows map to cords and runs, and how that was found.
+    pub structure: StructureSummary,
 }
 
 impl Design {
@@ -108,11 +106,20 @@ impl Design {
             time_s: d.has_column("time_s") || (protocol_times && d.has_column("step")),
         };
         let timed = obs.timing != TimingSource::None;
-        let mut cords: Vec<Cord> = Vec::new();
-        let mut cord_keys: HashMap<[u64; 3], usize> = HashMap::new();
-        let mut unit_keys: HashMap<(usize, u64), usize> = HashMap::new();
-        let mut units: Vec<Vec<usize>> = Vec::new();
-        let (mut unit_cord, mut unit_run) = (Vec::new(), Vec::new());
+        // Cords and runs as the data set's structure says (the same for every command).
+        let st = &d.structure;
+        let cords: Vec<Cord> = st
+            .cords
+            .iter()
+            .map(|c| Cord {
+                diameter_mm: c.diameter_mm,
+                drive_v: c.drive_v,
+                wrap_deg: c.wrap_deg,
+            })
+            .collect();
+        let unit_cord = st.run_cord.clone();
+        let mut units: Vec<Vec<usize>> = vec![Vec::new(); unit_cord.len()];
+        let mut unit_run = vec![1.0; unit_cord.len()];
         let n = obs.rows.len();
         let (mut t1, mut t2, mut op, mut timing) = (
             Vec::with_capacity(n),
@@ -121,23 +128,10 @@ impl Design {
             Vec::with_capacity(n),
         );
         for (i, row) in obs.rows.iter().enumerate() {
-            let cord = Cord {
-                diameter_mm: row.op.diameter_mm,
-                drive_v: row.op.drive_v,
-                wrap_deg: d.pairs[i].wrap_deg,
-            };
-            let ck = [cord.diameter_mm, cord.drive_v, cord.wrap_deg].map(f64::to_bits);
-            let c = index_of(&mut cord_keys, ck, || {
-                cords.push(cord);
-                cords.len() - 1
-            });
-            let run = if columns.run { row.op.run } else { 1.0 };
-            let u = index_of(&mut unit_keys, (c, run.to_bits()), || {
-                units.push(Vec::new());
-                unit_cord.push(c);
-                unit_run.push(run);
-                units.len() - 1
-            });
+            let u = st.run_of_row[i];
+            if columns.run {
+                unit_run[u] = row.op.run;
+            }
             units[u].push(i);
             t1.push(row.t1_n);
             t2.push(row.t2_n);
@@ -171,6 +165,8 @@ impl Design {
             t1_shape,
             columns,
             obs,
+            source: d.source.clone(),
+            structure: d.structure.summary(),
         }
     }
 
@@ -334,7 +330,7 @@ fn cells(
     let mut out = vec![None; n];
     let has_step = d.has_column("step");
     let has_time = d.has_column("time_s");
-    if !(has_step || has_time) || !d.has_column("run") {
+    if !(has_step || has_time) || d.structure.run_level.from == Basis::Assumed {
         return out;
     }
     let mut keys: HashMap<(usize, i64), usize> = HashMap::new();

@@ -281,6 +281,17 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
     }
     let mut alone = sel.alone;
     alone.extend(bt.alone);
+    // A candidate whose size or evidence could not be computed (a fit that ran off to
+    // infinity, a regression on no spread) is not identified: said so, never shown as inf.
+    let unidentified = |e: &Evidence| !(e.value.is_finite() && e.delta_bic.is_finite());
+    for e in evidence.iter().filter(|e| unidentified(e) && !e.selected) {
+        not_testable.push(NotTestable {
+            effect: e.effect,
+            reason: not_identified_reason(e),
+        });
+    }
+    evidence.retain(|e| e.selected || !unidentified(e));
+    alone.retain(|e| !unidentified(e));
     evidence.sort_by(|a, b| {
         b.selected
             .cmp(&a.selected)
@@ -311,6 +322,16 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
         scatter,
         rows_used,
     }
+}
+
+/// Why a candidate's numbers could not be computed.
+fn not_identified_reason(e: &Evidence) -> String {
+    let what = if e.value.is_finite() {
+        "its evidence (the fit with it) could not be computed"
+    } else {
+        "its size runs off to the edge of what can be computed"
+    };
+    format!("not identified on these data: {what} (too few rows, runs or spread in T1 for it)")
 }
 
 /// Scatter of mu (random-intercept model of the runs' mu) and the residuals' noise.

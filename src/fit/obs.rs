@@ -1,8 +1,9 @@
 //! Measured pairs arranged for fitting: groups (cords), runs in time order, step timing.
 //!
-//! * A **group** is one cord: one (capstan diameter, wrap) pair. The thesis fitted a new cord
-//!   for each and reused it for its runs, so cord-to-cord variation lives at this level.
-//! * A **run** is one pass of the step protocol on one cord (key: group, drive voltage, run).
+//! * A **group** is one cord: one (capstan diameter, wrap, drive voltage) combination and its
+//!   cord labels. The thesis fitted a new cord for each and reused it for its runs, so
+//!   cord-to-cord variation lives at this level.
+//! * A **run** is one pass of the step protocol on one cord.
 //!   The contact's load memory H ([`capstan_friction::LoadMemory`]) starts at zero at the
 //!   start of each run and is carried from step to step.
 //! * **Step timing.** With a `time_s` column (the centre of each conditioning window) the
@@ -11,13 +12,14 @@
 //!   with the dwell taken from the spacing of consecutive centres. Without `time_s` but with
 //!   `step` k, the thesis protocol gives the times: the step starts at 10k + 0.5 s after the
 //!   trigger, its window centre is at 10k + 6 s and it ends at 10(k+1) + 0.5 s. Without
-//!   either, each row is a run of its own (no load history).
+//!   either, the rows carry no load history (each starts from a cold contact).
 //!
-//! Missing optional columns take the reference values of `capstan_friction`
-//! (12.7 mm, 10 V, run 1).
+//! Cords and runs are the data set's structure ([`crate::data::Structure`]): the same for
+//! `analyze` and `diagnose`. Missing optional columns take the reference values of
+//! `capstan_friction` (12.7 mm, 10 V, run 1), as the structure says.
 
 use crate::data::Dataset;
-use capstan_friction::{Operating, REF_DIAMETER_MM, REF_DRIVE_V};
+use capstan_friction::Operating;
 
 /// When a step's tension was set, measured and left, s since the trigger.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,7 +51,7 @@ pub enum TimingSource {
     TimeColumn,
     /// Reconstructed from `step` with the thesis protocol (10 s steps).
     ThesisProtocolFromStep,
-    /// No timing: every row is its own run.
+    /// No timing: the rows of a run carry no load memory from one to the next.
     None,
 }
 
@@ -97,7 +99,8 @@ pub struct Observations {
 }
 
 impl Observations {
-    /// Arrange a data set.
+    /// Arrange a data set: its cords and runs as its structure says ([`Dataset::structure`],
+    /// the same for every command), cords sorted by diameter, wrap, voltage and labels.
     pub fn from_dataset(d: &Dataset) -> Self {
         let timing = if d.has_column("time_s") {
             TimingSource::TimeColumn
@@ -106,50 +109,31 @@ impl Observations {
         } else {
             TimingSource::None
         };
-        // Groups.
-        // Keyed by bits in hash maps: linear in the rows, whatever the number of runs.
-        let key = |dia: f64, wrap: f64| (dia.to_bits(), wrap.to_bits());
-        let mut seen = std::collections::HashSet::new();
-        let mut gk: Vec<(f64, f64)> = Vec::new();
-        for p in &d.pairs {
-            let dia = p.capstan_diameter_mm.unwrap_or(REF_DIAMETER_MM);
-            if seen.insert(key(dia, p.wrap_deg)) {
-                gk.push((dia, p.wrap_deg));
-            }
+        let st = &d.structure;
+        let mut order: Vec<usize> = (0..st.cords.len()).collect();
+        order.sort_by(|&a, &b| {
+            let (x, y) = (&st.cords[a], &st.cords[b]);
+            x.diameter_mm
+                .total_cmp(&y.diameter_mm)
+                .then(x.wrap_deg.total_cmp(&y.wrap_deg))
+                .then(x.drive_v.total_cmp(&y.drive_v))
+                .then(x.labels.cmp(&y.labels))
+        });
+        let mut group_of_cord = vec![0; st.cords.len()];
+        for (g, &c) in order.iter().enumerate() {
+            group_of_cord[c] = g;
         }
-        gk.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        let group_of: std::collections::HashMap<(u64, u64), usize> = gk
+        let groups: Vec<Group> = order
             .iter()
-            .enumerate()
-            .map(|(i, g)| (key(g.0, g.1), i))
-            .collect();
-        let mut run_of: std::collections::HashMap<(usize, u64, u64), usize> =
-            std::collections::HashMap::new();
-        let groups: Vec<Group> = gk
-            .iter()
-            .map(|&(dia, w)| Group {
-                label: format!("D{dia}/{w}deg"),
-                diameter_mm: dia,
-                wrap_deg: w,
+            .map(|&c| Group {
+                label: st.cord_label(c),
+                diameter_mm: st.cords[c].diameter_mm,
+                wrap_deg: st.cords[c].wrap_deg,
             })
             .collect();
-        // Runs.
-        let mut run_keys: Vec<(usize, u64, u64)> = Vec::new();
         let mut rows = Vec::with_capacity(d.pairs.len());
         for (i, p) in d.pairs.iter().enumerate() {
-            let dia = p.capstan_diameter_mm.unwrap_or(REF_DIAMETER_MM);
-            let group = group_of.get(&key(dia, p.wrap_deg)).copied().unwrap_or(0);
-            let drive_v = p.drive_v.unwrap_or(REF_DRIVE_V);
-            let run_no = p.run.unwrap_or(1.0);
-            let rk = if timing == TimingSource::None {
-                (group, drive_v.to_bits(), i as u64 | (1 << 63))
-            } else {
-                (group, drive_v.to_bits(), run_no.to_bits())
-            };
-            let run = *run_of.entry(rk).or_insert_with(|| {
-                run_keys.push(rk);
-                run_keys.len() - 1
-            });
+            let cord = &st.cords[st.cord_of_row[i]];
             let timing_row = match (timing, p.time_s, p.step) {
                 (TimingSource::ThesisProtocolFromStep, _, Some(k)) => StepTiming::thesis_step(k),
                 (TimingSource::TimeColumn, Some(t), _) => StepTiming {
@@ -164,19 +148,19 @@ impl Observations {
                 t2_n: p.t2_n,
                 op: Operating {
                     wrap_rad: p.wrap_rad(),
-                    diameter_mm: dia,
-                    drive_v,
-                    run: run_no,
+                    diameter_mm: cord.diameter_mm,
+                    drive_v: cord.drive_v,
+                    run: p.run.unwrap_or(1.0),
                     time_s: timing_row.centre_s,
                     load_memory_ns: 0.0,
                 },
-                group,
-                run,
+                group: group_of_cord[st.cord_of_row[i]],
+                run: st.run_of_row[i],
                 timing: timing_row,
                 step: p.step,
             });
         }
-        let mut runs: Vec<Vec<usize>> = vec![Vec::new(); run_keys.len()];
+        let mut runs: Vec<Vec<usize>> = vec![Vec::new(); st.run_cord.len()];
         for (i, r) in rows.iter().enumerate() {
             runs[r.run].push(i);
         }

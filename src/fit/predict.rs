@@ -423,9 +423,16 @@ fn run_one(
     let mut dx = vec![0.0; nf];
     let mut dh_c = vec![0.0; nf];
     let mut dy = vec![0.0; nf];
+    // Without step times a run's rows carry no memory from one to the next.
+    let carry = obs.timing != super::obs::TimingSource::None;
     for &i in rows {
         let row = &obs.rows[i];
         let tm = row.timing;
+        if !carry {
+            h_acc = 0.0;
+            dh_acc.fill(0.0);
+            t_prev_end = None;
+        }
         // Idle gap since the previous step (no load): the memory decays.
         if let Some(t_end) = t_prev_end {
             let gap = tm.change_s - t_end;

@@ -225,7 +225,9 @@ impl Connection {
         let mut buf = vec![0u8; 16 * 1024];
         loop {
             if stop.load(Ordering::SeqCst) {
-                return Ok(Stop::Interrupted);
+                return Ok(Stop::Interrupted(
+                    crate::cli::signal::stop_reason().unwrap_or("Ctrl-C"),
+                ));
             }
             if let Some(n) = limits.runs.filter(|&n| logger.completed_runs() >= n) {
                 return Ok(Stop::Limit(format!("{n} run(s) logged (--runs)")));

@@ -53,6 +53,7 @@ pub(crate) fn publish(
     crash: &mut dyn Crash,
 ) -> anyhow::Result<()> {
     refuse_others(dir, kind, files)?;
+    refuse_foreign(dir, kind, files)?;
     for f in unsynced {
         sync(&staging.join(f))?;
     }
@@ -158,6 +159,36 @@ pub(crate) fn refuse_others(dir: &Path, kind: &str, names: &[String]) -> anyhow:
                 if clash.len() > 1 { ", ..." } else { "" }
             );
         }
+    }
+    Ok(())
+}
+
+/// A file of `names` that is in `dir` but that no manifest of `kind` lists: the user's own (a
+/// `pairs.csv` of their own, a link they made), or one written without a manifest. Refused:
+/// capstan replaces only what it wrote.
+pub(crate) fn refuse_foreign(dir: &Path, kind: &str, names: &[String]) -> anyhow::Result<()> {
+    let ours = read_manifest(&dir.join(manifest_name(kind))).unwrap_or_default();
+    for n in names {
+        let p = dir.join(n);
+        let Ok(m) = std::fs::symlink_metadata(&p) else {
+            continue;
+        };
+        if ours.files.contains(n) && m.is_file() {
+            continue;
+        }
+        let what = if m.file_type().is_symlink() {
+            "a symbolic link"
+        } else if m.is_dir() {
+            "a directory"
+        } else {
+            "a file"
+        };
+        bail!(
+            "{} is {what} that `capstan {kind}` did not write (no manifest of it lists it): \
+             capstan never replaces what it did not write; move it away, or choose another \
+             output directory",
+            p.display()
+        );
     }
     Ok(())
 }

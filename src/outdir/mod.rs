@@ -15,11 +15,17 @@
 //! that the new one lacks are removed (only files the same command's previous manifest names:
 //! files it wrote), and the manifest is moved to `.capstan-manifest-<command>.json` last.
 //! Before the journal's rename every move is checked (parents, a directory in the way), and a
-//! set that would replace another command's files (a logged session, a campaign's pairs) is
-//! refused. Any interruption before
+//! set that would replace another command's files (a logged session, a campaign's pairs), or
+//! any file no manifest of the same command lists (the user's own `pairs.csv`, a link), is
+//! refused: capstan replaces only files it wrote. [`OutputDir::open`] makes the same checks
+//! before any work, for every file the command will write. Any interruption before
 //! the first rename leaves the old set; any after it is rolled forward by the next `open`.
-//! Renames replace a symbolic link at the target name; they never write through it, and a
-//! symbolic link where a sub-directory of ours should be is refused.
+//! Nothing is written through a symbolic link: one at a name of the set, or where a
+//! sub-directory of ours should be, is refused.
+//!
+//! A set that cannot be committed after its work is done (a late failure) is kept as
+//! `incomplete-<id>` and the error says where, as is the work of a process killed, or stopped
+//! by a second signal (`cli::signal`), while it wrote.
 //!
 //! Why by hand: the crates for atomic files (`tempfile`'s `persist`, `atomicwrites`) replace
 //! one file; the requirement here is a set of files (a report and its metrics, a campaign's
@@ -29,7 +35,7 @@
 mod commit;
 mod staged;
 
-pub use staged::Staged;
+pub use staged::{keep_open_sets, Staged};
 
 #[cfg(test)]
 mod tests;
@@ -58,6 +64,9 @@ pub const STAGING_PREFIX: &str = ".capstan-staging-";
 /// Prefix under which an abandoned staging directory's work is kept.
 pub const INCOMPLETE_PREFIX: &str = "incomplete-";
 
+/// A sub-directory a command writes into, with which of its files (`"sub/name"`) it writes.
+pub type Subdir<'a> = (&'a str, &'a dyn Fn(&str) -> bool);
+
 /// An output directory, locked for this process.
 #[derive(Debug)]
 pub struct OutputDir {
@@ -70,9 +79,22 @@ pub struct OutputDir {
 
 impl OutputDir {
     /// Create `dir` if needed, lock it, recover what an earlier process left, and refuse it
-    /// if another command's results there carry one of `names` (the files `kind`, e.g.
-    /// "analyze", will write at the top of the directory) — before any work is done.
+    /// if a file there carries one of `names` (the files `kind`, e.g. "analyze", will write at
+    /// the top of the directory) and `kind` did not write it (another command's results, the
+    /// user's own file, a link) — before any work is done.
     pub fn open(dir: &Path, kind: &'static str, names: &[&str]) -> anyhow::Result<OutputDir> {
+        Self::open_with(dir, kind, names, &[])
+    }
+
+    /// [`OutputDir::open`], with sub-directories the command writes into: for each
+    /// `(sub, writes)`, `dir/sub` must be a directory (or absent), and none of its files for
+    /// which `writes("sub/name")` holds may be a file `kind` did not write.
+    pub fn open_with(
+        dir: &Path,
+        kind: &'static str,
+        names: &[&str],
+        subdirs: &[Subdir<'_>],
+    ) -> anyhow::Result<OutputDir> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
         let lock = take_lock(dir)?;
@@ -93,6 +115,32 @@ impl OutputDir {
         out.keep_abandoned()?;
         let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
         commit::refuse_others(dir, kind, &names)?;
+        commit::refuse_foreign(dir, kind, &names)?;
+        for (sub, writes) in subdirs {
+            let path = dir.join(sub);
+            match std::fs::symlink_metadata(&path) {
+                Err(_) => continue,
+                Ok(m) if m.file_type().is_symlink() => anyhow::bail!(
+                    "{} is a symbolic link: capstan does not write through it (remove it, or \
+                     choose another output directory)",
+                    path.display()
+                ),
+                Ok(m) if !m.is_dir() => anyhow::bail!(
+                    "{} is a file where capstan {kind} writes a directory: move it away, or \
+                     choose another output directory",
+                    path.display()
+                ),
+                Ok(_) => {}
+            }
+            let ours: Vec<String> = std::fs::read_dir(&path)
+                .with_context(|| format!("cannot read {}", path.display()))?
+                .flatten()
+                .map(|e| format!("{sub}/{}", e.file_name().to_string_lossy()))
+                .filter(|rel| writes(rel))
+                .collect();
+            commit::refuse_others(dir, kind, &ours)?;
+            commit::refuse_foreign(dir, kind, &ours)?;
+        }
         Ok(out)
     }
 
@@ -173,10 +221,11 @@ fn take_lock(dir: &Path) -> anyhow::Result<File> {
             return Err(e).with_context(|| format!("cannot lock {}", path.display()));
         }
     }
-    f.set_len(0)?;
-    f.rewind()?;
     let args: Vec<String> = std::env::args().collect();
-    write!(f, "pid {}: {}", std::process::id(), args.join(" "))?;
+    f.set_len(0)
+        .and_then(|()| f.rewind())
+        .and_then(|_| write!(f, "pid {}: {}", std::process::id(), args.join(" ")))
+        .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(f)
 }
 

@@ -1,6 +1,9 @@
 //! One output set being written: files go into a staging directory inside the output
 //! directory; [`Staged::commit`] replaces the previous set with them, dropping without a
-//! commit discards them (or, for a logged session, keeps them under a visible name).
+//! commit discards them, or, once the command has done work worth keeping
+//! ([`Staged::keep_on_failure`]), keeps them under a visible name and says where. A commit
+//! that fails keeps the set the same way. Every open set is registered, so that a process
+//! about to exit at once (a second signal) can keep its work where it says ([`keep_open_sets`]).
 
 use super::{commit, OutputDir, INCOMPLETE_PREFIX, STAGING_PREFIX};
 use anyhow::Context;
@@ -8,6 +11,37 @@ use std::collections::BTreeSet;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The staging directories of this process's open sets, each with where its work is kept.
+static OPEN_SETS: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
+
+fn open_sets() -> std::sync::MutexGuard<'static, Vec<(PathBuf, PathBuf)>> {
+    OPEN_SETS.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Keep the work of every set this process has open under its visible name
+/// (`DIR/incomplete-<id>`), for a process about to exit without its destructors (a second
+/// signal); returns where each went. A set being committed (its staging directory already
+/// the journal) is not moved: the next run into its directory finishes the commit.
+pub fn keep_open_sets() -> Vec<PathBuf> {
+    keep_sets(|_| true)
+}
+
+/// [`keep_open_sets`] for the sets whose staging directory `which` selects.
+pub(super) fn keep_sets(which: impl Fn(&Path) -> bool) -> Vec<PathBuf> {
+    let mut kept = Vec::new();
+    open_sets().retain(|(staging, to)| {
+        if !which(staging) {
+            return true;
+        }
+        if std::fs::rename(staging, to).is_ok() {
+            kept.push(to.clone());
+        }
+        false
+    });
+    kept
+}
 
 /// An output set being written.
 #[derive(Debug)]
@@ -35,6 +69,8 @@ impl Staged {
                 out.path().display()
             )
         })?;
+        let kept = out.path().join(format!("{INCOMPLETE_PREFIX}{id}"));
+        open_sets().push((path.clone(), kept));
         Ok(Staged {
             out,
             path,
@@ -46,11 +82,42 @@ impl Staged {
         })
     }
 
-    /// If this set is dropped without a commit (an error), keep what was written under
-    /// `DIR/incomplete-<id>` instead of discarding it (a logged session is data that cannot
-    /// be made again).
+    /// If this set is dropped without a commit (an error), or its commit fails, keep what was
+    /// written under `DIR/incomplete-<id>` instead of discarding it (a logged session is data
+    /// that cannot be made again; a campaign's runs and an analysis took time to make).
     pub fn keep_on_failure(&mut self) {
         self.keep_on_failure = true;
+    }
+
+    /// Where this set's work goes if it is kept.
+    pub fn kept_path(&self) -> PathBuf {
+        self.out
+            .path()
+            .join(format!("{INCOMPLETE_PREFIX}{}", self.id))
+    }
+
+    /// Keep this set under `DIR/incomplete-<id>` now, without committing it (the command
+    /// decided it must not replace the previous set); returns where it went.
+    pub fn keep(mut self) -> anyhow::Result<PathBuf> {
+        let kept = self.kept_path();
+        self.done = true;
+        self.forget();
+        std::fs::rename(&self.path, &kept).with_context(|| {
+            format!("cannot keep {} as {}", self.path.display(), kept.display())
+        })?;
+        Ok(kept)
+    }
+
+    /// Discard this set (nothing in it is worth keeping).
+    pub fn discard(mut self) {
+        self.done = true;
+        self.forget();
+        let _ = std::fs::remove_dir_all(&self.path);
+    }
+
+    /// No longer an open set of this process.
+    fn forget(&self) {
+        open_sets().retain(|(p, _)| p != &self.path);
     }
 
     /// The staging path of `rel` (a relative name such as `raw/d12.7_run1.csv`), registered as
@@ -94,9 +161,25 @@ impl Staged {
         self.out.path()
     }
 
-    /// Replace the previous set with this one (see the module's commit protocol).
+    /// Replace the previous set with this one (see the module's commit protocol). If that
+    /// fails and the set is to be kept on failure, it is kept and the error says where.
     pub fn commit(mut self) -> anyhow::Result<()> {
-        self.commit_with(&mut commit::NoCrash)
+        let r = self.commit_with(&mut commit::NoCrash);
+        match r {
+            Err(e) if self.keep_on_failure && self.path.exists() => {
+                let kept = self.kept_path();
+                self.done = true;
+                self.forget();
+                match std::fs::rename(&self.path, &kept) {
+                    Ok(()) => Err(anyhow::anyhow!(
+                        "{e:#}; the results are kept in {}",
+                        kept.display()
+                    )),
+                    Err(_) => Err(e),
+                }
+            }
+            r => r,
+        }
     }
 
     pub(super) fn commit_with(&mut self, crash: &mut dyn commit::Crash) -> anyhow::Result<()> {
@@ -107,6 +190,7 @@ impl Staged {
         // Past the journal's rename the staging directory is gone: nothing to clean up.
         if r.is_ok() || !self.path.exists() {
             self.done = true;
+            self.forget();
         }
         r.with_context(|| format!("replacing the results in {}", self.out.path().display()))
     }
@@ -115,6 +199,7 @@ impl Staged {
     #[cfg(test)]
     pub(super) fn abandon(mut self) {
         self.done = true;
+        self.forget();
     }
 }
 
@@ -123,6 +208,7 @@ impl Drop for Staged {
         if self.done {
             return;
         }
+        self.forget();
         if self.keep_on_failure {
             let kept = self
                 .out

@@ -13,6 +13,7 @@ pub fn metrics_json(a: &Analysis, closed_loop: &Value) -> Value {
             "rows": a.obs.len(),
             "cords": a.obs.groups.len(),
             "runs": a.obs.runs.len(),
+            "structure": a.evidence.data.structure,
             "timing_source": a.obs.timing,
             "timing_note": "Without a time_s column, step k of the thesis protocol starts 10k + 0.5 s after the trigger, its conditioning window (2 s after the change to 1 s before the next) is centred at 10k + 6 s, and it ends at 10k + 10.5 s; the load memory starts at zero at the first kept step of each run.",
         },
@@ -34,6 +35,7 @@ pub fn metrics_json(a: &Analysis, closed_loop: &Value) -> Value {
         "thesis_per_angle_r2": a.thesis_per_angle_r2,
         "extended_fit": a.extended,
         "protocol_limits": a.mechanisms.protocol_limits,
+        "fits_not_converged": a.fit_notes,
         "closed_loop": closed_loop,
         "elapsed_s": a.elapsed,
     })
@@ -47,7 +49,8 @@ fn num(v: f64) -> String {
     }
 }
 
-/// `predictions.csv`: the input rows (columns as read) plus the cord, the step timing used, and
+/// `predictions.csv`: the input rows (columns as read) plus the cord and run of the data set's
+/// structure (`run_id`: 1, 2, ... in the order the runs first appear), the step timing used, and
 /// every model's prediction, written row by row (a million rows are ~230 MB: not held).
 pub fn write_predictions_csv(
     s: &mut impl std::io::Write,
@@ -58,6 +61,7 @@ pub fn write_predictions_csv(
     header.extend(
         [
             "cord",
+            "run_id",
             "window_centre_s",
             "t2_baseline_n",
             "t2_baseline_per_cord_n",
@@ -86,15 +90,19 @@ pub fn write_predictions_csv(
                 "time_s" => pair.time_s.map_or(String::new(), num),
                 "t1_n" => num(pair.t1_n),
                 "t2_n" => num(pair.t2_n),
-                other => ds
-                    .extra_columns
-                    .iter()
-                    .position(|c| c == other)
-                    .map_or(String::new(), |k| num(pair.extra[k])),
+                other => match ds.label_columns.iter().position(|c| c.name == other) {
+                    Some(k) => crate::data::text_cell(&pair.labels[k]),
+                    None => ds
+                        .extra_columns
+                        .iter()
+                        .position(|c| c == other)
+                        .map_or(String::new(), |k| num(pair.extra[k])),
+                },
             })
             .collect();
         let row = &a.obs.rows[i];
-        cells.push(a.obs.groups[row.group].label.clone());
+        cells.push(crate::data::text_cell(&a.obs.groups[row.group].label));
+        cells.push((row.run + 1).to_string());
         cells.push(num(row.timing.centre_s));
         for v in [
             p.baseline[i],

@@ -83,15 +83,15 @@ fn headline(h: &mut String, a: &Analysis) {
             .as_ref()
             .map_or("not refittable".into(), tables::with_ci)
     };
-    let _ = write!(h, "<h2>Headline</h2><ul><li>Euler-Eytelwein with one fitted mu = {:.4}: RMSE of T2 {} N, leave-one-cord-out {} N (95 % intervals from resampling whole cords).</li>", a.baseline_fit.model(None).law.mu, tables::with_ci(&b.rmse_t2_uncertainty), loco(b));
+    let _ = write!(h, "<h2>Headline</h2><ul><li>Euler-Eytelwein with one fitted mu = {}: RMSE of T2 {} N, leave-one-cord-out {} N (95 % intervals from resampling whole cords).</li>", tables::fx(a.baseline_fit.model(None).law.mu, 4), tables::with_ci(&b.rmse_t2_uncertainty), loco(b));
     if let Some(t) = get("thesis") {
-        let _ = write!(h, "<li>The thesis's Table 3 double exponential ({} hand-set numbers): RMSE {:.3} N; it cannot predict a new cord.</li>", t.n_params, t.rmse_t2_n);
+        let _ = write!(h, "<li>The thesis's Table 3 double exponential ({} hand-set numbers): RMSE {} N; it cannot predict a new cord.</li>", t.n_params, tables::fx(t.rmse_t2_n, 3));
     }
-    let _ = write!(h, "<li>The extended model ({:.1} parameters: {} fixed values + {:.1} effective degrees of freedom of the cord effects): RMSE {} N in-sample, {} N leave-one-cord-out.</li>", e.n_params, e.n_params_detail.fixed, e.n_params_detail.edf_random, tables::with_ci(&e.rmse_t2_uncertainty), loco(e));
+    let _ = write!(h, "<li>The extended model ({} parameters: {} fixed values + {} effective degrees of freedom of the cord effects): RMSE {} N in-sample, {} N leave-one-cord-out.</li>", tables::fx(e.n_params, 1), e.n_params_detail.fixed, tables::fx(e.n_params_detail.edf_random, 1), tables::with_ci(&e.rmse_t2_uncertainty), loco(e));
     let better = a.held_out.iter().filter(|c| c.extended_better).count();
     let g = &a.gain;
-    let _ = write!(h, "<li>The held-out gain: the extended model's leave-one-cord-out RMSE is {:.3} of Euler-Eytelwein's (95 % interval {:.3} to {:.3}, cord-jackknife SE {:.3}); it predicts {better} of {} cords better. {}</li>",
-        g.value, g.ci95.lo, g.ci95.hi, g.jackknife_se, a.held_out.len(), esc(&gain_words(g.ci95.hi)));
+    let _ = write!(h, "<li>The held-out gain: the extended model's leave-one-cord-out RMSE is {} of Euler-Eytelwein's (95 % interval {} to {}, cord-jackknife SE {}); it predicts {better} of {} cords better. {}</li>",
+        tables::fx(g.value, 3), tables::fx(g.ci95.lo, 3), tables::fx(g.ci95.hi, 3), tables::fx(g.jackknife_se, 3), a.held_out.len(), esc(&gain_words(g.ci95.hi)));
     let causes: Vec<String> = a
         .mechanisms
         .causes
@@ -168,7 +168,7 @@ pub fn report_html(
     let figs = figures::all(a, closed_loop)?;
     let mut h = String::new();
     let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Capstan analysis</title><style>{STYLE}</style></head><body>");
-    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len());
+    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&crate::diagnose::words::capitalised(&a.evidence.data.structure.statement)));
     headline(&mut h, a);
     gain_section(&mut h, a, &figs);
     h.push_str("<h2>The data against the models</h2>");
@@ -178,8 +178,8 @@ pub fn report_html(
     h.push_str(&tables::residual_patterns(a));
     figure_html(&mut h, &figs, "residuals");
     let ev = &a.evidence;
-    let _ = write!(h, "<h2>Why: the mechanisms</h2><p>Every mechanism of the catalogue is judged by the evidence engine that <code>capstan diagnose</code> uses, on these data: every run has its own mu; the effects that change the shape of T2 inside runs are selected forward, each judged by its quasi-likelihood ratio over its cluster-robust overdispersion (runs as clusters, so the serial correlation inside a run and each run's own tare count), referred to F(1, runs − 1) and put on the BIC scale; the effects on mu between cords and runs are judged on the runs' mu with cords or runs as the units. Thresholds: ΔBIC below {:.0} within runs, {:.0} between. Scatter of mu: {:.1} % cord to cord, {:.1} % run to run; noise {:.3} N + {:.1} % of T2; lag-1 autocorrelation of the residuals inside runs {:.2}.</p>",
-        ev.thresholds.within_run, ev.thresholds.between, ev.scatter.cord_pct, ev.scatter.run_pct, ev.scatter.noise_abs_n, 100.0 * ev.scatter.noise_rel, ev.scatter.lag1_autocorrelation);
+    let _ = write!(h, "<h2>Why: the mechanisms</h2><p>Every mechanism of the catalogue is judged by the evidence engine that <code>capstan diagnose</code> uses, on these data: every run has its own mu; the effects that change the shape of T2 inside runs are selected forward, each judged by its quasi-likelihood ratio over its cluster-robust overdispersion (runs as clusters, so the serial correlation inside a run and each run's own tare count), referred to F(1, runs − 1) and put on the BIC scale; the effects on mu between cords and runs are judged on the runs' mu with cords or runs as the units. Thresholds: ΔBIC below {:.0} within runs, {:.0} between. Scatter of mu: {} % cord to cord, {} % run to run; noise {} N + {} % of T2; lag-1 autocorrelation of the residuals inside runs {}.</p>",
+        ev.thresholds.within_run, ev.thresholds.between, tables::fx(ev.scatter.cord_pct, 1), tables::fx(ev.scatter.run_pct, 1), tables::fx(ev.scatter.noise_abs_n, 3), tables::fx(100.0 * ev.scatter.noise_rel, 1), tables::fx(ev.scatter.lag1_autocorrelation, 2));
     h.push_str(&tables::mechanisms(a));
     figure_html(&mut h, &figs, "mechanism_evidence");
     let u = &a.mechanisms.unexplained;
@@ -207,6 +207,13 @@ pub fn report_html(
     let _ = write!(h, "<p>{}</p>", esc(closed_loop_note));
     figure_html(&mut h, &figs, "closed_loop");
     let e = &a.elapsed;
+    if !a.fit_notes.is_empty() {
+        h.push_str("<h2>Fits that did not converge</h2><p>Every fit has a work budget that grows with the data; these stopped at it, and the analysis went on without them (a leave-one-cord-out fold) or with their last iterate (an in-sample fit):</p><ul>");
+        for n in &a.fit_notes {
+            let _ = write!(h, "<li>{}</li>", esc(n));
+        }
+        h.push_str("</ul>");
+    }
     let _ = write!(h, "<h2>Reproducing</h2><p><code>predictions.csv</code> holds the input rows, the cord, the window centre used for the load memory and every model's in-sample and leave-one-cord-out prediction; <code>metrics.json</code> every number of this page (its <code>evidence</code> object is what <code>capstan diagnose --json</code> prints). Timing: evidence {:.3} s, fits {:.3} s, LOCO {:.3} s, tables {:.3} s, closed loop {:.3} s.</p></body></html>", e.evidence_s, e.fits_s, e.loco_s, e.tables_s, e.closed_loop_s);
     Ok(h)
 }

@@ -18,6 +18,33 @@ pub fn f3(v: f64) -> String {
     }
 }
 
+/// `v` with `d` decimals, or a dash where it is not identified on these data.
+pub fn fx(v: f64, d: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.d$}")
+    } else {
+        "–".into()
+    }
+}
+
+/// `v` with its sign and `d` decimals, or a dash.
+pub fn fs(v: f64, d: usize) -> String {
+    if v.is_finite() {
+        format!("{v:+.d$}")
+    } else {
+        "–".into()
+    }
+}
+
+/// `v` in scientific notation with `d` decimals, or a dash.
+pub fn fe(v: f64, d: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.d$e}")
+    } else {
+        "–".into()
+    }
+}
+
 /// A value with its 95 % interval: "0.775 [0.70, 0.86]".
 pub fn with_ci(w: &WithInterval) -> String {
     format!("{} [{}, {}]", f3(w.value), f3(w.ci95.lo), f3(w.ci95.hi))
@@ -26,19 +53,17 @@ pub fn with_ci(w: &WithInterval) -> String {
 fn model_row(m: &ModelMetrics) -> String {
     let count = if m.n_params_detail.edf_random > 0.0 {
         format!(
-            "{:.1} ({} fixed + {:.1} edf of the cord effects)",
-            m.n_params, m.n_params_detail.fixed, m.n_params_detail.edf_random
+            "{} ({} fixed + {} edf of the cord effects)",
+            fx(m.n_params, 1),
+            m.n_params_detail.fixed,
+            fx(m.n_params_detail.edf_random, 1)
         )
     } else {
         format!("{}", m.n_params)
     };
-    let r2: Vec<String> = m
-        .per_cord_r2_amp
-        .iter()
-        .map(|c| format!("{:.2}", c.r2))
-        .collect();
+    let r2: Vec<String> = m.per_cord_r2_amp.iter().map(|c| fx(c.r2, 2)).collect();
     format!(
-        "<tr><td>{}</td><td>{count}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.1}</td><td>{:.1}</td><td>{}</td></tr>",
+        "<tr><td>{}</td><td>{count}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
         esc(&m.name),
         with_ci(&m.rmse_t2_uncertainty),
         f3(m.rmse_ln_amp),
@@ -46,8 +71,8 @@ fn model_row(m: &ModelMetrics) -> String {
             .as_ref()
             .map_or("not refittable".into(), with_ci),
         f3(m.per_cord_r2_amp_median),
-        m.aic,
-        m.bic,
+        fx(m.aic, 1),
+        fx(m.bic, 1),
         r2.join(" "),
     )
 }
@@ -66,7 +91,7 @@ pub fn gain(a: &Analysis) -> String {
 pub fn residual_patterns(a: &Analysis) -> String {
     let mut h = String::from("<table><tr><th>model</th><th>residual</th><th>column</th><th>ρ</th><th>slope/SD</th><th>t (cluster)</th><th>p (cluster)</th><th>η²</th><th>F</th><th>p (F)</th></tr>");
     for p in &a.residual_patterns {
-        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.4}</td><td>{:.2}</td><td>{:.3}</td><td>{:.3}</td><td>{:.1}</td><td>{:.2e}</td></tr>", p.model, p.residual, esc(&p.column), p.spearman_rho, p.slope_per_sd, p.slope_t_cluster, p.slope_p_cluster, p.eta2, p.f, p.f_p);
+        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>", p.model, p.residual, esc(&p.column), fx(p.spearman_rho, 3), fx(p.slope_per_sd, 4), fx(p.slope_t_cluster, 2), fx(p.slope_p_cluster, 3), fx(p.eta2, 3), fx(p.f, 1), fe(p.f_p, 2));
     }
     h.push_str("</table>");
     h
@@ -134,15 +159,15 @@ pub fn ln_amp_by_step(steps: &[StepResidual]) -> String {
         let worse = s.extended_rms > s.baseline_rms;
         let _ = write!(
             h,
-            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{:+.3}</td><td>{:+.3}</td><td>{:.3}</td><td>{:.3}</td></tr>",
+            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             if worse { " class=\"worse\"" } else { "" },
             s.step,
             s.rows,
             f3(s.mean_t1_n),
-            s.baseline_mean,
-            s.extended_mean,
-            s.baseline_rms,
-            s.extended_rms
+            fs(s.baseline_mean, 3),
+            fs(s.extended_mean, 3),
+            fx(s.baseline_rms, 3),
+            fx(s.extended_rms, 3)
         );
     }
     h.push_str("</table>");
@@ -153,31 +178,25 @@ pub fn ln_amp_by_step(steps: &[StepResidual]) -> String {
 /// offsets.
 pub fn extended(a: &Analysis) -> String {
     let e = &a.extended;
-    let se = |v: f64| {
-        if v.is_finite() {
-            format!("{v:.5}")
-        } else {
-            "–".into()
-        }
-    };
+    let se = |v: f64| fx(v, 5);
     let mut h = String::from("<table><tr><th>value</th><th>estimate</th><th>cord-jackknife SE (cords as clusters)</th><th>evidence engine SE (runs as clusters)</th><th>note</th></tr>");
     for v in &e.values {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{:.5}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             esc(&v.name),
-            v.value,
+            fx(v.value, 5),
             se(v.jackknife_se),
             se(v.run_clustered_se),
             esc(&v.note)
         );
     }
     h.push_str("</table>");
-    let _ = write!(h, "<p>σ<sub>u</sub> = {:.4} (ln mu), λ = {:.1}; the cord effects count {:.2} effective degrees of freedom, so the model uses {} fixed + {:.2} = {:.2}; population-only RMSE (u = 0) {:.3} N.</p>",
-        e.sigma_u, e.lambda, e.edf_random, e.n_fixed, e.edf_random, e.effective_dof, e.rmse_population_t2_n);
+    let _ = write!(h, "<p>σ<sub>u</sub> = {} (ln mu), λ = {}; the cord effects count {} effective degrees of freedom, so the model uses {} fixed + {} = {}; population-only RMSE (u = 0) {} N.</p>",
+        fx(e.sigma_u, 4), fx(e.lambda, 1), fx(e.edf_random, 2), e.n_fixed, fx(e.edf_random, 2), fx(e.effective_dof, 2), fx(e.rmse_population_t2_n, 3));
     h.push_str("<table><tr><th>cord</th><th>u (ln mu)</th></tr>");
     for (c, u) in &e.cord_log_mu {
-        let _ = write!(h, "<tr><td>{}</td><td>{u:+.4}</td></tr>", esc(c));
+        let _ = write!(h, "<tr><td>{}</td><td>{}</td></tr>", esc(c), fs(*u, 4));
     }
     h.push_str("</table>");
     h
@@ -189,8 +208,10 @@ pub fn thesis_r2(a: &Analysis) -> String {
     for r in &a.thesis_per_angle_r2 {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{:.3}</td><td>{}</td></tr>",
-            r.wrap_deg, r.r2, r.rows
+            "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
+            r.wrap_deg,
+            fx(r.r2, 3),
+            r.rows
         );
     }
     h.push_str("</table>");

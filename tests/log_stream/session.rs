@@ -33,6 +33,7 @@ fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not(
         save_stream: true,
         setup: SetupFlags::default(),
         progress: false,
+        allow_empty: true,
     };
     let mut logger = Logger::create(&fw, opts.clone(), "test").unwrap();
     for chunk in damaged.chunks(37) {
@@ -101,6 +102,7 @@ fn joining_mid_run_keeps_the_records_without_their_run_start() {
             ..SetupFlags::default()
         },
         progress: false,
+        allow_empty: true,
     };
     let mut logger = Logger::create(&fw, opts, "late").unwrap();
     logger.feed(late).unwrap();

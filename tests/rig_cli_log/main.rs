@@ -185,6 +185,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
         save_stream: false,
         setup: SetupFlags::default(),
         progress: false,
+        allow_empty: true,
     };
     let mut logger = Logger::create(&fw, opts, "test").unwrap();
     for chunk in stream(&[4]).chunks(29) {
@@ -307,6 +308,7 @@ fn a_run_start_without_the_newer_calibration_fields_leaves_them_null_in_the_summ
         save_stream: false,
         setup: SetupFlags::default(),
         progress: false,
+        allow_empty: true,
     };
     let mut logger = Logger::create(&fw, opts, "old").unwrap();
     logger.feed(&bytes).unwrap();

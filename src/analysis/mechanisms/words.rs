@@ -30,6 +30,15 @@ pub fn title(kind: EffectKind) -> &'static str {
     }
 }
 
+/// A ΔBIC with its sign and one decimal ("not identified" if it could not be computed).
+fn signed(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:+.1}")
+    } else {
+        crate::diagnose::words::NOT_IDENTIFIED.to_string()
+    }
+}
+
 fn value_text(kind: EffectKind, v: f64, se: f64) -> String {
     parameter(kind.parameter().unwrap_or("value"), v, se)
 }
@@ -60,29 +69,29 @@ pub fn sentence(
     let v = value_text(kind, n.value, n.se);
     match verdict {
         Verdict::RuledIn => format!(
-            "{} is in the data: {v}; dropping it costs ΔBIC {:+.1} {} (evidence computed with runs as clusters).",
+            "{} is in the data: {v}; dropping it costs ΔBIC {} {} (evidence computed with runs as clusters).",
             capital(name),
-            -n.delta_bic_given_causes,
+            signed(-n.delta_bic_given_causes),
             if causes.is_empty() { "against every run's own mu" } else { "given the other named causes" }
         ),
         Verdict::ExplainedAway => format!(
-            "{} alone would improve the fit ({} = {}, ΔBIC {:+.1}), but not {given} (ΔBIC {:+.1}): it stood in for them.",
+            "{} alone would improve the fit ({} = {}, ΔBIC {}), but not {given} (ΔBIC {}): it stood in for them.",
             capital(name),
             kind.parameter().unwrap_or("value"),
             sig(n.value_alone),
-            n.delta_bic_alone,
-            n.delta_bic_given_causes
+            signed(n.delta_bic_alone),
+            signed(n.delta_bic_given_causes)
         ),
         Verdict::RuledOut => format!(
-            "{} is ruled out: {v} {given}, and its 95 % interval lies inside ±{} of no effect, a size that would not matter (ΔBIC {:+.1}).",
+            "{} is ruled out: {v} {given}, and its 95 % interval lies inside ±{} of no effect, a size that would not matter (ΔBIC {}).",
             capital(name),
             sig(n.relevance_width),
-            n.delta_bic_given_causes
+            signed(n.delta_bic_given_causes)
         ),
         Verdict::NotEstablished => format!(
-            "{} is not established: {v} {given} (ΔBIC {:+.1}), but its 95 % interval still reaches a size that matters (±{} from no effect).",
+            "{} is not established: {v} {given} (ΔBIC {}), but its 95 % interval still reaches a size that matters (±{} from no effect).",
             capital(name),
-            n.delta_bic_given_causes,
+            signed(n.delta_bic_given_causes),
             sig(n.relevance_width)
         ),
         Verdict::NotTestable => format!("{} cannot be tested on these data: {reason}.", capital(name)),

@@ -17,6 +17,9 @@ pub enum CheckError {
     Setting(&'static str, SettingsError),
     /// A host verb (`live`, `keys`) used wrongly: what is wrong.
     Usage(String),
+    /// A value outside the physical range the data reader takes (`data::ranges`): what
+    /// `capstan log` would write from it could not be analysed.
+    Range(&'static str, f32, String),
 }
 
 impl std::fmt::Display for CheckError {
@@ -29,6 +32,11 @@ impl std::fmt::Display for CheckError {
             CheckError::Command(e) => write!(f, "not sent: {}", e.message()),
             CheckError::Setting(key, e) => write!(f, "not sent: set {key}: {}", e.message()),
             CheckError::Usage(why) => f.write_str(why),
+            CheckError::Range(key, v, why) => write!(
+                f,
+                "not sent: set {key} {v}: {why} (0 = not given); pairs.csv carries it, and \
+                 capstan analyze reads only values in that range"
+            ),
         }
     }
 }
@@ -55,7 +63,23 @@ pub fn command_line(words: &[String]) -> Result<(String, Command), CheckError> {
 /// A `set` against the settings the board reports: refused, with the reason, if the value
 /// would make them invalid. Other commands pass.
 pub fn check_set(cmd: &Command, current: &Settings) -> Result<(), CheckError> {
+    use crate::data::ranges;
+    use firmware::command::Key;
     match cmd {
+        Command::Set(key @ (Key::DiameterMm | Key::WrapDeg), value) if *value != 0.0 => {
+            let range = if *key == Key::DiameterMm {
+                &ranges::DIAMETER_MM
+            } else {
+                &ranges::WRAP_DEG
+            };
+            range
+                .check(f64::from(*value))
+                .map_err(|why| CheckError::Range(key.name(), *value, why))?;
+            current
+                .with(*key, *value)
+                .map(|_| ())
+                .map_err(|e| CheckError::Setting(key.name(), e))
+        }
         Command::Set(key, value) => current
             .with(*key, *value)
             .map(|_| ())
@@ -122,6 +146,15 @@ mod tests {
             protocol: Protocol::default(),
             calibration: Calibration::default(),
         };
+        // The set-up values pairs.csv carries stay inside the reader's ranges.
+        let (_, dia) = command_line(&words("set diameter_mm 2000")).unwrap();
+        let e = check_set(&dia, &s).unwrap_err().to_string();
+        assert!(
+            e.starts_with("not sent: set diameter_mm 2000: must be greater than 0"),
+            "{e}"
+        );
+        let (_, none) = command_line(&words("set diameter_mm 0")).unwrap();
+        assert_eq!(check_set(&none, &s), Ok(()));
         let (_, ok) = command_line(&words("set dwell_ms 8000")).unwrap();
         assert_eq!(check_set(&ok, &s), Ok(()));
         let (_, half) = command_line(&words("set dwell_ms 8000.5")).unwrap();
@@ -135,10 +168,10 @@ mod tests {
             )
         );
         let (_, wrap) = command_line(&words("set wrap_deg 4000")).unwrap();
-        assert_eq!(
+        assert!(matches!(
             check_set(&wrap, &s),
-            Err(CheckError::Setting("wrap_deg", SettingsError::Metadata))
-        );
+            Err(CheckError::Range("wrap_deg", 4000.0, _))
+        ));
         assert_eq!(check_set(&Command::Zero, &s), Ok(()));
     }
 }

@@ -51,8 +51,10 @@ impl CampaignWriter {
         })
     }
 
-    /// Write one finished run (in campaign order), flushed.
+    /// Write one finished run (in campaign order), flushed. From the first run on, the set is
+    /// work worth keeping: a late failure keeps it as `incomplete-<id>` and says where.
     pub fn add(&mut self, r: &RunResult) -> anyhow::Result<()> {
+        self.set.keep_on_failure();
         for row in pair_rows(r) {
             self.pairs.write(&super::to_pairs(&[row])[0])?;
             self.rows += 1;
@@ -76,8 +78,9 @@ impl CampaignWriter {
     /// Close the set: `summary.json`, then replace the previous results (the writers closed
     /// first: a directory with open files cannot be renamed everywhere).
     pub fn finish(mut self, summary: &Value) -> anyhow::Result<()> {
-        self.pairs.flush()?;
-        self.faults_csv.flush()?;
+        let at = |name: &str| format!("cannot write {}", self.set.target().join(name).display());
+        self.pairs.flush().with_context(|| at("pairs.csv"))?;
+        self.faults_csv.flush().with_context(|| at("faults.csv"))?;
         let mut set = self.set;
         drop((self.pairs, self.faults_csv));
         let text = serde_json::to_string_pretty(summary)? + "\n";

@@ -89,13 +89,12 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     };
     // The same ranges as a campaign's (diameter, wraps, drive voltage).
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mut set = crate::cli::open_out(
-        &args.out,
-        "two-control",
-        &["two_control.csv", "crosstalk.csv"],
-    )?
-    .stage()?;
+    let mut names = vec!["two_control.csv".to_string(), "crosstalk.csv".to_string()];
+    names.extend((1..=n).map(|k| format!("pairs_ch{k}.csv")));
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    let mut set = crate::cli::open_out(&args.out, "two-control", &names)?.stage()?;
     let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
+    set.keep_on_failure();
     write_two(&mut set, &cfg, &r)?;
     set.commit()?;
     let pairs: usize = r.channels.iter().map(|c| c.log.pairs.len()).sum();

@@ -227,6 +227,7 @@ mod tests {
                         t1_n: t1,
                         t2_n: t1 * 3.0,
                         extra: Vec::new(),
+                        labels: Vec::new(),
                     });
                 }
             }

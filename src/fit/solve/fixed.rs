@@ -1,22 +1,42 @@
 //! Fixed-effects fits (random effects held at zero).
 
+use super::budget::Budget;
 use super::problem::{solver, FitProblem};
 use super::result::{finish, Fit};
 use crate::fit::obs::Observations;
 use crate::fit::params::ModelSpec;
 
-/// Fixed effects only, from `start` (θ) or the spec's base values.
+/// Fixed effects only, from `start` (θ) or the spec's base values, within the budget its size
+/// gives ([`Budget::for_fit`]).
 pub fn fit_fixed(
     spec: &ModelSpec,
     obs: &Observations,
     runs: &[usize],
     start: Option<&[f64]>,
 ) -> Fit {
+    let rows = runs.iter().map(|&r| obs.runs[r].len()).sum();
+    fit_fixed_with(
+        spec,
+        obs,
+        runs,
+        start,
+        &Budget::for_fit(rows, spec.free.len()),
+    )
+}
+
+/// [`fit_fixed`] within `budget`.
+pub fn fit_fixed_with(
+    spec: &ModelSpec,
+    obs: &Observations,
+    runs: &[usize],
+    start: Option<&[f64]>,
+    budget: &Budget,
+) -> Fit {
     let theta = start.map_or_else(|| spec.start(), <[f64]>::to_vec);
     let u = vec![0.0; obs.groups.len()];
-    let problem = FitProblem::new(spec, obs, runs, None, &theta, &u);
+    let problem = FitProblem::new(spec, obs, runs, None, &theta, &u, budget);
     let (p, report) = solver().minimize(problem);
-    finish(spec, runs, p, None, report)
+    finish(spec, runs, p, None, report, budget)
 }
 
 /// The best (lowest RSS) of fixed-effects fits from several starts.

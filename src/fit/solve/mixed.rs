@@ -1,5 +1,6 @@
 //! Penalised fits at a given λ and mixed fits with λ = σ²/σ_u² re-estimated.
 
+use super::budget::Budget;
 use super::problem::{solver, FitProblem};
 use super::result::{finish, Fit};
 use crate::fit::obs::Observations;
@@ -14,9 +15,11 @@ pub fn fit_penalised(
     theta: &[f64],
     u: &[f64],
 ) -> Fit {
-    let problem = FitProblem::new(spec, obs, runs, Some(lambda), theta, u);
+    let rows = obs.rows_of(runs).len();
+    let budget = Budget::for_fit(rows, spec.free.len() + obs.groups.len());
+    let problem = FitProblem::new(spec, obs, runs, Some(lambda), theta, u, &budget);
     let (p, report) = solver().minimize(problem);
-    finish(spec, runs, p, Some(lambda), report)
+    finish(spec, runs, p, Some(lambda), report, &budget)
 }
 
 /// Options of [`fit_mixed`].
@@ -28,6 +31,9 @@ pub struct MixedOptions {
     pub max_updates: usize,
     /// If set, shrink harder so that fixed + edf of the group effects ≤ this.
     pub edf_cap: Option<f64>,
+    /// If set, the most work units the fit may spend (below its size's budget, e.g. one fold
+    /// of many).
+    pub max_units: Option<u64>,
 }
 
 impl Default for MixedOptions {
@@ -36,6 +42,7 @@ impl Default for MixedOptions {
             lambda0: 200.0,
             max_updates: 12,
             edf_cap: None,
+            max_units: None,
         }
     }
 }
@@ -68,8 +75,17 @@ pub fn fit_mixed_from(
     let mut lambda = opts.lambda0;
     let p = spec.n_fixed() as f64;
     let mut evaluations = 0;
+    let rows = obs.rows_of(runs).len();
+    let params = spec.free.len() + obs.groups.len();
+    let budget = match opts.max_units {
+        Some(cap) => Budget::for_fit_within(rows, params, cap),
+        None => Budget::for_fit(rows, params),
+    };
     for _ in 0..opts.max_updates {
-        let problem = FitProblem::new(spec, obs, runs, Some(lambda), &theta, &u);
+        if budget.spent() {
+            break;
+        }
+        let problem = FitProblem::new(spec, obs, runs, Some(lambda), &theta, &u, &budget);
         let (pr, report) = solver().minimize(problem);
         evaluations += report.number_of_evaluations;
         theta = pr.theta.clone();
@@ -81,7 +97,7 @@ pub fn fit_mixed_from(
             break;
         }
     }
-    let problem = FitProblem::new(spec, obs, runs, Some(lambda), &theta, &u);
+    let problem = FitProblem::new(spec, obs, runs, Some(lambda), &theta, &u, &budget);
     let (pr, report) = solver().minimize(problem);
     let info = pr.group_information();
     let edf: f64 = pr
@@ -92,7 +108,7 @@ pub fn fit_mixed_from(
     let n = pr.rows.len() as f64;
     let rss = pr.rss();
     let sigma2 = rss / (n - p - edf).max(1.0);
-    let mut fit = finish(spec, runs, pr, Some(lambda), report);
+    let mut fit = finish(spec, runs, pr, Some(lambda), report, &budget);
     fit.edf_random = edf;
     fit.sigma2 = sigma2;
     fit.sigma_u = Some((sigma2 / lambda).sqrt());

@@ -11,17 +11,21 @@
 //! * [`loco`]: leave-one-group-out: refit on the other groups, predict the held-out group with
 //!   population values (u = 0).
 //! * [`information_criteria`]: AIC/BIC on T2 residuals, n·ln(RSS/n) + 2p / p·ln n.
+//! * [`Budget`]: every fit's work budget; a fit that spends it stops and says it did not
+//!   converge ([`Fit::converged`], [`Fit::stopped`]).
 //!
 //! Files: [`problem`] (the least-squares problem), [`result`] (a fitted spec, its counts and
 //! information criteria), [`fixed`], [`mixed`] (penalised and mixed fits), [`loco`].
 
+pub mod budget;
 pub mod fixed;
 pub mod loco;
 pub mod mixed;
 pub mod problem;
 pub mod result;
 
-pub use fixed::{fit_fixed, fit_fixed_multistart};
+pub use budget::Budget;
+pub use fixed::{fit_fixed, fit_fixed_multistart, fit_fixed_with};
 pub use loco::{loco, Loco};
 pub use mixed::{fit_mixed, fit_mixed_from, fit_penalised, MixedOptions};
 pub use problem::FitProblem;

@@ -2,6 +2,7 @@
 //! residuals are predicted − measured T2 (N) on the training rows, plus √λ·u_g for each group's
 //! random effect (penalised least squares: Σr² + λΣu²).
 
+use super::budget::Budget;
 use crate::fit::obs::Observations;
 use crate::fit::params::ModelSpec;
 use crate::fit::predict::{evaluate, Evaluation};
@@ -24,11 +25,14 @@ pub struct FitProblem<'a> {
     pub(super) u: Vec<f64>,
     /// Predictions at the current parameters.
     pub(super) eval: Evaluation,
+    /// What the fit may still spend.
+    budget: &'a Budget,
 }
 
 impl<'a> FitProblem<'a> {
     /// A problem on `runs`. With a random effect in `spec` and `lambda` given, the group
-    /// effects are parameters (penalised by `lambda`); otherwise they stay at zero.
+    /// effects are parameters (penalised by `lambda`); otherwise they stay at zero. The solver
+    /// stops (the Jacobian is refused) once `budget` is spent.
     pub fn new(
         spec: &'a ModelSpec,
         obs: &'a Observations,
@@ -36,6 +40,7 @@ impl<'a> FitProblem<'a> {
         lambda: Option<f64>,
         theta: &[f64],
         u: &[f64],
+        budget: &'a Budget,
     ) -> Self {
         let rows = obs.rows_of(runs);
         let mut re_groups: Vec<usize> = Vec::new();
@@ -62,9 +67,18 @@ impl<'a> FitProblem<'a> {
             theta: theta.to_vec(),
             u: uu,
             eval: Evaluation::default(),
+            budget,
         };
         p.eval = evaluate(spec, &p.theta, &p.u, obs, &p.runs, false);
+        budget.charge(p.rows.len() as u64);
         p
+    }
+
+    /// The work a Jacobian costs here.
+    fn jacobian_cost(&self) -> u64 {
+        let free = self.theta.len() * if self.spec.tie.is_some() { 2 } else { 1 };
+        let m = self.rows.len() + self.re_groups.len();
+        Budget::jacobian_cost(self.rows.len(), free, m, self.n_params())
     }
 
     fn n_params(&self) -> usize {
@@ -94,6 +108,7 @@ impl<'a> FitProblem<'a> {
         let Some(j) = self.spec.random else {
             return vec![0.0; self.obs.groups.len()];
         };
+        self.budget.charge(self.jacobian_cost());
         let ev = evaluate(self.spec, &self.theta, &self.u, self.obs, &self.runs, true);
         let mut info = vec![0.0; self.obs.groups.len()];
         for &i in &self.rows {
@@ -115,6 +130,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for FitProblem<'_> {
             self.u[g] = x[nf + k];
         }
         self.eval = evaluate(self.spec, &self.theta, &self.u, self.obs, &self.runs, false);
+        self.budget.charge(self.rows.len() as u64);
     }
 
     fn params(&self) -> DVector<f64> {
@@ -138,6 +154,12 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for FitProblem<'_> {
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
+        // The solver asks for a Jacobian at the last accepted parameters: refusing it there
+        // ends the fit at its best point so far.
+        if self.budget.spent() {
+            return None;
+        }
+        self.budget.charge(self.jacobian_cost());
         let ev = evaluate(self.spec, &self.theta, &self.u, self.obs, &self.runs, true);
         let nf = self.theta.len();
         let m = self.rows.len() + self.re_groups.len();
@@ -195,7 +217,8 @@ mod tests {
             .random_effect_on(Param::Mu);
         let runs: Vec<usize> = (0..obs.runs.len()).step_by(7).collect();
         let u: Vec<f64> = (0..10).map(|g| 0.01 * g as f64 - 0.04).collect();
-        let mut p = FitProblem::new(&spec, &obs, &runs, Some(300.0), &spec.start(), &u);
+        let budget = Budget::new(u64::MAX);
+        let mut p = FitProblem::new(&spec, &obs, &runs, Some(300.0), &spec.start(), &u, &budget);
         let num = differentiate_numerically(&mut p).unwrap();
         let ana = p.jacobian().unwrap();
         let scale = ana.amax();

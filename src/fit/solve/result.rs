@@ -1,6 +1,7 @@
 //! A fitted spec ([`Fit`]): values, counts, predictions, standard errors, and the
 //! information criteria of its T2 residuals.
 
+use super::budget::Budget;
 use super::problem::FitProblem;
 use crate::fit::obs::Observations;
 use crate::fit::params::ModelSpec;
@@ -36,6 +37,12 @@ pub struct Fit {
     pub termination: String,
     /// Residual evaluations used.
     pub evaluations: usize,
+    /// The solver stopped on its tolerances (or at machine precision).
+    pub converged: bool,
+    /// Why it did not converge, if it did not ("did not converge: ...").
+    pub stopped: Option<String>,
+    /// Work units spent ([`super::budget`]).
+    pub work_units: u64,
 }
 
 impl Fit {
@@ -127,7 +134,44 @@ pub(super) fn finish(
     p: FitProblem<'_>,
     lambda: Option<f64>,
     report: levenberg_marquardt::MinimizationReport<f64>,
+    budget: &Budget,
 ) -> Fit {
+    use levenberg_marquardt::TerminationReason as T;
+    let stopped = match report.termination {
+        T::Converged { .. }
+        | T::Orthogonal
+        | T::ResidualsZero
+        | T::NoParameters
+        | T::NoImprovementPossible(_) => None,
+        T::User(_) => Some(format!(
+            "did not converge: its work budget ({} units for {} rows) ran out after {} \
+             evaluations",
+            budget.limit(),
+            p.rows.len(),
+            report.number_of_evaluations
+        )),
+        T::LostPatience => Some(format!(
+            "did not converge: its iteration budget ran out after {} evaluations",
+            report.number_of_evaluations
+        )),
+        T::Numerical(what) => Some(format!(
+            "did not converge: a numerical failure ({what} not finite: the model runs off to \
+             infinity on these data)"
+        )),
+        ref other => Some(format!("did not converge: {other:?}")),
+    };
+    if std::env::var_os("CAPSTAN_FIT_LOG").is_some() {
+        crate::errln!(
+            "fit {}: {} rows, {} params, {} evaluations, {} of {} units, {:?}",
+            spec.name,
+            p.rows.len(),
+            p.theta.len() + p.re_groups.len(),
+            report.number_of_evaluations,
+            budget.used(),
+            budget.limit(),
+            report.termination
+        );
+    }
     let rss = p.rss();
     let n = p.rows.len();
     let dof = (n as f64 - spec.n_fixed() as f64).max(1.0);
@@ -145,5 +189,8 @@ pub(super) fn finish(
         t2_n: p.eval.t2_n.clone(),
         termination: format!("{:?}", report.termination),
         evaluations: report.number_of_evaluations,
+        converged: stopped.is_none(),
+        stopped,
+        work_units: budget.used(),
     }
 }

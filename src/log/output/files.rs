@@ -44,9 +44,12 @@ fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<
     Ok(w)
 }
 
+/// A pairs CSV of the session: the schema's columns and `boot`, the board's start each run
+/// belongs to (a reset starts the run numbers again; `boot` keeps those runs apart for the
+/// reader).
 fn create_pairs(set: &mut Staged, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
     let w = create(set, name, None)?;
-    PairsWriter::new(w).with_context(|| format!("cannot write {name}"))
+    PairsWriter::with_labels(w, &["boot"]).with_context(|| format!("cannot write {name}"))
 }
 
 /// f32 as written: the shortest decimal that reads back to the same f32.
@@ -112,14 +115,15 @@ impl Files {
     /// Keep received bytes (if the session keeps them).
     pub fn stream(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         if let Some(s) = &mut self.stream {
-            s.write_all(bytes).context("cannot write stream.defmt")?;
+            s.write_all(bytes)
+                .with_context(|| self.at("stream.defmt"))?;
         }
         Ok(())
     }
 
     /// One of the firmware's other log lines.
     pub fn message(&mut self, level: &str, text: &str) -> anyhow::Result<()> {
-        writeln!(self.messages, "{level} {text}").context("cannot write messages.txt")
+        writeln!(self.messages, "{level} {text}").with_context(|| self.at("messages.txt"))
     }
 
     /// A raw sample of run `run` (empty: unknown).
@@ -133,7 +137,7 @@ impl Files {
             f(r.force_n[0]),
             f(r.force_n[1])
         )
-        .context("cannot write raw.csv")
+        .with_context(|| self.at("raw.csv"))
     }
 
     /// A fault of run `run` (empty: unknown).
@@ -150,12 +154,12 @@ impl Files {
             flt.kind.name(),
             f(flt.value)
         )
-        .context("cannot write faults.csv")
+        .with_context(|| self.at("faults.csv"))
     }
 
     /// A complete pair, to `pairs.csv`.
     pub fn pair(&mut self, p: &Pair) -> anyhow::Result<()> {
-        self.pairs.write(p).context("cannot write pairs.csv")
+        self.pairs.write(p).with_context(|| self.at("pairs.csv"))
     }
 
     /// Make sure `pairs-incomplete.csv` exists; true if this call created it.
@@ -171,7 +175,7 @@ impl Files {
     /// [`Files::open_incomplete`]).
     pub fn incomplete_pair(&mut self, p: &Pair) -> anyhow::Result<()> {
         let w = self.incomplete.as_mut().expect("opened first");
-        w.write(p).context("cannot write pairs-incomplete.csv")
+        w.write(p).with_context(|| self.at("pairs-incomplete.csv"))
     }
 
     /// A settings report, to `settings.csv` (created with its header by the first).
@@ -185,7 +189,7 @@ impl Files {
         let w = self.settings.as_mut().expect("just created");
         let cells: Vec<&str> = values.iter().map(|v| v.value.as_str()).collect();
         writeln!(w, "{seq},{},{}", source_name(r.source), cells.join(","))
-            .context("cannot write settings.csv")
+            .with_context(|| self.at("settings.csv"))
     }
 
     /// A live reading of setup mode, to `live.csv` (created with its header by the first).
@@ -204,7 +208,12 @@ impl Files {
             f(l.force_n[1]),
             f(l.servo_deg)
         )
-        .context("cannot write live.csv")
+        .with_context(|| self.at("live.csv"))
+    }
+
+    /// The message of a failed write of `name`: the final path, where the user looks.
+    fn at(&self, name: &str) -> String {
+        format!("cannot write {}", self.dir.join(name).display())
     }
 
     /// Flush every file.
@@ -230,8 +239,14 @@ impl Files {
         Ok(())
     }
 
-    /// Close the session: flush, add `summary.json`, and replace the previous session's files.
-    pub fn close(mut self, summary_json: &str) -> anyhow::Result<()> {
+    /// Close the session: flush, add `summary.json`, and, if `commit`, replace the previous
+    /// session's files; otherwise keep the files apart (if `received` anything) or drop them.
+    pub fn close(
+        mut self,
+        summary_json: &str,
+        commit: bool,
+        received: bool,
+    ) -> anyhow::Result<super::Outcome> {
         self.flush()?;
         drop((
             self.raw,
@@ -244,6 +259,14 @@ impl Files {
             self.live,
         ));
         self.set.write(SUMMARY_JSON, summary_json.as_bytes())?;
-        self.set.commit()
+        if commit {
+            self.set.commit()?;
+            Ok(super::Outcome::Committed)
+        } else if received {
+            Ok(super::Outcome::Kept(self.set.keep()?))
+        } else {
+            self.set.discard();
+            Ok(super::Outcome::Discarded)
+        }
     }
 }

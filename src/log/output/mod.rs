@@ -4,7 +4,7 @@
 //! | file | what |
 //! |---|---|
 //! | `raw.csv` | `run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n`: the decimated raw samples |
-//! | `pairs.csv` | the conditioned pairs, in the schema of `data.rs` (`analyze` reads it) |
+//! | `pairs.csv` | the conditioned pairs, in the schema of `data` (`analyze` reads it), and `boot`: 1, then one more at every restart of the board (its run numbers start again) |
 //! | `pairs-incomplete.csv` | only if needed: pairs whose set-up (wrap, diameter, drive voltage) or run number is unknown, same schema with those cells empty |
 //! | `faults.csv` | `run,seq,time_s,kind,channel,value` |
 //! | `messages.txt` | the firmware's other log lines (`LEVEL text`), and each command reply as `REPLY seq=N sentence` |
@@ -12,6 +12,10 @@
 //! | `live.csv` | only if needed: setup mode's live values `seq,time_s,t1_counts,t2_counts,t1_n,t2_n,servo_deg` (time since boot) |
 //! | `stream.defmt` | the bytes as received (for `capstan log --from`), unless read from a file |
 //! | `summary.json` | counts, runs, sequence gaps, bad frames, why the session stopped |
+//!
+//! The files become the directory's set only when the session holds a complete run (or
+//! [`LogOptions::allow_empty`]): a recorded session is never replaced by an empty or broken
+//! one ([`Outcome`]).
 //!
 //! Times are seconds since the logger trigger's rising edge (negative before it), except in
 //! `live.csv` and for a fault in setup mode (no trigger there): seconds since boot.
@@ -83,6 +87,20 @@ pub struct LogOptions {
     pub setup: SetupFlags,
     /// Report runs, pairs, faults and gaps on stderr as they arrive.
     pub progress: bool,
+    /// Keep a session without a complete run as the directory's set (otherwise it replaces
+    /// nothing: it is kept as `incomplete-<id>`, or dropped if nothing was received).
+    pub allow_empty: bool,
+}
+
+/// What became of a session's files when it ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// They are the directory's set now (the previous session's, if any, replaced).
+    Committed,
+    /// Not committed (no complete run): kept here; the directory is as it was.
+    Kept(PathBuf),
+    /// Not committed, and nothing was received: nothing kept; the directory is as it was.
+    Discarded,
 }
 
 /// Why a session ended.
@@ -90,8 +108,8 @@ pub struct LogOptions {
 pub enum Stop {
     /// The stream (file, pipe) ended.
     EndOfStream,
-    /// Ctrl-C.
-    Interrupted,
+    /// A signal: Ctrl-C, SIGTERM, SIGHUP (which, in words).
+    Interrupted(&'static str),
     /// The probe or the target stopped answering.
     ProbeLost(String),
     /// A limit given on the command line was reached.
@@ -102,7 +120,7 @@ impl std::fmt::Display for Stop {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Stop::EndOfStream => f.write_str("end of stream"),
-            Stop::Interrupted => f.write_str("interrupted (Ctrl-C)"),
+            Stop::Interrupted(why) => write!(f, "interrupted ({why})"),
             Stop::ProbeLost(e) => write!(f, "probe lost: {e}"),
             Stop::Limit(l) => write!(f, "limit reached: {l}"),
         }

@@ -6,7 +6,7 @@ mod setup;
 
 use super::files::{decimal, Files};
 use super::summary::{RecordCounts, RunCalibration, RunSummary, Sourced, Summary, TruncatedTail};
-use super::{LogOptions, Stop, PAIRS_INCOMPLETE_CSV};
+use super::{LogOptions, Outcome, Stop, PAIRS_INCOMPLETE_CSV};
 use crate::data::Pair;
 use crate::log::decoder::{BadFrame, Decoder, Located};
 use crate::log::elf::{Firmware, RecordKind};
@@ -42,6 +42,9 @@ pub struct Logger<'f> {
     in_setup: bool,
     events: Vec<Located>,
     bad: Vec<BadFrame>,
+    /// The board's starts seen so far (1, then one more at every restart): the `boot` label
+    /// of the pairs.
+    boot: u32,
 }
 
 /// A run number for messages: `?` when unknown.
@@ -69,6 +72,7 @@ impl<'f> Logger<'f> {
             in_setup: false,
             events: Vec::new(),
             bad: Vec::new(),
+            boot: 1,
         })
     }
 
@@ -160,6 +164,7 @@ impl<'f> Logger<'f> {
                     );
                 }
                 self.current = None;
+                self.boot += 1;
             }
             _ => {}
         }
@@ -269,6 +274,7 @@ impl<'f> Logger<'f> {
             t1_n: decimal(p.t1.mean_n),
             t2_n: decimal(p.t2.mean_n),
             extra: Vec::new(),
+            labels: vec![self.boot.to_string()],
         };
         let complete =
             c.diameter.is_some() && c.wrap.is_some() && c.drive.is_some() && rs.run.is_some();
@@ -345,8 +351,17 @@ impl<'f> Logger<'f> {
         }
     }
 
-    /// End the session: account for an unfinished frame, flush, write `summary.json`.
-    pub fn finish(mut self, stop: &Stop) -> anyhow::Result<Summary> {
+    /// End the session: account for an unfinished frame, flush, write `summary.json`, and
+    /// replace the directory's previous session with this one if it holds a complete run (or
+    /// `allow_empty` was given); see [`Logger::finish_with`].
+    pub fn finish(self, stop: &Stop) -> anyhow::Result<Summary> {
+        self.finish_with(stop).map(|(s, _)| s)
+    }
+
+    /// [`Logger::finish`], saying what became of the files: a session without a complete run
+    /// replaces nothing (a good recorded session is irreplaceable); what it received is kept
+    /// as `incomplete-<id>`, or dropped if nothing was.
+    pub fn finish_with(mut self, stop: &Stop) -> anyhow::Result<(Summary, Outcome)> {
         let tail = self.decoder.finish();
         self.files.flush()?;
         let d = &self.decoder;
@@ -369,13 +384,16 @@ impl<'f> Logger<'f> {
             // A frame cut by the end of the stream (or a lost probe) is damage; one cut where we
             // chose to stop reading (a limit, Ctrl-C) is not.
             truncated_tail: tail
-                .filter(|_| !matches!(stop, Stop::Interrupted | Stop::Limit(_)))
+                .filter(|_| !matches!(stop, Stop::Interrupted(_) | Stop::Limit(_)))
                 .map(|(byte_offset, bytes)| TruncatedTail { byte_offset, bytes }),
             runs: self.runs.clone(),
             pairs_incomplete: self.pairs_incomplete,
         };
         let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-        self.files.close(&(json + "\n"))?;
-        Ok(summary)
+        let commit = self.opts.allow_empty || summary.runs.iter().any(|r| r.complete);
+        let outcome = self
+            .files
+            .close(&(json + "\n"), commit, summary.bytes > 0)?;
+        Ok((summary, outcome))
     }
 }

@@ -260,12 +260,20 @@ impl Summary {
             );
         }
         if self.pairs_incomplete > 0 {
+            // The stream to decode again: the copy the session saved (from a board or stdin),
+            // or the file it was decoded from.
+            let saved = dir.join(STREAM_FILE);
+            let from = if saved.exists() {
+                saved.display().to_string()
+            } else {
+                self.source.clone()
+            };
             s += &format!(
                 "\ncapstan log: {} pair(s) lack a set-up value or their run number and are in \
                  {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; decode the stream again with \
-                 --wrap-deg/--diameter-mm/--drive-v (capstan log --from {}/{STREAM_FILE} ...)",
-                self.pairs_incomplete,
-                dir.display()
+                 --wrap-deg/--diameter-mm/--drive-v into another directory (capstan log \
+                 --elf {} --from {from} --out NEW_DIR --wrap-deg ...)",
+                self.pairs_incomplete, self.elf
             );
         }
         s

@@ -117,13 +117,10 @@ pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
 
 /// Amplification T2/T1 against T1, one panel per cord (rows: diameters, columns: wraps).
 pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
-    let panels: Vec<Panel> = a
-        .obs
-        .groups
-        .iter()
-        .enumerate()
-        .map(|(g, grp)| {
-            let c = pal.color(grp.wrap_deg);
+    let panels: Vec<Panel> = panel_cords(a)
+        .into_iter()
+        .map(|g| {
+            let c = pal.color(a.obs.groups[g].wrap_deg);
             amp_panel(a, g, c, model_series(a, g, c, true))
         })
         .collect();
@@ -131,8 +128,25 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
         id: "amp_vs_t1",
         legend: legend(a, pal),
         chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
-        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).{}", super::drawn_note(a)),
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).{}{}", panels_note(a), super::drawn_note(a)),
     })
+}
+
+/// The most cords drawn one panel each: a data set with more shows this many, evenly spaced.
+pub const MAX_CORD_PANELS: usize = 24;
+
+/// The cords drawn one panel each.
+fn panel_cords(a: &Analysis) -> Vec<usize> {
+    crate::analysis::closed_loop::evenly(a.obs.groups.len(), MAX_CORD_PANELS)
+}
+
+/// The caption's sentence when not every cord has its panel.
+fn panels_note(a: &Analysis) -> String {
+    let n = a.obs.groups.len();
+    if n <= MAX_CORD_PANELS {
+        return String::new();
+    }
+    format!(" {MAX_CORD_PANELS} of the {n} cords are drawn, evenly spaced in the cord order.")
 }
 
 /// One cord's amplification panel: its measured points, then `curves` over them.
@@ -165,13 +179,12 @@ fn plant_causes(a: &Analysis) -> String {
 
 /// The closed loop: simulated amplification over the measured points, per cord.
 pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<Figure> {
-    let panels: Vec<Panel> = a
-        .obs
-        .groups
+    let panels: Vec<Panel> = curves
         .iter()
-        .enumerate()
-        .map(|(g, grp)| {
-            let c = pal.color(grp.wrap_deg);
+        .map(|(g, _)| *g)
+        .take(MAX_CORD_PANELS)
+        .map(|g| {
+            let c = pal.color(a.obs.groups[g].wrap_deg);
             let sims = curves.iter().filter(|(cg, _)| *cg == g);
             amp_panel(
                 a,
@@ -190,6 +203,6 @@ pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<F
         id: "closed_loop",
         legend,
         chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
-        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{}", plant_causes(a), super::drawn_note(a)),
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{}{}", plant_causes(a), if curves.len() < a.obs.groups.len() { format!(" {} of the {} cords are simulated, evenly spaced in the cord order.", curves.len(), a.obs.groups.len()) } else { String::new() }, super::drawn_note(a)),
     })
 }

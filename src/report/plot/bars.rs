@@ -82,15 +82,16 @@ pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
             let x1 = x0 + bw - 0.02;
             let svg = render(size, |root| {
                 let mut chart = build(root, &f)?;
-                match v {
+                // A value that is not identified is drawn as missing, never as "NaN".
+                match v.filter(|x| x.is_finite()) {
                     Some(v) => {
                         let label = font(TICK, false).pos(Pos::new(HPos::Center, VPos::Bottom));
                         chart.draw_series([
-                            Rectangle::new([(x0, 0.0), (x1, *v)], color.filled()),
-                            Rectangle::new([(x0, 0.0), (x1, *v)], TEXT.stroke_width(1)),
+                            Rectangle::new([(x0, 0.0), (x1, v)], color.filled()),
+                            Rectangle::new([(x0, 0.0), (x1, v)], TEXT.stroke_width(1)),
                         ])?;
                         chart.draw_series(std::iter::once(
-                            EmptyElement::at(((x0 + x1) / 2.0, *v))
+                            EmptyElement::at(((x0 + x1) / 2.0, v))
                                 + Text::new(format!("{v:.3}"), (0, -4), label),
                         ))?;
                     }
@@ -111,7 +112,11 @@ pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
                 }
                 Ok(())
             })?;
-            let class = if v.is_some() { "mark bar" } else { "missing" };
+            let class = if v.is_some_and(|x| x.is_finite()) {
+                "mark bar"
+            } else {
+                "missing"
+            };
             layers.push(Layer { class, svg });
         }
     }

@@ -1,0 +1,220 @@
+//! `capstan log`'s judgement of its own command line and of a session: the arguments
+//! against the physical ranges before anything is opened, and the exit status and message a
+//! session ends with (committed or not, strict, probe lost).
+
+use super::Args;
+use crate::log::output::{Outcome, Stop, Summary};
+use anyhow::bail;
+
+/// The command line's values against the physical ranges (`data::ranges`), and `--from`
+/// checked, before anything is opened or written.
+pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
+    use crate::data::ranges;
+    if let Some(d) = args.duration {
+        ranges::LOG_DURATION_S.option("--duration", d)?;
+    }
+    for (flag, v, r) in [
+        ("--diameter-mm", args.diameter_mm, &ranges::DIAMETER_MM),
+        ("--wrap-deg", args.wrap_deg, &ranges::WRAP_DEG),
+        ("--drive-v", args.drive_v, &ranges::DRIVE_V),
+    ] {
+        if let Some(v) = v {
+            r.option(flag, v)?;
+        }
+    }
+    if args.runs == Some(0) {
+        bail!("--runs 0: must be 1 or more (the number of complete runs to log)");
+    }
+    let Some(from) = args.from.as_deref().filter(|f| *f != "-") else {
+        return Ok(());
+    };
+    if std::path::Path::new(from).is_dir() {
+        bail!("--from {from} is a directory: give the saved stream file (e.g. DIR/stream.defmt)");
+    }
+    let inside = std::fs::canonicalize(from).ok().and_then(|f| {
+        let out = std::fs::canonicalize(&args.out).ok()?;
+        Some(f == out.join(crate::log::output::STREAM_FILE))
+    });
+    if inside == Some(true) {
+        bail!(
+            "--from {from} is the saved stream of the session in --out {}: decoding it \
+             there would replace it; choose another --out",
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// A session without a complete run: it replaced nothing; say why, where what was received
+/// is, and what to do.
+pub(super) fn not_committed(
+    summary: &Summary,
+    stop: &Stop,
+    outcome: &Outcome,
+    args: &Args,
+) -> anyhow::Result<()> {
+    let dir = args.out.display();
+    let why = if summary.bytes == 0 {
+        "nothing was received".to_string()
+    } else if summary.records.total() == 0 {
+        format!(
+            "no rig records in {} bytes ({} frames, {} did not decode): is the stream from the \
+             firmware built as {}?",
+            summary.bytes,
+            summary.frames,
+            summary.bad_frames,
+            args.elf.display()
+        )
+    } else {
+        format!(
+            "no complete run in {} records (a run ends with its run_end record)",
+            summary.records.total()
+        )
+    };
+    let kept = match outcome {
+        Outcome::Kept(p) => format!("what was received is kept in {}", p.display()),
+        _ => "nothing was kept".to_string(),
+    };
+    let msg = format!(
+        "{why}; {dir} is as it was (a session replaces files only with a complete run), {kept}; \
+         pass --allow-empty to keep such a session as {dir}'s files"
+    );
+    if let Stop::ProbeLost(e) = stop {
+        bail!("lost the probe while logging ({e}): {msg}");
+    }
+    if matches!(stop, Stop::Interrupted(_)) {
+        return Err(crate::cli::signal::Interrupted(format!("interrupted: {msg}")).into());
+    }
+    bail!("{msg}")
+}
+
+pub(super) fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Result<()> {
+    let dir = args.out.display();
+    if let Stop::ProbeLost(e) = stop {
+        bail!("lost the probe while logging ({e}); everything received until then is in {dir}");
+    }
+    if summary.records.total() == 0 && summary.bytes > 0 {
+        bail!(
+            "no rig records in {} bytes ({} frames, {} did not decode): is the stream from the \
+             firmware built as {}?",
+            summary.bytes,
+            summary.frames,
+            summary.bad_frames,
+            args.elf.display()
+        );
+    }
+    if args.strict && summary.bytes == 0 {
+        bail!("--strict: the stream is empty (no byte received)");
+    }
+    if args.strict && summary.runs.iter().all(|r| !r.complete) {
+        bail!("--strict: no complete run in the stream (see {dir}/summary.json)");
+    }
+    if args.strict && !summary.is_clean() {
+        bail!(
+            "--strict: {} record(s) lost, {} bad frame(s){} (see {dir}/summary.json)",
+            summary.missing_records,
+            summary.bad_frames,
+            if summary.truncated_tail.is_some() {
+                ", stream truncated"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::log::output::RecordCounts;
+    use clap::Parser;
+
+    fn summary(records: RecordCounts, bytes: u64, missing: u64) -> Summary {
+        Summary {
+            source: "test".into(),
+            elf: "fw.elf".into(),
+            stopped: "end of stream".into(),
+            bytes,
+            frames: 3,
+            records,
+            messages: 0,
+            first_seq: Some(0),
+            last_seq: Some(9),
+            missing_records: missing,
+            gaps: Vec::new(),
+            restarts: Vec::new(),
+            backwards: Vec::new(),
+            bad_frames: 0,
+            bad_frame_examples: Vec::new(),
+            truncated_tail: None,
+            runs: vec![complete_run()],
+            pairs_incomplete: 0,
+        }
+    }
+
+    fn complete_run() -> crate::log::output::RunSummary {
+        use crate::log::output::{RunSummary, Sourced};
+        let mut r = RunSummary::new(
+            Some(1),
+            0,
+            Sourced::choose(None, None),
+            Sourced::choose(None, None),
+            Sourced::choose(None, None),
+        );
+        r.complete = true;
+        r
+    }
+
+    fn args(extra: &[&str]) -> Args {
+        let mut argv = vec![
+            "capstan", "log", "--elf", "fw.elf", "--out", "d", "--from", "-",
+        ];
+        argv.extend(extra);
+        match crate::cli::Cli::parse_from(argv).command {
+            crate::cli::Command::Log(a) => a,
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn exit_status_says_what_went_wrong() {
+        let some = RecordCounts {
+            raw: 10,
+            ..RecordCounts::default()
+        };
+        let ok = summary(some.clone(), 100, 0);
+        assert!(verdict(&ok, &Stop::EndOfStream, &args(&[])).is_ok());
+        assert!(verdict(&ok, &Stop::Interrupted("Ctrl-C"), &args(&[])).is_ok());
+        let lost = verdict(&ok, &Stop::ProbeLost("USB gone".into()), &args(&[]));
+        assert!(lost
+            .unwrap_err()
+            .to_string()
+            .contains("lost the probe while logging (USB gone)"));
+        let gaps = summary(some, 100, 2);
+        assert!(verdict(&gaps, &Stop::EndOfStream, &args(&[])).is_ok());
+        let strict = verdict(&gaps, &Stop::EndOfStream, &args(&["--strict"]));
+        assert!(strict.unwrap_err().to_string().contains("2 record(s) lost"));
+        let none = summary(RecordCounts::default(), 100, 0);
+        let e = verdict(&none, &Stop::EndOfStream, &args(&[])).unwrap_err();
+        assert!(e.to_string().contains("no rig records in 100 bytes"));
+        // A session committed without a complete run (only with --allow-empty: otherwise
+        // `not_committed` judges it) is not an error, except under --strict.
+        let empty = summary(RecordCounts::default(), 0, 0);
+        assert!(verdict(&empty, &Stop::EndOfStream, &args(&[])).is_ok());
+        let e = verdict(&empty, &Stop::EndOfStream, &args(&["--strict"])).unwrap_err();
+        assert!(e.to_string().contains("the stream is empty"), "{e}");
+        let mut unfinished = summary(
+            RecordCounts {
+                raw: 10,
+                ..RecordCounts::default()
+            },
+            100,
+            0,
+        );
+        unfinished.runs[0].complete = false;
+        assert!(verdict(&unfinished, &Stop::EndOfStream, &args(&[])).is_ok());
+        let e = verdict(&unfinished, &Stop::EndOfStream, &args(&["--strict"])).unwrap_err();
+        assert!(e.to_string().contains("no complete run"), "{e}");
+    }
+}

@@ -1,0 +1,299 @@
+//! Why a pairs CSV could not be read, each with the file, line and column an editor shows, the
+//! value found (at most [`QUOTE_CHARS`] characters of it) and what to do.
+
+use super::records::MAX_RECORD_BYTES;
+use std::fmt;
+
+/// The most characters of a cell an error quotes.
+pub const QUOTE_CHARS: usize = 80;
+
+/// Why a CSV could not be read. Lines and columns are 1-based, as an editor shows them.
+#[derive(Debug)]
+pub enum DataError {
+    /// The file could not be opened or read.
+    Io {
+        path: String,
+        line: Option<u64>,
+        source: std::io::Error,
+    },
+    /// A required column is missing from the header.
+    MissingColumn { path: String, column: &'static str },
+    /// A header names a column twice.
+    DuplicateColumn {
+        path: String,
+        column: String,
+        first: usize,
+        second: usize,
+    },
+    /// A header cell is empty.
+    UnnamedColumn { path: String, column: usize },
+    /// A cell is not what its column needs.
+    BadCell {
+        path: String,
+        line: u64,
+        column: usize,
+        name: String,
+        value: String,
+        reason: String,
+    },
+    /// A row has another number of cells than the header.
+    CellCount {
+        path: String,
+        line: u64,
+        found: usize,
+        expected: usize,
+    },
+    /// The file has a header but no rows.
+    Empty { path: String },
+    /// The file is empty: not even a header.
+    NoHeader { path: String },
+    /// The first line is a comment (`# ...`).
+    Comment { path: String, line: u64 },
+    /// The header has one column that looks like several joined by another separator.
+    Separator {
+        path: String,
+        header: String,
+        separator: char,
+        /// The rows write decimals with a comma (`1,5`).
+        decimal_comma: bool,
+    },
+    /// A record is longer than any pairs CSV line can be (a binary file, or a quote never
+    /// closed).
+    TooLong {
+        path: String,
+        line: u64,
+        column: usize,
+        quoted: bool,
+    },
+    /// The file ends inside a quoted cell.
+    UnclosedQuote {
+        path: String,
+        line: u64,
+        column: usize,
+    },
+    /// A cell is not UTF-8 text.
+    NotText {
+        path: String,
+        line: u64,
+        column: usize,
+    },
+    /// Two rows have the same cord, run and step.
+    DuplicateRow {
+        path: String,
+        line: u64,
+        first_line: u64,
+        key: String,
+    },
+    /// The data cannot come from a capstan: no row has T2 above T1.
+    NoFriction { path: String, rows: usize },
+    /// T2 is below T1 in most rows: the columns look swapped.
+    Swapped {
+        path: String,
+        rows: usize,
+        below: usize,
+    },
+    /// Most rows have a tension at or below zero: not tensions as a rig reads them.
+    NotPositive {
+        path: String,
+        rows: usize,
+        positive: usize,
+        first_line: u64,
+    },
+}
+
+/// At most [`QUOTE_CHARS`] characters of `s`, control characters escaped, with how long it
+/// was if cut.
+pub fn quote(s: &str) -> String {
+    let n = s.chars().count();
+    let shown: String = s
+        .chars()
+        .take(QUOTE_CHARS)
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_default().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect();
+    if n > QUOTE_CHARS {
+        format!("{shown}… ({n} characters)")
+    } else {
+        shown
+    }
+}
+
+impl fmt::Display for DataError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use DataError::*;
+        match self {
+            Io {
+                path,
+                line: Some(l),
+                source,
+            } => write!(f, "{path}:{l}: cannot read: {source}"),
+            Io { path, source, .. } => write!(f, "{path}: {source}"),
+            MissingColumn { path, column } => write!(
+                f,
+                "{path}:1: missing required column `{column}` (a pairs CSV needs wrap_deg, \
+                 t1_n and t2_n)"
+            ),
+            DuplicateColumn {
+                path,
+                column,
+                first,
+                second,
+            } => write!(
+                f,
+                "{path}:1:{second}: column `{column}` appears twice (also column {first}): \
+                 rename or remove one"
+            ),
+            UnnamedColumn { path, column } => write!(
+                f,
+                "{path}:1:{column}: header column {column} has no name (a trailing comma?): \
+                 name it or remove it"
+            ),
+            BadCell {
+                path,
+                line,
+                column,
+                name,
+                value,
+                reason,
+            } => write!(
+                f,
+                "{path}:{line}:{column}: column `{name}`: {reason} (found `{}`)",
+                quote(value)
+            ),
+            CellCount {
+                path,
+                line,
+                found,
+                expected,
+            } => write!(
+                f,
+                "{path}:{line}: {found} cells where the header has {expected}"
+            ),
+            Empty { path } => write!(f, "{path}: no data rows (a header and nothing else)"),
+            NoHeader { path } => {
+                write!(
+                    f,
+                    "{path}: the file is empty (expected a CSV header and rows)"
+                )
+            }
+            Comment { path, line } => write!(
+                f,
+                "{path}:{line}: a comment line (`#`) before the header: a pairs CSV starts with \
+                 its header; remove the comment lines (e.g. `grep -v '^#' {path} > clean.csv`)"
+            ),
+            Separator {
+                path,
+                header,
+                separator,
+                decimal_comma,
+            } => {
+                let sep = match separator {
+                    '\t' => "tabs".to_string(),
+                    c => format!("`{c}`"),
+                };
+                let e = separator.escape_default();
+                let fix = if *decimal_comma {
+                    format!(
+                        "its decimals are written with commas, so turn them into points first: \
+                         `sed -e 's/,/./g' -e 's/{e}/,/g' {path} > fixed.csv`"
+                    )
+                } else {
+                    format!("e.g. `tr '{e}' ',' < {path} > fixed.csv`")
+                };
+                write!(
+                    f,
+                    "{path}:1: the header `{}` is one column: the file looks separated by {sep}; \
+                     capstan reads comma-separated values ({fix})",
+                    quote(header)
+                )
+            }
+            TooLong {
+                path,
+                line,
+                column,
+                quoted: false,
+            } => write!(
+                f,
+                "{path}:{line}:{column}: a line longer than {MAX_RECORD_BYTES} bytes: not a \
+                 pairs CSV (a binary file?)"
+            ),
+            TooLong {
+                path,
+                line,
+                column,
+                quoted: true,
+            } => write!(
+                f,
+                "{path}:{line}:{column}: a quoted cell that runs over {MAX_RECORD_BYTES} bytes \
+                 (a `\"` never closed?)"
+            ),
+            UnclosedQuote { path, line, column } => write!(
+                f,
+                "{path}:{line}:{column}: a quoted cell opened here is never closed (a stray `\"`?)"
+            ),
+            NotText { path, line, column } => write!(
+                f,
+                "{path}:{line}:{column}: not UTF-8 text (a binary file, or another encoding: \
+                 save it as UTF-8 CSV)"
+            ),
+            DuplicateRow {
+                path,
+                line,
+                first_line,
+                key,
+            } => write!(
+                f,
+                "{path}:{line}: {key} again (first on line {first_line}): two sessions \
+                 concatenated with the same run numbers, or two cords no column tells apart? \
+                 Give each its own run numbers, a `session` column, or the column that \
+                 separates the cords (capstan_diameter_mm, or a `cord` label)"
+            ),
+            NoFriction { path, rows } => write!(
+                f,
+                "{path}: T2 is at most T1 in all {rows} rows: a capstan amplifies tension \
+                 (T2 > T1), so these are not capstan data (are the t1_n and t2_n columns \
+                 swapped, or the drive off?)"
+            ),
+            Swapped { path, rows, below } => write!(
+                f,
+                "{path}: T2 is below T1 in {below} of {rows} rows: a capstan amplifies tension \
+                 (T2 > T1), so the t1_n and t2_n columns look swapped; t1_n is the servo (low) \
+                 side: swap the two names in the header"
+            ),
+            NotPositive {
+                path,
+                rows,
+                positive,
+                first_line,
+            } => write!(
+                f,
+                "{path}: only {positive} of {rows} rows have both tensions above zero (the \
+                 first without is line {first_line}): a loaded cord reads above zero, so these \
+                 are not tensions as a rig measures them (negated, or another sign convention?)"
+            ),
+        }
+    }
+}
+
+// The I/O error's text is already part of the message (`path: error`), so it is not repeated
+// as a `source()` (which `{:#}` would print a second time).
+impl std::error::Error for DataError {}
+
+#[cfg(test)]
+mod tests {
+    use super::quote;
+
+    #[test]
+    fn quotes_are_short_and_on_one_line() {
+        assert_eq!(quote("abc"), "abc");
+        assert_eq!(quote("a\nb\r"), "a\\nb\\r");
+        let long = "x".repeat(1_000_000);
+        let q = quote(&long);
+        assert!(q.len() < 120 && q.ends_with("(1000000 characters)"), "{q}");
+    }
+}

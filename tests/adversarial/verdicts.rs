@@ -1,0 +1,113 @@
+//! What `diagnose` and `analyze` say on extreme data: no inf or NaN in a verdict, a summary or
+//! the report; "not identified" where the data cannot say.
+
+use super::checked;
+use capstan::data::{read_pairs, Dataset};
+
+fn data(text: &str) -> Dataset {
+    read_pairs(text.as_bytes(), "x.csv").unwrap()
+}
+
+/// No `inf`/`NaN` word in `text`.
+fn finite_words(text: &str) {
+    for w in text.split(|c: char| !(c.is_alphanumeric() || c == '_')) {
+        assert!(w != "inf" && w != "NaN", "{text}");
+    }
+}
+
+fn thesis_rows(mut edit: impl FnMut(usize, &mut Vec<String>)) -> Dataset {
+    let mut s = String::new();
+    for (i, l) in capstan::data::THESIS_CSV.lines().enumerate() {
+        let mut c: Vec<String> = l.trim_end().split(',').map(String::from).collect();
+        if i > 0 {
+            edit(i, &mut c);
+        }
+        s += &c.join(",");
+        s.push('\n');
+    }
+    data(&s)
+}
+
+#[test]
+fn extreme_readings_give_finite_words_or_not_identified() {
+    let sets = [
+        // Case 7: one T2 of 9,999 N among the thesis's.
+        thesis_rows(|i, c| {
+            if i == 100 {
+                c[6] = "9999".into();
+            }
+        }),
+        // Tensions near 1e-300.
+        thesis_rows(|i, c| {
+            if i % 7 == 0 {
+                c[5] = "1e-300".into();
+                c[6] = "2e-300".into();
+            }
+        }),
+        // A handful of rows, one wrap.
+        data("wrap_deg,t1_n,t2_n\n270,1,2\n270,2,4.2\n270,3,6.1\n"),
+        // Every T1 the same.
+        data("wrap_deg,run,t1_n,t2_n\n270,1,5,9\n270,1,5,9.1\n270,2,5,9.3\n360,1,5,12\n360,2,5,12.2\n"),
+    ];
+    for d in &sets {
+        let a = capstan::diagnose::diagnose(d);
+        finite_words(&capstan::cli::diagnose::summary(&a, &d.source));
+        finite_words(&a.verdict);
+        assert!(serde_json::from_str::<serde_json::Value>(&a.to_json()).is_ok());
+        checked();
+    }
+}
+
+#[test]
+fn one_row_is_not_identified_rather_than_explained() {
+    let d = data("wrap_deg,t1_n,t2_n\n270,1,2\n");
+    let a = capstan::diagnose::diagnose(&d);
+    assert!(a.verdict.starts_with("Not identified:"), "{}", a.verdict);
+    assert!(
+        !a.verdict.contains("explains the data within their noise"),
+        "{}",
+        a.verdict
+    );
+    assert!(
+        a.verdict.contains("each cord is taken as one run"),
+        "{}",
+        a.verdict
+    );
+    checked();
+    // analyze refuses it plainly.
+    let e = capstan::analysis::run(&d, capstan::analysis::Options { threads: 1 })
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("too few to analyse"), "{e}");
+    checked();
+}
+
+#[test]
+fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
+    // The thesis reduced to wrap, T1, T2 (case 5): 5 cords and 5 runs in both, assumed, said.
+    let three: String = capstan::data::THESIS_CSV
+        .lines()
+        .map(|l| {
+            let c: Vec<&str> = l.trim_end().split(',').collect();
+            format!("{},{},{}\n", c[1], c[5], c[6])
+        })
+        .collect();
+    let d = data(&three);
+    let a = capstan::analysis::run(&d, capstan::analysis::Options { threads: 2 }).unwrap();
+    assert_eq!((a.obs.groups.len(), a.obs.runs.len()), (5, 5));
+    assert_eq!((a.evidence.design.cords, a.evidence.design.runs), (5, 5));
+    assert!(
+        a.evidence
+            .verdict
+            .contains("a structure not read from columns"),
+        "{}",
+        a.evidence.verdict
+    );
+    let m = capstan::report::metrics_json(&a, &serde_json::Value::Null);
+    assert_eq!(m["data"]["structure"]["runs"]["from"], "assumed");
+    assert_eq!(m["data"]["structure"]["cords"]["from"], "assumed");
+    let html = capstan::report::report_html(&a, None, "").unwrap();
+    assert!(html.contains("5 cords ASSUMED"), "the report says it");
+    checked();
+}
