@@ -442,13 +442,13 @@ fn the_servo_is_an_hs322hd_whatever_the_firmware_means() {
 }
 
 #[test]
-fn the_amplifiers_rc_filter_takes_46_ms_to_settle_within_1_percent() {
+fn the_amplifiers_rc_filter_takes_22_ms_to_settle_within_1_percent() {
     let mut p = plant(360.0, Model::euler_eytelwein(0.115), 7);
     p.set_servo_duty(0, duty_for(160.0), SERVO_MAX_DUTY); // slack: no friction load
     p.set_amp_duty(0, 2_500, AMP_MAX_DUTY); // 2.5 V control, 10 V drive
     assert!(!p.is_safe(0));
-    p.advance_to(10 * MS);
-    // One time constant (10 kΩ · 1 µF): 63 %.
+    p.advance_to(4_700); // µs
+    // One time constant (4.7 kΩ · 1 µF): 63 %.
     let d = p.drive().drive_v;
     assert!((d - 10.0 * (1.0 - (-1.0f64).exp())).abs() < 0.01, "{d}");
     p.advance_to(1_000 * MS);
@@ -458,9 +458,10 @@ fn the_amplifiers_rc_filter_takes_46_ms_to_settle_within_1_percent() {
     p.set_amp_duty(0, 0, AMP_MAX_DUTY);
     p.set_servo_duty(0, duty_for(125.0), SERVO_MAX_DUTY);
     assert!(p.is_safe(0));
-    p.advance_to(1_040 * MS);
+    // 1 % of 10 V after 4.6 τ = 21.6 ms.
+    p.advance_to(1_020 * MS);
     assert!(p.drive().drive_v > 0.1, "{:?}", p.drive());
-    p.advance_to(1_047 * MS);
+    p.advance_to(1_022 * MS);
     assert!(p.drive().drive_v < 0.1, "{:?}", p.drive());
     p.advance_to(1_200 * MS);
     assert_eq!(p.drive().drive_v, 0.0);

@@ -293,9 +293,13 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
         && case.rtt_stall_us.is_none()
         && case.held_from_power_up_us == 0)
         .then_some("--strict");
+    // Those other cases may end with no complete run (a fault at boot, no press): their
+    // session is kept all the same, which `log` does only when asked.
+    let allow_empty = strict.is_none().then_some("--allow-empty");
     let log = Command::new(env!("CARGO_BIN_EXE_capstan"))
         .args(["log", "--quiet"])
         .args(strict)
+        .args(allow_empty)
         .arg("--elf")
         .arg(&img.elf)
         .arg("--from")
