@@ -331,6 +331,176 @@ fn settings_fields(s: &Settings, mut f: impl FnMut(Scalar)) {
     }
 }
 
+/// Why fields do not make a record ([`Record::from_fields`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldsError {
+    /// Fewer fields than the record has; the first missing.
+    Missing(&'static str),
+    /// A field of another wire type.
+    Type(&'static str),
+    /// More fields than the record has.
+    Extra,
+    /// A code that means nothing in this field.
+    Code {
+        /// The field.
+        field: &'static str,
+        /// The code.
+        code: u8,
+    },
+}
+
+impl Record {
+    /// The record of a kind from its fields in wire order, `seq` first and `crc` left out (as
+    /// [`Record::for_each_field`] gives them): the sequence number and the record.
+    pub fn from_fields(kind: RecordKind, fields: &[Scalar]) -> Result<(u32, Record), FieldsError> {
+        let mut r = FieldReader {
+            kind,
+            fields,
+            at: 0,
+        };
+        let seq = r.u32()?;
+        let record = match kind {
+            RecordKind::RunStart => {
+                let run = r.u32()?;
+                let s = r.settings()?;
+                Record::RunStart(RunStart {
+                    run,
+                    protocol: s.protocol,
+                    calibration: s.calibration,
+                })
+            }
+            RecordKind::Settings => Record::Settings(SettingsReport {
+                source: r.code(SettingsSource::from_code)?,
+                settings: r.settings()?,
+            }),
+            RecordKind::Live => Record::Live(Live {
+                t_ms: r.u32()?,
+                counts: [r.u16()?, r.u16()?],
+                force_n: [r.f32()?, r.f32()?],
+                servo_deg: r.f32()?,
+            }),
+            RecordKind::Reply => Record::Reply(Reply {
+                command: r.code(CommandKind::from_code)?,
+                error: r.code(|c| match c {
+                    0 => Some(None),
+                    c => CommandError::from_code(c).map(Some),
+                })?,
+                values: [r.f32()?, r.f32()?],
+            }),
+            RecordKind::Raw => Record::Raw(RawSample {
+                t_us: r.i64()?,
+                counts: [r.u16()?, r.u16()?],
+                force_n: [r.f32()?, r.f32()?],
+            }),
+            RecordKind::Pair => Record::Pair(StepPair {
+                step: r.u32()?,
+                level: r.u32()?,
+                angle_deg: r.f32()?,
+                t_mid_ms: r.u32()?,
+                t1: r.stats()?,
+                t2: r.stats()?,
+            }),
+            RecordKind::Fault => Record::Fault(Fault {
+                kind: r.code(FaultKind::from_code)?,
+                channel: r.code(none_or(Channel::from_code))?,
+                value: r.f32()?,
+                t_us: r.i64()?,
+            }),
+            RecordKind::RunEnd => Record::RunEnd(RunEnd {
+                t_us: r.i64()?,
+                pairs: r.u32()?,
+                fault: r.code(none_or(FaultKind::from_code))?,
+            }),
+        };
+        match r.at == fields.len() {
+            true => Ok((seq, record)),
+            false => Err(FieldsError::Extra),
+        }
+    }
+}
+
+/// A code that may be [`NONE_CODE`].
+fn none_or<T>(of: impl Fn(u8) -> Option<T>) -> impl Fn(u8) -> Option<Option<T>> {
+    move |c| match c {
+        NONE_CODE => Some(None),
+        c => of(c).map(Some),
+    }
+}
+
+/// Reads a record's fields in wire order.
+struct FieldReader<'a> {
+    kind: RecordKind,
+    fields: &'a [Scalar],
+    at: usize,
+}
+
+impl FieldReader<'_> {
+    /// The next field and its name.
+    fn next(&mut self) -> Result<(Scalar, &'static str), FieldsError> {
+        let name = self.kind.fields().nth(self.at).map_or("crc", |f| f.name);
+        let v = *self.fields.get(self.at).ok_or(FieldsError::Missing(name))?;
+        self.at += 1;
+        Ok((v, name))
+    }
+    fn u8(&mut self) -> Result<(u8, &'static str), FieldsError> {
+        match self.next()? {
+            (Scalar::U8(v), name) => Ok((v, name)),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn u16(&mut self) -> Result<u16, FieldsError> {
+        match self.next()? {
+            (Scalar::U16(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn u32(&mut self) -> Result<u32, FieldsError> {
+        match self.next()? {
+            (Scalar::U32(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn i64(&mut self) -> Result<i64, FieldsError> {
+        match self.next()? {
+            (Scalar::I64(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn f32(&mut self) -> Result<f32, FieldsError> {
+        match self.next()? {
+            (Scalar::F32(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    /// A one-byte code, as `of` reads it.
+    fn code<T>(&mut self, of: impl Fn(u8) -> Option<T>) -> Result<T, FieldsError> {
+        let (code, field) = self.u8()?;
+        of(code).ok_or(FieldsError::Code { field, code })
+    }
+    fn stats(&mut self) -> Result<ChannelStats, FieldsError> {
+        Ok(ChannelStats {
+            mean_n: self.f32()?,
+            std_n: self.f32()?,
+            count: self.u32()?,
+        })
+    }
+    /// The settings block (not validated: a record says what the rig ran with).
+    fn settings(&mut self) -> Result<Settings, FieldsError> {
+        let mut bits = [0u32; crate::settings::FIELDS];
+        for (b, setting) in bits.iter_mut().zip(Setting::ALL) {
+            *b = match setting.value() {
+                Value::Code => self.u8()?.0 as u32,
+                Value::Whole => self.u32()?,
+                Value::Real => self.f32()?.to_bits(),
+            };
+        }
+        Settings::from_fields(&bits).ok_or(FieldsError::Code {
+            field: Setting::Order.name(),
+            code: bits[Setting::Order.index()] as u8,
+        })
+    }
+}
+
 /// The checksum a record is logged with (`crc=` in its format string): over its sequence
 /// number and every field, in wire order ([`Record::for_each_field`]).
 pub fn record_crc(seq: u32, record: &Record) -> u32 {
@@ -418,6 +588,30 @@ mod tests {
                 .collect();
             assert_eq!(prims, schema, "{}", kind.word());
         }
+    }
+
+    #[test]
+    fn fields_make_the_record_back() {
+        for record in one_of_each() {
+            let mut fields = std::vec::Vec::new();
+            record.for_each_field(9, |v| fields.push(v));
+            assert_eq!(Record::from_fields(record.kind(), &fields), Ok((9, record)));
+            let short = &fields[..fields.len() - 1];
+            let last = record.kind().fields().nth(short.len()).unwrap().name;
+            assert_eq!(
+                Record::from_fields(record.kind(), short),
+                Err(FieldsError::Missing(last))
+            );
+        }
+        let bad_kind = [Scalar::U32(1), Scalar::U8(77), Scalar::U8(NONE_CODE)];
+        let bad_kind = [&bad_kind[..], &[Scalar::F32(0.0), Scalar::I64(0)]].concat();
+        assert_eq!(
+            Record::from_fields(RecordKind::Fault, &bad_kind),
+            Err(FieldsError::Code {
+                field: "kind",
+                code: 77
+            })
+        );
     }
 
     #[test]

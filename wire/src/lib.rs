@@ -26,4 +26,4 @@ pub use codes::{Channel, FaultKind, SettingsSource, StepOrder, NONE_CODE};
 pub use commands::{CommandError, CommandKind, MAX_LINE};
 pub use prim::{Prim, Scalar};
 pub use records::{Field, Level, RecordKind};
-pub use settings::{Key, Setting, Since, Value};
+pub use settings::{Group, Key, Setting, Since, Value};

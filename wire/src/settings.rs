@@ -26,6 +26,15 @@ impl Value {
     }
 }
 
+/// What a setting belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Group {
+    /// The test protocol (what a run does).
+    Protocol,
+    /// The calibration (how counts and angles map to forces and pulses).
+    Calibration,
+}
+
 /// Since when the `run_start` record carries a setting (the `settings` record carries all).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Since {
@@ -36,11 +45,11 @@ pub enum Since {
     SetupMode,
 }
 
-/// The table: `Variant "name" value "unit" since key "meaning";` one row per setting, in wire
-/// order. `key` is the setting's code in the `reply` to a `set` (the order `capstan rig` lists
+/// The table: `Variant "name" group value "unit" since key "meaning";` one row per setting, in
+/// wire order. `key` is the setting's code in the `reply` to a `set` (the order `capstan rig` lists
 /// the keys in), or `fixed` for a setting the host cannot set (the rates, fixed at build time).
 macro_rules! settings {
-    ($($v:ident $name:literal $value:ident $unit:literal $since:ident $key:tt $meaning:literal;)*) => {
+    ($($v:ident $name:literal $group:ident $value:ident $unit:literal $since:ident $key:tt $meaning:literal;)*) => {
         /// One value of the settings, in wire order (its discriminant is its index).
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -55,6 +64,11 @@ macro_rules! settings {
             /// Its name: the field of the records, the key of `set`.
             pub const fn name(self) -> &'static str {
                 match self { $(Setting::$v => $name,)* }
+            }
+
+            /// What it belongs to.
+            pub const fn group(self) -> Group {
+                match self { $(Setting::$v => Group::$group,)* }
             }
 
             /// How it is held.
@@ -126,31 +140,32 @@ pub const SETTINGS: usize = 25;
 pub const KEYS: usize = 23;
 
 settings! {
-    Order          "order"            Code  ""        First     3  "order of the levels: monotone, updown or pulse";
-    RestDeg        "rest_deg"         Real  "°"       First     0  "servo angle at rest and for step 0";
-    StepDeg        "step_deg"         Real  "°"       First     1  "servo angle change per tension level";
-    FinalDeg       "final_deg"        Real  "°"       First     2  "servo angle of the highest level";
-    DwellMs        "dwell_ms"         Whole "ms"      First     4  "time each level is held";
-    PreTriggerMs   "pre_trigger_ms"   Whole "ms"      First     5  "from the button (or run) to the logger trigger";
-    TriggerMs      "trigger_ms"       Whole "ms"      First     6  "logger trigger pulse length";
-    TareMs         "tare_ms"          Whole "ms"      First     7  "tare window before the trigger (0: keep the zeros)";
-    AmpControlV    "amp_control_v"    Real  "V"       First     8  "amplifier control voltage during a run";
-    SampleHz       "sample_hz"        Whole "Hz"      First     fixed "sampling rate of both force channels (fixed by the firmware)";
-    RawLogHz       "raw_log_hz"       Whole "Hz"      First     fixed "rate of the raw samples in the log (fixed by the firmware)";
-    WindowAfterMs  "window_after_ms"  Whole "ms"      First     9  "conditioning window starts this long after a change";
-    WindowBeforeMs "window_before_ms" Whole "ms"      First     10 "conditioning window ends this long before the next";
-    DiameterMm     "diameter_mm"      Real  "mm"      First     11 "capstan diameter (for the log; 0 = not given)";
-    WrapDeg        "wrap_deg"         Real  "°"       First     12 "wrap angle (for the log; 0 = not given)";
-    AmpGain        "amp_gain"         Real  "V/V"     First     22 "drive volts per control volt";
-    T1Zero         "t1_zero"          Real  "counts"  First     13 "T1 reading at no load (zero sets it)";
-    T1NPerCount    "t1_n_per_count"   Real  "N/count" First     14 "T1 sensitivity (weigh t1 sets it)";
-    T2Zero         "t2_zero"          Real  "counts"  First     15 "T2 reading at no load (zero sets it)";
-    T2NPerCount    "t2_n_per_count"   Real  "N/count" First     16 "T2 sensitivity (weigh t2 sets it)";
-    TareReferenceN "tare_reference_n" Real  "N"       SetupMode 17 "force both channels carry during the tare";
-    ServoMinUs     "servo_min_us"     Real  "µs"      SetupMode 18 "servo pulse at 0°";
-    ServoMaxUs     "servo_max_us"     Real  "µs"      SetupMode 19 "servo pulse at servo_max_deg";
-    ServoMaxDeg    "servo_max_deg"    Real  "°"       SetupMode 20 "servo angle reached at servo_max_us";
-    AmpFullScaleV  "amp_full_scale_v" Real  "V"       SetupMode 21 "amplifier control voltage at full PWM duty";
+    // variant     name               group       value unit      run_start key meaning
+    Order          "order"            Protocol    Code  ""        First     3  "order of the levels: monotone, updown or pulse";
+    RestDeg        "rest_deg"         Protocol    Real  "°"       First     0  "servo angle at rest and for step 0";
+    StepDeg        "step_deg"         Protocol    Real  "°"       First     1  "servo angle change per tension level";
+    FinalDeg       "final_deg"        Protocol    Real  "°"       First     2  "servo angle of the highest level";
+    DwellMs        "dwell_ms"         Protocol    Whole "ms"      First     4  "time each level is held";
+    PreTriggerMs   "pre_trigger_ms"   Protocol    Whole "ms"      First     5  "from the button (or run) to the logger trigger";
+    TriggerMs      "trigger_ms"       Protocol    Whole "ms"      First     6  "logger trigger pulse length";
+    TareMs         "tare_ms"          Protocol    Whole "ms"      First     7  "tare window before the trigger (0: keep the zeros)";
+    AmpControlV    "amp_control_v"    Protocol    Real  "V"       First     8  "amplifier control voltage during a run";
+    SampleHz       "sample_hz"        Protocol    Whole "Hz"      First     fixed "sampling rate of both force channels (fixed by the firmware)";
+    RawLogHz       "raw_log_hz"       Protocol    Whole "Hz"      First     fixed "rate of the raw samples in the log (fixed by the firmware)";
+    WindowAfterMs  "window_after_ms"  Protocol    Whole "ms"      First     9  "conditioning window starts this long after a change";
+    WindowBeforeMs "window_before_ms" Protocol    Whole "ms"      First     10 "conditioning window ends this long before the next";
+    DiameterMm     "diameter_mm"      Protocol    Real  "mm"      First     11 "capstan diameter (for the log; 0 = not given)";
+    WrapDeg        "wrap_deg"         Protocol    Real  "°"       First     12 "wrap angle (for the log; 0 = not given)";
+    AmpGain        "amp_gain"         Calibration Real  "V/V"     First     22 "drive volts per control volt";
+    T1Zero         "t1_zero"          Calibration Real  "counts"  First     13 "T1 reading at no load (zero sets it)";
+    T1NPerCount    "t1_n_per_count"   Calibration Real  "N/count" First     14 "T1 sensitivity (weigh t1 sets it)";
+    T2Zero         "t2_zero"          Calibration Real  "counts"  First     15 "T2 reading at no load (zero sets it)";
+    T2NPerCount    "t2_n_per_count"   Calibration Real  "N/count" First     16 "T2 sensitivity (weigh t2 sets it)";
+    TareReferenceN "tare_reference_n" Calibration Real  "N"       SetupMode 17 "force both channels carry during the tare";
+    ServoMinUs     "servo_min_us"     Calibration Real  "µs"      SetupMode 18 "servo pulse at 0°";
+    ServoMaxUs     "servo_max_us"     Calibration Real  "µs"      SetupMode 19 "servo pulse at servo_max_deg";
+    ServoMaxDeg    "servo_max_deg"    Calibration Real  "°"       SetupMode 20 "servo angle reached at servo_max_us";
+    AmpFullScaleV  "amp_full_scale_v" Calibration Real  "V"       SetupMode 21 "amplifier control voltage at full PWM duty";
 }
 
 impl Setting {
@@ -257,6 +272,14 @@ mod tests {
         assert_eq!(Key::ALL[0], Key::RestDeg);
         assert_eq!(Key::Order.field(), 0);
         assert_eq!(Key::AmpGain.field(), 15);
+    }
+
+    #[test]
+    fn fifteen_settings_of_the_protocol_then_ten_of_the_calibration() {
+        for s in Setting::ALL {
+            let protocol = s.index() < 15;
+            assert_eq!(s.group() == Group::Protocol, protocol, "{}", s.name());
+        }
     }
 
     #[test]
