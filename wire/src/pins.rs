@@ -81,7 +81,7 @@ pub const fn adc_channel(gpio: u8) -> Option<u8> {
 const _: () = {
     assert!(pwm_slice(PINS.servo) != pwm_slice(PINS.amp));
     assert!(
-        PINS.servo % 2 == 0 && PINS.amp % 2 == 0,
+        PINS.servo.is_multiple_of(2) && PINS.amp.is_multiple_of(2),
         "channel A of their slices"
     );
     assert!(adc_channel(PINS.t1).is_some() && adc_channel(PINS.t2).is_some());

@@ -323,7 +323,7 @@ fn random_sample(kind: u64, r: u64, t_us: i64, next: &mut impl FnMut() -> u64) -
         t_us,
         counts,
         force_n,
-        cord_check_armed: (r >> 50) % 4 != 0,
+        cord_check_armed: !(r >> 50).is_multiple_of(4),
     }
 }
 
