@@ -17,7 +17,7 @@ mod say;
 pub use check::{check_set, command_line, CheckError};
 pub use link::{exchange, exchange_within, take, timeout_for, Answer, NoReply, RigLink};
 pub use live::{watch as watch_live, NotInSetup};
-pub use say::{answer_lines, fault_line, key_lines, live_line, reply_line, Refused};
+pub use say::{answer_lines, key_lines, live_line, Refused};
 
 use crate::log::Firmware;
 use anyhow::bail;

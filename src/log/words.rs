@@ -1,10 +1,11 @@
-//! The setup-mode records in words, shared by `capstan rig` (what it prints) and `capstan log`
-//! (`messages.txt`, `settings.csv`): a sentence for each `reply`, each setting with its unit,
-//! and a name for each settings source. Every number in a sentence is the record's.
+//! The setup-mode records in words, shared by `capstan rig` (what it prints, and what its link
+//! notes while it waits for an answer) and `capstan log` (`messages.txt`, `settings.csv`): a
+//! sentence for each `reply`, a line for each fault, each setting with its unit, and a name
+//! for each settings source. Every number in a sentence is the record's.
 
 use firmware::command::{Command, CommandKind, Key};
 use firmware::hal::Channel;
-use firmware::record::{Reply, SettingsReport, SettingsSource};
+use firmware::record::{Fault, Reply, SettingsReport, SettingsSource};
 use firmware::{Settings, StepOrder};
 
 /// A stable name of a settings source, for CSV and JSON.
@@ -177,6 +178,35 @@ pub fn reply_sentence(reply: &Reply, sent: Option<&Command>) -> String {
         CommandKind::Ack => "ack: fault acknowledged".into(),
         CommandKind::Unparsed => "?: done".into(),
     }
+}
+
+/// One reply as a line: its sentence, and the command word before a refusal.
+pub fn reply_line(r: &Reply, sent: Option<&Command>) -> String {
+    let sentence = reply_sentence(r, sent);
+    match r.error {
+        Some(_) => format!("{}: {sentence}", r.command.word()),
+        None => sentence,
+    }
+}
+
+/// A fault, for stderr.
+pub fn fault_line(f: &Fault) -> String {
+    let channel = match f.channel {
+        Some(Channel::T1) => " on T1",
+        Some(Channel::T2) => " on T2",
+        None => "",
+    };
+    // (A fault latched at boot after a reset has no value: NaN.)
+    let value = if f.value.is_nan() {
+        String::new()
+    } else {
+        format!(" (value {})", f.value)
+    };
+    format!(
+        "FAULT {}{channel}{value}: the rig's outputs are safe; press the button or send `ack` to \
+         go on",
+        f.kind.name(),
+    )
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! `report.html`: the sections of the report around the tables and figures (self-contained:
 //! inline SVG and CSS, no scripts or external resources).
 
+use super::cells::{self, esc};
 use super::figures::{self, Figure};
 use super::plot::{hex, Dash, Entry, Key, DASH, DOT_PERIOD};
 use super::tables;
@@ -9,13 +10,6 @@ use crate::analysis::Analysis;
 use std::fmt::Write as _;
 
 const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}tr.worse td{background:#fbeaea}.unexplained{color:#a50}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
-
-/// Escape text for HTML (and SVG).
-pub fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
 
 /// A figure's legend: one row of samples (drawn as the chart draws them) and labels.
 fn legend_html(entries: &[Entry]) -> String {
@@ -81,17 +75,17 @@ fn headline(h: &mut String, a: &Analysis) {
     let loco = |m: &crate::analysis::ModelMetrics| {
         m.loco_rmse_t2_uncertainty
             .as_ref()
-            .map_or("not refittable".into(), tables::with_ci)
+            .map_or("not refittable".into(), cells::with_ci)
     };
-    let _ = write!(h, "<h2>Headline</h2><ul><li>Euler-Eytelwein with one fitted mu = {}: RMSE of T2 {} N, leave-one-cord-out {} N (95 % intervals from resampling whole cords).</li>", tables::fx(a.baseline_fit.model(None).law.mu, 4), tables::with_ci(&b.rmse_t2_uncertainty), loco(b));
+    let _ = write!(h, "<h2>Headline</h2><ul><li>Euler-Eytelwein with one fitted mu = {}: RMSE of T2 {} N, leave-one-cord-out {} N (95 % intervals from resampling whole cords).</li>", cells::fx(a.baseline_fit.model(None).law.mu, 4), cells::with_ci(&b.rmse_t2_uncertainty), loco(b));
     if let Some(t) = get("thesis") {
-        let _ = write!(h, "<li>The thesis's Table 3 double exponential ({} hand-set numbers): RMSE {} N; it cannot predict a new cord.</li>", t.n_params, tables::fx(t.rmse_t2_n, 3));
+        let _ = write!(h, "<li>The thesis's Table 3 double exponential ({} hand-set numbers): RMSE {} N; it cannot predict a new cord.</li>", t.n_params, cells::fx(t.rmse_t2_n, 3));
     }
-    let _ = write!(h, "<li>The extended model ({} parameters: {} fixed values + {} effective degrees of freedom of the cord effects): RMSE {} N in-sample, {} N leave-one-cord-out.</li>", tables::fx(e.n_params, 1), e.n_params_detail.fixed, tables::fx(e.n_params_detail.edf_random, 1), tables::with_ci(&e.rmse_t2_uncertainty), loco(e));
+    let _ = write!(h, "<li>The extended model ({} parameters: {} fixed values + {} effective degrees of freedom of the cord effects): RMSE {} N in-sample, {} N leave-one-cord-out.</li>", cells::fx(e.n_params, 1), e.n_params_detail.fixed, cells::fx(e.n_params_detail.edf_random, 1), cells::with_ci(&e.rmse_t2_uncertainty), loco(e));
     let better = a.held_out.iter().filter(|c| c.extended_better).count();
     let g = &a.gain;
     let _ = write!(h, "<li>The held-out gain: the extended model's leave-one-cord-out RMSE is {} of Euler-Eytelwein's (95 % interval {} to {}, cord-jackknife SE {}); it predicts {better} of {} cords better. {}</li>",
-        tables::fx(g.value, 3), tables::fx(g.ci95.lo, 3), tables::fx(g.ci95.hi, 3), tables::fx(g.jackknife_se, 3), a.held_out.len(), esc(&gain_words(g.ci95.hi)));
+        cells::fx(g.value, 3), cells::fx(g.ci95.lo, 3), cells::fx(g.ci95.hi, 3), cells::fx(g.jackknife_se, 3), a.held_out.len(), esc(&gain_words(g.ci95.hi)));
     let causes: Vec<String> = a
         .mechanisms
         .causes
@@ -179,7 +173,7 @@ pub fn report_html(
     figure_html(&mut h, &figs, "residuals");
     let ev = &a.evidence;
     let _ = write!(h, "<h2>Why: the mechanisms</h2><p>Every mechanism of the catalogue is judged by the evidence engine that <code>capstan diagnose</code> uses, on these data: every run has its own mu; the effects that change the shape of T2 inside runs are selected forward, each judged by its quasi-likelihood ratio over its cluster-robust overdispersion (runs as clusters, so the serial correlation inside a run and each run's own tare count), referred to F(1, runs − 1) and put on the BIC scale; the effects on mu between cords and runs are judged on the runs' mu with cords or runs as the units. Thresholds: ΔBIC below {:.0} within runs, {:.0} between. Scatter of mu: {} % cord to cord, {} % run to run; noise {} N + {} % of T2; lag-1 autocorrelation of the residuals inside runs {}.</p>",
-        ev.thresholds.within_run, ev.thresholds.between, tables::fx(ev.scatter.cord_pct, 1), tables::fx(ev.scatter.run_pct, 1), tables::fx(ev.scatter.noise_abs_n, 3), tables::fx(100.0 * ev.scatter.noise_rel, 1), tables::fx(ev.scatter.lag1_autocorrelation, 2));
+        ev.thresholds.within_run, ev.thresholds.between, cells::fx(ev.scatter.cord_pct, 1), cells::fx(ev.scatter.run_pct, 1), cells::fx(ev.scatter.noise_abs_n, 3), cells::fx(100.0 * ev.scatter.noise_rel, 1), cells::fx(ev.scatter.lag1_autocorrelation, 2));
     h.push_str(&tables::mechanisms(a));
     figure_html(&mut h, &figs, "mechanism_evidence");
     let u = &a.mechanisms.unexplained;
@@ -197,7 +191,7 @@ pub fn report_html(
         (x.0.min(v), x.1.max(v))
     });
     let _ = write!(h, "<h2>The thesis's R² of amplification, reproduced</h2><p>Table 3 applied per angle, R² = 1 − SS<sub>res</sub>/SS<sub>tot</sub> of T2/T1 with both diameters pooled: from {} to {} on these data.</p>",
-        tables::f3(lo), tables::f3(hi));
+        cells::f3(lo), cells::f3(hi));
     h.push_str(&tables::thesis_r2(a));
     h.push_str("<h2>What this design cannot separate</h2><ul>");
     for l in &a.mechanisms.protocol_limits {

@@ -2,11 +2,12 @@
 //! `report.html` (inline SVG figures, no external resources).
 //!
 //! * [`files`]: `metrics.json` and `predictions.csv`.
-//! * [`html`]: the page and its sections; [`tables`]: its tables; [`diagnosis`]: the section
-//!   quoting `capstan diagnose`.
+//! * [`html`]: the page and its sections; [`tables`]: its tables; [`cells`]: the text in them
+//!   (numbers or a dash, escaped text).
 //! * [`figures`]: the figures; [`plot`]: their charts (panels and bar charts, drawn by
 //!   `plotters`).
 
+pub mod cells;
 pub mod figures;
 pub mod files;
 pub mod html;

@@ -2,53 +2,11 @@
 //! ln-amplification residuals by step, residual patterns, mechanism verdicts, the extended fit,
 //! and the thesis's per-angle R².
 
-use super::html::esc;
+use super::cells::{esc, f3, fe, fs, fx, with_ci};
 use crate::analysis::mechanisms::Verdict;
 use crate::analysis::residuals::StepResidual;
-use crate::analysis::uncertainty::WithInterval;
 use crate::analysis::{Analysis, ModelMetrics};
 use std::fmt::Write as _;
-
-/// Three decimals, or a dash for a missing value.
-pub fn f3(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v:.3}")
-    } else {
-        "–".into()
-    }
-}
-
-/// `v` with `d` decimals, or a dash where it is not identified on these data.
-pub fn fx(v: f64, d: usize) -> String {
-    if v.is_finite() {
-        format!("{v:.d$}")
-    } else {
-        "–".into()
-    }
-}
-
-/// `v` with its sign and `d` decimals, or a dash.
-pub fn fs(v: f64, d: usize) -> String {
-    if v.is_finite() {
-        format!("{v:+.d$}")
-    } else {
-        "–".into()
-    }
-}
-
-/// `v` in scientific notation with `d` decimals, or a dash.
-pub fn fe(v: f64, d: usize) -> String {
-    if v.is_finite() {
-        format!("{v:.d$e}")
-    } else {
-        "–".into()
-    }
-}
-
-/// A value with its 95 % interval: "0.775 [0.70, 0.86]".
-pub fn with_ci(w: &WithInterval) -> String {
-    format!("{} [{}, {}]", f3(w.value), f3(w.ci95.lo), f3(w.ci95.hi))
-}
 
 fn model_row(m: &ModelMetrics) -> String {
     let count = if m.n_params_detail.edf_random > 0.0 {

@@ -89,10 +89,10 @@ pub fn take(
         }
         Record::Reply(r) => note(format!(
             "note: a reply to another command: {}",
-            super::say::reply_line(&r, None)
+            crate::log::words::reply_line(&r, None)
         )),
         Record::Settings(s) => answer.settings = Some(s),
-        Record::Fault(f) => note(super::say::fault_line(&f)),
+        Record::Fault(f) => note(crate::log::words::fault_line(&f)),
         Record::RunEnd(e) if *cmd == Command::Abort => {
             answer.run_end = Some(e);
             return true;

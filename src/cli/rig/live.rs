@@ -2,8 +2,9 @@
 //! mode (~10 a second), printed as they arrive, for SECONDS or until Ctrl-C.
 
 use super::link::RigLink;
-use super::say::{fault_line, live_line, LIVE_HEADER};
+use super::say::{live_line, LIVE_HEADER};
 use crate::log::frame::Event;
+use crate::log::words::fault_line;
 use firmware::record::Record;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
