@@ -9,8 +9,8 @@
 //! `-- --max-rows N` caps their size (default 1,000), `-- --seed S`, `-- --keep K` writes set
 //! K's CSV to `set-K.csv` (to run `capstan analyze` on it alone).
 
-use capstan::data::{check_capstan_data, read_pairs, Dataset};
 use capstan::diagnose::cases::{draw_case, Class};
+use capstan_data::{check_capstan_data, read_pairs, Dataset};
 use host_sim::plant::rng::Rng;
 use std::time::Instant;
 

@@ -7,8 +7,8 @@
 //! `cargo bench --bench scale` (release); `-- --max-rows N` stops at N rows (default
 //! 1,000,000); `-- --diagnose-only` skips the analysis.
 
-use capstan::data::{Dataset, Pair};
 use capstan::diagnose::cases::{self, Class};
+use capstan_data::{Dataset, Pair};
 use std::time::Instant;
 
 /// The data set repeated `k` times, each copy's runs numbered after the last copy's.

@@ -54,7 +54,7 @@ fn main() {
         c.config.runs = ((rows / (12.0 * cords as f64)).round() as u32).clamp(2, 400);
         let (d, _) = c.generate().expect("the case simulates");
         let mut f = std::fs::File::create("/tmp/case.csv").expect("/tmp is writable");
-        capstan::data::write_pairs_to(&mut f, &d.pairs).expect("written");
+        capstan_data::write_pairs_to(&mut f, &d.pairs).expect("written");
         eprintln!("wrote /tmp/case.csv: {}", c.describe());
         return;
     }
@@ -65,7 +65,7 @@ fn main() {
             .expect("a case with that seed");
         let (d, _) = c.generate().expect("the case simulates");
         let mut f = std::fs::File::create("/tmp/case.csv").expect("/tmp is writable");
-        capstan::data::write_pairs_to(&mut f, &d.pairs).expect("written");
+        capstan_data::write_pairs_to(&mut f, &d.pairs).expect("written");
         eprintln!("wrote /tmp/case.csv: {}", c.describe());
         return;
     }

@@ -4,7 +4,6 @@
 
 pub mod analysis;
 pub mod cli;
-pub mod data;
 pub mod diagnose;
 pub mod evidence;
 pub mod fit;

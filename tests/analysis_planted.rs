@@ -7,8 +7,8 @@
 
 use capstan::analysis::validate;
 use capstan::cli::{analyze, run, Cli, Command};
-use capstan::data::write_pairs;
 use capstan::diagnose::cases::{draw_case, Class};
+use capstan_data::write_pairs;
 
 mod analysis_support;
 

@@ -3,7 +3,7 @@
 
 use capstan::analysis::{self, Analysis};
 use capstan::cli::{analyze, run, Cli, Command};
-use capstan::data::thesis_dataset;
+use capstan_data::thesis_dataset;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 

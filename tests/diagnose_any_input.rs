@@ -14,8 +14,8 @@
 //! stopped after 60 s, and every analysis bounded by the fits' budgets.
 //! `PROPTEST_CASES=N` draws more (default 40 for diagnose, 8 for analyze).
 
-use capstan::data::{check_capstan_data, read_pairs, Dataset};
 use capstan::diagnose::diagnose;
+use capstan_data::{check_capstan_data, read_pairs, Dataset};
 use proptest::prelude::*;
 use proptest::test_runner::{FileFailurePersistence, RngSeed};
 

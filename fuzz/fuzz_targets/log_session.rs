@@ -35,7 +35,7 @@ fuzz_target!(|data: &[u8]| {
     // pairs.csv always reads back as the analysis reads it (incomplete rows go to
     // pairs-incomplete.csv). The only refusals allowed: no rows, or a value beyond what a rig
     // can measure (the reader's documented limits; the logger writes what it received).
-    if let Err(e) = capstan::data::load_pairs(&dir.join("pairs.csv")) {
+    if let Err(e) = capstan_data::load_pairs(&dir.join("pairs.csv")) {
         let e = e.to_string();
         let allowed = [
             "no data rows",

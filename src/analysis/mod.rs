@@ -25,11 +25,11 @@ pub mod thesis;
 pub mod uncertainty;
 pub mod validate;
 
-use crate::data::Dataset;
 use crate::diagnose::Diagnosis;
 use crate::evidence;
 use crate::fit::solve::Fit;
 use crate::fit::Observations;
+use capstan_data::Dataset;
 use serde::Serialize;
 use std::time::Instant;
 

@@ -8,9 +8,9 @@
 //! (which treats rows as independent and so overstates significance; read it with η²).
 
 use super::{ln_amp, Predictions};
-use crate::data::Dataset;
 use crate::fit::stats::{eta_squared, mean, regress, spearman, variance};
 use crate::fit::Observations;
+use capstan_data::Dataset;
 use serde::Serialize;
 
 /// One residual trend.
@@ -58,7 +58,7 @@ fn levels(v: &[f64]) -> Vec<usize> {
         .collect()
 }
 
-type Getter = fn(&crate::data::Pair) -> Option<f64>;
+type Getter = fn(&capstan_data::Pair) -> Option<f64>;
 
 /// The columns to test: every known column present plus the extra ones.
 fn columns(ds: &Dataset, obs: &Observations) -> Vec<(String, Vec<f64>)> {

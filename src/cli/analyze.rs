@@ -1,8 +1,8 @@
 //! `capstan analyze [DATA.csv] --out DIR`: fit the models, test the mechanisms, write the
 //! report (`report.html`), `metrics.json` and `predictions.csv`.
 
-use crate::data::{load_pairs, thesis_dataset};
 use anyhow::Context;
+use capstan_data::{load_pairs, thesis_dataset};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -34,7 +34,7 @@ pub struct Args {
 /// Run `capstan analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
-        crate::data::ranges::THREADS.option("--threads", t as f64)?;
+        capstan_data::ranges::THREADS.option("--threads", t as f64)?;
     }
     if args.validate {
         return validate(&args);
@@ -47,7 +47,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    crate::data::check_capstan_data(&ds)?;
+    capstan_data::check_capstan_data(&ds)?;
     let mut opts = crate::analysis::Options::default();
     if let Some(t) = args.threads {
         opts.threads = t.max(1);

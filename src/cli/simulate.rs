@@ -9,8 +9,8 @@ mod checks;
 mod output;
 mod two;
 
-use crate::data::Pair;
 use anyhow::{bail, Context};
+use capstan_data::Pair;
 use capstan_friction::{Effect, Model};
 use firmware::StepOrder;
 use host_sim::campaign::{stream_campaign, CampaignConfig, PairRow, StreamError};

@@ -18,7 +18,7 @@
 //! Used by the tests (`tests/diagnose_cases.rs`), the calibration (`examples/calibrate.rs`) and
 //! the benchmark (`benches/diagnose.rs`).
 
-use crate::data::{read_pairs, write_pairs_to, Dataset, Pair};
+use capstan_data::{read_pairs, write_pairs_to, Dataset, Pair};
 use capstan_friction::{Effect, EffectKind, Model};
 use firmware::{Protocol, StepOrder};
 use host_sim::campaign::{run_campaign, CampaignConfig, CampaignResult};

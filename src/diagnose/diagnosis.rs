@@ -1,7 +1,7 @@
 //! What `capstan diagnose` answers (`Diagnosis`, serialised as its `--json` object).
 
-use crate::data::structure::StructureSummary;
 use crate::evidence::{Adequacy, Columns, Evidence, Level, NotTestable, Rival, RowsUsed, Scatter};
+use capstan_data::structure::StructureSummary;
 use capstan_friction::{Effect, EffectKind};
 use serde::Serialize;
 use std::collections::BTreeMap;

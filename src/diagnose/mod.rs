@@ -20,11 +20,11 @@ pub use diagnosis::{
     Baseline, DataInfo, DesignSummary, Diagnosis, Extended, Found, PathStep, Thresholds,
 };
 
-use crate::data::Dataset;
 use crate::evidence::{self, Assessment};
 use crate::fit::params::{ModelSpec, Param};
 use crate::fit::solve::fit_fixed;
 use crate::fit::stats;
+use capstan_data::Dataset;
 use capstan_friction::{Effect, EffectKind, Model, HEAT_TAU_S};
 use std::time::Instant;
 

@@ -117,7 +117,7 @@ fn par<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync
 
 /// Simulate every case (firmware in the loop) on `threads` threads; data sets in case order.
 /// A case the simulator refuses is an error naming it.
-pub fn generate(cases: &[Case], threads: usize) -> Result<Vec<crate::data::Dataset>, String> {
+pub fn generate(cases: &[Case], threads: usize) -> Result<Vec<capstan_data::Dataset>, String> {
     par(cases, threads, |c| {
         c.generate()
             .map(|x| x.0)
@@ -130,11 +130,11 @@ pub fn generate(cases: &[Case], threads: usize) -> Result<Vec<crate::data::Datas
 /// Diagnose every generated data set with `diagnose`; outcomes in case order.
 pub fn evaluate(
     cases: &[Case],
-    data: &[crate::data::Dataset],
+    data: &[capstan_data::Dataset],
     threads: usize,
-    diagnose: impl Fn(&crate::data::Dataset) -> Diagnosis + Sync,
+    diagnose: impl Fn(&capstan_data::Dataset) -> Diagnosis + Sync,
 ) -> Vec<Outcome> {
-    let pairs: Vec<(&Case, &crate::data::Dataset)> = cases.iter().zip(data).collect();
+    let pairs: Vec<(&Case, &capstan_data::Dataset)> = cases.iter().zip(data).collect();
     par(&pairs, threads, |(c, d)| outcome(c, d, &diagnose))
 }
 
@@ -142,7 +142,7 @@ pub fn evaluate(
 pub fn run(
     cases: &[Case],
     threads: usize,
-    diagnose: impl Fn(&crate::data::Dataset) -> Diagnosis + Sync,
+    diagnose: impl Fn(&capstan_data::Dataset) -> Diagnosis + Sync,
 ) -> Result<Vec<Outcome>, String> {
     let data = generate(cases, threads)?;
     Ok(evaluate(cases, &data, threads, diagnose))
@@ -150,8 +150,8 @@ pub fn run(
 
 fn outcome(
     case: &Case,
-    data: &crate::data::Dataset,
-    diagnose: &dyn Fn(&crate::data::Dataset) -> Diagnosis,
+    data: &capstan_data::Dataset,
+    diagnose: &dyn Fn(&capstan_data::Dataset) -> Diagnosis,
 ) -> Outcome {
     let d = diagnose(data);
     Outcome {

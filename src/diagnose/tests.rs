@@ -2,7 +2,7 @@
 //! `src/fit`.
 
 use super::*;
-use crate::data::{read_pairs, write_pairs_to, Pair};
+use capstan_data::{read_pairs, write_pairs_to, Pair};
 
 /// A data set straight from the shared model: 4 wraps × 2 diameters × 3 runs, each run with
 /// its own mu, 12 tension levels, a little deterministic noise. T2 comes from

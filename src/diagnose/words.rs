@@ -2,9 +2,9 @@
 //! itself (the effects found and the adequacy decision), never typed in beside it.
 
 use super::Found;
-use crate::data::structure::StructureSummary;
-use crate::data::Basis;
 use crate::evidence::{Adequacy, Rival};
+use capstan_data::structure::StructureSummary;
+use capstan_data::Basis;
 
 /// What a number that could not be computed is shown as.
 pub const NOT_IDENTIFIED: &str = "not identified";

@@ -3,16 +3,16 @@
 //! time order and step direction inside runs, the replicate cells that give the pure error,
 //! and which optional columns are there.
 
-use crate::data::structure::StructureSummary;
-use crate::data::{Basis, Dataset};
 use crate::fit::obs::{Observations, StepTiming, TimingSource};
 use crate::fit::stats::distinct;
+use capstan_data::structure::StructureSummary;
+use capstan_data::{Basis, Dataset};
 use capstan_friction::Operating;
 use serde::Serialize;
 use std::collections::HashMap;
 
 /// A cord: one (capstan diameter, drive voltage, wrap) combination (and its cord labels, see
-/// [`crate::data::Structure`]), reused for its runs.
+/// [`capstan_data::Structure`]), reused for its runs.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Cord {
     /// Capstan diameter, mm (12.7 if the column is absent).

@@ -44,8 +44,8 @@ pub use candidates::Level;
 pub use design::{Columns, Cord, Design};
 pub use rivals::{Rival, RIVAL_GAP};
 
-use crate::data::Dataset;
 use crate::fit::stats;
+use capstan_data::Dataset;
 use capstan_friction::EffectKind;
 use serde::Serialize;
 use std::collections::BTreeMap;

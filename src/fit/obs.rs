@@ -14,11 +14,11 @@
 //!   trigger, its window centre is at 10k + 6 s and it ends at 10(k+1) + 0.5 s. Without
 //!   either, the rows carry no load history (each starts from a cold contact).
 //!
-//! Cords and runs are the data set's structure ([`crate::data::Structure`]): the same for
+//! Cords and runs are the data set's structure ([`capstan_data::Structure`]): the same for
 //! `analyze` and `diagnose`. Missing optional columns take the reference values of
 //! `capstan_friction` (12.7 mm, 10 V, run 1), as the structure says.
 
-use crate::data::Dataset;
+use capstan_data::Dataset;
 use capstan_friction::Operating;
 
 /// When a step's tension was set, measured and left, s since the trigger.
@@ -267,7 +267,7 @@ impl Observations {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::{read_pairs, thesis_dataset};
+    use capstan_data::{read_pairs, thesis_dataset};
 
     #[test]
     fn thesis_has_ten_cords_sixty_runs_and_protocol_times() {

@@ -573,8 +573,8 @@ mod tests {
         let want = 9.0 * p.law.t2_n(12.0, &op[0]) / 12.0;
         assert!((b[0] - want).abs() <= 1e-12 * want, "{} {want}", b[0]);
     }
-    use crate::data::thesis_dataset;
     use crate::fit::params::Transform;
+    use capstan_data::thesis_dataset;
 
     fn model_a() -> ModelSpec {
         let mut base = Model::euler_eytelwein(0.1417);

@@ -2,7 +2,7 @@
 //! every model's predictions).
 
 use crate::analysis::Analysis;
-use crate::data::Dataset;
+use capstan_data::Dataset;
 use serde_json::{json, Value};
 
 /// The contents of `metrics.json`.
@@ -91,7 +91,7 @@ pub fn write_predictions_csv(
                 "t1_n" => num(pair.t1_n),
                 "t2_n" => num(pair.t2_n),
                 other => match ds.label_columns.iter().position(|c| c.name == other) {
-                    Some(k) => crate::data::text_cell(&pair.labels[k]),
+                    Some(k) => capstan_data::text_cell(&pair.labels[k]),
                     None => ds
                         .extra_columns
                         .iter()
@@ -101,7 +101,7 @@ pub fn write_predictions_csv(
             })
             .collect();
         let row = &a.obs.rows[i];
-        cells.push(crate::data::text_cell(&a.obs.groups[row.group].label));
+        cells.push(capstan_data::text_cell(&a.obs.groups[row.group].label));
         cells.push((row.run + 1).to_string());
         cells.push(num(row.timing.centre_s));
         for v in [

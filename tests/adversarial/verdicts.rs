@@ -2,7 +2,7 @@
 //! the report; "not identified" where the data cannot say.
 
 use super::checked;
-use capstan::data::{read_pairs, Dataset};
+use capstan_data::{read_pairs, Dataset};
 
 fn data(text: &str) -> Dataset {
     read_pairs(text.as_bytes(), "x.csv").unwrap()
@@ -17,7 +17,7 @@ fn finite_words(text: &str) {
 
 fn thesis_rows(mut edit: impl FnMut(usize, &mut Vec<String>)) -> Dataset {
     let mut s = String::new();
-    for (i, l) in capstan::data::THESIS_CSV.lines().enumerate() {
+    for (i, l) in capstan_data::THESIS_CSV.lines().enumerate() {
         let mut c: Vec<String> = l.trim_end().split(',').map(String::from).collect();
         if i > 0 {
             edit(i, &mut c);
@@ -86,7 +86,7 @@ fn one_row_is_not_identified_rather_than_explained() {
 #[test]
 fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
     // The thesis reduced to wrap, T1, T2 (case 5): 5 cords and 5 runs in both, assumed, said.
-    let three: String = capstan::data::THESIS_CSV
+    let three: String = capstan_data::THESIS_CSV
         .lines()
         .map(|l| {
             let c: Vec<&str> = l.trim_end().split(',').collect();

@@ -252,7 +252,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
     ] {
         assert!(messages.contains(needle), "{needle:?} not in:\n{messages}");
     }
-    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert_eq!(pairs.pairs.len(), 2);
     assert!(pairs.pairs.iter().all(|p| p.run == Some(1.0)));
 }

@@ -9,7 +9,7 @@ use anyhow::bail;
 /// The command line's values against the physical ranges (`data::ranges`), and `--from`
 /// checked, before anything is opened or written.
 pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
-    use crate::data::ranges;
+    use capstan_data::ranges;
     if let Some(d) = args.duration {
         ranges::LOG_DURATION_S.option("--duration", d)?;
     }

@@ -63,7 +63,7 @@ pub fn command_line(words: &[String]) -> Result<(String, Command), CheckError> {
 /// A `set` against the settings the board reports: refused, with the reason, if the value
 /// would make them invalid. Other commands pass.
 pub fn check_set(cmd: &Command, current: &Settings) -> Result<(), CheckError> {
-    use crate::data::ranges;
+    use capstan_data::ranges;
     use firmware::command::Key;
     match cmd {
         Command::Set(key @ (Key::DiameterMm | Key::WrapDeg), value) if *value != 0.0 => {

@@ -4,9 +4,9 @@
 //! whether the campaign was interrupted; the set replaces the previous one when it is closed
 //! (`outdir`). Memory holds one run at a time, whatever `--runs` is.
 
-use crate::data::PairsWriter;
 use crate::outdir::{OutputDir, Staged};
 use anyhow::Context;
+use capstan_data::PairsWriter;
 use host_sim::campaign::{pair_rows, CampaignStats, FaultSummary, RunResult};
 use serde_json::{json, Value};
 use std::fs::File;

@@ -3,9 +3,9 @@
 //! each channel's `pairs_ch<k>.csv`.
 
 use super::{model, plant, protocol, to_pairs, Args, Order};
-use crate::data::write_pairs_to;
 use crate::outdir::Staged;
 use anyhow::bail;
+use capstan_data::write_pairs_to;
 use host_sim::campaign::{CordKey, PairRow};
 use host_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
 use serde_json::json;

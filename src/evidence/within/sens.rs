@@ -202,8 +202,8 @@ fn run(
 mod tests {
     use super::super::{jacobian_by_differences, predict, Weights};
     use super::*;
-    use crate::data::{read_pairs, write_pairs_to, Pair};
     use crate::fit::obs::StepTiming;
+    use capstan_data::{read_pairs, write_pairs_to, Pair};
 
     /// Three wraps × two runs of 10 steps with times (the memory carries), T1 from slack to
     /// 20 N; T2 does not matter for sensitivities.

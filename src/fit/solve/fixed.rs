@@ -59,8 +59,8 @@ pub fn fit_fixed_multistart(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::thesis_dataset;
     use crate::fit::params::Param;
+    use capstan_data::thesis_dataset;
     use capstan_friction::Model;
 
     #[test]

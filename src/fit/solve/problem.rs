@@ -196,8 +196,8 @@ pub(super) fn solver() -> LevenbergMarquardt<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::thesis_dataset;
     use crate::fit::params::Param;
+    use capstan_data::thesis_dataset;
     use capstan_friction::Model;
     use levenberg_marquardt::differentiate_numerically;
 

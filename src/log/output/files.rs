@@ -7,10 +7,10 @@ use super::{
     LogOptions, FAULTS_CSV, FAULTS_HEADER, LIVE_CSV, LIVE_HEADER, MESSAGES_TXT, PAIRS_CSV,
     PAIRS_INCOMPLETE_CSV, RAW_CSV, RAW_HEADER, SETTINGS_CSV, STREAM_FILE, SUMMARY_JSON,
 };
-use crate::data::{Pair, PairsWriter};
 use crate::log::words::{setting_values, source_name};
 use crate::outdir::Staged;
 use anyhow::Context;
+use capstan_data::{Pair, PairsWriter};
 use firmware::hal::Channel;
 use firmware::record::{Fault, Live, RawSample, SettingsReport};
 use std::fs::File;

@@ -224,7 +224,7 @@ pub fn check_capstan_data(ds: &Dataset) -> Result<(), DataError> {
 }
 
 /// The bundled thesis data (720 pairs), compiled into the binary so no path is needed.
-pub const THESIS_CSV: &str = include_str!("../../data/thesis-conditioned.csv");
+pub const THESIS_CSV: &str = include_str!("../../../data/thesis-conditioned.csv");
 
 /// The bundled thesis data, parsed.
 pub fn thesis_dataset() -> Dataset {
