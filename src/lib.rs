@@ -8,6 +8,6 @@ pub mod diagnose;
 pub mod evidence;
 pub mod fit;
 pub mod log;
-pub mod outdir;
+pub mod outputs;
 pub mod report;
 pub mod term;

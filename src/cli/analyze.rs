@@ -42,7 +42,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     // Lock the output directory and prove it writable before the analysis, not after it.
     let names = ["report.html", "metrics.json", "predictions.csv"];
-    let mut set = super::open_out(&args.out, "analyze", &names)?.stage()?;
+    let mut set = crate::outputs::open_out(&args.out, "analyze", &names)?.stage()?;
     let ds = match &args.data {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
@@ -56,7 +56,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     crate::errln!("{}", ds.structure.describe());
     let mut a = crate::analysis::run(&ds, opts)?;
     // From here on the set holds work: a late failure keeps it and says where.
-    set.keep_on_failure();
+    set.keep_on_failure(crate::outputs::say_kept);
     for note in &a.fit_notes {
         crate::errln!("warning: {note}");
     }
@@ -108,10 +108,10 @@ fn validate(args: &Args) -> anyhow::Result<()> {
         crate::analysis::validate::cases(args.seed).len(),
         args.seed
     );
-    let mut set = super::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
+    let mut set = crate::outputs::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
     let v = crate::analysis::validate::validate(args.seed, 1, threads)?;
-    set.keep_on_failure();
+    set.keep_on_failure(crate::outputs::say_kept);
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
     crate::outln!(
         "causes named exactly (clean, single, heating + T1 loss): {}/{} ({:.0} %, target ≥ 90 %)",

@@ -45,16 +45,3 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Rig(a) => rig::run(a),
     }
 }
-
-/// The output directory, locked, with what was recovered in it said on stderr.
-pub fn open_out(
-    dir: &std::path::Path,
-    kind: &'static str,
-    names: &[&str],
-) -> anyhow::Result<crate::outdir::OutputDir> {
-    let out = crate::outdir::OutputDir::open(dir, kind, names)?;
-    for r in &out.recovered {
-        crate::errln!("note: {r}");
-    }
-    Ok(out)
-}

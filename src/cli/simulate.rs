@@ -269,15 +269,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Every file the campaign will write is checked before it runs: none may be the user's
     // own (or a link), `raw` must be a directory of ours.
     let writes = |rel: &str| checks::writes_raw(&cfg, rel);
-    let out = crate::outdir::OutputDir::open_with(
+    let out = capstan_outdir::OutputDir::open_with(
         &args.out,
         "simulate",
         &["pairs.csv", "faults.csv", "summary.json"],
         &[("raw", &writes)],
     )?;
-    for r in &out.recovered {
-        crate::errln!("note: {r}");
-    }
+    crate::outputs::say_recovered(&out);
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
     let bar = progress_bar(&args, cfg.run_count());
     let stop = super::signal::stop_flag("simulate");

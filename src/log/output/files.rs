@@ -8,9 +8,9 @@ use super::{
     PAIRS_INCOMPLETE_CSV, RAW_CSV, RAW_HEADER, SETTINGS_CSV, STREAM_FILE, SUMMARY_JSON,
 };
 use crate::log::words::{setting_values, source_name};
-use crate::outdir::Staged;
 use anyhow::Context;
 use capstan_data::{Pair, PairsWriter};
+use capstan_outdir::Staged;
 use firmware::hal::Channel;
 use firmware::record::{Fault, Live, RawSample, SettingsReport};
 use std::fs::File;
@@ -80,7 +80,7 @@ impl Files {
             MESSAGES_TXT,
         ];
         // Locked and recovered first, so the check sees what is really there.
-        let out = crate::cli::open_out(dir, "log", &names)?;
+        let out = crate::outputs::open_out(dir, "log", &names)?;
         if !opts.overwrite {
             let existing: Vec<&str> = names.into_iter().filter(|n| dir.join(n).exists()).collect();
             if !existing.is_empty() {
@@ -93,7 +93,7 @@ impl Files {
             }
         }
         let mut set = out.stage()?;
-        set.keep_on_failure();
+        set.keep_on_failure(crate::outputs::say_kept);
         Ok(Files {
             raw: create(&mut set, RAW_CSV, Some(RAW_HEADER))?,
             pairs: create_pairs(&mut set, PAIRS_CSV)?,

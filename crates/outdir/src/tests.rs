@@ -197,7 +197,7 @@ fn a_set_that_fails_late_is_kept_and_the_error_says_where() {
     let dir = scratch();
     let mut s = OutputDir::open(&dir, "test", &[]).unwrap().stage().unwrap();
     s.write("pairs.csv", b"run,step\n1,1\n").unwrap();
-    s.keep_on_failure();
+    s.keep_on_failure(|_| {});
     // Something in the way appears while the work runs: the commit is refused.
     std::fs::create_dir_all(dir.join("pairs.csv")).unwrap();
     let e = format!("{:#}", s.commit().unwrap_err());

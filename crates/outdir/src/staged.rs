@@ -1,8 +1,8 @@
 //! One output set being written: files go into a staging directory inside the output
 //! directory; [`Staged::commit`] replaces the previous set with them, dropping without a
 //! commit discards them, or, once the command has done work worth keeping
-//! ([`Staged::keep_on_failure`]), keeps them under a visible name and says where. A commit
-//! that fails keeps the set the same way. Every open set is registered, so that a process
+//! ([`Staged::keep_on_failure`]), keeps them under a visible name and tells the caller where.
+//! A commit that fails keeps the set the same way. Every open set is registered, so that a process
 //! about to exit at once (a second signal) can keep its work where it says ([`keep_open_sets`]).
 
 use super::{commit, OutputDir, INCOMPLETE_PREFIX, STAGING_PREFIX};
@@ -53,7 +53,8 @@ pub struct Staged {
     /// Files written by streaming writers, synced at the commit.
     streamed: BTreeSet<String>,
     done: bool,
-    keep_on_failure: bool,
+    /// Keep the work on failure, and say where with this (`None`: discard it).
+    keep_on_failure: Option<fn(&Path)>,
 }
 
 impl Staged {
@@ -78,15 +79,17 @@ impl Staged {
             files: BTreeSet::new(),
             streamed: BTreeSet::new(),
             done: false,
-            keep_on_failure: false,
+            keep_on_failure: None,
         })
     }
 
     /// If this set is dropped without a commit (an error), or its commit fails, keep what was
     /// written under `DIR/incomplete-<id>` instead of discarding it (a logged session is data
-    /// that cannot be made again; a campaign's runs and an analysis took time to make).
-    pub fn keep_on_failure(&mut self) {
-        self.keep_on_failure = true;
+    /// that cannot be made again; a campaign's runs and an analysis took time to make). A set
+    /// dropped is kept silently, so `say` is handed where it went (the program says it); a
+    /// failed commit says it in its error.
+    pub fn keep_on_failure(&mut self, say: fn(&Path)) {
+        self.keep_on_failure = Some(say);
     }
 
     /// Where this set's work goes if it is kept.
@@ -166,7 +169,7 @@ impl Staged {
     pub fn commit(mut self) -> anyhow::Result<()> {
         let r = self.commit_with(&mut commit::NoCrash);
         match r {
-            Err(e) if self.keep_on_failure && self.path.exists() => {
+            Err(e) if self.keep_on_failure.is_some() && self.path.exists() => {
                 let kept = self.kept_path();
                 self.done = true;
                 self.forget();
@@ -209,13 +212,13 @@ impl Drop for Staged {
             return;
         }
         self.forget();
-        if self.keep_on_failure {
+        if let Some(say) = self.keep_on_failure {
             let kept = self
                 .out
                 .path()
                 .join(format!("{INCOMPLETE_PREFIX}{}", self.id));
             if std::fs::rename(&self.path, &kept).is_ok() {
-                crate::errln!("the work done so far is kept in {}", kept.display());
+                say(&kept);
             }
         } else {
             let _ = std::fs::remove_dir_all(&self.path);
