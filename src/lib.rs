@@ -7,7 +7,7 @@ pub mod cli;
 pub mod diagnose;
 pub mod evidence;
 pub mod fit;
-pub mod log;
+pub mod logger;
 pub mod outputs;
 pub mod report;
 pub mod term;

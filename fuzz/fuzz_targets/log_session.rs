@@ -2,8 +2,8 @@
 //! the summary): it must never panic, and what it writes must read back.
 #![no_main]
 
-use capstan::log::output::{LogOptions, Logger, SetupFlags, Stop};
-use capstan::log::Firmware;
+use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
+use capstan_link::Firmware;
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
 

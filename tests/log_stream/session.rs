@@ -2,9 +2,9 @@
 
 use crate::log_support::{firmware, fresh_dir, split, stream};
 use crate::record_seq;
-use capstan::log::output::{LogOptions, Logger, SetupFlags, Stop};
-use capstan::log::seq::Gap;
-use capstan::log::{decode_all, Event};
+use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
+use capstan_link::seq::Gap;
+use capstan_link::{decode_all, Event};
 use firmware::record::Record;
 
 #[test]

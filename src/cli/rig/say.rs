@@ -3,8 +3,8 @@
 //! from a record; the wording of replies, settings and faults is `log::words`, shared with
 //! `capstan log` and the rig link.
 
-use super::link::Answer;
-use crate::log::words::{reply_sentence, settings_lines, unit};
+use capstan_link::rig::Answer;
+use capstan_link::words::{reply_sentence, settings_lines, unit};
 use firmware::command::{Command, CommandKind, Key};
 use firmware::record::Live;
 
@@ -115,7 +115,7 @@ pub fn key_lines() -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::log::words::fault_line;
+    use capstan_link::words::fault_line;
     use firmware::command::CommandError;
     use firmware::hal::Channel;
     use firmware::record::{Fault, FaultKind, Reply, RunEnd, SettingsReport, SettingsSource};

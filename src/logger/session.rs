@@ -7,11 +7,11 @@ mod setup;
 use super::files::{decimal, Files};
 use super::summary::{RecordCounts, RunCalibration, RunSummary, Sourced, Summary, TruncatedTail};
 use super::{LogOptions, Outcome, Stop, PAIRS_INCOMPLETE_CSV};
-use crate::log::decoder::{BadFrame, Decoder, Located};
-use crate::log::elf::{Firmware, RecordKind};
-use crate::log::frame::Event;
-use crate::log::seq::SeqEvent;
 use capstan_data::Pair;
+use capstan_link::decoder::{BadFrame, Decoder, Located};
+use capstan_link::elf::{Firmware, RecordKind};
+use capstan_link::frame::Event;
+use capstan_link::seq::SeqEvent;
 use firmware::record::{Fault, RawSample, Record, RunEnd, RunStart, StepPair};
 
 /// The run the records belong to: its entry in the summary's runs, and the set-up values its

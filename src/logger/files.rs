@@ -7,9 +7,9 @@ use super::{
     LogOptions, FAULTS_CSV, FAULTS_HEADER, LIVE_CSV, LIVE_HEADER, MESSAGES_TXT, PAIRS_CSV,
     PAIRS_INCOMPLETE_CSV, RAW_CSV, RAW_HEADER, SETTINGS_CSV, STREAM_FILE, SUMMARY_JSON,
 };
-use crate::log::words::{setting_values, source_name};
 use anyhow::Context;
 use capstan_data::{Pair, PairsWriter};
+use capstan_link::words::{setting_values, source_name};
 use capstan_outdir::Staged;
 use firmware::hal::Channel;
 use firmware::record::{Fault, Live, RawSample, SettingsReport};

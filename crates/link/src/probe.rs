@@ -1,13 +1,14 @@
 //! The real board: flash (or attach to) the chip through a debug probe with the probe-rs
-//! library, find the firmware's RTT control block, and feed the defmt up-channel to a
-//! [`Logger`] until Ctrl-C, a limit, or the probe goes away. `capstan rig` attaches the same
-//! way (never flashing) and also writes command lines into the RTT down channel.
+//! library, find the firmware's RTT control block, and read the defmt up-channel (`capstan
+//! log` feeds it to its session until Ctrl-C, a limit, or the probe goes away). `capstan rig`
+//! attaches the same way (never flashing) and also writes command lines into the RTT down
+//! channel. What is worth saying meanwhile (flashing, the channel read) goes to the caller's
+//! `say`.
 //!
 //! The RTT channel stays in the firmware's mode (never block, drop what does not fit). The
 //! rig's sample loop must not stall on a slow host; a record that is dropped instead shows up
 //! as a sequence gap in the summary.
 
-use super::output::{Logger, Stop};
 use anyhow::{anyhow, bail, Context};
 use probe_rs::flashing::{DownloadOptions, ElfLoader, ElfOptions};
 use probe_rs::probe::list::Lister;
@@ -15,7 +16,6 @@ use probe_rs::probe::DebugProbeSelector;
 use probe_rs::rtt::{find_rtt_control_block_in_raw_file, try_attach_to_rtt, Rtt, ScanRegion};
 use probe_rs::{Permissions, Session};
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// How to reach the board.
@@ -35,15 +35,6 @@ pub struct ProbeOptions {
     pub rtt_channel: usize,
     /// How long to wait for the firmware to set up RTT.
     pub rtt_timeout: Duration,
-}
-
-/// When to stop on one's own.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Limits {
-    /// After this many complete runs.
-    pub runs: Option<usize>,
-    /// After this long.
-    pub duration: Option<Duration>,
 }
 
 fn open_session(opts: &ProbeOptions) -> anyhow::Result<(Session, String)> {
@@ -104,21 +95,29 @@ pub struct Connection {
 
 /// Reach the board: open the probe, attach to the chip, flash the ELF and reset (unless
 /// `opts.flash` is off), and find the RTT control block. Every failure here is an error that
-/// says what is missing; nothing has been logged yet.
-pub fn connect(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connection> {
-    let mut conn = attach(elf_path, opts)?;
+/// says what is missing; nothing has been logged yet. Progress goes to `say`, one line each.
+pub fn connect(
+    elf_path: &Path,
+    opts: &ProbeOptions,
+    say: &mut dyn FnMut(String),
+) -> anyhow::Result<Connection> {
+    let mut conn = attach(elf_path, opts, say)?;
     let size = conn.up_buffer_size();
-    crate::errln!(
+    say(format!(
         "capstan log: reading defmt from RTT channel {} ({size} bytes buffer); Ctrl-C stops and \
          keeps everything",
         conn.channel
-    );
+    ));
     Ok(conn)
 }
 
-/// [`connect`] without a word on stderr unless it flashes: the board reached, its RTT control
+/// [`connect`] without a word to `say` unless it flashes: the board reached, its RTT control
 /// block found, and its up-channel `opts.rtt_channel` checked to exist.
-pub fn attach(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connection> {
+pub fn attach(
+    elf_path: &Path,
+    opts: &ProbeOptions,
+    say: &mut dyn FnMut(String),
+) -> anyhow::Result<Connection> {
     let elf = std::fs::read(elf_path)
         .with_context(|| format!("cannot read the firmware ELF {}", elf_path.display()))?;
     let region = match find_rtt_control_block_in_raw_file(&elf) {
@@ -132,18 +131,21 @@ pub fn attach(elf_path: &Path, opts: &ProbeOptions) -> anyhow::Result<Connection
     };
     let (mut session, probe_name) = open_session(opts)?;
     if opts.flash {
-        crate::errln!(
+        say(format!(
             "capstan log: flashing {} to the {} through {probe_name}...",
             elf_path.display(),
             opts.chip
-        );
+        ));
         let t = Instant::now();
         let mut dl = DownloadOptions::default();
         dl.verify = true;
         let loader = ElfLoader(ElfOptions::default());
         probe_rs::flashing::download_file_with_options(&mut session, elf_path, loader, dl)
             .with_context(|| format!("flashing {} failed", elf_path.display()))?;
-        crate::errln!("capstan log: flashed in {:.1} s", t.elapsed().as_secs_f64());
+        say(format!(
+            "capstan log: flashed in {:.1} s",
+            t.elapsed().as_secs_f64()
+        ));
     }
     let rtt = {
         let mut core = session
@@ -210,36 +212,5 @@ impl Connection {
         channel
             .write(&mut core, bytes)
             .with_context(|| format!("cannot write RTT down channel {n}"))
-    }
-
-    /// Feed the defmt up-channel to `logger` until Ctrl-C (`stop`), a limit, or a probe
-    /// failure, which ends the stream as [`Stop::ProbeLost`] (the logger keeps what it has).
-    /// Only a failure to write the files is an error.
-    pub fn stream(
-        &mut self,
-        limits: Limits,
-        logger: &mut Logger,
-        stop: &AtomicBool,
-    ) -> anyhow::Result<Stop> {
-        let started = Instant::now();
-        let mut buf = vec![0u8; 16 * 1024];
-        loop {
-            if stop.load(Ordering::SeqCst) {
-                return Ok(Stop::Interrupted(
-                    crate::cli::signal::stop_reason().unwrap_or("Ctrl-C"),
-                ));
-            }
-            if let Some(n) = limits.runs.filter(|&n| logger.completed_runs() >= n) {
-                return Ok(Stop::Limit(format!("{n} run(s) logged (--runs)")));
-            }
-            if let Some(d) = limits.duration.filter(|&d| started.elapsed() >= d) {
-                return Ok(Stop::Limit(format!("{} s (--duration)", d.as_secs_f64())));
-            }
-            match self.read_up(&mut buf) {
-                Ok(0) => std::thread::sleep(Duration::from_millis(5)),
-                Ok(n) => logger.feed(&buf[..n])?,
-                Err(e) => return Ok(Stop::ProbeLost(e)),
-            }
-        }
     }
 }

@@ -3,7 +3,7 @@
 //! with no run. None of them opens, closes or counts towards a run.
 
 use super::Logger;
-use crate::log::words::{reply_sentence, source_name};
+use capstan_link::words::{reply_sentence, source_name};
 use firmware::command::CommandKind;
 use firmware::record::{Fault, Live, Record, Reply, SettingsReport};
 

@@ -4,8 +4,8 @@
 //! restarts, bad frames and an unfinished frame at the end.
 
 use super::{LIVE_CSV, MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, SETTINGS_CSV, STREAM_FILE};
-use crate::log::decoder::BadFrame;
-use crate::log::seq::{Backwards, Gap, Restart};
+use capstan_link::decoder::BadFrame;
+use capstan_link::seq::{Backwards, Gap, Restart};
 use serde::Serialize;
 use std::path::Path;
 

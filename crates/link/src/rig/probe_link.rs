@@ -3,11 +3,11 @@
 //! with the same decoder `capstan log` uses.
 
 use super::link::RigLink;
-use crate::log::decoder::{Decoder, Located};
-use crate::log::frame::Event;
-use crate::log::probe::{attach, Connection, ProbeOptions};
-use crate::log::seq::SeqEvent;
-use crate::log::Firmware;
+use crate::decoder::{Decoder, Located};
+use crate::frame::Event;
+use crate::probe::{attach, Connection, ProbeOptions};
+use crate::seq::SeqEvent;
+use crate::Firmware;
 use anyhow::{anyhow, bail};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -51,7 +51,8 @@ pub fn open<'f>(
     mut opts: ProbeOptions,
 ) -> anyhow::Result<ProbeLink<'f>> {
     opts.flash = false;
-    let mut conn = attach(elf, &opts)?;
+    // Never flashed: nothing to say.
+    let mut conn = attach(elf, &opts, &mut |_| {})?;
     if conn.down_buffer_size(COMMAND_CHANNEL).is_none() {
         bail!(NoDownChannel);
     }

@@ -2,7 +2,7 @@
 //! firmware's own typed [`Record`]: the same struct the rig emitted, so the host works with
 //! what the firmware means, not with a copy of it.
 
-use crate::log::elf::{RecordKind, RecordLayout};
+use crate::elf::{RecordKind, RecordLayout};
 use firmware::calib::{AmpMap, Calibration, ChannelCal, ServoMap};
 use firmware::command::{CommandError, CommandKind};
 use firmware::condition::ChannelStats;

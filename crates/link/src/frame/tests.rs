@@ -4,14 +4,14 @@
 //! a field renamed, reordered or left out of the checksum on either side fails here.
 
 use super::{record_from_values, Event};
-use crate::log::elf::{record_layout, RecordLayout};
+use crate::elf::{record_layout, RecordLayout};
 use firmware::command::{CommandError, CommandKind};
 use firmware::record::{
     record_crc, CrcFields, Live, Record, Reply, RunStart, SettingsReport, SettingsSource,
 };
 use firmware::{Calibration, Protocol, Settings, StepOrder};
 
-const SINK: &str = include_str!("../../../firmware/src/defmt_sink.rs");
+const SINK: &str = include_str!("../../../../firmware/src/defmt_sink.rs");
 
 /// The format string of a record kind, as the firmware writes it.
 fn format_of(word: &str) -> String {
@@ -213,7 +213,7 @@ fn codes_the_firmware_does_not_know_are_refused() {
 
 /// The CRC of a frame's values, in format order (for records this test builds by hand).
 fn crc_over(l: &RecordLayout, v: &[String]) -> u32 {
-    use crate::log::elf::Prim;
+    use crate::elf::Prim;
     let mut c = CrcFields::new();
     for ((name, prim), v) in l.fields.iter().zip(v).filter(|((n, _), _)| n != "crc") {
         let bad = || format!("{name} = {v}");

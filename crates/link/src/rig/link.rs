@@ -2,7 +2,7 @@
 //! records and messages the firmware logs, whatever carries them (RTT through a debug probe,
 //! or a scripted rig in the tests); [`exchange`] sends one command and waits for the record answering it.
 
-use crate::log::frame::Event;
+use crate::frame::Event;
 use firmware::command::{Command, CommandKind};
 use firmware::record::{Record, Reply, RunEnd, SettingsReport};
 use std::time::{Duration, Instant};
@@ -89,10 +89,10 @@ pub fn take(
         }
         Record::Reply(r) => note(format!(
             "note: a reply to another command: {}",
-            crate::log::words::reply_line(&r, None)
+            crate::words::reply_line(&r, None)
         )),
         Record::Settings(s) => answer.settings = Some(s),
-        Record::Fault(f) => note(crate::log::words::fault_line(&f)),
+        Record::Fault(f) => note(crate::words::fault_line(&f)),
         Record::RunEnd(e) if *cmd == Command::Abort => {
             answer.run_end = Some(e);
             return true;
