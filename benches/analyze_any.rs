@@ -9,7 +9,7 @@
 //! `-- --max-rows N` caps their size (default 1,000), `-- --seed S`, `-- --keep K` writes set
 //! K's CSV to `set-K.csv` (to run `capstan analyze` on it alone).
 
-use capstan::diagnose::cases::{draw_case, Class};
+use capstan::truth::cases::{draw_case, Class};
 use capstan_data::{check_capstan_data, read_pairs, Dataset};
 use host_sim::plant::rng::Rng;
 use std::time::Instant;
@@ -103,9 +103,9 @@ fn simulated(seed: u64, k: u64, wraps: usize, runs: u32) -> Dataset {
 /// Analyse `d` end to end as `capstan analyze` does; the wall time and a description.
 fn analyse(d: &Dataset, dir: &std::path::Path, what: &str) -> Option<(f64, usize, String)> {
     let t0 = Instant::now();
-    let opts = capstan::analysis::Options { threads: 2 };
-    let a = capstan::analysis::run(d, opts).ok()?;
-    let cl = capstan::analysis::closed_loop::run(&a, 2).ok();
+    let opts = capstan_engine::analysis::Options { threads: 2 };
+    let a = capstan_engine::analysis::run(d, opts).ok()?;
+    let cl = capstan_engine::analysis::closed_loop::run(&a, 2).ok();
     let html = capstan::report::report_html(&a, cl.as_ref().map(|c| c.curves.as_slice()), "")
         .expect("the report renders");
     let mut csv = Vec::new();

@@ -1,4 +1,4 @@
-//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan::diagnose::cases`).
+//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan::truth::cases`).
 //!
 //! ```text
 //! cargo run --release --example calibrate -- [SEED] [--every K] [--grid] [--verbose]
@@ -12,8 +12,9 @@
 //!   `src/evidence/mod.rs` and `src/evidence/adequacy.rs` were chosen (on seed 99; the test
 //!   asserts on another seed);
 //! * `--dump-seed S`: write the case with seed S to /tmp/case.csv.
-use capstan::diagnose::{cases, diagnose_with, score, Options};
-use capstan::evidence::AdequacyRule;
+use capstan::truth::{cases, score};
+use capstan_engine::diagnose::{diagnose_with, Options};
+use capstan_engine::evidence::AdequacyRule;
 
 fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> Option<T> {
     args.iter()
@@ -111,7 +112,7 @@ fn main() {
         return;
     }
     // `--rival-gap G`: report rivals up to G (the figures below for every gap up to it).
-    let rival_gap = arg(&args, "--rival-gap").unwrap_or(capstan::evidence::RIVAL_GAP);
+    let rival_gap = arg(&args, "--rival-gap").unwrap_or(capstan_engine::evidence::RIVAL_GAP);
     let opts = Options {
         rival_gap,
         ..Options::default()

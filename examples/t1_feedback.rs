@@ -14,9 +14,9 @@
 //! * the wander switched off.
 //!
 //! The figures are in docs/README-diagnose.md ("The cause: T1 answers to mu").
-use capstan::diagnose::cases::{draw_case, Class};
-use capstan::evidence::{assess, candidates::ThetaMap, within, Options};
+use capstan::truth::cases::{draw_case, Class};
 use capstan_data::Dataset;
+use capstan_engine::evidence::{assess, candidates::ThetaMap, within, Options};
 use capstan_friction::{Effect, EffectKind};
 use std::collections::HashMap;
 

@@ -2,12 +2,9 @@
 //!
 //! The library behind the `capstan` binary; the integration tests in `tests/` use it directly.
 
-pub mod analysis;
 pub mod cli;
-pub mod diagnose;
-pub mod evidence;
-pub mod fit;
 pub mod logger;
 pub mod outputs;
 pub mod report;
 pub mod term;
+pub mod truth;

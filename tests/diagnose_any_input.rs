@@ -14,8 +14,8 @@
 //! stopped after 60 s, and every analysis bounded by the fits' budgets.
 //! `PROPTEST_CASES=N` draws more (default 40 for diagnose, 8 for analyze).
 
-use capstan::diagnose::diagnose;
 use capstan_data::{check_capstan_data, read_pairs, Dataset};
+use capstan_engine::diagnose::diagnose;
 use proptest::prelude::*;
 use proptest::test_runner::{FileFailurePersistence, RngSeed};
 
@@ -186,9 +186,9 @@ proptest! {
     ) {
         let text = csv(&rows, cols);
         if let Some(d) = accepted(&text) {
-            let opts = capstan::analysis::Options { threads: 1 };
+            let opts = capstan_engine::analysis::Options { threads: 1 };
             // Too few rows is a clear refusal; anything else must come back analysed.
-            match capstan::analysis::run(&d, opts) {
+            match capstan_engine::analysis::run(&d, opts) {
                 Ok(a) => {
                     prop_assert!(a.mechanisms.tests.len() == 10);
                     // The same cords and runs as diagnose.

@@ -2,9 +2,9 @@
 //! catalogue effect explains, readings at or below zero, effects whose column is absent, and
 //! the thesis data.
 
-use capstan::diagnose::cases::{self, Class};
-use capstan::diagnose::{self, Options};
+use capstan::truth::cases::{self, Class};
 use capstan_data::{read_pairs, thesis_dataset, write_pairs, write_pairs_to, Dataset};
+use capstan_engine::diagnose::{self, Options};
 use capstan_friction::EffectKind;
 use std::process::Command;
 

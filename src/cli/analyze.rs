@@ -48,13 +48,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => thesis_dataset(),
     };
     capstan_data::check_capstan_data(&ds)?;
-    let mut opts = crate::analysis::Options::default();
+    let mut opts = capstan_engine::analysis::Options::default();
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     crate::errln!("{}", ds.structure.describe());
-    let mut a = crate::analysis::run(&ds, opts)?;
+    let mut a = capstan_engine::analysis::run(&ds, opts)?;
     // From here on the set holds work: a late failure keeps it and says where.
     set.keep_on_failure(crate::outputs::say_kept);
     for note in &a.fit_notes {
@@ -62,7 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t_report = Instant::now();
     let t_cl = Instant::now();
-    let (curves, closed, note) = match crate::analysis::closed_loop::run(&a, opts.threads) {
+    let (curves, closed, note) = match capstan_engine::analysis::closed_loop::run(&a, opts.threads) {
         Ok(cl) => (Some(cl.curves), cl.summary, "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string()),
         Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
     };
@@ -105,12 +105,12 @@ fn validate(args: &Args) -> anyhow::Result<()> {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     crate::errln!(
         "validating the cause-naming on {} planted data sets (seed {}) ...",
-        crate::analysis::validate::cases(args.seed).len(),
+        crate::truth::validate::cases(args.seed).len(),
         args.seed
     );
     let mut set = crate::outputs::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
-    let v = crate::analysis::validate::validate(args.seed, 1, threads)?;
+    let v = crate::truth::validate::validate(args.seed, 1, threads)?;
     set.keep_on_failure(crate::outputs::say_kept);
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
     crate::outln!(

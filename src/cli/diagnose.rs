@@ -1,9 +1,9 @@
 //! `capstan diagnose DATA.csv [--json]`: which catalogue effects (if any) make a data set depart
-//! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`crate::diagnose`].
+//! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`capstan_engine::diagnose`].
 
-use crate::diagnose::words::fixed;
-use crate::diagnose::{self, words, Diagnosis, Options};
 use capstan_data::{load_pairs, thesis_dataset};
+use capstan_engine::diagnose::words::fixed;
+use capstan_engine::diagnose::{self, words, Diagnosis, Options};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 

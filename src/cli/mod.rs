@@ -37,6 +37,8 @@ pub enum Command {
 
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    // The engine's developer traces (CAPSTAN_FIT_LOG, CAPSTAN_LAPS) go to stderr.
+    capstan_engine::trace::set_sink(|line| crate::errln!("{line}"));
     match cli.command {
         Command::Simulate(a) => simulate::run(a),
         Command::Analyze(a) => analyze::run(a),

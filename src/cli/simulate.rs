@@ -342,7 +342,7 @@ fn progress_bar(args: &Args, runs: usize) -> Option<indicatif::ProgressBar> {
     })
 }
 
-/// The simulator's rows as pairs of the CSV schema (`capstan::data`): what `pairs.csv` holds,
+/// The simulator's rows as pairs of the CSV schema (`capstan_data`): what `pairs.csv` holds,
 /// and what the diagnosis's generated cases read back.
 pub fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
     rows.iter()

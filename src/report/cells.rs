@@ -2,7 +2,7 @@
 //! a number is not identified on these data, and text escaped for HTML. Shared by the page
 //! ([`super::html`]) and its tables ([`super::tables`]).
 
-use crate::analysis::uncertainty::WithInterval;
+use capstan_engine::analysis::uncertainty::WithInterval;
 
 /// Escape text for HTML (and SVG).
 pub fn esc(s: &str) -> String {

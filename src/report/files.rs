@@ -1,8 +1,8 @@
 //! `metrics.json` (every number of the report) and `predictions.csv` (the input rows with
 //! every model's predictions).
 
-use crate::analysis::Analysis;
 use capstan_data::Dataset;
+use capstan_engine::analysis::Analysis;
 use serde_json::{json, Value};
 
 /// The contents of `metrics.json`.

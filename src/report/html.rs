@@ -5,8 +5,8 @@ use super::cells::{self, esc};
 use super::figures::{self, Figure};
 use super::plot::{hex, Dash, Entry, Key, DASH, DOT_PERIOD};
 use super::tables;
-use crate::analysis::closed_loop::SimCurve;
-use crate::analysis::Analysis;
+use capstan_engine::analysis::closed_loop::SimCurve;
+use capstan_engine::analysis::Analysis;
 use std::fmt::Write as _;
 
 const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}tr.worse td{background:#fbeaea}.unexplained{color:#a50}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
@@ -72,7 +72,7 @@ fn headline(h: &mut String, a: &Analysis) {
     let (Some(b), Some(e)) = (get("baseline"), get("extended")) else {
         return;
     };
-    let loco = |m: &crate::analysis::ModelMetrics| {
+    let loco = |m: &capstan_engine::analysis::ModelMetrics| {
         m.loco_rmse_t2_uncertainty
             .as_ref()
             .map_or("not refittable".into(), cells::with_ci)
@@ -162,7 +162,7 @@ pub fn report_html(
     let figs = figures::all(a, closed_loop)?;
     let mut h = String::new();
     let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Capstan analysis</title><style>{STYLE}</style></head><body>");
-    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&crate::diagnose::words::capitalised(&a.evidence.data.structure.statement)));
+    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&capstan_engine::diagnose::words::capitalised(&a.evidence.data.structure.statement)));
     headline(&mut h, a);
     gain_section(&mut h, a, &figs);
     h.push_str("<h2>The data against the models</h2>");
@@ -184,7 +184,7 @@ pub fn report_html(
     );
     let causes: Vec<&str> = a.mechanisms.causes.iter().map(|c| c.name).collect();
     let _ = write!(h, "<h2>The extended model</h2><p>Euler-Eytelwein with the named causes ({}), each through the catalogue's own term in <code>capstan_friction::FrictionLaw</code> and <code>SensorArtefacts</code> (the law the simulator runs), one population mu and a per-cord random log-mu u<sub>cord</sub> ~ N(0, σ<sub>u</sub>²), fitted by penalised least squares with λ = σ²/σ<sub>u</sub>² re-estimated and the cord effects shrunk so that the fixed values plus their effective degrees of freedom stay within {}.</p>",
-        if causes.is_empty() { "none".to_string() } else { causes.join(", ") }, crate::analysis::fits::STRICT_BUDGET);
+        if causes.is_empty() { "none".to_string() } else { causes.join(", ") }, capstan_engine::analysis::fits::STRICT_BUDGET);
     h.push_str(&tables::extended(a));
     let r2: Vec<f64> = a.thesis_per_angle_r2.iter().map(|r| r.r2).collect();
     let (lo, hi) = r2.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |x, &v| {

@@ -14,6 +14,6 @@ pub mod html;
 pub mod plot;
 pub mod tables;
 
-pub use crate::analysis::closed_loop::SimCurve;
+pub use capstan_engine::analysis::closed_loop::SimCurve;
 pub use files::{metrics_json, write_predictions_csv};
 pub use html::report_html;

@@ -3,9 +3,9 @@
 //! and the thesis's per-angle R².
 
 use super::cells::{esc, f3, fe, fs, fx, with_ci};
-use crate::analysis::mechanisms::Verdict;
-use crate::analysis::residuals::StepResidual;
-use crate::analysis::{Analysis, ModelMetrics};
+use capstan_engine::analysis::mechanisms::Verdict;
+use capstan_engine::analysis::residuals::StepResidual;
+use capstan_engine::analysis::{Analysis, ModelMetrics};
 use std::fmt::Write as _;
 
 fn model_row(m: &ModelMetrics) -> String {

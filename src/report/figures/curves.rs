@@ -3,10 +3,10 @@
 use super::{
     baseline_style, extended_style, measured, model_legend, thesis_style, Figure, Palette, INK,
 };
-use crate::analysis::closed_loop::SimCurve;
-use crate::analysis::Analysis;
 use crate::report::plot::{figure, Entry, Key, Panel, Series};
 use anyhow::Result;
+use capstan_engine::analysis::closed_loop::SimCurve;
+use capstan_engine::analysis::Analysis;
 use plotters::style::RGBColor;
 use std::collections::BTreeMap;
 
@@ -137,7 +137,7 @@ pub const MAX_CORD_PANELS: usize = 24;
 
 /// The cords drawn one panel each.
 fn panel_cords(a: &Analysis) -> Vec<usize> {
-    crate::analysis::closed_loop::evenly(a.obs.groups.len(), MAX_CORD_PANELS)
+    capstan_engine::analysis::closed_loop::evenly(a.obs.groups.len(), MAX_CORD_PANELS)
 }
 
 /// The caption's sentence when not every cord has its panel.

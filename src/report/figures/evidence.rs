@@ -2,9 +2,9 @@
 //! evidence, and the gain.
 
 use super::{measured, Figure, Palette};
-use crate::analysis::Analysis;
 use crate::report::plot::{bar_chart, figure, finite_range, Bars, Panel, Series};
 use anyhow::Result;
+use capstan_engine::analysis::Analysis;
 use plotters::style::RGBColor;
 
 /// Residuals of T2 against T1, step and run, for the baseline (top) and the extended model.
@@ -72,7 +72,7 @@ pub fn residuals(a: &Analysis, pal: &Palette) -> Result<Figure> {
 /// given the named causes, with the naming threshold of its level.
 pub fn mechanisms(a: &Analysis, _pal: &Palette) -> Result<Figure> {
     let ev = &a.evidence;
-    let testable: Vec<&crate::evidence::Evidence> = ev.candidates.iter().collect();
+    let testable: Vec<&capstan_engine::evidence::Evidence> = ev.candidates.iter().collect();
     let alone = |name: &str| {
         a.mechanisms
             .get(name)
@@ -81,11 +81,11 @@ pub fn mechanisms(a: &Analysis, _pal: &Palette) -> Result<Figure> {
     };
     let n = ev.design.rows as f64;
     // χ² = −ΔBIC + ln N, N the level's units: rows within runs, cords or runs between.
-    let chi2 = |dbic: f64, level: crate::evidence::Level| {
+    let chi2 = |dbic: f64, level: capstan_engine::evidence::Level| {
         let units = match level {
-            crate::evidence::Level::WithinRun => n,
-            crate::evidence::Level::BetweenCord => ev.design.cords as f64,
-            crate::evidence::Level::BetweenRun => ev.design.runs as f64,
+            capstan_engine::evidence::Level::WithinRun => n,
+            capstan_engine::evidence::Level::BetweenCord => ev.design.cords as f64,
+            capstan_engine::evidence::Level::BetweenRun => ev.design.runs as f64,
         };
         (-dbic + units.ln()).max(0.0)
     };

@@ -11,9 +11,9 @@ pub mod curves;
 pub mod evidence;
 
 use super::plot::{Chart, Dash, Entry, Key, LineStyle, Marker};
-use crate::analysis::closed_loop::SimCurve;
-use crate::analysis::Analysis;
-use crate::fit::stats::distinct;
+use capstan_engine::analysis::closed_loop::SimCurve;
+use capstan_engine::analysis::Analysis;
+use capstan_engine::fit::stats::distinct;
 use plotters::style::RGBColor;
 
 /// The most markers (or line vertices) drawn per cord and series: a million-row data set

@@ -1,6 +1,6 @@
 //! `capstan analyze --validate`: the whole analysis on data sets where the truth was planted,
 //! generated end to end by the firmware-in-the-loop simulator with the thesis rig's noise
-//! (`crate::diagnose::cases`): no effect; each mechanism the report can name, twice; the
+//! (`crate::truth::cases`): no effect; each mechanism the report can name, twice; the
 //! two-mechanism truth the thesis data suggest (contact heating + a T1-path loss); and physics
 //! the report cannot name (direction hysteresis, an S-shaped T2 calibration error, a friction
 //! regime change). 40 data sets per seed.
@@ -9,8 +9,8 @@
 //! truths (clean ones included); a cause named, or structure flagged, on a clean set in ≤ 5 %;
 //! structure outside the catalogue reported as unexplained in ≥ 80 % of those sets.
 
-use super::{run, Options};
-use crate::diagnose::cases::{draw_case, Case, Class};
+use crate::truth::cases::{draw_case, Case, Class};
+use capstan_engine::analysis::{run, Options};
 use capstan_friction::EffectKind;
 use serde::Serialize;
 
@@ -122,7 +122,7 @@ pub fn validate(seed: u64, every: usize, threads: usize) -> anyhow::Result<Valid
         .map(|x| x.1)
         .collect();
     let opts = Options { threads: 1 };
-    let results = crate::fit::par::par_map(&cs, threads, |c| analyse(c, opts));
+    let results = capstan_engine::fit::par::par_map(&cs, threads, |c| analyse(c, opts));
     let outcomes: Vec<Outcome> = results.into_iter().collect::<anyhow::Result<_>>()?;
     let count = |f: &dyn Fn(&Outcome) -> bool, keep: &dyn Fn(&Outcome) -> bool| {
         let of: Vec<&Outcome> = outcomes.iter().filter(|o| keep(o)).collect();

@@ -12,7 +12,7 @@
 //! gain table), [`uncertainty`] (cluster-bootstrap intervals of the gain), [`extended`] (the
 //! extended fit in detail), [`residuals`] (what the models get wrong), [`mechanisms`] (the
 //! verdicts and their sentences), [`closed_loop`] (the firmware against the fitted plant),
-//! [`validate`] (the cause-naming on planted truths), [`models`] and [`thesis`].
+//! [`models`] and [`thesis`]. The cause-naming on planted truths is `capstan_truth::validate`.
 
 pub mod closed_loop;
 pub mod extended;
@@ -23,7 +23,6 @@ pub mod models;
 pub mod residuals;
 pub mod thesis;
 pub mod uncertainty;
-pub mod validate;
 
 use crate::diagnose::Diagnosis;
 use crate::evidence;

@@ -251,7 +251,10 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
     let clock = std::time::Instant::now();
     let lap = |what: &str| {
         if std::env::var("CAPSTAN_LAPS").is_ok() {
-            crate::errln!("{what}: {:.1} ms", clock.elapsed().as_secs_f64() * 1e3);
+            crate::trace::line(format_args!(
+                "{what}: {:.1} ms",
+                clock.elapsed().as_secs_f64() * 1e3
+            ));
         }
     };
     let cold = within::fit(&d, &[], &[], &within::start_mu(&d), &Weights::equal(d.n()));

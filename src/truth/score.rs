@@ -8,9 +8,9 @@
 //!   the lack of fit ignored (a found set without the unexplained flag counts as a miss);
 //! * clean: anything named, or unexplained, in ≤ 5 %.
 
-use super::cases::{Case, Class};
-use super::Diagnosis;
-use crate::evidence::Level;
+use crate::truth::cases::{Case, Class};
+use capstan_engine::diagnose::Diagnosis;
+use capstan_engine::evidence::Level;
 use capstan_friction::{Effect, EffectKind};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -287,7 +287,7 @@ impl Metrics {
             .filter(|o| {
                 o.missed()
                     .iter()
-                    .all(|k| crate::evidence::candidates::level(*k) == Level::WithinRun)
+                    .all(|k| capstan_engine::evidence::candidates::level(*k) == Level::WithinRun)
             })
             .collect();
         let count_of = |of: &[&Outcome], f: &dyn Fn(&Outcome) -> bool| {

@@ -10,9 +10,7 @@
 //! the diagnosis: the effects found with their evidence given the others, the population fit
 //! through `src/fit`, and the verdict in words.
 
-pub mod cases;
 mod diagnosis;
-pub mod score;
 pub mod words;
 
 pub use crate::evidence::{Level, NotTestable, BETWEEN_THRESHOLD, WITHIN_THRESHOLD};

@@ -16,9 +16,9 @@
 //!
 //! Typical use:
 //! ```no_run
-//! use capstan::fit::{obs::Observations, params::{ModelSpec, Param}, solve};
+//! use capstan_engine::fit::{obs::Observations, params::{ModelSpec, Param}, solve};
 //! use capstan_friction::Model;
-//! let obs = Observations::from_dataset(&capstan::data::thesis_dataset());
+//! let obs = Observations::from_dataset(&capstan_data::thesis_dataset());
 //! let spec = ModelSpec::new("ee", Model::euler_eytelwein(0.115)).free(Param::Mu);
 //! let fit = solve::fit_fixed(&spec, &obs, &obs.all_runs(), None);
 //! println!("mu = {:.4}, RMSE = {:.3} N", fit.model(None).law.mu, fit.rmse());

@@ -161,7 +161,7 @@ pub(super) fn finish(
         ref other => Some(format!("did not converge: {other:?}")),
     };
     if std::env::var_os("CAPSTAN_FIT_LOG").is_some() {
-        crate::errln!(
+        crate::trace::line(format_args!(
             "fit {}: {} rows, {} params, {} evaluations, {} of {} units, {:?}",
             spec.name,
             p.rows.len(),
@@ -170,7 +170,7 @@ pub(super) fn finish(
             budget.used(),
             budget.limit(),
             report.termination
-        );
+        ));
     }
     let rss = p.rss();
     let n = p.rows.len();
