@@ -9,8 +9,8 @@
 //! `-- --max-rows N` caps their size (default 1,000), `-- --seed S`, `-- --keep K` writes set
 //! K's CSV to `set-K.csv` (to run `capstan analyze` on it alone).
 
-use capstan::truth::cases::{draw_case, Class};
 use capstan_data::{check_capstan_data, read_pairs, Dataset};
+use capstan_truth::cases::{draw_case, Class};
 use host_sim::plant::rng::Rng;
 use std::time::Instant;
 
@@ -105,7 +105,7 @@ fn analyse(d: &Dataset, dir: &std::path::Path, what: &str) -> Option<(f64, usize
     let t0 = Instant::now();
     let opts = capstan_engine::analysis::Options { threads: 2 };
     let a = capstan_engine::analysis::run(d, opts).ok()?;
-    let cl = capstan_engine::analysis::closed_loop::run(&a, 2).ok();
+    let cl = capstan_truth::closed_loop::run(&a, 2).ok();
     let html = capstan::report::report_html(&a, cl.as_ref().map(|c| c.curves.as_slice()), "")
         .expect("the report renders");
     let mut csv = Vec::new();

@@ -6,9 +6,9 @@
 //! `cargo bench --bench diagnose` (release). `--repeat N` takes the best of N (default 3);
 //! `--quick` skips the 10,000-row sets; `--only NAME` times only the sets of that name.
 
-use capstan::truth::cases::{self, Case, Class};
 use capstan_data::{thesis_dataset, Dataset};
 use capstan_engine::diagnose::diagnose;
+use capstan_truth::cases::{self, Case, Class};
 use std::time::Instant;
 
 /// The name of a case: its effects (or the physics outside the catalogue), `none` if clean.

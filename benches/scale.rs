@@ -7,8 +7,8 @@
 //! `cargo bench --bench scale` (release); `-- --max-rows N` stops at N rows (default
 //! 1,000,000); `-- --diagnose-only` skips the analysis.
 
-use capstan::truth::cases::{self, Class};
 use capstan_data::{Dataset, Pair};
+use capstan_truth::cases::{self, Class};
 use std::time::Instant;
 
 /// The data set repeated `k` times, each copy's runs numbered after the last copy's.

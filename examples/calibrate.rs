@@ -1,4 +1,4 @@
-//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan::truth::cases`).
+//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan_truth::cases`).
 //!
 //! ```text
 //! cargo run --release --example calibrate -- [SEED] [--every K] [--grid] [--verbose]
@@ -12,9 +12,9 @@
 //!   `src/evidence/mod.rs` and `src/evidence/adequacy.rs` were chosen (on seed 99; the test
 //!   asserts on another seed);
 //! * `--dump-seed S`: write the case with seed S to /tmp/case.csv.
-use capstan::truth::{cases, score};
 use capstan_engine::diagnose::{diagnose_with, Options};
 use capstan_engine::evidence::AdequacyRule;
+use capstan_truth::{cases, score};
 
 fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> Option<T> {
     args.iter()

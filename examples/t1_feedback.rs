@@ -14,10 +14,10 @@
 //! * the wander switched off.
 //!
 //! The figures are in docs/README-diagnose.md ("The cause: T1 answers to mu").
-use capstan::truth::cases::{draw_case, Class};
 use capstan_data::Dataset;
 use capstan_engine::evidence::{assess, candidates::ThetaMap, within, Options};
 use capstan_friction::{Effect, EffectKind};
+use capstan_truth::cases::{draw_case, Class};
 use std::collections::HashMap;
 
 fn arg(args: &[String], name: &str, default: f64) -> f64 {

@@ -7,4 +7,3 @@ pub mod logger;
 pub mod outputs;
 pub mod report;
 pub mod term;
-pub mod truth;

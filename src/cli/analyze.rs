@@ -62,7 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t_report = Instant::now();
     let t_cl = Instant::now();
-    let (curves, closed, note) = match capstan_engine::analysis::closed_loop::run(&a, opts.threads) {
+    let (curves, closed, note) = match capstan_truth::closed_loop::run(&a, opts.threads) {
         Ok(cl) => (Some(cl.curves), cl.summary, "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string()),
         Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
     };
@@ -105,12 +105,12 @@ fn validate(args: &Args) -> anyhow::Result<()> {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     crate::errln!(
         "validating the cause-naming on {} planted data sets (seed {}) ...",
-        crate::truth::validate::cases(args.seed).len(),
+        capstan_truth::validate::cases(args.seed).len(),
         args.seed
     );
     let mut set = crate::outputs::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
-    let v = crate::truth::validate::validate(args.seed, 1, threads)?;
+    let v = capstan_truth::validate::validate(args.seed, 1, threads)?;
     set.keep_on_failure(crate::outputs::say_kept);
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
     crate::outln!(

@@ -10,10 +10,9 @@ mod output;
 mod two;
 
 use anyhow::{bail, Context};
-use capstan_data::Pair;
 use capstan_friction::{Effect, Model};
 use firmware::StepOrder;
-use host_sim::campaign::{stream_campaign, CampaignConfig, PairRow, StreamError};
+use host_sim::campaign::{stream_campaign, CampaignConfig, StreamError};
 use host_sim::noise::NoiseProfile;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -340,23 +339,4 @@ fn progress_bar(args: &Args, runs: usize) -> Option<indicatif::ProgressBar> {
         );
         pb
     })
-}
-
-/// The simulator's rows as pairs of the CSV schema (`capstan_data`): what `pairs.csv` holds,
-/// and what the diagnosis's generated cases read back.
-pub fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
-    rows.iter()
-        .map(|r| Pair {
-            capstan_diameter_mm: Some(r.capstan_diameter_mm),
-            wrap_deg: r.wrap_deg,
-            drive_v: Some(r.drive_v),
-            run: Some(r.run as f64),
-            step: Some(r.step as f64),
-            time_s: Some(r.time_s),
-            t1_n: r.t1_n,
-            t2_n: r.t2_n,
-            extra: Vec::new(),
-            labels: Vec::new(),
-        })
-        .collect()
 }

@@ -56,7 +56,8 @@ impl CampaignWriter {
     pub fn add(&mut self, r: &RunResult) -> anyhow::Result<()> {
         self.set.keep_on_failure(crate::outputs::say_kept);
         for row in pair_rows(r) {
-            self.pairs.write(&super::to_pairs(&[row])[0])?;
+            self.pairs
+                .write(&capstan_truth::pairs::to_pairs(&[row])[0])?;
             self.rows += 1;
         }
         if self.raw {

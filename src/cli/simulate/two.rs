@@ -2,10 +2,11 @@
 //! writes `two_control.csv` (the drive and the true tensions over time), `crosstalk.csv` and
 //! each channel's `pairs_ch<k>.csv`.
 
-use super::{model, plant, protocol, to_pairs, Args, Order};
+use super::{model, plant, protocol, Args, Order};
 use anyhow::bail;
 use capstan_data::write_pairs_to;
 use capstan_outdir::Staged;
+use capstan_truth::pairs::to_pairs;
 use host_sim::campaign::{CordKey, PairRow};
 use host_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
 use serde_json::json;

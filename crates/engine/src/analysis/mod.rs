@@ -11,8 +11,9 @@
 //! Files: [`fits`] (every model fitted, in-sample and leave-one-cord-out), [`metrics`] (the
 //! gain table), [`uncertainty`] (cluster-bootstrap intervals of the gain), [`extended`] (the
 //! extended fit in detail), [`residuals`] (what the models get wrong), [`mechanisms`] (the
-//! verdicts and their sentences), [`closed_loop`] (the firmware against the fitted plant),
-//! [`models`] and [`thesis`]. The cause-naming on planted truths is `capstan_truth::validate`.
+//! verdicts and their sentences), [`closed_loop`] (the firmware against the fitted plant, as
+//! the report draws it), [`models`] and [`thesis`]. The cause-naming on planted truths is
+//! `capstan_truth::validate`; the closed loop is run by `capstan_truth::closed_loop`.
 
 pub mod closed_loop;
 pub mod extended;

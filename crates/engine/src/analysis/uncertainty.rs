@@ -5,7 +5,7 @@
 
 use crate::fit::stats::jackknife_se;
 use crate::fit::Observations;
-use host_sim::plant::rng::Rng;
+use capstan_plant::rng::Rng;
 use serde::Serialize;
 
 /// Cluster-bootstrap resamples.

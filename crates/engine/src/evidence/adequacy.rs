@@ -21,7 +21,7 @@
 use super::design::Design;
 use super::within::{fit_strata, Strata, Weights, WithinFit};
 use crate::fit::stats::f_p_upper;
-use host_sim::plant::rng::Rng;
+use capstan_plant::rng::Rng;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 

@@ -8,7 +8,7 @@
 //!   the lack of fit ignored (a found set without the unexplained flag counts as a miss);
 //! * clean: anything named, or unexplained, in ≤ 5 %.
 
-use crate::truth::cases::{Case, Class};
+use crate::cases::{Case, Class};
 use capstan_engine::diagnose::Diagnosis;
 use capstan_engine::evidence::Level;
 use capstan_friction::{Effect, EffectKind};

@@ -9,7 +9,7 @@
 //! truths (clean ones included); a cause named, or structure flagged, on a clean set in ≤ 5 %;
 //! structure outside the catalogue reported as unexplained in ≥ 80 % of those sets.
 
-use crate::truth::cases::{draw_case, Case, Class};
+use crate::cases::{draw_case, Case, Class};
 use capstan_engine::analysis::{run, Options};
 use capstan_friction::EffectKind;
 use serde::Serialize;

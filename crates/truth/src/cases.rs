@@ -124,7 +124,7 @@ impl Case {
     /// simulate` writes them to `pairs.csv` (minus the dropped columns).
     pub fn generate(&self) -> Result<(Dataset, CampaignResult), String> {
         let r = run_campaign(&self.config).map_err(|e| e.to_string())?;
-        let pairs: Vec<Pair> = crate::cli::simulate::to_pairs(&r.rows)
+        let pairs: Vec<Pair> = crate::pairs::to_pairs(&r.rows)
             .into_iter()
             .map(|mut p| {
                 for c in &self.drop_columns {

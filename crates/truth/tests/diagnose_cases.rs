@@ -5,17 +5,17 @@
 //! noise — cord-to-cord and run-to-run scatter of mu, a slow wander of mu inside runs, a zero
 //! error per run, sensor noise and the ADC — and a planted truth: nothing, one catalogue effect
 //! (at a size that matters, or small), two at once, or physics outside the catalogue that only
-//! the plant knows (`capstan::truth::cases`). The thresholds were calibrated on seed 99
+//! the plant knows (`capstan_truth::cases`). The thresholds were calibrated on seed 99
 //! (`cargo run --release --example calibrate -- 99 --grid`); this test asserts on another.
 //!
 //! * `cargo test` runs a fixed slice: every 6th case of the test seed (53 cases);
 //! * `CAPSTAN_CASES=full cargo test --release --test diagnose_cases -- --nocapture` runs all
-//!   317 cases and asserts the targets of `capstan::truth::score` (`.ci/run` does this);
+//!   317 cases and asserts the targets of `capstan_truth::score` (`.ci/run` does this);
 //! * `CAPSTAN_DIAGNOSE_SEED=N` draws the cases from another master seed.
 
-use capstan::truth::cases::{self, Case, Class};
-use capstan::truth::score::{self, Metrics, Outcome};
 use capstan_friction::{Effect, EffectKind};
+use capstan_truth::cases::{self, Case, Class};
+use capstan_truth::score::{self, Metrics, Outcome};
 use std::sync::OnceLock;
 
 /// Seed of the test cases (the thresholds were calibrated on seed 99).
