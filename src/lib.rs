@@ -5,5 +5,4 @@
 pub mod cli;
 pub mod logger;
 pub mod outputs;
-pub mod report;
 pub mod term;

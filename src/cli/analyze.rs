@@ -67,9 +67,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
     };
     a.elapsed.closed_loop_s = t_cl.elapsed().as_secs_f64();
-    let html = crate::report::report_html(&a, curves.as_deref(), &note)?;
+    let html = capstan_report::report_html(&a, curves.as_deref(), &note)?;
     let mut csv = set.create("predictions.csv")?;
-    crate::report::write_predictions_csv(&mut csv, &ds, &a)
+    capstan_report::write_predictions_csv(&mut csv, &ds, &a)
         .and_then(|()| csv.flush())
         .with_context(|| {
             format!(
@@ -80,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
-    let metrics = crate::report::metrics_json(&a, &closed);
+    let metrics = capstan_report::metrics_json(&a, &closed);
     set.write("report.html", html.as_bytes())?;
     set.write(
         "metrics.json",

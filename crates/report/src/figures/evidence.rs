@@ -2,7 +2,7 @@
 //! evidence, and the gain.
 
 use super::{measured, Figure, Palette};
-use crate::report::plot::{bar_chart, figure, finite_range, Bars, Panel, Series};
+use crate::plot::{bar_chart, figure, finite_range, Bars, Panel, Series};
 use anyhow::Result;
 use capstan_engine::analysis::Analysis;
 use plotters::style::RGBColor;

@@ -1,5 +1,6 @@
 //! The outputs of `capstan analyze`: `metrics.json`, `predictions.csv` and a self-contained
-//! `report.html` (inline SVG figures, no external resources).
+//! `report.html` (inline SVG figures, no external resources), from the engine's analysis
+//! (`capstan_engine::analysis`).
 //!
 //! * [`files`]: `metrics.json` and `predictions.csv`.
 //! * [`html`]: the page and its sections; [`tables`]: its tables; [`cells`]: the text in them

@@ -3,7 +3,7 @@
 use super::{
     baseline_style, extended_style, measured, model_legend, thesis_style, Figure, Palette, INK,
 };
-use crate::report::plot::{figure, Entry, Key, Panel, Series};
+use crate::plot::{figure, Entry, Key, Panel, Series};
 use anyhow::Result;
 use capstan_engine::analysis::closed_loop::SimCurve;
 use capstan_engine::analysis::Analysis;
