@@ -9,8 +9,8 @@
 //!   K-th case), with every miss;
 //! * `--grid`: the same figures for a grid of thresholds (within-run ΔBIC, between ΔBIC, the
 //!   adequacy test's α and size), on the same simulated data sets: how the thresholds in
-//!   `src/evidence/mod.rs` and `src/evidence/adequacy.rs` were chosen (on seed 99; the test
-//!   asserts on another seed);
+//!   `crates/engine/src/evidence/mod.rs` and `crates/engine/src/evidence/adequacy.rs` were
+//!   chosen (on seed 99; the test asserts on another seed);
 //! * `--dump-seed S`: write the case with seed S to /tmp/case.csv.
 use capstan_engine::diagnose::{diagnose_with, Options};
 use capstan_engine::evidence::AdequacyRule;

@@ -10,7 +10,7 @@
 //! setup-mode records (`settings`, `live`, `reply`) and faults in words, for `capstan log` and
 //! `capstan rig` alike. [`rig`] sends command lines and waits for the records that answer them.
 //!
-//! The bytes come from a debug probe reading RTT ([`probe`], feature `probe`), from a saved
+//! The bytes come from a debug probe reading RTT (`probe`, feature `probe`), from a saved
 //! stream, or from a pipe (QEMU's semihosting output in the end-to-end test); the decoding is
 //! the same. Nothing here prints: what a caller may want said is handed to it.
 

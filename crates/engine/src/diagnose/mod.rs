@@ -8,7 +8,7 @@
 //! between-run covariates; the residuals against the replicate runs' pure error and against
 //! T1, time, step direction, wrap and diameter. This module turns the engine's assessment into
 //! the diagnosis: the effects found with their evidence given the others, the population fit
-//! through `src/fit`, and the verdict in words.
+//! through [`crate::fit`], and the verdict in words.
 
 mod diagnosis;
 pub mod words;
@@ -123,7 +123,7 @@ pub fn from_assessment(a: &Assessment, opts: &Options, t0: Instant) -> Diagnosis
     }
 }
 
-/// The population fits through `src/fit`: one mu, and one mu with the found effects at their
+/// The population fits through [`crate::fit`]: one mu, and one mu with the found effects at their
 /// sizes.
 fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) {
     let obs = &a.design.obs;

@@ -1,5 +1,5 @@
 //! The diagnosis on data straight from the shared model, and its run-level mu against
-//! `src/fit`.
+//! `fit`.
 
 use super::*;
 use capstan_data::{read_pairs, write_pairs_to, Pair};
@@ -101,7 +101,7 @@ fn recovers_effects_from_the_shared_model() {
 
 #[test]
 fn run_mu_agree_with_the_fit_module() {
-    // The within-run Euler-Eytelwein mu of one run equals src/fit's fit_fixed on that run
+    // The within-run Euler-Eytelwein mu of one run equals fit's fit_fixed on that run
     // (equal weights: the same least squares).
     let data = synthetic(Effect::NONE);
     let des = crate::evidence::Design::new(&data, false);

@@ -85,7 +85,7 @@ pub struct Design {
     pub t1_shape: Vec<f64>,
     /// Optional columns present.
     pub columns: Columns,
-    /// The arrangement of `src/fit` (cords by diameter and wrap, for the population fits).
+    /// The arrangement of [`crate::fit`] (cords by diameter and wrap, for the population fits).
     pub obs: Observations,
     /// Where the data set came from.
     pub source: String,
