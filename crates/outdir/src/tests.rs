@@ -210,6 +210,25 @@ fn a_set_that_fails_late_is_kept_and_the_error_says_where() {
 }
 
 #[test]
+fn a_set_dropped_after_work_worth_keeping_is_kept_and_said_where() {
+    static SAID: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    fn say(kept: &Path) {
+        SAID.lock().unwrap().push(kept.to_path_buf());
+    }
+    let dir = scratch();
+    let mut s = OutputDir::open(&dir, "test", &[]).unwrap().stage().unwrap();
+    s.write("pairs.csv", b"run,step\n1,1\n").unwrap();
+    s.keep_on_failure(say);
+    let kept = s.kept_path();
+    drop(s); // an error before the commit
+    assert_eq!(SAID.lock().unwrap().as_slice(), std::slice::from_ref(&kept));
+    assert_eq!(
+        std::fs::read_to_string(kept.join("pairs.csv")).unwrap(),
+        "run,step\n1,1\n"
+    );
+}
+
+#[test]
 fn an_abandoned_staging_directory_is_kept_not_deleted() {
     let dir = scratch();
     let mut s = OutputDir::open(&dir, "test", &[]).unwrap().stage().unwrap();
