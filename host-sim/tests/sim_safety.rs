@@ -313,7 +313,11 @@ fn a_hung_loop_is_reset_within_10_ms_and_nothing_moves_until_a_person_acknowledg
         .expect("the drive falls")
         .t_us;
     // The issue's target: no fault but loss of power leaves the drive on for more than 50 ms.
-    assert!(below_1pct - froze <= 50 * MS, "drive above 1 % for {} µs", below_1pct - froze);
+    assert!(
+        below_1pct - froze <= 50 * MS,
+        "drive above 1 % for {} µs",
+        below_1pct - froze
+    );
     eprintln!(
         "hung loop at {:.3} s (T1 {:.1} N, horn {:.1}°): pins released {} ms later by the \
          watchdog; booted latched; horn back-driven to {:.1}° (T1 {:.2} N) with no pulse for \
