@@ -9,8 +9,8 @@
 //! `-- --max-rows N` caps their size (default 1,000), `-- --seed S`, `-- --keep K` writes set
 //! K's CSV to `set-K.csv` (to run `capstan analyze` on it alone).
 
-use capstan::data::{check_capstan_data, read_pairs, Dataset};
-use capstan::diagnose::cases::{draw_case, Class};
+use capstan_data::{check_capstan_data, read_pairs, Dataset};
+use capstan_truth::cases::{draw_case, Class};
 use host_sim::plant::rng::Rng;
 use std::time::Instant;
 
@@ -103,13 +103,13 @@ fn simulated(seed: u64, k: u64, wraps: usize, runs: u32) -> Dataset {
 /// Analyse `d` end to end as `capstan analyze` does; the wall time and a description.
 fn analyse(d: &Dataset, dir: &std::path::Path, what: &str) -> Option<(f64, usize, String)> {
     let t0 = Instant::now();
-    let opts = capstan::analysis::Options { threads: 2 };
-    let a = capstan::analysis::run(d, opts).ok()?;
-    let cl = capstan::analysis::closed_loop::run(&a, 2).ok();
-    let html = capstan::report::report_html(&a, cl.as_ref().map(|c| c.curves.as_slice()), "")
+    let opts = capstan_engine::analysis::Options { threads: 2 };
+    let a = capstan_engine::analysis::run(d, opts).ok()?;
+    let cl = capstan_truth::closed_loop::run(&a, 2).ok();
+    let html = capstan_report::report_html(&a, cl.as_ref().map(|c| c.curves.as_slice()), "")
         .expect("the report renders");
     let mut csv = Vec::new();
-    capstan::report::write_predictions_csv(&mut csv, d, &a).unwrap();
+    capstan_report::write_predictions_csv(&mut csv, d, &a).unwrap();
     let _ = std::fs::create_dir_all(dir);
     std::fs::write(dir.join("report.html"), html).unwrap();
     let s = t0.elapsed().as_secs_f64();

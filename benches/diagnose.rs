@@ -1,4 +1,4 @@
-//! Times `capstan::diagnose::diagnose` on generated data sets of about 1,000 and 10,000 rows
+//! Times `capstan_engine::diagnose::diagnose` on generated data sets of about 1,000 and 10,000 rows
 //! (one clean set, one of every catalogue effect, the thesis's pair and one outside the
 //! catalogue, all with the thesis rig's noise) and on the thesis data (720 rows).
 //! Targets: under 0.2 s for 1,000 rows and under 1 s for 10,000 rows.
@@ -6,9 +6,9 @@
 //! `cargo bench --bench diagnose` (release). `--repeat N` takes the best of N (default 3);
 //! `--quick` skips the 10,000-row sets; `--only NAME` times only the sets of that name.
 
-use capstan::data::{thesis_dataset, Dataset};
-use capstan::diagnose::cases::{self, Case, Class};
-use capstan::diagnose::diagnose;
+use capstan_data::{thesis_dataset, Dataset};
+use capstan_engine::diagnose::diagnose;
+use capstan_truth::cases::{self, Case, Class};
 use std::time::Instant;
 
 /// The name of a case: its effects (or the physics outside the catalogue), `none` if clean.

@@ -7,8 +7,8 @@
 //! `cargo bench --bench scale` (release); `-- --max-rows N` stops at N rows (default
 //! 1,000,000); `-- --diagnose-only` skips the analysis.
 
-use capstan::data::{Dataset, Pair};
-use capstan::diagnose::cases::{self, Class};
+use capstan_data::{Dataset, Pair};
+use capstan_truth::cases::{self, Class};
 use std::time::Instant;
 
 /// The data set repeated `k` times, each copy's runs numbered after the last copy's.
@@ -67,7 +67,7 @@ fn main() {
             break;
         }
         let t = Instant::now();
-        let diag = capstan::diagnose::diagnose(&d);
+        let diag = capstan_engine::diagnose::diagnose(&d);
         let s = t.elapsed().as_secs_f64();
         let n = d.pairs.len();
         println!(
@@ -81,7 +81,7 @@ fn main() {
             continue;
         }
         let t = Instant::now();
-        let a = capstan::analysis::run(&d, capstan::analysis::Options::default());
+        let a = capstan_engine::analysis::run(&d, capstan_engine::analysis::Options::default());
         let s = t.elapsed().as_secs_f64();
         println!(
             "{n:>9} {:>9} {s:>10.2} {:>12.0} {:>14.0}   ({})",

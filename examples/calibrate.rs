@@ -1,4 +1,4 @@
-//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan::diagnose::cases`).
+//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan_truth::cases`).
 //!
 //! ```text
 //! cargo run --release --example calibrate -- [SEED] [--every K] [--grid] [--verbose]
@@ -9,11 +9,12 @@
 //!   K-th case), with every miss;
 //! * `--grid`: the same figures for a grid of thresholds (within-run ΔBIC, between ΔBIC, the
 //!   adequacy test's α and size), on the same simulated data sets: how the thresholds in
-//!   `src/evidence/mod.rs` and `src/evidence/adequacy.rs` were chosen (on seed 99; the test
-//!   asserts on another seed);
+//!   `crates/engine/src/evidence/mod.rs` and `crates/engine/src/evidence/adequacy.rs` were
+//!   chosen (on seed 99; the test asserts on another seed);
 //! * `--dump-seed S`: write the case with seed S to /tmp/case.csv.
-use capstan::diagnose::{cases, diagnose_with, score, Options};
-use capstan::evidence::AdequacyRule;
+use capstan_engine::diagnose::{diagnose_with, Options};
+use capstan_engine::evidence::AdequacyRule;
+use capstan_truth::{cases, score};
 
 fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> Option<T> {
     args.iter()
@@ -54,7 +55,7 @@ fn main() {
         c.config.runs = ((rows / (12.0 * cords as f64)).round() as u32).clamp(2, 400);
         let (d, _) = c.generate().expect("the case simulates");
         let mut f = std::fs::File::create("/tmp/case.csv").expect("/tmp is writable");
-        capstan::data::write_pairs_to(&mut f, &d.pairs).expect("written");
+        capstan_data::write_pairs_to(&mut f, &d.pairs).expect("written");
         eprintln!("wrote /tmp/case.csv: {}", c.describe());
         return;
     }
@@ -65,7 +66,7 @@ fn main() {
             .expect("a case with that seed");
         let (d, _) = c.generate().expect("the case simulates");
         let mut f = std::fs::File::create("/tmp/case.csv").expect("/tmp is writable");
-        capstan::data::write_pairs_to(&mut f, &d.pairs).expect("written");
+        capstan_data::write_pairs_to(&mut f, &d.pairs).expect("written");
         eprintln!("wrote /tmp/case.csv: {}", c.describe());
         return;
     }
@@ -111,7 +112,7 @@ fn main() {
         return;
     }
     // `--rival-gap G`: report rivals up to G (the figures below for every gap up to it).
-    let rival_gap = arg(&args, "--rival-gap").unwrap_or(capstan::evidence::RIVAL_GAP);
+    let rival_gap = arg(&args, "--rival-gap").unwrap_or(capstan_engine::evidence::RIVAL_GAP);
     let opts = Options {
         rival_gap,
         ..Options::default()

@@ -14,10 +14,10 @@
 //! * the wander switched off.
 //!
 //! The figures are in docs/README-diagnose.md ("The cause: T1 answers to mu").
-use capstan::data::Dataset;
-use capstan::diagnose::cases::{draw_case, Class};
-use capstan::evidence::{assess, candidates::ThetaMap, within, Options};
+use capstan_data::Dataset;
+use capstan_engine::evidence::{assess, candidates::ThetaMap, within, Options};
 use capstan_friction::{Effect, EffectKind};
+use capstan_truth::cases::{draw_case, Class};
 use std::collections::HashMap;
 
 fn arg(args: &[String], name: &str, default: f64) -> f64 {
@@ -30,7 +30,7 @@ fn arg(args: &[String], name: &str, default: f64) -> f64 {
 
 /// T1 of every row replaced by its (wrap, step) mean over the runs, T2/T1 kept.
 fn exogenous_t1(d: &mut Dataset) {
-    let key = |p: &capstan::data::Pair| (p.wrap_deg.to_bits(), p.step.map(f64::to_bits));
+    let key = |p: &capstan_data::Pair| (p.wrap_deg.to_bits(), p.step.map(f64::to_bits));
     let mut m: HashMap<_, (f64, f64)> = HashMap::new();
     for p in &d.pairs {
         let e = m.entry(key(p)).or_insert((0.0, 0.0));

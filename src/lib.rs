@@ -1,14 +1,16 @@
-//! `capstan`: simulate the rig, analyse and diagnose its data, and log real runs.
+//! `capstan`: simulate the rig, analyse and diagnose its data, and log real runs — the command
+//! line over the project's crates (`capstan-data`, `capstan-engine`, `capstan-truth`,
+//! `capstan-report`, `capstan-link`, `capstan-outdir`, `host-sim`).
 //!
-//! The library behind the `capstan` binary; the integration tests in `tests/` use it directly.
+//! * [`cli`]: one module per command, each with its `Args` and `run`;
+//! * [`logger`]: the files of a logged session, written as the records arrive;
+//! * [`outputs`]: how every command opens its output directory;
+//! * [`term`]: stdout and stderr that survive a closed pipe. Only this crate prints.
+//!
+//! The integration tests in `tests/` drive the binary, and use this library and the crates
+//! directly.
 
-pub mod analysis;
 pub mod cli;
-pub mod data;
-pub mod diagnose;
-pub mod evidence;
-pub mod fit;
-pub mod log;
-pub mod outdir;
-pub mod report;
+pub mod logger;
+pub mod outputs;
 pub mod term;

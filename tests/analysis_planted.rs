@@ -5,10 +5,10 @@
 //! `cargo test` runs a fixed slice of the validation (every 4th of its 40 data sets);
 //! `capstan analyze --validate` runs all 40 and asserts the targets (`.ci/run` does this).
 
-use capstan::analysis::validate;
 use capstan::cli::{analyze, run, Cli, Command};
-use capstan::data::write_pairs;
-use capstan::diagnose::cases::{draw_case, Class};
+use capstan_data::write_pairs;
+use capstan_truth::cases::{draw_case, Class};
+use capstan_truth::validate;
 
 mod analysis_support;
 

@@ -1,9 +1,9 @@
 //! `capstan analyze` on the bundled thesis data: the reference numbers, the targets, and the
 //! outputs (one analysis run shared by all tests of this file).
 
-use capstan::analysis::{self, Analysis};
 use capstan::cli::{analyze, run, Cli, Command};
-use capstan::data::thesis_dataset;
+use capstan_data::thesis_dataset;
+use capstan_engine::analysis::{self, Analysis};
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
@@ -111,7 +111,7 @@ fn named_causes_are_the_evidence_engines() {
     let engine: Vec<&str> = a.evidence.effects.iter().map(|e| e.effect).collect();
     assert_eq!(causes, engine);
     // The same as `capstan diagnose` on the same data.
-    let d = capstan::diagnose::diagnose(&thesis_dataset());
+    let d = capstan_engine::diagnose::diagnose(&thesis_dataset());
     let diag: Vec<&str> = d.effects.iter().map(|e| e.effect).collect();
     assert_eq!(causes, diag);
     assert!(causes.contains(&"contact_heating"), "{causes:?}");
@@ -119,7 +119,7 @@ fn named_causes_are_the_evidence_engines() {
     assert_eq!(m.tests.len(), 10);
     for t in &m.tests {
         assert_eq!(
-            t.verdict == capstan::analysis::mechanisms::Verdict::RuledIn,
+            t.verdict == capstan_engine::analysis::mechanisms::Verdict::RuledIn,
             causes.contains(&t.name),
             "{}",
             t.name

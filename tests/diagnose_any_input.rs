@@ -14,8 +14,8 @@
 //! stopped after 60 s, and every analysis bounded by the fits' budgets.
 //! `PROPTEST_CASES=N` draws more (default 40 for diagnose, 8 for analyze).
 
-use capstan::data::{check_capstan_data, read_pairs, Dataset};
-use capstan::diagnose::diagnose;
+use capstan_data::{check_capstan_data, read_pairs, Dataset};
+use capstan_engine::diagnose::diagnose;
 use proptest::prelude::*;
 use proptest::test_runner::{FileFailurePersistence, RngSeed};
 
@@ -186,15 +186,15 @@ proptest! {
     ) {
         let text = csv(&rows, cols);
         if let Some(d) = accepted(&text) {
-            let opts = capstan::analysis::Options { threads: 1 };
+            let opts = capstan_engine::analysis::Options { threads: 1 };
             // Too few rows is a clear refusal; anything else must come back analysed.
-            match capstan::analysis::run(&d, opts) {
+            match capstan_engine::analysis::run(&d, opts) {
                 Ok(a) => {
                     prop_assert!(a.mechanisms.tests.len() == 10);
                     // The same cords and runs as diagnose.
                     prop_assert_eq!(a.obs.groups.len(), a.evidence.design.cords);
                     prop_assert_eq!(a.obs.runs.len(), a.evidence.design.runs);
-                    let html = capstan::report::report_html(&a, None, "").unwrap();
+                    let html = capstan_report::report_html(&a, None, "").unwrap();
                     prop_assert!(non_finite_word(&html).is_none(), "{:?}", non_finite_word(&html));
                     let words = serde_json::to_string(&a.mechanisms).unwrap();
                     prop_assert!(non_finite_word(&words).is_none(), "{:?}", non_finite_word(&words));

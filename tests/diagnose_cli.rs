@@ -2,10 +2,10 @@
 //! catalogue effect explains, readings at or below zero, effects whose column is absent, and
 //! the thesis data.
 
-use capstan::data::{read_pairs, thesis_dataset, write_pairs, write_pairs_to, Dataset};
-use capstan::diagnose::cases::{self, Class};
-use capstan::diagnose::{self, Options};
+use capstan_data::{read_pairs, thesis_dataset, write_pairs, write_pairs_to, Dataset};
+use capstan_engine::diagnose::{self, Options};
 use capstan_friction::EffectKind;
+use capstan_truth::cases::{self, Class};
 use std::process::Command;
 
 fn capstan() -> Command {

@@ -94,10 +94,10 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
     }
     // Read from a file, the stream is not copied.
     assert!(!dir.join("stream.defmt").exists());
-    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert_eq!(
         pairs.header.join(","),
-        capstan::data::PAIRS_HEADER.join(",") + ",boot"
+        capstan_data::PAIRS_HEADER.join(",") + ",boot"
     );
     assert_eq!(pairs.pairs.len(), 4);
     // Running again into the same directory is refused unless --overwrite.
@@ -113,7 +113,7 @@ fn stdin_works_and_flags_override_the_run_start_set_up() {
     let o = decode(&["--quiet"], "-", &dir, &set_up, Some(&stream()));
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("step 1"), "--quiet: {}", stderr(&o));
-    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert!(pairs.pairs.iter().all(|p| p.wrap_deg == 450.0));
     assert!(pairs
         .pairs

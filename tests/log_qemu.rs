@@ -20,7 +20,7 @@
 //! drops writes without a fault), which fails the test, and qemu-fw's report of its stack
 //! high-water mark on QEMU's stderr is checked and printed.
 
-use capstan::data::load_pairs;
+use capstan_data::load_pairs;
 use firmware::record::{RawSample, StepPair};
 use host_sim::run::{run, RunSpec};
 use std::io::Read;

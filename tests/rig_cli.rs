@@ -2,11 +2,9 @@
 //! (exit status 2), and the conversation with a rig played by a scripted [`RigLink`] (answers,
 //! refusals, faults, no reply, live values).
 
-use capstan::cli::rig::{
-    answer_lines, command_line, exchange, exchange_within, send, watch_live, CheckError, NoReply,
-    NotInSetup, Refused, RigLink,
-};
-use capstan::log::Event;
+use capstan::cli::rig::{answer_lines, send, watch_live, NotInSetup, Refused};
+use capstan_link::rig::{command_line, exchange, exchange_within, CheckError, NoReply, RigLink};
+use capstan_link::Event;
 use firmware::command::{Command, CommandError, CommandKind, Key};
 use firmware::hal::Channel;
 use firmware::record::{

@@ -65,7 +65,7 @@ fn simulate_writes_pairs_raw_logs_and_one_json_object() {
         text.lines().next().unwrap(),
         "capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n"
     );
-    let d = capstan::data::load_pairs(&out.join("pairs.csv")).unwrap();
+    let d = capstan_data::load_pairs(&out.join("pairs.csv")).unwrap();
     assert_eq!(d.pairs.len(), 48);
     let p = &d.pairs[0];
     assert_eq!(

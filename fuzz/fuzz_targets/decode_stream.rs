@@ -2,7 +2,7 @@
 //! table: it must never panic, abort or hang.
 #![no_main]
 
-use capstan::log::{Decoder, Firmware};
+use capstan_link::{Decoder, Firmware};
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
 

@@ -2,7 +2,7 @@
 //! loaded, never a panic.
 #![no_main]
 
-use capstan::log::Firmware;
+use capstan_link::Firmware;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

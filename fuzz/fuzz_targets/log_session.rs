@@ -2,8 +2,8 @@
 //! the summary): it must never panic, and what it writes must read back.
 #![no_main]
 
-use capstan::log::output::{LogOptions, Logger, SetupFlags, Stop};
-use capstan::log::Firmware;
+use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
+use capstan_link::Firmware;
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
 
@@ -35,7 +35,7 @@ fuzz_target!(|data: &[u8]| {
     // pairs.csv always reads back as the analysis reads it (incomplete rows go to
     // pairs-incomplete.csv). The only refusals allowed: no rows, or a value beyond what a rig
     // can measure (the reader's documented limits; the logger writes what it received).
-    if let Err(e) = capstan::data::load_pairs(&dir.join("pairs.csv")) {
+    if let Err(e) = capstan_data::load_pairs(&dir.join("pairs.csv")) {
         let e = e.to_string();
         let allowed = [
             "no data rows",

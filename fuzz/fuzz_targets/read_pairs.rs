@@ -3,7 +3,7 @@
 //! back the same.
 #![no_main]
 
-use capstan::data::{check_capstan_data, read_pairs, write_pairs_to};
+use capstan_data::{check_capstan_data, read_pairs, write_pairs_to};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -447,7 +447,7 @@ fn the_amplifiers_rc_filter_takes_22_ms_to_settle_within_1_percent() {
     p.set_servo_duty(0, duty_for(160.0), SERVO_MAX_DUTY); // slack: no friction load
     p.set_amp_duty(0, 2_500, AMP_MAX_DUTY); // 2.5 V control, 10 V drive
     assert!(!p.is_safe(0));
-    // 4.7 ms, one time constant (4.7 kΩ · 1 µF): 63 %.
+    // One time constant (4.7 kΩ · 1 µF = 4,700 µs): 63 %.
     p.advance_to(4_700);
     let d = p.drive().drive_v;
     assert!((d - 10.0 * (1.0 - (-1.0f64).exp())).abs() < 0.01, "{d}");

@@ -1,8 +1,8 @@
 //! `capstan analyze [DATA.csv] --out DIR`: fit the models, test the mechanisms, write the
 //! report (`report.html`), `metrics.json` and `predictions.csv`.
 
-use crate::data::{load_pairs, thesis_dataset};
 use anyhow::Context;
+use capstan_data::{load_pairs, thesis_dataset};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -34,7 +34,7 @@ pub struct Args {
 /// Run `capstan analyze`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
-        crate::data::ranges::THREADS.option("--threads", t as f64)?;
+        capstan_data::ranges::THREADS.option("--threads", t as f64)?;
     }
     if args.validate {
         return validate(&args);
@@ -42,34 +42,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     // Lock the output directory and prove it writable before the analysis, not after it.
     let names = ["report.html", "metrics.json", "predictions.csv"];
-    let mut set = super::open_out(&args.out, "analyze", &names)?.stage()?;
+    let mut set = crate::outputs::open_out(&args.out, "analyze", &names)?.stage()?;
     let ds = match &args.data {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    crate::data::check_capstan_data(&ds)?;
-    let mut opts = crate::analysis::Options::default();
+    capstan_data::check_capstan_data(&ds)?;
+    let mut opts = capstan_engine::analysis::Options::default();
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     crate::errln!("{}", ds.structure.describe());
-    let mut a = crate::analysis::run(&ds, opts)?;
+    let mut a = capstan_engine::analysis::run(&ds, opts)?;
     // From here on the set holds work: a late failure keeps it and says where.
-    set.keep_on_failure();
+    set.keep_on_failure(crate::outputs::say_kept);
     for note in &a.fit_notes {
         crate::errln!("warning: {note}");
     }
     let t_report = Instant::now();
     let t_cl = Instant::now();
-    let (curves, closed, note) = match crate::analysis::closed_loop::run(&a, opts.threads) {
+    let (curves, closed, note) = match capstan_truth::closed_loop::run(&a, opts.threads) {
         Ok(cl) => (Some(cl.curves), cl.summary, "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string()),
         Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
     };
     a.elapsed.closed_loop_s = t_cl.elapsed().as_secs_f64();
-    let html = crate::report::report_html(&a, curves.as_deref(), &note)?;
+    let html = capstan_report::report_html(&a, curves.as_deref(), &note)?;
     let mut csv = set.create("predictions.csv")?;
-    crate::report::write_predictions_csv(&mut csv, &ds, &a)
+    capstan_report::write_predictions_csv(&mut csv, &ds, &a)
         .and_then(|()| csv.flush())
         .with_context(|| {
             format!(
@@ -80,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
-    let metrics = crate::report::metrics_json(&a, &closed);
+    let metrics = capstan_report::metrics_json(&a, &closed);
     set.write("report.html", html.as_bytes())?;
     set.write(
         "metrics.json",
@@ -105,13 +105,13 @@ fn validate(args: &Args) -> anyhow::Result<()> {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     crate::errln!(
         "validating the cause-naming on {} planted data sets (seed {}) ...",
-        crate::analysis::validate::cases(args.seed).len(),
+        capstan_truth::validate::cases(args.seed).len(),
         args.seed
     );
-    let mut set = super::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
+    let mut set = crate::outputs::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
-    let v = crate::analysis::validate::validate(args.seed, 1, threads)?;
-    set.keep_on_failure();
+    let v = capstan_truth::validate::validate(args.seed, 1, threads)?;
+    set.keep_on_failure(crate::outputs::say_kept);
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
     crate::outln!(
         "causes named exactly (clean, single, heating + T1 loss): {}/{} ({:.0} %, target ≥ 90 %)",

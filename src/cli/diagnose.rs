@@ -1,9 +1,9 @@
 //! `capstan diagnose DATA.csv [--json]`: which catalogue effects (if any) make a data set depart
-//! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`crate::diagnose`].
+//! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`capstan_engine::diagnose`].
 
-use crate::data::{load_pairs, thesis_dataset};
-use crate::diagnose::words::fixed;
-use crate::diagnose::{self, words, Diagnosis, Options};
+use capstan_data::{load_pairs, thesis_dataset};
+use capstan_engine::diagnose::words::fixed;
+use capstan_engine::diagnose::{self, words, Diagnosis, Options};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -42,7 +42,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    crate::data::check_capstan_data(&data)?;
+    capstan_data::check_capstan_data(&data)?;
     let opts = Options {
         within_threshold: args.within_threshold,
         between_threshold: args.between_threshold,

@@ -1,10 +1,11 @@
 //! `capstan log`: record runs from the board over defmt/RTT, or decode a saved defmt stream.
 
+mod board;
 mod judge;
 
-use crate::log::output::{LogOptions, Logger, Outcome, SetupFlags, Stop, Summary};
-use crate::log::Firmware;
-use anyhow::{bail, Context};
+use crate::logger::{LogOptions, Logger, Outcome, SetupFlags, Stop, Summary};
+use anyhow::Context;
+use capstan_link::Firmware;
 use judge::{check_args, not_committed, verdict};
 use std::io::Read;
 use std::path::PathBuf;
@@ -163,7 +164,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     super::signal::stop_flag("log"); // Ctrl-C and SIGTERM end the session, keeping it
     let (summary, stop, outcome) = match &args.from {
         Some(from) => from_stream(&fw, opts, from, &args)?,
-        None => from_board(&fw, opts, &args)?,
+        None => board::from_board(&fw, opts, &args)?,
     };
     let at = match &outcome {
         Outcome::Kept(p) => p.clone(),
@@ -286,71 +287,4 @@ fn from_stream(
     };
     let (summary, outcome) = logger.finish_with(&stop)?;
     Ok((summary, stop, outcome))
-}
-
-#[cfg(feature = "probe")]
-fn from_board(
-    fw: &Firmware,
-    opts: LogOptions,
-    args: &Args,
-) -> anyhow::Result<(Summary, Stop, Outcome)> {
-    use crate::log::probe::{connect, Limits, ProbeOptions};
-    let chip = args
-        .chip
-        .clone()
-        .expect("clap requires --chip without --from");
-    let popts = ProbeOptions {
-        chip: chip.clone(),
-        probe: args.probe.clone(),
-        flash: !args.no_flash,
-        connect_under_reset: args.connect_under_reset,
-        speed_khz: args.speed,
-        rtt_channel: 0,
-        rtt_timeout: Duration::from_secs(5),
-    };
-    let limits = Limits {
-        runs: args.runs,
-        duration: args.duration.map(Duration::from_secs_f64),
-    };
-    // The board first: a missing probe or chip leaves no half-made session directory behind.
-    let mut board = connect(&args.elf, &popts)?;
-    let source = format!("{chip} over RTT (probe: {})", board.probe_name);
-    let mut logger = Logger::create(fw, opts, &source)?;
-    if args.start {
-        start_run(&mut board)?;
-    }
-    let stop = board.stream(limits, &mut logger, super::signal::stop_flag("log"))?;
-    let (summary, outcome) = logger.finish_with(&stop)?;
-    Ok((summary, stop, outcome))
-}
-
-/// `--start`: the `run` command into the firmware's command channel (the firmware answers
-/// with a `reply` record, which the log keeps like any other).
-#[cfg(feature = "probe")]
-fn start_run(board: &mut crate::log::probe::Connection) -> anyhow::Result<()> {
-    if board.down_buffer_size(0).is_none() {
-        bail!(
-            "--start: this firmware has no RTT command channel (down channel 0): rebuild it \
-             from this repository, or press the rig's button instead"
-        );
-    }
-    let line = b"run\n";
-    let taken = board.write_down(0, line)?;
-    if taken != line.len() {
-        bail!("--start: the firmware's command buffer is full; press the rig's button instead");
-    }
-    crate::errln!("capstan log: run started (--start); its reply and records follow");
-    Ok(())
-}
-
-#[cfg(not(feature = "probe"))]
-fn from_board(
-    _fw: &Firmware,
-    _opts: LogOptions,
-    _args: &Args,
-) -> anyhow::Result<(Summary, Stop, Outcome)> {
-    bail!(
-        "this `capstan` was built without the `probe` feature: it can only decode saved streams \
-         (--from). Rebuild with default features to log from a board."
-    )
 }

@@ -37,6 +37,8 @@ pub enum Command {
 
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    // The engine's developer traces (CAPSTAN_FIT_LOG, CAPSTAN_LAPS) go to stderr.
+    capstan_engine::trace::set_sink(|line| crate::errln!("{line}"));
     match cli.command {
         Command::Simulate(a) => simulate::run(a),
         Command::Analyze(a) => analyze::run(a),
@@ -44,17 +46,4 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Log(a) => log::run(a),
         Command::Rig(a) => rig::run(a),
     }
-}
-
-/// The output directory, locked, with what was recovered in it said on stderr.
-pub fn open_out(
-    dir: &std::path::Path,
-    kind: &'static str,
-    names: &[&str],
-) -> anyhow::Result<crate::outdir::OutputDir> {
-    let out = crate::outdir::OutputDir::open(dir, kind, names)?;
-    for r in &out.recovered {
-        crate::errln!("note: {r}");
-    }
-    Ok(out)
 }

@@ -4,23 +4,19 @@
 //! plus two host verbs, `live` and `keys`. (The simulated rig takes the same lines through
 //! `host_sim::session`, in the tests.)
 //!
-//! `check` refuses bad input before anything is sent, `link` is the [`RigLink`] trait and the
-//! wait for an answer, `say` what is printed, `live` the live view, `probe_link` the board.
+//! The link to the rig is `capstan_link::rig`: the check that refuses bad input before
+//! anything is sent, the [`RigLink`] trait and the wait for an answer, the board through a
+//! probe. Here: `say` what is printed, `live` the live view, and the command itself.
 
-mod check;
-mod link;
 mod live;
-#[cfg(feature = "probe")]
-mod probe_link;
 mod say;
 
-pub use check::{check_set, command_line, CheckError};
-pub use link::{exchange, exchange_within, take, timeout_for, Answer, NoReply, RigLink};
 pub use live::{watch as watch_live, NotInSetup};
-pub use say::{answer_lines, fault_line, key_lines, live_line, reply_line, Refused};
+pub use say::{answer_lines, key_lines, live_line, Refused};
 
-use crate::log::Firmware;
 use anyhow::bail;
+use capstan_link::rig::{check_set, command_line, exchange, CheckError, RigLink};
+use capstan_link::Firmware;
 use firmware::command::Command;
 use std::path::{Path, PathBuf};
 
@@ -197,7 +193,7 @@ fn board(
     args: &Args,
     work: impl FnOnce(&mut dyn RigLink) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    let opts = crate::log::probe::ProbeOptions {
+    let opts = capstan_link::probe::ProbeOptions {
         chip: chip.to_string(),
         probe: args.probe.clone(),
         flash: false,
@@ -206,7 +202,7 @@ fn board(
         rtt_channel: 0,
         rtt_timeout: std::time::Duration::from_secs(5),
     };
-    let mut link = probe_link::open(fw, elf, opts)?;
+    let mut link = capstan_link::rig::probe_link::open(fw, elf, opts)?;
     work(&mut link)
 }
 

@@ -76,7 +76,7 @@ fn on_signal(command: &'static str, signal: i32) {
         }
         Action::Ignore => {}
         Action::Exit => {
-            let kept = crate::outdir::keep_open_sets();
+            let kept = capstan_outdir::keep_open_sets();
             let where_ = if kept.is_empty() {
                 "nothing was being written".to_string()
             } else {

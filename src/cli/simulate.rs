@@ -9,11 +9,10 @@ mod checks;
 mod output;
 mod two;
 
-use crate::data::Pair;
 use anyhow::{bail, Context};
 use capstan_friction::{Effect, Model};
 use firmware::StepOrder;
-use host_sim::campaign::{stream_campaign, CampaignConfig, PairRow, StreamError};
+use host_sim::campaign::{stream_campaign, CampaignConfig, StreamError};
 use host_sim::noise::NoiseProfile;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -269,15 +268,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Every file the campaign will write is checked before it runs: none may be the user's
     // own (or a link), `raw` must be a directory of ours.
     let writes = |rel: &str| checks::writes_raw(&cfg, rel);
-    let out = crate::outdir::OutputDir::open_with(
+    let out = capstan_outdir::OutputDir::open_with(
         &args.out,
         "simulate",
         &["pairs.csv", "faults.csv", "summary.json"],
         &[("raw", &writes)],
     )?;
-    for r in &out.recovered {
-        crate::errln!("note: {r}");
-    }
+    crate::outputs::say_recovered(&out);
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
     let bar = progress_bar(&args, cfg.run_count());
     let stop = super::signal::stop_flag("simulate");
@@ -342,23 +339,4 @@ fn progress_bar(args: &Args, runs: usize) -> Option<indicatif::ProgressBar> {
         );
         pb
     })
-}
-
-/// The simulator's rows as pairs of the CSV schema (`capstan::data`): what `pairs.csv` holds,
-/// and what the diagnosis's generated cases read back.
-pub fn to_pairs(rows: &[PairRow]) -> Vec<Pair> {
-    rows.iter()
-        .map(|r| Pair {
-            capstan_diameter_mm: Some(r.capstan_diameter_mm),
-            wrap_deg: r.wrap_deg,
-            drive_v: Some(r.drive_v),
-            run: Some(r.run as f64),
-            step: Some(r.step as f64),
-            time_s: Some(r.time_s),
-            t1_n: r.t1_n,
-            t2_n: r.t2_n,
-            extra: Vec::new(),
-            labels: Vec::new(),
-        })
-        .collect()
 }

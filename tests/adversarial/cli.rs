@@ -275,7 +275,7 @@ fn a_session_across_a_board_restart_reads_back_with_its_runs_apart() {
         "-q",
     ]);
     assert!(o.status.success(), "{}", err(&o));
-    let d = capstan::data::load_pairs(&dir.join("o/pairs.csv")).unwrap();
+    let d = capstan_data::load_pairs(&dir.join("o/pairs.csv")).unwrap();
     assert_eq!(d.structure.run_level.columns, ["run", "boot"]);
     assert_eq!(d.structure.run_cord.len(), 4, "{}", d.structure.describe());
     checked();

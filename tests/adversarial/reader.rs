@@ -2,7 +2,7 @@
 //! or accept with the right structure.
 
 use super::checked;
-use capstan::data::{check_capstan_data, read_pairs, thesis_dataset, Basis, Dataset, THESIS_CSV};
+use capstan_data::{check_capstan_data, read_pairs, thesis_dataset, Basis, Dataset, THESIS_CSV};
 
 const H: &str = "capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n";
 const ROW: [&str; 8] = ["12.7", "270", "10", "1", "1", "16", "1.5", "3.2"];
@@ -115,7 +115,7 @@ fn positions_are_exact_for_every_line_ending_blank_lines_and_long_lines() {
         }
         // A line longer than any pairs CSV line, on line 301.
         let mut text = rows(299, sep);
-        text += &"7".repeat(capstan::data::MAX_LINE_BYTES + 1);
+        text += &"7".repeat(capstan_data::MAX_LINE_BYTES + 1);
         refused(&text, "x.csv:301:1:", &["a line longer than"]);
         // Good files read the same whatever the line ending.
         accepted(&rows(12, sep), 12, 1, 1);

@@ -2,7 +2,7 @@
 //! the report; "not identified" where the data cannot say.
 
 use super::checked;
-use capstan::data::{read_pairs, Dataset};
+use capstan_data::{read_pairs, Dataset};
 
 fn data(text: &str) -> Dataset {
     read_pairs(text.as_bytes(), "x.csv").unwrap()
@@ -17,7 +17,7 @@ fn finite_words(text: &str) {
 
 fn thesis_rows(mut edit: impl FnMut(usize, &mut Vec<String>)) -> Dataset {
     let mut s = String::new();
-    for (i, l) in capstan::data::THESIS_CSV.lines().enumerate() {
+    for (i, l) in capstan_data::THESIS_CSV.lines().enumerate() {
         let mut c: Vec<String> = l.trim_end().split(',').map(String::from).collect();
         if i > 0 {
             edit(i, &mut c);
@@ -50,7 +50,7 @@ fn extreme_readings_give_finite_words_or_not_identified() {
         data("wrap_deg,run,t1_n,t2_n\n270,1,5,9\n270,1,5,9.1\n270,2,5,9.3\n360,1,5,12\n360,2,5,12.2\n"),
     ];
     for d in &sets {
-        let a = capstan::diagnose::diagnose(d);
+        let a = capstan_engine::diagnose::diagnose(d);
         finite_words(&capstan::cli::diagnose::summary(&a, &d.source));
         finite_words(&a.verdict);
         assert!(serde_json::from_str::<serde_json::Value>(&a.to_json()).is_ok());
@@ -61,7 +61,7 @@ fn extreme_readings_give_finite_words_or_not_identified() {
 #[test]
 fn one_row_is_not_identified_rather_than_explained() {
     let d = data("wrap_deg,t1_n,t2_n\n270,1,2\n");
-    let a = capstan::diagnose::diagnose(&d);
+    let a = capstan_engine::diagnose::diagnose(&d);
     assert!(a.verdict.starts_with("Not identified:"), "{}", a.verdict);
     assert!(
         !a.verdict.contains("explains the data within their noise"),
@@ -75,7 +75,7 @@ fn one_row_is_not_identified_rather_than_explained() {
     );
     checked();
     // analyze refuses it plainly.
-    let e = capstan::analysis::run(&d, capstan::analysis::Options { threads: 1 })
+    let e = capstan_engine::analysis::run(&d, capstan_engine::analysis::Options { threads: 1 })
         .err()
         .unwrap()
         .to_string();
@@ -86,7 +86,7 @@ fn one_row_is_not_identified_rather_than_explained() {
 #[test]
 fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
     // The thesis reduced to wrap, T1, T2 (case 5): 5 cords and 5 runs in both, assumed, said.
-    let three: String = capstan::data::THESIS_CSV
+    let three: String = capstan_data::THESIS_CSV
         .lines()
         .map(|l| {
             let c: Vec<&str> = l.trim_end().split(',').collect();
@@ -94,7 +94,8 @@ fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
         })
         .collect();
     let d = data(&three);
-    let a = capstan::analysis::run(&d, capstan::analysis::Options { threads: 2 }).unwrap();
+    let a = capstan_engine::analysis::run(&d, capstan_engine::analysis::Options { threads: 2 })
+        .unwrap();
     assert_eq!((a.obs.groups.len(), a.obs.runs.len()), (5, 5));
     assert_eq!((a.evidence.design.cords, a.evidence.design.runs), (5, 5));
     assert!(
@@ -104,10 +105,10 @@ fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
         "{}",
         a.evidence.verdict
     );
-    let m = capstan::report::metrics_json(&a, &serde_json::Value::Null);
+    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null);
     assert_eq!(m["data"]["structure"]["runs"]["from"], "assumed");
     assert_eq!(m["data"]["structure"]["cords"]["from"], "assumed");
-    let html = capstan::report::report_html(&a, None, "").unwrap();
+    let html = capstan_report::report_html(&a, None, "").unwrap();
     assert!(html.contains("5 cords ASSUMED"), "the report says it");
     checked();
 }

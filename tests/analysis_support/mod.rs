@@ -1,7 +1,7 @@
 //! Shared by the analysis tests: the report's verdict sentences against `metrics.json`.
 
-use capstan::analysis::mechanisms::{words, Numbers, Verdict};
-use capstan::evidence::Level;
+use capstan_engine::analysis::mechanisms::{words, Numbers, Verdict};
+use capstan_engine::evidence::Level;
 use capstan_friction::EffectKind;
 use serde_json::Value;
 
@@ -40,13 +40,13 @@ fn level(s: &str) -> Level {
 }
 
 /// A mechanism's rival from `metrics.json` (null: none).
-fn rival(r: &Value) -> Option<capstan::evidence::Rival> {
+fn rival(r: &Value) -> Option<capstan_engine::evidence::Rival> {
     if r.is_null() {
         return None;
     }
     let kind = |k: &Value| EffectKind::from_name(k.as_str().unwrap()).unwrap();
     let (instead_of, effect) = (kind(&r["instead_of"]), kind(&r["effect"]));
-    Some(capstan::evidence::Rival {
+    Some(capstan_engine::evidence::Rival {
         instead_of: instead_of.name(),
         effect: effect.name(),
         parameters: r["parameters"]
@@ -109,7 +109,7 @@ pub fn check(metrics: &Value, html: &str) {
                 r.instead_of
             );
             made.push(' ');
-            made += &capstan::diagnose::words::rival_sentences(&[r]);
+            made += &capstan_engine::diagnose::words::rival_sentences(&[r]);
         }
         let json = m["summary"].as_str().unwrap();
         // Numbers round-trip through JSON exactly, so the sentence does too.

@@ -3,7 +3,7 @@
 
 use crate::log_support::{firmware, split, stream, Frames};
 use crate::seqs;
-use capstan::log::{decode_all, Event};
+use capstan_link::{decode_all, Event};
 use firmware::record::Record;
 
 #[test]
@@ -162,7 +162,7 @@ fn corrupted_bytes_cost_frames_not_the_stream() {
 }
 
 /// The records of a decoded stream, with their sequence numbers.
-fn records(fw: &capstan::log::Firmware, bytes: &[u8]) -> (Vec<(u32, Record)>, bool) {
+fn records(fw: &capstan_link::Firmware, bytes: &[u8]) -> (Vec<(u32, Record)>, bool) {
     let (events, d) = decode_all(fw, bytes);
     let recs = events
         .into_iter()

@@ -1,8 +1,8 @@
 //! Decoding the recorded stream as it is; the framing; ELFs and tables that do not fit.
 
 use crate::log_support::{self, firmware, rzcobs_decode, rzcobs_encode, split, stream};
-use capstan::log::elf::MAX_PADDING;
-use capstan::log::{decode_all, Event, Firmware};
+use capstan_link::elf::MAX_PADDING;
+use capstan_link::{decode_all, Event, Firmware};
 use firmware::record::Record;
 
 #[test]
@@ -97,15 +97,15 @@ fn rzcobs_round_trips_up_to_padding() {
     for data in cases {
         let enc = rzcobs_encode(&data);
         assert!(!enc.contains(&0), "{data:?}");
-        let dec = capstan::log::stream::rzcobs_decode(&enc).unwrap();
+        let dec = capstan_link::stream::rzcobs_decode(&enc).unwrap();
         assert!(dec.len() >= data.len(), "{data:?}");
         assert_eq!(&dec[..data.len()], &data[..]);
         assert!(dec[data.len()..].iter().all(|&b| b == 0));
         assert!(dec.len() - data.len() <= MAX_PADDING);
     }
-    assert!(capstan::log::stream::rzcobs_decode(&[0x11, 0x00]).is_err());
-    assert!(capstan::log::stream::rzcobs_decode(&[0x01]).is_err());
-    assert!(capstan::log::stream::rzcobs_decode(&[0x85]).is_err());
+    assert!(capstan_link::stream::rzcobs_decode(&[0x11, 0x00]).is_err());
+    assert!(capstan_link::stream::rzcobs_decode(&[0x01]).is_err());
+    assert!(capstan_link::stream::rzcobs_decode(&[0x85]).is_err());
 }
 
 #[test]

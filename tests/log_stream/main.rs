@@ -14,7 +14,7 @@ mod damage;
 mod decoding;
 mod session;
 
-use capstan::log::{decode_all, Event, Firmware, Located};
+use capstan_link::{decode_all, Event, Firmware, Located};
 
 /// The sequence numbers of the records in a stream, in order.
 fn seqs(fw: &Firmware, bytes: &[u8]) -> Vec<u32> {

@@ -2,9 +2,9 @@
 
 use crate::log_support::{firmware, fresh_dir, split, stream};
 use crate::record_seq;
-use capstan::log::output::{LogOptions, Logger, SetupFlags, Stop};
-use capstan::log::seq::Gap;
-use capstan::log::{decode_all, Event};
+use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
+use capstan_link::seq::Gap;
+use capstan_link::{decode_all, Event};
 use firmware::record::Record;
 
 #[test]
@@ -63,7 +63,7 @@ fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not(
         )),
         "{human}"
     );
-    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert_eq!(pairs.pairs.len(), 3);
     assert_eq!(pairs.pairs[0].step, Some(2.0));
     assert_eq!(pairs.pairs[0].wrap_deg, 360.0);
@@ -119,7 +119,7 @@ fn joining_mid_run_keeps_the_records_without_their_run_start() {
     let incomplete = std::fs::read_to_string(dir.join("pairs-incomplete.csv")).unwrap();
     let first = incomplete.lines().nth(1).unwrap();
     assert!(first.starts_with(",360,,,"), "{first}");
-    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert!(pairs.pairs.iter().all(|p| p.run == Some(2.0)));
     assert_eq!(pairs.pairs.len(), summary.runs[1].pairs as usize);
 }

@@ -2,7 +2,7 @@
 //! a stream apart frame by frame.
 #![allow(dead_code)]
 
-use capstan::log::Firmware;
+use capstan_link::Firmware;
 use std::path::PathBuf;
 
 /// `tests/data/<name>`.
@@ -118,5 +118,5 @@ pub fn rzcobs_encode(data: &[u8]) -> Vec<u8> {
 
 /// Undo rzCOBS (the decoder's own function).
 pub fn rzcobs_decode(data: &[u8]) -> Vec<u8> {
-    capstan::log::stream::rzcobs_decode(data).expect("valid rzCOBS")
+    capstan_link::stream::rzcobs_decode(data).expect("valid rzCOBS")
 }

@@ -4,7 +4,7 @@
 //! CRC over them in format order (checked against the firmware's own `record_crc`).
 
 use crate::log_support::rzcobs_encode;
-use capstan::log::Firmware;
+use capstan_link::Firmware;
 use firmware::condition::ChannelStats;
 use firmware::record::{record_crc, CrcFields, Live, RawSample, Record, NONE_CODE};
 use firmware::Settings;

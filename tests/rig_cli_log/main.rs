@@ -10,8 +10,8 @@ mod log_support;
 
 mod frames;
 
-use capstan::log::output::{LogOptions, Logger, SetupFlags, Stop};
-use capstan::log::{decode_all, Firmware};
+use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
+use capstan_link::{decode_all, Firmware};
 use firmware::command::{CommandError, CommandKind};
 use firmware::condition::ChannelStats;
 use firmware::hal::Channel;
@@ -162,7 +162,7 @@ fn a_corrupted_setup_record_is_refused_by_its_checksum() {
     let r = reply(CommandKind::Zero, None, [412.3, 388.1]);
     let good = frame(3, &r);
     // v1's first byte, in the frame before rzCOBS: index 2 + seq 4 + command 1 + error 1.
-    let mut body = capstan::log::stream::rzcobs_decode(&good[..good.len() - 1]).unwrap();
+    let mut body = capstan_link::stream::rzcobs_decode(&good[..good.len() - 1]).unwrap();
     body[8] ^= 0x01;
     let mut bad = rzcobs_encode(&body);
     bad.push(0);
@@ -252,7 +252,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
     ] {
         assert!(messages.contains(needle), "{needle:?} not in:\n{messages}");
     }
-    let pairs = capstan::data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert_eq!(pairs.pairs.len(), 2);
     assert!(pairs.pairs.iter().all(|p| p.run == Some(1.0)));
 }

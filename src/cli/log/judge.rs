@@ -3,13 +3,13 @@
 //! session ends with (committed or not, strict, probe lost).
 
 use super::Args;
-use crate::log::output::{Outcome, Stop, Summary};
+use crate::logger::{Outcome, Stop, Summary};
 use anyhow::bail;
 
 /// The command line's values against the physical ranges (`data::ranges`), and `--from`
 /// checked, before anything is opened or written.
 pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
-    use crate::data::ranges;
+    use capstan_data::ranges;
     if let Some(d) = args.duration {
         ranges::LOG_DURATION_S.option("--duration", d)?;
     }
@@ -33,7 +33,7 @@ pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
     }
     let inside = std::fs::canonicalize(from).ok().and_then(|f| {
         let out = std::fs::canonicalize(&args.out).ok()?;
-        Some(f == out.join(crate::log::output::STREAM_FILE))
+        Some(f == out.join(crate::logger::STREAM_FILE))
     });
     if inside == Some(true) {
         bail!(
@@ -127,7 +127,7 @@ pub(super) fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Re
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::log::output::RecordCounts;
+    use crate::logger::RecordCounts;
     use clap::Parser;
 
     fn summary(records: RecordCounts, bytes: u64, missing: u64) -> Summary {
@@ -153,8 +153,8 @@ mod tests {
         }
     }
 
-    fn complete_run() -> crate::log::output::RunSummary {
-        use crate::log::output::{RunSummary, Sourced};
+    fn complete_run() -> crate::logger::RunSummary {
+        use crate::logger::{RunSummary, Sourced};
         let mut r = RunSummary::new(
             Some(1),
             0,

@@ -1,9 +1,10 @@
 //! `capstan rig live [SECONDS]`: the forces, counts and servo angle the rig reports in setup
 //! mode (~10 a second), printed as they arrive, for SECONDS or until Ctrl-C.
 
-use super::link::RigLink;
-use super::say::{fault_line, live_line, LIVE_HEADER};
-use crate::log::frame::Event;
+use super::say::{live_line, LIVE_HEADER};
+use capstan_link::frame::Event;
+use capstan_link::rig::RigLink;
+use capstan_link::words::fault_line;
 use firmware::record::Record;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};

@@ -1,13 +1,12 @@
 //! What `capstan rig` prints: the answer to a command (a sentence from its reply record, the
-//! settings from a settings record), live values, faults, and the settable keys. Every number
-//! comes from a record; the wording of replies and settings is `log::words`, shared with
-//! `capstan log`.
+//! settings from a settings record), live values and the settable keys. Every number comes
+//! from a record; the wording of replies, settings and faults is `log::words`, shared with
+//! `capstan log` and the rig link.
 
-use super::link::Answer;
-use crate::log::words::{reply_sentence, settings_lines, unit};
+use capstan_link::rig::Answer;
+use capstan_link::words::{reply_sentence, settings_lines, unit};
 use firmware::command::{Command, CommandKind, Key};
-use firmware::hal::Channel;
-use firmware::record::{Fault, Live, Reply};
+use firmware::record::Live;
 
 /// The firmware refused the command.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,15 +19,6 @@ impl std::fmt::Display for Refused {
 }
 
 impl std::error::Error for Refused {}
-
-/// One reply as a line: its sentence, and the command word before a refusal.
-pub fn reply_line(r: &Reply, sent: Option<&Command>) -> String {
-    let sentence = reply_sentence(r, sent);
-    match r.error {
-        Some(_) => format!("{}: {sentence}", r.command.word()),
-        None => sentence,
-    }
-}
 
 /// The lines answering `cmd` (stdout), or the firmware's refusal (`refused: REASON`).
 pub fn answer_lines(answer: &Answer, cmd: &Command) -> Result<Vec<String>, Refused> {
@@ -61,26 +51,6 @@ pub fn answer_lines(answer: &Answer, cmd: &Command) -> Result<Vec<String>, Refus
         lines.extend(settings_lines(&s));
     }
     Ok(lines)
-}
-
-/// A fault, for stderr.
-pub fn fault_line(f: &Fault) -> String {
-    let channel = match f.channel {
-        Some(Channel::T1) => " on T1",
-        Some(Channel::T2) => " on T2",
-        None => "",
-    };
-    // (A fault latched at boot after a reset has no value: NaN.)
-    let value = if f.value.is_nan() {
-        String::new()
-    } else {
-        format!(" (value {})", f.value)
-    };
-    format!(
-        "FAULT {}{channel}{value}: the rig's outputs are safe; press the button or send `ack` to \
-         go on",
-        f.kind.name(),
-    )
 }
 
 /// Header of the live table.
@@ -145,8 +115,10 @@ pub fn key_lines() -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use capstan_link::words::fault_line;
     use firmware::command::CommandError;
-    use firmware::record::{FaultKind, RunEnd, SettingsReport, SettingsSource};
+    use firmware::hal::Channel;
+    use firmware::record::{Fault, FaultKind, Reply, RunEnd, SettingsReport, SettingsSource};
     use firmware::{Calibration, Protocol, Settings};
 
     fn reply(command: CommandKind, error: Option<CommandError>, values: [f32; 2]) -> Answer {

@@ -5,7 +5,7 @@
 //! the output directory is checked before the campaign runs.
 
 use super::Args;
-use crate::data::ranges;
+use capstan_data::ranges;
 use host_sim::campaign::{CampaignConfig, CordKey, FaultSpec};
 
 /// Check every numeric argument against its range.

@@ -4,9 +4,9 @@
 //! whether the campaign was interrupted; the set replaces the previous one when it is closed
 //! (`outdir`). Memory holds one run at a time, whatever `--runs` is.
 
-use crate::data::PairsWriter;
-use crate::outdir::{OutputDir, Staged};
 use anyhow::Context;
+use capstan_data::PairsWriter;
+use capstan_outdir::{OutputDir, Staged};
 use host_sim::campaign::{pair_rows, CampaignStats, FaultSummary, RunResult};
 use serde_json::{json, Value};
 use std::fs::File;
@@ -54,9 +54,10 @@ impl CampaignWriter {
     /// Write one finished run (in campaign order), flushed. From the first run on, the set is
     /// work worth keeping: a late failure keeps it as `incomplete-<id>` and says where.
     pub fn add(&mut self, r: &RunResult) -> anyhow::Result<()> {
-        self.set.keep_on_failure();
+        self.set.keep_on_failure(crate::outputs::say_kept);
         for row in pair_rows(r) {
-            self.pairs.write(&super::to_pairs(&[row])[0])?;
+            self.pairs
+                .write(&capstan_truth::pairs::to_pairs(&[row])[0])?;
             self.rows += 1;
         }
         if self.raw {

@@ -2,10 +2,11 @@
 //! writes `two_control.csv` (the drive and the true tensions over time), `crosstalk.csv` and
 //! each channel's `pairs_ch<k>.csv`.
 
-use super::{model, plant, protocol, to_pairs, Args, Order};
-use crate::data::write_pairs_to;
-use crate::outdir::Staged;
+use super::{model, plant, protocol, Args, Order};
 use anyhow::bail;
+use capstan_data::write_pairs_to;
+use capstan_outdir::Staged;
+use capstan_truth::pairs::to_pairs;
 use host_sim::campaign::{CordKey, PairRow};
 use host_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
 use serde_json::json;
@@ -92,9 +93,9 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     let mut names = vec!["two_control.csv".to_string(), "crosstalk.csv".to_string()];
     names.extend((1..=n).map(|k| format!("pairs_ch{k}.csv")));
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
-    let mut set = crate::cli::open_out(&args.out, "two-control", &names)?.stage()?;
+    let mut set = crate::outputs::open_out(&args.out, "two-control", &names)?.stage()?;
     let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
-    set.keep_on_failure();
+    set.keep_on_failure(crate::outputs::say_kept);
     write_two(&mut set, &cfg, &r)?;
     set.commit()?;
     let pairs: usize = r.channels.iter().map(|c| c.log.pairs.len()).sum();

@@ -3,7 +3,7 @@
 
 use crate::setup::{Emulated, Setup};
 use crate::{f, MS};
-use capstan::log::{decode_all, Firmware};
+use capstan_link::{decode_all, Firmware};
 use emu_bench::case::{board_calibration, board_limits, board_protocol, Case, BURST_AT_MS};
 use firmware::record::{Live, Record};
 use host_sim::flash::RamFlash;

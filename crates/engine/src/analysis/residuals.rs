@@ -1,0 +1,199 @@
+//! What the models get wrong: residual trends against every column, with test statistics.
+//!
+//! For each model, residual kind (T2 in N, ln(T2/T1)) and column: Spearman's rank correlation
+//! (effect size, monotone trends), the least-squares slope per standard deviation of the
+//! column with standard errors clustered by cord (G − 1 degrees of freedom: rows of one cord
+//! are not independent), and η², the share of residual variance explained by the column's
+//! levels (up to 12 levels; continuous columns in 10 quantile bins), with its one-way F test
+//! (which treats rows as independent and so overstates significance; read it with η²).
+
+use super::{ln_amp, Predictions};
+use crate::fit::stats::{eta_squared, mean, regress, spearman, variance};
+use crate::fit::Observations;
+use capstan_data::Dataset;
+use serde::Serialize;
+
+/// One residual trend.
+#[derive(Clone, Debug, Serialize)]
+pub struct Pattern {
+    /// Model.
+    pub model: String,
+    /// `t2_n` (measured − predicted, N) or `ln_amp` (measured − predicted ln(T2/T1)).
+    pub residual: &'static str,
+    /// Column.
+    pub column: String,
+    /// Spearman's rank correlation of residual and column.
+    pub spearman_rho: f64,
+    /// Slope of the residual per SD of the column.
+    pub slope_per_sd: f64,
+    /// Its t statistic, SE clustered by cord.
+    pub slope_t_cluster: f64,
+    /// Two-sided p of that t (G − 1 df).
+    pub slope_p_cluster: f64,
+    /// Number of levels used for η².
+    pub levels: usize,
+    /// Share of residual variance explained by the column's levels.
+    pub eta2: f64,
+    /// One-way F.
+    pub f: f64,
+    /// p of F (rows treated as independent).
+    pub f_p: f64,
+}
+
+fn levels(v: &[f64]) -> Vec<usize> {
+    let mut distinct: Vec<f64> = v.to_vec();
+    distinct.sort_by(f64::total_cmp);
+    distinct.dedup();
+    if distinct.len() <= 12 {
+        return v
+            .iter()
+            .map(|x| distinct.iter().position(|d| d == x).unwrap_or(0))
+            .collect();
+    }
+    let mut sorted = v.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let cuts: Vec<f64> = (1..10).map(|k| sorted[k * sorted.len() / 10]).collect();
+    v.iter()
+        .map(|x| cuts.iter().filter(|c| x >= c).count())
+        .collect()
+}
+
+type Getter = fn(&capstan_data::Pair) -> Option<f64>;
+
+/// The columns to test: every known column present plus the extra ones.
+fn columns(ds: &Dataset, obs: &Observations) -> Vec<(String, Vec<f64>)> {
+    let mut cols: Vec<(String, Vec<f64>)> = vec![
+        ("t1_n".into(), obs.rows.iter().map(|r| r.t1_n).collect()),
+        ("t2_n".into(), obs.rows.iter().map(|r| r.t2_n).collect()),
+        (
+            "wrap_deg".into(),
+            obs.rows
+                .iter()
+                .map(|r| r.op.wrap_rad.to_degrees())
+                .collect(),
+        ),
+    ];
+    let opt: [(&str, Getter); 5] = [
+        ("capstan_diameter_mm", |p| p.capstan_diameter_mm),
+        ("drive_v", |p| p.drive_v),
+        ("run", |p| p.run),
+        ("step", |p| p.step),
+        ("time_s", |p| p.time_s),
+    ];
+    for (name, f) in opt {
+        if ds.has_column(name) {
+            cols.push((
+                name.into(),
+                ds.pairs.iter().map(|p| f(p).unwrap_or(0.0)).collect(),
+            ));
+        }
+    }
+    for (k, name) in ds.extra_columns.iter().enumerate() {
+        cols.push((name.clone(), ds.pairs.iter().map(|p| p.extra[k]).collect()));
+    }
+    // A column with one value carries no pattern.
+    cols.retain(|(_, v)| v.iter().any(|x| *x != v[0]));
+    cols
+}
+
+/// Residual patterns of the baseline and the extended model.
+pub fn patterns(ds: &Dataset, obs: &Observations, pred: &Predictions) -> Vec<Pattern> {
+    let cols = columns(ds, obs);
+    let clusters: Vec<usize> = obs.group_of_rows();
+    let mut out = Vec::new();
+    for (model, p) in [("baseline", &pred.baseline), ("extended", &pred.extended)] {
+        for kind in ["t2_n", "ln_amp"] {
+            let resid: Vec<f64> = obs
+                .rows
+                .iter()
+                .zip(p.iter())
+                .map(|(r, p)| match kind {
+                    "t2_n" => r.t2_n - p,
+                    _ => ln_amp(r.t2_n, r.t1_n) - ln_amp(*p, r.t1_n),
+                })
+                .collect();
+            for (name, v) in &cols {
+                let (m, sd) = (mean(v), variance(v).sqrt());
+                let x: Vec<Vec<f64>> = v.iter().map(|a| vec![1.0, (a - m) / sd]).collect();
+                let reg = regress(&x, &resid, None, Some(&clusters));
+                let lv = levels(v);
+                let (eta2, f, f_p) = eta_squared(&resid, &lv);
+                out.push(Pattern {
+                    model: model.into(),
+                    residual: kind,
+                    column: name.clone(),
+                    spearman_rho: spearman(v, &resid),
+                    slope_per_sd: reg.as_ref().map_or(f64::NAN, |r| r.coef[1]),
+                    slope_t_cluster: reg.as_ref().map_or(f64::NAN, |r| r.t[1]),
+                    slope_p_cluster: reg.as_ref().map_or(f64::NAN, |r| r.p[1]),
+                    levels: lv.iter().copied().max().map_or(0, |m| m + 1),
+                    eta2,
+                    f,
+                    f_p,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The ln-amplification residuals of one step, Euler-Eytelwein against the extended model:
+/// where at low tension the extended model does better or worse, shown for every step.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepResidual {
+    /// The step.
+    pub step: f64,
+    /// Rows with both tensions above zero (the logarithm's rows).
+    pub rows: usize,
+    /// Mean T1 of those rows, N.
+    pub mean_t1_n: f64,
+    /// Mean residual of ln(T2/T1), Euler-Eytelwein (measured − model).
+    pub baseline_mean: f64,
+    /// Mean residual of ln(T2/T1), extended model.
+    pub extended_mean: f64,
+    /// RMS residual of ln(T2/T1), Euler-Eytelwein.
+    pub baseline_rms: f64,
+    /// RMS residual of ln(T2/T1), extended model.
+    pub extended_rms: f64,
+}
+
+/// The ln-amplification residuals by step (None without a `step` column).
+pub fn ln_amp_by_step(obs: &Observations, pred: &Predictions) -> Option<Vec<StepResidual>> {
+    let steps = crate::fit::stats::distinct(obs.rows.iter().filter_map(|r| r.step));
+    if steps.is_empty() {
+        return None;
+    }
+    Some(
+        steps
+            .into_iter()
+            .map(|s| {
+                let idx: Vec<usize> = (0..obs.len())
+                    .filter(|&i| {
+                        let r = &obs.rows[i];
+                        r.step == Some(s) && r.t1_n > 0.0 && r.t2_n > 0.0
+                    })
+                    .collect();
+                let res = |p: &[f64]| -> Vec<f64> {
+                    idx.iter()
+                        .map(|&i| {
+                            let r = &obs.rows[i];
+                            ln_amp(r.t2_n, r.t1_n) - ln_amp(p[i], r.t1_n)
+                        })
+                        .collect()
+                };
+                let rms =
+                    |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+                let (b, e) = (res(&pred.baseline), res(&pred.extended));
+                StepResidual {
+                    step: s,
+                    rows: idx.len(),
+                    mean_t1_n: mean(&idx.iter().map(|&i| obs.rows[i].t1_n).collect::<Vec<_>>()),
+                    baseline_mean: mean(&b),
+                    extended_mean: mean(&e),
+                    baseline_rms: rms(&b),
+                    extended_rms: rms(&e),
+                }
+            })
+            .collect(),
+    )
+}

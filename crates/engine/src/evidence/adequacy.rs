@@ -1,0 +1,593 @@
+//! Is anything left? After the selected effects are fitted, the residuals are tested for the
+//! structure no catalogue effect took up.
+//!
+//! * **Lack of fit against pure error** (Draper & Smith §2.1, with clustered replicates): the
+//!   runs of a cord repeat the same steps, so the residuals of a cord × step cell scatter
+//!   around their cell mean by the run-to-run error alone. F = MS_LOF/MS_PE with
+//!   MS_LOF = Σ n_c·m_c²/(cells − cords − k) (each run's mu removes one mean per cord) and
+//!   MS_PE = Σ(z − m_c)²/Σ(n_c − 1), on the standardised residuals z = r·√w; its p from sign
+//!   flips of whole runs (the runs' residuals are serially correlated). Its size, the
+//!   systematic part's RMS per observation (SS_LOF beyond what the flips give) over the pure
+//!   error's, tells a pattern that matters from one that is merely detectable.
+//! * **Directed tests**, each a cluster-robust Wald test (runs as clusters, F with (q, G − q)
+//!   degrees of freedom) of the run-centred residuals against one structure: the shape along
+//!   T1 (asinh(T1/0.5 N) and its square: defined for readings at or below zero), time inside
+//!   runs, the step direction, the T1 shape changing with the wrap or with the diameter. They
+//!   name the pattern that remains, and decide without replicates.
+//!
+//! `unexplained` is set when the remaining lack of fit is both significant and large; the
+//! sentence is generated from that decision and the pattern found.
+
+use super::design::Design;
+use super::within::{fit_strata, Strata, Weights, WithinFit};
+use crate::fit::stats::f_p_upper;
+use capstan_plant::rng::Rng;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+/// The decision rule's constants.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct AdequacyRule {
+    /// A test is significant below this p.
+    pub alpha: f64,
+    /// The systematic RMS over the noise's (pure-error test) at or above which a significant
+    /// lack of fit is large.
+    pub min_ratio: f64,
+    /// The share of the residual variance a directed test explains at or above which it is
+    /// large (used without replicates).
+    pub min_r2: f64,
+    /// The spread of an effect's per-wrap sizes (fraction of its common size) at or above
+    /// which a significant inconstancy is large.
+    pub min_spread: f64,
+}
+
+impl Default for AdequacyRule {
+    fn default() -> Self {
+        AdequacyRule {
+            alpha: 1e-3,
+            min_ratio: 0.35,
+            min_r2: 0.05,
+            min_spread: 0.5,
+        }
+    }
+}
+
+/// The pure-error lack-of-fit test.
+#[derive(Clone, Debug, Serialize)]
+pub struct LackOfFit {
+    /// Replicate cells used (with at least two runs).
+    pub cells: usize,
+    /// F = MS_LOF / MS_PE.
+    pub f: f64,
+    /// Degrees of freedom of the lack of fit.
+    pub df_lof: f64,
+    /// Degrees of freedom of the pure error.
+    pub df_pe: f64,
+    /// Upper-tail p of F.
+    pub p: f64,
+    /// RMS of the systematic part over the RMS of the pure error.
+    pub systematic_ratio: f64,
+}
+
+/// Do the selected effects have one size for all wraps? The same physics has the same size on
+/// every cord; an effect that takes different sizes on different wraps stands in for something
+/// else. A cluster-robust Wald test (runs as clusters) of the per-wrap sizes' contrasts.
+#[derive(Clone, Debug, Serialize)]
+pub struct Constancy {
+    /// Per effect: its size on each wrap, (wrap in degrees, value).
+    pub by_wrap: Vec<(&'static str, Vec<(f64, f64)>)>,
+    /// F of the Wald statistic.
+    pub f: f64,
+    /// Numerator degrees of freedom: effects × (wraps − 1).
+    pub df1: f64,
+    /// Denominator degrees of freedom: runs − df1.
+    pub df2: f64,
+    /// Upper-tail p.
+    pub p: f64,
+    /// The largest spread of one effect's per-wrap sizes around its common size, as a
+    /// fraction of the common size's departure from no effect.
+    pub spread: f64,
+}
+
+/// One directed test of the residuals.
+#[derive(Clone, Debug, Serialize)]
+pub struct Directed {
+    /// What the residuals were tested against.
+    pub structure: &'static str,
+    /// F of the cluster-robust Wald statistic.
+    pub f: f64,
+    /// Its numerator degrees of freedom.
+    pub df1: f64,
+    /// Its denominator degrees of freedom (runs − q).
+    pub df2: f64,
+    /// Upper-tail p.
+    pub p: f64,
+    /// Share of the run-centred residual variance the structure explains.
+    pub partial_r2: f64,
+}
+
+/// What is left after the selected effects.
+#[derive(Clone, Debug, Serialize)]
+pub struct Adequacy {
+    /// Significant and large structure remains that no catalogue effect explains.
+    pub unexplained: bool,
+    /// The structure that explains most of what remains (`step_direction`, `t1_shape`,
+    /// `time`, `wrap`, `diameter`, or `cells` when none of them does), if any is significant.
+    pub pattern: Option<&'static str>,
+    /// Any test of what is left could be made (replicate runs, or runs enough for a directed
+    /// test).
+    pub tested: bool,
+    /// The tests that could not be computed on these data, and why.
+    pub not_identified: Vec<String>,
+    /// The decision in one sentence.
+    pub sentence: String,
+    /// Selected effects whose best fit sits on the edge of their physical range, with the
+    /// value there: the data want more than the effect can be.
+    pub at_physical_limit: Vec<(&'static str, f64)>,
+    /// The selected within-run effects refitted with one size per wrap (None with one wrap
+    /// or none selected).
+    pub constancy: Option<Constancy>,
+    /// The pure-error test (None without replicate runs).
+    pub lack_of_fit: Option<LackOfFit>,
+    /// The directed tests.
+    pub directed: Vec<Directed>,
+    /// The rule.
+    pub rule: AdequacyRule,
+}
+
+/// Test the residuals of `fit` (weights `w`) for structure left.
+pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> Adequacy {
+    let z: Vec<f64> = (0..d.n())
+        .map(|i| (d.t2[i] - fit.fitted[i]) * w.w[i].sqrt())
+        .collect();
+    let mut not_identified = Vec::new();
+    let lack_of_fit = pure_error(d, &z, fit.k()).filter(|l| {
+        let ok = [l.f, l.p, l.systematic_ratio].iter().all(|v| v.is_finite());
+        if !ok {
+            not_identified.push(
+                "lack of fit: the replicate runs agree exactly (no pure error to compare with)"
+                    .to_string(),
+            );
+        }
+        ok
+    });
+    let directed = directed_tests(d, &z);
+    if lack_of_fit.is_none() && directed.is_empty() {
+        not_identified.push(format!(
+            "what is left: {} run(s) are too few for any test of the residuals",
+            d.units.len()
+        ));
+    }
+    let significant: Vec<&Directed> = directed.iter().filter(|t| t.p < rule.alpha).collect();
+    let best = significant
+        .iter()
+        .min_by(|a, b| a.p.total_cmp(&b.p).then(b.f.total_cmp(&a.f)))
+        .copied();
+    let at_physical_limit: Vec<(&'static str, f64)> = (0..fit.k())
+        .filter(|&j| fit.maps[j].at_physical_limit(fit.theta[j]))
+        .map(|j| (fit.maps[j].kind.name(), fit.value(j)))
+        .collect();
+    let lack = match &lack_of_fit {
+        Some(l) => l.p < rule.alpha && l.systematic_ratio >= rule.min_ratio,
+        None => {
+            let bonferroni = rule.alpha / directed.len().max(1) as f64;
+            best.is_some_and(|t| t.p < bonferroni && t.partial_r2 >= rule.min_r2)
+        }
+    };
+    let constancy = constancy(d, fit, w);
+    if fit.k() > 0 && d.wraps().len() > MAX_CONSTANCY_WRAPS {
+        not_identified.push(format!(
+            "one size per wrap: {} wraps are more than the {MAX_CONSTANCY_WRAPS} this test \
+             refits",
+            d.wraps().len()
+        ));
+    }
+    let inconstant = constancy
+        .as_ref()
+        .is_some_and(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
+    let unexplained = lack || !at_physical_limit.is_empty() || inconstant;
+    // When the pure error says structure is left, the pattern is the directed test that
+    // comes closest to it (a description of what is left, at p < 0.05: the omnibus test has
+    // made the decision); otherwise a directed test must be significant on its own.
+    let closest = directed
+        .iter()
+        .filter(|t| t.p < 0.05)
+        .min_by(|a, b| a.p.total_cmp(&b.p));
+    let pattern = match (best, &lack_of_fit) {
+        (Some(t), _) => Some(t.structure),
+        (None, Some(l)) if l.p < rule.alpha => Some(closest.map_or("cells", |t| t.structure)),
+        _ => None,
+    };
+    let mut sentence = sentence(lack, pattern, lack_of_fit.as_ref(), &directed);
+    if lack_of_fit.is_none() && directed.is_empty() {
+        sentence = format!(
+            "What is left is not identified: with {} run(s) no test of it can be made (no \
+             replicate runs, and too few runs for a test of the residuals against T1, time or \
+             wrap).",
+            d.units.len()
+        );
+    }
+    if !at_physical_limit.is_empty() {
+        let list: Vec<String> = at_physical_limit
+            .iter()
+            .map(|(k, v)| format!("{k} ({v:.4})"))
+            .collect();
+        let edge = format!(
+            "The data push {} to the edge of the physical range, so the catalogue does not explain them.",
+            list.join(" and ")
+        );
+        sentence = if lack {
+            format!("{sentence} {edge}")
+        } else {
+            edge
+        };
+    }
+    if inconstant {
+        if let Some(c) = &constancy {
+            let list: Vec<String> = c
+                .by_wrap
+                .iter()
+                .map(|(k, v)| {
+                    let vals: Vec<String> =
+                        v.iter().map(|(w, x)| format!("{x:.4} at {w}°")).collect();
+                    format!("{k} ({})", vals.join(", "))
+                })
+                .collect();
+            let text = format!(
+                "The found effects take different sizes on different wraps ({}; F = {:.1}, p = {:.1e}), which the same physics would not: they stand in for something no catalogue effect explains.",
+                list.join("; "),
+                c.f,
+                c.p
+            );
+            sentence = if lack || !at_physical_limit.is_empty() {
+                format!("{sentence} {text}")
+            } else {
+                text
+            };
+        }
+    }
+    Adequacy {
+        unexplained,
+        pattern,
+        tested: lack_of_fit.is_some() || !directed.is_empty(),
+        not_identified,
+        sentence,
+        at_physical_limit,
+        constancy,
+        lack_of_fit,
+        directed,
+        rule,
+    }
+}
+
+/// The sentence of the decision.
+pub fn sentence(
+    unexplained: bool,
+    pattern: Option<&str>,
+    lof: Option<&LackOfFit>,
+    directed: &[Directed],
+) -> String {
+    if unexplained {
+        let what = match pattern.unwrap_or("cells") {
+            "step_direction" => "T2 depends on the step direction (rising against falling tension)",
+            "t1_shape" => "T2 departs from the fitted model along T1 (the shape of T2 against T1)",
+            "time" => "T2 drifts with time inside runs beyond the fitted effects",
+            "wrap" => "the shape of T2 against T1 changes with the wrap",
+            "diameter" => "the shape of T2 against T1 changes with the capstan diameter",
+            _ => "T2 departs from the fitted model at particular steps, along none of T1, time, step direction, wrap or diameter",
+        };
+        let mut s = format!("{what}; no catalogue effect explains it");
+        if let Some(l) = lof {
+            s += &format!(
+                " (lack of fit against the replicate runs F = {:.1}, p = {:.1e}; the systematic part is {:.2}× the noise)",
+                l.f, l.p, l.systematic_ratio
+            );
+        }
+        s + "."
+    } else {
+        match lof {
+            Some(l) if l.p < 1e-3 => format!(
+                "What remains is detectable but small (lack of fit F = {:.1}, p = {:.1e}; the systematic part is {:.2}× the noise, under the rule's size): the fitted effects explain the data.",
+                l.f, l.p, l.systematic_ratio
+            ),
+            Some(l) => format!(
+                "No structure is left beyond the noise (lack of fit against the replicate runs F = {:.2}, p = {:.2}).",
+                l.f, l.p
+            ),
+            None => {
+                let p_min = directed.iter().map(|t| t.p).fold(1.0, f64::min);
+                format!(
+                    "No replicate runs give a pure error; no test of the residuals against T1, time, step direction, wrap or diameter finds structure that matters (smallest p = {p_min:.2})."
+                )
+            }
+        }
+    }
+}
+
+/// Sign-flip replications of the lack-of-fit statistic.
+const FLIPS: usize = 1999;
+
+/// The pure-error lack-of-fit test (None without at least 4 replicated cells).
+///
+/// F = MS_LOF/MS_PE as in Draper & Smith, but its p comes from flipping the sign of whole
+/// runs' residual vectors (a wild cluster bootstrap with Rademacher weights, Cameron, Gelbach
+/// & Miller 2008): the runs' residuals are correlated from step to step (a run's tare, the
+/// wander of its mu), which makes the cell means of a cord move together and the nominal F
+/// distribution far too narrow; flipping whole runs keeps that correlation and destroys only a
+/// pattern the runs share.
+fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
+    let n_cells = d.cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
+    let mut cnt = vec![0usize; n_cells];
+    let mut cord_of_cell = vec![usize::MAX; n_cells];
+    for (u, rows) in d.units.iter().enumerate() {
+        for &i in rows {
+            if let Some(c) = d.cell[i] {
+                cnt[c] += 1;
+                cord_of_cell[c] = d.unit_cord[u];
+            }
+        }
+    }
+    let used: Vec<bool> = cnt.iter().map(|&c| c >= 2).collect();
+    let n_used = used.iter().filter(|&&u| u).count();
+    if n_used < 4 {
+        return None;
+    }
+    // The rows that enter, as (run, cell) pairs.
+    let entries: Vec<(usize, usize, usize)> = d
+        .units
+        .iter()
+        .enumerate()
+        .flat_map(|(u, rows)| rows.iter().map(move |&i| (u, i)))
+        .filter_map(|(u, i)| d.cell[i].filter(|&c| used[c]).map(|c| (u, i, c)))
+        .collect();
+    let ss_lof = |sign: &dyn Fn(usize) -> f64| {
+        let mut sum = vec![0.0; n_cells];
+        for &(u, i, c) in &entries {
+            sum[c] += sign(u) * z[i];
+        }
+        (0..n_cells)
+            .filter(|&c| used[c])
+            .map(|c| sum[c] * sum[c] / cnt[c] as f64)
+            .sum::<f64>()
+    };
+    let observed = ss_lof(&|_| 1.0);
+    let mut mean = vec![0.0; n_cells];
+    for &(_, i, c) in &entries {
+        mean[c] += z[i] / cnt[c] as f64;
+    }
+    let ss_pe: f64 = entries
+        .iter()
+        .map(|&(_, i, c)| (z[i] - mean[c]).powi(2))
+        .sum();
+    let df_pe: f64 = (0..n_cells)
+        .filter(|&c| used[c])
+        .map(|c| (cnt[c] - 1) as f64)
+        .sum();
+    let cords: std::collections::HashSet<usize> = (0..n_cells)
+        .filter(|&c| used[c])
+        .map(|c| cord_of_cell[c])
+        .collect();
+    let df_lof = (n_used as f64 - cords.len() as f64 - k as f64).max(1.0);
+    let ms_pe = ss_pe / df_pe.max(1.0);
+    // Rademacher flips of whole runs, from a fixed seed (the answer is reproducible).
+    let mut rng = Rng::new(0x01ac_0f17);
+    let (mut above, mut total) = (0usize, 0.0);
+    let mut signs = vec![1.0; d.units.len()];
+    for _ in 0..FLIPS {
+        for s in signs.iter_mut() {
+            *s = if rng.next_u64() >> 63 == 0 { 1.0 } else { -1.0 };
+        }
+        let t = ss_lof(&|u| signs[u]);
+        total += t;
+        if t >= observed {
+            above += 1;
+        }
+    }
+    let null_mean = total / FLIPS as f64;
+    let n_obs = entries.len() as f64;
+    let systematic = ((observed - null_mean).max(0.0) / n_obs).sqrt();
+    Some(LackOfFit {
+        cells: n_used,
+        f: (observed / df_lof) / ms_pe,
+        df_lof,
+        df_pe,
+        p: (above + 1) as f64 / (FLIPS + 1) as f64,
+        systematic_ratio: systematic / ms_pe.sqrt(),
+    })
+}
+
+/// The most wraps the constancy test refits one size per wrap for: beyond, it is not
+/// identified (a data set of a few rows at each of hundreds of wraps cannot say an effect's
+/// size per wrap, and the refit would grow with the square of their number).
+pub const MAX_CONSTANCY_WRAPS: usize = 24;
+
+/// Refit the selected effects with one size per wrap and test that the sizes agree.
+fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
+    let k = fit.k();
+    let wraps = d.wraps();
+    if k == 0 || wraps.len() < 2 || wraps.len() > MAX_CONSTANCY_WRAPS {
+        return None;
+    }
+    // Too few runs for the contrasts: decided before the refit, which it would not change.
+    if d.units.len() < k * (wraps.len() - 1) + 2 {
+        return None;
+    }
+    let of_unit: Vec<usize> = d
+        .unit_cord
+        .iter()
+        .map(|&c| {
+            wraps
+                .iter()
+                .position(|&x| x == d.cords[c].wrap_deg)
+                .unwrap_or(0)
+        })
+        .collect();
+    let s_n = wraps.len();
+    let maps: Vec<_> = (0..s_n).flat_map(|_| fit.maps.iter().copied()).collect();
+    let theta0: Vec<f64> = (0..s_n).flat_map(|_| fit.theta.iter().copied()).collect();
+    let strata = Strata { k, of_unit };
+    let split = fit_strata(d, (&maps, &strata), &theta0, &fit.mu, w);
+    let big_k = k * s_n;
+    let q = k * (s_n - 1);
+    let g = d.units.len() as f64;
+    if g - (q as f64) < 2.0 {
+        return None;
+    }
+    // Contrasts θ[s, j] − θ[0, j].
+    let mut c = DMatrix::<f64>::zeros(q, big_k);
+    for s in 1..s_n {
+        for j in 0..k {
+            let row = (s - 1) * k + j;
+            c[(row, s * k + j)] = 1.0;
+            c[(row, j)] = -1.0;
+        }
+    }
+    let theta = DVector::from_column_slice(&split.theta);
+    let v = DMatrix::from_row_slice(big_k, big_k, &split.cov_robust);
+    let ct = &c * &theta;
+    let cvc = &c * v * c.transpose();
+    let wald = (ct.transpose() * cvc.try_inverse()? * &ct)[(0, 0)];
+    let qf = q as f64;
+    let f = wald / qf * (g - qf) / (g - 1.0);
+    if !f.is_finite() {
+        return None;
+    }
+    let mut spread: f64 = 0.0;
+    let by_wrap: Vec<(&str, Vec<(f64, f64)>)> = (0..k)
+        .map(|j| {
+            let common = fit.value(j);
+            let scale = (common - fit.maps[j].kind.neutral_value()).abs();
+            let vals: Vec<(f64, f64)> = (0..s_n)
+                .map(|s| (wraps[s], split.value(s * k + j)))
+                .collect();
+            for &(_, x) in &vals {
+                if scale > 0.0 {
+                    spread = spread.max((x - common).abs() / scale);
+                }
+            }
+            (fit.maps[j].kind.name(), vals)
+        })
+        .collect();
+    let finite = spread.is_finite()
+        && by_wrap
+            .iter()
+            .all(|(_, v)| v.iter().all(|x| x.1.is_finite()));
+    if !finite {
+        return None;
+    }
+    Some(Constancy {
+        by_wrap,
+        f,
+        df1: qf,
+        df2: g - qf,
+        p: f_p_upper(f, qf, g - qf),
+        spread,
+    })
+}
+
+/// Subtract each run's mean from `v`.
+fn run_centred(d: &Design, v: &[f64]) -> Vec<f64> {
+    let mut out = v.to_vec();
+    for rows in &d.units {
+        let m = rows.iter().map(|&i| v[i]).sum::<f64>() / rows.len() as f64;
+        for &i in rows {
+            out[i] = v[i] - m;
+        }
+    }
+    out
+}
+
+/// The structures to test on this design, each as its basis columns.
+fn structures(d: &Design) -> Vec<(&'static str, Vec<Vec<f64>>)> {
+    let n = d.n();
+    let s: Vec<f64> = d.t1.iter().map(|t| (t / 0.5).asinh()).collect();
+    let mut out = vec![(
+        "t1_shape",
+        vec![s.clone(), s.iter().map(|x| x * x).collect()],
+    )];
+    if d.columns.time_s && d.max_time_spread_s() > 0.0 {
+        let t: Vec<f64> = d.op.iter().map(|o| o.time_s / 100.0).collect();
+        out.push(("time", vec![t.clone(), t.iter().map(|x| x * x).collect()]));
+    }
+    if d.has_both_directions() {
+        let f: Vec<f64> = d
+            .falling
+            .iter()
+            .map(|f| if *f == Some(true) { 1.0 } else { 0.0 })
+            .collect();
+        out.push(("step_direction", vec![f]));
+    }
+    if d.wraps().len() >= 2 {
+        let b_bar = d.op.iter().map(|o| o.wrap_rad).sum::<f64>() / n as f64;
+        let x = (0..n).map(|i| s[i] * (d.op[i].wrap_rad - b_bar)).collect();
+        out.push(("wrap", vec![x]));
+    }
+    if d.diameters().len() >= 2 {
+        let d_bar = d.op.iter().map(|o| o.diameter_mm).sum::<f64>() / n as f64;
+        let x = (0..n)
+            .map(|i| s[i] * (d.op[i].diameter_mm - d_bar) / 10.0)
+            .collect();
+        out.push(("diameter", vec![x]));
+    }
+    out
+}
+
+fn directed_tests(d: &Design, z: &[f64]) -> Vec<Directed> {
+    let y = run_centred(d, z);
+    structures(d)
+        .into_iter()
+        .filter_map(|(name, cols)| {
+            let x: Vec<Vec<f64>> = cols.iter().map(|c| run_centred(d, c)).collect();
+            wald(d, &x, &y).map(|(f, q, g, r2)| Directed {
+                structure: name,
+                f,
+                df1: q,
+                df2: g - q,
+                p: f_p_upper(f, q, g - q),
+                partial_r2: r2,
+            })
+        })
+        .collect()
+}
+
+/// Cluster-robust (runs) Wald test that y has no component along the columns `x`:
+/// (F, q, G, share of y's sum of squares explained).
+fn wald(d: &Design, x: &[Vec<f64>], y: &[f64]) -> Option<(f64, f64, f64, f64)> {
+    let q = x.len();
+    let g = d.units.len() as f64;
+    if g <= q as f64 + 1.0 {
+        return None;
+    }
+    let mut xtx = DMatrix::<f64>::zeros(q, q);
+    let mut xty = DVector::<f64>::zeros(q);
+    for i in 0..d.n() {
+        for a in 0..q {
+            xty[a] += x[a][i] * y[i];
+            for b in 0..q {
+                xtx[(a, b)] += x[a][i] * x[b][i];
+            }
+        }
+    }
+    let inv = xtx.try_inverse()?;
+    let beta = &inv * &xty;
+    let mut meat = DMatrix::<f64>::zeros(q, q);
+    let mut rss = 0.0;
+    for rows in &d.units {
+        let mut s = DVector::<f64>::zeros(q);
+        for &i in rows {
+            let fit: f64 = (0..q).map(|a| x[a][i] * beta[a]).sum();
+            let r = y[i] - fit;
+            rss += r * r;
+            for a in 0..q {
+                s[a] += x[a][i] * r;
+            }
+        }
+        meat += &s * s.transpose();
+    }
+    let cov = &inv * meat * &inv * (g / (g - 1.0));
+    let w = (beta.transpose() * cov.try_inverse()? * &beta)[(0, 0)];
+    let tss: f64 = y.iter().map(|v| v * v).sum();
+    let f = w / q as f64 * (g - q as f64) / (g - 1.0);
+    let r2 = if tss > 0.0 { 1.0 - rss / tss } else { 0.0 };
+    f.is_finite().then_some((f, q as f64, g, r2))
+}

@@ -1,0 +1,208 @@
+//! T2 and amplification against T1 with the three models, and the closed-loop overlay.
+
+use super::{
+    baseline_style, extended_style, measured, model_legend, thesis_style, Figure, Palette, INK,
+};
+use crate::plot::{figure, Entry, Key, Panel, Series};
+use anyhow::Result;
+use capstan_engine::analysis::closed_loop::SimCurve;
+use capstan_engine::analysis::Analysis;
+use plotters::style::RGBColor;
+use std::collections::BTreeMap;
+
+/// (T1, y(i)) of cord `g`'s rows, sorted by T1: a model that depends on T1 and the cord only
+/// (Euler-Eytelwein, Table 3) traces its curve through its predictions.
+fn by_t1(a: &Analysis, g: usize, y: impl Fn(usize) -> f64) -> Vec<(f64, f64)> {
+    let mut v: Vec<(f64, f64)> = a
+        .obs
+        .rows_of_group(g)
+        .into_iter()
+        .map(|i| (a.obs.rows[i].t1_n, y(i)))
+        .collect();
+    v.sort_by(|p, q| p.0.total_cmp(&q.0));
+    super::drawn(v)
+}
+
+/// Step means (over the runs of cord `g`) of x and y, in T1 order: the extended model, whose
+/// prediction also depends on each run's load history.
+fn step_means(a: &Analysis, g: usize, y: impl Fn(usize) -> f64) -> Vec<(f64, f64)> {
+    let mut by_step: BTreeMap<i64, (f64, f64, f64)> = BTreeMap::new();
+    for i in a.obs.rows_of_group(g) {
+        let r = &a.obs.rows[i];
+        let e = by_step
+            .entry(r.step.map_or(i as i64, |s| s.round() as i64))
+            .or_default();
+        e.0 += r.t1_n;
+        e.1 += y(i);
+        e.2 += 1.0;
+    }
+    let mut v: Vec<(f64, f64)> = by_step.values().map(|(x, y, n)| (x / n, y / n)).collect();
+    v.sort_by(|p, q| p.0.total_cmp(&q.0));
+    v
+}
+
+/// The three models' curves of cord `g` in its wrap's colour; `amp` divides by T1.
+fn model_series(a: &Analysis, g: usize, color: RGBColor, amp: bool) -> Vec<Series> {
+    let t1 = |i: usize| if amp { a.obs.rows[i].t1_n } else { 1.0 };
+    let p = &a.pred;
+    let mut s = vec![Series::Line(
+        by_t1(a, g, |i| p.baseline[i] / t1(i)),
+        baseline_style(color),
+    )];
+    if a.obs
+        .rows_of_group(g)
+        .iter()
+        .all(|&i| p.thesis[i].is_finite())
+    {
+        s.push(Series::Line(
+            by_t1(a, g, |i| p.thesis[i] / t1(i)),
+            thesis_style(color),
+        ));
+    }
+    s.push(Series::Line(
+        step_means(a, g, |i| p.extended[i] / t1(i)),
+        extended_style(color),
+    ));
+    s
+}
+
+fn measured_points(a: &Analysis, g: usize, amp: bool) -> Vec<(f64, f64)> {
+    super::drawn(a.obs.rows_of_group(g))
+        .into_iter()
+        .map(|i| {
+            let r = &a.obs.rows[i];
+            (r.t1_n, if amp { r.t2_n / r.t1_n } else { r.t2_n })
+        })
+        .collect()
+}
+
+fn has_thesis(a: &Analysis) -> bool {
+    a.pred.thesis.iter().any(|v| v.is_finite())
+}
+
+fn legend(a: &Analysis, pal: &Palette) -> Vec<Entry> {
+    let mut l = pal.legend();
+    l.extend(model_legend(has_thesis(a)));
+    l
+}
+
+/// T2 against T1, one panel per capstan diameter.
+pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
+    let mut panels = Vec::new();
+    for dia in a.obs.diameters() {
+        let mut series = Vec::new();
+        for (g, grp) in a.obs.groups.iter().enumerate() {
+            if grp.diameter_mm != dia {
+                continue;
+            }
+            let c = pal.color(grp.wrap_deg);
+            series.push(Series::Points(measured_points(a, g, false), measured(c)));
+            series.extend(model_series(a, g, c, false));
+        }
+        panels.push(Panel {
+            title: format!("capstan diameter {dia} mm"),
+            x_label: "T1, servo-side tension (N)".into(),
+            y_label: "T2, load-side tension (N)".into(),
+            series,
+            ..Panel::default()
+        });
+    }
+    Ok(Figure {
+        id: "t2_vs_t1",
+        legend: legend(a, pal),
+        chart: figure(&panels, 2, 650, 470)?,
+        caption: format!("T2 against T1, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model (mean over the cord's runs at each step). Every curve joins the model's predictions in predictions.csv.{}", super::drawn_note(a)),
+    })
+}
+
+/// Amplification T2/T1 against T1, one panel per cord (rows: diameters, columns: wraps).
+pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
+    let panels: Vec<Panel> = panel_cords(a)
+        .into_iter()
+        .map(|g| {
+            let c = pal.color(a.obs.groups[g].wrap_deg);
+            amp_panel(a, g, c, model_series(a, g, c, true))
+        })
+        .collect();
+    Ok(Figure {
+        id: "amp_vs_t1",
+        legend: legend(a, pal),
+        chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).{}{}", panels_note(a), super::drawn_note(a)),
+    })
+}
+
+/// The most cords drawn one panel each: a data set with more shows this many, evenly spaced.
+pub const MAX_CORD_PANELS: usize = 24;
+
+/// The cords drawn one panel each.
+fn panel_cords(a: &Analysis) -> Vec<usize> {
+    capstan_engine::analysis::closed_loop::evenly(a.obs.groups.len(), MAX_CORD_PANELS)
+}
+
+/// The caption's sentence when not every cord has its panel.
+fn panels_note(a: &Analysis) -> String {
+    let n = a.obs.groups.len();
+    if n <= MAX_CORD_PANELS {
+        return String::new();
+    }
+    format!(" {MAX_CORD_PANELS} of the {n} cords are drawn, evenly spaced in the cord order.")
+}
+
+/// One cord's amplification panel: its measured points, then `curves` over them.
+fn amp_panel(
+    a: &Analysis,
+    g: usize,
+    c: RGBColor,
+    curves: impl IntoIterator<Item = Series>,
+) -> Panel {
+    let grp = &a.obs.groups[g];
+    let mut series = vec![Series::Points(measured_points(a, g, true), measured(c))];
+    series.extend(curves);
+    Panel {
+        title: format!("{:.0}°, D = {} mm", grp.wrap_deg, grp.diameter_mm),
+        x_label: "T1 (N)".into(),
+        y_label: "amplification T2/T1".into(),
+        series,
+        ..Panel::default()
+    }
+}
+
+/// The named causes the closed-loop plant carries, as a caption fragment (", a, b").
+fn plant_causes(a: &Analysis) -> String {
+    a.mechanisms
+        .causes
+        .iter()
+        .map(|c| format!(", {}", c.name))
+        .collect()
+}
+
+/// The closed loop: simulated amplification over the measured points, per cord.
+pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<Figure> {
+    let panels: Vec<Panel> = curves
+        .iter()
+        .map(|(g, _)| *g)
+        .take(MAX_CORD_PANELS)
+        .map(|g| {
+            let c = pal.color(a.obs.groups[g].wrap_deg);
+            let sims = curves.iter().filter(|(cg, _)| *cg == g);
+            amp_panel(
+                a,
+                g,
+                c,
+                sims.map(|(_, sim)| Series::Line(sim.clone(), extended_style(c))),
+            )
+        })
+        .collect();
+    let mut legend = pal.legend();
+    legend.push(Entry {
+        key: Key::Line(extended_style(INK)),
+        label: "closed-loop simulation (firmware + extended plant)".into(),
+    });
+    Ok(Figure {
+        id: "closed_loop",
+        legend,
+        chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{}{}", plant_causes(a), if curves.len() < a.obs.groups.len() { format!(" {} of the {} cords are simulated, evenly spaced in the cord order.", curves.len(), a.obs.groups.len()) } else { String::new() }, super::drawn_note(a)),
+    })
+}

@@ -1,0 +1,212 @@
+//! The report's figures. One colour per wrap in every figure (Okabe-Ito, safe for the common
+//! colour-vision deficiencies), one line style per model (Euler-Eytelwein dashed, Table 3
+//! dotted, extended solid and thick), a legend above each figure (HTML). Every curve of a model is
+//! drawn through that model's predictions as written to `predictions.csv`; the evidence panels
+//! come from `metrics.json`.
+//!
+//! * [`curves`]: T2 and amplification against T1 with the three models, and the closed loop.
+//! * [`evidence`]: residuals, the mechanism evidence, and the gain (RMSE by model).
+
+pub mod curves;
+pub mod evidence;
+
+use super::plot::{Chart, Dash, Entry, Key, LineStyle, Marker};
+use capstan_engine::analysis::closed_loop::SimCurve;
+use capstan_engine::analysis::Analysis;
+use capstan_engine::fit::stats::distinct;
+use plotters::style::RGBColor;
+
+/// The most markers (or line vertices) drawn per cord and series: a million-row data set
+/// would otherwise make an SVG of hundreds of megabytes that no browser opens.
+pub const MAX_DRAWN_PER_CORD: usize = 2_000;
+
+/// At most [`MAX_DRAWN_PER_CORD`] of `v`, evenly spaced (every k-th, in the given order).
+pub fn drawn<T>(v: Vec<T>) -> Vec<T> {
+    let k = v.len().div_ceil(MAX_DRAWN_PER_CORD).max(1);
+    v.into_iter().step_by(k).collect()
+}
+
+/// The caption's sentence when some cord has more rows than are drawn (empty otherwise).
+pub fn drawn_note(a: &Analysis) -> String {
+    let most = (0..a.obs.groups.len())
+        .map(|g| a.obs.rows_of_group(g).len())
+        .max()
+        .unwrap_or(0);
+    if most <= MAX_DRAWN_PER_CORD {
+        return String::new();
+    }
+    format!(
+        " With up to {most} rows per cord, every {}-th is drawn (at most {MAX_DRAWN_PER_CORD} \
+         per cord and series); every statistic uses all {} rows.",
+        most.div_ceil(MAX_DRAWN_PER_CORD),
+        a.obs.len()
+    )
+}
+
+/// The Okabe-Ito palette without yellow (poor on white) and black (kept for annotations).
+pub const OKABE_ITO: [RGBColor; 6] = [
+    RGBColor(0x00, 0x72, 0xB2),
+    RGBColor(0xE6, 0x9F, 0x00),
+    RGBColor(0x00, 0x9E, 0x73),
+    RGBColor(0xD5, 0x5E, 0x00),
+    RGBColor(0xCC, 0x79, 0xA7),
+    RGBColor(0x56, 0xB4, 0xE9),
+];
+/// Neutral colour of the model line samples in legends and of annotations.
+pub const INK: RGBColor = RGBColor(0x33, 0x33, 0x33);
+
+/// Euler-Eytelwein with one mu: thin dashes.
+pub fn baseline_style(color: RGBColor) -> LineStyle {
+    LineStyle {
+        color,
+        width: 2,
+        dash: Dash::Dashed,
+    }
+}
+
+/// The thesis's Table 3: dots.
+pub fn thesis_style(color: RGBColor) -> LineStyle {
+    LineStyle {
+        color,
+        width: 2,
+        dash: Dash::Dotted,
+    }
+}
+
+/// The extended model: thick and solid.
+pub fn extended_style(color: RGBColor) -> LineStyle {
+    LineStyle {
+        color,
+        width: 3,
+        dash: Dash::Solid,
+    }
+}
+
+/// A measured point.
+pub fn measured(color: RGBColor) -> Marker {
+    Marker {
+        color,
+        radius: 2,
+        hollow: false,
+        opacity: 0.5,
+    }
+}
+
+/// A per-cord summary point: a disc on the smallest capstan, a ring on the others.
+pub fn cord_marker(color: RGBColor, hollow: bool) -> Marker {
+    Marker {
+        color,
+        radius: 5,
+        hollow,
+        opacity: 0.9,
+    }
+}
+
+/// Colours by wrap angle.
+pub struct Palette {
+    wraps: Vec<f64>,
+}
+
+impl Palette {
+    /// The data's wraps, in order.
+    pub fn new(a: &Analysis) -> Self {
+        Palette {
+            wraps: distinct(a.obs.groups.iter().map(|g| g.wrap_deg)),
+        }
+    }
+
+    /// The colour of `wrap_deg` (colours repeat after six wraps).
+    pub fn color(&self, wrap_deg: f64) -> RGBColor {
+        let k = self.wraps.iter().position(|w| *w == wrap_deg).unwrap_or(0);
+        OKABE_ITO[k % OKABE_ITO.len()]
+    }
+
+    /// Index of `wrap_deg` among the wraps.
+    pub fn index(&self, wrap_deg: f64) -> usize {
+        self.wraps.iter().position(|w| *w == wrap_deg).unwrap_or(0)
+    }
+
+    /// Number of wraps.
+    pub fn len(&self) -> usize {
+        self.wraps.len()
+    }
+
+    /// True without wraps.
+    pub fn is_empty(&self) -> bool {
+        self.wraps.is_empty()
+    }
+
+    /// Legend entries: one coloured disc per wrap.
+    pub fn legend(&self) -> Vec<Entry> {
+        self.wraps
+            .iter()
+            .map(|w| Entry {
+                key: Key::Marker(Marker {
+                    opacity: 1.0,
+                    ..measured(self.color(*w))
+                }),
+                label: format!("{w:.0}° wrap"),
+            })
+            .collect()
+    }
+}
+
+/// Legend entries of the three models (line styles in a neutral colour).
+pub fn model_legend(with_thesis: bool) -> Vec<Entry> {
+    let mut v = vec![Entry {
+        key: Key::Line(baseline_style(INK)),
+        label: "Euler-Eytelwein, one mu (baseline)".into(),
+    }];
+    if with_thesis {
+        v.push(Entry {
+            key: Key::Line(thesis_style(INK)),
+            label: "thesis Table 3".into(),
+        });
+    }
+    v.push(Entry {
+        key: Key::Line(extended_style(INK)),
+        label: "extended model".into(),
+    });
+    v
+}
+
+/// Legend entries for the capstan diameters (disc: smallest, ring: others).
+pub fn diameter_legend(a: &Analysis) -> Vec<Entry> {
+    a.obs
+        .diameters()
+        .iter()
+        .enumerate()
+        .map(|(k, d)| Entry {
+            key: Key::Marker(cord_marker(INK, k > 0)),
+            label: format!("D = {d} mm"),
+        })
+        .collect()
+}
+
+/// A figure of the report.
+pub struct Figure {
+    /// `data-figure` id.
+    pub id: &'static str,
+    /// The legend above the chart (HTML).
+    pub legend: Vec<Entry>,
+    /// The chart.
+    pub chart: Chart,
+    /// Caption.
+    pub caption: String,
+}
+
+/// Every figure, in report order.
+pub fn all(a: &Analysis, closed_loop: Option<&[SimCurve]>) -> anyhow::Result<Vec<Figure>> {
+    let pal = Palette::new(a);
+    let mut figs = vec![
+        curves::t2_vs_t1(a, &pal)?,
+        curves::amp_vs_t1(a, &pal)?,
+        evidence::residuals(a, &pal)?,
+        evidence::mechanisms(a, &pal)?,
+        evidence::gain(a)?,
+    ];
+    if let Some(cl) = closed_loop {
+        figs.push(curves::closed_loop(a, &pal, cl)?);
+    }
+    Ok(figs)
+}

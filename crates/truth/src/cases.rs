@@ -1,0 +1,419 @@
+//! Generated test cases: effects hidden the way the rig would hide them, in data sets made end
+//! to end by the firmware-in-the-loop simulator (`host-sim`: the firmware's protocol, 1 kHz
+//! sampling and conditioning against the plant) with the thesis rig's noise
+//! (`host_sim::noise::NoiseProfile::Thesis`: cord-to-cord and run-to-run scatter of mu, a slow
+//! wander of mu inside runs, a zero error per run on both sensors, sensor noise, the 12-bit
+//! ADC), and sometimes without optional columns.
+//!
+//! A case's truth is what the plant was given: catalogue effects (`CampaignConfig::effects`) or
+//! physics outside the catalogue (`CampaignConfig::unmodelled`, which only the plant knows).
+//! [`draw_cases`] draws, from one master seed, at least 300 cases in four classes:
+//! * **clean**: no effect;
+//! * **single**: one catalogue effect, at a size a tribologist would care about, or small
+//!   (below that, to measure the detection limit);
+//! * **pair**: two catalogue effects at once (including the thesis's heating + T1-path loss);
+//! * **outside**: hysteresis with the step direction, a non-linear T2 sensor, or a friction
+//!   regime change with tension — structure no catalogue effect has.
+//!
+//! Used by the tests (`tests/diagnose_cases.rs`), the calibration (`examples/calibrate.rs`) and
+//! the benchmark (`benches/diagnose.rs`).
+
+use capstan_data::{read_pairs, write_pairs_to, Dataset, Pair};
+use capstan_friction::{Effect, EffectKind, Model};
+use firmware::{Protocol, StepOrder};
+use host_sim::campaign::{run_campaign, CampaignConfig, CampaignResult};
+use host_sim::noise::{thesis, NoiseProfile};
+use host_sim::plant::rng::{derive_seed, Rng};
+use host_sim::plant::{Disturbances, Unmodelled};
+
+/// The shortened protocol of the cases: 4 s steps, windows from 1 s after a change to 0.5 s
+/// before the next, through the firmware's sampling and conditioning. The wander of mu is
+/// scaled with it (its correlation time in steps is the thesis rig's).
+pub fn short_protocol() -> Protocol {
+    Protocol {
+        dwell_ms: 4_000,
+        window_after_change_ms: 1_000,
+        window_before_next_ms: 500,
+        ..Protocol::default()
+    }
+}
+
+/// Which kind of truth a case hides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Class {
+    /// No effect.
+    Clean,
+    /// One catalogue effect at a size that matters.
+    Single,
+    /// One catalogue effect below that size.
+    SmallSingle,
+    /// Two catalogue effects.
+    Pair,
+    /// Physics outside the catalogue.
+    Outside,
+}
+
+impl Class {
+    /// Name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Class::Clean => "clean",
+            Class::Single => "single",
+            Class::SmallSingle => "small single",
+            Class::Pair => "pair",
+            Class::Outside => "outside",
+        }
+    }
+}
+
+/// One generated case, before it is simulated.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// Case seed (also the campaign seed).
+    pub seed: u64,
+    /// Its class.
+    pub class: Class,
+    /// The catalogue effects hidden (the ground truth; empty for clean and outside cases).
+    pub effects: Vec<Effect>,
+    /// The physics outside the catalogue, by name and value.
+    pub outside: Option<(&'static str, f64)>,
+    /// Simulator configuration (effects, noise, design).
+    pub config: CampaignConfig,
+    /// Optional columns removed from the CSV.
+    pub drop_columns: Vec<&'static str>,
+}
+
+impl Case {
+    /// A one-line description.
+    pub fn describe(&self) -> String {
+        let c = &self.config;
+        let truth: Vec<String> = self
+            .effects
+            .iter()
+            .map(|e| format!("{}={:.4}", e.kind, e.value))
+            .chain(self.outside.map(|(n, v)| format!("OUTSIDE {n}={v:.3}")))
+            .collect();
+        format!(
+            "seed {} {} [{}] | wraps {:?} d {:?} V {:?} runs {} {:?} scatter {:.1}/{:.1}%{}",
+            self.seed,
+            self.class.name(),
+            truth.join(", "),
+            c.wraps_deg,
+            c.diameters_mm,
+            c.drive_vs,
+            c.runs,
+            c.order,
+            c.scatter_pct,
+            c.run_scatter_pct.unwrap_or(f64::NAN),
+            if self.drop_columns.is_empty() {
+                String::new()
+            } else {
+                format!(" without {:?}", self.drop_columns)
+            }
+        )
+    }
+
+    /// The catalogue effects hidden, sorted by kind.
+    pub fn truth_kinds(&self) -> Vec<EffectKind> {
+        let mut k: Vec<EffectKind> = self.effects.iter().map(|e| e.kind).collect();
+        k.sort();
+        k
+    }
+
+    /// Run the simulator and read its pairs back through the CSV schema, exactly as `capstan
+    /// simulate` writes them to `pairs.csv` (minus the dropped columns).
+    pub fn generate(&self) -> Result<(Dataset, CampaignResult), String> {
+        let r = run_campaign(&self.config).map_err(|e| e.to_string())?;
+        let pairs: Vec<Pair> = crate::pairs::to_pairs(&r.rows)
+            .into_iter()
+            .map(|mut p| {
+                for c in &self.drop_columns {
+                    match *c {
+                        "capstan_diameter_mm" => p.capstan_diameter_mm = None,
+                        "drive_v" => p.drive_v = None,
+                        "run" => p.run = None,
+                        "step" => p.step = None,
+                        "time_s" => p.time_s = None,
+                        _ => {}
+                    }
+                }
+                p
+            })
+            .collect();
+        let mut csv = Vec::new();
+        write_pairs_to(&mut csv, &pairs).map_err(|e| e.to_string())?;
+        let name = format!("case-{}.csv", self.seed);
+        let d = read_pairs(csv.as_slice(), &name).map_err(|e| e.to_string())?;
+        Ok((d, r))
+    }
+}
+
+fn uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * rng.uniform()
+}
+
+fn sign(rng: &mut Rng) -> f64 {
+    if rng.uniform() < 0.5 {
+        -1.0
+    } else {
+        1.0
+    }
+}
+
+/// `k` distinct values of `pool`, sorted.
+fn subset(rng: &mut Rng, pool: &[f64], k: usize) -> Vec<f64> {
+    let mut v = pool.to_vec();
+    for i in 0..k.min(v.len()) {
+        let j = i + ((rng.uniform() * (v.len() - i) as f64) as usize).min(v.len() - i - 1);
+        v.swap(i, j);
+    }
+    v.truncate(k);
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+const WRAPS: [f64; 6] = [270.0, 360.0, 450.0, 540.0, 630.0, 720.0];
+const DIAMETERS: [f64; 3] = [12.7, 19.05, 25.4];
+const VOLTS: [f64; 4] = [6.0, 8.0, 10.0, 12.0];
+
+/// The design a set of effects needs to show, drawn around a thesis-like campaign.
+fn design(rng: &mut Rng, kinds: &[EffectKind], force_updown: bool) -> CampaignConfig {
+    let has = |k: EffectKind| kinds.contains(&k);
+    // An effect on mu between cords is judged against the cord-to-cord scatter, with as many
+    // independent observations as cords: such a campaign has ten cords or more, like the
+    // thesis's.
+    let between_cords = has(EffectKind::SensorGain)
+        || has(EffectKind::DiameterDependence)
+        || has(EffectKind::SpeedDependence);
+    let k = if between_cords {
+        5 + usize::from(rng.uniform() < 0.5)
+    } else {
+        3 + (rng.uniform() * 4.0) as usize % 4
+    };
+    let mut wraps = subset(rng, &WRAPS, k);
+    if has(EffectKind::SensorGain) {
+        // A gain shows only across wraps (mu_apparent = mu + ln g/β): span them.
+        wraps[0] = 270.0;
+        *wraps.last_mut().expect("wraps") = 720.0;
+    }
+    let volts = if has(EffectKind::SpeedDependence) {
+        let k = 2 + usize::from(rng.uniform() < 0.5);
+        subset(rng, &VOLTS, k)
+    } else if rng.uniform() < 0.2 {
+        subset(rng, &VOLTS, 2)
+    } else {
+        vec![10.0]
+    };
+    let two_d = has(EffectKind::DiameterDependence)
+        || has(EffectKind::BendingStiffness)
+        || (between_cords && wraps.len() * volts.len() < 10)
+        || rng.uniform() < 0.4;
+    let diameters = if two_d {
+        subset(rng, &DIAMETERS, 2)
+    } else {
+        vec![DIAMETERS[(rng.uniform() * 3.0) as usize % 3]]
+    };
+    let mut runs = 4 + (rng.uniform() * 5.0) as u32 % 5;
+    if has(EffectKind::Wear) {
+        runs = runs.max(5);
+    }
+    let order = if force_updown || rng.uniform() < 0.5 {
+        StepOrder::UpDown
+    } else {
+        StepOrder::Monotone
+    };
+    let mut cfg = CampaignConfig {
+        diameters_mm: diameters,
+        wraps_deg: wraps,
+        drive_vs: volts,
+        runs,
+        order,
+        model: Model::euler_eytelwein(uniform(rng, 0.10, 0.13)),
+        protocol: short_protocol(),
+        threads: 1,
+        keep_raw: false,
+        // The highest T2 reading (mu up to 0.13 and +25 %, or a +20 % gain, at 720°) can pass
+        // the default 45 N over-force limit; these rigs' sensors read up to the ADC's top rail
+        // (55.4 N: no 5 V saturation below it), so the rail check sits there and the 54 N
+        // limit reads below it.
+        limits: firmware::safety::SafetyLimits {
+            over_force_n: 54.0,
+            rail_high_counts: firmware::hal::ADC_MAX_COUNTS - 4,
+            ..firmware::safety::SafetyLimits::default()
+        },
+        ..CampaignConfig::default()
+    };
+    cfg.plant.sensor.saturation_counts = f64::INFINITY;
+    // The cases were calibrated (thresholds on seed 99, targets on the test seed) on the rig
+    // with the earlier 10 ms amplifier filter; the README now suggests 4.7 ms, which changes
+    // the plant's random stream. Kept, so every case's data stay identical.
+    cfg.plant.motor.amp_filter_tau_s = 0.010;
+    NoiseProfile::Thesis.apply(&mut cfg);
+    // The thesis rig's noise, ±20 %, its wander's memory scaled to the shorter steps.
+    let level = uniform(rng, 0.8, 1.2);
+    cfg.scatter_pct = thesis::CORD_SCATTER_PCT * level;
+    cfg.run_scatter_pct = Some(thesis::RUN_SCATTER_PCT * level);
+    cfg.plant.disturbances = Disturbances {
+        mu_wander_sd: thesis::MU_WANDER_SD * level,
+        mu_wander_tau_s: thesis::MU_WANDER_TAU_S * cfg.protocol.dwell_ms as f64 / 10_000.0,
+        zero_error_sd_n: thesis::ZERO_ERROR_SD_N * level,
+    };
+    cfg
+}
+
+/// The span of a covariate in `cfg` for effects that scale mu linearly in it.
+fn span(kind: EffectKind, cfg: &CampaignConfig) -> f64 {
+    let s = |v: &[f64]| v[v.len() - 1] - v[0];
+    match kind {
+        EffectKind::ThermalDrift => {
+            let levels = (cfg.protocol.rest_deg - cfg.protocol.final_deg) / cfg.protocol.step_deg;
+            levels as f64 * cfg.protocol.dwell_ms as f64 / 1000.0 / 100.0
+        }
+        EffectKind::Wear => cfg.runs as f64 - 1.0,
+        EffectKind::DiameterDependence => s(&cfg.diameters_mm),
+        EffectKind::SpeedDependence => s(&cfg.drive_vs),
+        _ => 1.0,
+    }
+}
+
+/// A value of `kind` at a size that matters (`small`: below it), for the design `cfg`.
+fn value(rng: &mut Rng, kind: EffectKind, small: bool, cfg: &CampaignConfig) -> f64 {
+    let pick = |rng: &mut Rng, care: (f64, f64), low: (f64, f64)| {
+        let (lo, hi) = if small { low } else { care };
+        uniform(rng, lo, hi)
+    };
+    match kind {
+        EffectKind::None => 0.0,
+        EffectKind::PressureFriction => 1.0 - pick(rng, (0.07, 0.2), (0.02, 0.05)),
+        EffectKind::BendingStiffness => pick(rng, (3e-5, 1.5e-4), (5e-6, 1.5e-5)),
+        EffectKind::T1Offset => pick(rng, (0.2, 1.0), (0.04, 0.12)) * sign(rng),
+        EffectKind::T2Offset => pick(rng, (0.3, 1.2), (0.08, 0.2)) * sign(rng),
+        // Effects between cords are judged against the cord-to-cord scatter of mu (thesis:
+        // ~4 %) with the design's ten-odd cords: below ~10 % they are at the detection limit
+        // (the small class measures it), so the sizes that matter start at 12 %.
+        EffectKind::SensorGain => 1.0 + pick(rng, (0.12, 0.3), (0.03, 0.06)) * sign(rng),
+        EffectKind::ContactHeating => {
+            // mu falls by this fraction at a friction load of 30 N.
+            let drop = pick(rng, (0.1, 0.35), (0.02, 0.06));
+            -(1.0 - drop).ln() / 30.0
+        }
+        EffectKind::DiameterDependence | EffectKind::SpeedDependence => {
+            let change = pick(rng, (0.12, 0.3), (0.03, 0.06)) * sign(rng);
+            change / span(kind, cfg)
+        }
+        EffectKind::ThermalDrift | EffectKind::Wear => {
+            let change = pick(rng, (0.08, 0.25), (0.02, 0.05)) * sign(rng);
+            change / span(kind, cfg)
+        }
+    }
+}
+
+/// Optional columns a case may lose without hiding its truth or merging its runs (a voltage or
+/// diameter column can go only when it has one value).
+fn droppable(kinds: &[EffectKind], cfg: &CampaignConfig) -> Vec<&'static str> {
+    let mut v = Vec::new();
+    if !kinds.contains(&EffectKind::ThermalDrift) {
+        v.push("time_s");
+    }
+    if cfg.drive_vs.len() == 1 {
+        v.push("drive_v");
+    }
+    let needs_d = kinds.iter().any(|k| {
+        matches!(
+            k,
+            EffectKind::DiameterDependence | EffectKind::BendingStiffness
+        )
+    });
+    if !needs_d && cfg.diameters_mm.len() == 1 {
+        v.push("capstan_diameter_mm");
+    }
+    v
+}
+
+/// Case `index` of `class` from `master_seed`.
+pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
+    let seed = derive_seed(master_seed, &[class as u64, index]);
+    let mut rng = Rng::new(seed);
+    let catalogue: Vec<EffectKind> = EffectKind::ALL.into_iter().skip(1).collect();
+    let (kinds, outside): (Vec<EffectKind>, Option<&'static str>) = match class {
+        Class::Clean => (Vec::new(), None),
+        Class::Single | Class::SmallSingle => {
+            (vec![catalogue[index as usize % catalogue.len()]], None)
+        }
+        Class::Pair => {
+            // Every fifth pair is the thesis's heating + T1-path loss.
+            if index.is_multiple_of(5) {
+                (vec![EffectKind::T1Offset, EffectKind::ContactHeating], None)
+            } else {
+                let a = (rng.uniform() * catalogue.len() as f64) as usize % catalogue.len();
+                let mut b = (rng.uniform() * catalogue.len() as f64) as usize % catalogue.len();
+                if b == a {
+                    b = (b + 1 + index as usize) % catalogue.len();
+                    if b == a {
+                        b = (a + 1) % catalogue.len();
+                    }
+                }
+                (vec![catalogue[a], catalogue[b]], None)
+            }
+        }
+        Class::Outside => (
+            Vec::new(),
+            Some(Unmodelled::NAMES[index as usize % Unmodelled::NAMES.len()]),
+        ),
+    };
+    let mut cfg = design(&mut rng, &kinds, outside == Some("hysteresis"));
+    let small = class == Class::SmallSingle;
+    let mut effects: Vec<Effect> = kinds
+        .iter()
+        .map(|&kind| Effect {
+            kind,
+            value: value(&mut rng, kind, small, &cfg),
+        })
+        .collect();
+    effects.sort_by_key(|e| e.kind);
+    cfg.effects = effects.clone();
+    let outside = outside.map(|name| {
+        let v = match name {
+            "hysteresis" => uniform(&mut rng, 0.08, 0.2),
+            "t2_nonlinearity" => uniform(&mut rng, 0.6, 1.5) * sign(&mut rng),
+            _ => uniform(&mut rng, 0.15, 0.3) * sign(&mut rng),
+        };
+        cfg.unmodelled.set(name, v);
+        (name, v)
+    });
+    cfg.seed = seed;
+    // A sixth of the cases lose an optional column their truth does not need.
+    let mut drop_columns = Vec::new();
+    if class != Class::Outside && rng.uniform() < 1.0 / 6.0 {
+        let pool = droppable(&kinds, &cfg);
+        if !pool.is_empty() {
+            drop_columns.push(pool[(rng.uniform() * pool.len() as f64) as usize % pool.len()]);
+        }
+    }
+    Case {
+        seed,
+        class,
+        effects,
+        outside,
+        config: cfg,
+        drop_columns,
+    }
+}
+
+/// How many cases of each class [`draw_cases`] draws: 60 clean, 10 of every catalogue effect
+/// at a size that matters and 3 small, 66 pairs, 48 outside — 317 in all.
+pub const COUNTS: [(Class, u64); 5] = [
+    (Class::Clean, 60),
+    (Class::Single, 110),
+    (Class::SmallSingle, 33),
+    (Class::Pair, 66),
+    (Class::Outside, 48),
+];
+
+/// Every case of `master_seed` (see [`COUNTS`]).
+pub fn draw_cases(master_seed: u64) -> Vec<Case> {
+    COUNTS
+        .iter()
+        .flat_map(|&(class, n)| (0..n).map(move |i| draw_case(master_seed, class, i)))
+        .collect()
+}

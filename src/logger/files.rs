@@ -1,0 +1,272 @@
+//! The session's files and their rows: the CSV writers (raw samples, faults, and the pairs
+//! through `data::PairsWriter`, the same schema `simulate` writes and `analyze` reads), the
+//! firmware's other log lines and the received bytes. Nothing here decides what goes where;
+//! the session does.
+
+use super::{
+    LogOptions, FAULTS_CSV, FAULTS_HEADER, LIVE_CSV, LIVE_HEADER, MESSAGES_TXT, PAIRS_CSV,
+    PAIRS_INCOMPLETE_CSV, RAW_CSV, RAW_HEADER, SETTINGS_CSV, STREAM_FILE, SUMMARY_JSON,
+};
+use anyhow::Context;
+use capstan_data::{Pair, PairsWriter};
+use capstan_link::words::{setting_values, source_name};
+use capstan_outdir::Staged;
+use firmware::hal::Channel;
+use firmware::record::{Fault, Live, RawSample, SettingsReport};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+
+/// The open files of one session: an output set (`outdir`) whose files grow as the records
+/// arrive, flushed after every chunk, and replace the previous session's when it closes. If
+/// the process dies, the next run into the directory keeps them as `incomplete-*`.
+pub(super) struct Files {
+    set: Staged,
+    dir: PathBuf,
+    raw: BufWriter<File>,
+    pairs: PairsWriter<BufWriter<File>>,
+    faults: BufWriter<File>,
+    messages: BufWriter<File>,
+    stream: Option<BufWriter<File>>,
+    /// `pairs-incomplete.csv`, created when its first row arrives.
+    incomplete: Option<PairsWriter<BufWriter<File>>>,
+    /// `settings.csv`, created when its first row arrives.
+    settings: Option<BufWriter<File>>,
+    /// `live.csv`, created when its first row arrives.
+    live: Option<BufWriter<File>>,
+}
+
+fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<BufWriter<File>> {
+    let mut w = set.create(name)?;
+    if let Some(h) = header {
+        writeln!(w, "{h}").with_context(|| format!("cannot write {name}"))?;
+    }
+    Ok(w)
+}
+
+/// A pairs CSV of the session: the schema's columns and `boot`, the board's start each run
+/// belongs to (a reset starts the run numbers again; `boot` keeps those runs apart for the
+/// reader).
+fn create_pairs(set: &mut Staged, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
+    let w = create(set, name, None)?;
+    PairsWriter::with_labels(w, &["boot"]).with_context(|| format!("cannot write {name}"))
+}
+
+/// f32 as written: the shortest decimal that reads back to the same f32.
+fn f(v: f32) -> String {
+    v.to_string()
+}
+
+/// An f32 as the f64 of its shortest decimal (12.7f32 -> 12.7, not 12.699999809265137). Written
+/// as an f64, it is the same shortest decimal again.
+pub(super) fn decimal(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(f64::NAN)
+}
+
+impl Files {
+    /// Create (or, with `overwrite`, replace) the session's files in `opts.out_dir`. Refuses a
+    /// directory that holds another session's files unless `overwrite` is set.
+    pub fn create(opts: &LogOptions) -> anyhow::Result<Files> {
+        let dir = &opts.out_dir;
+        let names = [
+            RAW_CSV,
+            PAIRS_CSV,
+            PAIRS_INCOMPLETE_CSV,
+            FAULTS_CSV,
+            SETTINGS_CSV,
+            LIVE_CSV,
+            SUMMARY_JSON,
+            STREAM_FILE,
+            MESSAGES_TXT,
+        ];
+        // Locked and recovered first, so the check sees what is really there.
+        let out = crate::outputs::open_out(dir, "log", &names)?;
+        if !opts.overwrite {
+            let existing: Vec<&str> = names.into_iter().filter(|n| dir.join(n).exists()).collect();
+            if !existing.is_empty() {
+                anyhow::bail!(
+                    "{} already holds a logged session ({}): choose another --out, or pass \
+                     --overwrite to replace it",
+                    dir.display(),
+                    existing.join(", ")
+                );
+            }
+        }
+        let mut set = out.stage()?;
+        set.keep_on_failure(crate::outputs::say_kept);
+        Ok(Files {
+            raw: create(&mut set, RAW_CSV, Some(RAW_HEADER))?,
+            pairs: create_pairs(&mut set, PAIRS_CSV)?,
+            faults: create(&mut set, FAULTS_CSV, Some(FAULTS_HEADER))?,
+            messages: create(&mut set, MESSAGES_TXT, None)?,
+            stream: if opts.save_stream {
+                Some(create(&mut set, STREAM_FILE, None)?)
+            } else {
+                None
+            },
+            incomplete: None,
+            settings: None,
+            live: None,
+            set,
+            dir: dir.clone(),
+        })
+    }
+
+    /// Keep received bytes (if the session keeps them).
+    pub fn stream(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        if let Some(s) = &mut self.stream {
+            s.write_all(bytes)
+                .with_context(|| self.at("stream.defmt"))?;
+        }
+        Ok(())
+    }
+
+    /// One of the firmware's other log lines.
+    pub fn message(&mut self, level: &str, text: &str) -> anyhow::Result<()> {
+        writeln!(self.messages, "{level} {text}").with_context(|| self.at("messages.txt"))
+    }
+
+    /// A raw sample of run `run` (empty: unknown).
+    pub fn raw(&mut self, run: &str, seq: u32, r: &RawSample) -> anyhow::Result<()> {
+        writeln!(
+            self.raw,
+            "{run},{seq},{},{},{},{},{}",
+            r.t_us as f64 / 1e6,
+            r.counts[0],
+            r.counts[1],
+            f(r.force_n[0]),
+            f(r.force_n[1])
+        )
+        .with_context(|| self.at("raw.csv"))
+    }
+
+    /// A fault of run `run` (empty: unknown).
+    pub fn fault(&mut self, run: &str, seq: u32, flt: &Fault) -> anyhow::Result<()> {
+        let channel = match flt.channel {
+            Some(Channel::T1) => "t1",
+            Some(Channel::T2) => "t2",
+            None => "",
+        };
+        writeln!(
+            self.faults,
+            "{run},{seq},{},{},{channel},{}",
+            flt.t_us as f64 / 1e6,
+            flt.kind.name(),
+            f(flt.value)
+        )
+        .with_context(|| self.at("faults.csv"))
+    }
+
+    /// A complete pair, to `pairs.csv`.
+    pub fn pair(&mut self, p: &Pair) -> anyhow::Result<()> {
+        self.pairs.write(p).with_context(|| self.at("pairs.csv"))
+    }
+
+    /// Make sure `pairs-incomplete.csv` exists; true if this call created it.
+    pub fn open_incomplete(&mut self) -> anyhow::Result<bool> {
+        if self.incomplete.is_some() {
+            return Ok(false);
+        }
+        self.incomplete = Some(create_pairs(&mut self.set, PAIRS_INCOMPLETE_CSV)?);
+        Ok(true)
+    }
+
+    /// A pair lacking a set-up value or its run number, to `pairs-incomplete.csv` (opened by
+    /// [`Files::open_incomplete`]).
+    pub fn incomplete_pair(&mut self, p: &Pair) -> anyhow::Result<()> {
+        let w = self.incomplete.as_mut().expect("opened first");
+        w.write(p).with_context(|| self.at("pairs-incomplete.csv"))
+    }
+
+    /// A settings report, to `settings.csv` (created with its header by the first).
+    pub fn settings(&mut self, seq: u32, r: &SettingsReport) -> anyhow::Result<()> {
+        let values = setting_values(&r.settings);
+        if self.settings.is_none() {
+            let names: Vec<&str> = values.iter().map(|v| v.name).collect();
+            let header = format!("seq,source,{}", names.join(","));
+            self.settings = Some(create(&mut self.set, SETTINGS_CSV, Some(&header))?);
+        }
+        let w = self.settings.as_mut().expect("just created");
+        let cells: Vec<&str> = values.iter().map(|v| v.value.as_str()).collect();
+        writeln!(w, "{seq},{},{}", source_name(r.source), cells.join(","))
+            .with_context(|| self.at("settings.csv"))
+    }
+
+    /// A live reading of setup mode, to `live.csv` (created with its header by the first).
+    pub fn live(&mut self, seq: u32, l: &Live) -> anyhow::Result<()> {
+        if self.live.is_none() {
+            self.live = Some(create(&mut self.set, LIVE_CSV, Some(LIVE_HEADER))?);
+        }
+        let w = self.live.as_mut().expect("just created");
+        writeln!(
+            w,
+            "{seq},{},{},{},{},{},{}",
+            l.t_ms as f64 / 1e3,
+            l.counts[0],
+            l.counts[1],
+            f(l.force_n[0]),
+            f(l.force_n[1]),
+            f(l.servo_deg)
+        )
+        .with_context(|| self.at("live.csv"))
+    }
+
+    /// The message of a failed write of `name`: the final path, where the user looks.
+    fn at(&self, name: &str) -> String {
+        format!("cannot write {}", self.dir.join(name).display())
+    }
+
+    /// Flush every file.
+    pub fn flush(&mut self) -> anyhow::Result<()> {
+        let dir = self.dir.display().to_string();
+        let at = |name: &str| format!("cannot write {dir}/{name}");
+        self.raw.flush().with_context(|| at(RAW_CSV))?;
+        self.pairs.flush().with_context(|| at(PAIRS_CSV))?;
+        self.faults.flush().with_context(|| at(FAULTS_CSV))?;
+        self.messages.flush().with_context(|| at(MESSAGES_TXT))?;
+        if let Some(s) = &mut self.stream {
+            s.flush().with_context(|| at(STREAM_FILE))?;
+        }
+        if let Some(w) = &mut self.incomplete {
+            w.flush().with_context(|| at(PAIRS_INCOMPLETE_CSV))?;
+        }
+        if let Some(w) = &mut self.settings {
+            w.flush().with_context(|| at(SETTINGS_CSV))?;
+        }
+        if let Some(w) = &mut self.live {
+            w.flush().with_context(|| at(LIVE_CSV))?;
+        }
+        Ok(())
+    }
+
+    /// Close the session: flush, add `summary.json`, and, if `commit`, replace the previous
+    /// session's files; otherwise keep the files apart (if `received` anything) or drop them.
+    pub fn close(
+        mut self,
+        summary_json: &str,
+        commit: bool,
+        received: bool,
+    ) -> anyhow::Result<super::Outcome> {
+        self.flush()?;
+        drop((
+            self.raw,
+            self.pairs,
+            self.faults,
+            self.messages,
+            self.stream,
+            self.incomplete,
+            self.settings,
+            self.live,
+        ));
+        self.set.write(SUMMARY_JSON, summary_json.as_bytes())?;
+        if commit {
+            self.set.commit()?;
+            Ok(super::Outcome::Committed)
+        } else if received {
+            Ok(super::Outcome::Kept(self.set.keep()?))
+        } else {
+            self.set.discard();
+            Ok(super::Outcome::Discarded)
+        }
+    }
+}

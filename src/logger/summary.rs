@@ -1,0 +1,343 @@
+//! What a session saw, as `summary.json` and the closing lines on stderr say it: counts by
+//! record kind, each run (complete or not, where its set-up values came from, its
+//! calibration), sequence gaps,
+//! restarts, bad frames and an unfinished frame at the end.
+
+use super::{LIVE_CSV, MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, SETTINGS_CSV, STREAM_FILE};
+use capstan_link::decoder::BadFrame;
+use capstan_link::seq::{Backwards, Gap, Restart};
+use serde::Serialize;
+use std::path::Path;
+
+/// Where a set-up value of the pairs came from.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Sourced {
+    /// The value written (`None`: the cell is empty).
+    pub value: Option<f64>,
+    /// `flag`, `run_start` or `unknown`.
+    pub from: &'static str,
+}
+
+/// One run as the log saw it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunSummary {
+    /// Run number since boot (`None` if its run-start record was lost).
+    pub run: Option<u32>,
+    /// Sequence number of its first record seen.
+    pub first_seq: u32,
+    /// Its run-end record arrived.
+    pub complete: bool,
+    /// Raw samples received.
+    pub raw: u64,
+    /// Pairs received.
+    pub pairs: u64,
+    /// Pairs not written anywhere (a window without samples: mean is NaN).
+    pub pairs_not_written: u64,
+    /// Pairs written to pairs-incomplete.csv instead of pairs.csv.
+    pub pairs_incomplete: u64,
+    /// Pairs the run-end record says the rig made.
+    pub pairs_reported: Option<u32>,
+    /// Faults received.
+    pub faults: u64,
+    /// The fault that ended the run, if one did.
+    pub ended_by_fault: Option<&'static str>,
+    /// End time, s since the trigger.
+    pub end_time_s: Option<f64>,
+    /// Capstan diameter written to pairs.csv.
+    pub capstan_diameter_mm: Sourced,
+    /// Wrap angle written to pairs.csv.
+    pub wrap_deg: Sourced,
+    /// Drive voltage written to pairs.csv.
+    pub drive_v: Sourced,
+    /// The calibration the run used, from its run-start record (`None` if it was lost).
+    pub calibration: Option<RunCalibration>,
+}
+
+/// The calibration of a run, as its run-start record gives it. A value is `None` (null) when
+/// the record does not carry it (the tare reference, servo map and amplifier full scale came
+/// with setup mode: a firmware built before it does not send them) or is not a number.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RunCalibration {
+    /// T1 zero (after the tare), ADC counts.
+    pub t1_zero: Option<f64>,
+    /// T1 sensitivity, N per count.
+    pub t1_n_per_count: Option<f64>,
+    /// T2 zero (after the tare), ADC counts.
+    pub t2_zero: Option<f64>,
+    /// T2 sensitivity, N per count.
+    pub t2_n_per_count: Option<f64>,
+    /// Force both channels carry during the tare, N.
+    pub tare_reference_n: Option<f64>,
+    /// Servo pulse at 0°, µs.
+    pub servo_min_us: Option<f64>,
+    /// Servo pulse at `servo_max_deg`, µs.
+    pub servo_max_us: Option<f64>,
+    /// Servo angle at `servo_max_us`, deg.
+    pub servo_max_deg: Option<f64>,
+    /// Amplifier gain, V per V of control.
+    pub amp_gain: Option<f64>,
+    /// Amplifier control voltage at full duty, V.
+    pub amp_full_scale_v: Option<f64>,
+}
+
+impl RunCalibration {
+    /// From a run-start record's calibration; `sent(field)` says whether the record carries
+    /// that field (by its name in the record).
+    pub fn of(c: &firmware::Calibration, sent: impl Fn(&str) -> bool) -> RunCalibration {
+        let v = |name: &str, x: f32| {
+            Some(super::files::decimal(x)).filter(|d| d.is_finite() && sent(name))
+        };
+        RunCalibration {
+            t1_zero: v("t1_zero", c.t1.zero_counts),
+            t1_n_per_count: v("t1_n_per_count", c.t1.n_per_count),
+            t2_zero: v("t2_zero", c.t2.zero_counts),
+            t2_n_per_count: v("t2_n_per_count", c.t2.n_per_count),
+            tare_reference_n: v("tare_reference_n", c.tare_reference_n),
+            servo_min_us: v("servo_min_us", c.servo.pulse_at_min_us),
+            servo_max_us: v("servo_max_us", c.servo.pulse_at_max_us),
+            servo_max_deg: v("servo_max_deg", c.servo.max_deg),
+            amp_gain: v("amp_gain", c.amp.amp_gain),
+            amp_full_scale_v: v("amp_full_scale_v", c.amp.full_scale_v),
+        }
+    }
+}
+
+/// Counts by record kind.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct RecordCounts {
+    /// run_start
+    pub run_start: u64,
+    /// raw
+    pub raw: u64,
+    /// pair
+    pub pair: u64,
+    /// fault
+    pub fault: u64,
+    /// run_end
+    pub run_end: u64,
+    /// settings (setup mode; not part of a run)
+    pub settings: u64,
+    /// live (setup mode)
+    pub live: u64,
+    /// reply (answers to host commands)
+    pub reply: u64,
+}
+
+/// Everything `summary.json` says.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Where the bytes came from.
+    pub source: String,
+    /// The ELF used to decode them.
+    pub elf: String,
+    /// Why the session ended.
+    pub stopped: String,
+    /// Bytes received.
+    pub bytes: u64,
+    /// Frames cut from them.
+    pub frames: u64,
+    /// Records decoded, by kind.
+    pub records: RecordCounts,
+    /// Other log lines.
+    pub messages: u64,
+    /// First and last sequence numbers seen.
+    pub first_seq: Option<u32>,
+    /// Last sequence number seen.
+    pub last_seq: Option<u32>,
+    /// Records known lost (sum over the gaps).
+    pub missing_records: u64,
+    /// Where records were lost.
+    pub gaps: Vec<Gap>,
+    /// Where the board restarted.
+    pub restarts: Vec<Restart>,
+    /// Records numbered below the expected one.
+    pub backwards: Vec<Backwards>,
+    /// Frames that did not decode.
+    pub bad_frames: u64,
+    /// The first of them, with the reason.
+    pub bad_frame_examples: Vec<BadFrame>,
+    /// An unfinished frame at the end of the stream: (byte offset, length).
+    pub truncated_tail: Option<TruncatedTail>,
+    /// The runs.
+    pub runs: Vec<RunSummary>,
+    /// Pairs written to pairs-incomplete.csv (unknown wrap, diameter, drive voltage or run).
+    pub pairs_incomplete: u64,
+}
+
+/// An unfinished frame at the end of the stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct TruncatedTail {
+    /// Byte offset of its start.
+    pub byte_offset: u64,
+    /// Its length.
+    pub bytes: u64,
+}
+
+impl Summary {
+    /// True if nothing was lost or damaged.
+    pub fn is_clean(&self) -> bool {
+        self.missing_records == 0
+            && self.bad_frames == 0
+            && self.truncated_tail.is_none()
+            && self.backwards.is_empty()
+    }
+
+    /// The human report (a few lines, for stderr).
+    pub fn human(&self, dir: &Path) -> String {
+        let r = &self.records;
+        let complete = self.runs.iter().filter(|r| r.complete).count();
+        let mut s = format!(
+            "capstan log: {} run(s) ({} complete), {} pairs, {} raw samples, {} faults, {} \
+             messages from {} bytes ({}); files in {}",
+            self.runs.len(),
+            complete,
+            r.pair,
+            r.raw,
+            r.fault,
+            self.messages,
+            self.bytes,
+            self.stopped,
+            dir.display()
+        );
+        if r.setup() > 0 {
+            s += &format!(
+                "\ncapstan log: setup mode: {} settings report(s) ({SETTINGS_CSV}), {} live \
+                 reading(s) ({LIVE_CSV}), {} command reply record(s) ({MESSAGES_TXT})",
+                r.settings, r.live, r.reply
+            );
+        }
+        if self.missing_records > 0 {
+            let places: Vec<String> = self
+                .gaps
+                .iter()
+                .take(5)
+                .map(|g| {
+                    format!(
+                        "{} after seq {} (byte {})",
+                        g.missing, g.after_seq, g.byte_offset
+                    )
+                })
+                .collect();
+            let more = if self.gaps.len() > 5 { ", ..." } else { "" };
+            s += &format!(
+                "\ncapstan log: LOST {} record(s) in {} gap(s): {}{more}",
+                self.missing_records,
+                self.gaps.len(),
+                places.join("; ")
+            );
+        }
+        if self.bad_frames > 0 {
+            let first = &self.bad_frame_examples[0];
+            s += &format!(
+                "\ncapstan log: {} frame(s) did not decode; first: frame {} at byte {}: {}",
+                self.bad_frames, first.frame, first.byte_offset, first.reason
+            );
+        }
+        if let Some(t) = self.truncated_tail {
+            s += &format!(
+                "\ncapstan log: the stream ends inside a frame ({} bytes from byte {} dropped)",
+                t.bytes, t.byte_offset
+            );
+        }
+        for rs in &self.restarts {
+            s += &format!(
+                "\ncapstan log: the board restarted after seq {} (byte {})",
+                rs.after_seq, rs.byte_offset
+            );
+        }
+        if !self.backwards.is_empty() {
+            s += &format!(
+                "\ncapstan log: {} record(s) numbered out of order (first: seq {} where {} was expected)",
+                self.backwards.len(),
+                self.backwards[0].seq,
+                self.backwards[0].expected_seq
+            );
+        }
+        if let Some(first) = self.first_seq.filter(|&s| s != 0) {
+            s += &format!(
+                "\ncapstan log: the stream joins the board at seq {first}: records before it were \
+                 sent before logging began"
+            );
+        }
+        if self.pairs_incomplete > 0 {
+            // The stream to decode again: the copy the session saved (from a board or stdin),
+            // or the file it was decoded from.
+            let saved = dir.join(STREAM_FILE);
+            let from = if saved.exists() {
+                saved.display().to_string()
+            } else {
+                self.source.clone()
+            };
+            s += &format!(
+                "\ncapstan log: {} pair(s) lack a set-up value or their run number and are in \
+                 {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; decode the stream again with \
+                 --wrap-deg/--diameter-mm/--drive-v into another directory (capstan log \
+                 --elf {} --from {from} --out NEW_DIR --wrap-deg ...)",
+                self.pairs_incomplete, self.elf
+            );
+        }
+        s
+    }
+}
+
+impl Sourced {
+    /// The value from the flag if one was given, else the record's, else unknown.
+    pub fn choose(flag: Option<f64>, record: Option<f64>) -> Sourced {
+        match (flag, record) {
+            (Some(v), _) => Sourced {
+                value: Some(v),
+                from: "flag",
+            },
+            (None, Some(v)) => Sourced {
+                value: Some(v),
+                from: "run_start",
+            },
+            (None, None) => Sourced {
+                value: None,
+                from: "unknown",
+            },
+        }
+    }
+}
+
+impl RunSummary {
+    /// A run whose first record (sequence number `first_seq`) has just arrived: nothing
+    /// counted yet.
+    pub fn new(
+        run: Option<u32>,
+        first_seq: u32,
+        capstan_diameter_mm: Sourced,
+        wrap_deg: Sourced,
+        drive_v: Sourced,
+    ) -> RunSummary {
+        RunSummary {
+            run,
+            first_seq,
+            complete: false,
+            raw: 0,
+            pairs: 0,
+            pairs_not_written: 0,
+            pairs_incomplete: 0,
+            pairs_reported: None,
+            faults: 0,
+            ended_by_fault: None,
+            end_time_s: None,
+            capstan_diameter_mm,
+            wrap_deg,
+            drive_v,
+            calibration: None,
+        }
+    }
+}
+
+impl RecordCounts {
+    /// Records of every kind.
+    pub fn total(&self) -> u64 {
+        self.run_start + self.raw + self.pair + self.fault + self.run_end + self.setup()
+    }
+
+    /// Records of the setup-mode kinds (settings, live, reply).
+    pub fn setup(&self) -> u64 {
+        self.settings + self.live + self.reply
+    }
+}
