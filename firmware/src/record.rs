@@ -322,12 +322,8 @@ impl RunStart {
 /// The settings block of `run_start` and `settings`: every setting in wire order, at its wire
 /// type.
 fn settings_fields(s: &Settings, mut f: impl FnMut(Scalar)) {
-    for (setting, bits) in Setting::ALL.iter().zip(s.fields()) {
-        f(match setting.value() {
-            Value::Code => Scalar::U8(bits as u8),
-            Value::Whole => Scalar::U32(bits),
-            Value::Real => Scalar::F32(f32::from_bits(bits)),
-        });
+    for (&setting, bits) in Setting::ALL.iter().zip(s.fields()) {
+        f(crate::settings::scalar(setting, bits));
     }
 }
 

@@ -11,7 +11,7 @@
 
 use crate::calib::{Calibration, CalibrationError};
 use crate::protocol::{Protocol, ProtocolError, StepOrder};
-use capstan_wire::{Key, Setting, Value};
+use capstan_wire::{Key, Scalar, Setting, Value};
 
 /// Version of the byte layout below. Change it whenever the layout changes.
 pub const SETTINGS_VERSION: u8 = 1;
@@ -59,6 +59,15 @@ pub enum SettingsError {
     /// Under this calibration the over-force limit would read above the rail check: the
     /// over-force check could not trip ([`crate::safety::SafetyLimits::visible`]).
     Blind,
+}
+
+/// A setting's 32 bits ([`Settings::get`]) at its wire type.
+pub fn scalar(setting: Setting, bits: u32) -> Scalar {
+    match setting.value() {
+        Value::Code => Scalar::U8(bits as u8),
+        Value::Whole => Scalar::U32(bits),
+        Value::Real => Scalar::F32(f32::from_bits(bits)),
+    }
 }
 
 /// How far inside the servo map's 0..=`servo_max_deg` the protocol's angles must stay, deg: the
@@ -193,6 +202,11 @@ impl Settings {
             Setting::ServoMaxDeg => f(c.servo.max_deg),
             Setting::AmpFullScaleV => f(c.amp.full_scale_v),
         }
+    }
+
+    /// One value at its wire type (as the `run_start` and `settings` records carry it).
+    pub fn scalar(&self, setting: Setting) -> Scalar {
+        scalar(setting, self.get(setting))
     }
 
     /// Set one value from its 32 bits (the inverse of [`Settings::get`]; `None` for an unknown
