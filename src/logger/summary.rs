@@ -6,6 +6,8 @@
 use super::{LIVE_CSV, MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, SETTINGS_CSV, STREAM_FILE};
 use capstan_link::decoder::BadFrame;
 use capstan_link::seq::{Backwards, Gap, Restart};
+use capstan_wire::settings::Group;
+use capstan_wire::Setting;
 use serde::Serialize;
 use std::path::Path;
 
@@ -53,52 +55,48 @@ pub struct RunSummary {
     pub calibration: Option<RunCalibration>,
 }
 
-/// The calibration of a run, as its run-start record gives it. A value is `None` (null) when
-/// the record does not carry it (the tare reference, servo map and amplifier full scale came
-/// with setup mode: a firmware built before it does not send them) or is not a number.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct RunCalibration {
-    /// T1 zero (after the tare), ADC counts.
-    pub t1_zero: Option<f64>,
-    /// T1 sensitivity, N per count.
-    pub t1_n_per_count: Option<f64>,
-    /// T2 zero (after the tare), ADC counts.
-    pub t2_zero: Option<f64>,
-    /// T2 sensitivity, N per count.
-    pub t2_n_per_count: Option<f64>,
-    /// Force both channels carry during the tare, N.
-    pub tare_reference_n: Option<f64>,
-    /// Servo pulse at 0°, µs.
-    pub servo_min_us: Option<f64>,
-    /// Servo pulse at `servo_max_deg`, µs.
-    pub servo_max_us: Option<f64>,
-    /// Servo angle at `servo_max_us`, deg.
-    pub servo_max_deg: Option<f64>,
-    /// Amplifier gain, V per V of control.
-    pub amp_gain: Option<f64>,
-    /// Amplifier control voltage at full duty, V.
-    pub amp_full_scale_v: Option<f64>,
-}
+/// The calibration of a run, as its run-start record gives it: every calibration setting of
+/// the wire schema, by its name and in its order (`t1_zero`, `t1_n_per_count`, …, written as a
+/// JSON object). A value is `None` (null) when the record does not carry it (the tare
+/// reference, servo map and amplifier full scale came with setup mode: a firmware built before
+/// it does not send them) or is not a number.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunCalibration(pub Vec<(&'static str, Option<f64>)>);
 
 impl RunCalibration {
-    /// From a run-start record's calibration; `sent(field)` says whether the record carries
+    /// From a run-start record's settings; `sent(field)` says whether the record carries
     /// that field (by its name in the record).
-    pub fn of(c: &firmware::Calibration, sent: impl Fn(&str) -> bool) -> RunCalibration {
-        let v = |name: &str, x: f32| {
-            Some(super::files::decimal(x)).filter(|d| d.is_finite() && sent(name))
+    pub fn of(s: &firmware::Settings, sent: impl Fn(&str) -> bool) -> RunCalibration {
+        let value = |setting: Setting| {
+            let v = super::files::decimal(f32::from_bits(s.get(setting)));
+            Some(v).filter(|d| d.is_finite() && sent(setting.name()))
         };
-        RunCalibration {
-            t1_zero: v("t1_zero", c.t1.zero_counts),
-            t1_n_per_count: v("t1_n_per_count", c.t1.n_per_count),
-            t2_zero: v("t2_zero", c.t2.zero_counts),
-            t2_n_per_count: v("t2_n_per_count", c.t2.n_per_count),
-            tare_reference_n: v("tare_reference_n", c.tare_reference_n),
-            servo_min_us: v("servo_min_us", c.servo.pulse_at_min_us),
-            servo_max_us: v("servo_max_us", c.servo.pulse_at_max_us),
-            servo_max_deg: v("servo_max_deg", c.servo.max_deg),
-            amp_gain: v("amp_gain", c.amp.amp_gain),
-            amp_full_scale_v: v("amp_full_scale_v", c.amp.full_scale_v),
+        RunCalibration(
+            Setting::ALL
+                .iter()
+                .filter(|s| s.group() == Group::Calibration)
+                .map(|&setting| (setting.name(), value(setting)))
+                .collect(),
+        )
+    }
+
+    /// One value by its setting's name (`None` for a name it lacks or a value not sent).
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.0
+            .iter()
+            .find(|(n, _)| *n == name)
+            .and_then(|(_, v)| *v)
+    }
+}
+
+impl Serialize for RunCalibration {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, value) in &self.0 {
+            map.serialize_entry(name, value)?;
         }
+        map.end()
     }
 }
 
