@@ -182,11 +182,24 @@ impl Summary {
 
     /// The human report (a few lines, for stderr).
     pub fn human(&self, dir: &Path) -> String {
+        let mut lines = vec![self.totals_line(dir)];
+        lines.extend(self.setup_line());
+        lines.extend(self.damage_lines());
+        lines.extend(self.incomplete_line(dir));
+        lines
+            .iter()
+            .map(|l| format!("capstan log: {l}"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
+    /// Runs, pairs, samples, faults and messages, from how many bytes, and where the files are.
+    fn totals_line(&self, dir: &Path) -> String {
         let r = &self.records;
         let complete = self.runs.iter().filter(|r| r.complete).count();
-        let mut s = format!(
-            "capstan log: {} run(s) ({} complete), {} pairs, {} raw samples, {} faults, {} \
-             messages from {} bytes ({}); files in {}",
+        format!(
+            "{} run(s) ({} complete), {} pairs, {} raw samples, {} faults, {} messages from {} \
+             bytes ({}); files in {}",
             self.runs.len(),
             complete,
             r.pair,
@@ -196,19 +209,27 @@ impl Summary {
             self.bytes,
             self.stopped,
             dir.display()
-        );
-        if r.setup() > 0 {
-            s += &format!(
-                "\ncapstan log: setup mode: {} settings report(s) ({SETTINGS_CSV}), {} live \
-                 reading(s) ({LIVE_CSV}), {} command reply record(s) ({MESSAGES_TXT})",
+        )
+    }
+
+    /// The setup-mode records and their files, if any came.
+    fn setup_line(&self) -> Option<String> {
+        let r = &self.records;
+        (r.setup() > 0).then(|| {
+            format!(
+                "setup mode: {} settings report(s) ({SETTINGS_CSV}), {} live reading(s) \
+                 ({LIVE_CSV}), {} command reply record(s) ({MESSAGES_TXT})",
                 r.settings, r.live, r.reply
-            );
-        }
+            )
+        })
+    }
+
+    /// What the stream lost or got wrong: gaps, bad frames, a cut-off tail, restarts,
+    /// records out of order, and a start after the board's first record.
+    fn damage_lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
         if self.missing_records > 0 {
-            let places: Vec<String> = self
-                .gaps
-                .iter()
-                .take(5)
+            let places: Vec<String> = (self.gaps.iter().take(5))
                 .map(|g| {
                     format!(
                         "{} after seq {} (byte {})",
@@ -217,64 +238,72 @@ impl Summary {
                 })
                 .collect();
             let more = if self.gaps.len() > 5 { ", ..." } else { "" };
-            s += &format!(
-                "\ncapstan log: LOST {} record(s) in {} gap(s): {}{more}",
+            lines.push(format!(
+                "LOST {} record(s) in {} gap(s): {}{more}",
                 self.missing_records,
                 self.gaps.len(),
                 places.join("; ")
-            );
+            ));
         }
-        if self.bad_frames > 0 {
-            let first = &self.bad_frame_examples[0];
-            s += &format!(
-                "\ncapstan log: {} frame(s) did not decode; first: frame {} at byte {}: {}",
+        if let Some(first) = self
+            .bad_frame_examples
+            .first()
+            .filter(|_| self.bad_frames > 0)
+        {
+            lines.push(format!(
+                "{} frame(s) did not decode; first: frame {} at byte {}: {}",
                 self.bad_frames, first.frame, first.byte_offset, first.reason
-            );
+            ));
         }
         if let Some(t) = self.truncated_tail {
-            s += &format!(
-                "\ncapstan log: the stream ends inside a frame ({} bytes from byte {} dropped)",
+            lines.push(format!(
+                "the stream ends inside a frame ({} bytes from byte {} dropped)",
                 t.bytes, t.byte_offset
-            );
+            ));
         }
-        for rs in &self.restarts {
-            s += &format!(
-                "\ncapstan log: the board restarted after seq {} (byte {})",
+        lines.extend(self.restarts.iter().map(|rs| {
+            format!(
+                "the board restarted after seq {} (byte {})",
                 rs.after_seq, rs.byte_offset
-            );
-        }
-        if !self.backwards.is_empty() {
-            s += &format!(
-                "\ncapstan log: {} record(s) numbered out of order (first: seq {} where {} was expected)",
+            )
+        }));
+        if let Some(b) = self.backwards.first() {
+            lines.push(format!(
+                "{} record(s) numbered out of order (first: seq {} where {} was expected)",
                 self.backwards.len(),
-                self.backwards[0].seq,
-                self.backwards[0].expected_seq
-            );
+                b.seq,
+                b.expected_seq
+            ));
         }
         if let Some(first) = self.first_seq.filter(|&s| s != 0) {
-            s += &format!(
-                "\ncapstan log: the stream joins the board at seq {first}: records before it were \
-                 sent before logging began"
-            );
+            lines.push(format!(
+                "the stream joins the board at seq {first}: records before it were sent before \
+                 logging began"
+            ));
         }
-        if self.pairs_incomplete > 0 {
-            // The stream to decode again: the copy the session saved (from a board or stdin),
-            // or the file it was decoded from.
-            let saved = dir.join(STREAM_FILE);
-            let from = if saved.exists() {
-                saved.display().to_string()
-            } else {
-                self.source.clone()
-            };
-            s += &format!(
-                "\ncapstan log: {} pair(s) lack a set-up value or their run number and are in \
-                 {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; decode the stream again with \
-                 --wrap-deg/--diameter-mm/--drive-v into another directory (capstan log \
-                 --elf {} --from {from} --out NEW_DIR --wrap-deg ...)",
-                self.pairs_incomplete, self.elf
-            );
+        lines
+    }
+
+    /// Pairs kept out of pairs.csv, and how to decode them again with the missing values.
+    fn incomplete_line(&self, dir: &Path) -> Option<String> {
+        if self.pairs_incomplete == 0 {
+            return None;
         }
-        s
+        // The stream to decode again: the copy the session saved (from a board or stdin),
+        // or the file it was decoded from.
+        let saved = dir.join(STREAM_FILE);
+        let from = if saved.exists() {
+            saved.display().to_string()
+        } else {
+            self.source.clone()
+        };
+        Some(format!(
+            "{} pair(s) lack a set-up value or their run number and are in \
+             {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; decode the stream again with \
+             --wrap-deg/--diameter-mm/--drive-v into another directory (capstan log \
+             --elf {} --from {from} --out NEW_DIR --wrap-deg ...)",
+            self.pairs_incomplete, self.elf
+        ))
     }
 }
 

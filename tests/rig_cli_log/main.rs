@@ -314,7 +314,10 @@ fn a_run_start_without_the_newer_calibration_fields_leaves_them_null_in_the_summ
     logger.feed(&bytes).unwrap();
     let summary = logger.finish(&Stop::EndOfStream).unwrap();
     assert_eq!(summary.bad_frames, 0, "{:?}", summary.bad_frame_examples);
-    let cal = summary.runs[0].calibration.as_ref().expect("from run_start");
+    let cal = summary.runs[0]
+        .calibration
+        .as_ref()
+        .expect("from run_start");
     assert_eq!(cal.get("t1_n_per_count"), Some(0.015));
     assert_eq!(cal.get("amp_gain"), Some(4.0));
     assert_eq!(cal.get("servo_max_deg"), None);
