@@ -87,7 +87,7 @@ fn two_channels(args: &Args) -> anyhow::Result<Vec<ChannelSpec>> {
         );
     }
     let alternate = |i: usize| {
-        if i % 2 == 0 {
+        if i.is_multiple_of(2) {
             Order::Monotone
         } else {
             Order::Pulse
