@@ -23,7 +23,7 @@ use crate::fit::params::{ModelSpec, Param};
 use crate::fit::solve::fit_fixed;
 use crate::fit::stats;
 use capstan_data::Dataset;
-use capstan_friction::{Effect, EffectKind, Model, HEAT_TAU_S};
+use capstan_friction::{Effect, EffectKind, Model};
 use std::time::Instant;
 
 /// Options of [`diagnose_with`].
@@ -134,10 +134,9 @@ fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) 
     let mu_pop = base_fit.model(None).law.mu;
     let mut model = Model::euler_eytelwein(mu_pop);
     for e in found {
-        let value = match e.kind {
-            EffectKind::BendingStiffness => e.value.max(1e-8),
-            EffectKind::SensorGain => e.value.max(0.1),
-            _ => e.value,
+        let value = match e.kind.entry().population.floor {
+            Some(floor) => e.value.max(floor),
+            None => e.value,
         };
         Effect {
             kind: e.kind,
@@ -145,8 +144,8 @@ fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) 
         }
         .apply(&mut model);
     }
-    if found.iter().any(|e| e.kind == EffectKind::ContactHeating) {
-        model.law.heat_tau_s = HEAT_TAU_S;
+    for e in found {
+        (e.kind.entry().prepare)(&mut model);
     }
     // One mu with the effects at the sizes the engine found (refitting them all on the
     // population scale is the analysis's job, `capstan analyze`).

@@ -7,27 +7,9 @@ use crate::diagnose::words::{list, parameter, sig};
 use crate::evidence::Design;
 use capstan_friction::EffectKind;
 
-/// What each mechanism of the catalogue is, physically.
+/// What each mechanism of the catalogue is, physically (its entry's title).
 pub fn title(kind: EffectKind) -> &'static str {
-    match kind {
-        EffectKind::None => "Euler-Eytelwein",
-        EffectKind::PressureFriction => {
-            "pressure-dependent friction (Howell's power law dT/dθ = k·Tⁿ, n < 1)"
-        }
-        EffectKind::BendingStiffness => {
-            "bending stiffness (the cord lifts off the capstan at low tension)"
-        }
-        EffectKind::T1Offset => "a loss or zero offset on the T1 (servo) path",
-        EffectKind::T2Offset => "a zero offset of the T2 sensor",
-        EffectKind::SensorGain => "a gain error of the T2 sensor relative to T1",
-        EffectKind::ThermalDrift => "a drift of mu with time since the trigger",
-        EffectKind::Wear => "wear or polishing: mu changing from run to run",
-        EffectKind::DiameterDependence => "a dependence of mu on the capstan diameter",
-        EffectKind::SpeedDependence => "a dependence of mu on the drive voltage (speed)",
-        EffectKind::ContactHeating => {
-            "contact heating: mu falling with the friction load T2 − T1 the contact carries"
-        }
-    }
+    kind.entry().title
 }
 
 /// A ΔBIC with its sign and one decimal ("not identified" if it could not be computed).
@@ -110,9 +92,12 @@ pub fn protocol_limits(d: &Design, named: &[EffectKind]) -> Vec<String> {
     if !d.columns.time_s {
         out.push("There is no time_s column: a drift with time cannot be tested (capstan diagnose --protocol-times takes the times from step with the thesis protocol).".to_string());
     }
-    if named.contains(&EffectKind::ContactHeating) {
-        out.push(format!("Contact heating is fitted with the catalogue's short load memory (τ = {} s): window means taken ≥ 1 s after each change cannot resolve a memory shorter than the settling, so a contact temperature that settles within a second cannot be told from a friction law that depends on the load itself. Logging the samples inside each dwell would show the transient.", capstan_friction::HEAT_TAU_S));
-    }
+    out.extend(
+        named
+            .iter()
+            .filter_map(|k| k.entry().named_note)
+            .map(String::from),
+    );
     if d.wraps().len() < 3 {
         out.push("Fewer than three wraps: an offset on T1 and one on T2 (and a gain) are told apart only across wraps.".to_string());
     }
