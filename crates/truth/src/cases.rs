@@ -305,12 +305,35 @@ fn droppable(kinds: &[EffectKind], cfg: &CampaignConfig) -> Vec<&'static str> {
     v
 }
 
-/// Case `index` of `class` from `master_seed`.
-pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
-    let seed = derive_seed(master_seed, &[class as u64, index]);
-    let mut rng = Rng::new(seed);
-    let catalogue: Vec<EffectKind> = EffectKind::ALL.into_iter().skip(1).collect();
-    let (kinds, outside): (Vec<EffectKind>, Option<&'static str>) = match class {
+/// The effects the suite was calibrated with: the first ten of the catalogue. An effect added
+/// later gets cases of its own after these ([`ADDED_CASES`]), so every earlier case keeps its
+/// seed, its truth and its draws.
+pub const CALIBRATED: usize = 10;
+
+/// Cases of each effect added after [`CALIBRATED`]: 11 at a size that matters, 3 small, and
+/// one pair with each calibrated effect, drawn after the classes' first [`COUNTS`].
+pub const ADDED_CASES: [(Class, u64); 3] = [
+    (Class::Single, 11),
+    (Class::SmallSingle, 3),
+    (Class::Pair, CALIBRATED as u64),
+];
+
+/// The truth of case `index` of `class`: its effects and what outside the catalogue it holds.
+fn truth(rng: &mut Rng, class: Class, index: u64) -> (Vec<EffectKind>, Option<&'static str>) {
+    let all: Vec<EffectKind> = EffectKind::ALL.into_iter().skip(1).collect();
+    let (catalogue, added) = all.split_at(CALIBRATED.min(all.len()));
+    let base = COUNTS.iter().find(|c| c.0 == class).map_or(0, |c| c.1);
+    if index >= base && !added.is_empty() {
+        // An added effect's own cases.
+        let per = ADDED_CASES.iter().find(|c| c.0 == class).map_or(1, |c| c.1);
+        let k = added[((index - base) / per) as usize % added.len()];
+        let partner = catalogue[((index - base) % per) as usize % catalogue.len()];
+        return match class {
+            Class::Pair => (vec![k, partner], None),
+            _ => (vec![k], None),
+        };
+    }
+    match class {
         Class::Clean => (Vec::new(), None),
         Class::Single | Class::SmallSingle => {
             (vec![catalogue[index as usize % catalogue.len()]], None)
@@ -335,7 +358,14 @@ pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
             Vec::new(),
             Some(Unmodelled::NAMES[index as usize % Unmodelled::NAMES.len()]),
         ),
-    };
+    }
+}
+
+/// Case `index` of `class` from `master_seed`.
+pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
+    let seed = derive_seed(master_seed, &[class as u64, index]);
+    let mut rng = Rng::new(seed);
+    let (kinds, outside) = truth(&mut rng, class, index);
     let mut cfg = design(&mut rng, &kinds, outside == Some("hysteresis"));
     let small = class == Class::SmallSingle;
     let mut effects: Vec<Effect> = kinds
@@ -375,8 +405,8 @@ pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
     }
 }
 
-/// How many cases of each class [`draw_cases`] draws: 60 clean, 10 of every catalogue effect
-/// at a size that matters and 3 small, 66 pairs, 48 outside — 317 in all.
+/// How many cases of each class [`draw_cases`] draws for the [`CALIBRATED`] effects: 60 clean,
+/// 11 of every effect at a size that matters and 3-4 small, 66 pairs, 48 outside — 317 in all.
 pub const COUNTS: [(Class, u64); 5] = [
     (Class::Clean, 60),
     (Class::Single, 110),
@@ -385,10 +415,18 @@ pub const COUNTS: [(Class, u64); 5] = [
     (Class::Outside, 48),
 ];
 
-/// Every case of `master_seed` (see [`COUNTS`]).
+/// Every case of `master_seed`: those of [`COUNTS`], then those of the effects added since
+/// the calibration ([`ADDED_CASES`]).
 pub fn draw_cases(master_seed: u64) -> Vec<Case> {
+    let added = (EffectKind::ALL.len() - 1).saturating_sub(CALIBRATED) as u64;
+    let extra = ADDED_CASES.iter().map(|&(class, per)| {
+        let base = COUNTS.iter().find(|c| c.0 == class).map_or(0, |c| c.1);
+        (class, base, base + per * added)
+    });
     COUNTS
         .iter()
-        .flat_map(|&(class, n)| (0..n).map(move |i| draw_case(master_seed, class, i)))
+        .map(|&(class, n)| (class, 0, n))
+        .chain(extra)
+        .flat_map(|(class, from, to)| (from..to).map(move |i| draw_case(master_seed, class, i)))
         .collect()
 }
