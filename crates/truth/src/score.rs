@@ -1,5 +1,7 @@
-//! Scoring the diagnosis on generated cases ([`super::cases`]): run them, compare the answer
-//! with the planted truth, and compute the acceptance figures.
+//! The planted-truth scorer: run generated cases ([`super::cases`]), compare the answer (the
+//! verdict layer's, as `capstan diagnose` renders it) with the planted truth, and compute the
+//! acceptance figures. The diagnose suite scores by it, and so does `capstan analyze
+//! --validate` ([`super::validate`]), on the same rule ([`Outcome::correct`]).
 //!
 //! * single effects at sizes that matter: named (the found set is exactly the effect, nothing
 //!   unexplained) in ≥ 90 %, the parameter within 25 % for ≥ 90 % of those;
@@ -63,6 +65,11 @@ impl Outcome {
             Class::Outside => self.unexplained,
             _ => !self.unexplained && self.found_kinds() == self.truth_kinds(),
         }
+    }
+
+    /// A clean set's alarm: anything named, or structure flagged.
+    pub fn alarm(&self) -> bool {
+        self.unexplained || !self.found.is_empty()
     }
 
     /// The planted effects not among those named.
@@ -153,7 +160,11 @@ fn outcome(
     data: &capstan_data::Dataset,
     diagnose: &dyn Fn(&capstan_data::Dataset) -> Diagnosis,
 ) -> Outcome {
-    let d = diagnose(data);
+    judge(case, data.pairs.len(), &diagnose(data))
+}
+
+/// The outcome of the answer `d` on `case` (whose data have `rows` rows).
+pub fn judge(case: &Case, rows: usize, d: &Diagnosis) -> Outcome {
     Outcome {
         class: case.class,
         truth: case.effects.clone(),
@@ -182,7 +193,7 @@ fn outcome(
             })
             .collect::<Vec<_>>()
             .join(", "),
-        rows: data.pairs.len(),
+        rows,
         elapsed_s: d.elapsed_s,
     }
 }
@@ -307,7 +318,7 @@ impl Metrics {
             pairs: count(Class::Pair, &|o| o.correct()),
             outside: count(Class::Outside, &|o| o.unexplained),
             outside_named: count(Class::Outside, &|o| !o.unexplained && !o.found.is_empty()),
-            clean_alarms: count(Class::Clean, &|o| o.unexplained || !o.found.is_empty()),
+            clean_alarms: count(Class::Clean, &|o| o.alarm()),
             rival_doubts: count_of(&right, &|o| !o.rivals.is_empty()),
             rival_catches: count_of(&swapped, &|o| {
                 let truth = o.truth_kinds();
