@@ -3,6 +3,7 @@
 //! `capstan-report`, `capstan-link`, `capstan-outdir`, `host-sim`).
 //!
 //! * [`cli`]: one module per command, each with its `Args` and `run`;
+//! * [`condition`]: a raw time series into pairs by the firmware's rules;
 //! * [`logger`]: the files of a logged session, written as the records arrive;
 //! * [`outputs`]: how every command opens its output directory;
 //! * [`simboard`]: the simulated board behind `rig --sim DIR` and `log --sim DIR`;
@@ -12,6 +13,7 @@
 //! directly.
 
 pub mod cli;
+pub mod condition;
 pub mod logger;
 pub mod outputs;
 pub mod simboard;
