@@ -239,7 +239,11 @@ impl<'f> Logger<'f> {
         // Records decoded on the host (no firmware table) carry every field.
         let sent =
             |field: &str| fw.is_none_or(|fw| fw.record_has_field(RecordKind::RunStart, field));
-        summary.calibration = Some(RunCalibration::of(&s.calibration, sent));
+        let settings = firmware::Settings {
+            protocol: s.protocol,
+            calibration: s.calibration,
+        };
+        summary.calibration = Some(RunCalibration::of(&settings, sent));
         self.current = Some(Current {
             index: self.runs.len(),
             diameter: summary.capstan_diameter_mm.value,
