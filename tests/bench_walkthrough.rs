@@ -122,3 +122,67 @@ fn the_readme_walkthrough_runs_on_the_simulated_board_and_stores_the_true_calibr
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+fn rig(dir: &Path, board: &str, words: &str) -> (bool, String) {
+    let mut args = vec!["rig", "--sim", board];
+    args.extend(words.split(' '));
+    let o = Command::new(env!("CARGO_BIN_EXE_capstan"))
+        .args(&args)
+        .current_dir(dir)
+        .output()
+        .expect("capstan runs");
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    (o.status.success(), text)
+}
+
+/// The rehearsal goes through the firmware's safety rules, not around them: a zero under load
+/// that would blind the over-force check is refused, a weight over the limit latches a fault,
+/// a run needs `ack` after it, a tare under load ends the run, and the board keeps all of
+/// that between commands.
+#[test]
+fn the_simulated_board_keeps_the_safety_rules_between_commands() {
+    let dir = tmp("safety");
+    let ok = |words: &str| {
+        let (ok, text) = rig(&dir, "b", words);
+        assert!(ok, "`rig {words}` failed: {text}");
+        text
+    };
+    let refused = |words: &str, why: &str| {
+        let (ok, text) = rig(&dir, "b", words);
+        assert!(!ok && text.contains(why), "`rig {words}`: {text}");
+    };
+    ok("setup");
+    ok("bench load t1 30");
+    refused("zero", "over-force limit would read above the rail");
+    assert!(ok("bench load t1 47").contains("FAULT over_force on T1"));
+    refused("run", "a fault is latched");
+    ok("bench unload");
+    // Still latched in the next command: the board kept it.
+    refused("setup", "a fault is latched");
+    ok("ack");
+    ok("bench load t2 20");
+    let log = |out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_capstan"))
+            .args(["log", "--sim", "b", "--start", "--runs", "1", "--out", out])
+            .current_dir(&dir)
+            .output()
+            .expect("capstan runs")
+    };
+    let o = log("loaded");
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(text.contains("FAULT tare_load"), "{text}");
+    ok("bench unload");
+    // The tare fault is latched: the run command is refused, no run is recorded.
+    let o = log("unacknowledged");
+    assert!(
+        !o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    ok("ack");
+    let o = log("clean");
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{text}");
+    assert!(text.contains("12 pairs"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -171,11 +171,15 @@ fn rig(args: &Args) -> anyhow::Result<()> {
             if cmd == Command::Run {
                 // The probe serves one program at a time and the board's log buffer holds
                 // ~0.3 s: a run started here is not recorded unless capstan log starts it.
-                note(
+                let board = if args.sim.sim.is_some() {
+                    "--sim DIR"
+                } else {
+                    "--chip ... --elf ... --no-flash"
+                };
+                note(format!(
                     "note: nothing records this run; to record it, start it with `capstan log \
-                     --chip ... --elf ... --no-flash --start --out DIR` instead"
-                        .into(),
-                );
+                     {board} --start --out SESSION` instead"
+                ));
             }
             with_link(args, |link| send(link, &line, &cmd, &mut out, &mut note))
         }
