@@ -198,6 +198,28 @@ fn check_order(order: &str) {
             );
         }
     }
+    // Placed by the protocol instead of found: the firmware's windows, the same pairs.
+    let proto = dir.join("protocol");
+    let o = capstan(&[
+        "condition",
+        export.to_str().unwrap(),
+        "--out",
+        proto.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+        "--first-change-s",
+        "10.5",
+        "--dwell-s",
+        "10",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for ((step, n, t1, sd1, _, _, _), (_, fw1, _)) in levels(&proto).iter().zip(&fw_pairs) {
+        let tol = 4.0 * sd1 / n.sqrt() + 0.005;
+        assert!(
+            (t1 - fw1).abs() <= tol,
+            "{order} protocol step {step}: {t1} against {fw1}"
+        );
+    }
     // The pairs are what analyze reads.
     let pairs = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
     assert!(pairs.starts_with("capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n"));
@@ -222,7 +244,7 @@ fn a_level_that_cannot_be_found_is_reported_never_dropped() {
     let dir = tmp("missing");
     let (_, raw) = simulate(&dir, "monotone");
     let text = logger_pro_export(&raw, 3);
-    // Step 5 of the thesis protocol: 40.5 to 50.5 s after the trigger. Cut 41-50 s.
+    // Step 4 of the thesis protocol: 40.5 to 50.5 s after the trigger. Cut 41-50 s.
     let cut: String = text
         .lines()
         .filter(
@@ -261,15 +283,15 @@ fn a_level_that_cannot_be_found_is_reported_never_dropped() {
         out.join("levels.csv").is_file(),
         "the levels found are kept"
     );
-    let (o, out) = run(&["--first-change-s", "0.5", "--dwell-s", "10"], "protocol");
+    let (o, out) = run(&["--first-change-s", "10.5", "--dwell-s", "10"], "protocol");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{stderr}");
     let lv = levels(&out);
     assert_eq!(lv.len(), 12, "every level of the protocol is listed");
     let missing: Vec<_> = lv.iter().filter(|l| l.6 != "ok").map(|l| l.0).collect();
-    assert_eq!(missing, vec![5], "{lv:?}");
+    assert_eq!(missing, vec![4], "{lv:?}");
     assert!(
-        stderr.contains("step  5") && stderr.contains("not found"),
+        stderr.contains("step  4") && stderr.contains("not found"),
         "{stderr}"
     );
     let pairs = std::fs::read_to_string(out.join("pairs.csv")).unwrap();

@@ -20,7 +20,7 @@ INPUTS
 LEVELS
   By default the level changes are found from the tensions themselves (robust to noise,
   spikes and transients; any order: monotone, up-down, pulse). Or from the protocol:
-  --first-change-s S --dwell-s S (the thesis: 0.5 after the trigger, 10), or from a trigger
+  --first-change-s S --dwell-s S (the thesis: 10.5 after the trigger, 10), or from a trigger
   column (--trigger-column NAME: its rising edge is time zero). The rest before the first
   level and after the last gives no pair; each level's window is the firmware's: from
   --window-after-ms after the change to --window-before-ms before the next (2000 and 1000).
@@ -57,7 +57,8 @@ pub struct Args {
     #[arg(long, value_name = "NAME")]
     pub run_column: Option<String>,
     /// Protocol: the first level change (rest to level 1), s of the file's time (or after the
-    /// trigger's edge). With --dwell-s: the levels from the protocol, not found.
+    /// trigger's edge; default there the firmware's 10.5). With --dwell-s: the levels from the
+    /// protocol, not found.
     #[arg(
         long,
         value_name = "S",
@@ -111,7 +112,8 @@ fn settings(a: &Args) -> anyhow::Result<Settings> {
     let after = a.window_after_ms.map_or(after, |m| m as f64 / 1e3);
     let before = a.window_before_ms.map_or(before, |m| m as f64 / 1e3);
     let p = firmware::Protocol::default();
-    let proto_first = p.trigger_ms as f64 / 1e3;
+    // Step 0 (rest) starts `trigger_ms` after the trigger's edge; level 1 a dwell later.
+    let proto_first = (p.trigger_ms + p.dwell_ms) as f64 / 1e3;
     let levels = a.levels.unwrap_or(p.levels());
     let placement = match (a.first_change_s, a.dwell_s, &a.trigger_column) {
         (Some(first), Some(dwell), None) => Placement::Protocol {

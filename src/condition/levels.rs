@@ -153,9 +153,22 @@ fn detect(s: &Series, min_dwell_s: f64) -> Vec<f64> {
         kept.retain(|&i| score[i] >= RELATIVE_FLOOR * typical);
     }
     kept.sort_unstable();
-    // A change happens between the samples either side of the peak: its time is the first
-    // sample of the new level.
-    kept.iter().map(|&i| s.t_s[i]).collect()
+    // Around a clean step the median difference is flat for about h samples (either median
+    // flips once more than half its window is on the new level): the change is the middle of
+    // the run of samples within 80 % of the peak, the first sample of the new level.
+    kept.iter()
+        .map(|&i| {
+            let floor = 0.8 * score[i];
+            let (mut a, mut b) = (i, i);
+            while a > 0 && score[a - 1] >= floor {
+                a -= 1;
+            }
+            while b + 1 < n && score[b + 1] >= floor {
+                b += 1;
+            }
+            s.t_s[(a + b).div_ceil(2)]
+        })
+        .collect()
 }
 
 /// At each sample i: |median(x[i..i+h]) - median(x[i-h..i])| / (noise·√(π/2h)·√2), the
@@ -181,4 +194,91 @@ fn change_score(s: &Series, h: usize) -> Vec<f64> {
         }
     }
     score
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 30 Hz, the thesis protocol's timing (rest, 12 levels of 10 s from 10.5 s, rest), the
+    /// levels in `order`, white noise and a spike train; the trigger high from 0 to 0.5 s
+    /// after a 2 s lead-in.
+    fn series(order: &[u32], noise: f64, lead_s: f64) -> Series {
+        let mut s = Series::default();
+        let mut x = 12345u64;
+        let mut gauss = || {
+            let mut u = || {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+            };
+            let (a, b) = (u(), u());
+            (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+        };
+        for i in 0..((140.0 + lead_s) * 30.0) as usize {
+            let t = i as f64 / 30.0;
+            let since = t - lead_s;
+            let k = ((since - 0.5) / 10.0).floor();
+            let level = if (1.0..=12.0).contains(&k) {
+                order[k as usize - 1] as f64
+            } else {
+                0.0
+            };
+            let spike = if i % 97 == 0 { 3.0 } else { 0.0 };
+            s.t_s.push(t);
+            s.t1_n.push(1.5 * level + 0.3 + noise * gauss() + spike);
+            s.t2_n.push(3.0 * level + 0.3 + noise * gauss());
+            s.trigger.push(if (0.0..0.5).contains(&since) {
+                5.0
+            } else {
+                0.0
+            });
+            s.line.push(i as u64 + 2);
+        }
+        s
+    }
+
+    fn starts(segs: &[(f64, f64)]) -> Vec<f64> {
+        segs.iter().skip(1).map(|s| s.0).collect()
+    }
+
+    #[test]
+    fn changes_are_found_in_any_order_through_noise_and_spikes() {
+        let pulse = [1, 12, 2, 11, 3, 10, 4, 9, 5, 8, 6, 7];
+        let updown = [2, 4, 6, 8, 10, 12, 11, 9, 7, 5, 3, 1];
+        for order in [pulse, updown] {
+            let s = series(&order, 0.08, 0.0);
+            let segs = segments(&s, &Placement::Detect { min_dwell_s: 3.0 }).unwrap();
+            let found = starts(&segs);
+            assert_eq!(found.len(), 13, "{order:?}: {found:?}");
+            for (k, t) in found.iter().enumerate() {
+                let want = 10.5 + 10.0 * k as f64;
+                assert!(
+                    (t - want).abs() <= 2.0 / 30.0 + 1e-9,
+                    "{order:?}: change {k} at {t}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_trigger_edge_is_time_zero() {
+        let s = series(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12], 0.02, 2.0);
+        let how = Placement::Trigger {
+            first_s: 10.5,
+            dwell_s: 10.0,
+            levels: 12,
+        };
+        let segs = segments(&s, &how).unwrap();
+        assert_eq!(segs.len(), 14);
+        assert!((segs[1].0 - 12.5).abs() < 1e-9, "{segs:?}");
+        assert!((segs[13].0 - 132.5).abs() < 1e-9, "{segs:?}");
+        let mut flat = s.clone();
+        flat.trigger.iter_mut().for_each(|v| *v = 0.0);
+        assert!(
+            segments(&flat, &how).is_err(),
+            "a trigger that never rises is said"
+        );
+    }
 }
