@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod analyze;
+pub mod condition;
 pub mod diagnose;
 pub mod log;
 pub mod rig;
@@ -33,6 +34,8 @@ pub enum Command {
     /// Set up the rig from the host: live forces, jog the servo, calibrate, set the protocol,
     /// store it on the board, start a run.
     Rig(rig::Args),
+    /// Condition a raw time series (raw.csv, a logger's CSV or Logger Pro export) into pairs.
+    Condition(condition::Args),
 }
 
 /// Run a parsed command line.
@@ -45,5 +48,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Diagnose(a) => diagnose::run(a),
         Command::Log(a) => log::run(a),
         Command::Rig(a) => rig::run(a),
+        Command::Condition(a) => condition::run(a),
     }
 }
