@@ -58,6 +58,24 @@ pub enum Var {
     DriveV,
 }
 
+impl Var {
+    /// Its name in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Var::T1 => "t1",
+            Var::T2 => "t2",
+            Var::Load => "load",
+            Var::Wrap => "wrap",
+            Var::Diameter => "diameter",
+            Var::Time => "time",
+            Var::Run => "run",
+            Var::Step => "step",
+            Var::StepDirection => "step_direction",
+            Var::DriveV => "drive_v",
+        }
+    }
+}
+
 /// The physical sign a term's parameter must keep (outside it, it is not that physics).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]

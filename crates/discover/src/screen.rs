@@ -37,6 +37,9 @@ pub struct Screen {
     pub c_hat: f64,
     /// θ̂ has the term's physical sign.
     pub sign_ok: bool,
+    /// Share of its column (each run's mu projected out) the model's columns explain:
+    /// 1 − 1/VIF (within-run terms; 0 between).
+    pub r2_model: f64,
 }
 
 /// Projection of columns off every run's mu and the model's shared columns (weighted).

@@ -14,6 +14,12 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+/// A proposed term must leave no lack of fit against the replicate runs at this level.
+pub const LOF_ALPHA: f64 = 0.01;
+
+/// The default [`Options::max_r2_model`]: VIF 100.
+pub const MAX_R2_MODEL: f64 = 0.99;
+
 /// How to search.
 #[derive(Clone, Copy, Debug)]
 pub struct Options {
@@ -27,6 +33,10 @@ pub struct Options {
     pub resamples: usize,
     /// Least stability a proposed term needs.
     pub min_stability: f64,
+    /// A within-run term whose column the model's columns explain beyond this share
+    /// (1 − 1/VIF) is not separable from them at this design: it is screened and shown, never
+    /// proposed.
+    pub max_r2_model: f64,
 }
 
 impl Default for Options {
@@ -37,6 +47,7 @@ impl Default for Options {
             max_terms: 2,
             resamples: 100,
             min_stability: 0.5,
+            max_r2_model: MAX_R2_MODEL,
         }
     }
 }
@@ -145,8 +156,27 @@ pub struct Search {
     pub resamples: usize,
     /// Least stability.
     pub min_stability: f64,
-    /// Every testable term's screen given the catalogue, best first: (name, ΔBIC, θ̂).
-    pub screen: Vec<(&'static str, f64, f64)>,
+    /// Every testable term's screen given the catalogue, best first.
+    pub screen: Vec<ScreenRow>,
+}
+
+/// One term's screen given the catalogue.
+#[derive(Clone, Debug, Serialize)]
+pub struct ScreenRow {
+    /// Library name.
+    pub name: &'static str,
+    /// Where its evidence comes from.
+    pub level: Level,
+    /// ΔBIC given the catalogue (before the search penalty).
+    pub delta_bic: f64,
+    /// θ̂ (first order).
+    pub theta: f64,
+    /// Its cluster-robust standard error.
+    pub se: f64,
+    /// θ̂ keeps the term's physical sign.
+    pub sign_ok: bool,
+    /// Share of its column the catalogue's columns explain within runs (1 − 1/VIF).
+    pub r2_model: f64,
 }
 
 /// The answer of `capstan discover`.
@@ -295,11 +325,15 @@ pub fn discover_assessed(
     };
     st.e = Projector::new(&base, &st.shared).project(&base, &base.e);
     let lof_before = a.adequacy.lack_of_fit.clone();
-    let rule = a.adequacy.rule;
-    let lof_open = |l: &Option<LackOfFit>| {
-        l.as_ref()
-            .is_some_and(|l| l.p < rule.alpha && l.systematic_ratio >= rule.min_ratio)
-    };
+    if std::env::var("CAPSTAN_DISCOVER_DEBUG").is_ok() {
+        let z: Vec<f64> = (0..d.n()).map(|i| st.e[i] * base.w[i].sqrt()).collect();
+        let z0: Vec<f64> = (0..d.n()).map(|i| base.e[i] * base.w[i].sqrt()).collect();
+        let diff: f64 = (0..d.n()).map(|i| (st.e[i] - base.e[i]).powi(2)).sum::<f64>().sqrt();
+        eprintln!("engine lof {:?}\nmine proj {:?}\nmine raw {:?}\n|proj - raw| {diff}", lof_before, lack_of_fit(d, &z, st.shared.len()), lack_of_fit(d, &z0, st.shared.len()));
+    }
+    // After a term, any significant lack of fit keeps "unexplained" (the spike's rule: a
+    // partial mimic leaves the replicates disagreeing with the model, whatever its size).
+    let lof_open = |l: &Option<LackOfFit>| l.as_ref().is_some_and(|l| l.p < LOF_ALPHA);
     let mut terms: Vec<Proposed> = Vec::new();
     let mut declined: Vec<Declined> = Vec::new();
     let mut first_screen = Vec::new();
@@ -311,12 +345,20 @@ pub fn discover_assessed(
         if step == 1 {
             first_screen = screens
                 .iter()
-                .map(|s| (LIBRARY[s.term].name, s.delta_bic, s.theta))
+                .map(|s| ScreenRow {
+                    name: LIBRARY[s.term].name,
+                    level: s.level,
+                    delta_bic: s.delta_bic,
+                    theta: s.theta,
+                    se: s.se,
+                    sign_ok: s.sign_ok,
+                    r2_model: s.r2_model,
+                })
                 .collect();
         }
         let kf = step as f64;
         let bar = -threshold - 2.0 * opts.gamma * ((p - kf + 1.0) / kf).max(1.0).ln();
-        let Some(best) = screens.iter().find(|s| s.sign_ok).cloned() else {
+        let Some(best) = screens.iter().find(|s| s.sign_ok && s.r2_model <= opts.max_r2_model).cloned() else {
             break;
         };
         let t = &LIBRARY[best.term];
@@ -458,9 +500,13 @@ fn screen_all(base: &Base, testable: &[Testable], proj: &Projector, st: &State, 
         .filter(|c| !st.used.contains(&c.term))
         .filter_map(|c| {
             let t = &LIBRARY[c.term];
+            let mut r2 = 0.0;
             let (level, (theta, se, dbic, c_hat)) = match (&c.column, &c.g_run) {
                 (Some(x), _) => {
                     let xt = proj.project(base, x);
+                    let xa = screen::off_run_mu(base, x);
+                    let norm = |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
+                    r2 = 1.0 - norm(&xt) / norm(&xa).max(1e-300);
                     (Level::WithinRun, within_evidence(base, &xt, &st.e, st.shared.len())?)
                 }
                 (None, Some(g)) => {
@@ -477,6 +523,7 @@ fn screen_all(base: &Base, testable: &[Testable], proj: &Projector, st: &State, 
                 delta_bic: dbic,
                 c_hat,
                 sign_ok: sign_ok(t, theta),
+                r2_model: r2,
             })
         })
         .collect();

@@ -13,6 +13,7 @@
 
 pub mod cases;
 pub mod closed_loop;
+pub mod discover_cases;
 pub mod pairs;
 pub mod score;
 pub mod validate;
