@@ -36,9 +36,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     capstan_data::check_capstan_data(&data)?;
     // Lock the output directory before the work, not after it.
     let mut set = match &args.out {
-        Some(dir) => {
-            Some(crate::outputs::open_out(dir, "discover", &["discover.json"])?.stage()?)
-        }
+        Some(dir) => Some(crate::outputs::open_out(dir, "discover", &["discover.json"])?.stage()?),
         None => None,
     };
     let mut opts = Options::default();
@@ -141,8 +139,16 @@ pub fn summary(d: &Discovery) -> String {
             r.delta_bic,
             r.theta,
             r.se,
-            if r.sign_ok { "" } else { "  (wrong physical sign)" },
-            if r.r2_model > 0.99 { "  (not separable from the catalogue)" } else { "" }
+            if r.sign_ok {
+                ""
+            } else {
+                "  (wrong physical sign)"
+            },
+            if r.r2_model > 0.99 {
+                "  (not separable from the catalogue)"
+            } else {
+                ""
+            }
         );
     }
     for x in &d.declined {

@@ -14,6 +14,9 @@ fn main() {
     for o in &out {
         eprintln!("{}", o.describe);
     }
-    println!("seed {seed}, {per_kind} per kind, {:.0} s", t0.elapsed().as_secs_f64());
+    println!(
+        "seed {seed}, {per_kind} per kind, {:.0} s",
+        t0.elapsed().as_secs_f64()
+    );
     println!("{}", validation::table(&out));
 }

@@ -75,7 +75,14 @@ impl<'a> Base<'a> {
             .map(|&mu| run_model(&fit.maps, mu, &fit.theta))
             .collect();
         let (mut f0, mut slope) = (vec![0.0; n], vec![f64::NAN; n]);
-        predict_all(d, &models, (&d.t1, &d.t1_shape), None, &mut f0, Some(&mut slope));
+        predict_all(
+            d,
+            &models,
+            (&d.t1, &d.t1_shape),
+            None,
+            &mut f0,
+            Some(&mut slope),
+        );
         let hint = Some(Hint {
             t2: &f0,
             slope: Some(&slope),
@@ -101,10 +108,18 @@ impl<'a> Base<'a> {
         for j in 0..fit.k() {
             let map = fit.maps[j];
             let step = map.step();
-            let hb = if fit.theta[j] + step > map.hi { -step } else { step };
+            let hb = if fit.theta[j] + step > map.hi {
+                -step
+            } else {
+                step
+            };
             let mut th = fit.theta.clone();
             th[j] += hb;
-            let ms: Vec<Model> = fit.mu.iter().map(|&mu| run_model(&fit.maps, mu, &th)).collect();
+            let ms: Vec<Model> = fit
+                .mu
+                .iter()
+                .map(|&mu| run_model(&fit.maps, mu, &th))
+                .collect();
             predict_all(d, &ms, (&d.t1, &d.t1_shape), hint, &mut scratch, None);
             b.push((0..n).map(|i| (scratch[i] - f0[i]) / hb).collect());
         }

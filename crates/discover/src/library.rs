@@ -190,7 +190,7 @@ pub const LIBRARY: &[Term] = &[
         depends_on: &[Var::Wrap],
         sign: Sign::Free,
         reading: "beyond one full turn the cord lies on or against itself",
-        source: "rope-on-rope contact (e.g. Jung et al. 2008, capstan with self-contact)",
+        source: "rope-on-rope contact on multi-turn capstans (the issue-26 spike's reading; no closed form)",
         form: Form::Mu(|r| pos(r.wrap - TURN) / r.wrap),
     },
     Term {
@@ -202,7 +202,7 @@ pub const LIBRARY: &[Term] = &[
         depends_on: &[Var::Wrap, Var::Diameter],
         sign: Sign::NonNegative,
         reading: "every turn beyond the first shifts the cord by one cord diameter (a helix)",
-        source: "Konyukhov 2015, capstan on a helix: mu·cos α",
+        source: "Konyukhov's generalised Euler-Eytelwein for a rope on a helix (mu·cos α), as the spike cites",
         form: Form::Mu(|r| {
             let x = pos(r.wrap - TURN) / (TURN * 0.5 * r.diameter * r.wrap);
             -0.5 * x * x
@@ -481,7 +481,7 @@ pub const LIBRARY: &[Term] = &[
         depends_on: &[Var::T1, Var::Diameter],
         sign: Sign::NonNegative,
         reading: "bending hysteresis where the cord bends onto the capstan, ∝ B/R²",
-        source: "rope bending losses (Feyrer, Wire Ropes: loss ∝ bending energy ∝ 1/R²)",
+        source: "the bending energy of an elastic cord on a drum, ∝ B/R²",
         form: Form::T1(|r| -(r.diameter_mean / r.diameter).powi(2)),
     },
     Term {
@@ -505,7 +505,7 @@ pub const LIBRARY: &[Term] = &[
         depends_on: &[Var::T1, Var::Wrap, Var::Diameter],
         sign: Sign::NonNegative,
         reading: "a pressure-independent adhesive shear per length of contact (two-term friction)",
-        source: "Bowden and Tabor two-term friction law; capstan form as in Stuart 1961",
+        source: "Bowden and Tabor's two-term (adhesion + load) friction, integrated along the wrap",
         form: Form::Adhesion,
     },
 ];
@@ -524,7 +524,11 @@ mod tests {
         for (i, t) in LIBRARY.iter().enumerate() {
             assert!(!t.depends_on.is_empty(), "{}", t.name);
             assert!(!t.reading.is_empty() && !t.source.is_empty());
-            assert!(LIBRARY[i + 1..].iter().all(|u| u.name != t.name), "{}", t.name);
+            assert!(
+                LIBRARY[i + 1..].iter().all(|u| u.name != t.name),
+                "{}",
+                t.name
+            );
         }
         assert!(LIBRARY.len() >= 25);
     }

@@ -78,7 +78,10 @@ impl Projector {
         let shared: Vec<Vec<f64>> = cols.iter().map(|c| off_run_mu(base, c)).collect();
         let k = shared.len();
         let g = DMatrix::from_fn(k, k, |i, j| dot_w(&base.w, &shared[i], &shared[j]));
-        let inv = g.clone().try_inverse().unwrap_or_else(|| DMatrix::zeros(k, k));
+        let inv = g
+            .clone()
+            .try_inverse()
+            .unwrap_or_else(|| DMatrix::zeros(k, k));
         Projector { shared, inv }
     }
 
@@ -102,7 +105,12 @@ impl Projector {
 
 /// Within-run evidence of a projected column `x` against projected residuals `e`, with `k`
 /// shared parameters already in.
-pub fn within_evidence(base: &Base, x: &[f64], e: &[f64], k: usize) -> Option<(f64, f64, f64, f64)> {
+pub fn within_evidence(
+    base: &Base,
+    x: &[f64],
+    e: &[f64],
+    k: usize,
+) -> Option<(f64, f64, f64, f64)> {
     let d = base.d;
     let n = d.n() as f64;
     let w = &base.w;
@@ -142,7 +150,10 @@ pub fn run_level_g(base: &Base, t: &Term) -> Option<Vec<f64>> {
     let mut out = Vec::with_capacity(base.d.units.len());
     for rows in &base.d.units {
         let first = g(&base.rows[*rows.first()?]);
-        if rows.iter().any(|&i| (g(&base.rows[i]) - first).abs() > 1e-12 * (1.0 + first.abs())) {
+        if rows
+            .iter()
+            .any(|&i| (g(&base.rows[i]) - first).abs() > 1e-12 * (1.0 + first.abs()))
+        {
             return None;
         }
         out.push(first);
@@ -169,17 +180,16 @@ pub fn between_evidence(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Option<(f6
     let nr = runs.cord.len();
     let mut first = vec![f64::NAN; nc];
     let mut cord_level = true;
-    for u in 0..nr {
-        let c = runs.cord[u];
+    for (&c, &gu) in runs.cord.iter().zip(g) {
         if first[c].is_nan() {
-            first[c] = g[u];
-        } else if (g[u] - first[c]).abs() > 1e-12 * (1.0 + g[u].abs()) {
+            first[c] = gu;
+        } else if (gu - first[c]).abs() > 1e-12 * (1.0 + gu.abs()) {
             cord_level = false;
         }
     }
     let spread = g.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
         - g.iter().cloned().fold(f64::INFINITY, f64::min);
-    if !(spread > 1e-12) {
+    if spread.is_nan() || spread <= 1e-12 {
         return None;
     }
     let y = &runs.ln_mu;
@@ -226,7 +236,11 @@ pub fn between_evidence(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Option<(f6
                 r
             })
             .collect();
-        let used = runs.cord.iter().collect::<std::collections::BTreeSet<_>>().len();
+        let used = runs
+            .cord
+            .iter()
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
         (x, demean(y), nr, used)
     };
     let p = x.first()?.len();

@@ -287,7 +287,8 @@ fn classify(base: &Base) -> (Vec<Testable>, Vec<NotTestable>) {
         } else {
             not.push(NotTestable {
                 name: t.name,
-                reason: "its column is all absorbed by every run's own mu (no spread of its variable)",
+                reason:
+                    "its column is all absorbed by every run's own mu (no spread of its variable)",
             });
         }
     }
@@ -325,12 +326,6 @@ pub fn discover_assessed(
     };
     st.e = Projector::new(&base, &st.shared).project(&base, &base.e);
     let lof_before = a.adequacy.lack_of_fit.clone();
-    if std::env::var("CAPSTAN_DISCOVER_DEBUG").is_ok() {
-        let z: Vec<f64> = (0..d.n()).map(|i| st.e[i] * base.w[i].sqrt()).collect();
-        let z0: Vec<f64> = (0..d.n()).map(|i| base.e[i] * base.w[i].sqrt()).collect();
-        let diff: f64 = (0..d.n()).map(|i| (st.e[i] - base.e[i]).powi(2)).sum::<f64>().sqrt();
-        eprintln!("engine lof {:?}\nmine proj {:?}\nmine raw {:?}\n|proj - raw| {diff}", lof_before, lack_of_fit(d, &z, st.shared.len()), lack_of_fit(d, &z0, st.shared.len()));
-    }
     // After a term, any significant lack of fit keeps "unexplained" (the spike's rule: a
     // partial mimic leaves the replicates disagreeing with the model, whatever its size).
     let lof_open = |l: &Option<LackOfFit>| l.as_ref().is_some_and(|l| l.p < LOF_ALPHA);
@@ -358,7 +353,11 @@ pub fn discover_assessed(
         }
         let kf = step as f64;
         let bar = -threshold - 2.0 * opts.gamma * ((p - kf + 1.0) / kf).max(1.0).ln();
-        let Some(best) = screens.iter().find(|s| s.sign_ok && s.r2_model <= opts.max_r2_model).cloned() else {
+        let Some(best) = screens
+            .iter()
+            .find(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
+            .cloned()
+        else {
             break;
         };
         let t = &LIBRARY[best.term];
@@ -379,7 +378,10 @@ pub fn discover_assessed(
                 term: c.term,
                 column: c.column.clone(),
                 g_run: c.g_run.clone(),
-                c_hat: screens.iter().find(|s| s.term == c.term).map_or(1.0, |s| s.c_hat),
+                c_hat: screens
+                    .iter()
+                    .find(|s| s.term == c.term)
+                    .map_or(1.0, |s| s.c_hat),
                 sign_ok: match LIBRARY[c.term].sign {
                     Sign::Free => |_| true,
                     Sign::NonNegative => |t| t >= 0.0,
@@ -395,26 +397,45 @@ pub fn discover_assessed(
             covs: &st.covs,
             bar,
         };
-        let stab = stability::stability(&problem, best.term, opts.resamples, 0x26_57ab + step as u64);
+        let stab =
+            stability::stability(&problem, best.term, opts.resamples, 0x26_57ab + step as u64);
         progress("held-out cords", 0.5 + 0.2 * (step - 1) as f64);
         let tst = testable.iter().find(|c| c.term == best.term).unwrap();
         let ratio = held_out(&base, a, &st, tst);
         let Some(ratio) = ratio else {
-            declined.push(decline(t, &best, Some(stab), None, "its held-out gain could not be computed (too few cords)".into()));
+            declined.push(decline(
+                t,
+                &best,
+                Some(stab),
+                None,
+                "its held-out gain could not be computed (too few cords)".into(),
+            ));
             break;
         };
         if stab < opts.min_stability {
-            declined.push(decline(t, &best, Some(stab), Some(ratio), format!(
+            declined.push(decline(
+                t,
+                &best,
+                Some(stab),
+                Some(ratio),
+                format!(
                 "unstable: the search picks it in {:.0} % of whole-cord resamples (needs {:.0} %)",
                 100.0 * stab, 100.0 * opts.min_stability
-            )));
+            ),
+            ));
             break;
         }
         if ratio.value >= 1.0 {
-            declined.push(decline(t, &best, Some(stab), Some(ratio.clone()), format!(
-                "does not help held-out cords: RMSE ratio {:.3} [{:.3}, {:.3}]",
-                ratio.value, ratio.ci95.lo, ratio.ci95.hi
-            )));
+            declined.push(decline(
+                t,
+                &best,
+                Some(stab),
+                Some(ratio.clone()),
+                format!(
+                    "does not help held-out cords: RMSE ratio {:.3} [{:.3}, {:.3}]",
+                    ratio.value, ratio.ci95.lo, ratio.ci95.hi
+                ),
+            ));
             break;
         }
         // Lack of fit with the term in (within-run terms change what the replicates share).
@@ -457,7 +478,9 @@ pub fn discover_assessed(
     let unexplained_after = if terms.is_empty() {
         base_open
     } else {
-        partial || !a.adequacy.at_physical_limit.is_empty() || lof_open(&last_lof.or(lof_before.clone()))
+        partial
+            || !a.adequacy.at_physical_limit.is_empty()
+            || lof_open(&last_lof.or(lof_before.clone()))
     };
     let residual_pattern = if unexplained_after {
         Some(a.adequacy.pattern.unwrap_or("cells"))
@@ -494,7 +517,13 @@ pub fn discover_assessed(
 }
 
 /// Every testable, unused term's screen, best (lowest ΔBIC) first.
-fn screen_all(base: &Base, testable: &[Testable], proj: &Projector, st: &State, runs: &Runs) -> Vec<screen::Screen> {
+fn screen_all(
+    base: &Base,
+    testable: &[Testable],
+    proj: &Projector,
+    st: &State,
+    runs: &Runs,
+) -> Vec<screen::Screen> {
     let mut out: Vec<screen::Screen> = testable
         .iter()
         .filter(|c| !st.used.contains(&c.term))
@@ -505,9 +534,13 @@ fn screen_all(base: &Base, testable: &[Testable], proj: &Projector, st: &State, 
                 (Some(x), _) => {
                     let xt = proj.project(base, x);
                     let xa = screen::off_run_mu(base, x);
-                    let norm = |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
+                    let norm =
+                        |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
                     r2 = 1.0 - norm(&xt) / norm(&xa).max(1e-300);
-                    (Level::WithinRun, within_evidence(base, &xt, &st.e, st.shared.len())?)
+                    (
+                        Level::WithinRun,
+                        within_evidence(base, &xt, &st.e, st.shared.len())?,
+                    )
                 }
                 (None, Some(g)) => {
                     let (th, se, db) = between_evidence(runs, g, &st.covs)?;
@@ -515,16 +548,19 @@ fn screen_all(base: &Base, testable: &[Testable], proj: &Projector, st: &State, 
                 }
                 _ => return None,
             };
-            [theta, se, dbic].iter().all(|v| v.is_finite()).then(|| screen::Screen {
-                term: c.term,
-                level,
-                theta,
-                se,
-                delta_bic: dbic,
-                c_hat,
-                sign_ok: sign_ok(t, theta),
-                r2_model: r2,
-            })
+            [theta, se, dbic]
+                .iter()
+                .all(|v| v.is_finite())
+                .then(|| screen::Screen {
+                    term: c.term,
+                    level,
+                    theta,
+                    se,
+                    delta_bic: dbic,
+                    c_hat,
+                    sign_ok: sign_ok(t, theta),
+                    r2_model: r2,
+                })
         })
         .collect();
     out.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
@@ -540,26 +576,50 @@ fn held_out(base: &Base, a: &Assessment, st: &State, c: &Testable) -> Option<Rat
             let mut cols = st.shared.clone();
             cols.push(x.clone());
             let with = heldout::shape_sse(base, &cols);
-            heldout::ratio(&with, &without, &rows, "each held-out run keeps its own mu; the shape comes from the other cords")
+            heldout::ratio(
+                &with,
+                &without,
+                &rows,
+                "each held-out run keeps its own mu; the shape comes from the other cords",
+            )
         }
         (None, Some(g)) => {
             let x0: Vec<Vec<f64>> = (0..g.len())
-                .map(|u| std::iter::once(1.0).chain(st.covs.iter().map(|cv| cv[u])).collect())
+                .map(|u| {
+                    std::iter::once(1.0)
+                        .chain(st.covs.iter().map(|cv| cv[u]))
+                        .collect()
+                })
                 .collect();
-            let x1: Vec<Vec<f64>> = x0.iter().zip(g).map(|(r, gv)| {
-                let mut r = r.clone();
-                r.push(*gv);
-                r
-            }).collect();
+            let x1: Vec<Vec<f64>> = x0
+                .iter()
+                .zip(g)
+                .map(|(r, gv)| {
+                    let mut r = r.clone();
+                    r.push(*gv);
+                    r
+                })
+                .collect();
             let without = heldout::population_sse(base, &a.fit, &x0);
             let with = heldout::population_sse(base, &a.fit, &x1);
-            heldout::ratio(&with, &without, &rows, "the held-out cord's mu predicted from the other cords")
+            heldout::ratio(
+                &with,
+                &without,
+                &rows,
+                "the held-out cord's mu predicted from the other cords",
+            )
         }
         _ => None,
     }
 }
 
-fn decline(t: &Term, s: &screen::Screen, stability: Option<f64>, ratio: Option<Ratio>, reason: String) -> Declined {
+fn decline(
+    t: &Term,
+    s: &screen::Screen,
+    stability: Option<f64>,
+    ratio: Option<Ratio>,
+    reason: String,
+) -> Declined {
     Declined {
         name: t.name,
         delta_bic: s.delta_bic,
@@ -610,13 +670,23 @@ fn rivals_of(
         .collect()
 }
 
-fn proposed(t: &'static Term, s: &screen::Screen, stab: f64, ratio: Ratio, lof: Option<LackOfFit>, rivals: Vec<Rival>) -> Proposed {
+fn proposed(
+    t: &'static Term,
+    s: &screen::Screen,
+    stab: f64,
+    ratio: Ratio,
+    lof: Option<LackOfFit>,
+    rivals: Vec<Rival>,
+) -> Proposed {
     let shown = ratio.ci95.hi < 1.0;
     let rival_words = if rivals.is_empty() {
         String::new()
     } else {
         let names: Vec<&str> = rivals.iter().map(|r| r.name).collect();
-        format!(" The data cannot tell it from {} (within {RIVAL_GAP:.0} BIC units).", names.join(", "))
+        format!(
+            " The data cannot tell it from {} (within {RIVAL_GAP:.0} BIC units).",
+            names.join(", ")
+        )
     };
     let words = format!(
         "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4} {}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
@@ -655,11 +725,19 @@ fn proposed(t: &'static Term, s: &screen::Screen, stab: f64, ratio: Ratio, lof: 
     }
 }
 
-fn verdict_words(terms: &[Proposed], unexplained: bool, pattern: Option<&str>, declined: &[Declined]) -> String {
+fn verdict_words(
+    terms: &[Proposed],
+    unexplained: bool,
+    pattern: Option<&str>,
+    declined: &[Declined],
+) -> String {
     if !terms.is_empty() {
         let names: Vec<&str> = terms.iter().map(|t| t.name).collect();
         let left = if unexplained {
-            format!(" Structure is still left (pattern: {}).", pattern.unwrap_or("cells"))
+            format!(
+                " Structure is still left (pattern: {}).",
+                pattern.unwrap_or("cells")
+            )
         } else {
             " With it, the lack of fit against the replicate runs is resolved.".to_string()
         };
@@ -668,9 +746,12 @@ fn verdict_words(terms: &[Proposed], unexplained: bool, pattern: Option<&str>, d
             names.join(" + ")
         );
     }
-    let why = declined
-        .first()
-        .map_or(String::new(), |d| format!(" The strongest candidate, {}, was not proposed: {}.", d.name, d.reason));
+    let why = declined.first().map_or(String::new(), |d| {
+        format!(
+            " The strongest candidate, {}, was not proposed: {}.",
+            d.name, d.reason
+        )
+    });
     if unexplained {
         format!(
             "Nothing in the library explains what the catalogue leaves (pattern: {}).{why}",

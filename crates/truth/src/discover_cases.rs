@@ -50,9 +50,27 @@ pub struct Kind {
 
 /// Every kind, in the order of the tables.
 pub const KINDS: [Kind; 10] = [
-    Kind { name: "clean", group: Group::Null, size: (0.0, 0.0, false), right: &[], updown: false },
-    Kind { name: "catalogue", group: Group::Null, size: (0.0, 0.0, false), right: &[], updown: false },
-    Kind { name: "t2_lowforce", group: Group::Expressible, size: (0.5, 1.0, true), right: &[&["t2"]], updown: false },
+    Kind {
+        name: "clean",
+        group: Group::Null,
+        size: (0.0, 0.0, false),
+        right: &[],
+        updown: false,
+    },
+    Kind {
+        name: "catalogue",
+        group: Group::Null,
+        size: (0.0, 0.0, false),
+        right: &[],
+        updown: false,
+    },
+    Kind {
+        name: "t2_lowforce",
+        group: Group::Expressible,
+        size: (0.5, 1.0, true),
+        right: &[&["t2"]],
+        updown: false,
+    },
     Kind {
         name: "t1_tare_diameter",
         group: Group::Expressible,
@@ -60,8 +78,20 @@ pub const KINDS: [Kind; 10] = [
         right: &[&["t1", "diameter"], &["diameter"]],
         updown: false,
     },
-    Kind { name: "t2_offset_wrap", group: Group::Expressible, size: (0.4, 0.8, true), right: &[&["wrap"]], updown: false },
-    Kind { name: "settling", group: Group::Expressible, size: (0.08, 0.15, true), right: &[&["time", "step"]], updown: false },
+    Kind {
+        name: "t2_offset_wrap",
+        group: Group::Expressible,
+        size: (0.4, 0.8, true),
+        right: &[&["wrap"]],
+        updown: false,
+    },
+    Kind {
+        name: "settling",
+        group: Group::Expressible,
+        size: (0.08, 0.15, true),
+        right: &[&["time", "step"]],
+        updown: false,
+    },
     Kind {
         name: "hysteresis",
         group: Group::Expressible,
@@ -69,9 +99,27 @@ pub const KINDS: [Kind; 10] = [
         right: &[&["step_direction"]],
         updown: true,
     },
-    Kind { name: "regime_change", group: Group::Inexpressible, size: (0.15, 0.25, true), right: &[], updown: false },
-    Kind { name: "t2_nonlinearity", group: Group::Inexpressible, size: (0.6, 1.2, true), right: &[], updown: false },
-    Kind { name: "t2_range_step", group: Group::Inexpressible, size: (0.4, 0.8, true), right: &[], updown: false },
+    Kind {
+        name: "regime_change",
+        group: Group::Inexpressible,
+        size: (0.15, 0.25, true),
+        right: &[],
+        updown: false,
+    },
+    Kind {
+        name: "t2_nonlinearity",
+        group: Group::Inexpressible,
+        size: (0.6, 1.2, true),
+        right: &[],
+        updown: false,
+    },
+    Kind {
+        name: "t2_range_step",
+        group: Group::Inexpressible,
+        size: (0.4, 0.8, true),
+        right: &[],
+        updown: false,
+    },
 ];
 
 /// The thesis's catalogue pair: contact heating (ln mu per newton of load) and the T2 offset.
@@ -97,7 +145,11 @@ fn design(rng: &mut Rng, clean: bool, updown: bool) -> CampaignConfig {
         wraps_deg: vec![270.0, 360.0, 450.0, 630.0, 720.0],
         drive_vs: vec![10.0],
         runs: 6,
-        order: if updown { StepOrder::UpDown } else { StepOrder::Monotone },
+        order: if updown {
+            StepOrder::UpDown
+        } else {
+            StepOrder::Monotone
+        },
         model: Model::euler_eytelwein(0.143 * (1.0 + 0.05 * (rng.uniform() - 0.5))),
         protocol: short_protocol(),
         threads: 1,
@@ -120,8 +172,14 @@ fn design(rng: &mut Rng, clean: bool, updown: bool) -> CampaignConfig {
     };
     if !clean {
         cfg.effects = vec![
-            Effect { kind: EffectKind::T2Offset, value: THESIS_T2_OFFSET_N },
-            Effect { kind: EffectKind::ContactHeating, value: THESIS_HEATING },
+            Effect {
+                kind: EffectKind::T2Offset,
+                value: THESIS_T2_OFFSET_N,
+            },
+            Effect {
+                kind: EffectKind::ContactHeating,
+                value: THESIS_HEATING,
+            },
         ];
     }
     cfg
@@ -153,7 +211,11 @@ pub fn draw(master_seed: u64, kind: &Kind, index: u64) -> DiscoverCase {
     DiscoverCase {
         case: Case {
             seed,
-            class: if outside.is_some() { Class::Outside } else { Class::Clean },
+            class: if outside.is_some() {
+                Class::Outside
+            } else {
+                Class::Clean
+            },
             effects,
             outside,
             config: cfg,

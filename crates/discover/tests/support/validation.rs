@@ -1,5 +1,6 @@
 //! Scoring `capstan discover` on planted sets (shared by tests/planted.rs and
-//! examples/validate.rs).
+//! examples/validate.rs; each uses part of it).
+#![allow(dead_code)]
 
 use capstan_discover::{discover, Discovery, Options};
 use capstan_truth::discover_cases::{self, DiscoverCase, Group, KINDS};
@@ -36,8 +37,7 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
     };
     let right = d.terms.iter().any(|t| ok(deps(t.depends_on)));
     let right_or_rival = right
-        || d
-            .terms
+        || d.terms
             .iter()
             .any(|t| t.rivals.iter().any(|r| ok(deps(r.depends_on))));
     Outcome {
@@ -55,10 +55,15 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
             c.kind.name,
             c.size,
             d.catalogue_effects,
-            d.lack_of_fit_before.as_ref().map(|l| (l.p, l.systematic_ratio)),
+            d.lack_of_fit_before
+                .as_ref()
+                .map(|l| (l.p, l.systematic_ratio)),
             d.terms.iter().map(|t| t.name).collect::<Vec<_>>(),
             d.unexplained_after,
-            d.declined.iter().map(|x| (x.name, x.reason.clone())).collect::<Vec<_>>()
+            d.declined
+                .iter()
+                .map(|x| (x.name, x.reason.clone()))
+                .collect::<Vec<_>>()
         ),
     }
 }
