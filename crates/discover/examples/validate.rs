@@ -1,6 +1,6 @@
 //! `cargo run --release -p capstan-discover --example validate -- SEED PER_KIND [THREADS]`:
 //! the planted-truth table of `capstan discover` on one master seed (the calibration seed is
-//! 26, the test seed tests/planted.rs uses is 2_026_112_7).
+//! 26, the test seed tests/planted.rs uses is 20_261_127).
 #[path = "../tests/support/validation.rs"]
 mod validation;
 
