@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod analyze;
 pub mod condition;
 pub mod diagnose;
+pub mod discover;
 pub mod log;
 pub mod rig;
 pub mod signal;
@@ -29,6 +30,9 @@ pub enum Command {
     /// Say which catalogue effects a data set holds (several, or none), or that it holds
     /// structure no catalogue effect explains.
     Diagnose(diagnose::Args),
+    /// Search a library of physical terms beyond the catalogue for what is left; propose one
+    /// only if it earns its evidence and helps held-out cords.
+    Discover(discover::Args),
     /// Record a real run from the board over defmt/RTT (or decode a saved stream).
     Log(log::Args),
     /// Set up the rig from the host: live forces, jog the servo, calibrate, set the protocol,
@@ -46,6 +50,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::Analyze(a) => analyze::run(a),
         Command::Diagnose(a) => diagnose::run(a),
+        Command::Discover(a) => discover::run(a),
         Command::Log(a) => log::run(a),
         Command::Rig(a) => rig::run(a),
         Command::Condition(a) => condition::run(a),
