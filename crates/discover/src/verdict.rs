@@ -221,16 +221,24 @@ pub fn discover(data: &Dataset, opts: &Options, progress: &mut dyn FnMut(&str, f
     discover_assessed(data, &a, opts, t0, progress)
 }
 
-/// The covariate per run of a selected between-level catalogue effect.
+/// The covariate per run of a selected between-level catalogue effect: its entry's cord
+/// covariate, or the run number (from 0) for an effect between runs.
 fn catalogue_covariate(a: &Assessment, kind: EffectKind) -> Option<Vec<f64>> {
     let d = &a.design;
+    let entry = kind.entry();
     let v = |u: usize| {
         let c = &d.cords[d.unit_cord[u]];
-        match kind {
-            EffectKind::SensorGain => Some(1.0 / c.wrap_deg.to_radians()),
-            EffectKind::DiameterDependence => Some(c.diameter_mm - 12.7),
-            EffectKind::SpeedDependence => Some(c.drive_v - 10.0),
-            EffectKind::Wear => Some(d.unit_run[u] - 1.0),
+        let op = capstan_friction::Operating {
+            wrap_rad: c.wrap_deg.to_radians(),
+            diameter_mm: c.diameter_mm,
+            drive_v: c.drive_v,
+            run: d.unit_run[u],
+            time_s: 0.0,
+            load_memory_ns: 0.0,
+        };
+        match (entry.cord, entry.level) {
+            (Some(test), _) => Some((test.covariate)(&op)),
+            (None, capstan_friction::entry::Level::BetweenRun) => Some(d.unit_run[u] - 1.0),
             _ => None,
         }
     };
