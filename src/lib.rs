@@ -5,6 +5,7 @@
 //! * [`cli`]: one module per command, each with its `Args` and `run`;
 //! * [`logger`]: the files of a logged session, written as the records arrive;
 //! * [`outputs`]: how every command opens its output directory;
+//! * [`provenance`]: version, commit, input hash and command line for every output;
 //! * [`term`]: stdout and stderr that survive a closed pipe. Only this crate prints.
 //!
 //! The integration tests in `tests/` drive the binary, and use this library and the crates
@@ -13,4 +14,5 @@
 pub mod cli;
 pub mod logger;
 pub mod outputs;
+pub mod provenance;
 pub mod term;

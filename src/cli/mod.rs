@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod analyze;
 pub mod diagnose;
 pub mod log;
+pub mod predict;
 pub mod rig;
 pub mod signal;
 pub mod simulate;
@@ -28,6 +29,9 @@ pub enum Command {
     /// Say which catalogue effects a data set holds (several, or none), or that it holds
     /// structure no catalogue effect explains.
     Diagnose(diagnose::Args),
+    /// T2 and amplification from an analysis's fitted model, with a 95 % confidence interval
+    /// (the mean curve) and a 95 % prediction interval (a new measurement on a new cord).
+    Predict(predict::Args),
     /// Record a real run from the board over defmt/RTT (or decode a saved stream).
     Log(log::Args),
     /// Set up the rig from the host: live forces, jog the servo, calibrate, set the protocol,
@@ -44,6 +48,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Log(a) => log::run(a),
+        Command::Predict(a) => predict::run(a),
         Command::Rig(a) => rig::run(a),
     }
 }
