@@ -3,7 +3,8 @@
 //
 // The emulated chip runs in its own virtual time (8 ns per cycle at 125 MHz, idle time skipped).
 // Everything the rig sees goes through the bench, at the emulator's time in ns:
-//   output pins (GP16 servo PWM, GP18 amplifier PWM, GP20 trigger, GP25 LED) -> bench_pin,
+//   output pins (GP16 servo PWM, GP18 amplifier PWM, GP20 trigger, GP25 LED: job.pins, the
+//   wire schema's pin map) -> bench_pin,
 //   each ADC conversion -> bench_adc, whose code the ADC returns 2 us later,
 //   the operator's button (GP21), the case's chip fault and the end <- bench_deadline/bench_wake,
 //   every busy stretch of the core (wake to sleep) -> bench_burst (the loop budget).
@@ -43,7 +44,13 @@ const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4, WAKE_STACK_OVERFLOW = 8;
 // Below SRAM nothing is mapped: an access there is a bus fault, and one made by a stack that
 // ran off the bottom of SRAM leaves the HardFault no room to stack its frame: lockup.
 const BELOW_RAM = 0x1fff0000;
-const SERVO = 16, AMP = 18, TRIGGER = 20, BUTTON = 21, LED = 25;
+// The board's pins: the wire schema's pin map (capstan-wire), written into the job by the test.
+const { servo: SERVO, amp: AMP, trigger: TRIGGER, button: BUTTON, led: LED } = job.pins;
+for (const [name, gpio] of Object.entries({ SERVO, AMP, TRIGGER, BUTTON, LED })) {
+  if (!Number.isInteger(gpio)) throw new Error(`job.json: no pin ${name.toLowerCase()} in its pins`);
+}
+// The PWM slices of the servo and the amplifier (the RP2040's: GPIO / 2 mod 8).
+const SLICES = [SERVO, AMP].map((gpio) => (gpio >> 1) & 7);
 const FUNCSEL_PWM = 4, HIGH = 1, HARDFAULT = 3;
 const WATCHDOG_BASE = 0x40058000, RAM = 0x20000000;
 
@@ -88,7 +95,7 @@ const commands = (job.commands ?? []).map((c) => ({
 }));
 let nextCommand = 0;
 const resets = [], breaks = [];
-// Writes that changed a PWM compare (servo slice 0, amplifier slice 1): when the firmware
+// Writes that changed a PWM compare (the servo's slice, the amplifier's): when the firmware
 // commanded a pulse width or duty, as opposed to when the pin shows it.
 const pwmWrites = [];
 let panicInjected = null, stackInjected = null, lockup = null;
@@ -226,7 +233,7 @@ function boot(carried) {
     mcu.gpio[gpio].addListener((state) => B.bench_pin(gpio, state === HIGH ? 1 : 0, now(), pwmTickNs(gpio)));
   }
   mcu.gpio[BUTTON].setInputValue(!B.bench_button());
-  for (const slice of [0, 1]) {
+  for (const slice of SLICES) {
     const ch = mcu.pwm.channels[slice];
     const write = ch.writeRegister.bind(ch);
     ch.writeRegister = (offset, value) => {
@@ -264,7 +271,7 @@ function reset() {
   const pins = Object.fromEntries(
     [SERVO, AMP, TRIGGER].map((g) => [g, { funcsel: mcu.gpio[g].functionSelect, out: mcu.gpio[g].outputValue, oe: mcu.gpio[g].outputEnable }]),
   );
-  const cc = [0, 1].map((slice) => mcu.pwm.channels[slice].cc & 0xffff);
+  const cc = SLICES.map((slice) => mcu.pwm.channels[slice].cc & 0xffff);
   resets.push({ t_ns: t, reason: carried.reason, scratch0: carried.scratch[0], scratch1: carried.scratch[1], halted, pins, pwm_cc_a: cc });
   halted = false;
   B.bench_reset(t, carried.reason);

@@ -5,18 +5,10 @@
 //! rebuild (`capstan rig`, README "Setting up the rig"); what needs one is in this file. The wiring itself is in
 //! the README (section "Firmware on a Raspberry Pi Pico").
 //!
-//! Pin map (Pico header pin in brackets; every signal is 3.3 V logic):
-//!
-//! | signal                          | GPIO | peripheral        | Pico pin |
-//! |---------------------------------|------|-------------------|----------|
-//! | servo signal, 50 Hz PWM         | GP16 | PWM slice 0, A    | 21       |
-//! | amplifier control, PWM into RC  | GP18 | PWM slice 1, A    | 24       |
-//! | logger trigger (high = trigger) | GP20 | SIO output        | 26       |
-//! | start/abort button (to GND)     | GP21 | SIO input pull-up | 27       |
-//! | status LED (onboard)            | GP25 | SIO output        | —        |
-//! | T1 force sensor (servo side)    | GP26 | ADC0              | 31       |
-//! | T2 force sensor (fixed side)    | GP27 | ADC1              | 32       |
-//! | SMPS mode (inside the Pico)     | GP23 | SIO output, high  | —        |
+//! The pin map is the wire schema's (`capstan_wire::pins`, with its table of signals, GPIOs,
+//! peripherals and Pico header pins; every signal is 3.3 V logic), which the emulated board's
+//! harness and bench use too. [`Pins`] takes those pins as embassy-rp's typed peripherals, and
+//! `main` checks at boot that they are the schema's.
 //!
 //! GP23 is the Pico's own regulator "power save" pin, not on the header: driving it high puts
 //! the RT6150 buck-boost into PWM mode, which the Pico datasheet recommends for ADC work (much
@@ -30,12 +22,12 @@
 //! UART0 console: all avoided. (On a Pico W, GP23/GP24/GP25/GP29 belong to the wireless chip:
 //! this binary is for the plain Pico.)
 //!
-//! To move a signal, change its line in [`Pins`] (type and `take`) and the table above; for a
-//! PWM pin, the slice must be the one that pin belongs to (the compiler checks that). For an
-//! output, also its number in [`SERVO_GPIO`]/[`SERVO_SLICE`], [`AMP_GPIO`]/[`AMP_SLICE`] or
-//! [`TRIGGER_GPIO`]: the panic path writes those registers directly (`main` checks at boot that
-//! they are the pins of [`Pins`]).
+//! To move a signal, change its GPIO in `capstan_wire::pins::PINS` and its line in [`Pins`]
+//! (type and `take`); for a PWM pin, the slice must be the one that pin belongs to (the
+//! compiler checks that). `main` checks at boot that [`Pins`] are the schema's pins, whose
+//! registers the panic path writes directly ([`SERVO_GPIO`], [`SERVO_SLICE`], ...).
 
+use capstan_wire::pins::{pwm_slice, PINS};
 use core::ops::Range;
 use embassy_rp::peripherals::{
     ADC, FLASH, PIN_16, PIN_18, PIN_20, PIN_21, PIN_23, PIN_25, PIN_26, PIN_27, PWM_SLICE0,
@@ -48,6 +40,24 @@ use firmware::{Calibration, Protocol};
 
 /// The peripherals the rig uses, taken out of embassy-rp's singletons in one place.
 pub struct Pins {
+    /// What the board needs before the rig runs.
+    pub board: BoardPins,
+    /// What the rig's I/O is made of.
+    pub rig: RigPins,
+}
+
+/// The peripherals of the board's own set-up: power, watchdog, flash.
+pub struct BoardPins {
+    /// The hardware watchdog.
+    pub watchdog: Peri<'static, WATCHDOG>,
+    /// The Pico's SMPS power-save pin (driven high: PWM mode, quieter ADC reference).
+    pub smps_mode: Peri<'static, PIN_23>,
+    /// The QSPI flash (the settings store).
+    pub flash: Peri<'static, FLASH>,
+}
+
+/// The peripherals of the rig's inputs and outputs.
+pub struct RigPins {
     /// PWM slice of the servo signal.
     pub servo_slice: Peri<'static, PWM_SLICE0>,
     /// Servo signal (slice 0, channel A).
@@ -68,45 +78,67 @@ pub struct Pins {
     pub t1: Peri<'static, PIN_26>,
     /// T2 (fixed side) force sensor, ADC1.
     pub t2: Peri<'static, PIN_27>,
-    /// The hardware watchdog.
-    pub watchdog: Peri<'static, WATCHDOG>,
-    /// The Pico's SMPS power-save pin (driven high: PWM mode, quieter ADC reference).
-    pub smps_mode: Peri<'static, PIN_23>,
-    /// The QSPI flash (the settings store).
-    pub flash: Peri<'static, FLASH>,
 }
 
 impl Pins {
     /// Take the rig's peripherals.
     pub fn take(p: Peripherals) -> Self {
         Pins {
-            servo_slice: p.PWM_SLICE0,
-            servo: p.PIN_16,
-            amp_slice: p.PWM_SLICE1,
-            amp: p.PIN_18,
-            trigger: p.PIN_20,
-            button: p.PIN_21,
-            led: p.PIN_25,
-            adc: p.ADC,
-            t1: p.PIN_26,
-            t2: p.PIN_27,
-            watchdog: p.WATCHDOG,
-            smps_mode: p.PIN_23,
-            flash: p.FLASH,
+            board: BoardPins {
+                watchdog: p.WATCHDOG,
+                smps_mode: p.PIN_23,
+                flash: p.FLASH,
+            },
+            rig: RigPins {
+                servo_slice: p.PWM_SLICE0,
+                servo: p.PIN_16,
+                amp_slice: p.PWM_SLICE1,
+                amp: p.PIN_18,
+                trigger: p.PIN_20,
+                button: p.PIN_21,
+                led: p.PIN_25,
+                adc: p.ADC,
+                t1: p.PIN_26,
+                t2: p.PIN_27,
+            },
         }
     }
 }
 
-/// GPIO of the servo signal, for the panic path's register writes (the pin of [`Pins::servo`]).
-pub const SERVO_GPIO: usize = 16;
-/// PWM slice of the servo signal (of [`Pins::servo_slice`]).
-pub const SERVO_SLICE: usize = 0;
-/// GPIO of the amplifier control PWM (of [`Pins::amp`]).
-pub const AMP_GPIO: usize = 18;
-/// PWM slice of the amplifier control (of [`Pins::amp_slice`]).
-pub const AMP_SLICE: usize = 1;
-/// GPIO of the logger trigger (of [`Pins::trigger`]).
-pub const TRIGGER_GPIO: usize = 20;
+/// GPIO of the servo signal, for the panic path's register writes (the pin of [`RigPins::servo`]).
+pub const SERVO_GPIO: usize = PINS.servo as usize;
+/// PWM slice of the servo signal (of [`RigPins::servo_slice`]).
+pub const SERVO_SLICE: usize = pwm_slice(PINS.servo) as usize;
+/// GPIO of the amplifier control PWM (of [`RigPins::amp`]).
+pub const AMP_GPIO: usize = PINS.amp as usize;
+/// PWM slice of the amplifier control (of [`RigPins::amp_slice`]).
+pub const AMP_SLICE: usize = pwm_slice(PINS.amp) as usize;
+/// GPIO of the logger trigger (of [`RigPins::trigger`]).
+pub const TRIGGER_GPIO: usize = PINS.trigger as usize;
+
+impl Pins {
+    /// True if these are the schema's pins (`capstan_wire::pins::PINS`), as the panic path, the
+    /// emulated board and the README take them.
+    pub fn are_the_schemas(&self) -> bool {
+        use embassy_rp::gpio::Pin;
+        use embassy_rp::pwm::Slice;
+        let r = &self.rig;
+        [
+            (r.servo.pin(), PINS.servo),
+            (r.amp.pin(), PINS.amp),
+            (r.trigger.pin(), PINS.trigger),
+            (r.button.pin(), PINS.button),
+            (r.led.pin(), PINS.led),
+            (r.t1.pin(), PINS.t1),
+            (r.t2.pin(), PINS.t2),
+            (self.board.smps_mode.pin(), PINS.smps_mode),
+        ]
+        .iter()
+        .all(|(a, b)| a == b)
+            && r.servo_slice.number() == SERVO_SLICE
+            && r.amp_slice.number() == AMP_SLICE
+    }
+}
 
 /// clk_sys that the PWM settings below assume: embassy-rp's default clocks (12 MHz crystal,
 /// PLL to 125 MHz). `main` checks it at boot.

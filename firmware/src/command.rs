@@ -8,13 +8,12 @@
 //! ```
 //!
 //! Text rather than a binary frame: a person can type it in any RTT terminal, and the parser
-//! is a few hundred bytes of flash.
+//! is a few hundred bytes of flash. The words, the keys, the step orders' and channels' names
+//! and the reply's codes are the wire schema's (`capstan-wire`), which the host builds from too.
 
-use crate::hal::Channel;
-use crate::protocol::StepOrder;
+use capstan_wire::{Channel, StepOrder};
 
-/// Longest command line, bytes (without the newline).
-pub const MAX_LINE: usize = 64;
+pub use capstan_wire::{CommandError, CommandKind, Key, MAX_LINE};
 
 /// A parsed command.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,304 +45,6 @@ pub enum Command {
     /// Acknowledge a latched fault, as the button does (a host-started run after a fault
     /// needs it: `run` is refused while one is latched).
     Ack,
-}
-
-/// The settings a host may set by name, with their units in the name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs)]
-pub enum Key {
-    RestDeg,
-    StepDeg,
-    FinalDeg,
-    Order,
-    DwellMs,
-    PreTriggerMs,
-    TriggerMs,
-    TareMs,
-    AmpControlV,
-    WindowAfterMs,
-    WindowBeforeMs,
-    DiameterMm,
-    WrapDeg,
-    T1Zero,
-    T1NPerCount,
-    T2Zero,
-    T2NPerCount,
-    TareReferenceN,
-    ServoMinUs,
-    ServoMaxUs,
-    ServoMaxDeg,
-    AmpFullScaleV,
-    AmpGain,
-}
-
-impl Key {
-    /// Every key, in the order `capstan rig` lists them.
-    pub const ALL: [Key; 23] = [
-        Key::RestDeg,
-        Key::StepDeg,
-        Key::FinalDeg,
-        Key::Order,
-        Key::DwellMs,
-        Key::PreTriggerMs,
-        Key::TriggerMs,
-        Key::TareMs,
-        Key::AmpControlV,
-        Key::WindowAfterMs,
-        Key::WindowBeforeMs,
-        Key::DiameterMm,
-        Key::WrapDeg,
-        Key::T1Zero,
-        Key::T1NPerCount,
-        Key::T2Zero,
-        Key::T2NPerCount,
-        Key::TareReferenceN,
-        Key::ServoMinUs,
-        Key::ServoMaxUs,
-        Key::ServoMaxDeg,
-        Key::AmpFullScaleV,
-        Key::AmpGain,
-    ];
-
-    /// The name on the command line (the field names of the `settings` record).
-    pub const fn name(self) -> &'static str {
-        match self {
-            Key::RestDeg => "rest_deg",
-            Key::StepDeg => "step_deg",
-            Key::FinalDeg => "final_deg",
-            Key::Order => "order",
-            Key::DwellMs => "dwell_ms",
-            Key::PreTriggerMs => "pre_trigger_ms",
-            Key::TriggerMs => "trigger_ms",
-            Key::TareMs => "tare_ms",
-            Key::AmpControlV => "amp_control_v",
-            Key::WindowAfterMs => "window_after_ms",
-            Key::WindowBeforeMs => "window_before_ms",
-            Key::DiameterMm => "diameter_mm",
-            Key::WrapDeg => "wrap_deg",
-            Key::T1Zero => "t1_zero",
-            Key::T1NPerCount => "t1_n_per_count",
-            Key::T2Zero => "t2_zero",
-            Key::T2NPerCount => "t2_n_per_count",
-            Key::TareReferenceN => "tare_reference_n",
-            Key::ServoMinUs => "servo_min_us",
-            Key::ServoMaxUs => "servo_max_us",
-            Key::ServoMaxDeg => "servo_max_deg",
-            Key::AmpFullScaleV => "amp_full_scale_v",
-            Key::AmpGain => "amp_gain",
-        }
-    }
-
-    /// Its index in [`crate::settings::Settings::fields`].
-    pub const fn field(self) -> usize {
-        match self {
-            Key::Order => 0,
-            Key::RestDeg => 1,
-            Key::StepDeg => 2,
-            Key::FinalDeg => 3,
-            Key::DwellMs => 4,
-            Key::PreTriggerMs => 5,
-            Key::TriggerMs => 6,
-            Key::TareMs => 7,
-            Key::AmpControlV => 8,
-            Key::WindowAfterMs => 11,
-            Key::WindowBeforeMs => 12,
-            Key::DiameterMm => 13,
-            Key::WrapDeg => 14,
-            Key::AmpGain => 15,
-            Key::T1Zero => 16,
-            Key::T1NPerCount => 17,
-            Key::T2Zero => 18,
-            Key::T2NPerCount => 19,
-            Key::TareReferenceN => 20,
-            Key::ServoMinUs => 21,
-            Key::ServoMaxUs => 22,
-            Key::ServoMaxDeg => 23,
-            Key::AmpFullScaleV => 24,
-        }
-    }
-
-    /// Wire code in the `reply` record.
-    pub fn code(self) -> u8 {
-        Key::ALL.iter().position(|&k| k == self).unwrap_or(0) as u8
-    }
-
-    /// The key of a name.
-    pub fn from_name(name: &str) -> Option<Key> {
-        Key::ALL.into_iter().find(|k| k.name() == name)
-    }
-}
-
-/// Why a command was refused (the `reply` record's `error` code; 0 is success).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(target_os = "none", derive(defmt::Format))]
-pub enum CommandError {
-    /// Not a command word.
-    Unknown = 1,
-    /// A number is missing, not a number, or there is too much on the line.
-    Argument = 2,
-    /// Not a settings name.
-    UnknownKey = 3,
-    /// The line is longer than [`MAX_LINE`].
-    TooLong = 4,
-    /// A run is in progress: only `abort` and `show` are taken.
-    Running = 5,
-    /// This command works in setup mode only.
-    NotInSetup = 6,
-    /// A fault is latched: acknowledge it first (button or `ack`).
-    FaultLatched = 7,
-    /// The servo is still homing to rest.
-    Homing = 8,
-    /// A zero or weigh is still being measured.
-    Measuring = 9,
-    /// The value would make the settings invalid (the settings are unchanged).
-    Invalid = 10,
-    /// The known weight barely moved the reading: is it on that channel?
-    NoLoad = 11,
-    /// Writing the flash failed (the board uses, after a reset, the newest settings that were
-    /// written whole).
-    StoreFailed = 12,
-    /// Nothing to do in this state (e.g. `ack` with no fault, `leave` outside setup).
-    NotApplicable = 13,
-    /// The readings scattered too much to measure: something moved.
-    Unsteady = 14,
-    /// Setup mode ended (a fault, the button, `leave`) before the measurement was done.
-    Interrupted = 15,
-    /// The reading fell under the weight: the sensor is reversed (a tension must raise it).
-    Reversed = 16,
-    /// With the result the over-force limit would read above the rail check: the check could
-    /// never trip (nothing changed).
-    Blind = 17,
-    /// `store` holds the loop for the flash write: only with the servo at rest.
-    NotAtRest = 18,
-}
-
-impl CommandError {
-    /// Every error.
-    pub const ALL: [CommandError; 18] = [
-        CommandError::Unknown,
-        CommandError::Argument,
-        CommandError::UnknownKey,
-        CommandError::TooLong,
-        CommandError::Running,
-        CommandError::NotInSetup,
-        CommandError::FaultLatched,
-        CommandError::Homing,
-        CommandError::Measuring,
-        CommandError::Invalid,
-        CommandError::NoLoad,
-        CommandError::StoreFailed,
-        CommandError::NotApplicable,
-        CommandError::Unsteady,
-        CommandError::Interrupted,
-        CommandError::Reversed,
-        CommandError::Blind,
-        CommandError::NotAtRest,
-    ];
-
-    /// Wire code (never 0).
-    pub const fn code(self) -> u8 {
-        self as u8
-    }
-
-    /// Inverse of [`CommandError::code`].
-    pub fn from_code(code: u8) -> Option<CommandError> {
-        CommandError::ALL.into_iter().find(|e| e.code() == code)
-    }
-
-    /// What went wrong, for a person.
-    pub const fn message(self) -> &'static str {
-        match self {
-            CommandError::Unknown => "not a command (setup, leave, jog, servo, zero, weigh, set, show, store, defaults, run, abort, ack)",
-            CommandError::Argument => "a number is missing or is not a number, or the line has too much on it",
-            CommandError::UnknownKey => "not the name of a setting",
-            CommandError::TooLong => "the line is longer than 64 bytes",
-            CommandError::Running => "a run is in progress: only abort and show are taken",
-            CommandError::NotInSetup => "this works in setup mode only (send setup first)",
-            CommandError::FaultLatched => "a fault is latched: press the button once (after releasing it) or send ack",
-            CommandError::Homing => "the servo is still on its way to rest: try again in a few seconds",
-            CommandError::Measuring => "a zero or weigh is still being measured",
-            CommandError::Invalid => "that value would make the settings invalid; nothing changed",
-            CommandError::NoLoad => "the reading moved less than 20 counts: is the weight hanging on that channel?",
-            CommandError::StoreFailed => "writing the flash failed: send store again (after a reset the board uses the newest settings written whole, or its defaults, and says which)",
-            CommandError::NotApplicable => "not in this state (run: from idle; leave: from setup mode; abort: in setup mode or a run; ack: with a fault latched)",
-            CommandError::Unsteady => "the reading was not steady (something moved): let the servo and the weight settle, then repeat",
-            CommandError::Interrupted => "setup mode ended (a fault, the button or leave) before the measurement was done",
-            CommandError::Reversed => "the reading fell under the weight: the sensor is reversed or wired to the other input (a tension must raise the counts); nothing changed",
-            CommandError::Blind => "with that calibration the over-force limit would read above the rail check, so it could never trip (the sensor's range, or the value, is wrong); nothing changed",
-            CommandError::NotAtRest => "store only with the servo at rest: the flash write holds the safety loop (send servo <rest> and wait, or leave setup mode and let it home)",
-        }
-    }
-}
-
-/// The kind of a command, as the `reply` record names it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs)]
-pub enum CommandKind {
-    Unparsed = 0,
-    Setup,
-    Leave,
-    Jog,
-    Servo,
-    Zero,
-    Weigh,
-    Set,
-    Show,
-    Store,
-    Defaults,
-    Run,
-    Abort,
-    Ack,
-}
-
-impl CommandKind {
-    /// Every kind, by code.
-    pub const ALL: [CommandKind; 14] = [
-        CommandKind::Unparsed,
-        CommandKind::Setup,
-        CommandKind::Leave,
-        CommandKind::Jog,
-        CommandKind::Servo,
-        CommandKind::Zero,
-        CommandKind::Weigh,
-        CommandKind::Set,
-        CommandKind::Show,
-        CommandKind::Store,
-        CommandKind::Defaults,
-        CommandKind::Run,
-        CommandKind::Abort,
-        CommandKind::Ack,
-    ];
-
-    /// Wire code.
-    pub const fn code(self) -> u8 {
-        self as u8
-    }
-
-    /// Inverse of [`CommandKind::code`].
-    pub fn from_code(code: u8) -> Option<CommandKind> {
-        CommandKind::ALL.get(code as usize).copied()
-    }
-
-    /// The command word (`"?"` for a line that did not parse).
-    pub const fn word(self) -> &'static str {
-        match self {
-            CommandKind::Unparsed => "?",
-            CommandKind::Setup => "setup",
-            CommandKind::Leave => "leave",
-            CommandKind::Jog => "jog",
-            CommandKind::Servo => "servo",
-            CommandKind::Zero => "zero",
-            CommandKind::Weigh => "weigh",
-            CommandKind::Set => "set",
-            CommandKind::Show => "show",
-            CommandKind::Store => "store",
-            CommandKind::Defaults => "defaults",
-            CommandKind::Run => "run",
-            CommandKind::Abort => "abort",
-            CommandKind::Ack => "ack",
-        }
-    }
 }
 
 impl Command {
@@ -378,33 +79,27 @@ impl Command {
         if !extra.is_empty() {
             return Err(CommandError::Argument);
         }
-        let arity = |n: usize| {
-            let given = [a, b].iter().filter(|w| !w.is_empty()).count();
-            (given == n).then_some(()).ok_or(CommandError::Argument)
-        };
-        if let Some((_, cmd)) = SIMPLE.iter().find(|(w, _)| *w == word) {
-            arity(0)?;
-            return Ok(*cmd);
-        }
-        let cmd = match word {
-            b"jog" | b"servo" => {
-                arity(1)?;
-                let v = number(a)?;
-                if word == b"jog" {
-                    Command::Jog(v)
-                } else {
-                    Command::Servo(v)
-                }
+        let given = [a, b].iter().filter(|w| !w.is_empty()).count();
+        let arity = |n: usize| (given == n).then_some(()).ok_or(CommandError::Argument);
+        let kind = CommandKind::from_word(word).ok_or(CommandError::Unknown)?;
+        let simple = |cmd: Command| arity(0).map(|()| cmd);
+        match kind {
+            CommandKind::Setup => simple(Command::Setup),
+            CommandKind::Leave => simple(Command::Leave),
+            CommandKind::Zero => simple(Command::Zero),
+            CommandKind::Show => simple(Command::Show),
+            CommandKind::Store => simple(Command::Store),
+            CommandKind::Defaults => simple(Command::Defaults),
+            CommandKind::Run => simple(Command::Run),
+            CommandKind::Abort => simple(Command::Abort),
+            CommandKind::Ack => simple(Command::Ack),
+            CommandKind::Jog => arity(1).and_then(|()| number(a)).map(Command::Jog),
+            CommandKind::Servo => arity(1).and_then(|()| number(a)).map(Command::Servo),
+            CommandKind::Weigh => {
+                let ch = Channel::from_name(a).ok_or(CommandError::Argument)?;
+                Ok(Command::Weigh(ch, number(b)?))
             }
-            b"weigh" => {
-                let ch = match a {
-                    b"t1" => Channel::T1,
-                    b"t2" => Channel::T2,
-                    _ => return Err(CommandError::Argument),
-                };
-                Command::Weigh(ch, number(b)?)
-            }
-            b"set" => {
+            CommandKind::Set => {
                 let key = Key::ALL
                     .into_iter()
                     .find(|k| k.name().as_bytes() == a)
@@ -413,18 +108,17 @@ impl Command {
                     } else {
                         CommandError::UnknownKey
                     })?;
-                let value = match (key, b) {
-                    (Key::Order, b"monotone") => StepOrder::Monotone.code() as f32,
-                    (Key::Order, b"updown") => StepOrder::UpDown.code() as f32,
-                    (Key::Order, b"pulse") => StepOrder::Pulse.code() as f32,
-                    (Key::Order, _) => return Err(CommandError::Argument),
+                let value = match key {
+                    Key::Order => {
+                        let order = StepOrder::from_name(b).ok_or(CommandError::Argument)?;
+                        order.code() as f32
+                    }
                     _ => number(b)?,
                 };
-                Command::Set(key, value)
+                Ok(Command::Set(key, value))
             }
-            _ => return Err(CommandError::Unknown),
-        };
-        Ok(cmd)
+            CommandKind::Unparsed => Err(CommandError::Unknown),
+        }
     }
 }
 
@@ -451,19 +145,6 @@ fn words(line: &[u8]) -> [&[u8]; 4] {
     out
 }
 
-/// The commands without arguments, by their word.
-const SIMPLE: [(&[u8], Command); 9] = [
-    (b"setup", Command::Setup),
-    (b"leave", Command::Leave),
-    (b"zero", Command::Zero),
-    (b"show", Command::Show),
-    (b"store", Command::Store),
-    (b"defaults", Command::Defaults),
-    (b"run", Command::Run),
-    (b"abort", Command::Abort),
-    (b"ack", Command::Ack),
-];
-
 /// A word as a number.
 fn number(word: &[u8]) -> Result<f32, CommandError> {
     decimal_bytes(word).ok_or(CommandError::Argument)
@@ -479,7 +160,7 @@ const POW10: [f32; 39] = [
 /// A decimal number: `[+-]digits[.digits][e[+-]digits]`, at most 18 significant digits.
 ///
 /// By hand because core's `f32::from_str` brings 16 KiB of flash (its power-of-five table)
-/// into a 64 KiB budget. Exact for what a person types: the digits form an exact integer and
+/// into a 128 KiB budget. Exact for what a person types: the digits form an exact integer and
 /// one multiplication or division by a power of ten rounds once more (within one ulp of the
 /// correctly rounded value; the tests compare with core's parser).
 pub fn decimal(word: &str) -> Option<f32> {

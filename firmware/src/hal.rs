@@ -1,19 +1,7 @@
 //! The small hardware traits of ours, for what embedded-hal 1.0 has no trait for.
 
-/// The two force channels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(target_os = "none", derive(defmt::Format))]
-pub enum Channel {
-    /// T1: the low-side tension, the cord end pulled by the servo.
-    T1 = 0,
-    /// T2: the high-side tension, the cord end on the fixed sensor.
-    T2 = 1,
-}
-
-impl Channel {
-    /// Both channels, T1 first.
-    pub const BOTH: [Channel; 2] = [Channel::T1, Channel::T2];
-}
+/// The two force channels (their wire codes and names are the schema's).
+pub use capstan_wire::Channel;
 
 /// Full scale of the 12-bit ADC, counts.
 pub const ADC_MAX_COUNTS: u16 = 4095;
@@ -66,30 +54,6 @@ pub trait Console {
 impl Console for () {
     fn read_byte(&mut self) -> Option<u8> {
         None
-    }
-}
-
-/// Where the settings are kept ([`crate::store::SettingsStore`] on a flash).
-#[allow(async_fn_in_trait)]
-pub trait SettingsFlash {
-    /// Keep `settings`; false if the write failed (the stored settings are then unchanged).
-    async fn save(&mut self, settings: &crate::settings::Settings) -> bool;
-}
-
-/// No flash: nothing can be stored.
-impl SettingsFlash for () {
-    async fn save(&mut self, _: &crate::settings::Settings) -> bool {
-        false
-    }
-}
-
-impl<F: embedded_storage_async::nor_flash::NorFlash> SettingsFlash
-    for crate::store::SettingsStore<F>
-{
-    async fn save(&mut self, settings: &crate::settings::Settings) -> bool {
-        crate::store::SettingsStore::save(self, settings)
-            .await
-            .is_ok()
     }
 }
 

@@ -30,14 +30,14 @@ fn main() {
 
 #[cfg(target_os = "none")]
 mod pico {
-    use crate::board::{self, Pins};
+    use crate::board::{self, BoardPins, Pins, RigPins};
     use crate::board_safe::{self, PeriodPwm, RememberingServo};
     use embassy_embedded_hal::adapter::BlockingAsync;
     use embassy_executor::Spawner;
     use embassy_rp::adc::{self, Adc, Blocking};
     use embassy_rp::flash::Flash;
-    use embassy_rp::gpio::{Input, Level, Output, Pin, Pull};
-    use embassy_rp::pwm::{self, Pwm, Slice};
+    use embassy_rp::gpio::{Input, Level, Output, Pull};
+    use embassy_rp::pwm::{self, Pwm};
     use embassy_rp::watchdog::{ResetReason, Watchdog};
     use embassy_time::Duration;
     use firmware::defmt_sink::DefmtSink;
@@ -124,6 +124,17 @@ mod pico {
         c
     }
 
+    /// The board's I/O as the rig core drives it.
+    type BoardIo = RigIo<
+        RememberingServo,
+        PeriodPwm,
+        Output<'static>,
+        Output<'static>,
+        Input<'static>,
+        ForceSensors,
+        HardwareWatchdog,
+    >;
+
     #[embassy_executor::main]
     async fn main(_spawner: Spawner) {
         let mut console = rtt();
@@ -135,21 +146,56 @@ mod pico {
             "PWM timing assumes a 125 MHz clk_sys"
         );
         let pins = Pins::take(p);
-        // The panic path writes these pins' registers by number (board_safe.rs).
+        // The panic path writes these pins' registers by number (board_safe.rs), the host and
+        // the emulated board take them from the same schema.
         defmt::assert!(
-            pins.servo.pin() as usize == board::SERVO_GPIO
-                && pins.servo_slice.number() == board::SERVO_SLICE
-                && pins.amp.pin() as usize == board::AMP_GPIO
-                && pins.amp_slice.number() == board::AMP_SLICE
-                && pins.trigger.pin() as usize == board::TRIGGER_GPIO,
-            "board::*_GPIO/*_SLICE must name the pins of board::Pins"
+            pins.are_the_schemas(),
+            "board::Pins must be the pins of capstan_wire::pins::PINS"
         );
-
+        let BoardPins {
+            watchdog,
+            smps_mode,
+            flash,
+        } = pins.board;
         // Quieter 3V3/ADC_VREF for the force sensors; kept for the whole program (dropping an
         // Output would release the pin).
-        let _smps_pwm_mode = Output::new(pins.smps_mode, Level::High);
-        let mut dog = Watchdog::new(pins.watchdog);
-        let cause = match dog.reset_reason() {
+        let _smps_pwm_mode = Output::new(smps_mode, Level::High);
+        let mut dog = Watchdog::new(watchdog);
+        let cause = reset_cause(&dog);
+        // Not paused while a debugger halts the core (see board::WATCHDOG_PAUSES_WHILE_HALTED),
+        // set before anything can halt.
+        dog.pause_on_debug(board::WATCHDOG_PAUSES_WHILE_HALTED);
+
+        let mut rig = defmt::unwrap!(firmware::Rig::new(
+            board::protocol(),
+            board::calibration(),
+            board::safety_limits(),
+        ));
+        let flash =
+            Flash::<_, embassy_rp::flash::Blocking, { board::FLASH_BYTES }>::new_blocking(flash);
+        let mut store = defmt::unwrap!(SettingsStore::new(
+            BlockingAsync::new(flash),
+            board::SETTINGS_FLASH
+        ));
+        let mut sink = DefmtSink::default();
+        boot(&mut rig, &mut store, &mut sink, cause).await;
+
+        let mut io = rig_io(pins.rig, dog);
+        // Amplifier to 0 V, trigger low, the servo at the stored rest (or without pulses after
+        // a reset that latched a fault), before anything runs.
+        defmt::unwrap!(io.boot(&rig));
+        io.watchdog.dog.start(board::WATCHDOG_TIMEOUT);
+        defmt::info!(
+            "capstan rig ready: {=u32} Hz sampling, watchdog {=u64} ms; press the button to run, or set it up with capstan rig",
+            rig.protocol().sample_hz,
+            board::WATCHDOG_TIMEOUT.as_millis()
+        );
+        serve(&mut io, &mut rig, &mut sink, &mut console, &mut store).await
+    }
+
+    /// Why the chip last reset, as its watchdog tells it (and the log says).
+    fn reset_cause(dog: &Watchdog) -> ResetCause {
+        match dog.reset_reason() {
             Some(ResetReason::TimedOut) => {
                 defmt::warn!(
                     "the hardware watchdog reset the chip: the loop stopped (a hang, a lockup, a stack overflow), or a debugger held the core halted"
@@ -163,36 +209,23 @@ mod pico {
                 ResetCause::Forced
             }
             None => ResetCause::PowerUp,
-        };
-        // Not paused while a debugger halts the core (see board::WATCHDOG_PAUSES_WHILE_HALTED),
-        // set before anything can halt.
-        dog.pause_on_debug(board::WATCHDOG_PAUSES_WHILE_HALTED);
+        }
+    }
 
-        let mut rig = defmt::unwrap!(firmware::Rig::new(
-            board::protocol(),
-            board::calibration(),
-            board::safety_limits(),
-        ));
-        // The settings stored from the host, or the built-in ones (logged either way), before
-        // the servo's first pulse: that pulse is the stored rest.
-        let flash = Flash::<_, embassy_rp::flash::Blocking, { board::FLASH_BYTES }>::new_blocking(
-            pins.flash,
-        );
-        let mut store = defmt::unwrap!(SettingsStore::new(
-            BlockingAsync::new(flash),
-            board::SETTINGS_FLASH
-        ));
-        let mut sink = DefmtSink::default();
-        store.load_into(&mut rig, &mut sink).await;
+    /// Before the servo's first pulse: the stored settings (or the built-in ones, logged either
+    /// way: that pulse is the stored rest), the fault a reset latches, and the panic path armed.
+    async fn boot(
+        rig: &mut firmware::Rig,
+        store: &mut SettingsStore<impl embedded_storage_async::nor_flash::NorFlash>,
+        sink: &mut DefmtSink,
+        cause: ResetCause,
+    ) {
+        store.load_into(rig, sink).await;
         // A reset that was not a clean power-up at rest latches a fault (kept across it), and
         // the servo gets no pulses until a person acknowledges it: nothing moves by itself.
-        let latched = firmware::reset::boot(
-            &mut rig,
-            cause,
-            board_safe::latch_word_before_reset(),
-            &mut sink,
-        );
-        board_safe::remember_latch(firmware::reset::latch_word(&rig));
+        let latched =
+            firmware::reset::boot(rig, cause, board_safe::latch_word_before_reset(), sink);
+        board_safe::remember_latch(firmware::reset::latch_word(rig));
         if let (Some(_), Some(duty)) = (latched, board_safe::servo_duty_before_reset()) {
             let angle = rig
                 .calibration()
@@ -203,11 +236,15 @@ mod pico {
                 angle
             );
         }
-        firmware::LogSink::flush(&mut sink);
+        firmware::LogSink::flush(sink);
         // From here a panic puts the servo at rest (before: no pulses at all; and none while
         // the rig holds the servo without pulses).
-        board_safe::arm(SafeDuties::for_rig(&rig, board::SERVO_FULL_SCALE));
+        board_safe::arm(SafeDuties::for_rig(rig, board::SERVO_FULL_SCALE));
+    }
 
+    /// The rig's drivers: both PWMs (low until the rig's first command), the trigger, LED and
+    /// button, the ADC, the watchdog.
+    fn rig_io(pins: RigPins, dog: Watchdog) -> BoardIo {
         let servo = Pwm::new_output_a(
             pins.servo_slice,
             pins.servo,
@@ -224,7 +261,7 @@ mod pico {
             t1: adc::Channel::new_pin(pins.t1, Pull::None),
             t2: adc::Channel::new_pin(pins.t2, Pull::None),
         };
-        let mut io = RigIo {
+        RigIo {
             // Duties as fractions of the whole period (top + 1 counts), see `PeriodPwm`.
             servo: RememberingServo(PeriodPwm::new(servo, board::SERVO_SLICE)),
             amp: PeriodPwm::new(amp, board::AMP_SLICE),
@@ -236,22 +273,20 @@ mod pico {
                 dog,
                 timeout: board::WATCHDOG_TIMEOUT,
             },
-        };
-        // Amplifier to 0 V, trigger low, the servo at the stored rest (or without pulses after
-        // a reset that latched a fault), before anything runs.
-        defmt::unwrap!(io.boot(&rig));
+        }
+    }
 
-        io.watchdog.dog.start(board::WATCHDOG_TIMEOUT);
-        defmt::info!(
-            "capstan rig ready: {=u32} Hz sampling, watchdog {=u64} ms; press the button to run, or set it up with capstan rig",
-            rig.protocol().sample_hz,
-            board::WATCHDOG_TIMEOUT.as_millis()
-        );
-
-        // Runs, setup mode and host commands, forever: `serve` returns only on a hardware
-        // error, which cannot happen with this HAL (its pins are infallible, duties are clamped
-        // to top). The runner has then already commanded the safe state; the panic handler
-        // forces it again through the registers and the chip resets.
+    /// Runs, setup mode and host commands, forever: `serve` returns only on a hardware error,
+    /// which cannot happen with this HAL (its pins are infallible, duties are clamped to top).
+    /// The runner has then already commanded the safe state; the panic handler forces it again
+    /// through the registers and the chip resets.
+    async fn serve(
+        io: &mut BoardIo,
+        rig: &mut firmware::Rig,
+        sink: &mut DefmtSink,
+        console: &mut RttConsole,
+        store: &mut SettingsStore<impl embedded_storage_async::nor_flash::NorFlash>,
+    ) {
         // New settings may move the rest angle or change the servo map, and an acknowledged
         // reset gives the servo its pulses back: the panic path's rest duty follows them. The
         // latch word is kept every sample for the next boot.
@@ -262,15 +297,7 @@ mod pico {
             }
             None::<()>
         };
-        let served = firmware::runner::serve(
-            &mut io,
-            &mut rig,
-            &mut sink,
-            &mut console,
-            &mut store,
-            never,
-        )
-        .await;
+        let served = firmware::runner::serve(io, rig, sink, console, store, never).await;
         if let Err(e) = served {
             defmt::panic!("hardware error {}: outputs made safe", e);
         }

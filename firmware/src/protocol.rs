@@ -14,40 +14,9 @@
 //! pair is conditioned over [change + `window_after_change_ms`, next change −
 //! `window_before_next_ms`).
 
-/// The order in which the N tension levels are visited.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(target_os = "none", derive(defmt::Format))]
-pub enum StepOrder {
-    /// Levels 1, 2, ..., N: tension rises with time (the thesis).
-    Monotone,
-    /// Odd levels up, then even levels down (1, 3, 5, ..., 6, 4, 2): every level is visited
-    /// once, no step moves more than two levels, and level is nearly uncorrelated with time, so
-    /// heating can be told from tension.
-    UpDown,
-    /// Alternates level 1 and level N: a periodic pulse (for the two-control experiments).
-    Pulse,
-}
-
-impl StepOrder {
-    /// Wire code used in the run-start record.
-    pub const fn code(self) -> u8 {
-        match self {
-            StepOrder::Monotone => 0,
-            StepOrder::UpDown => 1,
-            StepOrder::Pulse => 2,
-        }
-    }
-
-    /// Inverse of [`StepOrder::code`].
-    pub const fn from_code(code: u8) -> Option<StepOrder> {
-        match code {
-            0 => Some(StepOrder::Monotone),
-            1 => Some(StepOrder::UpDown),
-            2 => Some(StepOrder::Pulse),
-            _ => None,
-        }
-    }
-}
+/// The order in which the N tension levels are visited (its code and name are the wire
+/// schema's).
+pub use capstan_wire::StepOrder;
 
 /// Everything the rig does in a run. `Protocol::default()` is the thesis's protocol.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,88 +8,14 @@
 //! the thesis's logger.
 
 use crate::calib::Calibration;
-use crate::command::{CommandError, CommandKind};
 use crate::condition::ChannelStats;
-use crate::hal::Channel;
 use crate::protocol::Protocol;
 use crate::settings::Settings;
+use capstan_wire::{Channel, CommandError, CommandKind, RecordKind, Scalar, Setting, Value};
 
-/// Wire value of "no channel" / "no fault" in the defmt records (the host decoder reads it too).
-pub const NONE_CODE: u8 = 0xff;
-
-/// Why a run was stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(target_os = "none", derive(defmt::Format))]
-pub enum FaultKind {
-    /// A channel read above the force limit.
-    OverForce,
-    /// T2 collapsed while T1 was held: the cord broke.
-    CordBreak,
-    /// A channel sat at an ADC rail (unplugged or shorted sensor) or failed to convert.
-    SensorRail,
-    /// The button was pressed during the run.
-    Abort,
-    /// The sample loop missed its deadline, or (latched at boot) the hardware watchdog reset
-    /// the chip.
-    Watchdog,
-    /// The tare saw a load beyond [`crate::rig::TARE_MAX_N`] on a channel: a weight or a
-    /// preload on the cord, or a zero that is wrong. Taken as zero, it would blind the
-    /// over-force check.
-    TareLoad,
-    /// The calibration cannot show the over-force limit below the rail check
-    /// ([`crate::safety::SafetyLimits::visible`]).
-    Blind,
-    /// A channel read far below zero ([`crate::safety::SafetyLimits::negative_force_n`]): a
-    /// reversed sensor or a wrong zero.
-    NegativeForce,
-    /// Latched at boot: the panic or HardFault handler reset the chip.
-    Panic,
-    /// Latched at boot: the chip was reset (a debugger, the RUN pin) while the rig was not at
-    /// rest.
-    Reset,
-}
-
-impl FaultKind {
-    /// Every fault.
-    pub const ALL: [FaultKind; 10] = [
-        FaultKind::OverForce,
-        FaultKind::CordBreak,
-        FaultKind::SensorRail,
-        FaultKind::Abort,
-        FaultKind::Watchdog,
-        FaultKind::TareLoad,
-        FaultKind::Blind,
-        FaultKind::NegativeForce,
-        FaultKind::Panic,
-        FaultKind::Reset,
-    ];
-
-    /// Stable name, as used by the CLI (`--fault NAME@SECONDS`) and in CSV/JSON.
-    pub const fn name(self) -> &'static str {
-        match self {
-            FaultKind::OverForce => "over_force",
-            FaultKind::CordBreak => "cord_break",
-            FaultKind::SensorRail => "sensor_unplugged",
-            FaultKind::Abort => "abort",
-            FaultKind::Watchdog => "watchdog",
-            FaultKind::TareLoad => "tare_load",
-            FaultKind::Blind => "blind_calibration",
-            FaultKind::NegativeForce => "negative_force",
-            FaultKind::Panic => "panic",
-            FaultKind::Reset => "reset",
-        }
-    }
-
-    /// Wire code used in the defmt record.
-    pub const fn code(self) -> u8 {
-        self as u8
-    }
-
-    /// Inverse of [`FaultKind::code`].
-    pub fn from_code(code: u8) -> Option<FaultKind> {
-        FaultKind::ALL.into_iter().find(|k| k.code() == code)
-    }
-}
+/// The codes the records carry (fault kinds, where the settings came from, "none"): the wire
+/// schema's.
+pub use capstan_wire::{FaultKind, SettingsSource, NONE_CODE};
 
 /// The run begins (emitted once the tare is done, with the calibration the run will use).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -186,73 +112,6 @@ pub struct Reply {
     pub values: [f32; 2],
 }
 
-/// Where the settings in force came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SettingsSource {
-    /// Changed by `set` since they were loaded, stored or reset to the defaults.
-    Current = 0,
-    /// Just written to flash (`store`).
-    Stored = 1,
-    /// Read from flash at boot.
-    Loaded = 2,
-    /// Built-in defaults: nothing stored yet.
-    DefaultsNoRecord = 3,
-    /// Built-in defaults: the newest stored record is corrupt, so none is used.
-    DefaultsCorrupt = 4,
-    /// Built-in defaults: the stored record does not validate (another version, bad values).
-    DefaultsInvalid = 5,
-    /// Built-in defaults: the flash could not be read.
-    DefaultsFlashError = 6,
-    /// Built-in defaults restored by `defaults` (not yet stored).
-    DefaultsAsked = 7,
-}
-
-impl SettingsSource {
-    /// Every source.
-    pub const ALL: [SettingsSource; 8] = [
-        SettingsSource::Current,
-        SettingsSource::Stored,
-        SettingsSource::Loaded,
-        SettingsSource::DefaultsNoRecord,
-        SettingsSource::DefaultsCorrupt,
-        SettingsSource::DefaultsInvalid,
-        SettingsSource::DefaultsFlashError,
-        SettingsSource::DefaultsAsked,
-    ];
-
-    /// Wire code.
-    pub const fn code(self) -> u8 {
-        self as u8
-    }
-
-    /// Inverse of [`SettingsSource::code`].
-    pub fn from_code(code: u8) -> Option<SettingsSource> {
-        SettingsSource::ALL.get(code as usize).copied()
-    }
-
-    /// What it means, for a person.
-    pub const fn message(self) -> &'static str {
-        match self {
-            SettingsSource::Current => {
-                "changed by `set` since they were loaded or stored (send store to keep them)"
-            }
-            SettingsSource::Stored => "stored in flash",
-            SettingsSource::Loaded => "loaded from flash at boot",
-            SettingsSource::DefaultsNoRecord => "no settings stored: using the built-in defaults",
-            SettingsSource::DefaultsCorrupt => {
-                "the stored settings are corrupt: using the built-in defaults"
-            }
-            SettingsSource::DefaultsInvalid => {
-                "the stored settings are of another version or invalid: using the built-in defaults"
-            }
-            SettingsSource::DefaultsFlashError => {
-                "the flash could not be read: using the built-in defaults"
-            }
-            SettingsSource::DefaultsAsked => "built-in defaults restored (send store to keep them)",
-        }
-    }
-}
-
 /// The settings in force, and where they came from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SettingsReport {
@@ -320,8 +179,8 @@ impl Sequencer {
 /// The CRC of every log record: CRC-32/ISO-HDLC (the Ethernet and zip CRC).
 const RECORD_CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
-/// The bytes a record's checksum covers, fed one field at a time in the order of the record's
-/// format string (`defmt_sink.rs`), each little-endian at its wire width; a NaN always as the
+/// The bytes a record's checksum covers, fed one field at a time in wire order
+/// ([`Record::for_each_field`]), each little-endian at its wire width; a NaN always as the
 /// canonical NaN (the host reads NaN back from its text, without its payload).
 pub struct CrcFields(crc::Digest<'static, u32>);
 
@@ -330,44 +189,36 @@ impl CrcFields {
     pub fn new() -> Self {
         CrcFields(RECORD_CRC.digest())
     }
-    /// A `u8` field.
+    /// One field.
     // Not inlined: a record checksums ~25 fields, inlined they cost ~1.5 KiB of flash.
     #[inline(never)]
+    pub fn push(&mut self, v: Scalar) {
+        let bytes = v.le_bytes();
+        self.0.update(&bytes[..v.prim().bytes()]);
+    }
+    /// A `u8` field.
     pub fn u8(mut self, v: u8) -> Self {
-        self.0.update(&[v]);
+        self.push(Scalar::U8(v));
         self
     }
     /// A `u16` field.
-    // Not inlined: a record checksums ~25 fields, inlined they cost ~1.5 KiB of flash.
-    #[inline(never)]
     pub fn u16(mut self, v: u16) -> Self {
-        self.0.update(&v.to_le_bytes());
+        self.push(Scalar::U16(v));
         self
     }
     /// A `u32` field.
-    // Not inlined: a record checksums ~25 fields, inlined they cost ~1.5 KiB of flash.
-    #[inline(never)]
     pub fn u32(mut self, v: u32) -> Self {
-        self.0.update(&v.to_le_bytes());
+        self.push(Scalar::U32(v));
         self
     }
     /// An `i64` field.
-    // Not inlined: a record checksums ~25 fields, inlined they cost ~1.5 KiB of flash.
-    #[inline(never)]
     pub fn i64(mut self, v: i64) -> Self {
-        self.0.update(&v.to_le_bytes());
+        self.push(Scalar::I64(v));
         self
     }
     /// An `f32` field.
-    // Not inlined: a record checksums ~25 fields, inlined they cost ~1.5 KiB of flash.
-    #[inline(never)]
     pub fn f32(mut self, v: f32) -> Self {
-        let bits = if v.is_nan() {
-            f32::NAN.to_bits()
-        } else {
-            v.to_bits()
-        };
-        self.0.update(&bits.to_le_bytes());
+        self.push(Scalar::F32(v));
         self
     }
     /// The checksum.
@@ -382,66 +233,398 @@ impl Default for CrcFields {
     }
 }
 
-/// The protocol and calibration fields of `run_start` and `settings`, in their order.
-fn settings_crc(c: CrcFields, p: &Protocol, k: &Calibration) -> CrcFields {
-    let s = Settings {
-        protocol: *p,
-        calibration: *k,
-    };
-    let fields = s.fields();
-    let c = c.u8(fields[0] as u8);
-    fields[1..].iter().fold(c, |c, &v| c.u32(v))
+impl Record {
+    /// Its kind in the wire schema.
+    pub const fn kind(&self) -> RecordKind {
+        match self {
+            Record::RunStart(_) => RecordKind::RunStart,
+            Record::Raw(_) => RecordKind::Raw,
+            Record::Pair(_) => RecordKind::Pair,
+            Record::Fault(_) => RecordKind::Fault,
+            Record::RunEnd(_) => RecordKind::RunEnd,
+            Record::Live(_) => RecordKind::Live,
+            Record::Reply(_) => RecordKind::Reply,
+            Record::Settings(_) => RecordKind::Settings,
+        }
+    }
+
+    /// Every field of the record but its `crc`, with `seq`, in wire order and at its wire type
+    /// (the schema's [`RecordKind::fields`]): what the checksum covers and the board sends.
+    pub fn for_each_field(&self, seq: u32, mut f: impl FnMut(Scalar)) {
+        use Scalar::{F32, I64, U16, U32, U8};
+        f(U32(seq));
+        match self {
+            Record::RunStart(s) => {
+                f(U32(s.run));
+                settings_fields(&s.settings(), f);
+            }
+            Record::Settings(s) => {
+                f(U8(s.source.code()));
+                settings_fields(&s.settings, f);
+            }
+            Record::Live(l) => {
+                f(U32(l.t_ms));
+                f(U16(l.counts[0]));
+                f(U16(l.counts[1]));
+                f(F32(l.force_n[0]));
+                f(F32(l.force_n[1]));
+                f(F32(l.servo_deg));
+            }
+            Record::Reply(r) => {
+                f(U8(r.command.code()));
+                f(U8(r.error.map_or(0, |e| e.code())));
+                f(F32(r.values[0]));
+                f(F32(r.values[1]));
+            }
+            Record::Raw(r) => {
+                f(I64(r.t_us));
+                f(U16(r.counts[0]));
+                f(U16(r.counts[1]));
+                f(F32(r.force_n[0]));
+                f(F32(r.force_n[1]));
+            }
+            Record::Pair(p) => {
+                f(U32(p.step));
+                f(U32(p.level));
+                f(F32(p.angle_deg));
+                f(U32(p.t_mid_ms));
+                for t in [&p.t1, &p.t2] {
+                    f(F32(t.mean_n));
+                    f(F32(t.std_n));
+                    f(U32(t.count));
+                }
+            }
+            Record::Fault(x) => {
+                f(U8(x.kind.code()));
+                f(U8(x.channel.map_or(NONE_CODE, Channel::code)));
+                f(F32(x.value));
+                f(I64(x.t_us));
+            }
+            Record::RunEnd(e) => {
+                f(I64(e.t_us));
+                f(U32(e.pairs));
+                f(U8(e.fault.map_or(NONE_CODE, FaultKind::code)));
+            }
+        }
+    }
+}
+
+impl RunStart {
+    /// The protocol and calibration of the run, as settings.
+    pub fn settings(&self) -> Settings {
+        Settings {
+            protocol: self.protocol,
+            calibration: self.calibration,
+        }
+    }
+}
+
+/// The settings block of `run_start` and `settings`: every setting in wire order, at its wire
+/// type.
+fn settings_fields(s: &Settings, mut f: impl FnMut(Scalar)) {
+    for (&setting, bits) in Setting::ALL.iter().zip(s.fields()) {
+        f(crate::settings::scalar(setting, bits));
+    }
+}
+
+/// Why fields do not make a record ([`Record::from_fields`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldsError {
+    /// Fewer fields than the record has; the first missing.
+    Missing(&'static str),
+    /// A field of another wire type.
+    Type(&'static str),
+    /// More fields than the record has.
+    Extra,
+    /// A code that means nothing in this field.
+    Code {
+        /// The field.
+        field: &'static str,
+        /// The code.
+        code: u8,
+    },
+}
+
+impl Record {
+    /// The record of a kind from its fields in wire order, `seq` first and `crc` left out (as
+    /// [`Record::for_each_field`] gives them): the sequence number and the record.
+    pub fn from_fields(kind: RecordKind, fields: &[Scalar]) -> Result<(u32, Record), FieldsError> {
+        let mut r = FieldReader {
+            kind,
+            fields,
+            at: 0,
+        };
+        let seq = r.u32()?;
+        let record = match kind {
+            RecordKind::RunStart => {
+                let run = r.u32()?;
+                let s = r.settings()?;
+                Record::RunStart(RunStart {
+                    run,
+                    protocol: s.protocol,
+                    calibration: s.calibration,
+                })
+            }
+            RecordKind::Settings => Record::Settings(SettingsReport {
+                source: r.code(SettingsSource::from_code)?,
+                settings: r.settings()?,
+            }),
+            RecordKind::Live => Record::Live(Live {
+                t_ms: r.u32()?,
+                counts: [r.u16()?, r.u16()?],
+                force_n: [r.f32()?, r.f32()?],
+                servo_deg: r.f32()?,
+            }),
+            RecordKind::Reply => Record::Reply(Reply {
+                command: r.code(CommandKind::from_code)?,
+                error: r.code(|c| match c {
+                    0 => Some(None),
+                    c => CommandError::from_code(c).map(Some),
+                })?,
+                values: [r.f32()?, r.f32()?],
+            }),
+            RecordKind::Raw => Record::Raw(RawSample {
+                t_us: r.i64()?,
+                counts: [r.u16()?, r.u16()?],
+                force_n: [r.f32()?, r.f32()?],
+            }),
+            RecordKind::Pair => Record::Pair(StepPair {
+                step: r.u32()?,
+                level: r.u32()?,
+                angle_deg: r.f32()?,
+                t_mid_ms: r.u32()?,
+                t1: r.stats()?,
+                t2: r.stats()?,
+            }),
+            RecordKind::Fault => Record::Fault(Fault {
+                kind: r.code(FaultKind::from_code)?,
+                channel: r.code(none_or(Channel::from_code))?,
+                value: r.f32()?,
+                t_us: r.i64()?,
+            }),
+            RecordKind::RunEnd => Record::RunEnd(RunEnd {
+                t_us: r.i64()?,
+                pairs: r.u32()?,
+                fault: r.code(none_or(FaultKind::from_code))?,
+            }),
+        };
+        match r.at == fields.len() {
+            true => Ok((seq, record)),
+            false => Err(FieldsError::Extra),
+        }
+    }
+}
+
+/// A code that may be [`NONE_CODE`].
+fn none_or<T>(of: impl Fn(u8) -> Option<T>) -> impl Fn(u8) -> Option<Option<T>> {
+    move |c| match c {
+        NONE_CODE => Some(None),
+        c => of(c).map(Some),
+    }
+}
+
+/// Reads a record's fields in wire order.
+struct FieldReader<'a> {
+    kind: RecordKind,
+    fields: &'a [Scalar],
+    at: usize,
+}
+
+impl FieldReader<'_> {
+    /// The next field and its name.
+    fn next(&mut self) -> Result<(Scalar, &'static str), FieldsError> {
+        let name = self.kind.fields().nth(self.at).map_or("crc", |f| f.name);
+        let v = *self.fields.get(self.at).ok_or(FieldsError::Missing(name))?;
+        self.at += 1;
+        Ok((v, name))
+    }
+    fn u8(&mut self) -> Result<(u8, &'static str), FieldsError> {
+        match self.next()? {
+            (Scalar::U8(v), name) => Ok((v, name)),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn u16(&mut self) -> Result<u16, FieldsError> {
+        match self.next()? {
+            (Scalar::U16(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn u32(&mut self) -> Result<u32, FieldsError> {
+        match self.next()? {
+            (Scalar::U32(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn i64(&mut self) -> Result<i64, FieldsError> {
+        match self.next()? {
+            (Scalar::I64(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    fn f32(&mut self) -> Result<f32, FieldsError> {
+        match self.next()? {
+            (Scalar::F32(v), _) => Ok(v),
+            (_, name) => Err(FieldsError::Type(name)),
+        }
+    }
+    /// A one-byte code, as `of` reads it.
+    fn code<T>(&mut self, of: impl Fn(u8) -> Option<T>) -> Result<T, FieldsError> {
+        let (code, field) = self.u8()?;
+        of(code).ok_or(FieldsError::Code { field, code })
+    }
+    fn stats(&mut self) -> Result<ChannelStats, FieldsError> {
+        Ok(ChannelStats {
+            mean_n: self.f32()?,
+            std_n: self.f32()?,
+            count: self.u32()?,
+        })
+    }
+    /// The settings block (not validated: a record says what the rig ran with).
+    fn settings(&mut self) -> Result<Settings, FieldsError> {
+        let mut bits = [0u32; crate::settings::FIELDS];
+        for (b, setting) in bits.iter_mut().zip(Setting::ALL) {
+            *b = match setting.value() {
+                Value::Code => self.u8()?.0 as u32,
+                Value::Whole => self.u32()?,
+                Value::Real => self.f32()?.to_bits(),
+            };
+        }
+        Settings::from_fields(&bits).ok_or(FieldsError::Code {
+            field: Setting::Order.name(),
+            code: bits[Setting::Order.index()] as u8,
+        })
+    }
 }
 
 /// The checksum a record is logged with (`crc=` in its format string): over its sequence
-/// number and every field, in the format string's order.
+/// number and every field, in wire order ([`Record::for_each_field`]).
 pub fn record_crc(seq: u32, record: &Record) -> u32 {
-    let c = CrcFields::new().u32(seq);
-    match record {
-        Record::RunStart(s) => settings_crc(c.u32(s.run), &s.protocol, &s.calibration),
-        Record::Settings(s) => settings_crc(
-            c.u8(s.source.code()),
-            &s.settings.protocol,
-            &s.settings.calibration,
-        ),
-        Record::Live(l) => c
-            .u32(l.t_ms)
-            .u16(l.counts[0])
-            .u16(l.counts[1])
-            .f32(l.force_n[0])
-            .f32(l.force_n[1])
-            .f32(l.servo_deg),
-        Record::Reply(r) => c
-            .u8(r.command.code())
-            .u8(r.error.map_or(0, |e| e.code()))
-            .f32(r.values[0])
-            .f32(r.values[1]),
-        Record::Raw(r) => c
-            .i64(r.t_us)
-            .u16(r.counts[0])
-            .u16(r.counts[1])
-            .f32(r.force_n[0])
-            .f32(r.force_n[1]),
-        Record::Pair(p) => c
-            .u32(p.step)
-            .u32(p.level)
-            .f32(p.angle_deg)
-            .u32(p.t_mid_ms)
-            .f32(p.t1.mean_n)
-            .f32(p.t1.std_n)
-            .u32(p.t1.count)
-            .f32(p.t2.mean_n)
-            .f32(p.t2.std_n)
-            .u32(p.t2.count),
-        Record::Fault(f) => c
-            .u8(f.kind.code())
-            .u8(f.channel.map_or(NONE_CODE, |ch| ch as u8))
-            .f32(f.value)
-            .i64(f.t_us),
-        Record::RunEnd(e) => c
-            .i64(e.t_us)
-            .u32(e.pairs)
-            .u8(e.fault.map_or(NONE_CODE, |k| k.code())),
+    let mut c = CrcFields::new();
+    record.for_each_field(seq, |v| c.push(v));
+    c.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::Calibration;
+    use crate::protocol::Protocol;
+    use capstan_wire::Prim;
+
+    fn one_of_each() -> [Record; 8] {
+        let stats = ChannelStats {
+            mean_n: 1.5,
+            std_n: 0.02,
+            count: 7000,
+        };
+        let settings = Settings {
+            protocol: Protocol::default(),
+            calibration: Calibration::default(),
+        };
+        [
+            Record::RunStart(RunStart {
+                run: 2,
+                protocol: settings.protocol,
+                calibration: settings.calibration,
+            }),
+            Record::Raw(RawSample {
+                t_us: -500,
+                counts: [400, 410],
+                force_n: [0.1, 0.2],
+            }),
+            Record::Pair(StepPair {
+                step: 3,
+                level: 3,
+                angle_deg: 110.0,
+                t_mid_ms: 26_000,
+                t1: stats,
+                t2: stats,
+            }),
+            Record::Fault(Fault {
+                kind: FaultKind::CordBreak,
+                channel: Some(Channel::T2),
+                value: 0.1,
+                t_us: 30_004_000,
+            }),
+            Record::RunEnd(RunEnd {
+                t_us: 30_004_000,
+                pairs: 2,
+                fault: Some(FaultKind::CordBreak),
+            }),
+            Record::Settings(SettingsReport {
+                source: SettingsSource::Loaded,
+                settings,
+            }),
+            Record::Live(Live {
+                t_ms: 100,
+                counts: [400, 401],
+                force_n: [0.0, 0.01],
+                servo_deg: 125.0,
+            }),
+            Record::Reply(Reply {
+                command: CommandKind::Jog,
+                error: None,
+                values: [95.0, 0.0],
+            }),
+        ]
     }
-    .finish()
+
+    #[test]
+    fn every_record_gives_the_schemas_fields_in_its_order() {
+        let records = one_of_each();
+        for kind in RecordKind::ALL {
+            let record = records.iter().find(|r| r.kind() == kind).unwrap();
+            let mut prims = std::vec::Vec::new();
+            record.for_each_field(9, |v| prims.push(v.prim()));
+            let schema: std::vec::Vec<Prim> = kind
+                .fields()
+                .filter(|f| f.name != "crc")
+                .map(|f| f.prim)
+                .collect();
+            assert_eq!(prims, schema, "{}", kind.word());
+        }
+    }
+
+    #[test]
+    fn fields_make_the_record_back() {
+        for record in one_of_each() {
+            let mut fields = std::vec::Vec::new();
+            record.for_each_field(9, |v| fields.push(v));
+            assert_eq!(Record::from_fields(record.kind(), &fields), Ok((9, record)));
+            let short = &fields[..fields.len() - 1];
+            let last = record.kind().fields().nth(short.len()).unwrap().name;
+            assert_eq!(
+                Record::from_fields(record.kind(), short),
+                Err(FieldsError::Missing(last))
+            );
+        }
+        let bad_kind = [Scalar::U32(1), Scalar::U8(77), Scalar::U8(NONE_CODE)];
+        let bad_kind = [&bad_kind[..], &[Scalar::F32(0.0), Scalar::I64(0)]].concat();
+        assert_eq!(
+            Record::from_fields(RecordKind::Fault, &bad_kind),
+            Err(FieldsError::Code {
+                field: "kind",
+                code: 77
+            })
+        );
+    }
+
+    #[test]
+    fn the_checksum_covers_every_field_at_its_width() {
+        let raw = Record::Raw(RawSample {
+            t_us: -500,
+            counts: [400, 410],
+            force_n: [f32::from_bits(0x7fc0_0001), 0.2],
+        });
+        // seq, t_us, c1, c2, t1_n (a NaN with a payload: checksummed as the canonical NaN), t2_n.
+        let mut bytes = std::vec::Vec::new();
+        bytes.extend(9u32.to_le_bytes());
+        bytes.extend((-500i64).to_le_bytes());
+        bytes.extend(400u16.to_le_bytes());
+        bytes.extend(410u16.to_le_bytes());
+        bytes.extend(f32::NAN.to_bits().to_le_bytes());
+        bytes.extend(0.2f32.to_bits().to_le_bytes());
+        assert_eq!(record_crc(9, &raw), RECORD_CRC.checksum(&bytes));
+    }
 }

@@ -2,7 +2,8 @@
 //! out, records to a sink. No hardware, no clock, no async: `runner.rs` does that.
 //!
 //! * this file: the state, what the rig commands when nothing runs, one sample's dispatch;
-//! * `rig/run.rs`: a run (tare and its bound, steps, conditioning, the end);
+//! * `rig/run.rs`: a run (tare and its bound, the raw log, the supervisor, the end);
+//! * `rig/steps.rs`: a run's steps (which is held, its window, its pair);
 //! * `rig/idle.rs`: between runs (supervision, homing, the fault latch and its
 //!   acknowledgement, the latch a reset leaves);
 //! * `rig/commands.rs`: host commands and setup mode.
@@ -14,17 +15,18 @@
 use crate::button::Debouncer;
 use crate::calib::Calibration;
 use crate::command::Command;
-use crate::condition::Window;
 use crate::hal::AdcError;
 use crate::protocol::{Protocol, ProtocolError};
 use crate::record::{FaultKind, LogSink, Record, RunEnd, Sequencer};
 use crate::safety::{SafetyLimits, Supervisor};
 use crate::settings::Settings;
 use crate::setup::Measure;
+use steps::Steps;
 
 mod commands;
 mod idle;
 mod run;
+mod steps;
 
 /// Debounce time of the button, ms.
 /// (10 ms: longer than contact bounce, short enough that an abort is safe well inside 20 ms.)
@@ -114,21 +116,8 @@ enum Phase {
         origin_us: u64,
         next_live_us: u64,
     },
-    /// Running the protocol; `step` is the step being held, `window` its conditioning.
-    Run {
-        step: u32,
-        window: Window,
-        /// The step's pair is emitted on the last sample before this, µs from the press (the
-        /// end of its window; `u64::MAX`: no pair to come in this step).
-        pair_due_us: u64,
-        /// When the next step starts, ms from the press (`u32::MAX`: the run is over). The
-        /// step is worked out anew only then, not with a division every sample.
-        next_ms: u32,
-        /// From when the step's level is held ([`Rig::level_held`]), ms (`u32::MAX`: never).
-        armed_ms: u32,
-        /// The step's servo angle, deg.
-        servo_deg: f32,
-    },
+    /// Running the protocol: the step being held and its conditioning.
+    Run(Steps),
 }
 
 /// The rig: protocol, calibration and the state of the current run.
@@ -370,7 +359,7 @@ impl Rig {
     /// A tension level (≥ 1) has been held for `CORD_CHECK_SETTLE_MS`: the cord is loaded.
     /// (The step is the one of the previous sample: at most one sample late at a change.)
     fn level_held(&self, elapsed_ms: u32) -> bool {
-        matches!(self.phase, Phase::Run { armed_ms, .. } if elapsed_ms >= armed_ms)
+        matches!(&self.phase, Phase::Run(steps) if steps.level_held(elapsed_ms))
     }
 
     /// Both channels in newtons (NaN where a conversion failed).

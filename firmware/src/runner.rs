@@ -3,9 +3,10 @@
 //! simulator all run this very function; only the `RigIo` they hand it differs.
 
 use crate::command::LineBuffer;
-use crate::hal::{Console, ForceAdc, SettingsFlash, Watchdog};
+use crate::hal::{Console, ForceAdc, Watchdog};
 use crate::record::{LogSink, RunEnd};
 use crate::rig::{Inputs, Outputs, Rig};
+use crate::store::SettingsFlash;
 use embassy_time::{Duration, Instant, Ticker};
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;

@@ -5,16 +5,19 @@
 //! flash store (`store.rs`, on `sequential-storage`) adds the CRC and the wear levelling. A
 //! record of another version, of the wrong length, or whose values do not validate, is never
 //! used: [`Settings::decode`] refuses it and the rig keeps its defaults.
+//!
+//! Which values there are, in which order, how each is held, is the wire schema's
+//! ([`capstan_wire::Setting`]); this file says where each lives in [`Settings`].
 
-use crate::calib::{AmpMap, Calibration, CalibrationError, ChannelCal, ServoMap};
-use crate::command::Key;
+use crate::calib::{Calibration, CalibrationError};
 use crate::protocol::{Protocol, ProtocolError, StepOrder};
+use capstan_wire::{Key, Scalar, Setting, Value};
 
 /// Version of the byte layout below. Change it whenever the layout changes.
 pub const SETTINGS_VERSION: u8 = 1;
 
 /// Values in [`Settings::fields`]: 15 of the protocol, 10 of the calibration.
-pub const FIELDS: usize = 25;
+pub const FIELDS: usize = capstan_wire::settings::SETTINGS;
 
 /// Encoded length, bytes: version, generation, the order's code, 24 values of 4 bytes.
 pub const SETTINGS_BYTES: usize = 1 + 4 + 1 + 4 * (FIELDS - 1);
@@ -56,6 +59,15 @@ pub enum SettingsError {
     /// Under this calibration the over-force limit would read above the rail check: the
     /// over-force check could not trip ([`crate::safety::SafetyLimits::visible`]).
     Blind,
+}
+
+/// A setting's 32 bits ([`Settings::get`]) at its wire type.
+pub fn scalar(setting: Setting, bits: u32) -> Scalar {
+    match setting.value() {
+        Value::Code => Scalar::U8(bits as u8),
+        Value::Whole => Scalar::U32(bits),
+        Value::Real => Scalar::F32(f32::from_bits(bits)),
+    }
 }
 
 /// How far inside the servo map's 0..=`servo_max_deg` the protocol's angles must stay, deg: the
@@ -114,15 +126,15 @@ impl Settings {
     /// order's code; a count of ms must be a whole number).
     pub fn with(&self, key: Key, value: f32) -> Result<Settings, SettingsError> {
         let i = key.field();
-        let bits = match FIELD_KINDS[i] {
-            Kind::F32 => value.to_bits(),
-            Kind::U32 => {
+        let bits = match key.setting().value() {
+            Value::Real => value.to_bits(),
+            Value::Whole => {
                 let whole = (0.0..=1.0e9).contains(&value) && libm::truncf(value) == value;
                 whole
                     .then_some(value as u32)
                     .ok_or(SettingsError::NotWhole)?
             }
-            Kind::Order => StepOrder::from_code(value as u8)
+            Value::Code => StepOrder::from_code(value as u8)
                 .filter(|o| o.code() as f32 == value)
                 .ok_or(SettingsError::Order)?
                 .code() as u32,
@@ -138,85 +150,98 @@ impl Settings {
         Ok(s)
     }
 
-    /// Every value, in the order of the `run_start` and `settings` records' fields (and of the
-    /// flash layout): each as 32 bits, an f32 by its bits (NaN canonical), `order` by its code.
+    /// Every value, in wire order (the `run_start` and `settings` records' fields, the flash
+    /// layout): each as 32 bits, an f32 by its bits (NaN canonical), `order` by its code.
     // Not inlined (here and below): five callers, ~0.5 KiB of flash each time.
     #[inline(never)]
     pub fn fields(&self) -> [u32; FIELDS] {
-        let (p, c) = (&self.protocol, &self.calibration);
-        let f = |v: f32| if v.is_nan() { f32::NAN } else { v }.to_bits();
-        [
-            p.order.code() as u32,
-            f(p.rest_deg),
-            f(p.step_deg),
-            f(p.final_deg),
-            p.dwell_ms,
-            p.pre_trigger_ms,
-            p.trigger_ms,
-            p.tare_ms,
-            f(p.amp_control_v),
-            p.sample_hz,
-            p.raw_log_hz,
-            p.window_after_change_ms,
-            p.window_before_next_ms,
-            f(p.capstan_diameter_mm),
-            f(p.wrap_deg),
-            f(c.amp.amp_gain),
-            f(c.t1.zero_counts),
-            f(c.t1.n_per_count),
-            f(c.t2.zero_counts),
-            f(c.t2.n_per_count),
-            f(c.tare_reference_n),
-            f(c.servo.pulse_at_min_us),
-            f(c.servo.pulse_at_max_us),
-            f(c.servo.max_deg),
-            f(c.amp.full_scale_v),
-        ]
+        Setting::ALL.map(|s| self.get(s))
     }
 
     /// Inverse of [`Settings::fields`] (`None` for an unknown step order; not validated).
     #[inline(never)]
     pub fn from_fields(v: &[u32; FIELDS]) -> Option<Settings> {
-        let f = f32::from_bits;
-        let protocol = Protocol {
-            order: StepOrder::from_code(u8::try_from(v[0]).ok()?)?,
-            rest_deg: f(v[1]),
-            step_deg: f(v[2]),
-            final_deg: f(v[3]),
-            dwell_ms: v[4],
-            pre_trigger_ms: v[5],
-            trigger_ms: v[6],
-            tare_ms: v[7],
-            amp_control_v: f(v[8]),
-            sample_hz: v[9],
-            raw_log_hz: v[10],
-            window_after_change_ms: v[11],
-            window_before_next_ms: v[12],
-            capstan_diameter_mm: f(v[13]),
-            wrap_deg: f(v[14]),
+        let mut s = Settings {
+            protocol: Protocol::default(),
+            calibration: Calibration::default(),
         };
-        let ch = |zero: u32, npc: u32| ChannelCal {
-            zero_counts: f(zero),
-            n_per_count: f(npc),
-        };
-        let calibration = Calibration {
-            amp: AmpMap {
-                amp_gain: f(v[15]),
-                full_scale_v: f(v[24]),
-            },
-            t1: ch(v[16], v[17]),
-            t2: ch(v[18], v[19]),
-            tare_reference_n: f(v[20]),
-            servo: ServoMap {
-                pulse_at_min_us: f(v[21]),
-                pulse_at_max_us: f(v[22]),
-                max_deg: f(v[23]),
-            },
-        };
-        Some(Settings {
-            protocol,
-            calibration,
-        })
+        for (setting, &bits) in Setting::ALL.iter().zip(v) {
+            s.set(*setting, bits)?;
+        }
+        Some(s)
+    }
+
+    /// One value as 32 bits (see [`Settings::fields`]): where each setting lives.
+    pub fn get(&self, setting: Setting) -> u32 {
+        let (p, c) = (&self.protocol, &self.calibration);
+        let f = |v: f32| if v.is_nan() { f32::NAN } else { v }.to_bits();
+        match setting {
+            Setting::Order => p.order.code() as u32,
+            Setting::RestDeg => f(p.rest_deg),
+            Setting::StepDeg => f(p.step_deg),
+            Setting::FinalDeg => f(p.final_deg),
+            Setting::DwellMs => p.dwell_ms,
+            Setting::PreTriggerMs => p.pre_trigger_ms,
+            Setting::TriggerMs => p.trigger_ms,
+            Setting::TareMs => p.tare_ms,
+            Setting::AmpControlV => f(p.amp_control_v),
+            Setting::SampleHz => p.sample_hz,
+            Setting::RawLogHz => p.raw_log_hz,
+            Setting::WindowAfterMs => p.window_after_change_ms,
+            Setting::WindowBeforeMs => p.window_before_next_ms,
+            Setting::DiameterMm => f(p.capstan_diameter_mm),
+            Setting::WrapDeg => f(p.wrap_deg),
+            Setting::AmpGain => f(c.amp.amp_gain),
+            Setting::T1Zero => f(c.t1.zero_counts),
+            Setting::T1NPerCount => f(c.t1.n_per_count),
+            Setting::T2Zero => f(c.t2.zero_counts),
+            Setting::T2NPerCount => f(c.t2.n_per_count),
+            Setting::TareReferenceN => f(c.tare_reference_n),
+            Setting::ServoMinUs => f(c.servo.pulse_at_min_us),
+            Setting::ServoMaxUs => f(c.servo.pulse_at_max_us),
+            Setting::ServoMaxDeg => f(c.servo.max_deg),
+            Setting::AmpFullScaleV => f(c.amp.full_scale_v),
+        }
+    }
+
+    /// One value at its wire type (as the `run_start` and `settings` records carry it).
+    pub fn scalar(&self, setting: Setting) -> Scalar {
+        scalar(setting, self.get(setting))
+    }
+
+    /// Set one value from its 32 bits (the inverse of [`Settings::get`]; `None` for an unknown
+    /// step order). Not validated.
+    pub fn set(&mut self, setting: Setting, bits: u32) -> Option<()> {
+        let (p, c) = (&mut self.protocol, &mut self.calibration);
+        let f = f32::from_bits(bits);
+        match setting {
+            Setting::Order => p.order = StepOrder::from_code(u8::try_from(bits).ok()?)?,
+            Setting::RestDeg => p.rest_deg = f,
+            Setting::StepDeg => p.step_deg = f,
+            Setting::FinalDeg => p.final_deg = f,
+            Setting::DwellMs => p.dwell_ms = bits,
+            Setting::PreTriggerMs => p.pre_trigger_ms = bits,
+            Setting::TriggerMs => p.trigger_ms = bits,
+            Setting::TareMs => p.tare_ms = bits,
+            Setting::AmpControlV => p.amp_control_v = f,
+            Setting::SampleHz => p.sample_hz = bits,
+            Setting::RawLogHz => p.raw_log_hz = bits,
+            Setting::WindowAfterMs => p.window_after_change_ms = bits,
+            Setting::WindowBeforeMs => p.window_before_next_ms = bits,
+            Setting::DiameterMm => p.capstan_diameter_mm = f,
+            Setting::WrapDeg => p.wrap_deg = f,
+            Setting::AmpGain => c.amp.amp_gain = f,
+            Setting::T1Zero => c.t1.zero_counts = f,
+            Setting::T1NPerCount => c.t1.n_per_count = f,
+            Setting::T2Zero => c.t2.zero_counts = f,
+            Setting::T2NPerCount => c.t2.n_per_count = f,
+            Setting::TareReferenceN => c.tare_reference_n = f,
+            Setting::ServoMinUs => c.servo.pulse_at_min_us = f,
+            Setting::ServoMaxUs => c.servo.pulse_at_max_us = f,
+            Setting::ServoMaxDeg => c.servo.max_deg = f,
+            Setting::AmpFullScaleV => c.amp.full_scale_v = f,
+        }
+        Some(())
     }
 
     /// The bytes stored in flash, with the store's `generation` (which save this is): the
@@ -254,23 +279,6 @@ impl Settings {
         Ok((s, generation))
     }
 }
-
-/// How a field is held.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
-    F32,
-    U32,
-    Order,
-}
-
-/// The kind of each of [`Settings::fields`].
-const FIELD_KINDS: [Kind; FIELDS] = {
-    use Kind::*;
-    [
-        Order, F32, F32, F32, U32, U32, U32, U32, F32, U32, U32, U32, U32, F32, F32, F32, F32, F32,
-        F32, F32, F32, F32, F32, F32, F32,
-    ]
-};
 
 #[cfg(test)]
 mod tests {
@@ -334,11 +342,11 @@ mod tests {
         let s = bench_settings();
         for key in Key::ALL {
             let i = key.field();
-            let value = match FIELD_KINDS[i] {
-                Kind::Order => 2.0,
+            let value = match key.setting().value() {
+                Value::Code => 2.0,
                 // A valid change of each: the ms keys and every calibration value by a little.
-                Kind::U32 => s.fields()[i] as f32 + 1000.0,
-                Kind::F32 => f32::from_bits(s.fields()[i]) * 1.01 + 0.5,
+                Value::Whole => s.fields()[i] as f32 + 1000.0,
+                Value::Real => f32::from_bits(s.fields()[i]) * 1.01 + 0.5,
             };
             let value = match key {
                 Key::RestDeg => 125.0 + 5.0,

@@ -8,6 +8,8 @@
 //! second key, after the settings: at load, settings older than the newest generation mean the
 //! newest settings were lost, and the rig falls back to its defaults and says so, rather than
 //! run with values the operator replaced.
+//!
+//! The runner sees a store only through [`SettingsFlash`] (no flash: `()`).
 
 use crate::record::{LogSink, SettingsSource};
 use crate::rig::Rig;
@@ -36,6 +38,26 @@ pub struct BadRange;
 pub struct StoreFailed;
 
 type Map<F> = MapStorage<u8, F, Cache<Uncached, Uncached, Uncached, u8>>;
+
+/// Where the settings are kept ([`SettingsStore`] on a flash).
+#[allow(async_fn_in_trait)]
+pub trait SettingsFlash {
+    /// Keep `settings`; false if the write failed (the stored settings are then unchanged).
+    async fn save(&mut self, settings: &Settings) -> bool;
+}
+
+/// No flash: nothing can be stored.
+impl SettingsFlash for () {
+    async fn save(&mut self, _: &Settings) -> bool {
+        false
+    }
+}
+
+impl<F: NorFlash> SettingsFlash for SettingsStore<F> {
+    async fn save(&mut self, settings: &Settings) -> bool {
+        SettingsStore::save(self, settings).await.is_ok()
+    }
+}
 
 /// The settings record in a flash range.
 pub struct SettingsStore<F: NorFlash> {

@@ -213,26 +213,7 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
     cfg.validate()?;
     let n = cfg.channels.len();
     let plant_cfg = setup::cord_plant(&cfg.plant, cfg.diameter_mm, cfg.sensor_noise);
-    let mut rigs = Vec::with_capacity(n);
-    let mut cords = Vec::with_capacity(n);
-    let mut limit = 0;
-    for ch in &cfg.channels {
-        let protocol = Protocol {
-            pre_trigger_ms: cfg.protocol.pre_trigger_ms + ch.delay_ms,
-            ..setup::cord_protocol(
-                &cfg.protocol,
-                &cfg.calibration,
-                ch.order,
-                cfg.diameter_mm,
-                ch.wrap_deg,
-                cfg.drive_v,
-            )
-        };
-        rigs.push(Rig::new(protocol, cfg.calibration, cfg.limits).map_err(SetupError::Protocol)?);
-        let cord = CordSetup::new(ch.wrap_deg, cfg.model);
-        limit = limit.max(time_limit_us(&protocol, &cord));
-        cords.push(cord);
-    }
+    let (mut rigs, cords, limit) = channel_rigs(cfg)?;
     let wall = std::time::Instant::now();
     time::reset(0);
     let plant =
@@ -249,27 +230,7 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
             .map(|((io, rig), sink)| firmware::run_once(io, rig, sink))
             .collect();
         let probe = run::sample_plant(&plant, every, |p| {
-            let d = p.drive();
-            let channels = (0..n)
-                .map(|i| {
-                    let c = p.truth(i);
-                    ChannelSample {
-                        angle_deg: c.angle_deg,
-                        t1_n: c.t1_n,
-                        t2_n: c.t2_n,
-                    }
-                })
-                .collect();
-            series.borrow_mut().push(SeriesRow {
-                t_s: p.now_us() as f64 * 1e-6,
-                drive_v: d.drive_v,
-                capstan_rpm: d.capstan_rpm,
-                current_a: d.current_a,
-                power_w: d.power_w,
-                load_nm: d.load_nm,
-                transmission: d.transmission,
-                channels,
-            });
+            series.borrow_mut().push(series_row(p, n));
         });
         time::block_on_until(select(time::join_all(runners), probe), limit)
     };
@@ -303,4 +264,55 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
         simulated_s: (p.now_us() - p.origin_us()) as f64 * 1e-6,
         wall_s: wall.elapsed().as_secs_f64(),
     })
+}
+
+/// Each channel's rig (its protocol delayed by the channel's delay) and cord, and the time
+/// limit of the longest.
+fn channel_rigs(cfg: &TwoControlConfig) -> Result<(Vec<Rig>, Vec<CordSetup>, u64), SetupError> {
+    let mut rigs = Vec::with_capacity(cfg.channels.len());
+    let mut cords = Vec::with_capacity(cfg.channels.len());
+    let mut limit = 0;
+    for ch in &cfg.channels {
+        let protocol = Protocol {
+            pre_trigger_ms: cfg.protocol.pre_trigger_ms + ch.delay_ms,
+            ..setup::cord_protocol(
+                &cfg.protocol,
+                &cfg.calibration,
+                ch.order,
+                cfg.diameter_mm,
+                ch.wrap_deg,
+                cfg.drive_v,
+            )
+        };
+        rigs.push(Rig::new(protocol, cfg.calibration, cfg.limits).map_err(SetupError::Protocol)?);
+        let cord = CordSetup::new(ch.wrap_deg, cfg.model);
+        limit = limit.max(time_limit_us(&protocol, &cord));
+        cords.push(cord);
+    }
+    Ok((rigs, cords, limit))
+}
+
+/// The drive and every channel's truth now.
+fn series_row(p: &Plant, n: usize) -> SeriesRow {
+    let d = p.drive();
+    let channels = (0..n)
+        .map(|i| {
+            let c = p.truth(i);
+            ChannelSample {
+                angle_deg: c.angle_deg,
+                t1_n: c.t1_n,
+                t2_n: c.t2_n,
+            }
+        })
+        .collect();
+    SeriesRow {
+        t_s: p.now_us() as f64 * 1e-6,
+        drive_v: d.drive_v,
+        capstan_rpm: d.capstan_rpm,
+        current_a: d.current_a,
+        power_w: d.power_w,
+        load_nm: d.load_nm,
+        transmission: d.transmission,
+        channels,
+    }
 }

@@ -88,7 +88,35 @@ fn jog_zero_weigh_store_reset_run_uses_the_stored_values() {
     let jog = r.iter().find(|x| x.command == CommandKind::Jog).unwrap();
     assert_eq!(jog.values[0], 105.0, "125° rest − 20°");
 
-    // Live values at ~10 Hz in setup mode, with the servo where it was jogged.
+    check_live_values(&out);
+    // The weighed sensitivities are the sensors' true ones, to 0.5 %.
+    let weighed: Vec<f32> = r
+        .iter()
+        .filter(|x| x.command == CommandKind::Weigh)
+        .map(|x| x.values[0])
+        .collect();
+    assert_eq!(weighed.len(), 2);
+    for npc in &weighed {
+        let err = (*npc as f64 / true_npc - 1.0).abs();
+        assert!(err < 0.005, "n_per_count {npc} vs true {true_npc:.6}");
+    }
+
+    check_loaded_after_the_reset(&out, &weighed);
+    // The store held the loop for its flash erase and write: no fault, and the watchdog was
+    // given room for it.
+    assert!(out
+        .records(|r| matches!(r, Record::Fault(_)).then_some(()))
+        .is_empty());
+    assert!(out.flash.erases <= 2, "{} erases", out.flash.erases);
+    let gap_ms = out.plant.max_feed_gap_us(0) as f64 / 1000.0;
+    assert!(gap_ms < STORE_WATCHDOG_MS as f64, "feed gap {gap_ms} ms");
+
+    check_calibrated_pairs(&out);
+}
+
+/// Live values at ~10 Hz in setup mode, with the servo where it was jogged, moving at setup
+/// mode's rate.
+fn check_live_values(out: &SessionOutput) {
     let live: Vec<Live> = out.records(|r| match r {
         Record::Live(l) => Some(*l),
         _ => None,
@@ -110,21 +138,11 @@ fn jog_zero_weigh_store_reset_run_uses_the_stored_values() {
         moves.iter().any(|&m| m > 2.9),
         "it moved at the full rate: {moves:?}"
     );
+}
 
-    // The weighed sensitivities are the sensors' true ones, to 0.5 %.
-    let weighed: Vec<f32> = r
-        .iter()
-        .filter(|x| x.command == CommandKind::Weigh)
-        .map(|x| x.values[0])
-        .collect();
-    assert_eq!(weighed.len(), 2);
-    for npc in &weighed {
-        let err = (*npc as f64 / true_npc - 1.0).abs();
-        assert!(err < 0.005, "n_per_count {npc} vs true {true_npc:.6}");
-    }
-
-    // After the reset: loaded from flash, and the run announces exactly what was stored.
-    let boot2 = settings_at_boot(&out, 2);
+/// After the reset: loaded from flash, and the run announces exactly what was stored.
+fn check_loaded_after_the_reset(out: &SessionOutput, weighed: &[f32]) {
+    let boot2 = settings_at_boot(out, 2);
     assert_eq!(boot2.source, SettingsSource::Loaded);
     // `show` after the reset says where its settings came from, as the boot did.
     let shown: Vec<SettingsReport> = out
@@ -154,19 +172,12 @@ fn jog_zero_weigh_store_reset_run_uses_the_stored_values() {
     assert_eq!(start.calibration.t1.n_per_count, weighed[0]);
     assert_eq!(start.calibration.t2.n_per_count, weighed[1]);
     assert_eq!(start.protocol.wrap_deg, 360.0);
+}
 
-    // The store held the loop for its flash erase and write: no fault, and the watchdog was
-    // given room for it.
-    assert!(out
-        .records(|r| matches!(r, Record::Fault(_)).then_some(()))
-        .is_empty());
-    assert!(out.flash.erases <= 2, "{} erases", out.flash.erases);
-    let gap_ms = out.plant.max_feed_gap_us(0) as f64 / 1000.0;
-    assert!(gap_ms < STORE_WATCHDOG_MS as f64, "feed gap {gap_ms} ms");
-
-    // The calibrated run reads the true tensions: same pairs, within 1.5 %, as a run of the
-    // same rig with sensors exactly as the built-in calibration assumes.
-    let calibrated = pairs(&out);
+/// The calibrated run reads the true tensions: same pairs, within 1.5 %, as a run of the same
+/// rig with sensors exactly as the built-in calibration assumes.
+fn check_calibrated_pairs(out: &SessionOutput) {
+    let calibrated = pairs(out);
     let reference = reference_pairs();
     assert_eq!(calibrated.len(), 12);
     for (c, r) in calibrated.iter().zip(&reference) {

@@ -5,6 +5,7 @@
 //! loop that hangs (the watchdog reset, the horn back-driven while the servo has no pulses),
 //! a fault while idle, a store away from rest.
 
+use capstan_plant::ServoEvent;
 use firmware::command::CommandError;
 use firmware::hal::Channel;
 use firmware::record::{Fault, Record, Reply};
@@ -260,22 +261,7 @@ fn a_hung_loop_is_reset_within_10_ms_and_nothing_moves_until_a_person_acknowledg
     assert_eq!(f[0].1.kind, FaultKind::Watchdog);
     // From the reset to the person's press: no servo pulse; the cord back-drives the horn
     // toward release only, and the tension only falls.
-    let (events, _) = out.plant.servo_events(0);
-    let after: Vec<_> = events.iter().filter(|e| e.t_us >= released).collect();
-    assert_eq!(after[0].pulse_us, 0.0, "{after:?}");
-    let press = reset_done + 50 * MS + 3_000 * MS;
-    let first_pulse = after
-        .iter()
-        .find(|e| e.pulse_us > 0.0)
-        .expect("a pulse after the press");
-    assert!(
-        first_pulse.t_us >= press,
-        "{first_pulse:?} before the press at {press}"
-    );
-    assert!(
-        (first_pulse.pulse_us - 1_833.0).abs() <= 1.0,
-        "the rest pulse: {first_pulse:?}"
-    );
+    let first_pulse = first_pulse_after(&out, released, reset_done + 50 * MS + 3_000 * MS);
     let limp: Vec<_> = out
         .trace
         .iter()
@@ -301,17 +287,7 @@ fn a_hung_loop_is_reset_within_10_ms_and_nothing_moves_until_a_person_acknowledg
     assert_eq!(runs_started(&out), 1);
     // The drive: the amplifier's pin safe at the reset, 10 ms after the hang; the motor's
     // voltage below 1 % through the RC filter.
-    let drive_off = out
-        .trace
-        .iter()
-        .find(|s| s.t_us > released && s.capstan_rpm == 0.0)
-        .map(|s| s.t_us);
-    let below_1pct = out
-        .trace
-        .iter()
-        .find(|s| s.t_us > released && s.drive_v < 0.01 * before.drive_v)
-        .expect("the drive falls")
-        .t_us;
+    let (drive_off, below_1pct) = drive_falls(&out, released, before.drive_v);
     // The target: no fault but loss of power leaves the drive on for more than 50 ms.
     assert!(
         below_1pct - froze <= 50 * MS,
@@ -334,6 +310,44 @@ fn a_hung_loop_is_reset_within_10_ms_and_nothing_moves_until_a_person_acknowledg
         (below_1pct - froze) as f64 / 1e3,
         drive_off.map_or(f64::NAN, |t| (t - froze) as f64 / 1e3),
     );
+}
+
+/// The first servo pulse after the pins were released at `released`: none until the person's
+/// press at `press`, and then the rest pulse.
+fn first_pulse_after(out: &SessionOutput, released: u64, press: u64) -> ServoEvent {
+    let (events, _) = out.plant.servo_events(0);
+    let after: Vec<_> = events.iter().filter(|e| e.t_us >= released).collect();
+    assert_eq!(after[0].pulse_us, 0.0, "{after:?}");
+    let first_pulse = **after
+        .iter()
+        .find(|e| e.pulse_us > 0.0)
+        .expect("a pulse after the press");
+    assert!(
+        first_pulse.t_us >= press,
+        "{first_pulse:?} before the press at {press}"
+    );
+    assert!(
+        (first_pulse.pulse_us - 1_833.0).abs() <= 1.0,
+        "the rest pulse: {first_pulse:?}"
+    );
+    first_pulse
+}
+
+/// After the pins were released: when the capstan stopped, and when the drive fell below 1 %
+/// of `drive_v`, µs.
+fn drive_falls(out: &SessionOutput, released: u64, drive_v: f64) -> (Option<u64>, u64) {
+    let stopped = out
+        .trace
+        .iter()
+        .find(|s| s.t_us > released && s.capstan_rpm == 0.0)
+        .map(|s| s.t_us);
+    let below_1pct = out
+        .trace
+        .iter()
+        .find(|s| s.t_us > released && s.drive_v < 0.01 * drive_v)
+        .expect("the drive falls")
+        .t_us;
+    (stopped, below_1pct)
 }
 
 #[test]

@@ -224,7 +224,11 @@ impl<'f> Logger<'f> {
         );
         let fw = self.decoder.firmware();
         let sent = |field: &str| fw.record_has_field(RecordKind::RunStart, field);
-        summary.calibration = Some(RunCalibration::of(&s.calibration, sent));
+        let settings = firmware::Settings {
+            protocol: s.protocol,
+            calibration: s.calibration,
+        };
+        summary.calibration = Some(RunCalibration::of(&settings, sent));
         self.current = Some(Current {
             index: self.runs.len(),
             diameter: summary.capstan_diameter_mm.value,

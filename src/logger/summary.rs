@@ -6,6 +6,8 @@
 use super::{LIVE_CSV, MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, SETTINGS_CSV, STREAM_FILE};
 use capstan_link::decoder::BadFrame;
 use capstan_link::seq::{Backwards, Gap, Restart};
+use capstan_wire::settings::Group;
+use capstan_wire::Setting;
 use serde::Serialize;
 use std::path::Path;
 
@@ -53,52 +55,48 @@ pub struct RunSummary {
     pub calibration: Option<RunCalibration>,
 }
 
-/// The calibration of a run, as its run-start record gives it. A value is `None` (null) when
-/// the record does not carry it (the tare reference, servo map and amplifier full scale came
-/// with setup mode: a firmware built before it does not send them) or is not a number.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct RunCalibration {
-    /// T1 zero (after the tare), ADC counts.
-    pub t1_zero: Option<f64>,
-    /// T1 sensitivity, N per count.
-    pub t1_n_per_count: Option<f64>,
-    /// T2 zero (after the tare), ADC counts.
-    pub t2_zero: Option<f64>,
-    /// T2 sensitivity, N per count.
-    pub t2_n_per_count: Option<f64>,
-    /// Force both channels carry during the tare, N.
-    pub tare_reference_n: Option<f64>,
-    /// Servo pulse at 0°, µs.
-    pub servo_min_us: Option<f64>,
-    /// Servo pulse at `servo_max_deg`, µs.
-    pub servo_max_us: Option<f64>,
-    /// Servo angle at `servo_max_us`, deg.
-    pub servo_max_deg: Option<f64>,
-    /// Amplifier gain, V per V of control.
-    pub amp_gain: Option<f64>,
-    /// Amplifier control voltage at full duty, V.
-    pub amp_full_scale_v: Option<f64>,
-}
+/// The calibration of a run, as its run-start record gives it: every calibration setting of
+/// the wire schema, by its name and in its order (`t1_zero`, `t1_n_per_count`, …, written as a
+/// JSON object). A value is `None` (null) when the record does not carry it (the tare
+/// reference, servo map and amplifier full scale came with setup mode: a firmware built before
+/// it does not send them) or is not a number.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunCalibration(pub Vec<(&'static str, Option<f64>)>);
 
 impl RunCalibration {
-    /// From a run-start record's calibration; `sent(field)` says whether the record carries
+    /// From a run-start record's settings; `sent(field)` says whether the record carries
     /// that field (by its name in the record).
-    pub fn of(c: &firmware::Calibration, sent: impl Fn(&str) -> bool) -> RunCalibration {
-        let v = |name: &str, x: f32| {
-            Some(super::files::decimal(x)).filter(|d| d.is_finite() && sent(name))
+    pub fn of(s: &firmware::Settings, sent: impl Fn(&str) -> bool) -> RunCalibration {
+        let value = |setting: Setting| {
+            let v = super::files::decimal(f32::from_bits(s.get(setting)));
+            Some(v).filter(|d| d.is_finite() && sent(setting.name()))
         };
-        RunCalibration {
-            t1_zero: v("t1_zero", c.t1.zero_counts),
-            t1_n_per_count: v("t1_n_per_count", c.t1.n_per_count),
-            t2_zero: v("t2_zero", c.t2.zero_counts),
-            t2_n_per_count: v("t2_n_per_count", c.t2.n_per_count),
-            tare_reference_n: v("tare_reference_n", c.tare_reference_n),
-            servo_min_us: v("servo_min_us", c.servo.pulse_at_min_us),
-            servo_max_us: v("servo_max_us", c.servo.pulse_at_max_us),
-            servo_max_deg: v("servo_max_deg", c.servo.max_deg),
-            amp_gain: v("amp_gain", c.amp.amp_gain),
-            amp_full_scale_v: v("amp_full_scale_v", c.amp.full_scale_v),
+        RunCalibration(
+            Setting::ALL
+                .iter()
+                .filter(|s| s.group() == Group::Calibration)
+                .map(|&setting| (setting.name(), value(setting)))
+                .collect(),
+        )
+    }
+
+    /// One value by its setting's name (`None` for a name it lacks or a value not sent).
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.0
+            .iter()
+            .find(|(n, _)| *n == name)
+            .and_then(|(_, v)| *v)
+    }
+}
+
+impl Serialize for RunCalibration {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, value) in &self.0 {
+            map.serialize_entry(name, value)?;
         }
+        map.end()
     }
 }
 
@@ -188,11 +186,24 @@ impl Summary {
 
     /// The human report (a few lines, for stderr).
     pub fn human(&self, dir: &Path) -> String {
+        let mut lines = vec![self.totals_line(dir)];
+        lines.extend(self.setup_line());
+        lines.extend(self.damage_lines());
+        lines.extend(self.incomplete_line(dir));
+        lines
+            .iter()
+            .map(|l| format!("capstan log: {l}"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
+    /// Runs, pairs, samples, faults and messages, from how many bytes, and where the files are.
+    fn totals_line(&self, dir: &Path) -> String {
         let r = &self.records;
         let complete = self.runs.iter().filter(|r| r.complete).count();
-        let mut s = format!(
-            "capstan log: {} run(s) ({} complete), {} pairs, {} raw samples, {} faults, {} \
-             messages from {} bytes ({}); files in {}",
+        format!(
+            "{} run(s) ({} complete), {} pairs, {} raw samples, {} faults, {} messages from {} \
+             bytes ({}); files in {}",
             self.runs.len(),
             complete,
             r.pair,
@@ -202,19 +213,27 @@ impl Summary {
             self.bytes,
             self.stopped,
             dir.display()
-        );
-        if r.setup() > 0 {
-            s += &format!(
-                "\ncapstan log: setup mode: {} settings report(s) ({SETTINGS_CSV}), {} live \
-                 reading(s) ({LIVE_CSV}), {} command reply record(s) ({MESSAGES_TXT})",
+        )
+    }
+
+    /// The setup-mode records and their files, if any came.
+    fn setup_line(&self) -> Option<String> {
+        let r = &self.records;
+        (r.setup() > 0).then(|| {
+            format!(
+                "setup mode: {} settings report(s) ({SETTINGS_CSV}), {} live reading(s) \
+                 ({LIVE_CSV}), {} command reply record(s) ({MESSAGES_TXT})",
                 r.settings, r.live, r.reply
-            );
-        }
+            )
+        })
+    }
+
+    /// What the stream lost or got wrong: gaps, bad frames, a cut-off tail, restarts,
+    /// records out of order, and a start after the board's first record.
+    fn damage_lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
         if self.missing_records > 0 {
-            let places: Vec<String> = self
-                .gaps
-                .iter()
-                .take(5)
+            let places: Vec<String> = (self.gaps.iter().take(5))
                 .map(|g| {
                     format!(
                         "{} after seq {} (byte {})",
@@ -223,64 +242,72 @@ impl Summary {
                 })
                 .collect();
             let more = if self.gaps.len() > 5 { ", ..." } else { "" };
-            s += &format!(
-                "\ncapstan log: LOST {} record(s) in {} gap(s): {}{more}",
+            lines.push(format!(
+                "LOST {} record(s) in {} gap(s): {}{more}",
                 self.missing_records,
                 self.gaps.len(),
                 places.join("; ")
-            );
+            ));
         }
-        if self.bad_frames > 0 {
-            let first = &self.bad_frame_examples[0];
-            s += &format!(
-                "\ncapstan log: {} frame(s) did not decode; first: frame {} at byte {}: {}",
+        if let Some(first) = self
+            .bad_frame_examples
+            .first()
+            .filter(|_| self.bad_frames > 0)
+        {
+            lines.push(format!(
+                "{} frame(s) did not decode; first: frame {} at byte {}: {}",
                 self.bad_frames, first.frame, first.byte_offset, first.reason
-            );
+            ));
         }
         if let Some(t) = self.truncated_tail {
-            s += &format!(
-                "\ncapstan log: the stream ends inside a frame ({} bytes from byte {} dropped)",
+            lines.push(format!(
+                "the stream ends inside a frame ({} bytes from byte {} dropped)",
                 t.bytes, t.byte_offset
-            );
+            ));
         }
-        for rs in &self.restarts {
-            s += &format!(
-                "\ncapstan log: the board restarted after seq {} (byte {})",
+        lines.extend(self.restarts.iter().map(|rs| {
+            format!(
+                "the board restarted after seq {} (byte {})",
                 rs.after_seq, rs.byte_offset
-            );
-        }
-        if !self.backwards.is_empty() {
-            s += &format!(
-                "\ncapstan log: {} record(s) numbered out of order (first: seq {} where {} was expected)",
+            )
+        }));
+        if let Some(b) = self.backwards.first() {
+            lines.push(format!(
+                "{} record(s) numbered out of order (first: seq {} where {} was expected)",
                 self.backwards.len(),
-                self.backwards[0].seq,
-                self.backwards[0].expected_seq
-            );
+                b.seq,
+                b.expected_seq
+            ));
         }
         if let Some(first) = self.first_seq.filter(|&s| s != 0) {
-            s += &format!(
-                "\ncapstan log: the stream joins the board at seq {first}: records before it were \
-                 sent before logging began"
-            );
+            lines.push(format!(
+                "the stream joins the board at seq {first}: records before it were sent before \
+                 logging began"
+            ));
         }
-        if self.pairs_incomplete > 0 {
-            // The stream to decode again: the copy the session saved (from a board or stdin),
-            // or the file it was decoded from.
-            let saved = dir.join(STREAM_FILE);
-            let from = if saved.exists() {
-                saved.display().to_string()
-            } else {
-                self.source.clone()
-            };
-            s += &format!(
-                "\ncapstan log: {} pair(s) lack a set-up value or their run number and are in \
-                 {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; decode the stream again with \
-                 --wrap-deg/--diameter-mm/--drive-v into another directory (capstan log \
-                 --elf {} --from {from} --out NEW_DIR --wrap-deg ...)",
-                self.pairs_incomplete, self.elf
-            );
+        lines
+    }
+
+    /// Pairs kept out of pairs.csv, and how to decode them again with the missing values.
+    fn incomplete_line(&self, dir: &Path) -> Option<String> {
+        if self.pairs_incomplete == 0 {
+            return None;
         }
-        s
+        // The stream to decode again: the copy the session saved (from a board or stdin),
+        // or the file it was decoded from.
+        let saved = dir.join(STREAM_FILE);
+        let from = if saved.exists() {
+            saved.display().to_string()
+        } else {
+            self.source.clone()
+        };
+        Some(format!(
+            "{} pair(s) lack a set-up value or their run number and are in \
+             {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; decode the stream again with \
+             --wrap-deg/--diameter-mm/--drive-v into another directory (capstan log \
+             --elf {} --from {from} --out NEW_DIR --wrap-deg ...)",
+            self.pairs_incomplete, self.elf
+        ))
     }
 }
 

@@ -31,6 +31,7 @@ mod setup;
 mod setup_mode;
 
 use emu_bench::case::{self, board_calibration, board_limits, board_protocol, Case};
+use emu_bench::pins::{pwm_slice, PINS};
 use firmware::rig::DEBOUNCE_MS;
 use firmware::{Rig, SafeDuties};
 use host_sim::run::{run, RunOutput, RunSpec};
@@ -111,9 +112,14 @@ fn rest_duty() -> u16 {
     SafeDuties::for_rig(&rig, SERVO_FULL_SCALE).servo_rest
 }
 
+/// PWM slice of the servo (the wire schema's pin map).
+const SERVO_SLICE: u8 = pwm_slice(PINS.servo);
+/// PWM slice of the amplifier control.
+pub(crate) const AMP_SLICE: u8 = pwm_slice(PINS.amp);
+
 /// When the firmware first wrote `cc` to PWM slice `slice`'s compare at or after `from_ns`
 /// (the harness logs every write that changed one).
-fn pwm_write(e: &Emulated, slice: u64, cc: u16, from_ns: f64) -> Option<f64> {
+fn pwm_write(e: &Emulated, slice: u8, cc: u16, from_ns: f64) -> Option<f64> {
     e.emulation["pwm_writes"]
         .as_array()
         .unwrap()
@@ -420,8 +426,8 @@ fn fault_case(setup: &Setup, c: Case) {
     // amplifier's at 0.
     let inj = f(&b["injections"][0]["at_ns"]);
     let deadline = inj + 20.0 * MS;
-    let servo_cmd = pwm_write(&e, 0, rest_duty(), inj).expect("servo to rest");
-    let amp_cmd = pwm_write(&e, 1, 0, inj).expect("amplifier off");
+    let servo_cmd = pwm_write(&e, SERVO_SLICE, rest_duty(), inj).expect("servo to rest");
+    let amp_cmd = pwm_write(&e, AMP_SLICE, 0, inj).expect("amplifier off");
     assert!(
         servo_cmd <= deadline && amp_cmd <= deadline,
         "{name}: commands too late"
@@ -637,8 +643,8 @@ fn panic_case(setup: &Setup, c: Case) {
     // The handler's register writes, within 1 ms of the panic: the servo's compare to the
     // rest duty, the amplifier's to 0; and what it left at the reset: the amplifier's pin and
     // the trigger driven low by software.
-    let servo_cmd = pwm_write(&e, 0, rest_duty(), panic).expect("servo to rest");
-    let amp_cmd = pwm_write(&e, 1, 0, panic).expect("amplifier off");
+    let servo_cmd = pwm_write(&e, SERVO_SLICE, rest_duty(), panic).expect("servo to rest");
+    let amp_cmd = pwm_write(&e, AMP_SLICE, 0, panic).expect("amplifier off");
     assert!(
         servo_cmd - panic <= MS && amp_cmd - panic <= MS,
         "{name}: servo at rest after {} µs, amplifier off after {} µs",
@@ -651,8 +657,8 @@ fn panic_case(setup: &Setup, c: Case) {
         "{name}: servo compare"
     );
     assert_eq!(resets[0]["pwm_cc_a"][1], 0, "{name}: amplifier compare");
-    for gpio in ["18", "20"] {
-        let pin = &resets[0]["pins"][gpio];
+    for gpio in [PINS.amp, PINS.trigger] {
+        let pin = &resets[0]["pins"][gpio.to_string()];
         assert_eq!(
             (pin["funcsel"].as_u64(), &pin["out"], &pin["oe"]),
             (Some(5), &Value::Bool(false), &Value::Bool(true)),

@@ -252,6 +252,8 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
             .map(|&(paddr, offset, size)| json!({"paddr": paddr, "offset": offset, "size": size}))
             .collect::<Vec<_>>(),
         "rtt": img.rtt,
+        // The board's pins, from the wire schema (the harness has no numbers of its own).
+        "pins": emu_bench::bench::pin_map_json(),
         "panic": {"fn": img.panic_fn, "message": PANIC_MESSAGE, "file": PANIC_FILE,
                   "line": PANIC_LINE, "col": 1, "ram": PANIC_RAM},
         // Boot2 first, as the boot ROM would start it, with the stack the ROM leaves.

@@ -11,7 +11,7 @@
 
 mod board;
 
-use super::{case, common, f, is_rest, pulse_us, ready, selected, MS};
+use super::{case, common, f, is_rest, pulse_us, ready, selected, AMP_SLICE, MS};
 use crate::pins::{segments, widths_after};
 use crate::setup::{emulate, Emulated};
 use board::{host_sim, Board, Line, ZERO_MS};
@@ -333,5 +333,8 @@ fn amplifier_off(e: &Emulated) {
     assert_eq!(b["amp_periods"], 0, "{}", b["amp"]);
     assert!(segments(&b["amp"]).iter().all(|s| s.static_low()));
     let amp_writes = e.emulation["pwm_writes"].as_array().unwrap();
-    assert!(amp_writes.iter().all(|w| w["slice"] != 1), "{amp_writes:?}");
+    assert!(
+        amp_writes.iter().all(|w| w["slice"] != AMP_SLICE),
+        "{amp_writes:?}"
+    );
 }

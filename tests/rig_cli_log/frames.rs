@@ -1,5 +1,6 @@
-//! Frames as the firmware sends them, made from its format strings
-//! (`firmware/src/defmt_sink.rs`) for a defmt table without an ELF
+//! Frames as the firmware sends them, made from the wire schema's format strings
+//! (`capstan-wire`, which the firmware's defmt calls are written from) for a defmt table
+//! without an ELF
 //! (`Firmware::from_formats`): each record's fields by name, at their wire widths, with the
 //! CRC over them in format order (checked against the firmware's own `record_crc`).
 
@@ -9,7 +10,6 @@ use firmware::condition::ChannelStats;
 use firmware::record::{record_crc, CrcFields, Live, RawSample, Record, NONE_CODE};
 use firmware::Settings;
 
-const SINK: &str = include_str!("../../firmware/src/defmt_sink.rs");
 pub const WORDS: [&str; 8] = [
     "run_start",
     "raw",
@@ -24,9 +24,10 @@ pub const WORDS: [&str; 8] = [
 pub const MESSAGE: u16 = 100;
 
 pub fn format_of(word: &str) -> String {
-    let start = SINK.find(&format!("\"{word} seq=")).expect(word) + 1;
-    let len = SINK[start..].find('"').unwrap();
-    SINK[start..start + len].to_string()
+    capstan_wire::RecordKind::from_word(word)
+        .expect(word)
+        .format()
+        .to_string()
 }
 
 pub fn firmware() -> Firmware {

@@ -1,9 +1,9 @@
 //! What `capstan log` makes of a stream in which the rig was set up from the host (`capstan
 //! rig`): the setup-mode records (`settings`, `live`, `reply`) decoded to the firmware's own
 //! records, checked by their CRC, counted in the sequence numbers, written to their files, and
-//! never taken for a run. The frames are made here from the firmware's format strings
-//! (`firmware/src/defmt_sink.rs`) and its `record_crc`, for a table without an ELF
-//! (`Firmware::from_formats`).
+//! never taken for a run. The frames are made here from the firmware's format strings (the
+//! wire schema's, as `firmware/src/defmt_sink.rs` writes them) and its `record_crc`, for a
+//! table without an ELF (`Firmware::from_formats`).
 
 #[path = "../log_support/mod.rs"]
 mod log_support;
@@ -207,10 +207,10 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
         (run.run, run.first_seq, run.pairs, run.faults),
         (Some(1), 12, 2, 0)
     );
-    let cal = run.calibration.expect("from run_start");
-    assert_eq!(cal.servo_max_deg, Some(175.0));
-    assert_eq!(cal.amp_full_scale_v, Some(3.2));
-    assert_eq!(cal.tare_reference_n, Some(0.12));
+    let cal = run.calibration.as_ref().expect("from run_start");
+    assert_eq!(cal.get("servo_max_deg"), Some(175.0));
+    assert_eq!(cal.get("amp_full_scale_v"), Some(3.2));
+    assert_eq!(cal.get("tare_reference_n"), Some(0.12));
     assert!(summary
         .human(&dir)
         .contains("setup mode: 3 settings report(s)"));
@@ -314,10 +314,13 @@ fn a_run_start_without_the_newer_calibration_fields_leaves_them_null_in_the_summ
     logger.feed(&bytes).unwrap();
     let summary = logger.finish(&Stop::EndOfStream).unwrap();
     assert_eq!(summary.bad_frames, 0, "{:?}", summary.bad_frame_examples);
-    let cal = summary.runs[0].calibration.expect("from run_start");
-    assert_eq!(cal.t1_n_per_count, Some(0.015));
-    assert_eq!(cal.amp_gain, Some(4.0));
-    assert_eq!(cal.servo_max_deg, None);
-    assert_eq!(cal.tare_reference_n, None);
-    assert_eq!(cal.amp_full_scale_v, None);
+    let cal = summary.runs[0]
+        .calibration
+        .as_ref()
+        .expect("from run_start");
+    assert_eq!(cal.get("t1_n_per_count"), Some(0.015));
+    assert_eq!(cal.get("amp_gain"), Some(4.0));
+    assert_eq!(cal.get("servo_max_deg"), None);
+    assert_eq!(cal.get("tare_reference_n"), None);
+    assert_eq!(cal.get("amp_full_scale_v"), None);
 }

@@ -10,9 +10,9 @@ mod build;
 #[cfg(test)]
 mod tests;
 
-use super::elf::{Firmware, Prim, RecordLayout};
+use super::elf::{Firmware, RecordLayout};
 use super::stream::rzcobs_decode;
-use build::{build, Fields};
+use build::{build, parse, Fields};
 use defmt_parser::Fragment;
 use firmware::record::{CrcFields, Record};
 use std::panic::AssertUnwindSafe;
@@ -96,10 +96,6 @@ pub(crate) fn record_from_values(
             layout.fields.len()
         ));
     }
-    debug_assert!(layout
-        .fields
-        .iter()
-        .all(|(_, p)| matches!(p, Prim::U8 | Prim::U16 | Prim::U32 | Prim::I64 | Prim::F32)));
     let f = Fields { layout, values };
     let seq = f.u("seq")?;
     let word = layout.kind.word();
@@ -118,7 +114,6 @@ fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), String> {
     let Some(at) = layout.position("crc") else {
         return Ok(());
     };
-    let bad = |name: &str, v: &str| format!("field `{name}`: `{v}` is not its type");
     let mut c = CrcFields::new();
     for ((name, prim), v) in layout
         .fields
@@ -126,14 +121,9 @@ fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), String> {
         .zip(values)
         .filter(|((n, _), _)| n != "crc")
     {
-        c = match prim {
-            Prim::U8 => c.u8(v.parse().map_err(|_| bad(name, v))?),
-            Prim::U16 => c.u16(v.parse().map_err(|_| bad(name, v))?),
-            Prim::U32 => c.u32(v.parse().map_err(|_| bad(name, v))?),
-            Prim::I64 => c.i64(v.parse().map_err(|_| bad(name, v))?),
-            Prim::F32 => c.f32(v.parse().map_err(|_| bad(name, v))?),
-        };
+        c.push(parse(name, *prim, v)?);
     }
+    let bad = |name: &str, v: &str| format!("field `{name}`: `{v}` is not its type");
     let sent: u32 = values[at].parse().map_err(|_| bad("crc", &values[at]))?;
     let got = c.finish();
     if sent != got {

@@ -3,50 +3,26 @@
 //! sentence for each `reply`, a line for each fault, each setting with its unit, and a name
 //! for each settings source. Every number in a sentence is the record's.
 
+use capstan_wire::{Setting, Value};
 use firmware::command::{Command, CommandKind, Key};
 use firmware::hal::Channel;
 use firmware::record::{Fault, Reply, SettingsReport, SettingsSource};
 use firmware::{Settings, StepOrder};
 
-/// A stable name of a settings source, for CSV and JSON.
+/// A stable name of a settings source, for CSV and JSON (the wire schema's).
 pub const fn source_name(source: SettingsSource) -> &'static str {
-    match source {
-        SettingsSource::Current => "changed",
-        SettingsSource::Stored => "stored",
-        SettingsSource::Loaded => "loaded",
-        SettingsSource::DefaultsNoRecord => "defaults_no_record",
-        SettingsSource::DefaultsCorrupt => "defaults_corrupt",
-        SettingsSource::DefaultsInvalid => "defaults_invalid",
-        SettingsSource::DefaultsFlashError => "defaults_flash_error",
-        SettingsSource::DefaultsAsked => "defaults_asked",
-    }
+    source.name()
 }
 
-/// The name of a step order, as `set order NAME` takes it.
+/// The name of a step order, as `set order NAME` takes it (the wire schema's).
 pub const fn order_name(order: StepOrder) -> &'static str {
-    match order {
-        StepOrder::Monotone => "monotone",
-        StepOrder::UpDown => "updown",
-        StepOrder::Pulse => "pulse",
-    }
+    order.name()
 }
 
-/// The unit of a setting, by its name (the `settings` record's field names).
+/// The unit of a setting, by its name (the wire schema's; empty for the order or a name the
+/// schema lacks).
 pub fn unit(name: &str) -> &'static str {
-    match name {
-        "order" => "",
-        "amp_gain" => "V/V",
-        "t1_zero" | "t2_zero" => "counts",
-        "t1_n_per_count" | "t2_n_per_count" => "N/count",
-        n if n.ends_with("_deg") => "°",
-        n if n.ends_with("_ms") => "ms",
-        n if n.ends_with("_hz") => "Hz",
-        n if n.ends_with("_mm") => "mm",
-        n if n.ends_with("_us") => "µs",
-        n if n.ends_with("_v") => "V",
-        n if n.ends_with("_n") => "N",
-        _ => "",
-    }
+    Setting::from_name(name).map_or("", |s| s.unit())
 }
 
 /// One setting, as written.
@@ -60,44 +36,23 @@ pub struct SettingValue {
     pub unit: &'static str,
 }
 
-/// Every setting, in the `settings` record's order.
+/// Every setting, in the `settings` record's order (the wire schema's table).
 pub fn setting_values(s: &Settings) -> Vec<SettingValue> {
-    let (p, c) = (&s.protocol, &s.calibration);
-    let f = |v: f32| v.to_string();
-    let u = |v: u32| v.to_string();
-    let fields: [(&'static str, String); 25] = [
-        ("order", order_name(p.order).to_string()),
-        ("rest_deg", f(p.rest_deg)),
-        ("step_deg", f(p.step_deg)),
-        ("final_deg", f(p.final_deg)),
-        ("dwell_ms", u(p.dwell_ms)),
-        ("pre_trigger_ms", u(p.pre_trigger_ms)),
-        ("trigger_ms", u(p.trigger_ms)),
-        ("tare_ms", u(p.tare_ms)),
-        ("amp_control_v", f(p.amp_control_v)),
-        ("sample_hz", u(p.sample_hz)),
-        ("raw_log_hz", u(p.raw_log_hz)),
-        ("window_after_ms", u(p.window_after_change_ms)),
-        ("window_before_ms", u(p.window_before_next_ms)),
-        ("diameter_mm", f(p.capstan_diameter_mm)),
-        ("wrap_deg", f(p.wrap_deg)),
-        ("amp_gain", f(c.amp.amp_gain)),
-        ("t1_zero", f(c.t1.zero_counts)),
-        ("t1_n_per_count", f(c.t1.n_per_count)),
-        ("t2_zero", f(c.t2.zero_counts)),
-        ("t2_n_per_count", f(c.t2.n_per_count)),
-        ("tare_reference_n", f(c.tare_reference_n)),
-        ("servo_min_us", f(c.servo.pulse_at_min_us)),
-        ("servo_max_us", f(c.servo.pulse_at_max_us)),
-        ("servo_max_deg", f(c.servo.max_deg)),
-        ("amp_full_scale_v", f(c.amp.full_scale_v)),
-    ];
-    fields
-        .into_iter()
-        .map(|(name, value)| SettingValue {
-            name,
-            value,
-            unit: unit(name),
+    Setting::ALL
+        .iter()
+        .map(|&setting| {
+            let bits = s.get(setting);
+            let value = match setting.value() {
+                Value::Code => StepOrder::from_code(bits as u8)
+                    .map_or_else(|| bits.to_string(), |o| o.name().to_string()),
+                Value::Whole => bits.to_string(),
+                Value::Real => f32::from_bits(bits).to_string(),
+            };
+            SettingValue {
+                name: setting.name(),
+                value,
+                unit: setting.unit(),
+            }
         })
         .collect()
 }

@@ -3,6 +3,8 @@
 //! The harness (`emu/harness.mjs`) calls in at every event of the emulated chip, with the
 //! emulator's time in ns:
 //!
+//! The pins are the wire schema's (`capstan_wire::pins`), the board's own.
+//!
 //! * an output pin changes ([`Bench::pin`]): the servo (GP16) and amplifier (GP18) PWMs are
 //!   measured edge by edge ([`crate::meter`]) and each change of waveform is handed to the
 //!   plant — the servo's pulse width when a pulse ends, the amplifier's duty at the start of
@@ -32,27 +34,43 @@
 //! duty, in the counts the firmware wrote (the servo's 62 500-count frame is host-sim's
 //! `SERVO_MAX_DUTY`, so both plants get the same pulse widths to the bit).
 
-use crate::case::{Case, CoreFault, Stop};
+use crate::case::Case;
 use crate::front_end::{quantise, FrontEnd};
 use crate::meter::{Event, PwmMeter};
 pub use crate::report::{
     Budget, CoreFaultOut, InjectionOut, PlantServoEvent, Report, Reset, ResetReason, Stats,
+    CYCLES_PER_SAMPLE,
 };
-use capstan_plant::{InjectionKind, Plant, PlantError, ServoEvent};
+use capstan_plant::{Plant, PlantError};
+use capstan_wire::pins::{adc_channel, PINS};
 use firmware::hal::Channel;
 
-/// GPIO of the servo signal.
-pub const SERVO_GPIO: u32 = 16;
+mod tally;
+mod timeline;
+
+/// GPIO of the servo signal (the wire schema's pin map, as the board's).
+pub const SERVO_GPIO: u32 = PINS.servo as u32;
 /// GPIO of the amplifier control PWM.
-pub const AMP_GPIO: u32 = 18;
+pub const AMP_GPIO: u32 = PINS.amp as u32;
 /// GPIO of the logger trigger.
-pub const TRIGGER_GPIO: u32 = 20;
+pub const TRIGGER_GPIO: u32 = PINS.trigger as u32;
 /// GPIO of the start/abort button.
-pub const BUTTON_GPIO: u32 = 21;
+pub const BUTTON_GPIO: u32 = PINS.button as u32;
 /// GPIO of the LED.
-pub const LED_GPIO: u32 = 25;
-/// Cycles per 1 ms sample at 125 MHz.
-pub const CYCLES_PER_SAMPLE: u32 = 125_000;
+pub const LED_GPIO: u32 = PINS.led as u32;
+/// ADC input of the T1 sensor (T2 is the other).
+const T1_ADC: u32 = match adc_channel(PINS.t1) {
+    Some(c) => c as u32,
+    None => panic!("T1 is not on an ADC input"),
+};
+
+/// The pin map as the harness reads it (`job.json`'s `pins`: every pin by name, its GPIO).
+pub fn pin_map_json() -> serde_json::Value {
+    let pins = PINS
+        .named()
+        .map(|(name, gpio)| (name.to_string(), gpio.into()));
+    serde_json::Value::Object(pins.into_iter().collect())
+}
 
 /// [`Bench::wake`]: the button's level changed (read it with [`Bench::button_pressed`]).
 pub const WAKE_BUTTON: u32 = 1;
@@ -351,7 +369,7 @@ impl Bench {
         }
     }
 
-    /// A conversion of ADC channel `channel` (0 = T1 on GP26, 1 = T2 on GP27) starts at
+    /// A conversion of ADC channel `channel` (T1's input, else T2's: ADC0 on GP26, ADC1 on GP27) starts at
     /// `t_ns`: its result, or `None` if it never completes (the case's hang).
     pub fn adc(&mut self, channel: u32, t_ns: f64) -> Option<u16> {
         self.settle(t_ns);
@@ -365,7 +383,7 @@ impl Bench {
             return None;
         }
         self.conversions += 1;
-        let ch = if channel == 0 {
+        let ch = if channel == T1_ADC {
             Channel::T1
         } else {
             Channel::T2
@@ -451,204 +469,5 @@ impl Bench {
         self.first_run_over = true;
         self.pin(TRIGGER_GPIO, false, t_ns, 0.0);
         self.pin(LED_GPIO, false, t_ns, 0.0);
-    }
-
-    /// Is the operator holding the button down?
-    pub fn button_pressed(&self) -> bool {
-        self.button_pressed
-    }
-
-    /// The operator's presses, [start, end) in emulator ns, as far as they are known: held
-    /// from power-up, the cord's start press, the aborts, and the one after the first reset.
-    fn press_windows(&self) -> Vec<(f64, f64)> {
-        let mut w = Vec::new();
-        let held = self.case.held_from_power_up_us;
-        if held > 0 {
-            w.push((0.0, held as f64 * 1e3));
-        }
-        if let (Some(after), Some(r)) = (self.case.press_after_reset_us, self.resets.first()) {
-            let at = r.t_ns + after as f64 * 1e3;
-            w.push((at, at + crate::case::PRESS_US as f64 * 1e3));
-        }
-        let Some(p) = self.plant.as_ref() else {
-            return w;
-        };
-        if let Some(at) = self.case.cord.press_at_us {
-            w.push((self.ns(at), self.ns(at + self.case.cord.press_us)));
-        }
-        if let Some(rise) = p.trigger_rise_us(0) {
-            let hold = self.case.plant.faults.abort_press_ms as u64 * 1_000;
-            for inj in &self.case.injections {
-                if inj.kind == InjectionKind::Abort {
-                    let at = rise + inj.after_trigger_us;
-                    w.push((self.ns(at), self.ns(at + hold)));
-                }
-            }
-        }
-        w
-    }
-
-    fn pressed_at(&self, t_ns: f64) -> bool {
-        self.press_windows()
-            .iter()
-            .any(|&(a, b)| t_ns >= a && t_ns < b)
-    }
-
-    fn core_fault_due(&self) -> Option<f64> {
-        let fault = self.case.core_fault?;
-        let rise = self.plant.as_ref()?.trigger_rise_us(0)?;
-        Some(self.ns(rise + fault.after_trigger_us()))
-    }
-
-    fn stop_at(&self) -> Option<f64> {
-        let p = self.plant.as_ref()?;
-        match self.case.stop {
-            Stop::At(us) => Some(self.ns(us)),
-            Stop::AfterTrigger(us) => Some(self.ns(p.trigger_rise_us(0)? + us)),
-            Stop::AfterReset(us) => Some(self.resets.first()?.t_ns + us as f64 * 1_000.0),
-        }
-    }
-
-    /// When [`Bench::wake`] must be called next, ns (None: no deadline).
-    pub fn deadline(&self) -> Option<f64> {
-        let now = self.now_ns;
-        let mut next: Option<f64> = None;
-        let mut consider = |t: f64| {
-            if t > now && next.is_none_or(|n| t < n) {
-                next = Some(t);
-            }
-        };
-        for (a, b) in self.press_windows() {
-            consider(a);
-            consider(b);
-        }
-        if !self.core_fault_done {
-            if let Some(t) = self.core_fault_due() {
-                consider(t);
-            }
-        }
-        if let Some(t) = self.stop_at() {
-            consider(t);
-        }
-        next
-    }
-
-    /// Time is `t_ns`: the operator, the chip fault and the end. Returns `WAKE_*` flags.
-    pub fn wake(&mut self, t_ns: f64) -> u32 {
-        self.settle(t_ns);
-        let mut out = 0;
-        let pressed = self.pressed_at(t_ns);
-        if pressed != self.button_pressed {
-            self.button_pressed = pressed;
-            self.button.push((t_ns, pressed));
-            let start_press = self.case.held_from_power_up_us == 0 && self.button.len() == 1;
-            if pressed && self.run_since_ns.is_none() && start_press {
-                // The start press: the run begins once it is debounced (10 samples).
-                self.run_since_ns = Some(t_ns + 10e6);
-            }
-            out |= WAKE_BUTTON;
-        }
-        if !self.core_fault_done && self.core_fault_due().is_some_and(|due| t_ns >= due) {
-            self.core_fault_done = true;
-            match self.case.core_fault {
-                // Struck at the first conversion that does not complete.
-                Some(CoreFault::Hang { .. }) => self.hang = true,
-                // Struck when the harness has diverted the core (`panicked`).
-                Some(CoreFault::Panic { .. }) => out |= WAKE_PANIC,
-                // Struck when the harness has moved the stack pointer (`panicked` too).
-                Some(CoreFault::StackOverflow { .. }) => out |= WAKE_STACK_OVERFLOW,
-                None => {}
-            }
-        }
-        if self.stop_at().is_some_and(|s| t_ns >= s) {
-            self.stopped = true;
-            out |= WAKE_STOP;
-        }
-        out
-    }
-
-    /// Has the emulation reached its end?
-    pub fn stopped(&self) -> bool {
-        self.stopped
-    }
-
-    /// Everything seen, at the end of the emulation (`t_ns`).
-    pub fn report(&mut self, t_ns: f64) -> Report {
-        self.settle(t_ns);
-        if let Some(p) = self.plant.as_mut() {
-            let us = ((t_ns - self.origin_ns) / 1_000.0).round().max(0.0) as u64;
-            p.advance_to(us);
-        }
-        let rise = self.trigger_rise_ns;
-        let mut run = self.run_bursts.clone();
-        let mut idle = self.idle_bursts.clone();
-        let mut worst = run.clone();
-        worst.sort_by_key(|b| std::cmp::Reverse(b.1));
-        worst.truncate(5);
-        let run_worst = worst
-            .iter()
-            .map(|&(t, c)| (t - rise.unwrap_or(0.0), c))
-            .collect();
-        let origin = self.origin_ns;
-        let (injections, plant_servo) = match self.plant.as_ref() {
-            Some(p) => (
-                p.injections()
-                    .iter()
-                    .map(|r| InjectionOut {
-                        kind: r.injection.kind.name(),
-                        at_ns: r.at_us.map(|us| origin + us as f64 * 1e3),
-                        plant_safe_at_ns: r.safe_at_us.map(|us| origin + us as f64 * 1e3),
-                    })
-                    .collect(),
-                p.servo_events(0)
-                    .0
-                    .iter()
-                    .map(|e: &ServoEvent| PlantServoEvent {
-                        t_ns: origin + e.t_us as f64 * 1e3,
-                        pulse_us: e.pulse_us,
-                        angle_deg: e.angle_deg,
-                    })
-                    .collect(),
-            ),
-            None => (Vec::new(), Vec::new()),
-        };
-        Report {
-            case: self.case.name.to_string(),
-            origin_ns: self.plant.as_ref().map(|_| origin),
-            end_ns: t_ns,
-            servo: self.servo.segments.clone(),
-            servo_pulses: self.servo.rises,
-            pwm_off_grid: self.pwm_off_grid,
-            amp: self.amp.segments.clone(),
-            amp_periods: self.amp.rises,
-            trigger: self.trigger.clone(),
-            led_edges: self.led_edges,
-            button: self.button.clone(),
-            button_mismatches: self.button_mismatches,
-            conversions: self.conversions,
-            rounding_mismatches: self.rounding_mismatches,
-            mismatch_examples: self.mismatch_examples.clone(),
-            t1_phase_ns: self.t1_phase_ns,
-            late_t1: self.late_t1.clone(),
-            trigger_rise_ns: rise,
-            injections,
-            core_fault: self.case.core_fault.map(|f| CoreFaultOut {
-                kind: f.name(),
-                due_ns: self.core_fault_due(),
-                struck_ns: self.core_fault_struck_ns,
-            }),
-            resets: self.resets.clone(),
-            budget: Budget {
-                available_per_sample: CYCLES_PER_SAMPLE,
-                run: Stats::of(&mut run),
-                idle: Stats::of(&mut idle),
-                run_worst,
-                cycles: self.cycles,
-            },
-            plant_servo,
-            samples: self.samples.clone(),
-            after_reset: self.after_reset.clone(),
-            drive_v_at_reset: self.drive_v_at_reset,
-        }
     }
 }

@@ -19,4 +19,6 @@ pub mod report;
 mod wasm;
 
 pub use bench::{Bench, Report};
+/// The board's pin map (the wire schema's), for the harness's job and the tests.
+pub use capstan_wire::pins;
 pub use case::{Case, CoreFault, HostLine, Stop};

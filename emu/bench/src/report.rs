@@ -1,9 +1,11 @@
 //! What the bench saw, as the JSON the harness writes next to the stream (`emulation.json`'s
 //! `bench`): the pins' waveforms, the plant's records, the resets, the loop budget.
 
-use crate::bench::CYCLES_PER_SAMPLE;
 use crate::meter::Segment;
 use serde::Serialize;
+
+/// Cycles per 1 ms sample at 125 MHz.
+pub const CYCLES_PER_SAMPLE: u32 = 125_000;
 
 /// Why the chip was reset (the watchdog's REASON register).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

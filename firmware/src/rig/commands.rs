@@ -79,6 +79,8 @@ impl Rig {
         Ok(())
     }
 
+    // Not inlined: two callers, ~250 bytes of flash each.
+    #[inline(never)]
     fn check_settings(&self, s: &Settings) -> Result<(), SettingsError> {
         s.validate()?;
         let (p, d) = (&s.protocol, &self.defaults.protocol);

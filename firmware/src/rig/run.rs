@@ -1,11 +1,11 @@
 //! A run, sample by sample: the tare and its bound, the steps, the conditioning windows, the
 //! raw log, the supervisor, and the end (normal or by a fault, which is latched).
 
-use super::{on_grid, Inputs, Outputs, Phase, Rig, CORD_CHECK_SETTLE_MS, TARE_MAX_N};
+use super::steps::Steps;
+use super::{on_grid, Inputs, Outputs, Phase, Rig, TARE_MAX_N};
 use crate::calib::ChannelCal;
-use crate::condition::Window;
 use crate::hal::Channel;
-use crate::record::{Fault, FaultKind, LogSink, RawSample, Record, RunEnd, RunStart, StepPair};
+use crate::record::{Fault, FaultKind, LogSink, RawSample, Record, RunEnd, RunStart};
 use crate::safety::{SafetyInput, Supervisor};
 
 impl Rig {
@@ -51,15 +51,7 @@ impl Rig {
                 fault = Some((FaultKind::Blind, b.channel, b.readable_n));
             }
         }
-        // Step 0 (rest, no window) until the first step starts.
-        let phase = Phase::Run {
-            step: 0,
-            window: Window::new(0, 0),
-            pair_due_us: u64::MAX,
-            next_ms: self.protocol.step_start_ms(0),
-            armed_ms: u32::MAX,
-            servo_deg: self.protocol.rest_deg,
-        };
+        let phase = Phase::Run(Steps::new(&self.protocol));
         let fault = fault.map(|(kind, ch, value)| Fault {
             kind,
             channel: Some(ch),
@@ -76,6 +68,7 @@ impl Rig {
         }
     }
 
+    /// One sample of a run (its tare included): a fault ends it in this very sample.
     #[cfg_attr(not(target_os = "none"), inline(always))]
     pub(super) fn step_running(
         &mut self,
@@ -83,20 +76,7 @@ impl Rig {
         pressed: bool,
         sink: &mut impl LogSink,
     ) -> Outputs {
-        // Borrowed, not copied: the protocol is ~60 bytes, and a sample needs a few of them.
-        let p = &self.protocol;
-        let period_us = self.period_us as u64;
-        // A sample comes one period after the last, give or take the clock's latency: then it
-        // is on the grid without `on_grid`'s 64-bit division (in software on the board).
-        let since_us = inp.now_us.saturating_sub(self.press_us) + period_us / 2;
-        let next_us = self.elapsed_us + period_us;
-        let elapsed_us = if since_us.wrapping_sub(next_us) < period_us {
-            next_us
-        } else {
-            on_grid(inp.now_us, self.press_us, self.period_us) - self.press_us
-        };
-        self.elapsed_us = elapsed_us;
-        let elapsed_ms = (elapsed_us / 1000) as u32;
+        let elapsed_us = self.run_clock(inp.now_us);
         let t_us = self.since_trigger_us(elapsed_us);
         let counts_ok = match inp.counts {
             [Ok(a), Ok(b)] => Some([a, b]),
@@ -107,27 +87,7 @@ impl Rig {
             Some([a, b]) => [self.cal.t1.newtons(a as f32), self.cal.t2.newtons(b as f32)],
             None => self.forces(inp),
         };
-
-        // Tare, then announce the run with the calibration it will use.
-        let mut tare_fault = None;
-        if let Phase::Tare { sum, n } = &mut self.phase {
-            if let Some(c) = counts_ok {
-                sum[0] += c[0] as u64;
-                sum[1] += c[1] as u64;
-                *n += 1;
-            }
-            if elapsed_us + period_us >= p.tare_ms as u64 * 1000 {
-                let (sum, n) = (*sum, *n);
-                (self.phase, tare_fault) = self.begin_run(sum, n, t_us);
-                let rec = RunStart {
-                    run: self.runs,
-                    protocol: self.protocol,
-                    calibration: self.cal,
-                };
-                self.emit(sink, Record::RunStart(rec));
-            }
-        }
-        let p = &self.protocol;
+        let tare_fault = self.tare_sample(counts_ok, elapsed_us, t_us, sink);
 
         // Safety first: a fault ends the run in this very sample (a tare that is refused,
         // before the amplifier is ever on).
@@ -145,7 +105,7 @@ impl Rig {
                 t_us,
                 counts: inp.counts,
                 force_n,
-                cord_check_armed: self.level_held(elapsed_ms),
+                cord_check_armed: self.level_held((elapsed_us / 1000) as u32),
             })
         };
         if let Some(f) = fault {
@@ -153,98 +113,117 @@ impl Rig {
             self.emit(sink, Record::Fault(f));
             return self.finish(t_us, Some(f.kind), sink);
         }
-
-        // Decimated raw samples for the log, from the run start on.
-        if !matches!(self.phase, Phase::Tare { .. }) {
-            if self.raw_in == 0 {
-                let raw = RawSample {
-                    t_us,
-                    counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
-                    force_n,
-                };
-                sink.emit(self.seq.next_seq(), &Record::Raw(raw));
-                self.raw_in = p.sample_hz / p.raw_log_hz;
-            }
-            self.raw_in -= 1;
+        if matches!(self.phase, Phase::Tare { .. }) {
+            // Taring: capstan stopped, servo at rest.
+            let mut out = self.safe_outputs();
+            out.led = true;
+            return out;
         }
+        self.log_raw(inp, force_n, t_us, sink);
+        self.step_sample(elapsed_us, counts_ok, t_us, sink)
+    }
 
-        // The phase is updated in place: a run's window is too large to copy every sample.
-        if let Phase::Run {
-            step,
-            window,
-            pair_due_us,
-            next_ms,
-            armed_ms,
-            servo_deg,
-        } = &mut self.phase
-        {
-            if elapsed_ms >= *next_ms {
-                // Which step is being held: steps start at step_start_ms(k).
-                let n = p.levels();
-                let k = ((elapsed_ms - p.step_start_ms(0)) / p.dwell_ms).min(n + 1);
-                if k != *step {
-                    *step = k;
-                    let (a, b) = p.window_ms(k);
-                    *window = Window::new(a as u64 * 1000, b as u64 * 1000);
-                    *pair_due_us = if k == 0 || k > n {
-                        u64::MAX
-                    } else {
-                        b as u64 * 1000
-                    };
-                    *servo_deg = p.angle_deg(k);
-                    *armed_ms = if k >= 1 && p.level(k) >= 1 {
-                        p.step_start_ms(k) + CORD_CHECK_SETTLE_MS
-                    } else {
-                        u32::MAX
-                    };
-                }
-                *next_ms = if k > n {
-                    u32::MAX
-                } else {
-                    p.step_start_ms(k + 1)
-                };
-            }
-            if let Some(c) = counts_ok {
-                window.push(elapsed_us, c);
-            }
-            let mut pair = None;
-            if elapsed_us + period_us >= *pair_due_us {
-                *pair_due_us = u64::MAX;
-                let (a, b) = p.window_ms(*step);
-                let [t1, t2] = window.stats(&self.cal);
-                pair = Some(StepPair {
-                    step: *step,
-                    level: p.level(*step),
-                    angle_deg: *servo_deg,
-                    t_mid_ms: (a + b) / 2 - p.trigger_at_ms(),
-                    t1,
-                    t2,
-                });
-            }
-            let (ended, servo_deg) = (*next_ms == u32::MAX, *servo_deg);
-            if let Some(pair) = pair {
-                self.pairs += 1;
-                sink.emit(self.seq.next_seq(), &Record::Pair(pair));
-            }
-            if ended {
-                return self.finish(t_us, None, sink);
-            }
-            let trigger_ms = elapsed_ms.wrapping_sub(p.trigger_at_ms());
-            return Outputs {
-                servo_deg,
-                servo_pulses: true,
-                amp_control_v: p.amp_control_v,
-                trigger: elapsed_ms >= p.trigger_at_ms() && trigger_ms < p.trigger_ms,
-                led: true,
-                finished: None,
-                store: None,
-                settings_changed: false,
+    /// The run's clock on this sample: µs from the press, on the sample grid.
+    #[cfg_attr(not(target_os = "none"), inline(always))]
+    fn run_clock(&mut self, now_us: u64) -> u64 {
+        let period_us = self.period_us as u64;
+        // A sample comes one period after the last, give or take the clock's latency: then it
+        // is on the grid without `on_grid`'s 64-bit division (in software on the board).
+        let since_us = now_us.saturating_sub(self.press_us) + period_us / 2;
+        let next_us = self.elapsed_us + period_us;
+        self.elapsed_us = if since_us.wrapping_sub(next_us) < period_us {
+            next_us
+        } else {
+            on_grid(now_us, self.press_us, self.period_us) - self.press_us
+        };
+        self.elapsed_us
+    }
+
+    /// While taring: add the sample to the tare; on its last sample, announce the run with
+    /// the calibration it will use. Returns the fault that refuses the run, if any.
+    #[cfg_attr(not(target_os = "none"), inline(always))]
+    fn tare_sample(
+        &mut self,
+        counts: Option<[u16; 2]>,
+        elapsed_us: u64,
+        t_us: i64,
+        sink: &mut impl LogSink,
+    ) -> Option<Fault> {
+        let Phase::Tare { sum, n } = &mut self.phase else {
+            return None;
+        };
+        if let Some(c) = counts {
+            sum[0] += c[0] as u64;
+            sum[1] += c[1] as u64;
+            *n += 1;
+        }
+        if elapsed_us + (self.period_us as u64) < self.protocol.tare_ms as u64 * 1000 {
+            return None;
+        }
+        let (sum, n) = (*sum, *n);
+        let tare_fault;
+        (self.phase, tare_fault) = self.begin_run(sum, n, t_us);
+        let rec = RunStart {
+            run: self.runs,
+            protocol: self.protocol,
+            calibration: self.cal,
+        };
+        self.emit(sink, Record::RunStart(rec));
+        tare_fault
+    }
+
+    /// Decimated raw samples for the log, from the run start on.
+    #[cfg_attr(not(target_os = "none"), inline(always))]
+    fn log_raw(&mut self, inp: &Inputs, force_n: [f32; 2], t_us: i64, sink: &mut impl LogSink) {
+        if self.raw_in == 0 {
+            let raw = RawSample {
+                t_us,
+                counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
+                force_n,
             };
+            sink.emit(self.seq.next_seq(), &Record::Raw(raw));
+            self.raw_in = self.protocol.sample_hz / self.protocol.raw_log_hz;
         }
-        // Taring: capstan stopped, servo at rest.
-        let mut out = self.safe_outputs();
-        out.led = true;
-        out
+        self.raw_in -= 1;
+    }
+
+    /// One sample of the steps (after the tare): the step held, its window, its pair when
+    /// due, the run's end after the last.
+    #[cfg_attr(not(target_os = "none"), inline(always))]
+    fn step_sample(
+        &mut self,
+        elapsed_us: u64,
+        counts: Option<[u16; 2]>,
+        t_us: i64,
+        sink: &mut impl LogSink,
+    ) -> Outputs {
+        let p = &self.protocol;
+        let Phase::Run(steps) = &mut self.phase else {
+            return self.safe_outputs();
+        };
+        steps.sample(p, elapsed_us, counts);
+        let pair = steps.pair_due(p, &self.cal, elapsed_us, self.period_us as u64);
+        let (ended, servo_deg) = (steps.ended(), steps.servo_deg());
+        if let Some(pair) = pair {
+            self.pairs += 1;
+            sink.emit(self.seq.next_seq(), &Record::Pair(pair));
+        }
+        if ended {
+            return self.finish(t_us, None, sink);
+        }
+        let p = &self.protocol;
+        let elapsed_ms = (elapsed_us / 1000) as u32;
+        let trigger_ms = elapsed_ms.wrapping_sub(p.trigger_at_ms());
+        Outputs {
+            servo_deg,
+            servo_pulses: true,
+            amp_control_v: p.amp_control_v,
+            trigger: elapsed_ms >= p.trigger_at_ms() && trigger_ms < p.trigger_ms,
+            led: true,
+            finished: None,
+            store: None,
+            settings_changed: false,
+        }
     }
 
     fn finish(&mut self, t_us: i64, fault: Option<FaultKind>, sink: &mut impl LogSink) -> Outputs {

@@ -198,8 +198,61 @@ fn decides_exactly_as_the_one_pass_reference() {
         x ^= x << 17;
         x
     };
+    let mut faults = 0;
+    for limits in limit_sets() {
+        for _stream in 0..300 {
+            let mut sup = Supervisor::new(limits);
+            let mut reference = Reference {
+                limits,
+                over: [0; 2],
+                neg: [0; 2],
+                rail: [0; 2],
+                cord: 0,
+                last_t_us: None,
+            };
+            let mut t_us = 0i64;
+            // Each stream holds one kind of sample for a while, then switches.
+            let mut kind = 0;
+            for _ in 0..400 {
+                let r = next();
+                if r % 16 == 0 {
+                    kind = (r >> 8) % 11;
+                }
+                t_us += if (r >> 20) % 997 == 0 { 12_000 } else { 1_000 };
+                let input = random_sample(kind, r, t_us, &mut next);
+                let got = sup.check(&input);
+                let want = reference.check(&input);
+                // NaN values compare by their bits.
+                let bits =
+                    |f: Option<Fault>| f.map(|f| (f.kind, f.channel, f.value.to_bits(), f.t_us));
+                assert_eq!(bits(got), bits(want), "{limits:?} {input:?}");
+                assert_eq!(
+                    (sup.rail, sup.over, sup.neg, sup.cord, sup.last_t_us),
+                    (
+                        reference.rail,
+                        reference.over,
+                        reference.neg,
+                        reference.cord,
+                        reference.last_t_us
+                    ),
+                    "{limits:?} {input:?}"
+                );
+                if got.is_some() {
+                    faults += 1;
+                    break;
+                }
+            }
+        }
+    }
+    // The streams reach the faults, not only the healthy path.
+    assert!(faults > 1000, "{faults}");
+}
+
+/// The limits the supervisor is compared with the reference under: the defaults and their
+/// edges (checks that trip at once, empty and inverted rail ranges, long counts).
+fn limit_sets() -> [SafetyLimits; 9] {
     let default = SafetyLimits::default();
-    let limit_sets = [
+    [
         default,
         SafetyLimits {
             rail_samples: 0,
@@ -240,80 +293,38 @@ fn decides_exactly_as_the_one_pass_reference() {
             cord_break_samples: 40,
             ..default
         },
-    ];
-    let mut faults = 0;
-    for limits in limit_sets {
-        for _stream in 0..300 {
-            let mut sup = Supervisor::new(limits);
-            let mut reference = Reference {
-                limits,
-                over: [0; 2],
-                neg: [0; 2],
-                rail: [0; 2],
-                cord: 0,
-                last_t_us: None,
-            };
-            let mut t_us = 0i64;
-            // Each stream holds one kind of sample for a while, then switches.
-            let mut kind = 0;
-            for _ in 0..400 {
-                let r = next();
-                if r % 16 == 0 {
-                    kind = (r >> 8) % 11;
-                }
-                t_us += if (r >> 20) % 997 == 0 { 12_000 } else { 1_000 };
-                let count = |r: u64| -> Result<u16, AdcError> {
-                    match (kind, r % 8) {
-                        (1, 0..=5) => Ok((r >> 3) as u16 % 6),
-                        (2, 0..=5) => Ok(4095 - (r >> 3) as u16 % 6),
-                        (3, 0..=2) => Err(AdcError),
-                        _ => Ok(400 + (r >> 3) as u16 % 3000),
-                    }
-                };
-                let counts = [count(next()), count(next())];
-                let f = |r: u64| (r % 5000) as f32 / 100.0 - 1.0;
-                let mut force_n = [f(next()), f(next())];
-                match kind {
-                    4 => force_n[(r >> 30) as usize % 2] = 45.0 + (r >> 40) as f32 % 3.0,
-                    9 => force_n[(r >> 30) as usize % 2] = -2.0 - (r >> 40) as f32 % 3.0,
-                    5 => force_n = [9.0, 0.15 + (r >> 40) as f32 % 4.0],
-                    6 => force_n = [0.01, -0.02 + ((r >> 40) % 2) as f32 * 0.07],
-                    7 => force_n[(r >> 30) as usize % 2] = f32::NAN,
-                    8 => force_n = [0.5, 0.15],
-                    _ => {}
-                }
-                let input = SafetyInput {
-                    t_us,
-                    counts,
-                    force_n,
-                    cord_check_armed: (r >> 50) % 4 != 0,
-                };
-                let got = sup.check(&input);
-                let want = reference.check(&input);
-                // NaN values compare by their bits.
-                let bits =
-                    |f: Option<Fault>| f.map(|f| (f.kind, f.channel, f.value.to_bits(), f.t_us));
-                assert_eq!(bits(got), bits(want), "{limits:?} {input:?}");
-                assert_eq!(
-                    (sup.rail, sup.over, sup.neg, sup.cord, sup.last_t_us),
-                    (
-                        reference.rail,
-                        reference.over,
-                        reference.neg,
-                        reference.cord,
-                        reference.last_t_us
-                    ),
-                    "{limits:?} {input:?}"
-                );
-                if got.is_some() {
-                    faults += 1;
-                    break;
-                }
-            }
+    ]
+}
+
+/// A random sample of one kind (0: healthy; 1, 2: at a rail; 3: failed conversions; 4: over
+/// force; 5, 6, 8: a cord collapsing; 7: NaN; 9: negative force), at `t_us`.
+fn random_sample(kind: u64, r: u64, t_us: i64, next: &mut impl FnMut() -> u64) -> SafetyInput {
+    let count = |r: u64| -> Result<u16, AdcError> {
+        match (kind, r % 8) {
+            (1, 0..=5) => Ok((r >> 3) as u16 % 6),
+            (2, 0..=5) => Ok(4095 - (r >> 3) as u16 % 6),
+            (3, 0..=2) => Err(AdcError),
+            _ => Ok(400 + (r >> 3) as u16 % 3000),
         }
+    };
+    let counts = [count(next()), count(next())];
+    let f = |r: u64| (r % 5000) as f32 / 100.0 - 1.0;
+    let mut force_n = [f(next()), f(next())];
+    match kind {
+        4 => force_n[(r >> 30) as usize % 2] = 45.0 + (r >> 40) as f32 % 3.0,
+        9 => force_n[(r >> 30) as usize % 2] = -2.0 - (r >> 40) as f32 % 3.0,
+        5 => force_n = [9.0, 0.15 + (r >> 40) as f32 % 4.0],
+        6 => force_n = [0.01, -0.02 + ((r >> 40) % 2) as f32 * 0.07],
+        7 => force_n[(r >> 30) as usize % 2] = f32::NAN,
+        8 => force_n = [0.5, 0.15],
+        _ => {}
     }
-    // The streams reach the faults, not only the healthy path.
-    assert!(faults > 1000, "{faults}");
+    SafetyInput {
+        t_us,
+        counts,
+        force_n,
+        cord_check_armed: !(r >> 50).is_multiple_of(4),
+    }
 }
 
 #[test]

@@ -148,18 +148,10 @@ pub fn stream_campaign<E>(
         for (i, r) in rx {
             pending.insert(i, r);
             while let Some(r) = pending.remove(&stats.done) {
-                let step = match r {
-                    Ok(run) if failure.is_none() => {
-                        let simulated_s = run.simulated_s;
-                        sink(run).map(|()| simulated_s).map_err(StreamError::Sink)
-                    }
-                    Ok(_) => break,
-                    Err(RunError::Setup(e)) => Err(StreamError::Campaign(CampaignError::Setup(e))),
-                    Err(RunError::Panicked(why)) => Err(StreamError::Campaign(
-                        CampaignError::Panicked(i_of(&stats), why),
-                    )),
-                };
-                match step {
+                if failure.is_some() && r.is_ok() {
+                    break;
+                }
+                match hand_over(r, &stats, sink) {
                     Ok(sim_s) => stats.simulated_s += sim_s,
                     Err(e) => {
                         failure = Some(e);
@@ -178,6 +170,26 @@ pub fn stream_campaign<E>(
     match failure {
         Some(e) => Err(e),
         None => Ok(stats),
+    }
+}
+
+/// The next run's result, in campaign order, to the sink: its simulated time, s, or why the
+/// campaign stops.
+fn hand_over<E>(
+    r: Result<RunResult, RunError>,
+    stats: &CampaignStats,
+    sink: &mut dyn FnMut(RunResult) -> Result<(), E>,
+) -> Result<f64, StreamError<E>> {
+    match r {
+        Ok(run) => {
+            let simulated_s = run.simulated_s;
+            sink(run).map(|()| simulated_s).map_err(StreamError::Sink)
+        }
+        Err(RunError::Setup(e)) => Err(StreamError::Campaign(CampaignError::Setup(e))),
+        Err(RunError::Panicked(why)) => Err(StreamError::Campaign(CampaignError::Panicked(
+            i_of(stats),
+            why,
+        ))),
     }
 }
 

@@ -69,35 +69,6 @@ pub fn live_line(l: &Live) -> String {
     )
 }
 
-/// What a key sets, in a few words.
-fn key_meaning(key: Key) -> &'static str {
-    match key {
-        Key::RestDeg => "servo angle at rest and for step 0",
-        Key::StepDeg => "servo angle change per tension level",
-        Key::FinalDeg => "servo angle of the highest level",
-        Key::Order => "order of the levels: monotone, updown or pulse",
-        Key::DwellMs => "time each level is held",
-        Key::PreTriggerMs => "from the button (or run) to the logger trigger",
-        Key::TriggerMs => "logger trigger pulse length",
-        Key::TareMs => "tare window before the trigger (0: keep the zeros)",
-        Key::AmpControlV => "amplifier control voltage during a run",
-        Key::WindowAfterMs => "conditioning window starts this long after a change",
-        Key::WindowBeforeMs => "conditioning window ends this long before the next",
-        Key::DiameterMm => "capstan diameter (for the log; 0 = not given)",
-        Key::WrapDeg => "wrap angle (for the log; 0 = not given)",
-        Key::T1Zero => "T1 reading at no load (zero sets it)",
-        Key::T1NPerCount => "T1 sensitivity (weigh t1 sets it)",
-        Key::T2Zero => "T2 reading at no load (zero sets it)",
-        Key::T2NPerCount => "T2 sensitivity (weigh t2 sets it)",
-        Key::TareReferenceN => "force both channels carry during the tare",
-        Key::ServoMinUs => "servo pulse at 0°",
-        Key::ServoMaxUs => "servo pulse at servo_max_deg",
-        Key::ServoMaxDeg => "servo angle reached at servo_max_us",
-        Key::AmpFullScaleV => "amplifier control voltage at full PWM duty",
-        Key::AmpGain => "drive volts per control volt",
-    }
-}
-
 /// The settable keys with their units, one a line.
 pub fn key_lines() -> Vec<String> {
     Key::ALL
@@ -107,7 +78,7 @@ pub fn key_lines() -> Vec<String> {
                 "" => "-",
                 u => u,
             };
-            format!("{:<18} {:<8} {}", k.name(), unit, key_meaning(k))
+            format!("{:<18} {:<8} {}", k.name(), unit, k.setting().meaning())
         })
         .collect()
 }

@@ -13,6 +13,26 @@ use serde_json::json;
 use std::io::Write;
 
 pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
+    let cfg = two_config(args)?;
+    let n = cfg.channels.len();
+    let mut names = vec!["two_control.csv".to_string(), "crosstalk.csv".to_string()];
+    names.extend((1..=n).map(|k| format!("pairs_ch{k}.csv")));
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    let mut set = crate::outputs::open_out(&args.out, "two-control", &names)?.stage()?;
+    let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
+    set.keep_on_failure(crate::outputs::say_kept);
+    write_two(&mut set, &cfg, &r)?;
+    set.commit()?;
+    if args.json {
+        crate::outln!("{}", two_json(&r, n));
+    } else {
+        say_two(args, &cfg, &r);
+    }
+    Ok(())
+}
+
+/// The two-control rig's configuration from the options, refusing the campaign-only ones.
+fn two_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
     let (model, effects) = model(args)?;
     if !effects.is_empty() {
         bail!("--effect is for campaigns; the two-control rig runs the base model (--mu)");
@@ -29,37 +49,8 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
             bail!("{flag} is for campaigns, not --two-control");
         }
     }
-    let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
-    let n = wraps.len();
-    if !(1..=host_sim::plant::MAX_CORDS).contains(&n) {
-        bail!(
-            "--two-control: give 1 to {} wraps (one per channel), not {n}",
-            host_sim::plant::MAX_CORDS
-        );
-    }
-    let orders = args.orders.clone().unwrap_or_else(|| {
-        (0..n)
-            .map(|i| {
-                if i % 2 == 0 {
-                    Order::Monotone
-                } else {
-                    Order::Pulse
-                }
-            })
-            .collect()
-    });
-    let delays = args
-        .delays_ms
-        .clone()
-        .unwrap_or_else(|| (0..n as u32).map(|i| 5_000 * (i % 2)).collect());
-    if orders.len() != n || delays.len() != n {
-        bail!(
-            "--two-control: {n} channels (--wraps) but {} --orders and {} --delays-ms",
-            orders.len(),
-            delays.len()
-        );
-    }
-    let diameter = match args.diameters.as_deref() {
+    let channels = two_channels(args)?;
+    let diameter_mm = match args.diameters.as_deref() {
         None => 12.7,
         Some([d]) => *d,
         Some(_) => bail!("--two-control: one capstan, one --diameters value"),
@@ -69,18 +60,9 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
         _ => bail!("--two-control: one drive motor, one --drive-v value"),
     };
     let cfg = TwoControlConfig {
-        diameter_mm: diameter,
+        diameter_mm,
         drive_v,
-        channels: wraps
-            .iter()
-            .zip(&orders)
-            .zip(&delays)
-            .map(|((&wrap_deg, &o), &delay_ms)| ChannelSpec {
-                wrap_deg,
-                order: o.into(),
-                delay_ms,
-            })
-            .collect(),
+        channels,
         model,
         protocol: protocol(args),
         plant: plant(args)?,
@@ -90,20 +72,51 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     };
     // The same ranges as a campaign's (diameter, wraps, drive voltage).
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mut names = vec!["two_control.csv".to_string(), "crosstalk.csv".to_string()];
-    names.extend((1..=n).map(|k| format!("pairs_ch{k}.csv")));
-    let names: Vec<&str> = names.iter().map(String::as_str).collect();
-    let mut set = crate::outputs::open_out(&args.out, "two-control", &names)?.stage()?;
-    let r = run_two_control(&cfg).map_err(|e| anyhow::anyhow!("{e}"))?;
-    set.keep_on_failure(crate::outputs::say_kept);
-    write_two(&mut set, &cfg, &r)?;
-    set.commit()?;
+    Ok(cfg)
+}
+
+/// One channel per `--wraps` value, with its order and start delay (alternating monotone and
+/// pulse, 0 and 5 s, unless given).
+fn two_channels(args: &Args) -> anyhow::Result<Vec<ChannelSpec>> {
+    let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
+    let n = wraps.len();
+    if !(1..=host_sim::plant::MAX_CORDS).contains(&n) {
+        bail!(
+            "--two-control: give 1 to {} wraps (one per channel), not {n}",
+            host_sim::plant::MAX_CORDS
+        );
+    }
+    let alternate = |i: usize| {
+        if i.is_multiple_of(2) {
+            Order::Monotone
+        } else {
+            Order::Pulse
+        }
+    };
+    let orders = (args.orders.clone()).unwrap_or_else(|| (0..n).map(alternate).collect());
+    let delays = (args.delays_ms.clone())
+        .unwrap_or_else(|| (0..n as u32).map(|i| 5_000 * (i % 2)).collect());
+    if orders.len() != n || delays.len() != n {
+        bail!(
+            "--two-control: {n} channels (--wraps) but {} --orders and {} --delays-ms",
+            orders.len(),
+            delays.len()
+        );
+    }
+    Ok((wraps.iter().zip(&orders).zip(&delays))
+        .map(|((&wrap_deg, &o), &delay_ms)| ChannelSpec {
+            wrap_deg,
+            order: o.into(),
+            delay_ms,
+        })
+        .collect())
+}
+
+/// The run's figures for `--json`.
+fn two_json(r: &TwoControlResult, n: usize) -> serde_json::Value {
     let pairs: usize = r.channels.iter().map(|c| c.log.pairs.len()).sum();
     let (t2_rel, rpm_rel) = r.worst_crosstalk();
-    let faults: Vec<_> = r
-        .channels
-        .iter()
-        .enumerate()
+    let faults: Vec<_> = (r.channels.iter().enumerate())
         .filter_map(|(i, c)| {
             let f = c.log.faults.first()?;
             Some(json!({
@@ -114,49 +127,51 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
             }))
         })
         .collect();
-    if args.json {
-        crate::outln!(
-            "{}",
-            json!({
-                "channels": n,
-                "pairs": pairs,
-                "simulated_s": r.simulated_s,
-                "wall_s": r.wall_s,
-                "realtime_factor": r.simulated_s / r.wall_s.max(1e-9),
-                "peak_current_a": r.peak_current_a(),
-                "peak_power_w": r.peak_power_w(),
-                "mean_power_w": r.mean_power_w(),
-                "crosstalk_events": r.crosstalk.len(),
-                "worst_t2_crosstalk_rel": t2_rel,
-                "worst_speed_crosstalk_rel": rpm_rel,
-                "faults": faults,
-            })
-        );
-    } else {
-        crate::outln!(
-            "{n} channels on one {diameter} mm capstan at {drive_v} V: {:.0} s simulated in {:.3} s",
-            r.simulated_s, r.wall_s
-        );
-        crate::outln!(
-            "drive: peak {:.2} A / {:.1} W (spin-up), mean {:.2} W while on",
-            r.peak_current_a(),
-            r.peak_power_w(),
-            r.mean_power_w()
-        );
-        crate::outln!(
-            "cross-talk over {} steps: holding channel's T2 moved at most {:.3} %, capstan \
-             speed at most {:.1} %",
-            r.crosstalk.len(),
-            t2_rel * 100.0,
-            rpm_rel * 100.0
-        );
-        crate::outln!(
-            "-> {}, {}, pairs_ch1..{n}.csv",
-            args.out.join("two_control.csv").display(),
-            args.out.join("crosstalk.csv").display()
-        );
-    }
-    Ok(())
+    json!({
+        "channels": n,
+        "pairs": pairs,
+        "simulated_s": r.simulated_s,
+        "wall_s": r.wall_s,
+        "realtime_factor": r.simulated_s / r.wall_s.max(1e-9),
+        "peak_current_a": r.peak_current_a(),
+        "peak_power_w": r.peak_power_w(),
+        "mean_power_w": r.mean_power_w(),
+        "crosstalk_events": r.crosstalk.len(),
+        "worst_t2_crosstalk_rel": t2_rel,
+        "worst_speed_crosstalk_rel": rpm_rel,
+        "faults": faults,
+    })
+}
+
+/// The run in words.
+fn say_two(args: &Args, cfg: &TwoControlConfig, r: &TwoControlResult) {
+    let n = cfg.channels.len();
+    let (t2_rel, rpm_rel) = r.worst_crosstalk();
+    crate::outln!(
+        "{n} channels on one {} mm capstan at {} V: {:.0} s simulated in {:.3} s",
+        cfg.diameter_mm,
+        cfg.drive_v,
+        r.simulated_s,
+        r.wall_s
+    );
+    crate::outln!(
+        "drive: peak {:.2} A / {:.1} W (spin-up), mean {:.2} W while on",
+        r.peak_current_a(),
+        r.peak_power_w(),
+        r.mean_power_w()
+    );
+    crate::outln!(
+        "cross-talk over {} steps: holding channel's T2 moved at most {:.3} %, capstan \
+         speed at most {:.1} %",
+        r.crosstalk.len(),
+        t2_rel * 100.0,
+        rpm_rel * 100.0
+    );
+    crate::outln!(
+        "-> {}, {}, pairs_ch1..{n}.csv",
+        args.out.join("two_control.csv").display(),
+        args.out.join("crosstalk.csv").display()
+    );
 }
 
 fn write_two(set: &mut Staged, cfg: &TwoControlConfig, r: &TwoControlResult) -> anyhow::Result<()> {

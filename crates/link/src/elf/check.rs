@@ -97,85 +97,100 @@ impl Firmware {
             if cur.steps > MAX_STEPS {
                 return Err("too many arguments".into());
             }
-            match &p.ty {
-                Type::Bool => {
-                    if cur.read(1)?[0] > 1 {
-                        return Err("bool is neither 0 nor 1".into());
-                    }
-                }
-                Type::U8 | Type::I8 => cur.skip(1)?,
-                Type::U16 | Type::I16 => cur.skip(2)?,
-                Type::U32 | Type::I32 | Type::Usize | Type::Isize | Type::F32 => cur.skip(4)?,
-                Type::U64 | Type::I64 | Type::F64 => cur.skip(8)?,
-                Type::U128 | Type::I128 => cur.skip(16)?,
-                Type::Char => {
-                    let c = cur.u32()?;
-                    if char::from_u32(c).is_none() {
-                        return Err(format!("{c:#x} is not a char"));
-                    }
-                }
-                Type::BitField(r) => cur.skip(bitfield_bytes(r)?)?,
-                Type::Str => {
-                    let n = cur.u32()? as usize;
-                    let s = cur.read(n)?;
-                    if std::str::from_utf8(s).is_err() {
-                        return Err("string is not UTF-8".into());
-                    }
-                }
-                Type::U8Slice => {
-                    let n = cur.u32()? as usize;
-                    cur.skip(n)?
-                }
-                Type::U8Array(n) => cur.skip(*n)?,
-                Type::IStr => {
-                    self.nested(cur)?;
-                }
-                Type::Debug | Type::Display => {
-                    let rest = &cur.bytes[cur.pos..];
-                    let end = rest
-                        .iter()
-                        .position(|&b| b == 0xff)
-                        .ok_or("unterminated preformatted string")?;
-                    if std::str::from_utf8(&rest[..end]).is_err() {
-                        return Err("preformatted string is not UTF-8".into());
-                    }
-                    cur.pos += end + 1;
-                }
-                Type::Format => {
-                    let entry = self.nested(cur)?;
-                    let inner = self.variant(entry, cur)?;
-                    self.walk(inner, cur, depth + 1)?;
-                }
-                Type::FormatSlice | Type::FormatArray(_) => {
-                    let n = match p.ty {
-                        Type::FormatArray(n) => n as u64,
-                        _ => cur.u32()? as u64,
-                    };
-                    if n > MAX_SLICE_ELEMENTS {
-                        return Err(format!("slice of {n} elements"));
-                    }
-                    let entry = self.nested(cur)?;
-                    for _ in 0..n {
-                        let inner = self.variant(entry, cur)?;
-                        self.walk(inner, cur, depth + 1)?;
-                    }
-                }
-                Type::FormatSequence => loop {
-                    let i = cur.u16()? as u64;
-                    if i == 0 {
-                        break;
-                    }
-                    let entry = match self.entries.get(&i) {
-                        Some(e) if !e.has_level() => e,
-                        _ => return Err(format!("sequence element index {i} is not a format")),
-                    };
-                    let inner = entry.params.as_deref().map_err(Clone::clone)?;
-                    self.walk(inner, cur, depth + 1)?;
-                },
+            match fixed_bytes(&p.ty)? {
+                Some(n) => cur.skip(n)?,
+                None => self.variable(&p.ty, cur, depth)?,
             }
         }
         Ok(())
     }
+
+    /// An argument whose length or validity is in its bytes: a checked value, a string, or
+    /// nested formats.
+    fn variable(&self, ty: &Type, cur: &mut Cursor, depth: u32) -> Result<(), String> {
+        match ty {
+            Type::Bool => {
+                if cur.read(1)?[0] > 1 {
+                    return Err("bool is neither 0 nor 1".into());
+                }
+            }
+            Type::Char => {
+                let c = cur.u32()?;
+                if char::from_u32(c).is_none() {
+                    return Err(format!("{c:#x} is not a char"));
+                }
+            }
+            Type::Str => {
+                let n = cur.u32()? as usize;
+                if std::str::from_utf8(cur.read(n)?).is_err() {
+                    return Err("string is not UTF-8".into());
+                }
+            }
+            Type::U8Slice => {
+                let n = cur.u32()? as usize;
+                cur.skip(n)?
+            }
+            Type::IStr => {
+                self.nested(cur)?;
+            }
+            Type::Debug | Type::Display => cur.preformatted()?,
+            _ => self.formats(ty, cur, depth)?,
+        }
+        Ok(())
+    }
+
+    /// Nested formats: one (`{=?}`), a slice or array of them, or a sequence ended by index 0.
+    fn formats(&self, ty: &Type, cur: &mut Cursor, depth: u32) -> Result<(), String> {
+        match ty {
+            Type::Format => {
+                let entry = self.nested(cur)?;
+                let inner = self.variant(entry, cur)?;
+                self.walk(inner, cur, depth + 1)?;
+            }
+            Type::FormatSlice | Type::FormatArray(_) => {
+                let n = match ty {
+                    Type::FormatArray(n) => *n as u64,
+                    _ => cur.u32()? as u64,
+                };
+                if n > MAX_SLICE_ELEMENTS {
+                    return Err(format!("slice of {n} elements"));
+                }
+                let entry = self.nested(cur)?;
+                for _ in 0..n {
+                    let inner = self.variant(entry, cur)?;
+                    self.walk(inner, cur, depth + 1)?;
+                }
+            }
+            Type::FormatSequence => loop {
+                let i = cur.u16()? as u64;
+                if i == 0 {
+                    break;
+                }
+                let entry = match self.entries.get(&i) {
+                    Some(e) if !e.has_level() => e,
+                    _ => return Err(format!("sequence element index {i} is not a format")),
+                };
+                let inner = entry.params.as_deref().map_err(Clone::clone)?;
+                self.walk(inner, cur, depth + 1)?;
+            },
+            other => return Err(format!("argument type {other:?} not handled")),
+        }
+        Ok(())
+    }
+}
+
+/// The bytes of an argument of fixed length (`None`: its length or validity is in its bytes).
+fn fixed_bytes(ty: &Type) -> Result<Option<usize>, String> {
+    Ok(Some(match ty {
+        Type::U8 | Type::I8 => 1,
+        Type::U16 | Type::I16 => 2,
+        Type::U32 | Type::I32 | Type::Usize | Type::Isize | Type::F32 => 4,
+        Type::U64 | Type::I64 | Type::F64 => 8,
+        Type::U128 | Type::I128 => 16,
+        Type::BitField(r) => bitfield_bytes(r)?,
+        Type::U8Array(n) => *n,
+        _ => return Ok(None),
+    }))
 }
 
 struct Cursor<'a> {
@@ -194,6 +209,20 @@ impl<'a> Cursor<'a> {
         let s = &self.bytes[self.pos..end];
         self.pos = end;
         Ok(s)
+    }
+
+    /// A `{:?}`/`{}` argument: UTF-8 text ended by 0xff.
+    fn preformatted(&mut self) -> Result<(), String> {
+        let rest = &self.bytes[self.pos..];
+        let end = rest
+            .iter()
+            .position(|&b| b == 0xff)
+            .ok_or("unterminated preformatted string")?;
+        if std::str::from_utf8(&rest[..end]).is_err() {
+            return Err("preformatted string is not UTF-8".into());
+        }
+        self.pos += end + 1;
+        Ok(())
     }
 
     fn skip(&mut self, n: usize) -> Result<(), String> {

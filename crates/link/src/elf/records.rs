@@ -1,217 +1,31 @@
 //! The rig's records as the firmware's defmt table declares them: the record kinds, found by
-//! the leading word of their format string (`firmware/src/defmt_sink.rs`), each
-//! `WORD name={=type} name={=type} ...`, so fields are read by name and type; and the check,
-//! when the ELF is loaded, that every record has the fields this decoder needs.
+//! the leading word of their format string, each `WORD name={=type} name={=type} ...`, so
+//! fields are read by name and type; and the check, when the ELF is loaded, that every record
+//! has the fields this decoder needs. Kinds, fields and types are the wire schema's
+//! (`capstan-wire`, which the firmware's format strings are written from too).
 //!
 //! The run records (`run_start`, `raw`, `pair`, `fault`, `run_end`) must all be there; the
-//! setup-mode records (`settings`, `live`, `reply`) and the calibration fields `run_start`
-//! gained with them are read when present, so an ELF built before them still decodes.
+//! setup-mode records (`settings`, `live`, `reply`) and the fields the schema marks as not
+//! required (the calibration fields `run_start` gained with setup mode, the run records'
+//! `crc`) are read when present, so an ELF built before them still decodes.
 
 use super::Entry;
 use anyhow::bail;
 use defmt_parser::{Fragment, ParserMode, Type};
 use std::collections::HashMap;
 
-/// The rig's record kinds, by the leading word of their format string.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum RecordKind {
-    /// `run_start`
-    RunStart,
-    /// `raw`
-    Raw,
-    /// `pair`
-    Pair,
-    /// `fault`
-    Fault,
-    /// `run_end`
-    RunEnd,
-    /// `settings` (setup mode, at boot and on request: not part of a run)
-    Settings,
-    /// `live` (setup mode)
-    Live,
-    /// `reply` (the answer to a host command)
-    Reply,
-}
+pub use capstan_wire::{Prim, RecordKind};
 
-impl RecordKind {
-    /// All kinds.
-    pub const ALL: [RecordKind; 8] = [
-        RecordKind::RunStart,
-        RecordKind::Raw,
-        RecordKind::Pair,
-        RecordKind::Fault,
-        RecordKind::RunEnd,
-        RecordKind::Settings,
-        RecordKind::Live,
-        RecordKind::Reply,
-    ];
-
-    /// The kinds every rig firmware has: an ELF lacking one is refused. The setup-mode kinds
-    /// (`settings`, `live`, `reply`) came later; an ELF without them still decodes.
-    pub const RUN_KINDS: [RecordKind; 5] = [
-        RecordKind::RunStart,
-        RecordKind::Raw,
-        RecordKind::Pair,
-        RecordKind::Fault,
-        RecordKind::RunEnd,
-    ];
-
-    /// The leading word of the format string.
-    pub const fn word(self) -> &'static str {
-        match self {
-            RecordKind::RunStart => "run_start",
-            RecordKind::Raw => "raw",
-            RecordKind::Pair => "pair",
-            RecordKind::Fault => "fault",
-            RecordKind::RunEnd => "run_end",
-            RecordKind::Settings => "settings",
-            RecordKind::Live => "live",
-            RecordKind::Reply => "reply",
-        }
-    }
-
-    fn from_word(word: &str) -> Option<RecordKind> {
-        RecordKind::ALL.into_iter().find(|k| k.word() == word)
-    }
-
-    /// The fields this decoder needs, with their wire types.
-    pub fn required_fields(self) -> Vec<(&'static str, Prim)> {
-        use Prim::*;
-        let lead: &[(&str, Prim)] = match self {
-            RecordKind::RunStart => &[("seq", U32), ("run", U32)],
-            RecordKind::Settings => &[("seq", U32), ("source", U8)],
-            RecordKind::Raw => &[
-                ("seq", U32),
-                ("t_us", I64),
-                ("c1", U16),
-                ("c2", U16),
-                ("t1_n", F32),
-                ("t2_n", F32),
-            ],
-            RecordKind::Pair => &[
-                ("seq", U32),
-                ("step", U32),
-                ("level", U32),
-                ("angle_deg", F32),
-                ("t_mid_ms", U32),
-                ("t1_mean_n", F32),
-                ("t1_std_n", F32),
-                ("t1_count", U32),
-                ("t2_mean_n", F32),
-                ("t2_std_n", F32),
-                ("t2_count", U32),
-            ],
-            RecordKind::Fault => &[
-                ("seq", U32),
-                ("kind", U8),
-                ("channel", U8),
-                ("value", F32),
-                ("t_us", I64),
-            ],
-            RecordKind::RunEnd => &[("seq", U32), ("t_us", I64), ("pairs", U32), ("fault", U8)],
-            RecordKind::Live => &[
-                ("seq", U32),
-                ("t_ms", U32),
-                ("c1", U16),
-                ("c2", U16),
-                ("t1_n", F32),
-                ("t2_n", F32),
-                ("servo_deg", F32),
-                ("crc", U32),
-            ],
-            RecordKind::Reply => &[
-                ("seq", U32),
-                ("command", U8),
-                ("error", U8),
-                ("v1", F32),
-                ("v2", F32),
-                ("crc", U32),
-            ],
-        };
-        let mut fields = lead.to_vec();
-        match self {
-            RecordKind::RunStart => fields.extend_from_slice(SETTINGS_FIELDS),
-            RecordKind::Settings => {
-                fields.extend_from_slice(SETTINGS_FIELDS);
-                fields.extend_from_slice(CALIBRATION_EXTRA_FIELDS);
-                fields.push(("crc", U32));
-            }
-            _ => {}
-        }
-        fields
-    }
-
-    /// Fields read when the record has them (firmware built before them lacks them): checked
-    /// for their type when present. `crc` of the run records is optional the same way.
-    pub fn optional_fields(self) -> &'static [(&'static str, Prim)] {
-        match self {
-            RecordKind::RunStart => CALIBRATION_EXTRA_FIELDS,
-            _ => &[],
-        }
-    }
-}
-
-/// The protocol and calibration fields `run_start` and `settings` share (after their leading
-/// fields), in the firmware's order.
-const SETTINGS_FIELDS: &[(&str, Prim)] = &[
-    ("order", Prim::U8),
-    ("rest_deg", Prim::F32),
-    ("step_deg", Prim::F32),
-    ("final_deg", Prim::F32),
-    ("dwell_ms", Prim::U32),
-    ("pre_trigger_ms", Prim::U32),
-    ("trigger_ms", Prim::U32),
-    ("tare_ms", Prim::U32),
-    ("amp_control_v", Prim::F32),
-    ("sample_hz", Prim::U32),
-    ("raw_log_hz", Prim::U32),
-    ("window_after_ms", Prim::U32),
-    ("window_before_ms", Prim::U32),
-    ("diameter_mm", Prim::F32),
-    ("wrap_deg", Prim::F32),
-    ("amp_gain", Prim::F32),
-    ("t1_zero", Prim::F32),
-    ("t1_n_per_count", Prim::F32),
-    ("t2_zero", Prim::F32),
-    ("t2_n_per_count", Prim::F32),
-];
-
-/// The rest of the calibration (tare reference, servo map, amplifier full scale): always in
-/// `settings`, in `run_start` since setup mode.
-const CALIBRATION_EXTRA_FIELDS: &[(&str, Prim)] = &[
-    ("tare_reference_n", Prim::F32),
-    ("servo_min_us", Prim::F32),
-    ("servo_max_us", Prim::F32),
-    ("servo_max_deg", Prim::F32),
-    ("amp_full_scale_v", Prim::F32),
-];
-
-/// The primitive wire types the records use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Prim {
-    /// `{=u8}`
-    U8,
-    /// `{=u16}`
-    U16,
-    /// `{=u32}`
-    U32,
-    /// `{=i64}`
-    I64,
-    /// `{=f32}`
-    F32,
-}
-
-impl Prim {
-    fn of(ty: &Type) -> Option<Prim> {
-        Some(match ty {
-            Type::U8 => Prim::U8,
-            Type::U16 => Prim::U16,
-            Type::U32 => Prim::U32,
-            Type::I64 => Prim::I64,
-            Type::F32 => Prim::F32,
-            _ => return None,
-        })
-    }
+/// The wire type of a format parameter, if it is one the records use.
+fn prim_of(ty: &Type) -> Option<Prim> {
+    Some(match ty {
+        Type::U8 => Prim::U8,
+        Type::U16 => Prim::U16,
+        Type::U32 => Prim::U32,
+        Type::I64 => Prim::I64,
+        Type::F32 => Prim::F32,
+        _ => return None,
+    })
 }
 
 /// Where each field of one record kind sits among the format's parameters.
@@ -253,7 +67,7 @@ pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, String>
                     .to_string();
             }
             Fragment::Parameter(p) => {
-                let Some(prim) = Prim::of(&p.ty).filter(|_| p.hint.is_none()) else {
+                let Some(prim) = prim_of(&p.ty).filter(|_| p.hint.is_none()) else {
                     return Some(Err(format!(
                         "field `{name}` has a type this decoder cannot read"
                     )));
@@ -266,20 +80,14 @@ pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, String>
         }
     }
     let layout = RecordLayout { kind, fields };
-    let optional = kind
-        .optional_fields()
-        .iter()
-        .chain(&[("crc", Prim::U32)])
-        .map(|&(n, t)| (n, t, false));
-    let required = kind
-        .required_fields()
-        .into_iter()
-        .map(|(n, t)| (n, t, true));
-    for (name, ty, needed) in required.chain(optional) {
-        match layout.fields.iter().find(|(n, _)| n == name) {
-            None if needed => return Some(Err(format!("no field `{name}`"))),
-            Some((_, t)) if *t != ty => {
-                return Some(Err(format!("field `{name}` is {t:?}, expected {ty:?}")))
+    for field in kind.fields() {
+        match layout.fields.iter().find(|(n, _)| n == field.name) {
+            None if field.required => return Some(Err(format!("no field `{}`", field.name))),
+            Some((_, t)) if *t != field.prim => {
+                return Some(Err(format!(
+                    "field `{}` is {t:?}, expected {:?}",
+                    field.name, field.prim
+                )))
             }
             _ => {}
         }

@@ -1,6 +1,7 @@
 //! Round trips through the record decoder for the setup-mode records and the longer
-//! `run_start`, with their format strings taken from the firmware's source
-//! (`firmware/src/defmt_sink.rs`) and their checksums from the firmware's own `record_crc`:
+//! `run_start`, with their format strings from the wire schema (`capstan-wire`, which the
+//! firmware's defmt calls are written from) and their checksums from the firmware's own
+//! `record_crc`:
 //! a field renamed, reordered or left out of the checksum on either side fails here.
 
 use super::{record_from_values, Event};
@@ -11,15 +12,13 @@ use firmware::record::{
 };
 use firmware::{Calibration, Protocol, Settings, StepOrder};
 
-const SINK: &str = include_str!("../../../../firmware/src/defmt_sink.rs");
-
-/// The format string of a record kind, as the firmware writes it.
+/// The format string of a record kind, as the wire schema gives it (the firmware's defmt calls
+/// are written from the same table by `firmware/build.rs`).
 fn format_of(word: &str) -> String {
-    let start = SINK
-        .find(&format!("\"{word} seq="))
-        .unwrap_or_else(|| panic!("no `{word}` record in defmt_sink.rs"));
-    let rest = &SINK[start + 1..];
-    rest[..rest.find('"').expect("closing quote")].to_string()
+    capstan_wire::RecordKind::from_word(word)
+        .unwrap_or_else(|| panic!("no `{word}` record in the wire schema"))
+        .format()
+        .to_string()
 }
 
 fn layout(format: &str) -> RecordLayout {
