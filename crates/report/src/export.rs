@@ -255,7 +255,7 @@ fn fonts() -> Arc<resvg::usvg::fontdb::Database> {
 
 /// Whether the system has any font to draw text with (PNG and PDF need one).
 pub fn have_fonts() -> bool {
-    fonts().len() > 0
+    !fonts().is_empty()
 }
 
 fn tree(svg: &str, db: &Arc<resvg::usvg::fontdb::Database>) -> Result<resvg::usvg::Tree> {
@@ -331,6 +331,26 @@ pub fn figure_files(figs: &[Figure], opts: &FigureOptions) -> Result<Vec<FigureF
     Ok(out)
 }
 
+/// Checks of a written figure file (for tests and for users' scripts): the SVG parses.
+pub fn svg_parses(svg: &str) -> Result<()> {
+    tree(svg, &Arc::new(resvg::usvg::fontdb::Database::new())).map(|_| ())
+}
+
+/// A PNG file's size in pixels, decoding it whole.
+pub fn png_decodes(bytes: &[u8]) -> Result<(u32, u32)> {
+    let pm = resvg::tiny_skia::Pixmap::decode_png(bytes).context("the PNG does not decode")?;
+    Ok((pm.width(), pm.height()))
+}
+
+/// The number of pages of a PDF (its `/Type /Page` objects), and whether it has its header and
+/// end-of-file marker.
+pub fn pdf_pages(bytes: &[u8]) -> (usize, bool) {
+    let text = String::from_utf8_lossy(bytes);
+    let pages = text.matches("/Type /Page").count() - text.matches("/Type /Pages").count();
+    let framed = bytes.starts_with(b"%PDF-") && text.trim_end().ends_with("%%EOF");
+    (pages, framed)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -351,24 +371,4 @@ mod tests {
         assert!(Format::parse_list("jpg").is_err());
         assert!(Format::parse_list(",").is_err());
     }
-}
-
-/// Checks of a written figure file (for tests and for users' scripts): the SVG parses.
-pub fn svg_parses(svg: &str) -> Result<()> {
-    tree(svg, &Arc::new(resvg::usvg::fontdb::Database::new())).map(|_| ())
-}
-
-/// A PNG file's size in pixels, decoding it whole.
-pub fn png_decodes(bytes: &[u8]) -> Result<(u32, u32)> {
-    let pm = resvg::tiny_skia::Pixmap::decode_png(bytes).context("the PNG does not decode")?;
-    Ok((pm.width(), pm.height()))
-}
-
-/// The number of pages of a PDF (its `/Type /Page` objects), and whether it has its header and
-/// end-of-file marker.
-pub fn pdf_pages(bytes: &[u8]) -> (usize, bool) {
-    let text = String::from_utf8_lossy(bytes);
-    let pages = text.matches("/Type /Page").count() - text.matches("/Type /Pages").count();
-    let framed = bytes.starts_with(b"%PDF-") && text.trim_end().ends_with("%%EOF");
-    (pages, framed)
 }

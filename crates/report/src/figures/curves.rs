@@ -79,7 +79,7 @@ fn physical(a: &Analysis, g: usize, amp: bool) -> Vec<(f64, f64)> {
     for i in a.obs.rows_of_group(g) {
         let r = &a.obs.rows[i];
         let t1 = m.sensors.true_t1_n(r.t1_n);
-        if !(t1 > 0.0) {
+        if t1.is_nan() || t1 <= 0.0 {
             continue;
         }
         let mut op = r.op;
