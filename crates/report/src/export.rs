@@ -305,28 +305,57 @@ pub fn figure_files(figs: &[Figure], opts: &FigureOptions) -> Result<Vec<FigureF
         return Ok(out);
     }
     let db = fonts();
-    for (k, f) in figs.iter().enumerate() {
-        let n = k + 1;
-        let svg = standalone_svg(f, n, Some(opts.width_mm));
-        let stem = format!("figures/figure-{n}-{}", f.id);
-        let needs_tree = opts.formats.iter().any(|x| *x != Format::Svg);
-        let t = if needs_tree {
-            Some(tree(&svg, &db)?)
-        } else {
-            None
+    // One figure per thread (they are independent; rasterising dominates).
+    let per_figure: Vec<Result<Vec<FigureFile>>> = std::thread::scope(|s| {
+        let handles: Vec<_> = figs
+            .iter()
+            .enumerate()
+            .map(|(k, f)| {
+                let db = &db;
+                s.spawn(move || one_figure(f, k + 1, opts, db))
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err(anyhow::anyhow!("a figure's renderer panicked")))
+            })
+            .collect()
+    });
+    for files in per_figure {
+        out.extend(files?);
+    }
+    Ok(out)
+}
+
+/// Figure `n`'s files in every asked format.
+fn one_figure(
+    f: &Figure,
+    n: usize,
+    opts: &FigureOptions,
+    db: &Arc<resvg::usvg::fontdb::Database>,
+) -> Result<Vec<FigureFile>> {
+    let svg = standalone_svg(f, n, Some(opts.width_mm));
+    let stem = format!("figures/figure-{n}-{}", f.id);
+    let needs_tree = opts.formats.iter().any(|x| *x != Format::Svg);
+    let t = if needs_tree {
+        Some(tree(&svg, db)?)
+    } else {
+        None
+    };
+    let mut out = Vec::new();
+    for fmt in &opts.formats {
+        let bytes = match (fmt, &t) {
+            (Format::Svg, _) => svg.clone().into_bytes(),
+            (Format::Png, Some(t)) => png(t, opts.width_mm)?,
+            (Format::Pdf, Some(t)) => pdf(t)?,
+            _ => unreachable!("a tree is built for PNG and PDF"),
         };
-        for fmt in &opts.formats {
-            let bytes = match (fmt, &t) {
-                (Format::Svg, _) => svg.clone().into_bytes(),
-                (Format::Png, Some(t)) => png(t, opts.width_mm)?,
-                (Format::Pdf, Some(t)) => pdf(t)?,
-                _ => unreachable!("a tree is built for PNG and PDF"),
-            };
-            out.push(FigureFile {
-                name: format!("{stem}.{}", fmt.ext()),
-                bytes,
-            });
-        }
+        out.push(FigureFile {
+            name: format!("{stem}.{}", fmt.ext()),
+            bytes,
+        });
     }
     Ok(out)
 }
