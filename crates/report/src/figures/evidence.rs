@@ -28,26 +28,22 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
             (a.min(r.op.run), b.max(r.op.run))
         });
     let run_span = (run_hi - run_lo).max(1.0);
+    let cord_label = "cord: wrap ° (by diameter)".to_string();
     // Cord labels on the cord axis (every k-th when there are many).
-    let every = obs.groups.len().div_ceil(12).max(1);
+    let every = obs.groups.len().div_ceil(6).max(1);
     let cord_ticks: Vec<(f64, String)> = obs
         .groups
         .iter()
         .enumerate()
         .step_by(every)
-        .map(|(g, grp)| {
-            (
-                g as f64 + 0.5,
-                format!("{:.0}/{}", grp.wrap_deg, grp.diameter_mm),
-            )
-        })
+        .map(|(g, grp)| (g as f64 + 0.5, format!("{:.0}", grp.wrap_deg)))
         .collect();
     let mut panels = Vec::new();
     for (name, pred) in models {
         for (col, x_label) in [
             ("T1", "T1 (N)"),
             ("step", "step"),
-            ("cord", "cord (wrap°/diameter mm), its runs left to right"),
+            ("cord", cord_label.as_str()),
         ] {
             let x = |i: usize| {
                 let r = &obs.rows[i];
@@ -70,9 +66,9 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
                 })
                 .collect();
             panels.push(Panel {
-                title: format!("{name}: residual by {col}"),
+                title: format!("{name}: by {col}"),
                 x_label: x_label.into(),
-                y_label: "T2 measured − model (N)".into(),
+                y_label: "residual of T2 (N)".into(),
                 series,
                 zero_line: true,
                 y_range: Some(y_range),
@@ -85,7 +81,7 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
         id: "residuals",
         legend: pal.legend(),
         chart: { let (c, w, h) = layout.grid(3, 430, 300); figure(&panels, c, w, h)? },
-        caption: format!("Residuals of T2 (measured − model) against T1, step and cord, for Euler-Eytelwein (top) and the extended model (bottom), one colour per wrap, on a common scale. On the cord axis each cord (wrap in degrees / capstan diameter in mm) holds its runs from left (first) to right (last). From predictions.csv (t2_n − t2_baseline_n, t2_n − t2_extended_n).{}", super::drawn_note(a)),
+        caption: format!("Residuals of T2 (measured − model) against T1, step and cord, for Euler-Eytelwein (top) and the extended model (bottom), one colour per wrap, on a common scale. Residual = measured T2 − the model's T2. On the cord axis the cords come diameter by diameter (the smallest capstan's first), each labelled by its wrap in degrees (every other label when there are more than six), and each holds its runs from left (first) to right (last). From predictions.csv (t2_n − t2_baseline_n, t2_n − t2_extended_n).{}", super::drawn_note(a)),
     })
 }
 
