@@ -106,8 +106,14 @@ fn analyse(d: &Dataset, dir: &std::path::Path, what: &str) -> Option<(f64, usize
     let opts = capstan_engine::analysis::Options { threads: 2 };
     let a = capstan_engine::analysis::run(d, opts).ok()?;
     let cl = capstan_truth::closed_loop::run(&a, 2).ok();
-    let html = capstan_report::report_html(&a, cl.as_ref().map(|c| c.curves.as_slice()), "")
-        .expect("the report renders");
+    let html = capstan_report::report_html(
+        &a,
+        cl.as_ref().map(|c| c.curves.as_slice()),
+        "",
+        &capstan_report::Context::library(),
+    )
+    .expect("the report renders")
+    .0;
     let mut csv = Vec::new();
     capstan_report::write_predictions_csv(&mut csv, d, &a).unwrap();
     let _ = std::fs::create_dir_all(dir);

@@ -6,6 +6,7 @@
 //! * [`condition`]: a raw time series into pairs by the firmware's rules;
 //! * [`logger`]: the files of a logged session, written as the records arrive;
 //! * [`outputs`]: how every command opens its output directory;
+//! * [`provenance`]: version, commit, input hash and command line for every output;
 //! * [`simboard`]: the simulated board behind `rig --sim DIR` and `log --sim DIR`;
 //! * [`term`]: stdout and stderr that survive a closed pipe. Only this crate prints.
 //!
@@ -16,5 +17,6 @@ pub mod cli;
 pub mod condition;
 pub mod logger;
 pub mod outputs;
+pub mod provenance;
 pub mod simboard;
 pub mod term;

@@ -15,6 +15,10 @@ fn analyze_csv(name: &str, body: &str) -> String {
             threads: Some(1),
             validate: false,
             seed: 0,
+            figures: None,
+            width_mm: 170.0,
+            font_pt: 8.0,
+            thesis_comparison: false,
         }),
     });
     format!("{:#}", r.expect_err("bad input must fail"))

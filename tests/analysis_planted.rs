@@ -63,6 +63,10 @@ fn the_report_on_planted_data_says_what_its_verdicts_say() {
                 threads: Some(2),
                 validate: false,
                 seed: 0,
+                figures: None,
+                width_mm: 170.0,
+                font_pt: 8.0,
+                thesis_comparison: false,
             }),
         })
         .unwrap();

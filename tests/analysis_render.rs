@@ -69,6 +69,10 @@ fn report_renders_in_headless_chromium() {
             threads: None,
             validate: false,
             seed: 0,
+            figures: None,
+            width_mm: 170.0,
+            font_pt: 8.0,
+            thesis_comparison: false,
         }),
     })
     .unwrap();

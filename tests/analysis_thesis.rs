@@ -25,6 +25,10 @@ fn outputs() -> &'static PathBuf {
                 threads: None,
                 validate: false,
                 seed: 0,
+                figures: None,
+                width_mm: 170.0,
+                font_pt: 8.0,
+                thesis_comparison: false,
             }),
         })
         .unwrap();

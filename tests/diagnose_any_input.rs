@@ -194,7 +194,7 @@ proptest! {
                     // The same cords and runs as diagnose.
                     prop_assert_eq!(a.obs.groups.len(), a.evidence.design.cords);
                     prop_assert_eq!(a.obs.runs.len(), a.evidence.design.runs);
-                    let html = capstan_report::report_html(&a, None, "").unwrap();
+                    let html = capstan_report::report_html(&a, None, "", &capstan_report::Context::library()).unwrap().0;
                     prop_assert!(non_finite_word(&html).is_none(), "{:?}", non_finite_word(&html));
                     let words = serde_json::to_string(&a.mechanisms).unwrap();
                     prop_assert!(non_finite_word(&words).is_none(), "{:?}", non_finite_word(&words));

@@ -39,7 +39,15 @@ fn simulate_writes_pairs_raw_logs_and_one_json_object() {
         "--wraps",
         "270,720",
     ];
-    args.extend(["--runs", "2", "--json"]);
+    args.extend([
+        "--runs",
+        "2",
+        "--json",
+        "--seed",
+        "77",
+        "--effect",
+        "t2_offset=-0.5",
+    ]);
     args.extend(SHORT);
     let r = capstan(&args);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
@@ -54,6 +62,16 @@ fn simulate_writes_pairs_raw_logs_and_one_json_object() {
     assert!(v["realtime_factor"].as_f64().unwrap() > 0.0);
     assert!(v["wall_s"].as_f64().unwrap() > 0.0);
     assert_eq!(v["faults"], serde_json::json!([]));
+    // Provenance: what made these data, in summary.json as in the printed object.
+    let prov = &v["provenance"];
+    assert_eq!(prov["seed"], 77);
+    assert_eq!(prov["effects"][0]["name"], "t2_offset");
+    assert_eq!(prov["effects"][0]["value"], -0.5);
+    assert!(prov["noise"]["profile"].is_string() && prov["commit"].is_string());
+    assert!(prov["command_line"].as_str().unwrap().contains("--seed 77"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["provenance"], *prov);
     // No progress bar when not on a terminal.
     assert!(
         r.stderr.is_empty(),

@@ -29,6 +29,21 @@ pub struct Args {
     /// Master seed of the validation's data sets.
     #[arg(long, default_value_t = 31_415_926)]
     pub seed: u64,
+    /// Also write every figure as a standalone file under DIR/figures/ (figure-N-ID.EXT, N as
+    /// in the report): a comma list of svg, png (300 dpi), pdf.
+    #[arg(long, value_name = "FORMATS")]
+    pub figures: Option<String>,
+    /// Width of the figures, mm (85: one journal column; 170: the page). The report's figures
+    /// are laid out to it too.
+    #[arg(long, default_value_t = 170.0)]
+    pub width_mm: f64,
+    /// Size of the figures' tick labels, pt (titles and axis labels are a little larger).
+    #[arg(long, default_value_t = 8.0)]
+    pub font_pt: f64,
+    /// Compare with the thesis's Table 3 even when the data are not the thesis's (by default
+    /// only the thesis data, recognised by their SHA-256, are compared with it).
+    #[arg(long)]
+    pub thesis_comparison: bool,
 }
 
 /// Run `capstan analyze`.
@@ -40,9 +55,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return validate(&args);
     }
     let t0 = Instant::now();
+    let figures = capstan_report::FigureOptions {
+        formats: match &args.figures {
+            Some(f) => capstan_report::Format::parse_list(f)?,
+            None => Vec::new(),
+        },
+        width_mm: args.width_mm,
+        font_pt: args.font_pt,
+    };
+    figures.check()?;
+    let provenance = crate::provenance::of_input(args.data.as_deref())?;
+    let thesis = capstan_report::ThesisComparison::decide(
+        crate::provenance::is_thesis(&provenance),
+        args.thesis_comparison,
+    );
+    let ctx = capstan_report::Context {
+        provenance,
+        thesis,
+        figures,
+    };
     // Lock the output directory and prove it writable before the analysis, not after it.
     let names = ["report.html", "metrics.json", "predictions.csv"];
-    let mut set = crate::outputs::open_out(&args.out, "analyze", &names)?.stage()?;
+    let ours = |rel: &str| rel.starts_with("figures/figure-");
+    let out =
+        capstan_outdir::OutputDir::open_with(&args.out, "analyze", &names, &[("figures", &ours)])?;
+    crate::outputs::say_recovered(&out);
+    let mut set = out.stage()?;
     let ds = match &args.data {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
@@ -55,6 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     crate::errln!("{}", ds.structure.describe());
     let mut a = capstan_engine::analysis::run(&ds, opts)?;
+    capstan_report::apply_thesis_choice(&mut a, &ctx.thesis);
     // From here on the set holds work: a late failure keeps it and says where.
     set.keep_on_failure(crate::outputs::say_kept);
     for note in &a.fit_notes {
@@ -72,11 +111,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let disc = capstan_discover::discover(&ds, &Default::default(), &mut |_, _| {});
     let disc = serde_json::to_value(&disc)?;
     let disc_s = t_disc.elapsed().as_secs_f64();
-    let html = capstan_report::report_html(&a, curves.as_deref(), &note)?;
+    let (html, figs) = capstan_report::report_html(&a, curves.as_deref(), &note, &ctx)?;
     let html = capstan_report::discovered::insert_section(
         html,
         &capstan_report::discovered::discovered_html(&disc),
     );
+    let t_files = Instant::now();
+    let files = capstan_report::figure_files(&figs, &ctx.figures)?;
+    if !files.is_empty() && !capstan_report::export::have_fonts() {
+        crate::errln!("warning: no system fonts found: the PNG and PDF figures have no text (the SVG files do)");
+    }
+    for f in &files {
+        set.write(&f.name, &f.bytes)?;
+    }
+    a.elapsed.figure_files_s = t_files.elapsed().as_secs_f64();
     let mut csv = set.create("predictions.csv")?;
     capstan_report::write_predictions_csv(&mut csv, &ds, &a)
         .and_then(|()| csv.flush())
@@ -89,7 +137,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
-    let mut metrics = capstan_report::metrics_json(&a, &closed);
+    let mut metrics = capstan_report::metrics_json(&a, &closed, &ctx);
     metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
     metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
     set.write("report.html", html.as_bytes())?;
@@ -99,8 +147,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     set.commit()?;
     crate::errln!(
-        "wrote {}/report.html, metrics.json, predictions.csv in {:.2} s",
+        "wrote {}/report.html, metrics.json, predictions.csv{} in {:.2} s",
         args.out.display(),
+        if files.is_empty() {
+            String::new()
+        } else {
+            format!(" and {} figure files in figures/", files.len())
+        },
         t0.elapsed().as_secs_f64()
     );
     if args.json {

@@ -51,7 +51,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let d = diagnose::diagnose_with(&data, &opts);
     if args.json {
-        crate::outln!("{}", d.to_json());
+        let mut v: serde_json::Value = serde_json::from_str(&d.to_json())?;
+        v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
+        crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         crate::out!("{}", summary(&d, &data.source));
     }

@@ -156,6 +156,24 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// What made a session, for its `summary.json`: program, commit, command line, the saved
+/// stream's SHA-256 (a file given to `--from`; a live board or stdin has none: its bytes are in
+/// `stream.defmt`) and the ELF's (none for a simulated board).
+pub(crate) fn provenance(args: &Args, from: Option<&str>) -> anyhow::Result<serde_json::Value> {
+    let p = match from.filter(|f| *f != "-") {
+        Some(f) => crate::provenance::of_input(Some(std::path::Path::new(f)))?,
+        None => crate::provenance::without_input(),
+    };
+    let mut v = serde_json::to_value(p)?;
+    // A simulated board (`--sim`) runs the firmware's code on the host: no ELF to hash.
+    if let Some(elf) = &args.elf {
+        let hash = capstan_data::provenance::sha256_file(elf)
+            .with_context(|| format!("cannot read {}", elf.display()))?;
+        v["elf_sha256"] = hash.into();
+    }
+    Ok(v)
+}
+
 /// Run `capstan log`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     check_args(&args)?;
@@ -249,6 +267,7 @@ fn from_stream(
         (from.to_string(), Box::new(file))
     };
     let mut logger = Logger::create(fw, opts, &source)?;
+    logger.set_provenance(provenance(args, Some(from))?);
     let (tx, rx) = mpsc::sync_channel::<std::io::Result<Vec<u8>>>(16);
     std::thread::spawn(move || {
         let mut reader = reader;

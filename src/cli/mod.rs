@@ -7,6 +7,7 @@ pub mod condition;
 pub mod diagnose;
 pub mod discover;
 pub mod log;
+pub mod predict;
 pub mod rig;
 pub mod signal;
 pub mod simulate;
@@ -33,6 +34,9 @@ pub enum Command {
     /// Search a library of physical terms beyond the catalogue for what is left; propose one
     /// only if it earns its evidence and helps held-out cords.
     Discover(discover::Args),
+    /// T2 and amplification from an analysis's fitted model, with a 95 % confidence interval
+    /// (the mean curve) and a 95 % prediction interval (a new measurement on a new cord).
+    Predict(predict::Args),
     /// Record a real run from the board over defmt/RTT (or decode a saved stream).
     Log(log::Args),
     /// Set up the rig from the host: live forces, jog the servo, calibrate, set the protocol,
@@ -52,6 +56,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Diagnose(a) => diagnose::run(a),
         Command::Discover(a) => discover::run(a),
         Command::Log(a) => log::run(a),
+        Command::Predict(a) => predict::run(a),
         Command::Rig(a) => rig::run(a),
         Command::Condition(a) => condition::run(a),
     }

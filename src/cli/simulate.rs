@@ -170,6 +170,33 @@ fn model(args: &Args) -> anyhow::Result<(Model, Vec<Effect>)> {
     Ok((Model::euler_eytelwein(args.mu), effects))
 }
 
+/// What made this campaign, for `summary.json`: the program, commit and command line, the
+/// master seed, the plant's mu, the effects, the noise and the unmodelled physics.
+fn provenance(args: &Args, cfg: &CampaignConfig) -> serde_json::Value {
+    let p = crate::provenance::without_input();
+    let u = &cfg.unmodelled;
+    serde_json::json!({
+        "program": p.program,
+        "commit": p.commit,
+        "command_line": p.command_line,
+        "seed": cfg.seed,
+        "mu": cfg.model.law.mu,
+        "effects": cfg.effects.iter().map(|e| serde_json::json!({"name": e.kind.name(), "value": e.value})).collect::<Vec<_>>(),
+        "noise": {
+            "profile": args.noise,
+            "sensor_noise": cfg.sensor_noise,
+            "cord_scatter_pct": cfg.scatter_pct,
+            "run_scatter_pct": cfg.run_scatter_pct,
+        },
+        "unmodelled": {
+            "hysteresis": u.hysteresis,
+            "t2_nonlinearity": u.t2_nonlinearity,
+            "regime_change": u.regime_change,
+        },
+        "faults": args.faults,
+    })
+}
+
 /// The physics outside the catalogue given by `--unmodelled`.
 fn unmodelled(args: &Args) -> anyhow::Result<host_sim::plant::Unmodelled> {
     let mut u = host_sim::plant::Unmodelled::default();
@@ -308,7 +335,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ))
         .into());
     }
-    let summary = output::campaign_json(&stats, files.rows, &files.faults, files.faults_total);
+    let mut summary = output::campaign_json(&stats, files.rows, &files.faults, files.faults_total);
+    summary["provenance"] = provenance(&args, &cfg);
     let (rows, faults, faults_total) = (
         files.rows,
         std::mem::take(&mut files.faults),

@@ -45,6 +45,8 @@ pub struct Logger<'f> {
     /// The board's starts seen so far (1, then one more at every restart): the `boot` label
     /// of the pairs.
     boot: u32,
+    /// What `summary.json` says made the session ([`Logger::set_provenance`]).
+    provenance: Option<serde_json::Value>,
 }
 
 /// A run number for messages: `?` when unknown.
@@ -83,7 +85,14 @@ impl<'f> Logger<'f> {
             events: Vec::new(),
             bad: Vec::new(),
             boot: 1,
+            provenance: None,
         })
+    }
+
+    /// What made the session (program, commit, command line, the input's and the ELF's
+    /// SHA-256), written into `summary.json`.
+    pub fn set_provenance(&mut self, p: serde_json::Value) {
+        self.provenance = Some(p);
     }
 
     /// Runs whose run-end record has arrived.
@@ -419,6 +428,7 @@ impl<'f> Logger<'f> {
                 .map(|(byte_offset, bytes)| TruncatedTail { byte_offset, bytes }),
             runs: self.runs.clone(),
             pairs_incomplete: self.pairs_incomplete,
+            provenance: self.provenance.clone(),
         };
         let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
         let commit = self.opts.allow_empty || summary.runs.iter().any(|r| r.complete);

@@ -160,6 +160,10 @@ pub struct Summary {
     pub runs: Vec<RunSummary>,
     /// Pairs written to pairs-incomplete.csv (unknown wrap, diameter, drive voltage or run).
     pub pairs_incomplete: u64,
+    /// What made the session: program, commit, command line, the input's and the ELF's
+    /// SHA-256 (absent from library sessions that set none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<serde_json::Value>,
 }
 
 /// An unfinished frame at the end of the stream.

@@ -105,10 +105,16 @@ fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
         "{}",
         a.evidence.verdict
     );
-    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null);
+    let m = capstan_report::metrics_json(
+        &a,
+        &serde_json::Value::Null,
+        &capstan_report::Context::library(),
+    );
     assert_eq!(m["data"]["structure"]["runs"]["from"], "assumed");
     assert_eq!(m["data"]["structure"]["cords"]["from"], "assumed");
-    let html = capstan_report::report_html(&a, None, "").unwrap();
+    let html = capstan_report::report_html(&a, None, "", &capstan_report::Context::library())
+        .unwrap()
+        .0;
     assert!(html.contains("5 cords ASSUMED"), "the report says it");
     checked();
 }

@@ -22,6 +22,7 @@
 //! line and column; so are data that cannot be capstan pairs ([`check_capstan_data`]).
 
 mod error;
+pub mod provenance;
 pub mod ranges;
 pub mod read;
 mod records;
@@ -29,6 +30,7 @@ pub mod structure;
 mod write;
 
 pub use error::{quote, DataError, QUOTE_CHARS};
+pub use provenance::Provenance;
 pub use records::MAX_RECORD_BYTES;
 pub use structure::{Basis, Structure};
 pub use write::{text_cell, write_pairs, write_pairs_to, PairsWriter};

@@ -51,3 +51,30 @@ pub fn fe(v: f64, d: usize) -> String {
 pub fn with_ci(w: &WithInterval) -> String {
     format!("{} [{}, {}]", f3(w.value), f3(w.ci95.lo), f3(w.ci95.hi))
 }
+
+/// A p-value as a reader quotes it: "< 0.0001" below that, otherwise two significant figures
+/// at most four decimals ("0.032", "0.0007"), or a dash.
+pub fn fp(p: f64) -> String {
+    if !p.is_finite() {
+        "–".into()
+    } else if p < 1e-4 {
+        "< 0.0001".into()
+    } else if p < 0.01 {
+        format!("{p:.4}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fp;
+
+    #[test]
+    fn p_values_read_sanely() {
+        assert_eq!(fp(1.71e-160), "< 0.0001");
+        assert_eq!(fp(0.0007), "0.0007");
+        assert_eq!(fp(0.0321), "0.032");
+        assert_eq!(fp(f64::NAN), "–");
+    }
+}

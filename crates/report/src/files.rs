@@ -5,9 +5,20 @@ use capstan_data::Dataset;
 use capstan_engine::analysis::Analysis;
 use serde_json::{json, Value};
 
+/// Version of `metrics.json`'s layout: 2 added `schema_version`, `provenance`,
+/// `thesis_comparison`, `headline`, `parameters` and `prediction_model` (what `capstan predict`
+/// reads).
+pub const METRICS_SCHEMA: u32 = 2;
+
 /// The contents of `metrics.json`.
-pub fn metrics_json(a: &Analysis, closed_loop: &Value) -> Value {
+pub fn metrics_json(a: &Analysis, closed_loop: &Value, ctx: &crate::Context) -> Value {
     json!({
+        "schema_version": METRICS_SCHEMA,
+        "provenance": ctx.provenance,
+        "thesis_comparison": {"shown": ctx.thesis.shown, "why": ctx.thesis.why},
+        "headline": crate::headline::headline(a),
+        "parameters": crate::parameters::rows(a),
+        "prediction_model": a.prediction_model,
         "data": {
             "source": a.source,
             "rows": a.obs.len(),

@@ -2,8 +2,8 @@
 //! inline SVG and CSS, no scripts or external resources).
 
 use super::cells::{self, esc};
+use super::export;
 use super::figures::{self, Figure};
-use super::plot::{hex, Dash, Entry, Key, DASH, DOT_PERIOD};
 use super::tables;
 use capstan_engine::analysis::closed_loop::SimCurve;
 use capstan_engine::analysis::Analysis;
@@ -11,63 +11,24 @@ use std::fmt::Write as _;
 
 const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}tr.worse td{background:#fbeaea}.unexplained{color:#a50}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
 
-/// A figure's legend: one row of samples (drawn as the chart draws them) and labels.
-fn legend_html(entries: &[Entry]) -> String {
-    let mut h = String::from("<div class=\"legend\">");
-    for e in entries {
-        let key = match e.key {
-            Key::Marker(m) => {
-                let (c, r) = (hex(m.color), f64::from(m.radius).max(4.5));
-                let paint = if m.hollow {
-                    format!("fill=\"none\" stroke=\"{c}\" stroke-width=\"1.3\"")
-                } else {
-                    format!("fill=\"{c}\"")
-                };
-                format!("<circle cx=\"14\" cy=\"8\" r=\"{r}\" {paint}/>")
-            }
-            Key::Line(l) => {
-                let dash = match l.dash {
-                    Dash::Solid => String::new(),
-                    Dash::Dashed => format!(" stroke-dasharray=\"{} {}\"", DASH.0, DASH.1),
-                    Dash::Dotted => format!(
-                        " stroke-dasharray=\"0.1 {}\" stroke-linecap=\"round\"",
-                        DOT_PERIOD - 0.1
-                    ),
-                };
-                format!(
-                    "<line x1=\"2\" y1=\"8\" x2=\"26\" y2=\"8\" stroke=\"{}\" stroke-width=\"{}\"{dash}/>",
-                    hex(l.color),
-                    l.width
-                )
-            }
-        };
-        let _ = write!(
-            h,
-            "<span><svg width=\"28\" height=\"16\" aria-hidden=\"true\">{key}</svg>{}</span>",
-            esc(&e.label)
-        );
-    }
-    h.push_str("</div>");
-    h
-}
-
-/// A figure: its legend, its chart (`data-series`: the number of data layers that
-/// `scripts/check-report` expects drawn) and its caption.
+/// A figure: the same standalone SVG as its file (legend inside; `data-series`: the number of
+/// data layers that `scripts/check-report` expects drawn), numbered, and its caption.
 fn figure_html(h: &mut String, figs: &[Figure], id: &str) {
-    if let Some(f) = figs.iter().find(|f| f.id == id) {
+    if let Some((k, f)) = figs.iter().enumerate().find(|(_, f)| f.id == id) {
         let _ = write!(
             h,
-            "<figure class=\"plot\" data-figure=\"{}\" data-series=\"{}\">{}{}<figcaption>{}</figcaption></figure>",
+            "<figure class=\"plot\" id=\"figure-{}\" data-figure=\"{}\" data-series=\"{}\">{}<figcaption><b>Figure {}.</b> {}</figcaption></figure>",
+            k + 1,
             f.id,
             f.chart.marks,
-            legend_html(&f.legend),
-            f.chart.svg,
+            export::standalone_svg(f, k + 1, None),
+            k + 1,
             esc(&f.caption)
         );
     }
 }
 
-fn headline(h: &mut String, a: &Analysis) {
+fn technical_summary(h: &mut String, a: &Analysis) {
     let get = |n: &str| a.models.iter().find(|m| m.name == n);
     let (Some(b), Some(e)) = (get("baseline"), get("extended")) else {
         return;
@@ -77,7 +38,7 @@ fn headline(h: &mut String, a: &Analysis) {
             .as_ref()
             .map_or("not refittable".into(), cells::with_ci)
     };
-    let _ = write!(h, "<h2>Headline</h2><ul><li>Euler-Eytelwein with one fitted mu = {}: RMSE of T2 {} N, leave-one-cord-out {} N (95 % intervals from resampling whole cords).</li>", cells::fx(a.baseline_fit.model(None).law.mu, 4), cells::with_ci(&b.rmse_t2_uncertainty), loco(b));
+    let _ = write!(h, "<h3>Technical summary</h3><ul><li>Euler-Eytelwein with one fitted mu = {}: RMSE of T2 {} N, leave-one-cord-out {} N (95 % intervals from resampling whole cords).</li>", cells::fx(a.baseline_fit.model(None).law.mu, 4), cells::with_ci(&b.rmse_t2_uncertainty), loco(b));
     if let Some(t) = get("thesis") {
         let _ = write!(h, "<li>The thesis's Table 3 double exponential ({} hand-set numbers): RMSE {} N; it cannot predict a new cord.</li>", t.n_params, cells::fx(t.rmse_t2_n, 3));
     }
@@ -111,6 +72,14 @@ fn headline(h: &mut String, a: &Analysis) {
         esc(&a.evidence.verdict)
     );
     h.push_str("</ul>");
+}
+
+/// The headline: at most five plain sentences ([`crate::headline`]).
+fn headline_html(h: &mut String, a: &Analysis) {
+    let hl = crate::headline::headline(a);
+    h.push_str("<h2>Headline</h2><p class=\"headline\">");
+    h.push_str(&esc(&hl.sentences.join(" ")));
+    h.push_str("</p>");
 }
 
 /// What the gain's interval says, from its upper end.
@@ -158,12 +127,16 @@ pub fn report_html(
     a: &Analysis,
     closed_loop: Option<&[SimCurve]>,
     closed_loop_note: &str,
-) -> anyhow::Result<String> {
-    let figs = figures::all(a, closed_loop)?;
+    ctx: &crate::Context,
+) -> anyhow::Result<(String, Vec<Figure>)> {
+    let figs = figures::all(a, closed_loop, &ctx.figures.layout())?;
     let mut h = String::new();
     let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Capstan analysis</title><style>{STYLE}</style></head><body>");
     let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&capstan_engine::verdict::words::capitalised(&a.evidence.data.structure.statement)));
-    headline(&mut h, a);
+    headline_html(&mut h, a);
+    technical_summary(&mut h, a);
+    h.push_str("<h2>The fitted quantities</h2><p>Table 1: every fitted quantity once, with its unit and 95 % interval; where two estimates of one quantity differ, both rows, with the reason. <code>metrics.json</code> holds the same rows (<code>parameters</code>).</p>");
+    h.push_str(&tables::parameters(a));
     gain_section(&mut h, a, &figs);
     h.push_str("<h2>The data against the models</h2>");
     figure_html(&mut h, &figs, "t2_vs_t1");
@@ -186,13 +159,15 @@ pub fn report_html(
     let _ = write!(h, "<h2>The extended model</h2><p>Euler-Eytelwein with the named causes ({}), each through the catalogue's own term in <code>capstan_friction::FrictionLaw</code> and <code>SensorArtefacts</code> (the law the simulator runs), one population mu and a per-cord random log-mu u<sub>cord</sub> ~ N(0, σ<sub>u</sub>²), fitted by penalised least squares with λ = σ²/σ<sub>u</sub>² re-estimated and the cord effects shrunk so that the fixed values plus their effective degrees of freedom stay within {}.</p>",
         if causes.is_empty() { "none".to_string() } else { causes.join(", ") }, capstan_engine::analysis::fits::STRICT_BUDGET);
     h.push_str(&tables::extended(a));
-    let r2: Vec<f64> = a.thesis_per_angle_r2.iter().map(|r| r.r2).collect();
-    let (lo, hi) = r2.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |x, &v| {
-        (x.0.min(v), x.1.max(v))
-    });
-    let _ = write!(h, "<h2>The thesis's R² of amplification, reproduced</h2><p>Table 3 applied per angle, R² = 1 − SS<sub>res</sub>/SS<sub>tot</sub> of T2/T1 with both diameters pooled: from {} to {} on these data.</p>",
-        cells::f3(lo), cells::f3(hi));
-    h.push_str(&tables::thesis_r2(a));
+    if !a.thesis_per_angle_r2.is_empty() {
+        let r2: Vec<f64> = a.thesis_per_angle_r2.iter().map(|r| r.r2).collect();
+        let (lo, hi) = r2.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |x, &v| {
+            (x.0.min(v), x.1.max(v))
+        });
+        let _ = write!(h, "<h2>The thesis's R² of amplification, reproduced</h2><p>{}. Table 3 applied per angle; R² = 1 − SS<sub>res</sub>/SS<sub>tot</sub> of T2/T1 with both diameters pooled, from {} to {} on these data. R² compares the model's error with the spread of the amplification around its mean at that angle: a negative R² means Table 3 predicts that angle's amplification worse than its plain mean would.</p>",
+            esc(&capstan_engine::verdict::words::capitalised(&ctx.thesis.why)), cells::f3(lo), cells::f3(hi));
+        h.push_str(&tables::thesis_r2(a));
+    }
     h.push_str("<h2>What this design cannot separate</h2><ul>");
     for l in &a.mechanisms.protocol_limits {
         let _ = write!(h, "<li>{}</li>", esc(l));
@@ -208,6 +183,6 @@ pub fn report_html(
         }
         h.push_str("</ul>");
     }
-    let _ = write!(h, "<h2>Reproducing</h2><p><code>predictions.csv</code> holds the input rows, the cord, the window centre used for the load memory and every model's in-sample and leave-one-cord-out prediction; <code>metrics.json</code> every number of this page (its <code>evidence</code> object is what <code>capstan diagnose --json</code> prints). Timing: evidence {:.3} s, fits {:.3} s, LOCO {:.3} s, tables {:.3} s, closed loop {:.3} s.</p></body></html>", e.evidence_s, e.fits_s, e.loco_s, e.tables_s, e.closed_loop_s);
-    Ok(h)
+    let _ = write!(h, "<h2>Reproducing</h2><p><code>predictions.csv</code> holds the input rows, the cord, the window centre used for the load memory and every model's in-sample and leave-one-cord-out prediction; <code>metrics.json</code> every number of this page (its <code>evidence</code> object is what <code>capstan diagnose --json</code> prints; its <code>prediction_model</code> is what <code>capstan predict --from</code> reads). Made by {}. Thesis Table 3 comparison: {}. Timing: evidence {:.3} s, fits {:.3} s, leave-one-cord-out refits {:.3} s, tables {:.3} s, closed loop {:.3} s.</p></body></html>", esc(&ctx.provenance.line()), esc(&ctx.thesis.why), e.evidence_s, e.fits_s, e.loco_s, e.tables_s, e.closed_loop_s);
+    Ok((h, figs))
 }

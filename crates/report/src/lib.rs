@@ -5,17 +5,25 @@
 //! * [`files`]: `metrics.json` and `predictions.csv`.
 //! * [`html`]: the page and its sections; [`tables`]: its tables; [`cells`]: the text in them
 //!   (numbers or a dash, escaped text).
+//! * [`headline`]: the plain headline; [`parameters`]: the one parameter table;
+//! * [`context`]: provenance and the thesis comparison; [`export`]: the figure files;
 //! * [`figures`]: the figures; [`plot`]: their charts (panels and bar charts, drawn by
 //!   `plotters`).
 
 pub mod cells;
+pub mod context;
 pub mod discovered;
+pub mod export;
 pub mod figures;
 pub mod files;
+pub mod headline;
 pub mod html;
+pub mod parameters;
 pub mod plot;
 pub mod tables;
 
 pub use capstan_engine::analysis::closed_loop::SimCurve;
+pub use context::{apply_thesis_choice, Context, ThesisComparison};
+pub use export::{figure_files, FigureOptions, Format};
 pub use files::{metrics_json, write_predictions_csv};
 pub use html::report_html;

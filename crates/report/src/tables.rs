@@ -2,7 +2,7 @@
 //! ln-amplification residuals by step, residual patterns, mechanism verdicts, the extended fit,
 //! and the thesis's per-angle R².
 
-use super::cells::{esc, f3, fe, fs, fx, with_ci};
+use super::cells::{esc, f3, fe, fp, fs, fx, with_ci};
 use capstan_engine::analysis::residuals::StepResidual;
 use capstan_engine::analysis::{Analysis, ModelMetrics};
 use capstan_engine::verdict::Verdict;
@@ -49,7 +49,7 @@ pub fn gain(a: &Analysis) -> String {
 pub fn residual_patterns(a: &Analysis) -> String {
     let mut h = String::from("<table><tr><th>model</th><th>residual</th><th>column</th><th>ρ</th><th>slope/SD</th><th>t (cluster)</th><th>p (cluster)</th><th>η²</th><th>F</th><th>p (F)</th></tr>");
     for p in &a.residual_patterns {
-        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>", p.model, p.residual, esc(&p.column), fx(p.spearman_rho, 3), fx(p.slope_per_sd, 4), fx(p.slope_t_cluster, 2), fx(p.slope_p_cluster, 3), fx(p.eta2, 3), fx(p.f, 1), fe(p.f_p, 2));
+        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>", p.model, p.residual, esc(&p.column), fx(p.spearman_rho, 3), fx(p.slope_per_sd, 4), fx(p.slope_t_cluster, 2), fp(p.slope_p_cluster), fx(p.eta2, 3), fx(p.f, 1), fp(p.f_p));
     }
     h.push_str("</table>");
     h
@@ -174,4 +174,37 @@ pub fn thesis_r2(a: &Analysis) -> String {
     }
     h.push_str("</table>");
     h
+}
+
+/// Table 1: every fitted quantity once ([`crate::parameters`]).
+pub fn parameters(a: &Analysis) -> String {
+    let mut h = String::from("<table class=\"parameters\"><tr><th>quantity</th><th>estimate of</th><th>value</th><th>unit</th><th>95 % interval</th><th>how / why it differs</th></tr>");
+    for r in crate::parameters::rows(a) {
+        let d = if r.value.abs() >= 1.0 { 3 } else { 4 };
+        let ci = match (r.ci95_lo, r.ci95_hi) {
+            (Some(lo), Some(hi)) => format!("{} to {}", fs_plain(lo, d), fs_plain(hi, d)),
+            _ => "–".into(),
+        };
+        let _ = write!(
+            h,
+            "<tr data-key=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{ci}</td><td>{}</td></tr>",
+            esc(&r.key),
+            esc(&r.quantity),
+            esc(&r.source),
+            fs_plain(r.value, d),
+            esc(r.unit),
+            esc(&r.note)
+        );
+    }
+    h.push_str("</table>");
+    h
+}
+
+/// A value with `d` significant-looking decimals (small values in scientific notation).
+fn fs_plain(v: f64, d: usize) -> String {
+    if v != 0.0 && v.abs() < 1e-3 {
+        fe(v, 2)
+    } else {
+        fx(v, d)
+    }
 }

@@ -43,6 +43,7 @@ pub(super) fn from_board(
     let mut board = connect(elf, &popts, &mut |line| crate::errln!("{line}"))?;
     let source = format!("{chip} over RTT (probe: {})", board.probe_name);
     let mut logger = Logger::create(fw, opts, &source)?;
+    logger.set_provenance(super::provenance(args, None)?);
     if args.start {
         start_run(&mut board)?;
     }

@@ -150,6 +150,7 @@ mod tests {
             truncated_tail: None,
             runs: vec![complete_run()],
             pairs_incomplete: 0,
+            provenance: None,
         }
     }
 

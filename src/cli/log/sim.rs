@@ -22,6 +22,7 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
     let source = format!("the simulated board in {}", board.dir().display());
     let (steps, runs) = plan(args);
     let mut logger = Logger::create_for_records(opts, &source)?;
+    logger.set_provenance(super::provenance(args, None)?);
     if args.start {
         crate::errln!("capstan log: run started (--start); its reply and records follow");
     }

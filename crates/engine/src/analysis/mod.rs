@@ -21,6 +21,7 @@ pub mod extended;
 pub mod fits;
 pub mod metrics;
 pub mod models;
+pub mod prediction;
 pub mod residuals;
 pub mod thesis;
 pub mod uncertainty;
@@ -68,6 +69,8 @@ pub struct Elapsed {
     pub closed_loop_s: f64,
     /// Writing the report (filled by the CLI).
     pub report_s: f64,
+    /// Of which the figure files (SVG, PNG, PDF; filled by the CLI).
+    pub figure_files_s: f64,
     /// Everything (filled by the CLI).
     pub total_s: f64,
 }
@@ -104,6 +107,10 @@ pub struct Analysis {
     pub extended_fit: Fit,
     /// The fitted baseline.
     pub baseline_fit: Fit,
+    /// Cord-jackknife SE of Euler-Eytelwein's one mu (over its leave-one-cord-out refits).
+    pub baseline_mu_se: f64,
+    /// The extended model with its uncertainty, for `capstan predict`.
+    pub prediction_model: prediction::PredictionModel,
     /// Timing.
     pub elapsed: Elapsed,
     /// Fits that did not converge, in words (empty when every fit did).
@@ -168,8 +175,17 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let thesis_per_angle_r2 = metrics::thesis_per_angle(&obs);
     let residual_patterns = residuals::patterns(ds, &obs, &f.pred);
     let ln_amp_by_step = residuals::ln_amp_by_step(&obs, &f.pred);
+    let prediction_model = prediction::build(&obs, &f, &assessment.scatter);
     let tables_s = t1.elapsed().as_secs_f64();
+    let baseline_mu_se = f
+        .baseline_loco
+        .jackknife_se()
+        .iter()
+        .find(|x| x.0 == "mu")
+        .map_or(f64::NAN, |x| x.1);
     Ok(Analysis {
+        baseline_mu_se,
+        prediction_model,
         source: ds.source.clone(),
         obs,
         models,

@@ -1,9 +1,10 @@
 //! T2 and amplification against T1 with the three models, and the closed-loop overlay.
 
 use super::{
-    baseline_style, extended_style, measured, model_legend, thesis_style, Figure, Palette, INK,
+    as_read_style, baseline_style, extended_style, measured, model_legend, thesis_style, Figure,
+    Palette, INK,
 };
-use crate::plot::{figure, Entry, Key, Panel, Series};
+use crate::plot::{figure, Entry, Key, Layout, Panel, Series};
 use anyhow::Result;
 use capstan_engine::analysis::closed_loop::SimCurve;
 use capstan_engine::analysis::Analysis;
@@ -59,11 +60,41 @@ fn model_series(a: &Analysis, g: usize, color: RGBColor, amp: bool) -> Vec<Serie
             thesis_style(color),
         ));
     }
+    // The extended model twice: the physics (the friction law alone, sensor terms removed,
+    // at the true T1) thick, and what the sensors would read thin.
+    s.push(Series::Line(physical(a, g, amp), extended_style(color)));
     s.push(Series::Line(
         step_means(a, g, |i| p.extended[i] / t1(i)),
-        extended_style(color),
+        as_read_style(color),
     ));
     s
+}
+
+/// The extended model's physical curve of cord `g` (its own mu, the friction law alone):
+/// (true T1, T2 or T2/T1) at the step means of the cord's runs. The law never lets T2 fall
+/// below T1, so the amplification stays at or above 1.
+fn physical(a: &Analysis, g: usize, amp: bool) -> Vec<(f64, f64)> {
+    let m = a.extended_fit.model(Some(g));
+    let mut by_step: BTreeMap<i64, (f64, f64, f64)> = BTreeMap::new();
+    for i in a.obs.rows_of_group(g) {
+        let r = &a.obs.rows[i];
+        let t1 = m.sensors.true_t1_n(r.t1_n);
+        if t1.is_nan() || t1 <= 0.0 {
+            continue;
+        }
+        let mut op = r.op;
+        op.load_memory_ns = a.pred.extended_load_memory_ns[i];
+        let t2 = m.law.t2_n(t1, &op);
+        let e = by_step
+            .entry(r.step.map_or(i as i64, |s| s.round() as i64))
+            .or_default();
+        e.0 += t1;
+        e.1 += if amp { t2 / t1 } else { t2 };
+        e.2 += 1.0;
+    }
+    let mut v: Vec<(f64, f64)> = by_step.values().map(|(x, y, n)| (x / n, y / n)).collect();
+    v.sort_by(|p, q| p.0.total_cmp(&q.0));
+    v
 }
 
 fn measured_points(a: &Analysis, g: usize, amp: bool) -> Vec<(f64, f64)> {
@@ -87,7 +118,7 @@ fn legend(a: &Analysis, pal: &Palette) -> Vec<Entry> {
 }
 
 /// T2 against T1, one panel per capstan diameter.
-pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
+pub fn t2_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> {
     let mut panels = Vec::new();
     for dia in a.obs.diameters() {
         let mut series = Vec::new();
@@ -107,29 +138,43 @@ pub fn t2_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
             ..Panel::default()
         });
     }
+    share_y(&mut panels);
     Ok(Figure {
         id: "t2_vs_t1",
         legend: legend(a, pal),
-        chart: figure(&panels, 2, 650, 470)?,
-        caption: format!("T2 against T1, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model (mean over the cord's runs at each step). Every curve joins the model's predictions in predictions.csv.{}", super::drawn_note(a)),
+        chart: { let (c, w, h) = layout.grid(2, 650, 470); figure(&panels, c, w, h)? },
+        caption: format!("T2 against T1, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model's physical T2 (sensor terms removed, against the true T1); thin solid: what the sensors would read under it (mean over the cord's runs at each step, as in predictions.csv). Both panels share the y-scale.{}", super::drawn_note(a)),
     })
 }
 
 /// Amplification T2/T1 against T1, one panel per cord (rows: diameters, columns: wraps).
-pub fn amp_vs_t1(a: &Analysis, pal: &Palette) -> Result<Figure> {
-    let panels: Vec<Panel> = panel_cords(a)
+pub fn amp_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> {
+    let mut panels: Vec<Panel> = panel_cords(a)
         .into_iter()
         .map(|g| {
             let c = pal.color(a.obs.groups[g].wrap_deg);
             amp_panel(a, g, c, model_series(a, g, c, true))
         })
         .collect();
+    share_y(&mut panels);
     Ok(Figure {
         id: "amp_vs_t1",
         legend: legend(a, pal),
-        chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
-        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3; thick solid: the extended model (step means over the cord's runs, with the cord's own mu).{}{}", panels_note(a), super::drawn_note(a)),
+        chart: { let (c, w, h) = layout.grid(pal.len().clamp(1, 5), 260, 230); figure(&panels, c, w, h)? },
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's physical amplification (the friction law alone with the cord's own mu, sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted sensor terms included; a sensor offset pulls it below 1 at low T1, which is the instrument, not the capstan). Step means over the cord's runs.{}{}", panels_note(a), super::drawn_note(a)),
     })
+}
+
+/// One y-range for every panel of a figure (the panels compare at a glance).
+fn share_y(panels: &mut [Panel]) {
+    let range = crate::plot::finite_range(panels.iter().flat_map(|p| p.series.iter()).flat_map(
+        |s| match s {
+            Series::Points(xy, _) | Series::Line(xy, _) => xy.iter().map(|v| v.1),
+        },
+    ));
+    for p in panels {
+        p.y_range = Some(range);
+    }
 }
 
 /// The most cords drawn one panel each: a data set with more shows this many, evenly spaced.
@@ -178,7 +223,12 @@ fn plant_causes(a: &Analysis) -> String {
 }
 
 /// The closed loop: simulated amplification over the measured points, per cord.
-pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<Figure> {
+pub fn closed_loop(
+    a: &Analysis,
+    pal: &Palette,
+    curves: &[SimCurve],
+    layout: &Layout,
+) -> Result<Figure> {
     let panels: Vec<Panel> = curves
         .iter()
         .map(|(g, _)| *g)
@@ -194,6 +244,8 @@ pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<F
             )
         })
         .collect();
+    let mut panels = panels;
+    share_y(&mut panels);
     let mut legend = pal.legend();
     legend.push(Entry {
         key: Key::Line(extended_style(INK)),
@@ -202,7 +254,7 @@ pub fn closed_loop(a: &Analysis, pal: &Palette, curves: &[SimCurve]) -> Result<F
     Ok(Figure {
         id: "closed_loop",
         legend,
-        chart: figure(&panels, pal.len().clamp(1, 5), 260, 230)?,
+        chart: { let (c, w, h) = layout.grid(pal.len().clamp(1, 5), 260, 230); figure(&panels, c, w, h)? },
         caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{}{}", plant_causes(a), if curves.len() < a.obs.groups.len() { format!(" {} of the {} cords are simulated, evenly spaced in the cord order.", curves.len(), a.obs.groups.len()) } else { String::new() }, super::drawn_note(a)),
     })
 }

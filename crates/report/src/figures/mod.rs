@@ -10,7 +10,7 @@
 pub mod curves;
 pub mod evidence;
 
-use super::plot::{Chart, Dash, Entry, Key, LineStyle, Marker};
+use super::plot::{Chart, Dash, Entry, Key, Layout, LineStyle, Marker};
 use capstan_engine::analysis::closed_loop::SimCurve;
 use capstan_engine::analysis::Analysis;
 use capstan_engine::fit::stats::distinct;
@@ -78,6 +78,15 @@ pub fn extended_style(color: RGBColor) -> LineStyle {
     LineStyle {
         color,
         width: 3,
+        dash: Dash::Solid,
+    }
+}
+
+/// The extended model as the sensors would read it: thin and solid.
+pub fn as_read_style(color: RGBColor) -> LineStyle {
+    LineStyle {
+        color,
+        width: 1,
         dash: Dash::Solid,
     }
 }
@@ -165,7 +174,11 @@ pub fn model_legend(with_thesis: bool) -> Vec<Entry> {
     }
     v.push(Entry {
         key: Key::Line(extended_style(INK)),
-        label: "extended model".into(),
+        label: "extended model, physical (sensor terms removed)".into(),
+    });
+    v.push(Entry {
+        key: Key::Line(as_read_style(INK)),
+        label: "extended model, as the sensors would read".into(),
     });
     v
 }
@@ -196,17 +209,21 @@ pub struct Figure {
 }
 
 /// Every figure, in report order.
-pub fn all(a: &Analysis, closed_loop: Option<&[SimCurve]>) -> anyhow::Result<Vec<Figure>> {
+pub fn all(
+    a: &Analysis,
+    closed_loop: Option<&[SimCurve]>,
+    layout: &Layout,
+) -> anyhow::Result<Vec<Figure>> {
     let pal = Palette::new(a);
     let mut figs = vec![
-        curves::t2_vs_t1(a, &pal)?,
-        curves::amp_vs_t1(a, &pal)?,
-        evidence::residuals(a, &pal)?,
-        evidence::mechanisms(a, &pal)?,
-        evidence::gain(a)?,
+        evidence::gain(a, layout)?,
+        curves::t2_vs_t1(a, &pal, layout)?,
+        curves::amp_vs_t1(a, &pal, layout)?,
+        evidence::residuals(a, &pal, layout)?,
+        evidence::mechanisms(a, &pal, layout)?,
     ];
     if let Some(cl) = closed_loop {
-        figs.push(curves::closed_loop(a, &pal, cl)?);
+        figs.push(curves::closed_loop(a, &pal, cl, layout)?);
     }
     Ok(figs)
 }

@@ -23,6 +23,10 @@ pub struct Bars {
     pub values: Vec<Vec<Option<f64>>>,
     /// Text for a missing value.
     pub missing: String,
+    /// Horizontal reference lines (a threshold): value and label.
+    pub lines: Vec<(f64, String)>,
+    /// Decimals of the bars' value labels.
+    pub decimals: usize,
 }
 
 impl Bars {
@@ -45,14 +49,18 @@ impl Bars {
 /// A grouped bar chart, `w`×`h` px, y from zero, each bar labelled with its value; every bar
 /// is a layer of class `mark bar`, every missing value one of class `missing`.
 pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
-    let top = c
-        .values
-        .iter()
-        .flatten()
-        .flatten()
-        .fold(0.0f64, |a, v| a.max(*v))
-        * 1.12;
+    let finite = || {
+        c.values
+            .iter()
+            .flatten()
+            .flatten()
+            .copied()
+            .chain(c.lines.iter().map(|l| l.0))
+            .filter(|v| v.is_finite())
+    };
+    let top = finite().fold(0.0f64, f64::max) * 1.12;
     let top = if top > 0.0 { top } else { 1.0 };
+    let bottom = finite().fold(0.0f64, f64::min) * 1.12;
     let n = c.categories.len().max(1) as f64;
     let panel = Panel {
         title: c.title.clone(),
@@ -61,17 +69,54 @@ pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
     };
     let f = Frame {
         x: (0.0, n),
-        y: (0.0, top),
-        x_ticks: (c.categories.iter().enumerate())
-            .map(|(k, name)| (k as f64 + 0.5, name.clone()))
+        y: (bottom, top),
+        // The category names are drawn below (staggered when they would collide).
+        x_ticks: (0..c.categories.len())
+            .map(|k| (k as f64 + 0.5, String::new()))
             .collect(),
-        y_ticks: auto_ticks(0.0, top, 5),
+        y_ticks: auto_ticks(bottom, top, 5),
         categorical: true,
     };
     let size = (w, h);
     let axes = render(size, |root| {
         root.fill(&WHITE)?;
-        draw_axes(root, &panel, &f)
+        draw_axes(root, &panel, &f)?;
+        let mut chart = build(root, &f)?;
+        let slot_px = f64::from(w.saturating_sub(super::LEFT + super::RIGHT)) / n;
+        let widest = c
+            .categories
+            .iter()
+            .map(|s| s.chars().count())
+            .max()
+            .unwrap_or(0);
+        let stagger = 0.6 * super::LABEL * widest as f64 > 0.95 * slot_px;
+        for (k, name) in c.categories.iter().enumerate() {
+            let dy = if stagger && k % 2 == 1 { 22 } else { 6 };
+            let style = font(super::LABEL, false).pos(Pos::new(HPos::Center, VPos::Top));
+            chart.draw_series(std::iter::once(
+                EmptyElement::at((k as f64 + 0.5, bottom))
+                    + Text::new(name.clone(), (0, dy), style),
+            ))?;
+        }
+        if bottom < 0.0 {
+            chart.draw_series(LineSeries::new([(0.0, 0.0), (n, 0.0)], super::ZERO))?;
+        }
+        let red = RGBColor(0xC0, 0x20, 0x20);
+        for (y, label) in &c.lines {
+            chart.draw_series(DashedLineSeries::new(
+                [(0.0, *y), (n, *y)],
+                super::DASH.0,
+                super::DASH.1,
+                red.stroke_width(2),
+            ))?;
+            let style = font(TICK, false)
+                .color(&red)
+                .pos(Pos::new(HPos::Right, VPos::Bottom));
+            chart.draw_series(std::iter::once(
+                EmptyElement::at((n, *y)) + Text::new(label.clone(), (-4, -3), style),
+            ))?;
+        }
+        Ok(())
     })?;
     // Bars fill 70 % of each category's slot, with a small gap between neighbours.
     let bw = 0.7 / c.groups.len().max(1) as f64;
@@ -92,7 +137,7 @@ pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
                         ])?;
                         chart.draw_series(std::iter::once(
                             EmptyElement::at(((x0 + x1) / 2.0, v))
-                                + Text::new(format!("{v:.3}"), (0, -4), label),
+                                + Text::new(format!("{v:.*}", c.decimals), (0, -4), label),
                         ))?;
                     }
                     None => {

@@ -360,6 +360,41 @@ fn compose((w, h): (u32, u32), axes: String, layers: Vec<Layer>) -> Chart {
     Chart { svg, marks }
 }
 
+/// The width a figure is laid out to: the natural sizes of the report's figures, or a given
+/// width (a journal column), to which the panels reflow.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Layout {
+    /// Total width, px (None: every figure at its natural size).
+    pub width_px: Option<u32>,
+}
+
+/// The narrowest panel a reflowed figure uses, px.
+pub const MIN_PANEL_W: u32 = 180;
+
+impl Layout {
+    /// A grid of `cols` panels of `w`×`h` px reflowed to the layout's width.
+    pub fn grid(&self, cols: usize, w: u32, h: u32) -> (usize, u32, u32) {
+        let Some(total) = self.width_px else {
+            return (cols, w, h);
+        };
+        let cols = cols.min((total / MIN_PANEL_W).max(1) as usize).max(1);
+        let w2 = total / cols as u32;
+        let h2 = ((f64::from(h) * f64::from(w2) / f64::from(w)) as u32).max(150);
+        (cols, w2, h2)
+    }
+
+    /// A single chart of `w`×`h` px at the layout's width.
+    pub fn single(&self, w: u32, h: u32) -> (u32, u32) {
+        match self.width_px {
+            None => (w, h),
+            Some(total) => (
+                total,
+                ((f64::from(h) * f64::from(total) / f64::from(w)) as u32).max(220),
+            ),
+        }
+    }
+}
+
 /// Panels on a grid of `cols` columns, each `w`×`h` px.
 pub fn figure(panels: &[Panel], cols: usize, w: u32, h: u32) -> Result<Chart> {
     let cols = cols.max(1);

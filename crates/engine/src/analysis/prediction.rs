@@ -1,0 +1,354 @@
+//! The fitted extended model as something to use: T2 and amplification at a wrap, diameter
+//! and T1 of the user's choosing, with a 95 % confidence interval (the mean curve) and a 95 %
+//! prediction interval (a new measurement on a new cord).
+//!
+//! [`PredictionModel`] is what `metrics.json` carries under `prediction_model` (schema
+//! [`SCHEMA`]): the population values of every model parameter, the covariance of the free ones
+//! over the leave-one-cord-out refits (a cord jackknife: cords as the independent units), and
+//! the variance components of a new measurement: cord to cord and run to run in ln mu, and the
+//! within-run noise sd² = a² + (r·T2)². `capstan predict` reads it back ([`predict`]).
+//!
+//! The operating point of a prediction: the given wrap, diameter and drive voltage, the first
+//! run of a fresh cord at the trigger (time 0), and the contact's load memory settled under the
+//! held T1 (H = τ·(T2 − T1): the thesis's 10 s steps are 40 τ long). Physical predictions use
+//! the friction law alone (sensor terms off): T2 ≥ T1 whatever the parameters, since the law's
+//! mu is never negative. `as_measured` adds the fitted sensor terms (what the rig would read).
+
+use crate::fit::Param;
+use capstan_friction::{Model, Operating, REF_DRIVE_V};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Version of the `prediction_model` object; `capstan predict` refuses another.
+pub const SCHEMA: u32 = 1;
+
+/// A closed range of the fitted data.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Span {
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+impl Span {
+    fn of(v: impl Iterator<Item = f64>) -> Span {
+        v.filter(|x| x.is_finite()).fold(
+            Span {
+                min: f64::INFINITY,
+                max: f64::NEG_INFINITY,
+            },
+            |s, x| Span {
+                min: s.min.min(x),
+                max: s.max.max(x),
+            },
+        )
+    }
+
+    /// True when `x` lies in the span (with a relative slack of 1e-9).
+    pub fn contains(&self, x: f64) -> bool {
+        let eps = 1e-9 * self.max.abs().max(1.0);
+        x >= self.min - eps && x <= self.max + eps
+    }
+}
+
+/// The fitted data's ranges: a prediction outside them extrapolates.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FittedRange {
+    /// Wraps fitted, deg.
+    pub wrap_deg: Span,
+    /// Capstan diameters fitted, mm.
+    pub diameter_mm: Span,
+    /// Measured T1, N.
+    pub t1_n: Span,
+    /// Drive voltages (the reference voltage when the data have none), V.
+    pub drive_v: Span,
+}
+
+/// The extended model with its uncertainty, as `metrics.json` carries it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PredictionModel {
+    /// [`SCHEMA`].
+    pub schema: u32,
+    /// Population value of every model parameter, by name (`capstan_engine::fit::Param`).
+    pub values: BTreeMap<String, f64>,
+    /// The free parameters, in the order of `covariance`.
+    pub free: Vec<String>,
+    /// Covariance of the free parameters' values over the leave-one-cord-out refits (cord
+    /// jackknife, (k − 1)/k Σ (v_k − v̄)(v_k − v̄)ᵀ).
+    pub covariance: Vec<Vec<f64>>,
+    /// Folds behind `covariance` (cords or groups of cords left out).
+    pub folds: usize,
+    /// SD of ln mu from cord to cord (the extended fit's σ_u).
+    pub sd_ln_mu_cord: f64,
+    /// SD of ln mu from run to run on one cord (the evidence engine's run scatter).
+    pub sd_ln_mu_run: f64,
+    /// Within-run noise, absolute part, N.
+    pub noise_abs_n: f64,
+    /// Within-run noise, proportional part (fraction of T2).
+    pub noise_rel: f64,
+    /// What the fitted data span.
+    pub fitted_range: FittedRange,
+    /// The operating point and intervals in words.
+    pub note: String,
+}
+
+/// The note every prediction model carries.
+pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter and the within-run noise (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
+
+/// One operating point to predict at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Query {
+    /// Wrap, deg.
+    pub wrap_deg: f64,
+    /// Capstan diameter, mm.
+    pub diameter_mm: f64,
+    /// Drive voltage, V.
+    pub drive_v: f64,
+    /// T1, N (true tension when physical, the reading when as measured).
+    pub t1_n: f64,
+    /// Include the fitted sensor terms.
+    pub as_measured: bool,
+}
+
+/// A 95 % interval.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Interval {
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+}
+
+/// One prediction (the JSON contract of `capstan predict --json`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Prediction {
+    /// T1, N.
+    pub t1_n: f64,
+    /// Predicted T2, N.
+    pub t2_n: f64,
+    /// T2/T1.
+    pub amplification: f64,
+    /// 95 % confidence interval of the mean T2, N.
+    pub t2_ci95: Interval,
+    /// 95 % prediction interval of a new measurement on a new cord, N.
+    pub t2_pi95: Interval,
+}
+
+impl PredictionModel {
+    /// The model at the population values, with the free values replaced by `free` (when given).
+    fn model(&self, free: Option<&[f64]>) -> Model {
+        let mut m = Model::euler_eytelwein(0.0);
+        for p in Param::ALL {
+            if let Some(v) = self.values.get(p.name()) {
+                p.set(&mut m, *v);
+            }
+        }
+        if let Some(f) = free {
+            for (name, v) in self.free.iter().zip(f) {
+                if let Some(p) = Param::ALL.iter().find(|p| p.name() == name) {
+                    p.set(&mut m, *v);
+                }
+            }
+        }
+        m
+    }
+
+    fn free_values(&self) -> Vec<f64> {
+        self.free
+            .iter()
+            .map(|n| self.values.get(n).copied().unwrap_or(f64::NAN))
+            .collect()
+    }
+
+    /// True when the query lies outside the fitted data's ranges.
+    pub fn extrapolates(&self, q: &Query) -> Vec<String> {
+        let r = &self.fitted_range;
+        let mut out = Vec::new();
+        for (name, v, s, unit) in [
+            ("wrap", q.wrap_deg, r.wrap_deg, "°"),
+            ("diameter", q.diameter_mm, r.diameter_mm, " mm"),
+            ("T1", q.t1_n, r.t1_n, " N"),
+            ("drive voltage", q.drive_v, r.drive_v, " V"),
+        ] {
+            if !s.contains(v) {
+                out.push(format!(
+                    "{name} {v}{unit} is outside the fitted {}{unit} to {}{unit}",
+                    s.min, s.max
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// T2 at a query for a model, the load memory settled under the held T1.
+fn t2_of(m: &Model, q: &Query) -> f64 {
+    let mut op = Operating::from_wrap_deg(q.wrap_deg);
+    op.diameter_mm = q.diameter_mm;
+    op.drive_v = q.drive_v;
+    let (t1_true, sensors) = if q.as_measured {
+        (m.sensors.true_t1_n(q.t1_n), m.sensors)
+    } else {
+        (q.t1_n, capstan_friction::SensorArtefacts::IDEAL)
+    };
+    let law = m.law;
+    let t2_at = |h: f64| {
+        let mut o = op;
+        o.load_memory_ns = h;
+        law.t2_n(t1_true, &o)
+    };
+    let mut t2 = t2_at(0.0);
+    if law.heat_per_ns != 0.0 && law.heat_tau_s > 0.0 && t2.is_finite() {
+        // H = τ·(T2(H) − T1): the left side grows and the right falls with H, so the root in
+        // [0, τ·(T2(0) − T1)] is unique; bisection finds it.
+        let (mut lo, mut hi) = (0.0, law.heat_tau_s * (t2 - t1_true).max(0.0));
+        for _ in 0..80 {
+            let mid = 0.5 * (lo + hi);
+            if mid - law.heat_tau_s * (t2_at(mid) - t1_true).max(0.0) > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        t2 = t2_at(0.5 * (lo + hi));
+    }
+    sensors.measured_t2_n(t2)
+}
+
+/// Two-sided 95 % quantile of Student's t with `dof` degrees of freedom (normal beyond 200).
+fn t95(dof: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    if dof == 0 || dof > 200 {
+        return 1.959_963_985;
+    }
+    StudentsT::new(0.0, 1.0, dof as f64).map_or(1.959_963_985, |t| t.inverse_cdf(0.975))
+}
+
+/// T2 at `q` with its intervals.
+pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
+    let v0 = pm.free_values();
+    let m0 = pm.model(None);
+    let t2 = t2_of(&m0, q);
+    // Gradient of T2 in the free values, central differences.
+    let grad: Vec<f64> = (0..v0.len())
+        .map(|k| {
+            let h = 1e-5 * v0[k].abs().max(1e-3);
+            let at = |d: f64| {
+                let mut v = v0.clone();
+                v[k] += d;
+                t2_of(&pm.model(Some(&v)), q)
+            };
+            (at(h) - at(-h)) / (2.0 * h)
+        })
+        .collect();
+    let mut var_mean = 0.0;
+    for (a, ga) in grad.iter().enumerate() {
+        for (b, gb) in grad.iter().enumerate() {
+            let c = pm
+                .covariance
+                .get(a)
+                .and_then(|r| r.get(b))
+                .copied()
+                .unwrap_or(0.0);
+            var_mean += ga * c * gb;
+        }
+    }
+    // A new cord and a new run: ln mu scattered; dT2/d ln mu by a central difference.
+    let d_ln_mu = {
+        let h = 1e-4;
+        let at = |d: f64| {
+            let mut m = m0;
+            m.law.mu *= d.exp();
+            t2_of(&m, q)
+        };
+        (at(h) - at(-h)) / (2.0 * h)
+    };
+    let var_new = d_ln_mu.powi(2) * (pm.sd_ln_mu_cord.powi(2) + pm.sd_ln_mu_run.powi(2))
+        + pm.noise_abs_n.powi(2)
+        + (pm.noise_rel * t2).powi(2);
+    let finite = |v: f64| if v.is_finite() { v.max(0.0) } else { 0.0 };
+    let ci = t95(pm.folds.saturating_sub(1)) * finite(var_mean).sqrt();
+    let pi = (ci.powi(2) + 1.959_963_985f64.powi(2) * finite(var_new)).sqrt();
+    // Physics: a capstan that is not driven backwards does not lose tension.
+    let floor = if q.as_measured {
+        f64::NEG_INFINITY
+    } else {
+        q.t1_n
+    };
+    Prediction {
+        t1_n: q.t1_n,
+        t2_n: t2,
+        amplification: t2 / q.t1_n,
+        t2_ci95: Interval {
+            lo: (t2 - ci).max(floor),
+            hi: t2 + ci,
+        },
+        t2_pi95: Interval {
+            lo: (t2 - pi).max(floor),
+            hi: t2 + pi,
+        },
+    }
+}
+
+/// The prediction model of a fitted analysis: population values, the cord-jackknife
+/// covariance of the free values, and the variance components.
+pub fn build(
+    obs: &crate::fit::Observations,
+    fits: &super::fits::Fits,
+    scatter: &crate::evidence::Scatter,
+) -> PredictionModel {
+    let ext = &fits.extended;
+    let m = ext.model(None);
+    let values: BTreeMap<String, f64> = Param::ALL
+        .iter()
+        .map(|p| (p.name().to_string(), p.get(&m)))
+        .collect();
+    let free: Vec<String> = ext
+        .spec
+        .free
+        .iter()
+        .map(|f| f.param.name().to_string())
+        .collect();
+    let folds = &fits.extended_loco.fold_values;
+    let k = folds.len();
+    let mut cov = vec![vec![0.0; free.len()]; free.len()];
+    if k >= 2 {
+        let mean: Vec<f64> = (0..free.len())
+            .map(|j| folds.iter().map(|f| f[j].1).sum::<f64>() / k as f64)
+            .collect();
+        for f in folds {
+            for a in 0..free.len() {
+                for b in 0..free.len() {
+                    cov[a][b] +=
+                        (f[a].1 - mean[a]) * (f[b].1 - mean[b]) * (k as f64 - 1.0) / k as f64;
+                }
+            }
+        }
+    } else {
+        cov = vec![vec![f64::NAN; free.len()]; free.len()];
+    }
+    let rows = &obs.rows;
+    let run_ln = (1.0 + scatter.run_pct / 100.0).ln();
+    PredictionModel {
+        schema: SCHEMA,
+        values,
+        free,
+        covariance: cov,
+        folds: k,
+        sd_ln_mu_cord: ext.sigma_u.unwrap_or(0.0),
+        sd_ln_mu_run: if run_ln.is_finite() { run_ln } else { 0.0 },
+        noise_abs_n: scatter.noise_abs_n,
+        noise_rel: scatter.noise_rel,
+        fitted_range: FittedRange {
+            wrap_deg: Span::of(obs.groups.iter().map(|g| g.wrap_deg)),
+            diameter_mm: Span::of(obs.groups.iter().map(|g| g.diameter_mm)),
+            t1_n: Span::of(rows.iter().map(|r| r.t1_n)),
+            drive_v: Span::of(rows.iter().map(|r| r.op.drive_v)),
+        },
+        note: NOTE.into(),
+    }
+}
+
+/// The reference drive voltage (the thesis's runs) for a query that gives none.
+pub const DEFAULT_DRIVE_V: f64 = REF_DRIVE_V;

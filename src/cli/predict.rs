@@ -1,0 +1,217 @@
+//! `capstan predict --from DIR/metrics.json --wrap-deg W --diameter-mm D --t1-n LIST`: T2 and
+//! amplification from the fitted extended model, with a 95 % confidence interval (the mean
+//! curve) and a 95 % prediction interval (a new measurement on a new cord). See
+//! [`capstan_engine::analysis::prediction`].
+
+use anyhow::{bail, Context};
+use capstan_engine::analysis::prediction::{self, PredictionModel, Query, DEFAULT_DRIVE_V};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+/// Arguments of `capstan predict`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The `metrics.json` that `capstan analyze` wrote.
+    #[arg(long)]
+    pub from: PathBuf,
+    /// Wrap angle, degrees.
+    #[arg(long)]
+    pub wrap_deg: f64,
+    /// Capstan diameter, mm.
+    #[arg(long)]
+    pub diameter_mm: f64,
+    /// T1 values, N: a comma list (2,5,10) or a range A:B:STEP (1:20:1, B included).
+    #[arg(long, allow_hyphen_values = true)]
+    pub t1_n: String,
+    /// Drive voltage, V (default: the thesis rig's 10 V).
+    #[arg(long)]
+    pub drive_v: Option<f64>,
+    /// Include the fitted sensor terms (offsets, gain): what the rig's sensors would read,
+    /// T1 being a reading too. Without it, the physical tensions.
+    #[arg(long)]
+    pub as_measured: bool,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The most T1 values one call predicts.
+pub const MAX_POINTS: usize = 100_000;
+
+/// Parse "2,5,10" or "A:B:STEP" (B included when the steps land on it).
+pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
+    let num = |x: &str| -> anyhow::Result<f64> {
+        let v: f64 = x
+            .trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("--t1-n {s}: {x:?} is not a number"))?;
+        if !(v.is_finite() && v > 0.0 && v <= capstan_data::MAX_TENSION_N) {
+            bail!(
+                "--t1-n {s}: {v} N is not a tension above 0 and up to {} N",
+                capstan_data::MAX_TENSION_N
+            );
+        }
+        Ok(v)
+    };
+    let parts: Vec<&str> = s.split(':').collect();
+    let vals = match parts.as_slice() {
+        [a, b, step] => {
+            let (a, b) = (num(a)?, num(b)?);
+            let step: f64 = step
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--t1-n {s}: the step {step:?} is not a number"))?;
+            if !(step.is_finite() && step > 0.0) || b < a {
+                bail!("--t1-n {s}: A:B:STEP needs A ≤ B and a step above 0");
+            }
+            let n = ((b - a) / step + 1e-9).floor() as usize + 1;
+            if n > MAX_POINTS {
+                bail!("--t1-n {s}: {n} values (at most {MAX_POINTS})");
+            }
+            (0..n).map(|k| a + step * k as f64).collect()
+        }
+        [_] => s
+            .split(',')
+            .map(num)
+            .collect::<anyhow::Result<Vec<f64>>>()?,
+        _ => bail!("--t1-n {s}: give a comma list (2,5,10) or A:B:STEP (1:20:1)"),
+    };
+    if vals.len() > MAX_POINTS {
+        bail!("--t1-n: {} values (at most {MAX_POINTS})", vals.len());
+    }
+    Ok(vals)
+}
+
+/// Read the prediction model from `metrics.json`.
+pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let v: Value = serde_json::from_str(&text).map_err(|e| {
+        anyhow::anyhow!(
+            "{}:{}:{}: not JSON: {e}",
+            path.display(),
+            e.line(),
+            e.column()
+        )
+    })?;
+    let Some(pm) = v.get("prediction_model") else {
+        bail!(
+            "{}: no prediction_model (written by capstan analyze from metrics schema 2 on; run capstan analyze again)",
+            path.display()
+        );
+    };
+    let schema = pm.get("schema").and_then(Value::as_u64);
+    if schema != Some(u64::from(prediction::SCHEMA)) {
+        bail!(
+            "{}: prediction_model schema {:?}, this capstan reads schema {}",
+            path.display(),
+            schema,
+            prediction::SCHEMA
+        );
+    }
+    serde_json::from_value(pm.clone())
+        .with_context(|| format!("{}: prediction_model is malformed", path.display()))
+}
+
+/// Run `capstan predict`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let drive_v = args.drive_v.unwrap_or(DEFAULT_DRIVE_V);
+    for (flag, v, r) in [
+        ("--wrap-deg", args.wrap_deg, capstan_data::ranges::WRAP_DEG),
+        (
+            "--diameter-mm",
+            args.diameter_mm,
+            capstan_data::ranges::DIAMETER_MM,
+        ),
+    ] {
+        r.option(flag, v)?;
+    }
+    if !(drive_v.is_finite() && drive_v > 0.0) {
+        bail!("--drive-v {drive_v}: must be above 0 V");
+    }
+    let t1 = parse_t1_list(&args.t1_n)?;
+    let pm = load_model(&args.from)?;
+    let q = |t1_n: f64| Query {
+        wrap_deg: args.wrap_deg,
+        diameter_mm: args.diameter_mm,
+        drive_v,
+        t1_n,
+        as_measured: args.as_measured,
+    };
+    let mut warnings: Vec<String> = Vec::new();
+    for t in &t1 {
+        for w in pm.extrapolates(&q(*t)) {
+            if !warnings.contains(&w) {
+                warnings.push(w);
+            }
+        }
+    }
+    let preds: Vec<_> = t1
+        .iter()
+        .map(|t| prediction::predict(&pm, &q(*t)))
+        .collect();
+    if args.json {
+        let out = json!({
+            "predictions": preds,
+            "extrapolating": !warnings.is_empty(),
+            "warnings": warnings,
+            "physical": !args.as_measured,
+            "wrap_deg": args.wrap_deg,
+            "diameter_mm": args.diameter_mm,
+            "drive_v": drive_v,
+            "from": args.from.display().to_string(),
+            "note": pm.note,
+        });
+        crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        for w in &warnings {
+            crate::errln!("warning: extrapolating: {w}");
+        }
+        crate::outln!(
+            "{} T2 at {}° wrap, D = {} mm, {} V (95 % CI: mean curve; 95 % PI: a new measurement on a new cord)",
+            if args.as_measured { "as measured:" } else { "physical:" },
+            args.wrap_deg,
+            args.diameter_mm,
+            drive_v
+        );
+        crate::outln!(
+            "{:>9} {:>10} {:>8} {:>21} {:>21}",
+            "T1 (N)",
+            "T2 (N)",
+            "T2/T1",
+            "95 % CI (N)",
+            "95 % PI (N)"
+        );
+        for p in &preds {
+            crate::outln!(
+                "{:>9.3} {:>10.3} {:>8.3} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
+                p.t1_n,
+                p.t2_n,
+                p.amplification,
+                p.t2_ci95.lo,
+                p.t2_ci95.hi,
+                p.t2_pi95.lo,
+                p.t2_pi95.hi
+            );
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_t1_list;
+
+    #[test]
+    fn t1_lists_and_ranges() {
+        assert_eq!(parse_t1_list("2,5,10").unwrap(), vec![2.0, 5.0, 10.0]);
+        assert_eq!(
+            parse_t1_list("1:3:0.5").unwrap(),
+            vec![1.0, 1.5, 2.0, 2.5, 3.0]
+        );
+        assert_eq!(parse_t1_list("1:2.9:1").unwrap(), vec![1.0, 2.0]);
+        for bad in ["", "a", "0", "-1", "3:1:1", "1:2:0", "1:2", "1:1e9:1e-9"] {
+            assert!(parse_t1_list(bad).is_err(), "{bad}");
+        }
+    }
+}

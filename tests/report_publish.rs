@@ -1,0 +1,199 @@
+//! The report as a researcher publishes from it: every figure file opens (SVG parses, PNG
+//! decodes, PDF has its page), every number of the headline is the value `metrics.json` holds,
+//! the provenance names the input by its SHA-256, and the thesis's Table 3 is compared only on
+//! the thesis data.
+
+use capstan::cli::{analyze, run, Cli, Command};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_mm: f64) {
+    run(Cli {
+        command: Command::Analyze(analyze::Args {
+            data,
+            out: dir.to_path_buf(),
+            json: false,
+            threads: None,
+            validate: false,
+            seed: 0,
+            figures: figures.map(String::from),
+            width_mm,
+            font_pt: 8.0,
+            thesis_comparison: false,
+        }),
+    })
+    .unwrap();
+}
+
+/// The thesis data analysed once, with every figure format at one journal column.
+fn thesis_out() -> &'static PathBuf {
+    static OUT: OnceLock<PathBuf> = OnceLock::new();
+    OUT.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("capstan-publish-{}", std::process::id()));
+        analyze_into(&dir, None, Some("svg,png,pdf"), 85.0);
+        dir
+    })
+}
+
+fn metrics(dir: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn every_figure_file_opens_and_is_numbered_as_in_the_report() {
+    let dir = thesis_out();
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let ids: Vec<&str> = html
+        .split("data-figure=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap())
+        .collect();
+    assert!(ids.len() >= 5, "{ids:?}");
+    for (k, id) in ids.iter().enumerate() {
+        let n = k + 1;
+        assert!(
+            html.contains(&format!("<b>Figure {n}.</b>")),
+            "figure {n} caption"
+        );
+        let stem = dir.join("figures").join(format!("figure-{n}-{id}"));
+        let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+        capstan_report::export::svg_parses(&svg).unwrap();
+        // Legend inside the file, sized for a journal column.
+        assert!(
+            svg.contains("class=\"legend\"") && svg.contains("width=\"85mm\""),
+            "{id}"
+        );
+        assert!(svg.contains(&format!(">Figure {n}</text>")), "{id}");
+        let (w, h) = capstan_report::export::png_decodes(
+            &std::fs::read(stem.with_extension("png")).unwrap(),
+        )
+        .unwrap();
+        // 85 mm at 300 dpi.
+        assert_eq!(w, 1004, "{id}");
+        assert!(h > 100, "{id}: {h}");
+        let (pages, framed) =
+            capstan_report::export::pdf_pages(&std::fs::read(stem.with_extension("pdf")).unwrap());
+        assert_eq!((pages, framed), (1, true), "{id}");
+    }
+}
+
+/// The numbers in a sentence (digits, a decimal point, a leading minus), except inside a word
+/// such as "T2".
+fn numbers_in(s: &str) -> Vec<String> {
+    let c: Vec<char> = s.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < c.len() {
+        let starts = c[i].is_ascii_digit() && (i == 0 || !c[i - 1].is_alphanumeric());
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j < c.len()
+            && (c[j].is_ascii_digit()
+                || (c[j] == '.' && j + 1 < c.len() && c[j + 1].is_ascii_digit()))
+        {
+            j += 1;
+        }
+        let neg = i > 0 && c[i - 1] == '-';
+        let text: String = c[i..j].iter().collect();
+        out.push(if neg { format!("-{text}") } else { text });
+        i = j;
+    }
+    out
+}
+
+#[test]
+fn every_number_in_the_headline_is_its_value_in_metrics_json() {
+    let m = metrics(thesis_out());
+    let h = &m["headline"];
+    let sentences: Vec<&str> = h["sentences"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap())
+        .collect();
+    assert!((3..=5).contains(&sentences.len()), "{sentences:?}");
+    let quoted = h["numbers"].as_array().unwrap();
+    let mut texts = Vec::new();
+    for n in quoted {
+        let text = n["text"].as_str().unwrap();
+        let d = n["decimals"].as_u64().unwrap() as usize;
+        let v = m
+            .pointer(n["pointer"].as_str().unwrap())
+            .and_then(Value::as_f64);
+        let v = v.unwrap_or_else(|| panic!("{} is not a number in metrics.json", n["pointer"]));
+        assert_eq!(format!("{v:.d$}"), text, "{}", n["pointer"]);
+        texts.push(text.to_string());
+    }
+    // "95 %" (the interval's level) and the "1" of "includes 1" are wording, not results.
+    for s in &sentences {
+        for num in numbers_in(s) {
+            assert!(
+                texts.contains(&num) || num == "95" || num == "1",
+                "{num} in {s:?} is not one of the quoted metrics {texts:?}"
+            );
+        }
+        assert!(
+            !s.contains("LOCO") && !s.contains("BIC") && !s.contains("edf") && !s.contains("SE "),
+            "{s}"
+        );
+    }
+    // No number quoted twice differently; every quoted number appears.
+    let all = sentences.join(" ");
+    for t in &texts {
+        assert!(all.contains(t.as_str()), "{t}");
+    }
+}
+
+#[test]
+fn provenance_names_the_input_and_the_thesis_is_recognised_by_content() {
+    let m = metrics(thesis_out());
+    let p = &m["provenance"];
+    assert_eq!(m["schema_version"], 2);
+    assert_eq!(
+        p["input_sha256"].as_str().unwrap(),
+        capstan_data::provenance::thesis_sha256()
+    );
+    assert!(p["program"].as_str().unwrap().starts_with("capstan "));
+    assert!(!p["commit"].as_str().unwrap().is_empty());
+    assert_eq!(m["thesis_comparison"]["shown"], true);
+    assert!(m["models"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|x| x["name"] == "thesis"));
+    let html = std::fs::read_to_string(thesis_out().join("report.html")).unwrap();
+    assert!(html.contains(p["input_sha256"].as_str().unwrap()));
+    assert!(html.contains("thesis's R² of amplification"));
+}
+
+#[test]
+fn other_data_get_no_thesis_comparison() {
+    // The thesis data without their last row: other bytes, so not the thesis data set.
+    let text = capstan_data::THESIS_CSV.trim_end();
+    let cut = &text[..text.rfind('\n').unwrap()];
+    let dir = std::env::temp_dir().join(format!("capstan-publish-other-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("mine.csv");
+    std::fs::write(&csv, format!("{cut}\n")).unwrap();
+    let out = dir.join("out");
+    analyze_into(&out, Some(csv.clone()), None, 170.0);
+    let m = metrics(&out);
+    assert_eq!(m["thesis_comparison"]["shown"], false);
+    assert!(!m["models"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|x| x["name"] == "thesis"));
+    assert_eq!(m["thesis_per_angle_r2"].as_array().unwrap().len(), 0);
+    assert_eq!(
+        m["provenance"]["input_sha256"].as_str().unwrap(),
+        capstan_data::provenance::sha256_file(&csv).unwrap()
+    );
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(!html.contains("Table 3 applied per angle") && !html.contains("thesis Table 3"));
+    assert!(!out.join("figures").exists(), "no --figures, no files");
+}
