@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod analyze;
 pub mod diagnose;
 pub mod log;
+pub mod plan;
 pub mod rig;
 pub mod signal;
 pub mod simulate;
@@ -28,6 +29,9 @@ pub enum Command {
     /// Say which catalogue effects a data set holds (several, or none), or that it holds
     /// structure no catalogue effect explains.
     Diagnose(diagnose::Args),
+    /// Plan the experiment that decides between the hypotheses a data set leaves open, with
+    /// each protocol's chance of deciding from simulated campaigns.
+    Plan(plan::Args),
     /// Record a real run from the board over defmt/RTT (or decode a saved stream).
     Log(log::Args),
     /// Set up the rig from the host: live forces, jog the servo, calibrate, set the protocol,
@@ -43,6 +47,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::Analyze(a) => analyze::run(a),
         Command::Diagnose(a) => diagnose::run(a),
+        Command::Plan(a) => plan::run(a),
         Command::Log(a) => log::run(a),
         Command::Rig(a) => rig::run(a),
     }
