@@ -3,14 +3,18 @@
 //! `capstan-report`, `capstan-link`, `capstan-outdir`, `host-sim`).
 //!
 //! * [`cli`]: one module per command, each with its `Args` and `run`;
+//! * [`condition`]: a raw time series into pairs by the firmware's rules;
 //! * [`logger`]: the files of a logged session, written as the records arrive;
 //! * [`outputs`]: how every command opens its output directory;
+//! * [`simboard`]: the simulated board behind `rig --sim DIR` and `log --sim DIR`;
 //! * [`term`]: stdout and stderr that survive a closed pipe. Only this crate prints.
 //!
 //! The integration tests in `tests/` drive the binary, and use this library and the crates
 //! directly.
 
 pub mod cli;
+pub mod condition;
 pub mod logger;
 pub mod outputs;
+pub mod simboard;
 pub mod term;

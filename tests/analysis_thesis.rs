@@ -119,7 +119,7 @@ fn named_causes_are_the_evidence_engines() {
     assert_eq!(m.tests.len(), 10);
     for t in &m.tests {
         assert_eq!(
-            t.verdict == capstan_engine::analysis::mechanisms::Verdict::RuledIn,
+            t.verdict == capstan_engine::verdict::Verdict::RuledIn,
             causes.contains(&t.name),
             "{}",
             t.name

@@ -10,7 +10,9 @@
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 
+pub mod catalogue;
 mod effect;
+pub mod entry;
 mod law;
 mod partials;
 mod sensor;
@@ -45,7 +47,9 @@ pub mod math {
     pub use libm::{exp, log, pow, sqrt};
 }
 
-pub use effect::{Effect, EffectKind, ParseEffectError, HEAT_TAU_S};
+pub use catalogue::{rivalry, EffectKind, Rivalry, ENTRIES, HEAT_TAU_S};
+pub use effect::{Effect, ParseEffectError};
+pub use entry::{EffectEntry, Facts, Level};
 pub use law::{FrictionLaw, LoadMemory};
 pub use partials::{LawPartials, MuPartials};
 pub use sensor::{SensorArtefacts, SLACK_T1_N};

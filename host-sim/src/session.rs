@@ -57,6 +57,10 @@ pub enum Step {
     HoldButton(u32),
     /// A sensor is fitted the wrong way round from now on: a tension lowers its reading.
     ReverseSensor(Channel),
+    /// A sensor's true sensitivity is this factor times its nominal one from now on (counts
+    /// per newton; `capstan rig --sim` draws one per sensor, hidden from the firmware). Give
+    /// it before any weight is hung.
+    ScaleSensor(Channel, f64),
 }
 
 /// From a reset to the firmware's first sample on the simulated board, ms (the RP2040 boots
@@ -150,6 +154,8 @@ struct Shared {
     events: RefCell<Vec<Event>>,
     console: RefCell<VecDeque<u8>>,
     boot: core::cell::Cell<u32>,
+    /// The weights hanging on the sensors, N (they stay across a reset: they are the rig's).
+    hung: Cell<[f64; 2]>,
 }
 
 struct Sink<'a>(&'a Shared);
@@ -192,6 +198,7 @@ pub fn run_session(
         events: RefCell::new(Vec::new()),
         console: RefCell::new(VecDeque::new()),
         boot: core::cell::Cell::new(0),
+        hung: Cell::new([0.0; 2]),
     };
     let range = 0..(FLASH_PAGES * crate::flash::ERASE_BYTES) as u32;
     let mut store = SettingsStore::new(flash, range).expect("whole pages");
@@ -339,7 +346,6 @@ async fn host(
 ) -> usize {
     // Let the board boot and settle (and a homing servo reach rest) first.
     Timer::after(Duration::from_millis(50)).await;
-    let mut hung = [0.0f64; 2];
     for (i, step) in steps.iter().enumerate() {
         match step {
             Step::Send(line) => {
@@ -359,8 +365,10 @@ async fn host(
             Step::Wait(ms) => Timer::after(Duration::from_millis(*ms as u64)).await,
             Step::Hang(ch, n) => {
                 let k = *ch as usize;
+                let mut hung = shared.hung.get();
                 plant.borrow_mut().hang(0, *ch, n - hung[k]);
                 hung[k] = *n;
+                shared.hung.set(hung);
             }
             Step::Press(ms) => {
                 let now = time::now_us();
@@ -368,6 +376,7 @@ async fn host(
                 Timer::after(Duration::from_millis(*ms as u64)).await;
             }
             Step::ReverseSensor(ch) => plant.borrow_mut().reverse_sensor(0, *ch),
+            Step::ScaleSensor(ch, factor) => plant.borrow_mut().scale_sensor(0, *ch, *factor),
             Step::HoldButton(ms) => {
                 let now = time::now_us();
                 plant.borrow_mut().press(0, now, *ms as u64 * 1000);

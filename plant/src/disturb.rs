@@ -25,6 +25,18 @@
 //! * `regime_change`: mu changes by this fraction over a narrow band of true T1 around
 //!   [`REGIME_T1_N`] (a logistic step [`REGIME_WIDTH_N`] wide): the cord flattens into a
 //!   different contact at a tension, a kink no power law follows.
+//!
+//! Five more for `capstan discover`'s validation (docs/README-discover.md): four that its
+//! library can express, one it cannot.
+//! * `t2_lowforce`: the T2 hook seats at low force: T2 reads T2 + q·(1 − e^{−T2/1 N}), N.
+//! * `t1_tare_diameter`: the T1 tare differs between capstan sessions: while the drive runs T1
+//!   reads T1 − q·(D − D_ref)/D_ref ([`TARE_REF_DIAMETER_MM`]), N.
+//! * `t2_offset_wrap`: the T2 sensor is re-mounted for every wrap and its zero moves: while
+//!   the drive runs T2 reads T2 + q·(β − β_ref)/2π ([`capstan_friction::REF_WRAP_RAD`]), N per
+//!   turn.
+//! * `settling`: the contact settles after the trigger: mu·(1 − c·e^{−t/10 s}).
+//! * `t2_range_step` (not expressible): the T2 amplifier switches range at
+//!   [`RANGE_STEP_T2_N`]: T2 reads q more above it (a logistic step 0.3 N wide), N.
 
 use crate::rng::Rng;
 
@@ -34,6 +46,12 @@ pub const NONLINEARITY_REF_N: f64 = 40.0;
 pub const REGIME_T1_N: f64 = 4.0;
 /// Width of the regime change (logistic scale), N.
 pub const REGIME_WIDTH_N: f64 = 0.5;
+/// Reference diameter of `t1_tare_diameter` (the middle of the thesis's two capstans), mm.
+pub const TARE_REF_DIAMETER_MM: f64 = 19.05;
+/// Time constant of `settling`, s.
+pub const SETTLING_TAU_S: f64 = 10.0;
+/// Where the T2 amplifier of `t2_range_step` switches range, N.
+pub const RANGE_STEP_T2_N: f64 = 15.0;
 /// How often the wander of mu is advanced, µs.
 pub const WANDER_STEP_US: u64 = 50_000;
 
@@ -77,11 +95,34 @@ pub struct Unmodelled {
     pub t2_nonlinearity: f64,
     /// Fractional change of mu above the regime tension ([`REGIME_T1_N`]).
     pub regime_change: f64,
+    /// T2 hook seating at low force: its full size, N.
+    pub t2_lowforce: f64,
+    /// T1 tare per capstan: N per relative diameter from [`TARE_REF_DIAMETER_MM`].
+    pub t1_tare_diameter: f64,
+    /// T2 zero per wrap: N per turn from the reference wrap.
+    pub t2_offset_wrap: f64,
+    /// Settling of mu after the trigger: its fraction at t = 0.
+    pub settling: f64,
+    /// T2 amplifier range switch at [`RANGE_STEP_T2_N`]: the step, N.
+    pub t2_range_step: f64,
 }
 
 impl Unmodelled {
     /// Names and meanings, for command lines and reports.
+    /// (The diagnose suite's outside cases draw from these three.)
     pub const NAMES: [&'static str; 3] = ["hysteresis", "t2_nonlinearity", "regime_change"];
+    /// Every kind, for command lines (`capstan simulate --unmodelled`) and `capstan discover`'s
+    /// validation.
+    pub const ALL_NAMES: [&'static str; 8] = [
+        "hysteresis",
+        "t2_nonlinearity",
+        "regime_change",
+        "t2_lowforce",
+        "t1_tare_diameter",
+        "t2_offset_wrap",
+        "settling",
+        "t2_range_step",
+    ];
 
     /// Set the one called `name` to `value`; `false` if there is no such name.
     pub fn set(&mut self, name: &str, value: f64) -> bool {
@@ -89,6 +130,11 @@ impl Unmodelled {
             "hysteresis" => self.hysteresis = value,
             "t2_nonlinearity" => self.t2_nonlinearity = value,
             "regime_change" => self.regime_change = value,
+            "t2_lowforce" => self.t2_lowforce = value,
+            "t1_tare_diameter" => self.t1_tare_diameter = value,
+            "t2_offset_wrap" => self.t2_offset_wrap = value,
+            "settling" => self.settling = value,
+            "t2_range_step" => self.t2_range_step = value,
             _ => return false,
         }
         true
@@ -96,7 +142,40 @@ impl Unmodelled {
 
     /// Is anything switched on?
     pub fn any(&self) -> bool {
-        self.hysteresis != 0.0 || self.t2_nonlinearity != 0.0 || self.regime_change != 0.0
+        self.values().iter().any(|v| *v != 0.0)
+    }
+
+    /// Every value, in [`Unmodelled::ALL_NAMES`] order.
+    pub fn values(&self) -> [f64; 8] {
+        [
+            self.hysteresis,
+            self.t2_nonlinearity,
+            self.regime_change,
+            self.t2_lowforce,
+            self.t1_tare_diameter,
+            self.t2_offset_wrap,
+            self.settling,
+            self.t2_range_step,
+        ]
+    }
+
+    /// Factor on mu from `settling`, `time_s` after the trigger.
+    pub fn settling_factor(&self, time_s: f64) -> f64 {
+        if self.settling == 0.0 {
+            return 1.0;
+        }
+        1.0 - self.settling * libm::exp(-time_s.max(0.0) / SETTLING_TAU_S)
+    }
+
+    /// What the T1 reading adds while the drive runs, on a capstan of `diameter_mm`, N.
+    pub fn t1_offset_n(&self, diameter_mm: f64) -> f64 {
+        -self.t1_tare_diameter * (diameter_mm - TARE_REF_DIAMETER_MM) / TARE_REF_DIAMETER_MM
+    }
+
+    /// What the T2 reading adds while the drive runs, at a wrap of `wrap_rad`, N.
+    pub fn t2_offset_n(&self, wrap_rad: f64) -> f64 {
+        self.t2_offset_wrap * (wrap_rad - capstan_friction::REF_WRAP_RAD)
+            / (2.0 * core::f64::consts::PI)
     }
 
     /// Factor on mu at true tension `t1_n` while the tension is `falling`.
@@ -114,6 +193,17 @@ impl Unmodelled {
 
     /// The T2 sensor's reading of a tension, N.
     pub fn t2_reading_n(&self, t2_n: f64) -> f64 {
+        let mut extra = 0.0;
+        if self.t2_lowforce != 0.0 {
+            extra += self.t2_lowforce * (1.0 - libm::exp(-t2_n.max(0.0)));
+        }
+        if self.t2_range_step != 0.0 {
+            extra += self.t2_range_step / (1.0 + libm::exp(-(t2_n - RANGE_STEP_T2_N) / 0.3));
+        }
+        extra + self.t2_nonlinear_reading_n(t2_n)
+    }
+
+    fn t2_nonlinear_reading_n(&self, t2_n: f64) -> f64 {
         if self.t2_nonlinearity == 0.0 {
             // What the sum below gives (T2 is finite, and never −0): without its square root
             // and two divisions, for every conversion of the T2 channel.
@@ -194,6 +284,7 @@ mod tests {
             hysteresis: 0.1,
             t2_nonlinearity: -0.05,
             regime_change: -0.2,
+            ..Unmodelled::default()
         };
         assert!((u.mu_factor(0.5, true) / u.mu_factor(0.5, false) - 1.1).abs() < 1e-12);
         assert!((u.mu_factor(REGIME_T1_N, false) - 0.9).abs() < 1e-12);
@@ -207,5 +298,32 @@ mod tests {
         assert!((u.t2_reading_n(40.0 - t_peak) - (40.0 - t_peak) - 0.05).abs() < 1e-12);
         let mut v = Unmodelled::default();
         assert!(!v.any() && v.set("hysteresis", 0.2) && v.any() && !v.set("x", 1.0));
+        for name in Unmodelled::ALL_NAMES {
+            let mut w = Unmodelled::default();
+            assert!(w.set(name, 0.5) && w.any(), "{name}");
+        }
+    }
+
+    #[test]
+    fn the_discover_kinds_act_where_their_docs_say() {
+        let u = Unmodelled {
+            t2_lowforce: 0.8,
+            t2_range_step: 0.6,
+            settling: 0.1,
+            t1_tare_diameter: 0.3,
+            t2_offset_wrap: -0.4,
+            ..Unmodelled::default()
+        };
+        // Low-force seating: 0 at 0 N, its full size well above 1 N; the range step above 15 N.
+        assert!(u.t2_reading_n(0.0).abs() < 1e-12);
+        assert!((u.t2_reading_n(10.0) - 10.0 - 0.8).abs() < 1e-3);
+        assert!((u.t2_reading_n(30.0) - 30.0 - 1.4).abs() < 1e-3);
+        assert!((u.settling_factor(0.0) - 0.9).abs() < 1e-12);
+        assert!((u.settling_factor(100.0) - 1.0).abs() < 1e-4);
+        assert!(u.t1_offset_n(TARE_REF_DIAMETER_MM).abs() < 1e-12);
+        assert!((u.t1_offset_n(12.7) - 0.1).abs() < 1e-12);
+        let three_turns = 3.0 * core::f64::consts::PI;
+        assert!(u.t2_offset_n(three_turns).abs() < 1e-12);
+        assert!((u.t2_offset_n(three_turns + 2.0 * core::f64::consts::PI) + 0.4).abs() < 1e-12);
     }
 }

@@ -202,6 +202,14 @@ impl Plant {
         c.counts_per_n[k] = -c.counts_per_n[k];
     }
 
+    /// Scale cord's sensor `channel`'s sensitivity by `factor` (counts per newton): a sensor
+    /// whose true sensitivity differs from its nominal one, as every real one does a little.
+    /// Apply it before hanging anything (a weight already hung keeps its old reading).
+    pub fn scale_sensor(&mut self, cord: usize, channel: Channel, factor: f64) {
+        let c = &mut self.cords[cord];
+        c.counts_per_n[channel as usize] *= factor;
+    }
+
     /// Bring the plant to `now_us` (no-op if it is there already or past it).
     #[inline]
     pub fn advance_to(&mut self, now_us: u64) {

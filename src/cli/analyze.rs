@@ -67,7 +67,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
     };
     a.elapsed.closed_loop_s = t_cl.elapsed().as_secs_f64();
+    // Beyond the catalogue (`capstan discover`): kept apart from the catalogue's causes.
+    let t_disc = Instant::now();
+    let disc = capstan_discover::discover(&ds, &Default::default(), &mut |_, _| {});
+    let disc = serde_json::to_value(&disc)?;
+    let disc_s = t_disc.elapsed().as_secs_f64();
     let html = capstan_report::report_html(&a, curves.as_deref(), &note)?;
+    let html = capstan_report::discovered::insert_section(
+        html,
+        &capstan_report::discovered::discovered_html(&disc),
+    );
     let mut csv = set.create("predictions.csv")?;
     capstan_report::write_predictions_csv(&mut csv, &ds, &a)
         .and_then(|()| csv.flush())
@@ -80,7 +89,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     drop(csv);
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
-    let metrics = capstan_report::metrics_json(&a, &closed);
+    let mut metrics = capstan_report::metrics_json(&a, &closed);
+    metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
+    metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
     set.write("report.html", html.as_bytes())?;
     set.write(
         "metrics.json",

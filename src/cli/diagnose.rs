@@ -2,8 +2,8 @@
 //! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`capstan_engine::diagnose`].
 
 use capstan_data::{load_pairs, thesis_dataset};
-use capstan_engine::diagnose::words::fixed;
-use capstan_engine::diagnose::{self, words, Diagnosis, Options};
+use capstan_engine::diagnose::{self, Diagnosis, Options};
+use capstan_engine::verdict::words::{self, fixed};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 

@@ -2,6 +2,7 @@
 
 mod board;
 mod judge;
+mod sim;
 
 use crate::logger::{LogOptions, Logger, Outcome, SetupFlags, Stop, Summary};
 use anyhow::Context;
@@ -69,19 +70,29 @@ DECODING A SAVED STREAM
 )]
 pub struct Args {
     /// The firmware ELF (the build running on the board): its defmt table decodes the stream.
-    #[arg(long, value_name = "FIRMWARE_ELF")]
-    pub elf: PathBuf,
+    /// (Not for --sim: the simulated board runs the firmware's code on the host.)
+    #[arg(
+        long,
+        value_name = "FIRMWARE_ELF",
+        required_unless_present = "sim",
+        conflicts_with = "sim"
+    )]
+    pub elf: Option<PathBuf>,
+
+    /// The simulated board instead (`--sim DIR`, as `capstan rig --sim DIR`).
+    #[command(flatten)]
+    pub sim: crate::simboard::SimArgs,
 
     /// Output directory (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 
     /// Board: the probe-rs chip name (RP2040 for the Pico). Flashes the ELF, resets, logs.
-    #[arg(long, value_name = "CHIP", required_unless_present = "from")]
+    #[arg(long, value_name = "CHIP", required_unless_present_any = ["from", "sim"], conflicts_with = "sim")]
     pub chip: Option<String>,
 
     /// Decode a saved defmt byte stream instead of a board (`-`: stdin).
-    #[arg(long, value_name = "FILE|-", conflicts_with_all = ["chip", "probe", "no_flash", "connect_under_reset", "speed", "start"])]
+    #[arg(long, value_name = "FILE|-", conflicts_with_all = ["chip", "probe", "no_flash", "connect_under_reset", "speed", "start", "sim"])]
     pub from: Option<String>,
 
     /// Board: which probe, as VID:PID[:SERIAL] (needed when several are plugged in).
@@ -148,7 +159,6 @@ pub struct Args {
 /// Run `capstan log`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     check_args(&args)?;
-    let fw = Firmware::load(&args.elf)?;
     let opts = LogOptions {
         out_dir: args.out.clone(),
         overwrite: args.overwrite,
@@ -162,9 +172,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         allow_empty: args.allow_empty,
     };
     super::signal::stop_flag("log"); // Ctrl-C and SIGTERM end the session, keeping it
-    let (summary, stop, outcome) = match &args.from {
-        Some(from) => from_stream(&fw, opts, from, &args)?,
-        None => board::from_board(&fw, opts, &args)?,
+    let (summary, stop, outcome) = match (&args.elf, &args.from) {
+        (None, _) => sim::from_sim(opts, &args)?,
+        (Some(elf), Some(from)) => from_stream(&Firmware::load(elf)?, opts, from, &args)?,
+        (Some(elf), None) => board::from_board(&Firmware::load(elf)?, opts, &args)?,
     };
     let at = match &outcome {
         Outcome::Kept(p) => p.clone(),
@@ -175,6 +186,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return not_committed(&summary, &stop, &outcome, &args);
     }
     verdict(&summary, &stop, &args)
+}
+
+/// The firmware ELF for messages (or what stands for it with --sim).
+fn elf_name(args: &Args) -> String {
+    args.elf.as_ref().map_or_else(
+        || "the simulated board's".to_string(),
+        |e| e.display().to_string(),
+    )
 }
 
 fn limit_reached(logger: &Logger, args: &Args, started: std::time::Instant) -> Option<Stop> {

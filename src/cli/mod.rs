@@ -3,7 +3,9 @@
 use clap::{Parser, Subcommand};
 
 pub mod analyze;
+pub mod condition;
 pub mod diagnose;
+pub mod discover;
 pub mod log;
 pub mod plan;
 pub mod rig;
@@ -29,6 +31,9 @@ pub enum Command {
     /// Say which catalogue effects a data set holds (several, or none), or that it holds
     /// structure no catalogue effect explains.
     Diagnose(diagnose::Args),
+    /// Search a library of physical terms beyond the catalogue for what is left; propose one
+    /// only if it earns its evidence and helps held-out cords.
+    Discover(discover::Args),
     /// Plan the experiment that decides between the hypotheses a data set leaves open, with
     /// each protocol's chance of deciding from simulated campaigns.
     Plan(plan::Args),
@@ -37,6 +42,8 @@ pub enum Command {
     /// Set up the rig from the host: live forces, jog the servo, calibrate, set the protocol,
     /// store it on the board, start a run.
     Rig(rig::Args),
+    /// Condition a raw time series (raw.csv, a logger's CSV or Logger Pro export) into pairs.
+    Condition(condition::Args),
 }
 
 /// Run a parsed command line.
@@ -47,8 +54,10 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::Analyze(a) => analyze::run(a),
         Command::Diagnose(a) => diagnose::run(a),
+        Command::Discover(a) => discover::run(a),
         Command::Plan(a) => plan::run(a),
         Command::Log(a) => log::run(a),
         Command::Rig(a) => rig::run(a),
+        Command::Condition(a) => condition::run(a),
     }
 }

@@ -46,7 +46,21 @@ SETTING UP THE RIG AT THE BENCH
 
   capstan rig never flashes or resets the board. It reads the RTT channel `capstan log`
   reads: the records it takes are not seen by a `capstan log` running at the same time
-  (that log reports them as a sequence gap). Stop the log while setting up, or accept the gap.";
+  (that log reports them as a sequence gap). Stop the log while setting up, or accept the gap.
+
+REHEARSING WITHOUT HARDWARE
+  R=\"capstan rig --sim DIR\": the same commands to a simulated board, the firmware's own code
+  on the host, its settings flash and state kept in DIR between commands (a new DIR is a new,
+  unconfigured board; --sim-seed N etc. describe its rig when it is made). Its sensors have
+  hidden zero and sensitivity errors: the truth is in DIR/sim-truth.json. What a person does
+  by hand at a real rig is a command here:
+    $R bench load t1 9.80665    hang 9.80665 N on T1 (then: weigh t1 9.80665)
+    $R bench unload             take every weight off
+    $R bench press              press the rig's button (200 ms; bench press MS)
+    $R bench wait 3             let 3 s pass (a servo reaching rest)
+    $R bench power-cycle        unplug the board and plug it back
+  After each command 2 s pass at the bench. `live SECONDS` prints that much of the board's
+  time at once. capstan log --sim DIR --start --runs N --out SESSION records N runs.";
 
 /// Arguments of `capstan rig`.
 #[derive(clap::Args, Debug)]
@@ -58,8 +72,12 @@ SETTING UP THE RIG AT THE BENCH
 )]
 pub struct Args {
     /// Board: the probe-rs chip name (RP2040 for the Pico). Attaches without flashing.
-    #[arg(long, value_name = "CHIP", requires = "elf")]
+    #[arg(long, value_name = "CHIP", requires = "elf", conflicts_with = "sim")]
     pub chip: Option<String>,
+
+    /// The simulated board instead (`--sim DIR`, see REHEARSING WITHOUT HARDWARE).
+    #[command(flatten)]
+    pub sim: crate::simboard::SimArgs,
 
     /// The firmware ELF running on the board: its defmt table decodes the replies.
     #[arg(long, value_name = "FIRMWARE_ELF")]
@@ -80,7 +98,8 @@ pub struct Args {
 
     /// The command: setup | leave | jog DEG | servo DEG | zero | weigh t1|t2 NEWTONS |
     /// set KEY VALUE | show | store | defaults | run | abort | ack; or on the host:
-    /// live [SECONDS] | keys.
+    /// live [SECONDS] | keys; or at a simulated board (--sim): bench load t1|t2 NEWTONS |
+    /// bench unload | bench press [MS] | bench wait SECONDS | bench power-cycle.
     #[arg(value_name = "COMMAND", required = true, num_args = 1.., allow_negative_numbers = true)]
     pub words: Vec<String>,
 }
@@ -115,6 +134,31 @@ fn rig(args: &Args) -> anyhow::Result<()> {
             }
             Ok(())
         }
+        "bench" => {
+            if args.sim.sim.is_none() {
+                bail!(CheckError::Usage(
+                    "bench actions are for a simulated board (--sim DIR); at a real rig, do \
+                     them by hand"
+                        .into()
+                ));
+            }
+            let (steps, said) = crate::simboard::steps::bench(rest).map_err(CheckError::Usage)?;
+            let mut board = crate::simboard::SimBoard::open(&args.sim, &mut note)?;
+            let done = board.advance(&steps)?;
+            out(said);
+            for e in done.events {
+                note_event(e);
+            }
+            Ok(())
+        }
+        "live" if args.sim.sim.is_some() => {
+            let how_long = live::seconds(rest).map_err(CheckError::Usage)?;
+            let how_long = how_long.unwrap_or(SIM_LIVE);
+            let mut board = crate::simboard::SimBoard::open(&args.sim, &mut note)?;
+            let ms = how_long.as_millis().min(3_600_000) as u32;
+            let done = board.advance(&[host_sim::session::Step::Wait(ms)])?;
+            live::show(done.events, &mut out, &mut note).map(|_| ())
+        }
         "live" => {
             let how_long = live::seconds(rest).map_err(CheckError::Usage)?;
             with_link(args, |link| {
@@ -127,19 +171,46 @@ fn rig(args: &Args) -> anyhow::Result<()> {
             if cmd == Command::Run {
                 // The probe serves one program at a time and the board's log buffer holds
                 // ~0.3 s: a run started here is not recorded unless capstan log starts it.
-                note(
+                let board = if args.sim.sim.is_some() {
+                    "--sim DIR"
+                } else {
+                    "--chip ... --elf ... --no-flash"
+                };
+                note(format!(
                     "note: nothing records this run; to record it, start it with `capstan log \
-                     --chip ... --elf ... --no-flash --start --out DIR` instead"
-                        .into(),
-                );
+                     {board} --start --out SESSION` instead"
+                ));
             }
             with_link(args, |link| send(link, &line, &cmd, &mut out, &mut note))
         }
     }
 }
 
+/// How much of a simulated board's time `live` without SECONDS shows.
+const SIM_LIVE: std::time::Duration = std::time::Duration::from_secs(5);
+
 fn out(line: String) {
     crate::outln!("{line}");
+}
+
+/// What a simulated board said during a bench action: faults and replies (e.g. the button
+/// leaving setup mode), on stderr.
+fn note_event(e: capstan_link::frame::Event) {
+    use firmware::record::Record;
+    if let capstan_link::frame::Event::Record { record, .. } = e {
+        match record {
+            Record::Fault(f) => note(capstan_link::words::fault_line(&f)),
+            Record::Reply(r) => note(capstan_link::words::reply_line(&r, None)),
+            Record::RunStart(s) => note(format!("the board started run {}", s.run)),
+            Record::RunEnd(e) => note(format!(
+                "the run ended: {} pairs{}",
+                e.pairs,
+                e.fault
+                    .map_or(String::new(), |k| format!(", fault {}", k.name()))
+            )),
+            _ => {}
+        }
+    }
 }
 
 fn note(line: String) {
@@ -175,10 +246,15 @@ fn with_link(
     args: &Args,
     work: impl FnOnce(&mut dyn RigLink) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
+    if args.sim.sim.is_some() {
+        let board = crate::simboard::SimBoard::open(&args.sim, &mut note)?;
+        let mut link = crate::simboard::SimLink::new(board);
+        return work(&mut link);
+    }
     let (Some(chip), Some(elf)) = (&args.chip, &args.elf) else {
         bail!(
-            "say which board: --chip CHIP --elf FIRMWARE_ELF (through a debug probe); \
-             `capstan rig keys` needs neither"
+            "say which board: --chip CHIP --elf FIRMWARE_ELF (through a debug probe), or \
+             --sim DIR (a simulated one); `capstan rig keys` needs neither"
         );
     };
     let fw = Firmware::load(elf)?;

@@ -99,7 +99,11 @@ pub struct Args {
     pub noise: String,
     /// Physics outside the effect catalogue, NAME=VALUE (repeatable): hysteresis (mu larger by
     /// this fraction while the tension falls), t2_nonlinearity (the T2 sensor's S-shaped calibration error, its largest deviation in N),
-    /// regime_change (mu changes by this fraction above T1 ≈ 4 N).
+    /// regime_change (mu changes by this fraction above T1 ≈ 4 N), t2_lowforce (the T2 hook
+    /// seats at low force: T2 reads q(1 − e^(−T2/1 N)) more, N), t1_tare_diameter (T1 reads
+    /// −q(D − 19.05 mm)/19.05 mm more, N), t2_offset_wrap (T2 reads q(β − 540°)/360° more, N
+    /// per turn), settling (mu·(1 − c·e^(−t/10 s)) after the trigger), t2_range_step (T2 reads
+    /// q more above 15 N: an amplifier range switch, N). See docs/README-discover.md.
     #[arg(long = "unmodelled", value_name = "NAME=VALUE")]
     pub unmodelled: Vec<String>,
     /// Seed of every random number (noise, scatter, sensor zeros).
@@ -171,7 +175,7 @@ fn unmodelled(args: &Args) -> anyhow::Result<host_sim::plant::Unmodelled> {
     let mut u = host_sim::plant::Unmodelled::default();
     let mut seen: Vec<&str> = Vec::new();
     for item in &args.unmodelled {
-        let known = host_sim::plant::Unmodelled::NAMES.join(", ");
+        let known = host_sim::plant::Unmodelled::ALL_NAMES.join(", ");
         let (name, value) = item
             .split_once('=')
             .ok_or_else(|| anyhow::anyhow!("--unmodelled {item}: expected NAME=VALUE"))?;

@@ -59,8 +59,18 @@ fn or_unknown(run: &str) -> &str {
 impl<'f> Logger<'f> {
     /// Start a session into `opts.out_dir`; `source` names the byte source in the summary.
     pub fn create(fw: &'f Firmware, opts: LogOptions, source: &str) -> anyhow::Result<Self> {
+        Self::with_decoder(Decoder::new(fw), opts, source)
+    }
+
+    /// A session fed records already decoded ([`Logger::take_records`]): the simulated board,
+    /// which runs the firmware's code on the host. `stream.defmt` stays empty.
+    pub fn create_for_records(opts: LogOptions, source: &str) -> anyhow::Result<Self> {
+        Self::with_decoder(Decoder::records_only(), opts, source)
+    }
+
+    fn with_decoder(decoder: Decoder<'f>, opts: LogOptions, source: &str) -> anyhow::Result<Self> {
         Ok(Logger {
-            decoder: Decoder::new(fw),
+            decoder,
             files: Files::create(&opts)?,
             source: source.to_string(),
             opts,
@@ -89,6 +99,18 @@ impl<'f> Logger<'f> {
     /// Take a chunk of the stream: decode it, write what it completes, flush every file.
     pub fn feed(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         self.push(bytes)?;
+        self.files.flush()
+    }
+
+    /// Take records already decoded, in order (a [`Logger::create_for_records`] session),
+    /// written as [`Logger::push`] writes decoded ones; the files are flushed.
+    pub fn take_records(&mut self, records: Vec<Event>) -> anyhow::Result<()> {
+        let mut events = std::mem::take(&mut self.events);
+        self.decoder.push_records(records, &mut events);
+        for e in events.drain(..) {
+            self.handle(e)?;
+        }
+        self.events = events;
         self.files.flush()
     }
 
@@ -214,7 +236,9 @@ impl<'f> Logger<'f> {
             ),
         );
         let fw = self.decoder.firmware();
-        let sent = |field: &str| fw.record_has_field(RecordKind::RunStart, field);
+        // Records decoded on the host (no firmware table) carry every field.
+        let sent =
+            |field: &str| fw.is_none_or(|fw| fw.record_has_field(RecordKind::RunStart, field));
         let settings = firmware::Settings {
             protocol: s.protocol,
             calibration: s.calibration,
@@ -371,7 +395,10 @@ impl<'f> Logger<'f> {
         let d = &self.decoder;
         let summary = Summary {
             source: self.source.clone(),
-            elf: d.firmware().path.clone(),
+            elf: d.firmware().map_or_else(
+                || "(none: the simulated board)".to_string(),
+                |f| f.path.clone(),
+            ),
             stopped: stop.to_string(),
             bytes: d.bytes_seen(),
             frames: d.frames_seen,
@@ -395,9 +422,11 @@ impl<'f> Logger<'f> {
         };
         let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
         let commit = self.opts.allow_empty || summary.runs.iter().any(|r| r.complete);
-        let outcome = self
-            .files
-            .close(&(json + "\n"), commit, summary.bytes > 0)?;
+        let outcome = self.files.close(
+            &(json + "\n"),
+            commit,
+            summary.bytes > 0 || summary.frames > 0,
+        )?;
         Ok((summary, outcome))
     }
 }

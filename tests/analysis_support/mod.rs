@@ -1,7 +1,7 @@
 //! Shared by the analysis tests: the report's verdict sentences against `metrics.json`.
 
-use capstan_engine::analysis::mechanisms::{words, Numbers, Verdict};
 use capstan_engine::evidence::Level;
+use capstan_engine::verdict::{words, Numbers, Verdict};
 use capstan_friction::EffectKind;
 use serde_json::Value;
 
@@ -109,7 +109,7 @@ pub fn check(metrics: &Value, html: &str) {
                 r.instead_of
             );
             made.push(' ');
-            made += &capstan_engine::diagnose::words::rival_sentences(&[r]);
+            made += &capstan_engine::verdict::words::rival_sentences(&[r]);
         }
         let json = m["summary"].as_str().unwrap();
         // Numbers round-trip through JSON exactly, so the sentence does too.

@@ -17,3 +17,4 @@ pub mod diagnose;
 pub mod evidence;
 pub mod fit;
 pub mod trace;
+pub mod verdict;

@@ -38,7 +38,8 @@ pub const KEEP_BAD_FRAMES: usize = 200;
 
 /// Decodes one stream.
 pub struct Decoder<'f> {
-    fw: &'f Firmware,
+    /// `None`: records that arrive already decoded ([`Decoder::push_records`]).
+    fw: Option<&'f Firmware>,
     deframer: Deframer,
     frames: Vec<RawFrame>,
     /// Sequence numbers so far.
@@ -59,7 +60,21 @@ impl<'f> Decoder<'f> {
     /// A decoder at the start of a stream from the firmware `fw`.
     pub fn new(fw: &'f Firmware) -> Self {
         Decoder {
-            fw,
+            fw: Some(fw),
+            ..Decoder::new_parts()
+        }
+    }
+
+    /// A decoder for records that arrive already decoded, with no firmware table (the
+    /// simulated board, which runs the firmware's code on the host): the same sequence
+    /// tracking and counts, no bytes.
+    pub fn records_only() -> Self {
+        Decoder::new_parts()
+    }
+
+    fn new_parts() -> Self {
+        Decoder {
+            fw: None,
             deframer: Deframer::new(),
             frames: Vec::new(),
             seq: SeqTracker::new(),
@@ -71,9 +86,38 @@ impl<'f> Decoder<'f> {
         }
     }
 
-    /// The firmware whose table decodes the stream.
-    pub fn firmware(&self) -> &'f Firmware {
+    /// The firmware whose table decodes the stream (`None` for [`Decoder::records_only`]).
+    pub fn firmware(&self) -> Option<&'f Firmware> {
         self.fw
+    }
+
+    /// Take records already decoded (with their sequence numbers), in order: each counted as
+    /// a frame and tracked like a decoded one, appended to `out`.
+    pub fn push_records(
+        &mut self,
+        records: impl IntoIterator<Item = Event>,
+        out: &mut Vec<Located>,
+    ) {
+        for event in records {
+            let number = self.frames_seen;
+            self.frames_seen += 1;
+            let seq = match &event {
+                Event::Record { seq, .. } => {
+                    self.records += 1;
+                    Some(self.seq.observe(*seq, number, 0))
+                }
+                Event::Message { .. } => {
+                    self.messages += 1;
+                    None
+                }
+            };
+            out.push(Located {
+                frame: number,
+                byte_offset: 0,
+                event,
+                seq,
+            });
+        }
     }
 
     /// Bytes fed so far.
@@ -92,7 +136,10 @@ impl<'f> Decoder<'f> {
                     "{} bytes without a frame separator (longest accepted: {MAX_FRAME_BYTES})",
                     raw.len
                 )),
-                Some(b) => decode_frame(self.fw, b),
+                Some(b) => match self.fw {
+                    Some(fw) => decode_frame(fw, b),
+                    None => Err("no firmware table to decode it with".to_string()),
+                },
             };
             match result {
                 Ok(event) => {

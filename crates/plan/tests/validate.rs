@@ -132,8 +132,19 @@ fn scenarios() -> Vec<Scenario> {
         },
         Scenario {
             name: "wear on monotone runs",
-            truth: vec![("wear", -0.004)],
+            truth: vec![("wear", -0.03)],
             design: thesis.clone(),
+        },
+        Scenario {
+            name: "T2 offset at two close wraps",
+            truth: vec![("t2_offset", 0.6)],
+            design: Design {
+                order: StepOrder::UpDown,
+                runs_per_cord: 5,
+                wraps_deg: vec![360.0, 450.0],
+                diameters_mm: vec![25.4],
+                drive_v: vec![10.0],
+            },
         },
         Scenario {
             name: "control: T2 offset, design decides",

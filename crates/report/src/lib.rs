@@ -9,6 +9,7 @@
 //!   `plotters`).
 
 pub mod cells;
+pub mod discovered;
 pub mod figures;
 pub mod files;
 pub mod html;

@@ -3,9 +3,9 @@
 //! and the thesis's per-angle R².
 
 use super::cells::{esc, f3, fe, fs, fx, with_ci};
-use capstan_engine::analysis::mechanisms::Verdict;
 use capstan_engine::analysis::residuals::StepResidual;
 use capstan_engine::analysis::{Analysis, ModelMetrics};
+use capstan_engine::verdict::Verdict;
 use std::fmt::Write as _;
 
 fn model_row(m: &ModelMetrics) -> String {

@@ -19,7 +19,8 @@
 //! the benchmark (`benches/diagnose.rs`).
 
 use capstan_data::{read_pairs, write_pairs_to, Dataset, Pair};
-use capstan_friction::{Effect, EffectKind, Model};
+use capstan_friction::entry::{CaseDesign, Span};
+use capstan_friction::{Effect, EffectKind, Level, Model};
 use firmware::{Protocol, StepOrder};
 use host_sim::campaign::{run_campaign, CampaignConfig, CampaignResult};
 use host_sim::noise::{thesis, NoiseProfile};
@@ -178,25 +179,23 @@ const VOLTS: [f64; 4] = [6.0, 8.0, 10.0, 12.0];
 
 /// The design a set of effects needs to show, drawn around a thesis-like campaign.
 fn design(rng: &mut Rng, kinds: &[EffectKind], force_updown: bool) -> CampaignConfig {
-    let has = |k: EffectKind| kinds.contains(&k);
+    let needs = |f: fn(&CaseDesign) -> bool| kinds.iter().any(|k| f(&k.entry().cases.design));
     // An effect on mu between cords is judged against the cord-to-cord scatter, with as many
     // independent observations as cords: such a campaign has ten cords or more, like the
     // thesis's.
-    let between_cords = has(EffectKind::SensorGain)
-        || has(EffectKind::DiameterDependence)
-        || has(EffectKind::SpeedDependence);
+    let between_cords = kinds.iter().any(|k| k.entry().level == Level::BetweenCord);
     let k = if between_cords {
         5 + usize::from(rng.uniform() < 0.5)
     } else {
         3 + (rng.uniform() * 4.0) as usize % 4
     };
     let mut wraps = subset(rng, &WRAPS, k);
-    if has(EffectKind::SensorGain) {
+    if needs(|d| d.wide_wraps) {
         // A gain shows only across wraps (mu_apparent = mu + ln g/β): span them.
         wraps[0] = 270.0;
         *wraps.last_mut().expect("wraps") = 720.0;
     }
-    let volts = if has(EffectKind::SpeedDependence) {
+    let volts = if needs(|d| d.voltages) {
         let k = 2 + usize::from(rng.uniform() < 0.5);
         subset(rng, &VOLTS, k)
     } else if rng.uniform() < 0.2 {
@@ -204,8 +203,7 @@ fn design(rng: &mut Rng, kinds: &[EffectKind], force_updown: bool) -> CampaignCo
     } else {
         vec![10.0]
     };
-    let two_d = has(EffectKind::DiameterDependence)
-        || has(EffectKind::BendingStiffness)
+    let two_d = needs(|d| d.diameters)
         || (between_cords && wraps.len() * volts.len() < 10)
         || rng.uniform() < 0.4;
     let diameters = if two_d {
@@ -214,9 +212,8 @@ fn design(rng: &mut Rng, kinds: &[EffectKind], force_updown: bool) -> CampaignCo
         vec![DIAMETERS[(rng.uniform() * 3.0) as usize % 3]]
     };
     let mut runs = 4 + (rng.uniform() * 5.0) as u32 % 5;
-    if has(EffectKind::Wear) {
-        runs = runs.max(5);
-    }
+    let min_runs = kinds.iter().map(|k| k.entry().cases.design.min_runs);
+    runs = runs.max(min_runs.max().unwrap_or(0));
     let order = if force_updown || rng.uniform() < 0.5 {
         StepOrder::UpDown
     } else {
@@ -262,80 +259,81 @@ fn design(rng: &mut Rng, kinds: &[EffectKind], force_updown: bool) -> CampaignCo
 }
 
 /// The span of a covariate in `cfg` for effects that scale mu linearly in it.
-fn span(kind: EffectKind, cfg: &CampaignConfig) -> f64 {
+fn span(span: Span, cfg: &CampaignConfig) -> f64 {
     let s = |v: &[f64]| v[v.len() - 1] - v[0];
-    match kind {
-        EffectKind::ThermalDrift => {
+    match span {
+        Span::Time100s => {
             let levels = (cfg.protocol.rest_deg - cfg.protocol.final_deg) / cfg.protocol.step_deg;
             levels as f64 * cfg.protocol.dwell_ms as f64 / 1000.0 / 100.0
         }
-        EffectKind::Wear => cfg.runs as f64 - 1.0,
-        EffectKind::DiameterDependence => s(&cfg.diameters_mm),
-        EffectKind::SpeedDependence => s(&cfg.drive_vs),
-        _ => 1.0,
+        Span::Runs => cfg.runs as f64 - 1.0,
+        Span::Diameters => s(&cfg.diameters_mm),
+        Span::Voltages => s(&cfg.drive_vs),
+        Span::One => 1.0,
     }
 }
 
-/// A value of `kind` at a size that matters (`small`: below it), for the design `cfg`.
+/// A value of `kind` at a size that matters (`small`: below it), for the design `cfg`: drawn
+/// as its entry says.
 fn value(rng: &mut Rng, kind: EffectKind, small: bool, cfg: &CampaignConfig) -> f64 {
-    let pick = |rng: &mut Rng, care: (f64, f64), low: (f64, f64)| {
-        let (lo, hi) = if small { low } else { care };
-        uniform(rng, lo, hi)
-    };
-    match kind {
-        EffectKind::None => 0.0,
-        EffectKind::PressureFriction => 1.0 - pick(rng, (0.07, 0.2), (0.02, 0.05)),
-        EffectKind::BendingStiffness => pick(rng, (3e-5, 1.5e-4), (5e-6, 1.5e-5)),
-        EffectKind::T1Offset => pick(rng, (0.2, 1.0), (0.04, 0.12)) * sign(rng),
-        EffectKind::T2Offset => pick(rng, (0.3, 1.2), (0.08, 0.2)) * sign(rng),
-        // Effects between cords are judged against the cord-to-cord scatter of mu (thesis:
-        // ~4 %) with the design's ten-odd cords: below ~10 % they are at the detection limit
-        // (the small class measures it), so the sizes that matter start at 12 %.
-        EffectKind::SensorGain => 1.0 + pick(rng, (0.12, 0.3), (0.03, 0.06)) * sign(rng),
-        EffectKind::ContactHeating => {
-            // mu falls by this fraction at a friction load of 30 N.
-            let drop = pick(rng, (0.1, 0.35), (0.02, 0.06));
-            -(1.0 - drop).ln() / 30.0
-        }
-        EffectKind::DiameterDependence | EffectKind::SpeedDependence => {
-            let change = pick(rng, (0.12, 0.3), (0.03, 0.06)) * sign(rng);
-            change / span(kind, cfg)
-        }
-        EffectKind::ThermalDrift | EffectKind::Wear => {
-            let change = pick(rng, (0.08, 0.25), (0.02, 0.05)) * sign(rng);
-            change / span(kind, cfg)
-        }
+    if kind == EffectKind::None {
+        return 0.0;
     }
+    let c = &kind.entry().cases;
+    let (lo, hi) = if small { c.small } else { c.care };
+    let mut change = uniform(rng, lo, hi);
+    if c.signed {
+        change *= sign(rng);
+    }
+    (c.value)(change, span(c.span, cfg))
 }
 
 /// Optional columns a case may lose without hiding its truth or merging its runs (a voltage or
 /// diameter column can go only when it has one value).
 fn droppable(kinds: &[EffectKind], cfg: &CampaignConfig) -> Vec<&'static str> {
     let mut v = Vec::new();
-    if !kinds.contains(&EffectKind::ThermalDrift) {
+    let needs = |col: &str| kinds.iter().any(|k| k.required_column() == Some(col));
+    if !needs("time_s") {
         v.push("time_s");
     }
     if cfg.drive_vs.len() == 1 {
         v.push("drive_v");
     }
-    let needs_d = kinds.iter().any(|k| {
-        matches!(
-            k,
-            EffectKind::DiameterDependence | EffectKind::BendingStiffness
-        )
-    });
-    if !needs_d && cfg.diameters_mm.len() == 1 {
+    if !needs("capstan_diameter_mm") && cfg.diameters_mm.len() == 1 {
         v.push("capstan_diameter_mm");
     }
     v
 }
 
-/// Case `index` of `class` from `master_seed`.
-pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
-    let seed = derive_seed(master_seed, &[class as u64, index]);
-    let mut rng = Rng::new(seed);
-    let catalogue: Vec<EffectKind> = EffectKind::ALL.into_iter().skip(1).collect();
-    let (kinds, outside): (Vec<EffectKind>, Option<&'static str>) = match class {
+/// The effects the suite was calibrated with: the first ten of the catalogue. An effect added
+/// later gets cases of its own after these ([`ADDED_CASES`]), so every earlier case keeps its
+/// seed, its truth and its draws.
+pub const CALIBRATED: usize = 10;
+
+/// Cases of each effect added after [`CALIBRATED`]: 11 at a size that matters, 3 small, and
+/// one pair with each calibrated effect, drawn after the classes' first [`COUNTS`].
+pub const ADDED_CASES: [(Class, u64); 3] = [
+    (Class::Single, 11),
+    (Class::SmallSingle, 3),
+    (Class::Pair, CALIBRATED as u64),
+];
+
+/// The truth of case `index` of `class`: its effects and what outside the catalogue it holds.
+fn truth(rng: &mut Rng, class: Class, index: u64) -> (Vec<EffectKind>, Option<&'static str>) {
+    let all: Vec<EffectKind> = EffectKind::ALL.into_iter().skip(1).collect();
+    let (catalogue, added) = all.split_at(CALIBRATED.min(all.len()));
+    let base = COUNTS.iter().find(|c| c.0 == class).map_or(0, |c| c.1);
+    if index >= base && !added.is_empty() {
+        // An added effect's own cases.
+        let per = ADDED_CASES.iter().find(|c| c.0 == class).map_or(1, |c| c.1);
+        let k = added[((index - base) / per) as usize % added.len()];
+        let partner = catalogue[((index - base) % per) as usize % catalogue.len()];
+        return match class {
+            Class::Pair => (vec![k, partner], None),
+            _ => (vec![k], None),
+        };
+    }
+    match class {
         Class::Clean => (Vec::new(), None),
         Class::Single | Class::SmallSingle => {
             (vec![catalogue[index as usize % catalogue.len()]], None)
@@ -360,7 +358,14 @@ pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
             Vec::new(),
             Some(Unmodelled::NAMES[index as usize % Unmodelled::NAMES.len()]),
         ),
-    };
+    }
+}
+
+/// Case `index` of `class` from `master_seed`.
+pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
+    let seed = derive_seed(master_seed, &[class as u64, index]);
+    let mut rng = Rng::new(seed);
+    let (kinds, outside) = truth(&mut rng, class, index);
     let mut cfg = design(&mut rng, &kinds, outside == Some("hysteresis"));
     let small = class == Class::SmallSingle;
     let mut effects: Vec<Effect> = kinds
@@ -400,8 +405,8 @@ pub fn draw_case(master_seed: u64, class: Class, index: u64) -> Case {
     }
 }
 
-/// How many cases of each class [`draw_cases`] draws: 60 clean, 10 of every catalogue effect
-/// at a size that matters and 3 small, 66 pairs, 48 outside — 317 in all.
+/// How many cases of each class [`draw_cases`] draws for the [`CALIBRATED`] effects: 60 clean,
+/// 11 of every effect at a size that matters and 3-4 small, 66 pairs, 48 outside — 317 in all.
 pub const COUNTS: [(Class, u64); 5] = [
     (Class::Clean, 60),
     (Class::Single, 110),
@@ -410,10 +415,18 @@ pub const COUNTS: [(Class, u64); 5] = [
     (Class::Outside, 48),
 ];
 
-/// Every case of `master_seed` (see [`COUNTS`]).
+/// Every case of `master_seed`: those of [`COUNTS`], then those of the effects added since
+/// the calibration ([`ADDED_CASES`]).
 pub fn draw_cases(master_seed: u64) -> Vec<Case> {
+    let added = (EffectKind::ALL.len() - 1).saturating_sub(CALIBRATED) as u64;
+    let extra = ADDED_CASES.iter().map(|&(class, per)| {
+        let base = COUNTS.iter().find(|c| c.0 == class).map_or(0, |c| c.1);
+        (class, base, base + per * added)
+    });
     COUNTS
         .iter()
-        .flat_map(|&(class, n)| (0..n).map(move |i| draw_case(master_seed, class, i)))
+        .map(|&(class, n)| (class, 0, n))
+        .chain(extra)
+        .flat_map(|(class, from, to)| (from..to).map(move |i| draw_case(master_seed, class, i)))
         .collect()
 }

@@ -3,8 +3,9 @@
 //!
 //! * [`cases`]: data sets with planted truths (catalogue effects, or physics outside the
 //!   catalogue), made end to end by the simulator with the thesis rig's noise;
-//! * [`score`]: the diagnosis on those cases, scored against the truth (the diagnose suite,
-//!   the calibration and the benchmark);
+//! * [`score`]: the one planted-truth scorer: an answer on those cases against the truth (the
+//!   diagnose suite, the calibration, the benchmark and `--validate`), with its acceptance
+//!   [`figures`];
 //! * [`validate`]: the cause-naming of `capstan analyze` on planted truths (`--validate`);
 //! * [`closed_loop`]: the firmware run against the simulated plant with the fitted extended
 //!   model, for the report;
@@ -13,6 +14,8 @@
 
 pub mod cases;
 pub mod closed_loop;
+pub mod discover_cases;
+pub mod figures;
 pub mod pairs;
 pub mod score;
 pub mod validate;

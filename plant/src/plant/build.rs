@@ -330,5 +330,17 @@ fn check_cord(cs: &CordSetup) -> Result<(), PlantError> {
         u.regime_change.is_finite() && u.regime_change > -0.9 && u.regime_change < 2.0,
         "cord unmodelled.regime_change",
     )?;
+    check(
+        u.settling.is_finite() && u.settling > -0.9 && u.settling < 0.9,
+        "cord unmodelled.settling",
+    )?;
+    for (v, what) in [
+        (u.t2_lowforce, "cord unmodelled.t2_lowforce"),
+        (u.t1_tare_diameter, "cord unmodelled.t1_tare_diameter"),
+        (u.t2_offset_wrap, "cord unmodelled.t2_offset_wrap"),
+        (u.t2_range_step, "cord unmodelled.t2_range_step"),
+    ] {
+        check(v.is_finite() && v.abs() < 10.0, what)?;
+    }
     Ok(())
 }

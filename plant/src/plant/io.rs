@@ -197,12 +197,16 @@ impl Plant {
         // the capstan stopped, neither removes the offsets nor sees the gain. (T2's calibration
         // curve, a function of T2 alone, only for T2.)
         let mut reading = match ch {
-            Channel::T1 if drive_on => c.t1 + art.t1_offset_n,
+            Channel::T1 if drive_on => {
+                c.t1 + art.t1_offset_n + c.setup.unmodelled.t1_offset_n(c.op.diameter_mm)
+            }
             Channel::T1 => c.t1,
             Channel::T2 => {
                 let t2 = c.setup.unmodelled.t2_reading_n(c.t2);
                 if drive_on {
-                    art.t2_gain * t2 + art.t2_offset_n
+                    art.t2_gain * t2
+                        + art.t2_offset_n
+                        + c.setup.unmodelled.t2_offset_n(c.op.wrap_rad)
                 } else {
                     t2
                 }

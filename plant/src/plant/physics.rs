@@ -371,7 +371,9 @@ impl Plant {
                 return 1.0;
             }
             let law = FrictionLaw {
-                mu: law.mu * unmodelled.mu_factor(t1, falling),
+                mu: law.mu
+                    * unmodelled.mu_factor(t1, falling)
+                    * unmodelled.settling_factor(op.time_s),
                 ..law
             };
             let a = law.t2_n(t1, &op) / t1;

@@ -36,7 +36,11 @@ pub(super) fn from_board(
         duration: args.duration.map(Duration::from_secs_f64),
     };
     // The board first: a missing probe or chip leaves no half-made session directory behind.
-    let mut board = connect(&args.elf, &popts, &mut |line| crate::errln!("{line}"))?;
+    let elf = args
+        .elf
+        .as_deref()
+        .expect("clap requires --elf without --sim");
+    let mut board = connect(elf, &popts, &mut |line| crate::errln!("{line}"))?;
     let source = format!("{chip} over RTT (probe: {})", board.probe_name);
     let mut logger = Logger::create(fw, opts, &source)?;
     if args.start {

@@ -54,7 +54,7 @@ pub(super) fn not_committed(
     args: &Args,
 ) -> anyhow::Result<()> {
     let dir = args.out.display();
-    let why = if summary.bytes == 0 {
+    let why = if summary.bytes == 0 && summary.records.total() == 0 {
         "nothing was received".to_string()
     } else if summary.records.total() == 0 {
         format!(
@@ -63,7 +63,7 @@ pub(super) fn not_committed(
             summary.bytes,
             summary.frames,
             summary.bad_frames,
-            args.elf.display()
+            super::elf_name(args)
         )
     } else {
         format!(
@@ -100,10 +100,10 @@ pub(super) fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Re
             summary.bytes,
             summary.frames,
             summary.bad_frames,
-            args.elf.display()
+            super::elf_name(args)
         );
     }
-    if args.strict && summary.bytes == 0 {
+    if args.strict && summary.bytes == 0 && summary.records.total() == 0 {
         bail!("--strict: the stream is empty (no byte received)");
     }
     if args.strict && summary.runs.iter().all(|r| !r.complete) {

@@ -62,37 +62,70 @@ pub fn watch(
             return Err(NotInSetup.into());
         }
         for event in link.poll(Duration::from_millis(100))? {
-            match event {
-                Event::Record {
-                    record: Record::Live(l),
-                    ..
-                } => {
-                    if readings == 0 {
-                        out(LIVE_HEADER.to_string());
-                    }
-                    readings += 1;
-                    out(live_line(&l));
-                }
-                Event::Record {
-                    record: Record::Fault(f),
-                    ..
-                } => {
-                    note(fault_line(&f));
-                    note("live: setup mode ended by the fault".into());
-                    return Ok(readings);
-                }
-                Event::Record {
-                    record: Record::Reply(r),
-                    ..
-                } if r.command == firmware::command::CommandKind::Leave && r.error.is_none() => {
-                    note("live: setup mode was left (the button, or another rig command)".into());
-                    return Ok(readings);
-                }
-                Event::Message { level, text } => note(format!("{level} {text}")),
-                Event::Record { .. } => {}
+            if take_live(event, &mut readings, out, note) {
+                return Ok(readings);
             }
         }
     }
+}
+
+/// Print the live readings among `events` (a simulated board's, made in virtual time), as
+/// [`watch`] prints them as they arrive; [`NotInSetup`] if there was none.
+pub fn show(
+    events: Vec<Event>,
+    out: &mut dyn FnMut(String),
+    note: &mut dyn FnMut(String),
+) -> anyhow::Result<u64> {
+    let mut readings = 0u64;
+    for event in events {
+        if take_live(event, &mut readings, out, note) {
+            break;
+        }
+    }
+    if readings == 0 {
+        return Err(NotInSetup.into());
+    }
+    Ok(readings)
+}
+
+/// One event of the live view: a reading printed, a fault or message noted; true when setup
+/// mode ended.
+fn take_live(
+    event: Event,
+    readings: &mut u64,
+    out: &mut dyn FnMut(String),
+    note: &mut dyn FnMut(String),
+) -> bool {
+    match event {
+        Event::Record {
+            record: Record::Live(l),
+            ..
+        } => {
+            if *readings == 0 {
+                out(LIVE_HEADER.to_string());
+            }
+            *readings += 1;
+            out(live_line(&l));
+        }
+        Event::Record {
+            record: Record::Fault(f),
+            ..
+        } => {
+            note(fault_line(&f));
+            note("live: setup mode ended by the fault".into());
+            return true;
+        }
+        Event::Record {
+            record: Record::Reply(r),
+            ..
+        } if r.command == firmware::command::CommandKind::Leave && r.error.is_none() => {
+            note("live: setup mode was left (the button, or another rig command)".into());
+            return true;
+        }
+        Event::Message { level, text } => note(format!("{level} {text}")),
+        Event::Record { .. } => {}
+    }
+    false
 }
 
 #[cfg(test)]

@@ -59,14 +59,10 @@ pub fn detail(obs: &Observations, f: &Fits, a: &Assessment) -> ExtendedDetail {
             let cause = a.selected_evidence().into_iter().find(|e| {
                 crate::fit::Param::from_effect(e.kind).map(|p| p.name()) == Some(name.as_str())
             });
-            let run_se = match cause {
-                // The heating's catalogue value is h·τ; the model's is h.
-                Some(e) if e.kind == capstan_friction::EffectKind::ContactHeating => {
-                    e.parameter_se / capstan_friction::HEAT_TAU_S
-                }
-                Some(e) => e.parameter_se,
-                None => f64::NAN,
-            };
+            // The catalogue value per model scalar (heating's value is h·τ; the model's is h).
+            let run_se = cause.map_or(f64::NAN, |e| {
+                e.parameter_se / e.kind.entry().population.value_per_scalar
+            });
             let note = if !(j.is_finite() && j > 0.0) {
                 "not identified: the cord-jackknife variance is zero or undefined".to_string()
             } else {

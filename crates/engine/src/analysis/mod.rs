@@ -10,15 +10,15 @@
 //!
 //! Files: [`fits`] (every model fitted, in-sample and leave-one-cord-out), [`metrics`] (the
 //! gain table), [`uncertainty`] (cluster-bootstrap intervals of the gain), [`extended`] (the
-//! extended fit in detail), [`residuals`] (what the models get wrong), [`mechanisms`] (the
-//! verdicts and their sentences), [`closed_loop`] (the firmware against the fitted plant, as
-//! the report draws it), [`models`] and [`thesis`]. The cause-naming on planted truths is
+//! extended fit in detail), [`residuals`] (what the models get wrong), [`closed_loop`] (the
+//! firmware against the fitted plant, as the report draws it), [`models`] and [`thesis`]. The
+//! verdicts and their sentences are the verdict layer's ([`crate::verdict`]), which the
+//! diagnosis renders too. The cause-naming on planted truths is
 //! `capstan_truth::validate`; the closed loop is run by `capstan_truth::closed_loop`.
 
 pub mod closed_loop;
 pub mod extended;
 pub mod fits;
-pub mod mechanisms;
 pub mod metrics;
 pub mod models;
 pub mod residuals;
@@ -29,6 +29,7 @@ use crate::diagnose::Diagnosis;
 use crate::evidence;
 use crate::fit::solve::Fit;
 use crate::fit::Observations;
+use crate::verdict::Mechanisms;
 use capstan_data::Dataset;
 use serde::Serialize;
 use std::time::Instant;
@@ -96,7 +97,7 @@ pub struct Analysis {
     /// ln-amplification residuals by step, baseline against extended.
     pub ln_amp_by_step: Option<Vec<residuals::StepResidual>>,
     /// The verdicts.
-    pub mechanisms: mechanisms::Mechanisms,
+    pub mechanisms: Mechanisms,
     /// The evidence engine's answer, as `capstan diagnose --json` prints it.
     pub evidence: Diagnosis,
     /// The fitted extended model (for the closed loop).
@@ -110,7 +111,7 @@ pub struct Analysis {
 }
 
 /// The named causes in words, for the extended model's description.
-fn causes_text(m: &mechanisms::Mechanisms) -> String {
+fn causes_text(m: &Mechanisms) -> String {
     if m.causes.is_empty() {
         "none named".into()
     } else {
@@ -139,8 +140,10 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
         ..evidence::Options::default()
     };
     let assessment = evidence::assess(ds, &eopts);
-    let evidence_view = crate::diagnose::from_assessment(&assessment, &eopts, t0);
-    let mechanisms = mechanisms::run(&assessment);
+    // One verdict layer: the diagnosis and the mechanisms render the same verdicts.
+    let verdicts = crate::verdict::of(&assessment);
+    let evidence_view = crate::diagnose::render(&assessment, &verdicts, &eopts, t0);
+    let mechanisms = verdicts.mechanisms;
     let evidence_s = t0.elapsed().as_secs_f64();
     let spec = models::extended(&assessment);
     let f = fits::fit_all(&obs, &spec, threads);

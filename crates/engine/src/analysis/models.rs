@@ -3,7 +3,7 @@
 
 use crate::evidence::Assessment;
 use crate::fit::{ModelSpec, Param, Transform};
-use capstan_friction::{Effect, EffectKind, Model, HEAT_TAU_S};
+use capstan_friction::{Effect, EffectKind, Model};
 
 /// Euler-Eytelwein with one free mu.
 pub fn baseline() -> ModelSpec {
@@ -12,13 +12,12 @@ pub fn baseline() -> ModelSpec {
 
 /// How a named cause enters the population model: its parameter and transform.
 fn free_param(kind: EffectKind) -> Option<(Param, Transform)> {
+    use capstan_friction::entry::Transform as T;
     let p = Param::from_effect(kind)?;
-    let t = match kind {
-        EffectKind::PressureFriction => Transform::Logistic { lo: 0.3, hi: 1.0 },
-        EffectKind::SensorGain | EffectKind::ContactHeating | EffectKind::BendingStiffness => {
-            Transform::Log
-        }
-        _ => Transform::Identity,
+    let t = match kind.entry().population.transform {
+        T::Logistic { lo, hi } => Transform::Logistic { lo, hi },
+        T::Log => Transform::Log,
+        T::Identity => Transform::Identity,
     };
     Some((p, t))
 }
@@ -38,8 +37,8 @@ pub fn extended(a: &Assessment) -> ModelSpec {
         }
         .apply(&mut base);
     }
-    if causes.iter().any(|e| e.kind == EffectKind::ContactHeating) {
-        base.law.heat_tau_s = HEAT_TAU_S;
+    for e in &causes {
+        (e.kind.entry().prepare)(&mut base);
     }
     let mut spec = ModelSpec::new("extended", base).free(Param::Mu);
     for e in &causes {

@@ -1,25 +1,11 @@
 //! What `capstan diagnose` answers (`Diagnosis`, serialised as its `--json` object).
 
-use crate::evidence::{Adequacy, Columns, Evidence, Level, NotTestable, Rival, RowsUsed, Scatter};
+use crate::evidence::{Adequacy, Columns, Evidence, NotTestable, Rival, RowsUsed, Scatter};
+pub use crate::verdict::Found;
 use capstan_data::structure::StructureSummary;
 use capstan_friction::{Effect, EffectKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
-
-/// One effect the data hold.
-#[derive(Clone, Debug, Serialize)]
-pub struct Found {
-    /// Catalogue name.
-    pub effect: &'static str,
-    /// Its fitted catalogue parameter (with the other found effects in the model).
-    pub parameters: BTreeMap<&'static str, f64>,
-    /// Its standard error (cluster-robust).
-    pub parameter_se: f64,
-    /// ΔBIC of dropping it, given the other found effects (negative: the data want it).
-    pub delta_bic_given_others: f64,
-    /// Where its evidence comes from.
-    pub level: Level,
-}
 
 /// A step of the forward selection.
 #[derive(Clone, Debug, Serialize)]

@@ -6,12 +6,12 @@
 //! analyze`): forward selection of within-run effects with every run's own mu and
 //! cluster-robust quasi-likelihood evidence; the runs' mu against the between-cord and
 //! between-run covariates; the residuals against the replicate runs' pure error and against
-//! T1, time, step direction, wrap and diameter. This module turns the engine's assessment into
-//! the diagnosis: the effects found with their evidence given the others, the population fit
-//! through [`crate::fit`], and the verdict in words.
+//! T1, time, step direction, wrap and diameter. This module renders the verdict layer's
+//! verdicts ([`crate::verdict`], which `capstan analyze` renders too) as the diagnosis: the
+//! effects found with their evidence given the others, the verdict in words, and the
+//! population fit through [`crate::fit`].
 
 mod diagnosis;
-pub mod words;
 
 pub use crate::evidence::{Level, NotTestable, BETWEEN_THRESHOLD, WITHIN_THRESHOLD};
 pub use diagnosis::{
@@ -22,8 +22,9 @@ use crate::evidence::{self, Assessment};
 use crate::fit::params::{ModelSpec, Param};
 use crate::fit::solve::fit_fixed;
 use crate::fit::stats;
+use crate::verdict::{self, Verdicts};
 use capstan_data::Dataset;
-use capstan_friction::{Effect, EffectKind, Model, HEAT_TAU_S};
+use capstan_friction::{Effect, EffectKind, Model};
 use std::time::Instant;
 
 /// Options of [`diagnose_with`].
@@ -43,29 +44,21 @@ pub fn diagnose_with(d: &Dataset, opts: &Options) -> Diagnosis {
 
 /// The diagnosis of an assessment.
 pub fn from_assessment(a: &Assessment, opts: &Options, t0: Instant) -> Diagnosis {
+    render(a, &verdict::of(a), opts, t0)
+}
+
+/// The diagnosis of an assessment, rendering its verdicts `v`.
+pub fn render(a: &Assessment, v: &Verdicts, opts: &Options, t0: Instant) -> Diagnosis {
     let des = &a.design;
     let n = des.n() as f64;
     let found: Vec<&evidence::Evidence> = a.selected_evidence();
-    let effects: Vec<Found> = found
-        .iter()
-        .map(|e| Found {
-            effect: e.effect,
-            parameters: e.parameters.clone(),
-            parameter_se: e.parameter_se,
-            delta_bic_given_others: e.delta_bic,
-            level: e.level,
-        })
-        .collect();
+    let effects: Vec<Found> = v.found.clone();
     let (kind, value) = found
         .first()
         .map_or((EffectKind::None, EffectKind::None.neutral_value()), |e| {
             (e.kind, e.value)
         });
     let (baseline, extended_rmse) = population(a, &found);
-    let mut verdict = words::verdict(&effects, &a.adequacy, &a.rivals);
-    if let Some(caveat) = words::structure_caveat(&des.structure) {
-        verdict = format!("{verdict} {caveat}");
-    }
     Diagnosis {
         data: DataInfo {
             source: des.source.clone(),
@@ -80,7 +73,7 @@ pub fn from_assessment(a: &Assessment, opts: &Options, t0: Instant) -> Diagnosis
         unexplained: a.adequacy.unexplained,
         residual_pattern: a.adequacy.pattern,
         rivals: a.rivals.clone(),
-        verdict,
+        verdict: v.sentence.clone(),
         adequacy: a.adequacy.clone(),
         candidates: a.evidence.clone(),
         selection_path: a
@@ -134,10 +127,9 @@ fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) 
     let mu_pop = base_fit.model(None).law.mu;
     let mut model = Model::euler_eytelwein(mu_pop);
     for e in found {
-        let value = match e.kind {
-            EffectKind::BendingStiffness => e.value.max(1e-8),
-            EffectKind::SensorGain => e.value.max(0.1),
-            _ => e.value,
+        let value = match e.kind.entry().population.floor {
+            Some(floor) => e.value.max(floor),
+            None => e.value,
         };
         Effect {
             kind: e.kind,
@@ -145,8 +137,8 @@ fn population(a: &Assessment, found: &[&evidence::Evidence]) -> (Baseline, f64) 
         }
         .apply(&mut model);
     }
-    if found.iter().any(|e| e.kind == EffectKind::ContactHeating) {
-        model.law.heat_tau_s = HEAT_TAU_S;
+    for e in found {
+        (e.kind.entry().prepare)(&mut model);
     }
     // One mu with the effects at the sizes the engine found (refitting them all on the
     // population scale is the analysis's job, `capstan analyze`).

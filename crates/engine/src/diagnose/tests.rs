@@ -179,11 +179,12 @@ fn the_swaps_are_the_final_set_with_one_member_replaced() {
     );
     let w = within::Weights::from_pure_error(&des, &cold);
     let null = within::fit(&des, &[], &[], &cold.mu, &w);
-    let sel = select::forward(&des, null, &candidates::WITHIN, &w, 6.0, 1);
+    let within = candidates::at_level(candidates::Level::WithinRun);
+    let sel = select::forward(&des, null, &within, &w, 6.0, 1);
     let mut kinds: Vec<EffectKind> = sel.fit.maps.iter().map(|m| m.kind).collect();
     kinds.sort();
     assert_eq!(kinds, [EffectKind::T1Offset, EffectKind::T2Offset]);
-    assert_eq!(sel.swaps.len(), 2 * (candidates::WITHIN.len() - 2));
+    assert_eq!(sel.swaps.len(), 2 * (within.len() - 2));
     for s in &sel.swaps {
         let mut maps = sel.fit.maps.clone();
         assert_ne!(maps[s.slot].kind, s.kind);

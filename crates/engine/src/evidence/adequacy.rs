@@ -315,6 +315,14 @@ const FLIPS: usize = 1999;
 /// wander of its mu), which makes the cell means of a cord move together and the nominal F
 /// distribution far too narrow; flipping whole runs keeps that correlation and destroys only a
 /// pattern the runs share.
+/// The lack-of-fit test alone, on standardised residuals `z` (residual × √weight per row) of
+/// a model with `k` shared parameters: the replicate runs' pure error against what the cells
+/// share (sign flips of whole runs). `None` without at least four replicated cells. Used by
+/// `capstan discover` to ask whether a proposed term resolves what the catalogue leaves.
+pub fn lack_of_fit(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
+    pure_error(d, z, k).filter(|l| [l.f, l.p, l.systematic_ratio].iter().all(|v| v.is_finite()))
+}
+
 fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     let n_cells = d.cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
     let mut cnt = vec![0usize; n_cells];

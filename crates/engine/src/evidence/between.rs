@@ -24,7 +24,9 @@ use super::candidates::{level, practically_relevant, Level};
 use super::design::Design;
 use super::Evidence;
 use crate::fit::stats::{self, chi2_of_t};
-use capstan_friction::{EffectKind, REF_DIAMETER_MM, REF_DRIVE_V};
+use capstan_friction::catalogue::cord_point;
+use capstan_friction::entry::Slope;
+use capstan_friction::EffectKind;
 
 /// ML fit of the random-intercept model.
 #[derive(Clone, Debug)]
@@ -148,13 +150,11 @@ pub fn fit_lmm(y: &[f64], x: &[Vec<f64>], cord: &[usize], n_cords: usize) -> Opt
     }
 }
 
-/// The cord-level covariate of an effect.
+/// The cord-level covariate of a between-cord effect (its entry's), NaN for any other.
 fn covariate(kind: EffectKind, c: &super::design::Cord) -> f64 {
-    match kind {
-        EffectKind::SensorGain => 1.0 / c.wrap_deg.to_radians(),
-        EffectKind::DiameterDependence => c.diameter_mm - REF_DIAMETER_MM,
-        _ => c.drive_v - REF_DRIVE_V,
-    }
+    kind.entry().cord.map_or(f64::NAN, |t| {
+        (t.covariate)(&cord_point(c.wrap_deg, c.diameter_mm, c.drive_v))
+    })
 }
 
 /// Regress the cords' mean mu on an intercept and `kinds`' covariates; the evidence of the
@@ -177,10 +177,9 @@ fn cord_regression(d: &Design, cord_mu: &[f64], kinds: &[EffectKind]) -> Option<
     let j = kinds.len();
     let kind = kinds[j - 1];
     let (a, b) = (r.coef[0], r.coef[j]);
-    let (value, se) = if kind == EffectKind::SensorGain {
-        (b.exp(), b.exp() * r.se[j])
-    } else {
-        (b / a, r.se[j] / a.abs())
+    let (value, se) = match kind.entry().cord.map(|t| t.slope) {
+        Some(Slope::Exp) => (b.exp(), b.exp() * r.se[j]),
+        _ => (b / a, r.se[j] / a.abs()),
     };
     let chi2 = chi2_of_t(r.t[j], r.df);
     Some(Evidence::new(
@@ -193,8 +192,8 @@ fn cord_regression(d: &Design, cord_mu: &[f64], kinds: &[EffectKind]) -> Option<
     ))
 }
 
-/// Wear: the runs' mu on run − 1 with one intercept per cord.
-fn wear(d: &Design, run_mu: &[f64]) -> Option<Evidence> {
+/// An effect between runs (wear): the runs' mu on run − 1 with one intercept per cord.
+fn between_runs(kind: EffectKind, d: &Design, run_mu: &[f64]) -> Option<Evidence> {
     let nc = d.cords.len();
     if run_mu.len() < nc + 2 {
         return None;
@@ -213,7 +212,7 @@ fn wear(d: &Design, run_mu: &[f64]) -> Option<Evidence> {
     let chi2 = chi2_of_t(r.t[nc], r.df);
     let n = run_mu.len() as f64;
     Some(Evidence::new(
-        EffectKind::Wear,
+        kind,
         b / a,
         r.se[nc] / a.abs(),
         -chi2 + n.ln(),
@@ -295,10 +294,10 @@ pub fn between_tests(
         }
     }
     let mut alone = alone.unwrap_or_default();
-    if testable.contains(&EffectKind::Wear) {
-        if let Some(e) = wear(d, run_mu) {
+    for &k in testable.iter().filter(|&&k| level(k) == Level::BetweenRun) {
+        if let Some(e) = between_runs(k, d, run_mu) {
             if supported(&e) {
-                chosen.push(EffectKind::Wear);
+                chosen.push(k);
             }
             alone.push(e.clone());
             out.push(e);

@@ -3,7 +3,7 @@
 //! is testable, and the size below which it is practically equivalent to no effect.
 
 use super::design::Design;
-use capstan_friction::{Effect, EffectKind, Model};
+use capstan_friction::{Effect, EffectKind, Facts, Model};
 use serde::Serialize;
 
 /// Where in the data an effect shows, and so against which scatter it is judged.
@@ -29,34 +29,49 @@ impl Level {
     }
 }
 
-/// The level at which an effect is judged.
-pub fn level(kind: EffectKind) -> Level {
-    match kind {
-        EffectKind::SensorGain | EffectKind::DiameterDependence | EffectKind::SpeedDependence => {
-            Level::BetweenCord
+impl From<capstan_friction::Level> for Level {
+    fn from(l: capstan_friction::Level) -> Self {
+        match l {
+            capstan_friction::Level::WithinRun => Level::WithinRun,
+            capstan_friction::Level::BetweenCord => Level::BetweenCord,
+            capstan_friction::Level::BetweenRun => Level::BetweenRun,
         }
-        EffectKind::Wear => Level::BetweenRun,
-        _ => Level::WithinRun,
     }
 }
 
-/// The effects judged within runs, in the catalogue's order.
-pub const WITHIN: [EffectKind; 6] = [
-    EffectKind::PressureFriction,
-    EffectKind::BendingStiffness,
-    EffectKind::T1Offset,
-    EffectKind::T2Offset,
-    EffectKind::ThermalDrift,
-    EffectKind::ContactHeating,
-];
+/// The level at which an effect is judged (its entry's).
+pub fn level(kind: EffectKind) -> Level {
+    kind.entry().level.into()
+}
 
-/// The effects judged between cords or runs.
-pub const BETWEEN: [EffectKind; 4] = [
-    EffectKind::SensorGain,
-    EffectKind::Wear,
-    EffectKind::DiameterDependence,
-    EffectKind::SpeedDependence,
-];
+/// The effects of the catalogue at `level`, in its order (`none` aside).
+pub fn at_level(at: Level) -> Vec<EffectKind> {
+    EffectKind::ALL
+        .into_iter()
+        .skip(1)
+        .filter(|&k| level(k) == at)
+        .collect()
+}
+
+/// What the design of `d` offers, for the entries' conditions, ranges and sizes.
+pub fn facts(d: &Design) -> Facts {
+    let span = |v: Vec<f64>| v.last().copied().unwrap_or(0.0) - v.first().copied().unwrap_or(0.0);
+    Facts {
+        wraps: d.wraps().len(),
+        diameters: d.diameters().len(),
+        voltages: d.voltages().len(),
+        cords: d.cords.len(),
+        runs: d.units.len(),
+        max_runs_per_cord: d.max_runs_per_cord(),
+        max_time_spread_s: d.max_time_spread_s(),
+        latest_time_s: d.op.iter().map(|o| o.time_s).fold(1.0, f64::max),
+        run_span: span(crate::fit::stats::distinct(d.unit_run.iter().copied())),
+        diameter_span_mm: span(d.diameters()),
+        voltage_span_v: span(d.voltages()),
+        max_load_n: (0..d.n()).map(|i| d.t2[i] - d.t1[i]).fold(0.0f64, f64::max),
+        max_wrap_rad: d.op.iter().map(|o| o.wrap_rad).fold(0.0, f64::max),
+    }
+}
 
 /// How a within-run effect's θ maps to its catalogue value, and θ's bounds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,29 +85,12 @@ pub struct ThetaMap {
 }
 
 impl ThetaMap {
-    /// θ's range for `kind` on this data set: the effect's physical range. Each effect means
-    /// one physical thing, and outside its range it is not that thing: Howell's law for
-    /// polymer cords has n < 1 (n > 1 would be friction growing faster than pressure); heating
-    /// lowers friction; a cord's bending stiffness is positive and below a steel rod's
-    /// (10⁻³ N m²); zero offsets are within ±3 N (T1) and ±5 N (T2) on a rig whose sensors end at
-    /// ~55 N; a drift changes mu by at most 80 % over the data's longest time. A best fit on
-    /// the edge of that range means the effect does not explain the data
+    /// θ's range for `kind` on this data set: the effect's physical range (its entry's).
+    /// Each effect means one physical thing, and outside its range it is not that thing. A
+    /// best fit on the edge of that range means the effect does not explain the data
     /// ([`ThetaMap::at_physical_limit`]).
     pub fn for_kind(kind: EffectKind, d: &Design) -> ThetaMap {
-        let (lo, hi) = match kind {
-            EffectKind::PressureFriction => (0.4, 1.0),
-            // θ = √B (√(N m²)): the lift-off loss grows as √B, so θ is smooth at B = 0.
-            EffectKind::BendingStiffness => (0.0, 1e-3f64.sqrt()),
-            EffectKind::T1Offset => (-3.0, 3.0),
-            EffectKind::T2Offset => (-5.0, 5.0),
-            EffectKind::ThermalDrift => {
-                let t_max = d.op.iter().map(|o| o.time_s).fold(1.0, f64::max);
-                (-0.8 * 100.0 / t_max, 0.8 * 100.0 / t_max)
-            }
-            // ln mu lost per newton of friction load.
-            EffectKind::ContactHeating => (0.0, 0.1),
-            _ => (0.0, 0.0),
-        };
+        let (lo, hi) = (kind.entry().theta.bounds)(&facts(d));
         ThetaMap { kind, lo, hi }
     }
 
@@ -107,46 +105,34 @@ impl ThetaMap {
 
     /// Catalogue value of θ.
     pub fn value(&self, theta: f64) -> f64 {
-        match self.kind {
-            EffectKind::BendingStiffness => theta * theta,
-            _ => theta,
-        }
+        self.kind.entry().value_of_theta(theta)
     }
 
     /// d value / d θ.
     pub fn derivative(&self, theta: f64) -> f64 {
-        match self.kind {
-            EffectKind::BendingStiffness => 2.0 * theta,
-            _ => 1.0,
-        }
+        self.kind.entry().derivative_of_theta(theta)
     }
 
     /// θ of a catalogue value (clamped into the bounds).
     pub fn theta(&self, value: f64) -> f64 {
-        let t = match self.kind {
-            EffectKind::BendingStiffness => value.max(0.0).sqrt(),
-            _ => value,
-        };
-        t.clamp(self.lo, self.hi)
+        self.kind
+            .entry()
+            .theta_of_value(value)
+            .clamp(self.lo, self.hi)
     }
 
     /// Forward-difference step of θ.
     pub fn step(&self) -> f64 {
-        match self.kind {
-            EffectKind::BendingStiffness => 1e-7,
-            EffectKind::ContactHeating => 1e-7,
-            _ => 1e-6,
-        }
+        self.kind.entry().theta.step
     }
 
     /// Start values of θ (several for the effects whose fits have more than one basin).
     pub fn starts(&self) -> Vec<f64> {
-        let v: Vec<f64> = match self.kind {
-            EffectKind::PressureFriction => vec![0.97, 0.8],
-            EffectKind::BendingStiffness => vec![5e-6, 8e-5],
-            EffectKind::T1Offset => vec![0.0, 0.3, -0.3],
-            EffectKind::ContactHeating => vec![0.0, 0.01],
-            _ => vec![self.kind.neutral_value()],
+        let e = self.kind.entry();
+        let v: Vec<f64> = if e.theta.starts.is_empty() {
+            vec![e.neutral]
+        } else {
+            e.theta.starts.to_vec()
         };
         v.into_iter().map(|x| self.theta(x)).collect()
     }
@@ -165,66 +151,25 @@ pub fn run_model(maps: &[ThetaMap], mu: f64, theta: &[f64]) -> Model {
     m
 }
 
-/// Why `kind` cannot be tested on `d`, if it cannot.
+/// Why `kind` cannot be tested on `d`, if it cannot: a missing column, its entry's own
+/// condition, or too few rows.
 pub fn untestable(kind: EffectKind, d: &Design) -> Option<String> {
     if let Some(col) = kind.required_column() {
         if !d.columns.has(col) {
             return Some(format!("no `{col}` column"));
         }
     }
-    let n_pos = d.positive_rows();
-    match kind {
-        EffectKind::DiameterDependence if d.diameters().len() < 2 => {
-            Some("a single capstan diameter".into())
-        }
-        EffectKind::SpeedDependence if d.voltages().len() < 2 => {
-            Some("a single drive voltage".into())
-        }
-        EffectKind::SensorGain if d.wraps().len() < 2 => {
-            Some("a single wrap (a gain error only shows across wraps)".into())
-        }
-        EffectKind::Wear if d.max_runs_per_cord() < 2 => Some("one run per cord".into()),
-        EffectKind::ThermalDrift if d.max_time_spread_s() <= 0.0 => {
-            Some("no time spread within runs".into())
-        }
-        EffectKind::DiameterDependence | EffectKind::SpeedDependence | EffectKind::SensorGain
-            if d.cords.len() < 3 =>
-        {
-            Some("fewer than 3 cords".into())
-        }
-        EffectKind::Wear if d.units.len() < d.cords.len() + 2 => {
-            Some("too few runs per cord".into())
-        }
-        _ if n_pos < 3 => Some("fewer than 3 rows with T1 and T2 above zero".into()),
-        _ => None,
+    if let Some(why) = (kind.entry().untestable)(&facts(d)) {
+        return Some(why.into());
     }
+    (d.positive_rows() < 3).then(|| "fewer than 3 rows with T1 and T2 above zero".into())
 }
 
 /// The half-width of the region of practical equivalence with no effect, in the catalogue's
 /// units (a departure from the neutral value smaller than this is below what the rig can
-/// resolve or what would matter): offsets 0.02 N (about one ADC count, 0.015 N), a gain 1 %, an
-/// exponent 0.01, a bending stiffness 2·10⁻⁶ N m² (B ≥ 0: the region is [0, 2·10⁻⁶]), a heating
-/// that changes mu by 1 % at the data's largest friction load, and a drift, wear, diameter or
-/// speed dependence that changes mu by 1 % across the data set's span of time, runs,
-/// diameters or voltages (infinite when that span is zero).
+/// resolve or what would matter; each entry says how much that is).
 pub fn relevance_width(kind: EffectKind, d: &Design) -> f64 {
-    let span = |v: Vec<f64>| v.last().copied().unwrap_or(0.0) - v.first().copied().unwrap_or(0.0);
-    let per = |s: f64| if s > 0.0 { 0.01 / s } else { f64::INFINITY };
-    match kind {
-        EffectKind::None => f64::INFINITY,
-        EffectKind::T1Offset | EffectKind::T2Offset => 0.02,
-        EffectKind::SensorGain | EffectKind::PressureFriction => 0.01,
-        EffectKind::BendingStiffness => 2e-6,
-        EffectKind::ThermalDrift => 100.0 * per(d.max_time_spread_s()),
-        EffectKind::ContactHeating => {
-            per((0..d.n()).map(|i| d.t2[i] - d.t1[i]).fold(0.0f64, f64::max))
-        }
-        EffectKind::Wear => per(span(crate::fit::stats::distinct(
-            d.unit_run.iter().copied(),
-        ))),
-        EffectKind::DiameterDependence => per(span(d.diameters())),
-        EffectKind::SpeedDependence => per(span(d.voltages())),
-    }
+    (kind.entry().relevance)(&facts(d))
 }
 
 /// Is an effect of this size more than the rig can resolve (outside the region of practical

@@ -242,7 +242,7 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
             None => testable.push(kind),
         }
     }
-    let within_cands: Vec<EffectKind> = candidates::WITHIN
+    let within_cands: Vec<EffectKind> = candidates::at_level(Level::WithinRun)
         .into_iter()
         .filter(|k| testable.contains(k))
         .collect();

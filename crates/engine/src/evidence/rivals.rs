@@ -17,7 +17,7 @@ use super::select::Swap;
 use super::within::WithinFit;
 use super::Evidence;
 use crate::fit::stats::chi2_of_f;
-use capstan_friction::EffectKind;
+use capstan_friction::{EffectKind, Rivalry};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -94,27 +94,17 @@ pub fn rivals(
     out
 }
 
-/// Why the design cannot tell `a` from `b`, for the pairs whose reason is known (`mu`: the
-/// runs' mu, for the wraps' amplification).
+/// Why the design cannot tell `a` from `b`, for the pairs whose reason is known
+/// ([`capstan_friction::rivalry`]; `mu`: the runs' mu, for the wraps' amplification).
 fn reason(a: EffectKind, b: EffectKind, d: &Design, mu: &[f64]) -> Option<String> {
-    use EffectKind::{ContactHeating, PressureFriction, T1Offset, T2Offset, ThermalDrift};
-    let pair = |x, y| (a == x && b == y) || (a == y && b == x);
-    let one_way = !d.has_both_directions();
-    if pair(ThermalDrift, ContactHeating) && one_way {
-        Some("in runs whose tension only rises, time and the friction load grow together; runs that step up and back down separate them".into())
-    } else if pair(PressureFriction, ContactHeating) && one_way {
-        Some("in runs whose tension only rises, the friction load's history follows the tension; runs that step up and back down separate them".into())
-    } else if pair(T1Offset, T2Offset) {
-        let mu_bar = crate::fit::stats::mean(mu);
-        let wraps = d.wraps();
-        let amp = |deg: f64| (mu_bar * deg.to_radians()).exp();
-        let (lo, hi) = (wraps.first()?, wraps.last()?);
-        Some(format!(
-            "a T1 and a T2 zero offset differ only in how the wrap amplifies them: a T1 offset by e^(μβ), {:.1} to {:.1} on these wraps, a T2 offset not at all",
-            amp(*lo),
-            amp(*hi)
-        ))
-    } else {
-        None
+    match capstan_friction::rivalry(a, b)? {
+        Rivalry::OneWay(why) => (!d.has_both_directions()).then(|| why.to_string()),
+        Rivalry::Amplified { before, after } => {
+            let mu_bar = crate::fit::stats::mean(mu);
+            let wraps = d.wraps();
+            let amp = |deg: f64| (mu_bar * deg.to_radians()).exp();
+            let (lo, hi) = (wraps.first()?, wraps.last()?);
+            Some(format!("{before}{:.1} to {:.1}{after}", amp(*lo), amp(*hi)))
+        }
     }
 }

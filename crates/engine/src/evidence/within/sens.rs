@@ -21,32 +21,14 @@ use super::{Sens, Strata};
 use crate::evidence::candidates::{run_model, ThetaMap};
 use crate::evidence::design::Design;
 use crate::fit::predict::shape_point;
-use capstan_friction::{EffectKind, Operating, HEAT_TAU_S, SLACK_T1_N};
+use capstan_friction::{Operating, HEAT_TAU_S, SLACK_T1_N};
 
-/// What a θ moves, for the chain rule.
-#[derive(Clone, Copy, PartialEq)]
-pub(super) enum Role {
-    Exponent,
-    SqrtB,
-    T1Offset,
-    T2Offset,
-    Drift,
-    Heating,
-}
+/// What a θ moves, for the chain rule: the law's closed-form partial its entry names.
+pub(super) use capstan_friction::entry::Partial as Role;
 
 /// The roles of `maps`, if every one has an analytic sensitivity.
 pub(super) fn roles(maps: &[ThetaMap]) -> Option<Vec<Role>> {
-    maps.iter()
-        .map(|m| match m.kind {
-            EffectKind::PressureFriction => Some(Role::Exponent),
-            EffectKind::BendingStiffness => Some(Role::SqrtB),
-            EffectKind::T1Offset => Some(Role::T1Offset),
-            EffectKind::T2Offset => Some(Role::T2Offset),
-            EffectKind::ThermalDrift => Some(Role::Drift),
-            EffectKind::ContactHeating => Some(Role::Heating),
-            _ => None,
-        })
-        .collect()
+    maps.iter().map(|m| m.kind.entry().partial).collect()
 }
 
 /// e^(−dt/τ) and τ(1 − e^(−dt/τ)): the memory's decay and its gain per newton of load over
@@ -204,6 +186,7 @@ mod tests {
     use super::*;
     use crate::fit::obs::StepTiming;
     use capstan_data::{read_pairs, write_pairs_to, Pair};
+    use capstan_friction::EffectKind;
 
     /// Three wraps × two runs of 10 steps with times (the memory carries), T1 from slack to
     /// 20 N; T2 does not matter for sensitivities.

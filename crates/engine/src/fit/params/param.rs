@@ -124,22 +124,18 @@ impl Param {
         }
     }
 
-    /// The parameter behind a catalogue effect (`None` for `none`).
+    /// The parameter behind a catalogue effect (`None` for `none`): the model scalar its entry
+    /// names.
     pub fn from_effect(kind: EffectKind) -> Option<Param> {
-        Some(match kind {
-            EffectKind::None => return None,
-            EffectKind::PressureFriction => Param::TensionExponent,
-            EffectKind::BendingStiffness => Param::BendingB,
-            EffectKind::T1Offset => Param::T1Offset,
-            EffectKind::T2Offset => Param::T2Offset,
-            EffectKind::SensorGain => Param::T2Gain,
-            EffectKind::ThermalDrift => Param::MuChangePer100s,
-            EffectKind::Wear => Param::MuChangePerRun,
-            EffectKind::DiameterDependence => Param::MuChangePerMm,
-            EffectKind::SpeedDependence => Param::MuChangePerV,
-            // The catalogue value is h·τ with τ = `capstan_friction::HEAT_TAU_S`.
-            EffectKind::ContactHeating => Param::HeatPerNs,
-        })
+        if kind == EffectKind::None {
+            return None;
+        }
+        Param::from_name(kind.entry().population.scalar)
+    }
+
+    /// The parameter of this name.
+    pub fn from_name(name: &str) -> Option<Param> {
+        Param::ALL.into_iter().find(|p| p.name() == name)
     }
 
     /// A natural transform for this parameter (`Log` for the positive ones).
@@ -263,11 +259,7 @@ mod tests {
             let p = Param::from_effect(kind).unwrap();
             let m = Model::euler_eytelwein(0.1)
                 .with_effect(capstan_friction::Effect { kind, value: 0.77 });
-            let scale = if kind == EffectKind::ContactHeating {
-                capstan_friction::HEAT_TAU_S
-            } else {
-                1.0
-            };
+            let scale = kind.entry().population.value_per_scalar;
             assert!((p.get(&m) * scale - 0.77).abs() < 1e-15, "{kind}");
         }
     }

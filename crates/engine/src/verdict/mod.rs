@@ -1,18 +1,76 @@
-//! Why: every mechanism of the catalogue with its verdict, decided from the evidence engine
-//! ([`crate::evidence`], the same statistics as `capstan diagnose`) by one rule for all
-//! ([`verdict`]), and its sentence made from that verdict ([`words`]).
+//! The one verdict layer: the evidence engine's assessment ([`crate::evidence`]) turned into
+//! verdicts and their sentences, which `capstan diagnose` and `capstan analyze` both render.
 //!
-//! The named causes are the engine's selected effects; what the engine's adequacy check finds
-//! left over is reported as unexplained, with its pattern, rather than pinned on a cause.
+//! * the effects the data hold ([`Found`]: the engine's selected effects, with their evidence
+//!   given the others) and the verdict on the set in one sentence ([`Verdicts::sentence`]:
+//!   what the data hold, what is left unexplained, which rivals they cannot rule out, and on
+//!   what structure);
+//! * every mechanism of the catalogue with its verdict, decided by one rule for all
+//!   ([`decide`]: ruled in, explained away, ruled out, not established, not testable), and its
+//!   sentence made from that verdict ([`words`]).
+//!
+//! What is left over after the named causes is reported as unexplained, with its pattern,
+//! rather than pinned on a cause.
 
-pub mod verdict;
+mod decide;
 pub mod words;
 
-use crate::evidence::{Assessment, Rival};
+use crate::evidence::{Assessment, Level, Rival};
 use capstan_friction::EffectKind;
+pub use decide::{decide, Numbers, Verdict};
 use serde::Serialize;
 use serde_json::{json, Value};
-pub use verdict::{Numbers, Verdict};
+use std::collections::BTreeMap;
+
+/// One effect the data hold.
+#[derive(Clone, Debug, Serialize)]
+pub struct Found {
+    /// Catalogue name.
+    pub effect: &'static str,
+    /// Its fitted catalogue parameter (with the other found effects in the model).
+    pub parameters: BTreeMap<&'static str, f64>,
+    /// Its standard error (cluster-robust).
+    pub parameter_se: f64,
+    /// ΔBIC of dropping it, given the other found effects (negative: the data want it).
+    pub delta_bic_given_others: f64,
+    /// Where its evidence comes from.
+    pub level: Level,
+}
+
+/// The verdicts on an assessment: what `diagnose` and `analyze` render.
+#[derive(Clone, Debug)]
+pub struct Verdicts {
+    /// The effects the data hold, strongest first.
+    pub found: Vec<Found>,
+    /// The verdict on the set in words.
+    pub sentence: String,
+    /// Every mechanism's verdict.
+    pub mechanisms: Mechanisms,
+}
+
+/// The verdicts of an assessment.
+pub fn of(a: &Assessment) -> Verdicts {
+    let found: Vec<Found> = a
+        .selected_evidence()
+        .iter()
+        .map(|e| Found {
+            effect: e.effect,
+            parameters: e.parameters.clone(),
+            parameter_se: e.parameter_se,
+            delta_bic_given_others: e.delta_bic,
+            level: e.level,
+        })
+        .collect();
+    let mut sentence = words::verdict(&found, &a.adequacy, &a.rivals);
+    if let Some(caveat) = words::structure_caveat(&a.design.structure) {
+        sentence = format!("{sentence} {caveat}");
+    }
+    Verdicts {
+        found,
+        sentence,
+        mechanisms: mechanisms(a),
+    }
+}
 
 /// One mechanism's verdict.
 #[derive(Clone, Debug, Serialize)]
@@ -75,15 +133,15 @@ pub struct Mechanisms {
     pub protocol_limits: Vec<String>,
 }
 
-/// The verdicts of an assessment.
-pub fn run(a: &Assessment) -> Mechanisms {
+/// Every mechanism's verdict on an assessment.
+fn mechanisms(a: &Assessment) -> Mechanisms {
     let named: Vec<EffectKind> = a.selected_evidence().iter().map(|e| e.kind).collect();
     let names: Vec<&str> = named.iter().map(|k| k.name()).collect();
     let tests: Vec<Mechanism> = EffectKind::ALL
         .into_iter()
         .skip(1)
         .map(|kind| {
-            let (v, numbers) = verdict::decide(a, kind);
+            let (v, numbers) = decide(a, kind);
             let reason = a
                 .not_testable
                 .iter()
@@ -99,7 +157,7 @@ pub fn run(a: &Assessment) -> Mechanisms {
             let mut summary = words::sentence(kind, v, numbers.as_ref(), &others, &reason);
             if let Some(r) = &rival {
                 summary.push(' ');
-                summary += &crate::diagnose::words::rival_sentences(std::slice::from_ref(r));
+                summary += &words::rival_sentences(std::slice::from_ref(r));
             }
             Mechanism {
                 name: kind.name(),

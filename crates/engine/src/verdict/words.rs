@@ -1,10 +1,13 @@
-//! The diagnosis in words: every sentence that states a verdict is made here from the verdict
-//! itself (the effects found and the adequacy decision), never typed in beside it.
+//! The verdicts in words, for `capstan diagnose` and `capstan analyze` alike: every sentence
+//! that states a verdict is made here from the verdict itself (the effects found, each
+//! mechanism's verdict and numbers, the adequacy decision, the rivals), never typed in beside
+//! it. What each effect is comes from its catalogue entry.
 
-use super::Found;
-use crate::evidence::{Adequacy, Rival};
+use super::{Found, Numbers, Verdict};
+use crate::evidence::{Adequacy, Design, Rival};
 use capstan_data::structure::StructureSummary;
 use capstan_data::Basis;
+use capstan_friction::EffectKind;
 
 /// What a number that could not be computed is shown as.
 pub const NOT_IDENTIFIED: &str = "not identified";
@@ -177,10 +180,109 @@ pub fn capitalised(s: &str) -> String {
     }
 }
 
+/// What each mechanism of the catalogue is, physically (its entry's title).
+pub fn title(kind: EffectKind) -> &'static str {
+    kind.entry().title
+}
+
+/// A ΔBIC with its sign and one decimal ("not identified" if it could not be computed).
+fn signed(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:+.1}")
+    } else {
+        NOT_IDENTIFIED.to_string()
+    }
+}
+
+fn value_text(kind: EffectKind, v: f64, se: f64) -> String {
+    parameter(kind.parameter().unwrap_or("value"), v, se)
+}
+
+/// The sentence of one mechanism's verdict, with its numbers; `causes` are the named causes.
+pub fn sentence(
+    kind: EffectKind,
+    verdict: Verdict,
+    n: Option<&Numbers>,
+    causes: &[&str],
+    reason: &str,
+) -> String {
+    let name = title(kind);
+    let Some(n) = n else {
+        return format!(
+            "{} cannot be tested on these data: {reason}.",
+            capitalised(name)
+        );
+    };
+    let given = if causes.is_empty() {
+        "on its own".to_string()
+    } else {
+        format!(
+            "given {}",
+            list(&causes.iter().map(|c| c.to_string()).collect::<Vec<_>>())
+        )
+    };
+    let v = value_text(kind, n.value, n.se);
+    match verdict {
+        Verdict::RuledIn => format!(
+            "{} is in the data: {v}; dropping it costs ΔBIC {} {} (evidence computed with runs as clusters).",
+            capitalised(name),
+            signed(-n.delta_bic_given_causes),
+            if causes.is_empty() { "against every run's own mu" } else { "given the other named causes" }
+        ),
+        Verdict::ExplainedAway => format!(
+            "{} alone would improve the fit ({} = {}, ΔBIC {}), but not {given} (ΔBIC {}): it stood in for them.",
+            capitalised(name),
+            kind.parameter().unwrap_or("value"),
+            sig(n.value_alone),
+            signed(n.delta_bic_alone),
+            signed(n.delta_bic_given_causes)
+        ),
+        Verdict::RuledOut => format!(
+            "{} is ruled out: {v} {given}, and its 95 % interval lies inside ±{} of no effect, a size that would not matter (ΔBIC {}).",
+            capitalised(name),
+            sig(n.relevance_width),
+            signed(n.delta_bic_given_causes)
+        ),
+        Verdict::NotEstablished => format!(
+            "{} is not established: {v} {given} (ΔBIC {}), but its 95 % interval still reaches a size that matters (±{} from no effect).",
+            capitalised(name),
+            signed(n.delta_bic_given_causes),
+            sig(n.relevance_width)
+        ),
+        Verdict::NotTestable => format!("{} cannot be tested on these data: {reason}.", capitalised(name)),
+    }
+}
+
+/// What the design of these data can and cannot separate, from the data themselves.
+pub fn protocol_limits(d: &Design, named: &[EffectKind]) -> Vec<String> {
+    let mut out = Vec::new();
+    let both = d.has_both_directions();
+    if both {
+        out.push("Steps rise and fall in these data, so a memory of the friction load shows as a difference between rising and falling tension, and load is decorrelated from time.".to_string());
+    } else {
+        out.push("Steps only rise in these data: tension, friction load and time since the trigger grow together inside every run, so a drift with time, contact heating and a power law in tension are told apart only by cords reaching different tensions at the same step. An up-down (or randomised) step order separates them.".to_string());
+    }
+    if !d.columns.time_s {
+        out.push("There is no time_s column: a drift with time cannot be tested (capstan diagnose --protocol-times takes the times from step with the thesis protocol).".to_string());
+    }
+    out.extend(
+        named
+            .iter()
+            .filter_map(|k| k.entry().named_note)
+            .map(String::from),
+    );
+    if d.wraps().len() < 3 {
+        out.push("Fewer than three wraps: an offset on T1 and one on T2 (and a gain) are told apart only across wraps.".to_string());
+    }
+    if d.cords.len() < 10 {
+        out.push(format!("{} cords: effects on mu that vary between cords (gain, diameter, speed) are judged against the cord-to-cord scatter with only that many independent observations.", d.cords.len()));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use capstan_friction::EffectKind;
 
     fn rival(delta_bic: f64, reason: Option<&str>) -> Rival {
         Rival {

@@ -1,5 +1,5 @@
 //! A verdict for every mechanism of the catalogue, decided from the evidence engine's numbers by
-//! one rule for all (the same rule `capstan diagnose` names its effects by).
+//! one rule for all (the rule the engine names its effects by).
 
 use crate::evidence::{candidates, Assessment, Evidence};
 use capstan_friction::EffectKind;

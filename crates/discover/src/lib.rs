@@ -1,0 +1,22 @@
+//! `capstan discover`: extend the model beyond the catalogue. After the evidence engine's
+//! catalogue selection, search a library of physically meaningful terms ([`library`]) for what
+//! is left, and propose a term only when it earns its evidence (the engine's statistics and
+//! thresholds, plus a penalty for the size of the search: extended BIC, γ = 1), is stable when
+//! whole cords are resampled, helps held-out cords, and resolves the lack of fit the catalogue
+//! left; otherwise say "nothing in the library explains it", with the residual pattern.
+//!
+//! The search is linearised about the catalogue fit ([`columns`]): every term is one
+//! parameter θ, θ = 0 is the catalogue model, and its column ∂T2/∂θ at θ = 0 enters the
+//! engine's within-run least squares (every run its own mu) as one more parameter
+//! ([`screen`]). Terms on mu that are constant inside runs are tested where they vary, on the
+//! runs' mu between cords or runs. The held-out check is [`heldout`], stability [`stability`].
+//! `docs/README-discover.md` states the algorithm, its grammar and its validation.
+
+pub mod columns;
+pub mod heldout;
+pub mod library;
+pub mod screen;
+pub mod stability;
+mod verdict;
+
+pub use verdict::{discover, discover_assessed, Discovery, Options, Proposed};

@@ -1,0 +1,176 @@
+//! Stability: how often the same term is the search's pick, and passes the bar, when whole
+//! cords are resampled (with their runs). Linearised: the per-cord cross-products of the
+//! model's and the terms' columns (each projected off its runs' mu, which resampling cords
+//! leaves as it is) are summed with the resample's multiplicities and the screen redone;
+//! each term keeps its full-data overdispersion ĉ. Between-level terms are retested on the
+//! resampled runs. (The spike found this within binomial noise of full refits: mean
+//! |difference| 0.04 over 15 sets.)
+
+use crate::screen::{between_evidence, off_run_mu, Runs};
+use capstan_engine::fit::stats::chi2_of_f;
+use capstan_plant::rng::Rng;
+use nalgebra::{DMatrix, DVector};
+
+/// A term as the resampled screen sees it.
+pub struct Candidate {
+    /// Library index.
+    pub term: usize,
+    /// Within-run column (raw), or None for a between-level term.
+    pub column: Option<Vec<f64>>,
+    /// Between-level g per run (for between terms).
+    pub g_run: Option<Vec<f64>>,
+    /// Full-data overdispersion.
+    pub c_hat: f64,
+    /// Its sign check.
+    pub sign_ok: fn(f64) -> bool,
+}
+
+/// What the resampled screen needs.
+pub struct Problem<'a> {
+    /// The linearised fit.
+    pub base: &'a crate::columns::Base<'a>,
+    /// The model's shared columns (catalogue, and any term already proposed), raw.
+    pub shared: &'a [Vec<f64>],
+    /// Residuals of the model with them, N (raw).
+    pub e: &'a [f64],
+    /// The candidates.
+    pub candidates: &'a [Candidate],
+    /// The runs for the between tests.
+    pub runs: &'a Runs,
+    /// The selected catalogue between covariates per run.
+    pub covs: &'a [Vec<f64>],
+    /// ΔBIC bar (negative) including the search penalty.
+    pub bar: f64,
+}
+
+/// Share of `b` cord resamples in which `target` (a library index) is the pick and passes.
+pub fn stability(p: &Problem, target: usize, b: usize, seed: u64) -> f64 {
+    let base = p.base;
+    let d = base.d;
+    let nc = d.cords.len();
+    let within: Vec<(usize, &Candidate)> = p
+        .candidates
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.column.is_some())
+        .collect();
+    let mut cols: Vec<Vec<f64>> = p.shared.iter().map(|c| off_run_mu(base, c)).collect();
+    let k0 = cols.len();
+    for (_, c) in &within {
+        cols.push(off_run_mu(base, c.column.as_ref().unwrap()));
+    }
+    let e = off_run_mu(base, p.e);
+    let m = cols.len();
+    let mut gc = vec![DMatrix::<f64>::zeros(m, m); nc];
+    let mut hc = vec![DVector::<f64>::zeros(m); nc];
+    let mut ec = vec![0.0; nc];
+    let mut nrow = vec![0.0; nc];
+    for i in 0..d.n() {
+        let c = base.cord_of_row[i];
+        let w = base.w[i];
+        nrow[c] += 1.0;
+        ec[c] += w * e[i] * e[i];
+        for a in 0..m {
+            let za = w * cols[a][i];
+            hc[c][a] += za * e[i];
+            for bb in a..m {
+                gc[c][(a, bb)] += za * cols[bb][i];
+            }
+        }
+    }
+    for g in gc.iter_mut() {
+        for a in 0..m {
+            for bb in 0..a {
+                g[(a, bb)] = g[(bb, a)];
+            }
+        }
+    }
+    let mut runs_of = vec![Vec::new(); nc];
+    for (u, &c) in p.runs.cord.iter().enumerate() {
+        runs_of[c].push(u);
+    }
+    let mut rng = Rng::new(seed);
+    let mut hits = 0usize;
+    for _ in 0..b {
+        let mut mult = vec![0.0; nc];
+        for _ in 0..nc {
+            mult[(rng.uniform() * nc as f64) as usize % nc] += 1.0;
+        }
+        let mut g = DMatrix::<f64>::zeros(m, m);
+        let mut h = DVector::<f64>::zeros(m);
+        let (mut ee, mut n) = (0.0, 0.0);
+        for c in 0..nc {
+            if mult[c] > 0.0 {
+                g += &gc[c] * mult[c];
+                h += &hc[c] * mult[c];
+                ee += ec[c] * mult[c];
+                n += nrow[c] * mult[c];
+            }
+        }
+        let n_runs: f64 = (0..nc).map(|c| mult[c] * runs_of[c].len() as f64).sum();
+        let gbb = g.view((0, 0), (k0, k0)).into_owned();
+        let inv = gbb.try_inverse().unwrap_or_else(|| DMatrix::zeros(k0, k0));
+        let hb = h.rows(0, k0).into_owned();
+        let wrss0 = ee - (hb.transpose() * &inv * &hb)[(0, 0)];
+        let mut best: Option<(usize, f64)> = None;
+        let mut consider = |term: usize, dbic: f64| {
+            if dbic.is_finite() && best.is_none_or(|(_, v)| dbic < v) {
+                best = Some((term, dbic));
+            }
+        };
+        for (j, (_, cand)) in within.iter().enumerate() {
+            let col = k0 + j;
+            let gjb = g.view((col, 0), (1, k0)).into_owned();
+            let s = g[(col, col)] - (&gjb * &inv * gjb.transpose())[(0, 0)];
+            let num = h[col] - (&gjb * &inv * &hb)[(0, 0)];
+            if !(s > 0.0 && wrss0 > 0.0) {
+                continue;
+            }
+            let theta = num / s;
+            if !(cand.sign_ok)(theta) {
+                continue;
+            }
+            let wrss1 = (wrss0 - num * num / s).max(1e-300);
+            let lr = (n * (wrss0 / wrss1).ln()).max(0.0);
+            let chi2 = chi2_of_f(lr / cand.c_hat, 1.0, (n_runs - 1.0).max(1.0));
+            consider(cand.term, -chi2 + n.ln());
+        }
+        // Between terms on the resampled runs (each copy of a cord is a cord of its own).
+        let mut rs = Runs {
+            cord: Vec::new(),
+            cords: 0,
+            ln_mu: Vec::new(),
+        };
+        let mut pick: Vec<usize> = Vec::new();
+        for c in 0..nc {
+            for _ in 0..mult[c] as usize {
+                for &u in &runs_of[c] {
+                    rs.cord.push(rs.cords);
+                    rs.ln_mu.push(p.runs.ln_mu[u]);
+                    pick.push(u);
+                }
+                rs.cords += 1;
+            }
+        }
+        let covs: Vec<Vec<f64>> = p
+            .covs
+            .iter()
+            .map(|cv| pick.iter().map(|&u| cv[u]).collect())
+            .collect();
+        for cand in p.candidates.iter().filter(|c| c.column.is_none()) {
+            let Some(gr) = &cand.g_run else { continue };
+            let g: Vec<f64> = pick.iter().map(|&u| gr[u]).collect();
+            if let Some((theta, _, dbic)) = between_evidence(&rs, &g, &covs) {
+                if (cand.sign_ok)(theta) {
+                    consider(cand.term, dbic);
+                }
+            }
+        }
+        if let Some((term, dbic)) = best {
+            if term == target && dbic < p.bar {
+                hits += 1;
+            }
+        }
+    }
+    hits as f64 / b.max(1) as f64
+}

@@ -1,0 +1,771 @@
+//! The search and its answer.
+
+use crate::columns::Base;
+use crate::heldout::{self, Ratio};
+use crate::library::{ActsOn, Sign, Term, Var, LIBRARY};
+use crate::screen::{self, between_evidence, sign_ok, within_evidence, Level, Projector, Runs};
+use crate::stability::{self, Candidate};
+use capstan_data::structure::StructureSummary;
+use capstan_data::Dataset;
+use capstan_engine::evidence::adequacy::{lack_of_fit, LackOfFit};
+use capstan_engine::evidence::{self, Assessment, RIVAL_GAP};
+use capstan_friction::EffectKind;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// A proposed term must leave no lack of fit against the replicate runs at this level.
+pub const LOF_ALPHA: f64 = 0.01;
+
+/// The default [`Options::max_r2_model`]: VIF 100.
+pub const MAX_R2_MODEL: f64 = 0.99;
+
+/// How to search.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// The engine's options (thresholds, threads).
+    pub engine: evidence::Options,
+    /// Extended-BIC γ: the bar is ΔBIC + 2γ·ln(p) < −threshold for the first of p terms tried.
+    pub gamma: f64,
+    /// Most terms proposed.
+    pub max_terms: usize,
+    /// Cord resamples of the stability.
+    pub resamples: usize,
+    /// Least stability a proposed term needs.
+    pub min_stability: f64,
+    /// A within-run term whose column the model's columns explain beyond this share
+    /// (1 − 1/VIF) is not separable from them at this design: it is screened and shown, never
+    /// proposed.
+    pub max_r2_model: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            engine: evidence::Options::default(),
+            gamma: 1.0,
+            max_terms: 2,
+            resamples: 100,
+            min_stability: 0.5,
+            max_r2_model: MAX_R2_MODEL,
+        }
+    }
+}
+
+/// A library term that might explain the data as well as a proposed one.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rival {
+    /// Its name.
+    pub name: &'static str,
+    /// What it depends on.
+    pub depends_on: &'static [Var],
+    /// Its ΔBIC in the same search step.
+    pub delta_bic: f64,
+    /// Correlation of its column with the proposed term's (within runs, after the model).
+    pub correlation: Option<f64>,
+}
+
+/// A proposed term.
+#[derive(Clone, Debug, Serialize)]
+pub struct Proposed {
+    /// Library name.
+    pub name: &'static str,
+    /// Formula (θ = 0 is off).
+    pub formula: &'static str,
+    /// Where it acts.
+    pub acts_on: ActsOn,
+    /// What it depends on.
+    pub depends_on: &'static [Var],
+    /// Its parameter (first-order estimate).
+    pub parameters: BTreeMap<&'static str, f64>,
+    /// Its cluster-robust standard error.
+    pub parameter_se: BTreeMap<&'static str, f64>,
+    /// Its parameter's units.
+    pub units: &'static str,
+    /// ΔBIC given the catalogue effects and any term proposed before it (no search penalty).
+    pub delta_bic_given_others: f64,
+    /// Share of whole-cord resamples in which it is the search's pick and passes the bar.
+    pub stability: f64,
+    /// Held-out RMSE with it over without it.
+    pub loco_rmse_ratio: Ratio,
+    /// The held-out upper end is below 1: shown to predict new cords better.
+    pub shown_to_predict_better: bool,
+    /// Where its evidence comes from.
+    pub level: Level,
+    /// Its physical reading.
+    pub reading: &'static str,
+    /// Where the physics comes from.
+    pub source: &'static str,
+    /// Lack of fit against the replicate runs with it in (None: not testable).
+    pub lack_of_fit_after: Option<LackOfFit>,
+    /// Library terms within the rival gap of it.
+    pub rivals: Vec<Rival>,
+    /// How to word it.
+    pub words: String,
+}
+
+/// A term the search looked at closely and did not propose, and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct Declined {
+    /// Library name.
+    pub name: &'static str,
+    /// ΔBIC given the others.
+    pub delta_bic: f64,
+    /// Its stability, if it got that far.
+    pub stability: Option<f64>,
+    /// Its held-out ratio, if it got that far.
+    pub loco_rmse_ratio: Option<Ratio>,
+    /// Why not.
+    pub reason: String,
+}
+
+/// A term that could not be tested on these data.
+#[derive(Clone, Debug, Serialize)]
+pub struct NotTestable {
+    /// Library name.
+    pub name: &'static str,
+    /// Why.
+    pub reason: &'static str,
+}
+
+/// The data set read.
+#[derive(Clone, Debug, Serialize)]
+pub struct DataInfo {
+    /// Where it came from.
+    pub source: String,
+    /// Rows.
+    pub rows: usize,
+    /// Its structure, and how each level was found.
+    pub structure: StructureSummary,
+}
+
+/// How the search was paid for.
+#[derive(Clone, Debug, Serialize)]
+pub struct Search {
+    /// Terms in the library.
+    pub library_size: usize,
+    /// Terms testable on these data.
+    pub tried: usize,
+    /// The engine's ΔBIC threshold.
+    pub threshold: f64,
+    /// Extended-BIC γ.
+    pub gamma: f64,
+    /// The bar the first term had to pass (ΔBIC below this).
+    pub first_bar: f64,
+    /// Cord resamples of the stability, and the least stability proposed.
+    pub resamples: usize,
+    /// Least stability.
+    pub min_stability: f64,
+    /// Every testable term's screen given the catalogue, best first.
+    pub screen: Vec<ScreenRow>,
+}
+
+/// One term's screen given the catalogue.
+#[derive(Clone, Debug, Serialize)]
+pub struct ScreenRow {
+    /// Library name.
+    pub name: &'static str,
+    /// Where its evidence comes from.
+    pub level: Level,
+    /// ΔBIC given the catalogue (before the search penalty).
+    pub delta_bic: f64,
+    /// θ̂ (first order).
+    pub theta: f64,
+    /// Its cluster-robust standard error.
+    pub se: f64,
+    /// θ̂ keeps the term's physical sign.
+    pub sign_ok: bool,
+    /// Share of its column the catalogue's columns explain within runs (1 − 1/VIF).
+    pub r2_model: f64,
+}
+
+/// The answer of `capstan discover`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Discovery {
+    /// The data set and its structure.
+    pub data: DataInfo,
+    /// The catalogue effects the engine selected.
+    pub catalogue_effects: Vec<&'static str>,
+    /// The terms proposed (empty: nothing in the library explains what is left).
+    pub terms: Vec<Proposed>,
+    /// Structure is still left after the proposed terms.
+    pub unexplained_after: bool,
+    /// The pattern of what is left (the catalogue fit's residuals), if anything is.
+    pub residual_pattern: Option<&'static str>,
+    /// The answer in words.
+    pub verdict: String,
+    /// The lack of fit the catalogue leaves.
+    pub lack_of_fit_before: Option<LackOfFit>,
+    /// Terms looked at closely and not proposed.
+    pub declined: Vec<Declined>,
+    /// Terms not testable here.
+    pub not_testable: Vec<NotTestable>,
+    /// The search.
+    pub search: Search,
+    /// Wall time, s.
+    pub elapsed_s: f64,
+}
+
+impl Discovery {
+    /// One JSON object.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}
+
+/// Search `data` (runs the engine's assessment first).
+pub fn discover(data: &Dataset, opts: &Options, progress: &mut dyn FnMut(&str, f64)) -> Discovery {
+    let t0 = Instant::now();
+    progress("catalogue", 0.0);
+    let a = evidence::assess(data, &opts.engine);
+    discover_assessed(data, &a, opts, t0, progress)
+}
+
+/// The covariate per run of a selected between-level catalogue effect: its entry's cord
+/// covariate, or the run number (from 0) for an effect between runs.
+fn catalogue_covariate(a: &Assessment, kind: EffectKind) -> Option<Vec<f64>> {
+    let d = &a.design;
+    let entry = kind.entry();
+    let v = |u: usize| {
+        let c = &d.cords[d.unit_cord[u]];
+        let op = capstan_friction::Operating {
+            wrap_rad: c.wrap_deg.to_radians(),
+            diameter_mm: c.diameter_mm,
+            drive_v: c.drive_v,
+            run: d.unit_run[u],
+            time_s: 0.0,
+            load_memory_ns: 0.0,
+        };
+        match (entry.cord, entry.level) {
+            (Some(test), _) => Some((test.covariate)(&op)),
+            (None, capstan_friction::entry::Level::BetweenRun) => Some(d.unit_run[u] - 1.0),
+            _ => None,
+        }
+    };
+    (0..d.units.len()).map(v).collect()
+}
+
+/// The model as the search grows it.
+struct State {
+    shared: Vec<Vec<f64>>,
+    covs: Vec<Vec<f64>>,
+    /// Residuals projected off the runs' mu and the shared columns.
+    e: Vec<f64>,
+    used: Vec<usize>,
+}
+
+/// One testable term's column or run-level g.
+struct Testable {
+    term: usize,
+    column: Option<Vec<f64>>,
+    g_run: Option<Vec<f64>>,
+}
+
+fn classify(base: &Base) -> (Vec<Testable>, Vec<NotTestable>) {
+    let (mut ok, mut not) = (Vec::new(), Vec::new());
+    let proj0 = Projector::new(base, &[]);
+    for (j, t) in LIBRARY.iter().enumerate() {
+        if let Some(g) = screen::run_level_g(base, t) {
+            let spread = g.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+                - g.iter().cloned().fold(f64::INFINITY, f64::min);
+            if spread > 1e-12 {
+                ok.push(Testable {
+                    term: j,
+                    column: None,
+                    g_run: Some(g),
+                });
+            } else {
+                not.push(NotTestable {
+                    name: t.name,
+                    reason: "its variable does not vary in these data",
+                });
+            }
+            continue;
+        }
+        let x = base.column(t);
+        let xt = proj0.project(base, &x);
+        let raw: f64 = x.iter().zip(&base.w).map(|(v, w)| w * v * v).sum();
+        let left: f64 = xt.iter().zip(&base.w).map(|(v, w)| w * v * v).sum();
+        if raw > 0.0 && left > 1e-9 * raw {
+            ok.push(Testable {
+                term: j,
+                column: Some(x),
+                g_run: None,
+            });
+        } else {
+            not.push(NotTestable {
+                name: t.name,
+                reason:
+                    "its column is all absorbed by every run's own mu (no spread of its variable)",
+            });
+        }
+    }
+    (ok, not)
+}
+
+/// Search given the engine's assessment `a` of `data`.
+pub fn discover_assessed(
+    data: &Dataset,
+    a: &Assessment,
+    opts: &Options,
+    t0: Instant,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Discovery {
+    let d = &a.design;
+    progress("linearise", 0.2);
+    let base = Base::new(d, &a.fit, &a.weights.w);
+    let threshold = opts.engine.within_threshold.max(0.0);
+    let (testable, not_testable) = classify(&base);
+    let p = testable.len().max(1) as f64;
+    let runs = Runs {
+        cord: d.unit_cord.clone(),
+        cords: d.cords.len(),
+        ln_mu: a.fit.mu.iter().map(|m| m.max(1e-6).ln()).collect(),
+    };
+    let mut st = State {
+        shared: base.b.clone(),
+        covs: a
+            .selected
+            .iter()
+            .filter_map(|&k| catalogue_covariate(a, k))
+            .collect(),
+        e: Vec::new(),
+        used: Vec::new(),
+    };
+    st.e = Projector::new(&base, &st.shared).project(&base, &base.e);
+    let lof_before = a.adequacy.lack_of_fit.clone();
+    // After a term, any significant lack of fit keeps "unexplained" (the spike's rule: a
+    // partial mimic leaves the replicates disagreeing with the model, whatever its size).
+    let lof_open = |l: &Option<LackOfFit>| l.as_ref().is_some_and(|l| l.p < LOF_ALPHA);
+    let mut terms: Vec<Proposed> = Vec::new();
+    let mut declined: Vec<Declined> = Vec::new();
+    let mut first_screen = Vec::new();
+    let mut partial = false;
+    for step in 1..=opts.max_terms {
+        progress("screen", 0.3 + 0.2 * (step - 1) as f64);
+        let proj = Projector::new(&base, &st.shared);
+        let screens = screen_all(&base, &testable, &proj, &st, &runs);
+        if step == 1 {
+            first_screen = screens
+                .iter()
+                .map(|s| ScreenRow {
+                    name: LIBRARY[s.term].name,
+                    level: s.level,
+                    delta_bic: s.delta_bic,
+                    theta: s.theta,
+                    se: s.se,
+                    sign_ok: s.sign_ok,
+                    r2_model: s.r2_model,
+                })
+                .collect();
+        }
+        let kf = step as f64;
+        let bar = -threshold - 2.0 * opts.gamma * ((p - kf + 1.0) / kf).max(1.0).ln();
+        let Some(best) = screens
+            .iter()
+            .find(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
+            .cloned()
+        else {
+            break;
+        };
+        let t = &LIBRARY[best.term];
+        if best.delta_bic >= bar {
+            if best.delta_bic < -threshold {
+                declined.push(decline(t, &best, None, None, format!(
+                    "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {} terms tried, that much is expected by chance",
+                    best.delta_bic, -threshold, testable.len()
+                )));
+            }
+            break;
+        }
+        progress("stability", 0.4 + 0.2 * (step - 1) as f64);
+        let cands: Vec<Candidate> = testable
+            .iter()
+            .filter(|c| !st.used.contains(&c.term))
+            .map(|c| Candidate {
+                term: c.term,
+                column: c.column.clone(),
+                g_run: c.g_run.clone(),
+                c_hat: screens
+                    .iter()
+                    .find(|s| s.term == c.term)
+                    .map_or(1.0, |s| s.c_hat),
+                sign_ok: match LIBRARY[c.term].sign {
+                    Sign::Free => |_| true,
+                    Sign::NonNegative => |t| t >= 0.0,
+                },
+            })
+            .collect();
+        let problem = stability::Problem {
+            base: &base,
+            shared: &st.shared,
+            e: &base.e,
+            candidates: &cands,
+            runs: &runs,
+            covs: &st.covs,
+            bar,
+        };
+        let stab =
+            stability::stability(&problem, best.term, opts.resamples, 0x26_57ab + step as u64);
+        progress("held-out cords", 0.5 + 0.2 * (step - 1) as f64);
+        let tst = testable.iter().find(|c| c.term == best.term).unwrap();
+        let ratio = held_out(&base, a, &st, tst);
+        let Some(ratio) = ratio else {
+            declined.push(decline(
+                t,
+                &best,
+                Some(stab),
+                None,
+                "its held-out gain could not be computed (too few cords)".into(),
+            ));
+            break;
+        };
+        if stab < opts.min_stability {
+            declined.push(decline(
+                t,
+                &best,
+                Some(stab),
+                Some(ratio),
+                format!(
+                "unstable: the search picks it in {:.0} % of whole-cord resamples (needs {:.0} %)",
+                100.0 * stab, 100.0 * opts.min_stability
+            ),
+            ));
+            break;
+        }
+        if ratio.value >= 1.0 {
+            declined.push(decline(
+                t,
+                &best,
+                Some(stab),
+                Some(ratio.clone()),
+                format!(
+                    "does not help held-out cords: RMSE ratio {:.3} [{:.3}, {:.3}]",
+                    ratio.value, ratio.ci95.lo, ratio.ci95.hi
+                ),
+            ));
+            break;
+        }
+        // Lack of fit with the term in (within-run terms change what the replicates share).
+        let proj_x = tst.column.as_ref().map(|x| proj.project(&base, x));
+        let lof_after = match &proj_x {
+            Some(xt) => {
+                let z: Vec<f64> = (0..d.n())
+                    .map(|i| (st.e[i] - best.theta * xt[i]) * base.w[i].sqrt())
+                    .collect();
+                lack_of_fit(d, &z, st.shared.len() + 1)
+            }
+            None => lof_before.clone(),
+        };
+        if proj_x.is_some() && lof_open(&lof_after) {
+            partial = true;
+            declined.push(decline(t, &best, Some(stab), Some(ratio), format!(
+                "a partial mimic: with it the lack of fit against the replicate runs stays (p = {:.3}, systematic part {:.2}× the noise)",
+                lof_after.as_ref().map_or(f64::NAN, |l| l.p),
+                lof_after.as_ref().map_or(f64::NAN, |l| l.systematic_ratio)
+            )));
+            break;
+        }
+        let rivals = rivals_of(&base, &proj, &screens, &best, &testable, threshold);
+        terms.push(proposed(t, &best, stab, ratio, lof_after, rivals));
+        // Grow the model.
+        match (&tst.column, proj_x) {
+            (Some(x), Some(xt)) => {
+                for (e, v) in st.e.iter_mut().zip(&xt) {
+                    *e -= best.theta * v;
+                }
+                st.shared.push(x.clone());
+            }
+            _ => st.covs.push(tst.g_run.clone().unwrap_or_default()),
+        }
+        st.used.push(best.term);
+    }
+    progress("done", 1.0);
+    let base_open = a.adequacy.unexplained;
+    let last_lof = terms.iter().rev().find_map(|t| t.lack_of_fit_after.clone());
+    let unexplained_after = if terms.is_empty() {
+        base_open
+    } else {
+        partial
+            || !a.adequacy.at_physical_limit.is_empty()
+            || lof_open(&last_lof.or(lof_before.clone()))
+    };
+    let residual_pattern = if unexplained_after {
+        Some(a.adequacy.pattern.unwrap_or("cells"))
+    } else {
+        None
+    };
+    let verdict = verdict_words(&terms, unexplained_after, residual_pattern, &declined);
+    Discovery {
+        data: DataInfo {
+            source: data.source.clone(),
+            rows: d.n(),
+            structure: d.structure.clone(),
+        },
+        catalogue_effects: a.selected.iter().map(|k| k.name()).collect(),
+        terms,
+        unexplained_after,
+        residual_pattern,
+        verdict,
+        lack_of_fit_before: lof_before,
+        declined,
+        not_testable,
+        search: Search {
+            library_size: LIBRARY.len(),
+            tried: testable.len(),
+            threshold,
+            gamma: opts.gamma,
+            first_bar: -threshold - 2.0 * opts.gamma * p.ln(),
+            resamples: opts.resamples,
+            min_stability: opts.min_stability,
+            screen: first_screen,
+        },
+        elapsed_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// Every testable, unused term's screen, best (lowest ΔBIC) first.
+fn screen_all(
+    base: &Base,
+    testable: &[Testable],
+    proj: &Projector,
+    st: &State,
+    runs: &Runs,
+) -> Vec<screen::Screen> {
+    let mut out: Vec<screen::Screen> = testable
+        .iter()
+        .filter(|c| !st.used.contains(&c.term))
+        .filter_map(|c| {
+            let t = &LIBRARY[c.term];
+            let mut r2 = 0.0;
+            let (level, (theta, se, dbic, c_hat)) = match (&c.column, &c.g_run) {
+                (Some(x), _) => {
+                    let xt = proj.project(base, x);
+                    let xa = screen::off_run_mu(base, x);
+                    let norm =
+                        |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
+                    r2 = 1.0 - norm(&xt) / norm(&xa).max(1e-300);
+                    (
+                        Level::WithinRun,
+                        within_evidence(base, &xt, &st.e, st.shared.len())?,
+                    )
+                }
+                (None, Some(g)) => {
+                    let (th, se, db) = between_evidence(runs, g, &st.covs)?;
+                    (Level::Between, (th, se, db, 1.0))
+                }
+                _ => return None,
+            };
+            [theta, se, dbic]
+                .iter()
+                .all(|v| v.is_finite())
+                .then(|| screen::Screen {
+                    term: c.term,
+                    level,
+                    theta,
+                    se,
+                    delta_bic: dbic,
+                    c_hat,
+                    sign_ok: sign_ok(t, theta),
+                    r2_model: r2,
+                })
+        })
+        .collect();
+    out.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+    out
+}
+
+/// The held-out ratio matched to the term's level.
+fn held_out(base: &Base, a: &Assessment, st: &State, c: &Testable) -> Option<Ratio> {
+    let rows = heldout::rows_per_cord(base);
+    match (&c.column, &c.g_run) {
+        (Some(x), _) => {
+            let without = heldout::shape_sse(base, &st.shared);
+            let mut cols = st.shared.clone();
+            cols.push(x.clone());
+            let with = heldout::shape_sse(base, &cols);
+            heldout::ratio(
+                &with,
+                &without,
+                &rows,
+                "each held-out run keeps its own mu; the shape comes from the other cords",
+            )
+        }
+        (None, Some(g)) => {
+            let x0: Vec<Vec<f64>> = (0..g.len())
+                .map(|u| {
+                    std::iter::once(1.0)
+                        .chain(st.covs.iter().map(|cv| cv[u]))
+                        .collect()
+                })
+                .collect();
+            let x1: Vec<Vec<f64>> = x0
+                .iter()
+                .zip(g)
+                .map(|(r, gv)| {
+                    let mut r = r.clone();
+                    r.push(*gv);
+                    r
+                })
+                .collect();
+            let without = heldout::population_sse(base, &a.fit, &x0);
+            let with = heldout::population_sse(base, &a.fit, &x1);
+            heldout::ratio(
+                &with,
+                &without,
+                &rows,
+                "the held-out cord's mu predicted from the other cords",
+            )
+        }
+        _ => None,
+    }
+}
+
+fn decline(
+    t: &Term,
+    s: &screen::Screen,
+    stability: Option<f64>,
+    ratio: Option<Ratio>,
+    reason: String,
+) -> Declined {
+    Declined {
+        name: t.name,
+        delta_bic: s.delta_bic,
+        stability,
+        loco_rmse_ratio: ratio,
+        reason,
+    }
+}
+
+fn rivals_of(
+    base: &Base,
+    proj: &Projector,
+    screens: &[screen::Screen],
+    best: &screen::Screen,
+    testable: &[Testable],
+    threshold: f64,
+) -> Vec<Rival> {
+    let col = |term: usize| {
+        testable
+            .iter()
+            .find(|c| c.term == term)
+            .and_then(|c| c.column.as_ref())
+            .map(|x| proj.project(base, x))
+    };
+    let xb = col(best.term);
+    screens
+        .iter()
+        .filter(|s| s.term != best.term && s.sign_ok)
+        .filter(|s| s.delta_bic < -threshold && s.delta_bic - best.delta_bic <= RIVAL_GAP)
+        .map(|s| {
+            let correlation = match (&xb, col(s.term)) {
+                (Some(a), Some(b)) => {
+                    let w = &base.w;
+                    let ab: f64 = (0..a.len()).map(|i| w[i] * a[i] * b[i]).sum();
+                    let aa: f64 = (0..a.len()).map(|i| w[i] * a[i] * a[i]).sum();
+                    let bb: f64 = (0..a.len()).map(|i| w[i] * b[i] * b[i]).sum();
+                    Some(ab / (aa * bb).sqrt())
+                }
+                _ => None,
+            };
+            Rival {
+                name: LIBRARY[s.term].name,
+                depends_on: LIBRARY[s.term].depends_on,
+                delta_bic: s.delta_bic,
+                correlation,
+            }
+        })
+        .collect()
+}
+
+fn proposed(
+    t: &'static Term,
+    s: &screen::Screen,
+    stab: f64,
+    ratio: Ratio,
+    lof: Option<LackOfFit>,
+    rivals: Vec<Rival>,
+) -> Proposed {
+    let shown = ratio.ci95.hi < 1.0;
+    let rival_words = if rivals.is_empty() {
+        String::new()
+    } else {
+        let names: Vec<&str> = rivals.iter().map(|r| r.name).collect();
+        format!(
+            " The data cannot tell it from {} (within {RIVAL_GAP:.0} BIC units).",
+            names.join(", ")
+        )
+    };
+    let words = format!(
+        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4} {}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
+        t.name,
+        t.reading,
+        t.parameter,
+        s.theta,
+        s.se,
+        t.units,
+        s.delta_bic,
+        100.0 * stab,
+        ratio.value,
+        ratio.ci95.lo,
+        ratio.ci95.hi,
+        if shown { ": shown to predict new cords better" } else { ": not shown to predict new cords better" },
+        rival_words
+    );
+    Proposed {
+        name: t.name,
+        formula: t.formula,
+        acts_on: t.acts_on,
+        depends_on: t.depends_on,
+        parameters: BTreeMap::from([(t.parameter, s.theta)]),
+        parameter_se: BTreeMap::from([(t.parameter, s.se)]),
+        units: t.units,
+        delta_bic_given_others: s.delta_bic,
+        stability: stab,
+        loco_rmse_ratio: ratio,
+        shown_to_predict_better: shown,
+        level: s.level,
+        reading: t.reading,
+        source: t.source,
+        lack_of_fit_after: lof,
+        rivals,
+        words,
+    }
+}
+
+fn verdict_words(
+    terms: &[Proposed],
+    unexplained: bool,
+    pattern: Option<&str>,
+    declined: &[Declined],
+) -> String {
+    if !terms.is_empty() {
+        let names: Vec<&str> = terms.iter().map(|t| t.name).collect();
+        let left = if unexplained {
+            format!(
+                " Structure is still left (pattern: {}).",
+                pattern.unwrap_or("cells")
+            )
+        } else {
+            " With it, the lack of fit against the replicate runs is resolved.".to_string()
+        };
+        return format!(
+            "Discovered (a candidate to test, not an established cause): {}.{left}",
+            names.join(" + ")
+        );
+    }
+    let why = declined.first().map_or(String::new(), |d| {
+        format!(
+            " The strongest candidate, {}, was not proposed: {}.",
+            d.name, d.reason
+        )
+    });
+    if unexplained {
+        format!(
+            "Nothing in the library explains what the catalogue leaves (pattern: {}).{why}",
+            pattern.unwrap_or("cells")
+        )
+    } else {
+        format!("Nothing to add: no library term earns its evidence beyond the catalogue.{why}")
+    }
+}

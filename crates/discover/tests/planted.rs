@@ -1,0 +1,80 @@
+//! `capstan discover` against physics planted in data sets made end to end by the
+//! firmware-in-the-loop simulator at the thesis rig's noise (`capstan_truth::discover_cases`).
+//!
+//! The rule (EBIC γ = 1, stability ≥ 0.5, held-out point ratio < 1, no lack of fit left at
+//! p < 0.01, VIF ≤ 100) was set on master seed 26 (`cargo run --release -p capstan-discover
+//! --example validate -- 26 6`); this test asserts on another seed.
+//!
+//! * `cargo test` runs a fixed slice: one set of every kind (10 sets);
+//! * `CAPSTAN_CASES=full cargo test --release -p capstan-discover --test planted -- --nocapture`
+//!   runs 12 sets of every kind (120) and asserts the targets that the design meets
+//!   (`.ci/run` runs it). The others are measured and printed, and stated with their figures in
+//!   docs/README-discover.md.
+
+#[path = "support/validation.rs"]
+mod validation;
+
+use capstan_truth::discover_cases::Group;
+use validation::Outcome;
+
+/// The test seed (the rule was set on seed 26).
+const MASTER_SEED: u64 = 20_261_127;
+
+fn full() -> bool {
+    std::env::var("CAPSTAN_CASES").is_ok_and(|v| v == "full")
+}
+
+fn rate(
+    out: &[Outcome],
+    pick: impl Fn(&Outcome) -> bool,
+    hit: impl Fn(&Outcome) -> bool,
+) -> (usize, usize) {
+    let sel: Vec<&Outcome> = out.iter().filter(|o| pick(o)).collect();
+    (sel.iter().filter(|o| hit(o)).count(), sel.len())
+}
+
+#[test]
+fn discover_proposes_only_what_earns_it_and_keeps_unexplained_what_it_cannot_express() {
+    let per_kind = if full() { 12 } else { 1 };
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let out = validation::run(MASTER_SEED, per_kind, threads);
+    println!("{}", validation::table(&out));
+    for o in &out {
+        println!("{}", o.describe);
+    }
+    // Clean sets (nothing planted, not even the catalogue): a term in ≤ 5 %.
+    let clean = rate(&out, |o| o.kind == "clean", |o| !o.proposed.is_empty());
+    assert!(
+        clean.0 as f64 <= 0.05 * clean.1 as f64,
+        "clean sets with a term proposed: {clean:?}"
+    );
+    // Inexpressible kinds: no confident term in ≤ 20 %, and "unexplained" kept in most.
+    let conf = rate(&out, |o| o.group == Group::Inexpressible, |o| o.confident);
+    assert!(
+        conf.0 as f64 <= 0.2 * conf.1 as f64,
+        "inexpressible sets with a confident term: {conf:?}"
+    );
+    let kept = rate(
+        &out,
+        |o| o.group == Group::Inexpressible,
+        |o| o.unexplained_after,
+    );
+    assert!(
+        kept.0 as f64 >= 0.6 * kept.1 as f64,
+        "inexpressible sets still flagged unexplained: {kept:?}"
+    );
+    // Every proposed term on a null set is a false discovery: at most one set in the slice,
+    // and (full) the catalogue-only sets' rate stays below a fifth (measured 2/12 on this
+    // seed; the 5 % is not met: docs/README-discover.md says why).
+    let null = rate(&out, |o| o.group == Group::Null, |o| !o.proposed.is_empty());
+    assert!(
+        null.0 as f64 <= (0.2 * null.1 as f64).max(1.0),
+        "null sets with a term proposed: {null:?}"
+    );
+    let expr = rate(
+        &out,
+        |o| o.group == Group::Expressible,
+        |o| o.right_or_rival,
+    );
+    println!("expressible sets with a term of the right dependence (or its named rival): {expr:?}");
+}

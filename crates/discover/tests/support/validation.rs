@@ -1,0 +1,123 @@
+//! Scoring `capstan discover` on planted sets (shared by tests/planted.rs and
+//! examples/validate.rs; each uses part of it).
+#![allow(dead_code)]
+
+use capstan_discover::{discover, Discovery, Options};
+use capstan_truth::discover_cases::{self, DiscoverCase, Group, KINDS};
+use std::collections::BTreeSet;
+
+/// One set's outcome.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    pub kind: &'static str,
+    pub group: Group,
+    pub size: f64,
+    pub proposed: Vec<&'static str>,
+    /// A proposed term has the right dependence.
+    pub right: bool,
+    /// ... or a rival of a proposed term has it.
+    pub right_or_rival: bool,
+    /// A term proposed and the lack of fit resolved.
+    pub confident: bool,
+    pub unexplained_after: bool,
+    pub elapsed_s: f64,
+    pub describe: String,
+}
+
+fn deps(d: &[capstan_discover::library::Var]) -> BTreeSet<&'static str> {
+    d.iter().map(|v| v.name()).collect()
+}
+
+pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
+    let ok = |set: BTreeSet<&'static str>| {
+        c.kind
+            .right
+            .iter()
+            .any(|r| r.iter().copied().collect::<BTreeSet<_>>() == set)
+    };
+    let right = d.terms.iter().any(|t| ok(deps(t.depends_on)));
+    let right_or_rival = right
+        || d.terms
+            .iter()
+            .any(|t| t.rivals.iter().any(|r| ok(deps(r.depends_on))));
+    Outcome {
+        kind: c.kind.name,
+        group: c.kind.group,
+        size: c.size,
+        proposed: d.terms.iter().map(|t| t.name).collect(),
+        right,
+        right_or_rival,
+        confident: !d.terms.is_empty() && !d.unexplained_after,
+        unexplained_after: d.unexplained_after,
+        elapsed_s: d.elapsed_s,
+        describe: format!(
+            "{} {:+.3}: cat {:?} lof {:?} | {:?} unexplained_after={} declined={:?}",
+            c.kind.name,
+            c.size,
+            d.catalogue_effects,
+            d.lack_of_fit_before
+                .as_ref()
+                .map(|l| (l.p, l.systematic_ratio)),
+            d.terms.iter().map(|t| t.name).collect::<Vec<_>>(),
+            d.unexplained_after,
+            d.declined
+                .iter()
+                .map(|x| (x.name, x.reason.clone()))
+                .collect::<Vec<_>>()
+        ),
+    }
+}
+
+/// Simulate and search `per_kind` sets of every kind (kinds by index `every`-th) on `threads`.
+pub fn run(seed: u64, per_kind: usize, threads: usize) -> Vec<Outcome> {
+    let cases = discover_cases::draw_all(seed, per_kind);
+    let plain: Vec<capstan_truth::cases::Case> = cases.iter().map(|c| c.case.clone()).collect();
+    let data = capstan_truth::score::generate(&plain, threads).unwrap_or_else(|e| panic!("{e}"));
+    let mut opts = Options::default();
+    if let Ok(v) = std::env::var("CAPSTAN_DISCOVER_MAX_R2") {
+        opts.max_r2_model = v.parse().expect("CAPSTAN_DISCOVER_MAX_R2");
+    }
+    opts.engine.threads = 1;
+    let out = std::sync::Mutex::new(vec![None; cases.len()]);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..threads.max(1) {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if i >= cases.len() {
+                    break;
+                }
+                let d = discover(&data[i], &opts, &mut |_, _| {});
+                let o = score(&cases[i], &d);
+                out.lock().unwrap()[i] = Some(o);
+            });
+        }
+    });
+    out.into_inner().unwrap().into_iter().flatten().collect()
+}
+
+/// Counts per kind: (sets, proposed, right, right or rival, confident, unexplained kept).
+pub fn table(out: &[Outcome]) -> String {
+    let mut s = String::from(
+        "| kind | group | sets | term proposed | right dependence | right or named rival | confident (lack of fit resolved) | unexplained kept |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for k in KINDS.iter() {
+        let o: Vec<&Outcome> = out.iter().filter(|o| o.kind == k.name).collect();
+        if o.is_empty() {
+            continue;
+        }
+        let n = |f: &dyn Fn(&Outcome) -> bool| o.iter().filter(|x| f(x)).count();
+        s += &format!(
+            "| {} | {:?} | {} | {} | {} | {} | {} | {} |\n",
+            k.name,
+            k.group,
+            o.len(),
+            n(&|x| !x.proposed.is_empty()),
+            n(&|x| x.right),
+            n(&|x| x.right_or_rival),
+            n(&|x| x.confident),
+            n(&|x| x.unexplained_after)
+        );
+    }
+    s
+}

@@ -1,0 +1,302 @@
+//! `capstan condition RAW --out DIR`: a raw time series into the pairs CSV, by the firmware's
+//! conditioning rules (`crate::condition`).
+
+use crate::condition::levels::Placement;
+use crate::condition::table::{self, Columns};
+use crate::condition::{condition_run, pairs, run_numbers, RunResult, Settings};
+use anyhow::{bail, Context};
+use std::path::PathBuf;
+use std::time::Instant;
+
+const AFTER_HELP: &str = "\
+INPUTS
+  Our raw.csv (capstan log, capstan simulate's raw/), a logger's CSV or tab-separated export
+  with a header, or Logger Pro's text export (File > Export As > Text: \"Vernier Format\"
+  blocks, one per run). The columns are found by name (time / t; t1, force 1 or force;
+  t2, force 2), units from the header: `Force (N)`, `T1 [kgf]`, `t1_n`, `Time (ms)`, or
+  Logger Pro's units line (s, ms, min; N, mN, kN, kgf, gf, lbf). Name them when the header
+  is not clear: --time-column, --t1-column, --t2-column.
+
+LEVELS
+  By default the level changes are found from the tensions themselves (robust to noise,
+  spikes and transients; any order: monotone, up-down, pulse). Or from the protocol:
+  --first-change-s S --dwell-s S (the thesis: 10.5 after the trigger, 10), or from a trigger
+  column (--trigger-column NAME: its rising edge is time zero). The rest before the first
+  level and after the last gives no pair; each level's window is the firmware's: from
+  --window-after-ms after the change to --window-before-ms before the next (2000 and 1000).
+
+OUTPUTS (DIR)
+  pairs.csv    the pairs, in the schema analyze reads
+  levels.csv   every level: run, step, its segment and window (s), samples, means and sds,
+               status (ok, or why no pair: a level never silently dropped)
+  condition.json  what was read (format, columns, units) and done, with timings";
+
+/// Arguments of `capstan condition`.
+#[derive(clap::Args, Debug)]
+#[command(after_long_help = AFTER_HELP)]
+pub struct Args {
+    /// The raw time series.
+    #[arg(value_name = "RAW")]
+    pub raw: PathBuf,
+    /// Output directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// The time column (by its header name, without the unit).
+    #[arg(long, value_name = "NAME")]
+    pub time_column: Option<String>,
+    /// The T1 column.
+    #[arg(long, value_name = "NAME")]
+    pub t1_column: Option<String>,
+    /// The T2 column.
+    #[arg(long, value_name = "NAME")]
+    pub t2_column: Option<String>,
+    /// A logger trigger column: its first rising edge is the run's time zero.
+    #[arg(long, value_name = "NAME")]
+    pub trigger_column: Option<String>,
+    /// The run-number column [default: a column named `run`, if any].
+    #[arg(long, value_name = "NAME")]
+    pub run_column: Option<String>,
+    /// Protocol: the first level change (rest to level 1), s of the file's time (or after the
+    /// trigger's edge; default there the firmware's 10.5). With --dwell-s: the levels from the
+    /// protocol, not found.
+    #[arg(
+        long,
+        value_name = "S",
+        requires = "dwell_s",
+        allow_negative_numbers = true
+    )]
+    pub first_change_s: Option<f64>,
+    /// Protocol: time each level is held, s.
+    #[arg(long, value_name = "S")]
+    pub dwell_s: Option<f64>,
+    /// Levels per run [default: the firmware protocol's, 12]; found from the tensions, a
+    /// different count is reported as a level not found.
+    #[arg(long, value_name = "N")]
+    pub levels: Option<u32>,
+    /// Shortest time between two level changes when finding them, s.
+    #[arg(long, value_name = "S", default_value_t = 3.0)]
+    pub min_dwell_s: f64,
+    /// The window starts this long after a change, ms [default: the firmware's, 2000].
+    #[arg(long, value_name = "MS")]
+    pub window_after_ms: Option<u32>,
+    /// The window ends this long before the next change, ms [default: the firmware's, 1000].
+    #[arg(long, value_name = "MS")]
+    pub window_before_ms: Option<u32>,
+    /// Wrap angle for the pairs, deg (an export does not say it).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub wrap_deg: f64,
+    /// Capstan diameter for the pairs, mm.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    pub diameter_mm: Option<f64>,
+    /// Drive voltage for the pairs, V.
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
+    pub drive_v: Option<f64>,
+    /// The first run's number (runs the file does not number count up from it).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub run: u32,
+    /// Print one JSON object (condition.json) on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn settings(a: &Args) -> anyhow::Result<Settings> {
+    use capstan_data::ranges;
+    ranges::WRAP_DEG.option("--wrap-deg", a.wrap_deg)?;
+    if let Some(d) = a.diameter_mm {
+        ranges::DIAMETER_MM.option("--diameter-mm", d)?;
+    }
+    if let Some(v) = a.drive_v {
+        ranges::DRIVE_V.option("--drive-v", v)?;
+    }
+    let (after, before) = Settings::firmware_windows();
+    let after = a.window_after_ms.map_or(after, |m| m as f64 / 1e3);
+    let before = a.window_before_ms.map_or(before, |m| m as f64 / 1e3);
+    let p = firmware::Protocol::default();
+    // Step 0 (rest) starts `trigger_ms` after the trigger's edge; level 1 a dwell later.
+    let proto_first = (p.trigger_ms + p.dwell_ms) as f64 / 1e3;
+    let levels = a.levels.unwrap_or(p.levels());
+    let placement = match (a.first_change_s, a.dwell_s, &a.trigger_column) {
+        (Some(first), Some(dwell), None) => Placement::Protocol {
+            first_s: first,
+            dwell_s: dwell,
+            levels,
+        },
+        (first, dwell, Some(_)) => Placement::Trigger {
+            first_s: first.unwrap_or(proto_first),
+            dwell_s: dwell.unwrap_or(p.dwell_ms as f64 / 1e3),
+            levels,
+        },
+        (None, Some(_), None) => bail!("--dwell-s needs --first-change-s (or --trigger-column)"),
+        _ => Placement::Detect {
+            min_dwell_s: a.min_dwell_s,
+        },
+    };
+    if let Placement::Protocol { dwell_s, .. } | Placement::Trigger { dwell_s, .. } = &placement {
+        if !(dwell_s.is_finite() && *dwell_s > 0.0) {
+            bail!("--dwell-s {dwell_s}: must be a positive number of seconds");
+        }
+    }
+    if !(a.min_dwell_s.is_finite() && a.min_dwell_s > 0.0) {
+        bail!("--min-dwell-s {}: must be positive", a.min_dwell_s);
+    }
+    Ok(Settings {
+        placement,
+        window_after_s: after,
+        window_before_s: before,
+        levels,
+        wrap_deg: a.wrap_deg,
+        diameter_mm: a.diameter_mm,
+        drive_v: a.drive_v,
+        first_run: a.run,
+    })
+}
+
+/// Run `capstan condition`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let set = settings(&a)?;
+    let names = ["pairs.csv", "levels.csv", "condition.json"];
+    let mut out = crate::outputs::open_out(&a.out, "condition", &names)?.stage()?;
+    let text = std::fs::read(&a.raw).with_context(|| format!("cannot read {}", a.raw.display()))?;
+    let text = String::from_utf8(text).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: not UTF-8 text (at byte {})",
+            a.raw.display(),
+            e.utf8_error().valid_up_to()
+        )
+    })?;
+    let cols = Columns {
+        time: a.time_column.clone(),
+        t1: a.t1_column.clone(),
+        t2: a.t2_column.clone(),
+        trigger: a.trigger_column.clone(),
+        run: a.run_column.clone(),
+    };
+    let t_read = Instant::now();
+    let (series, layout) = table::read(&a.raw, &text, &cols)?;
+    let read_s = t_read.elapsed().as_secs_f64();
+    let t_cond = Instant::now();
+    let numbers = run_numbers(&series, set.first_run);
+    let runs: Vec<RunResult> = series
+        .iter()
+        .zip(&numbers)
+        .map(|(s, &r)| condition_run(s, r, &set))
+        .collect();
+    let pairs = pairs(&runs, &set);
+    let condition_s = t_cond.elapsed().as_secs_f64();
+    let mut csv = Vec::new();
+    capstan_data::write_pairs_to(&mut csv, &pairs)?;
+    out.write("pairs.csv", &csv)?;
+    out.write("levels.csv", levels_csv(&runs).as_bytes())?;
+    let not_found: usize = runs
+        .iter()
+        .map(|r| r.levels.iter().filter(|l| l.status != "ok").count() + r.problems.len())
+        .sum();
+    let json = serde_json::json!({
+        "source": a.raw.display().to_string(),
+        "format": layout.format,
+        "columns": layout.used.iter().map(|(role, text, scale)| serde_json::json!({"role": role, "header": text, "scale": scale})).collect::<Vec<_>>(),
+        "placement": format!("{:?}", set.placement),
+        "window_after_s": set.window_after_s,
+        "window_before_s": set.window_before_s,
+        "runs": runs,
+        "pairs": pairs.len(),
+        "problems": not_found,
+        "elapsed": {"read_s": read_s, "condition_s": condition_s, "total_s": t0.elapsed().as_secs_f64()},
+    });
+    out.write(
+        "condition.json",
+        serde_json::to_string_pretty(&json)?.as_bytes(),
+    )?;
+    out.commit()?;
+    say(&runs, &layout, &a, pairs.len());
+    if a.json {
+        crate::outln!("{}", serde_json::to_string_pretty(&json)?);
+    }
+    if not_found > 0 {
+        bail!(
+            "{not_found} level(s) or run(s) not found (see above and {}/levels.csv); the pairs \
+             found are in {}/pairs.csv",
+            a.out.display(),
+            a.out.display()
+        );
+    }
+    Ok(())
+}
+
+fn f(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.6}")
+    } else {
+        String::new()
+    }
+}
+
+fn levels_csv(runs: &[RunResult]) -> String {
+    let mut s = String::from(
+        "run,step,from_s,to_s,window_from_s,window_to_s,samples,t1_mean_n,t1_sd_n,t2_mean_n,t2_sd_n,status\n",
+    );
+    for l in runs.iter().flat_map(|r| &r.levels) {
+        s += &format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            l.run,
+            l.step,
+            f(l.from_s),
+            f(l.to_s),
+            f(l.window_from_s),
+            f(l.window_to_s),
+            l.samples,
+            f(l.t1.0),
+            f(l.t1.1),
+            f(l.t2.0),
+            f(l.t2.1),
+            capstan_data::text_cell(&l.status)
+        );
+    }
+    s
+}
+
+fn say(runs: &[RunResult], layout: &table::Layout, a: &Args, pairs: usize) {
+    let cols: Vec<String> = layout
+        .used
+        .iter()
+        .map(|(role, text, scale)| format!("{role} = `{text}` (x{scale})"))
+        .collect();
+    crate::errln!(
+        "read {} as {}: {}",
+        a.raw.display(),
+        layout.format,
+        cols.join(", ")
+    );
+    for r in runs {
+        crate::errln!(
+            "run {}{}: {} samples, {} level(s)",
+            r.run,
+            r.label
+                .as_deref()
+                .map_or(String::new(), |l| format!(" ({l})")),
+            r.samples,
+            r.levels.len()
+        );
+        for l in &r.levels {
+            crate::errln!(
+                "  step {:>2}: window {:.3}..{:.3} s, {} samples: T1 {:.4} N, T2 {:.4} N{}",
+                l.step,
+                l.window_from_s,
+                l.window_to_s,
+                l.samples,
+                l.t1.0,
+                l.t2.0,
+                if l.status == "ok" {
+                    String::new()
+                } else {
+                    format!("  ({})", l.status)
+                }
+            );
+        }
+        for p in &r.problems {
+            crate::errln!("  run {}: {p}", r.run);
+        }
+    }
+    crate::errln!("{pairs} pairs -> {}", a.out.join("pairs.csv").display());
+}

@@ -1,0 +1,169 @@
+//! `capstan discover DATA.csv [--json] [--out DIR]`: after the catalogue, search a library of
+//! physically meaningful terms for what is left; propose a term only when it earns its
+//! evidence (with the search paid for), is stable over whole-cord resamples, helps held-out
+//! cords and resolves the lack of fit. See [`capstan_discover`] and docs/README-discover.md.
+
+use capstan_data::{load_pairs, thesis_dataset};
+use capstan_discover::{discover, Discovery, Options};
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// Arguments of `capstan discover`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Pairs CSV (the schema of `capstan analyze`/`diagnose`). Without it, the bundled thesis
+    /// data.
+    pub data: Option<PathBuf>,
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the JSON to DIR/discover.json (the directory is locked and written whole).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Without a `time_s` column, take the times from `step` with the thesis protocol.
+    #[arg(long)]
+    pub protocol_times: bool,
+}
+
+/// Run `capstan discover`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let data = match &args.data {
+        Some(p) => load_pairs(p)?,
+        None => thesis_dataset(),
+    };
+    capstan_data::check_capstan_data(&data)?;
+    // Lock the output directory before the work, not after it.
+    let mut set = match &args.out {
+        Some(dir) => Some(crate::outputs::open_out(dir, "discover", &["discover.json"])?.stage()?),
+        None => None,
+    };
+    let mut opts = Options::default();
+    opts.engine.protocol_times = args.protocol_times;
+    let bar = Progress::new(!args.json && std::io::stderr().is_terminal());
+    let d = discover(&data, &opts, &mut |stage, f| bar.tick(stage, f));
+    bar.finish();
+    if let Some(set) = set.as_mut() {
+        set.keep_on_failure(crate::outputs::say_kept);
+        set.write("discover.json", d.to_json().as_bytes())?;
+    }
+    if let Some(set) = set {
+        set.commit()?;
+    }
+    if args.json {
+        crate::outln!("{}", d.to_json());
+    } else {
+        crate::out!("{}", summary(&d));
+    }
+    Ok(())
+}
+
+/// A progress bar on a terminal, shown once the search has run for a second.
+struct Progress {
+    on: bool,
+    t0: Instant,
+    bar: std::cell::OnceCell<indicatif::ProgressBar>,
+}
+
+impl Progress {
+    fn new(on: bool) -> Self {
+        Progress {
+            on,
+            t0: Instant::now(),
+            bar: std::cell::OnceCell::new(),
+        }
+    }
+
+    fn tick(&self, stage: &str, fraction: f64) {
+        if !self.on || self.t0.elapsed() < Duration::from_secs(1) {
+            return;
+        }
+        let pb = self.bar.get_or_init(|| {
+            let pb = indicatif::ProgressBar::new(100);
+            if let Ok(style) =
+                indicatif::ProgressStyle::with_template("discover {bar:40} {msg} [{elapsed}]")
+            {
+                pb.set_style(style);
+            }
+            pb
+        });
+        pb.set_position((100.0 * fraction.clamp(0.0, 1.0)) as u64);
+        pb.set_message(stage.to_string());
+    }
+
+    fn finish(&self) {
+        if let Some(pb) = self.bar.get() {
+            pb.finish_and_clear();
+        }
+    }
+}
+
+/// The human summary.
+pub fn summary(d: &Discovery) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{}: {} rows", d.data.source, d.data.rows);
+    let _ = writeln!(s, "{}", d.data.structure.statement);
+    let _ = writeln!(
+        s,
+        "catalogue effects: {}",
+        if d.catalogue_effects.is_empty() {
+            "none".to_string()
+        } else {
+            d.catalogue_effects.join(" + ")
+        }
+    );
+    let _ = writeln!(s, "{}", d.verdict);
+    for t in &d.terms {
+        let _ = writeln!(s, "  {}  [{:?} → {}]", t.name, t.acts_on, t.formula);
+        let _ = writeln!(s, "    {}", t.words);
+    }
+    let sr = &d.search;
+    let _ = writeln!(
+        s,
+        "searched {} of {} library terms; bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {} for the search); stability ≥ {:.0} % over {} cord resamples",
+        sr.tried,
+        sr.library_size,
+        sr.first_bar,
+        sr.threshold,
+        sr.tried,
+        100.0 * sr.min_stability,
+        sr.resamples
+    );
+    let _ = writeln!(s, "strongest candidates (ΔBIC given the catalogue):");
+    for r in sr.screen.iter().take(5) {
+        let _ = writeln!(
+            s,
+            "  {:<20} {:>7.1}  θ = {:.4} ± {:.4}{}{}",
+            r.name,
+            r.delta_bic,
+            r.theta,
+            r.se,
+            if r.sign_ok {
+                ""
+            } else {
+                "  (wrong physical sign)"
+            },
+            if r.r2_model > 0.99 {
+                "  (not separable from the catalogue)"
+            } else {
+                ""
+            }
+        );
+    }
+    for x in &d.declined {
+        let _ = writeln!(s, "  not proposed: {}: {}", x.name, x.reason);
+    }
+    if let Some(l) = &d.lack_of_fit_before {
+        let _ = writeln!(
+            s,
+            "lack of fit the catalogue leaves: F = {:.2}, p = {:.4}, systematic part {:.2}× the noise",
+            l.f, l.p, l.systematic_ratio
+        );
+    }
+    for n in &d.not_testable {
+        let _ = writeln!(s, "  not testable: {}: {}", n.name, n.reason);
+    }
+    let _ = writeln!(s, "({:.3} s)", d.elapsed_s);
+    s
+}

@@ -1,0 +1,237 @@
+//! The simulated board behind `capstan rig --sim DIR` and `capstan log --sim DIR`: the
+//! firmware's own code on host-sim (`host_sim::session`), against a simulated rig whose force
+//! sensors have hidden zero and sensitivity errors, kept in `DIR` between commands.
+//!
+//! A real board keeps running between two host commands: its RAM (setup mode, a latched fault,
+//! settings `set` but not stored), its flash and the rig's physical state (the servo's angle, a
+//! weight on a hook) all carry over. Here that state is kept honestly by replay: `DIR` holds
+//! the rig's description (`sim.json`), everything that happened at the bench so far
+//! (`journal.txt`, one step a line) and how many records the board has made (`state.json`);
+//! each command replays the journal in virtual time (deterministic: the same seed, the same
+//! records, bit for bit) and then does its own steps, and the records they produce are the
+//! answer. `flash.bin` is the settings flash afterwards (for inspection; the replay rebuilds
+//! it). `sim-truth.json` is what the firmware cannot see: the sensors' true zeros and
+//! sensitivities, so a rehearsal's calibration can be checked.
+//!
+//! The cost of a command grows with the journal (about 1 s of CPU per 100 s of bench time);
+//! a new `DIR` is a new, unconfigured board.
+
+mod config;
+mod link;
+pub mod steps;
+
+pub use config::{SensorTruth, SimArgs, SimConfig, Truth};
+pub use link::SimLink;
+
+use anyhow::{bail, Context};
+use capstan_link::frame::Event;
+use host_sim::flash::RamFlash;
+use host_sim::session::{run_session, SessionOutput, Step, FLASH_PAGES};
+use std::fs::File;
+use std::path::{Path, PathBuf};
+
+/// The rig's description.
+pub const SIM_JSON: &str = "sim.json";
+/// The truth the firmware cannot see.
+pub const TRUTH_JSON: &str = "sim-truth.json";
+/// The bench so far.
+pub const JOURNAL_TXT: &str = "journal.txt";
+/// Records made so far.
+pub const STATE_JSON: &str = "state.json";
+/// The settings flash after the last command.
+pub const FLASH_BIN: &str = "flash.bin";
+const LOCK: &str = ".lock";
+
+/// After each command, the person at the bench takes this long before the next one, ms (the
+/// board keeps running: live values, a servo moving to where it was sent).
+pub const IDLE_MS: u32 = 2_000;
+
+/// What the replay of the journal must reproduce.
+#[derive(serde::Serialize, serde::Deserialize, Default)]
+struct State {
+    /// Records made by the journal's steps.
+    events: usize,
+    /// The last record's sequence number and boot, to check the replay.
+    last: Option<(u32, u32)>,
+    /// Command lines of the journal that got no answer.
+    unanswered: usize,
+}
+
+/// A simulated board in its directory, locked while a command uses it.
+pub struct SimBoard {
+    dir: PathBuf,
+    config: SimConfig,
+    journal: Vec<Step>,
+    state: State,
+    _lock: File,
+}
+
+/// What a command's steps produced.
+pub struct Advance {
+    /// The records the board made, in order.
+    pub events: Vec<Event>,
+    /// Command lines the board did not answer.
+    pub unanswered: Vec<String>,
+}
+
+impl SimBoard {
+    /// Open the board in `args.dir`, creating a new one (and saying so through `say`) if the
+    /// directory does not exist or is empty.
+    pub fn open(args: &SimArgs, say: &mut dyn FnMut(String)) -> anyhow::Result<SimBoard> {
+        let dir = args.sim.clone().context("--sim DIR is needed")?;
+        let fresh = !dir.join(SIM_JSON).exists();
+        if fresh {
+            let empty = match std::fs::read_dir(&dir) {
+                Ok(mut d) => d.next().is_none(),
+                Err(_) => !dir.exists(),
+            };
+            if !empty {
+                bail!(
+                    "--sim {}: the directory is not a simulated board (no {SIM_JSON}) and is not \
+                     empty; give a new directory (it is created)",
+                    dir.display()
+                );
+            }
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        let lock = lock(&dir)?;
+        let config = if fresh {
+            let c = SimConfig::from_args(args)?;
+            let truth = c.truth()?;
+            write_json(&dir.join(SIM_JSON), &c)?;
+            write_json(&dir.join(TRUTH_JSON), &truth)?;
+            std::fs::write(dir.join(JOURNAL_TXT), "")?;
+            write_json(&dir.join(STATE_JSON), &State::default())?;
+            say(format!(
+                "capstan: a new simulated board in {} (seed {}), unconfigured; its sensors' true \
+                 zeros and sensitivities are in {}",
+                dir.display(),
+                c.seed,
+                dir.join(TRUTH_JSON).display()
+            ));
+            c
+        } else {
+            let c: SimConfig = read_json(&dir.join(SIM_JSON))?;
+            c.check_same(args)?;
+            c
+        };
+        let text = std::fs::read_to_string(dir.join(JOURNAL_TXT))
+            .with_context(|| format!("cannot read {}", dir.join(JOURNAL_TXT).display()))?;
+        let journal = steps::parse_journal(&text, &dir.join(JOURNAL_TXT))?;
+        let state: State = read_json(&dir.join(STATE_JSON))?;
+        Ok(SimBoard {
+            dir,
+            config,
+            journal,
+            state,
+            _lock: lock,
+        })
+    }
+
+    /// The board's directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The rig's description.
+    pub fn config(&self) -> &SimConfig {
+        &self.config
+    }
+
+    /// Replay the bench so far, then do `steps`; the records they produced. The steps join the
+    /// journal (the board's state now includes them).
+    pub fn advance(&mut self, steps: &[Step]) -> anyhow::Result<Advance> {
+        let mut all = self.config.sensor_steps();
+        all.extend(self.journal.iter().cloned());
+        all.extend(steps.iter().cloned());
+        let out = run_session(
+            &self.config.session_spec()?,
+            RamFlash::new(FLASH_PAGES),
+            &all,
+        )
+        .map_err(|e| anyhow::anyhow!("the simulated rig cannot be set up: {e:?}"))?;
+        self.check_replay(&out)?;
+        let events: Vec<Event> = out.events[self.state.events..]
+            .iter()
+            .map(|e| Event::Record {
+                seq: e.seq,
+                record: e.record,
+            })
+            .collect();
+        let earlier = self.state.unanswered.min(out.unanswered.len());
+        let unanswered = out.unanswered[earlier..].to_vec();
+        self.journal.extend(steps.iter().cloned());
+        self.state = State {
+            events: out.events.len(),
+            last: out.events.last().map(|e| (e.seq, e.boot)),
+            unanswered: out.unanswered.len(),
+        };
+        self.save(&out)?;
+        Ok(Advance { events, unanswered })
+    }
+
+    /// The replay must reproduce the records the board made before (a changed simulator, or a
+    /// journal edited by hand, would make a different board).
+    fn check_replay(&self, out: &SessionOutput) -> anyhow::Result<()> {
+        let n = self.state.events;
+        let same = n <= out.events.len()
+            && match (self.state.last, n.checked_sub(1)) {
+                (Some(last), Some(i)) => (out.events[i].seq, out.events[i].boot) == last,
+                (None, None) => true,
+                _ => false,
+            };
+        if !same {
+            bail!(
+                "the simulated board in {} no longer replays as it ran (its journal was edited, \
+                 or this capstan's simulator differs from the one that made it): start a new \
+                 board in a new directory",
+                self.dir.display()
+            );
+        }
+        Ok(())
+    }
+
+    fn save(&self, out: &SessionOutput) -> anyhow::Result<()> {
+        let text = steps::journal_text(&self.journal);
+        write_atomic(&self.dir.join(JOURNAL_TXT), text.as_bytes())?;
+        write_json(&self.dir.join(STATE_JSON), &self.state)?;
+        write_atomic(&self.dir.join(FLASH_BIN), out.flash.bytes())
+    }
+}
+
+fn lock(dir: &Path) -> anyhow::Result<File> {
+    let path = dir.join(LOCK);
+    let f = File::options()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .with_context(|| format!("cannot open {}", path.display()))?;
+    if f.try_lock().is_err() {
+        bail!(
+            "the simulated board in {} is in use by another capstan command: one command at a \
+             time talks to a board",
+            dir.display()
+        );
+    }
+    Ok(f)
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, v: &T) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(v).expect("serialises") + "\n";
+    write_atomic(path, text.as_bytes())
+}
+
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> anyhow::Result<T> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{} is damaged", path.display()))
+}
+
+/// Write through a temporary file and a rename: a command stopped half-way leaves the old file.
+fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))
+}

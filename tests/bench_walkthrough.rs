@@ -1,0 +1,188 @@
+//! The README's bench walk-through ("Setting up the rig at the bench"), run as written on the
+//! simulated board: its shell blocks, in order, with `BOARD="--sim DIR"` for the board's
+//! options. Every command must succeed; the calibration it stores must be the simulated
+//! sensors' true one (the truth in DIR/sim-truth.json, hidden from the firmware), and the runs
+//! it logs must be what `analyze` reads.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SECTION: &str = "### Setting up the rig at the bench";
+const SECTION_END: &str = "### Configuration";
+
+/// The section's `sh` blocks, in order, joined.
+fn walkthrough_script() -> String {
+    let readme = include_str!("../README.md");
+    let start = readme
+        .find(SECTION)
+        .expect("the README has the walk-through");
+    let end = start + readme[start..].find(SECTION_END).expect("and its end");
+    let mut script = String::new();
+    let mut inside = false;
+    for line in readme[start..end].lines() {
+        let t = line.trim();
+        if t == "```sh" {
+            inside = true;
+        } else if t == "```" {
+            inside = false;
+        } else if inside {
+            script.push_str(t);
+            script.push('\n');
+        }
+    }
+    script
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("capstan-bench-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn the_readme_walkthrough_runs_on_the_simulated_board_and_stores_the_true_calibration() {
+    let script = walkthrough_script();
+    let board_line = script
+        .lines()
+        .find(|l| l.starts_with("BOARD="))
+        .expect("the walk-through sets BOARD");
+    assert!(board_line.contains("--chip RP2040"), "{board_line}");
+    for needed in [
+        "rig setup",
+        "rig zero",
+        "rig weigh t1",
+        "rig store",
+        "capstan log $BOARD",
+    ] {
+        assert!(script.contains(needed), "the walk-through has `{needed}`");
+    }
+    let script = script.replace(board_line, "BOARD=\"--sim rehearsal\"");
+    let dir = tmp("walk");
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_capstan"));
+    let path = format!(
+        "{}:{}",
+        bin.parent().unwrap().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(format!("set -eu\n{script}"))
+        .current_dir(&dir)
+        .env("PATH", path)
+        .output()
+        .expect("bash runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "the walk-through failed:\n{script}\n--- stdout\n{stdout}\n--- stderr\n{stderr}"
+    );
+    assert!(!stdout.contains("refused"), "{stdout}");
+    // After the power cycle the board says where its settings came from.
+    assert!(stdout.contains("loaded from flash at boot"), "{stdout}");
+
+    // The stored calibration against the hidden truth: within 1 %.
+    let truth = json(&dir.join("rehearsal/sim-truth.json"));
+    let summary = json(&dir.join("runs/first/summary.json"));
+    let runs = summary["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 3, "{summary}");
+    for run in runs {
+        assert_eq!(run["complete"], true, "{run}");
+        for ch in ["t1", "t2"] {
+            let stored = run["calibration"][format!("{ch}_n_per_count")]
+                .as_f64()
+                .unwrap();
+            let true_npc = truth[ch]["n_per_count"].as_f64().unwrap();
+            let err = stored / true_npc - 1.0;
+            assert!(
+                err.abs() < 0.01,
+                "{ch}: stored {stored} N/count, true {true_npc} ({:+.2} %)",
+                err * 100.0
+            );
+        }
+        assert_eq!(run["capstan_diameter_mm"]["value"], 12.7, "{run}");
+        assert_eq!(run["wrap_deg"]["value"], 360.0, "{run}");
+    }
+    // The sensors' errors were large enough to matter: uncalibrated, one would read > 1 % off.
+    let off = ["t1", "t2"]
+        .iter()
+        .map(|ch| (truth[ch]["vs_nominal"].as_f64().unwrap() - 1.0).abs())
+        .fold(0.0, f64::max);
+    assert!(off > 0.01, "seed 1's sensors are off by {off}");
+    // analyze read the runs.
+    assert!(
+        dir.join("runs/first-report/metrics.json").is_file(),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn rig(dir: &Path, board: &str, words: &str) -> (bool, String) {
+    let mut args = vec!["rig", "--sim", board];
+    args.extend(words.split(' '));
+    let o = Command::new(env!("CARGO_BIN_EXE_capstan"))
+        .args(&args)
+        .current_dir(dir)
+        .output()
+        .expect("capstan runs");
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    (o.status.success(), text)
+}
+
+/// The rehearsal goes through the firmware's safety rules, not around them: a zero under load
+/// that would blind the over-force check is refused, a weight over the limit latches a fault,
+/// a run needs `ack` after it, a tare under load ends the run, and the board keeps all of
+/// that between commands.
+#[test]
+fn the_simulated_board_keeps_the_safety_rules_between_commands() {
+    let dir = tmp("safety");
+    let ok = |words: &str| {
+        let (ok, text) = rig(&dir, "b", words);
+        assert!(ok, "`rig {words}` failed: {text}");
+        text
+    };
+    let refused = |words: &str, why: &str| {
+        let (ok, text) = rig(&dir, "b", words);
+        assert!(!ok && text.contains(why), "`rig {words}`: {text}");
+    };
+    ok("setup");
+    ok("bench load t1 30");
+    refused("zero", "over-force limit would read above the rail");
+    assert!(ok("bench load t1 47").contains("FAULT over_force on T1"));
+    refused("run", "a fault is latched");
+    ok("bench unload");
+    // Still latched in the next command: the board kept it.
+    refused("setup", "a fault is latched");
+    ok("ack");
+    ok("bench load t2 20");
+    let log = |out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_capstan"))
+            .args(["log", "--sim", "b", "--start", "--runs", "1", "--out", out])
+            .current_dir(&dir)
+            .output()
+            .expect("capstan runs")
+    };
+    let o = log("loaded");
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(text.contains("FAULT tare_load"), "{text}");
+    ok("bench unload");
+    // The tare fault is latched: the run command is refused, no run is recorded.
+    let o = log("unacknowledged");
+    assert!(
+        !o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    ok("ack");
+    let o = log("clean");
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{text}");
+    assert!(text.contains("12 pairs"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

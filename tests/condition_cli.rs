@@ -1,0 +1,423 @@
+//! `capstan condition` as a user meets it: a 30 Hz logger export made from the simulated rig
+//! (the thesis's LabPro rate, a logger's noise, the rig's own transients), in Logger Pro's
+//! text format, conditioned into pairs that match the firmware's own pairs within their
+//! noise, for monotone and up-down orders; a level that cannot be found is reported, never
+//! dropped; a bad cell is named by file, line and column.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn capstan(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_capstan"))
+        .args(args)
+        .output()
+        .expect("capstan runs")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("capstan-cond-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A seeded normal deviate stream (xorshift + Box-Muller), for the logger's noise.
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (a, b) = (self.uniform(), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+    }
+}
+
+fn csv_rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect()
+}
+
+/// The thesis logger: 30 Hz.
+const LOGGER_HZ: f64 = 30.0;
+/// A LabPro force channel's noise, N (sd).
+const LOGGER_NOISE_N: f64 = 0.05;
+/// The thesis logged 140 s.
+const LOGGED_S: f64 = 140.0;
+
+/// Simulate one run in `order`; its firmware pairs (step, T1, T2) and the raw samples
+/// (t, T1, T2) at the raw log's 100 Hz.
+/// (step, T1, T2) pairs and (t, T1, T2) samples.
+type Simulated = (Vec<(u32, f64, f64)>, Vec<(f64, f64, f64)>);
+
+fn simulate(dir: &Path, order: &str) -> Simulated {
+    let out = dir.join("sim");
+    let o = capstan(&[
+        "simulate",
+        "--out",
+        out.to_str().unwrap(),
+        "--runs",
+        "1",
+        "--wraps",
+        "360",
+        "--diameters",
+        "12.7",
+        "--order",
+        order,
+        "--seed",
+        "7",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pairs = csv_rows(&out.join("pairs.csv"))
+        .iter()
+        .map(|r| {
+            (
+                r[4].parse().unwrap(),
+                r[6].parse().unwrap(),
+                r[7].parse().unwrap(),
+            )
+        })
+        .collect();
+    let raw = csv_rows(&out.join("raw/d12.7_w360_v10_run1.csv"))
+        .iter()
+        .map(|r| {
+            (
+                r[0].parse().unwrap(),
+                r[3].parse().unwrap(),
+                r[4].parse().unwrap(),
+            )
+        })
+        .collect();
+    (pairs, raw)
+}
+
+/// The raw samples as a LabPro would log them: from the trigger, every 1/30 s, the sample
+/// nearest, plus the logger's noise; after the run, the rig at rest until 140 s. In Logger
+/// Pro's text export ("Vernier Format 2").
+fn logger_pro_export(raw: &[(f64, f64, f64)], seed: u64) -> String {
+    let mut noise = Noise(seed);
+    let rest = raw[..20]
+        .iter()
+        .fold((0.0, 0.0), |a, r| (a.0 + r.1 / 20.0, a.1 + r.2 / 20.0));
+    let mut s = String::from(
+        "Vernier Format 2\nthesis.cmbl 11/27/2026 10:00:00 .\nLatest\nTime\tForce\tForce 2\nt\tF\tF2\ns\tN\tN\n\n",
+    );
+    let mut j = 0;
+    for i in 0..(LOGGED_S * LOGGER_HZ) as usize {
+        let t = i as f64 / LOGGER_HZ;
+        while j + 1 < raw.len() && raw[j + 1].0 <= t {
+            j += 1;
+        }
+        let (t1, t2) = if t <= raw[raw.len() - 1].0 {
+            (raw[j].1, raw[j].2)
+        } else {
+            rest
+        };
+        let (n1, n2) = (noise.normal(), noise.normal());
+        s += &format!(
+            "{t:.4}\t{:.3}\t{:.3}\n",
+            t1 + LOGGER_NOISE_N * n1,
+            t2 + LOGGER_NOISE_N * n2
+        );
+    }
+    s
+}
+
+/// (step, samples, T1 mean, T1 sd, T2 mean, T2 sd, status) from levels.csv.
+fn levels(dir: &Path) -> Vec<(u32, f64, f64, f64, f64, f64, String)> {
+    csv_rows(&dir.join("levels.csv"))
+        .iter()
+        .map(|r| {
+            let f = |i: usize| r[i].parse::<f64>().unwrap_or(f64::NAN);
+            (
+                r[1].parse().unwrap(),
+                f(6),
+                f(7),
+                f(8),
+                f(9),
+                f(10),
+                r[11].clone(),
+            )
+        })
+        .collect()
+}
+
+fn check_order(order: &str) {
+    let dir = tmp(order);
+    let (fw_pairs, raw) = simulate(&dir, order);
+    assert_eq!(fw_pairs.len(), 12, "{order}: the firmware's 12 levels");
+    let export = dir.join("run1.txt");
+    std::fs::write(&export, logger_pro_export(&raw, 11)).unwrap();
+    let out = dir.join("pairs");
+    let o = capstan(&[
+        "condition",
+        export.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+        "--diameter-mm",
+        "12.7",
+        "--drive-v",
+        "10",
+        "--json",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{order}: {stderr}");
+    assert!(stderr.contains("as logger-pro"), "{stderr}");
+    let found = levels(&out);
+    assert_eq!(found.len(), 12, "{order}: every level found\n{stderr}");
+    for ((step, n, t1, sd1, t2, sd2, status), (fw_step, fw1, fw2)) in found.iter().zip(&fw_pairs) {
+        assert_eq!(status, "ok");
+        assert_eq!(step, fw_step);
+        // The window holds the firmware's 7 s at 30 Hz.
+        assert!(
+            (*n - 7.0 * LOGGER_HZ).abs() <= 8.0,
+            "{order} step {step}: {n} samples"
+        );
+        // Within the noise of the logger's mean (4 sd of it), plus 5 mN for the rig's own
+        // drift inside a window the change detection places a sample or so later.
+        for (mean, sd, fw, ch) in [(t1, sd1, fw1, "T1"), (t2, sd2, fw2, "T2")] {
+            let tol = 4.0 * sd / n.sqrt() + 0.005;
+            assert!(
+                (mean - fw).abs() <= tol,
+                "{order} step {step} {ch}: {mean} against the firmware's {fw} (tolerance {tol})"
+            );
+            // The noise seen is the logger's.
+            assert!(
+                *sd > 0.8 * LOGGER_NOISE_N && *sd < 1.5 * LOGGER_NOISE_N,
+                "{sd}"
+            );
+        }
+    }
+    // Placed by the protocol instead of found: the firmware's windows, the same pairs.
+    let proto = dir.join("protocol");
+    let o = capstan(&[
+        "condition",
+        export.to_str().unwrap(),
+        "--out",
+        proto.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+        "--first-change-s",
+        "10.5",
+        "--dwell-s",
+        "10",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for ((step, n, t1, sd1, _, _, _), (_, fw1, _)) in levels(&proto).iter().zip(&fw_pairs) {
+        let tol = 4.0 * sd1 / n.sqrt() + 0.005;
+        assert!(
+            (t1 - fw1).abs() <= tol,
+            "{order} protocol step {step}: {t1} against {fw1}"
+        );
+    }
+    // The pairs are what analyze reads.
+    let pairs = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
+    assert!(pairs.starts_with("capstan_diameter_mm,wrap_deg,drive_v,run,step,time_s,t1_n,t2_n"));
+    assert_eq!(pairs.lines().count(), 13);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_30_hz_logger_pro_export_gives_the_firmwares_pairs_monotone() {
+    check_order("monotone");
+}
+
+#[test]
+fn a_30_hz_logger_pro_export_gives_the_firmwares_pairs_updown() {
+    check_order("updown");
+}
+
+/// A level the series lacks (the logger dropped 8 s of it) is reported, by the count of
+/// levels found and, with the protocol, as that level's window without samples.
+#[test]
+fn a_level_that_cannot_be_found_is_reported_never_dropped() {
+    let dir = tmp("missing");
+    let (_, raw) = simulate(&dir, "monotone");
+    let text = logger_pro_export(&raw, 3);
+    // Step 4 of the thesis protocol: 40.5 to 50.5 s after the trigger. Cut 41-50 s.
+    let cut: String = text
+        .lines()
+        .filter(
+            |l| match l.split('\t').next().and_then(|t| t.parse::<f64>().ok()) {
+                Some(t) => !(41.0..50.0).contains(&t),
+                None => true,
+            },
+        )
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let export = dir.join("cut.txt");
+    std::fs::write(&export, cut).unwrap();
+    let run = |extra: &[&str], out: &str| {
+        let out = dir.join(out);
+        let mut args = vec![
+            "condition",
+            export.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--wrap-deg",
+            "360",
+        ];
+        args.extend(extra);
+        (capstan(&args), out)
+    };
+    let (o, out) = run(&[], "found");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    // Found from the tensions: the gap is a level whose window holds no sample (or, were it
+    // merged into a neighbour, one level fewer than the 12 expected), said either way.
+    assert!(
+        stderr.contains("not found") || stderr.contains("12 expected"),
+        "{stderr}"
+    );
+    assert!(
+        out.join("levels.csv").is_file(),
+        "the levels found are kept"
+    );
+    let (o, out) = run(&["--first-change-s", "10.5", "--dwell-s", "10"], "protocol");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    let lv = levels(&out);
+    assert_eq!(lv.len(), 12, "every level of the protocol is listed");
+    let missing: Vec<_> = lv.iter().filter(|l| l.6 != "ok").map(|l| l.0).collect();
+    assert_eq!(missing, vec![4], "{lv:?}");
+    assert!(
+        stderr.contains("step  4") && stderr.contains("not found"),
+        "{stderr}"
+    );
+    let pairs = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
+    assert_eq!(
+        pairs.lines().count(),
+        12,
+        "the 11 levels found, and the header"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_cells_are_named_by_file_line_and_column_and_units_are_honoured() {
+    let dir = tmp("bad");
+    let f = dir.join("daq.csv");
+    std::fs::write(&f, "Time (ms),T1 [kgf],T2 [kgf]\n0,0.1,0.2\n33,0.1,zero\n").unwrap();
+    let o = capstan(&[
+        "condition",
+        f.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("daq.csv:3:3:") && stderr.contains("zero"),
+        "{stderr}"
+    );
+    // Ambiguous force columns: the user is asked to name them.
+    std::fs::write(&f, "time,a (N),b (N)\n0,1,2\n").unwrap();
+    let o = capstan(&[
+        "condition",
+        f.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("--t1-column"), "{stderr}");
+    // Units: kgf and ms, read as N and s.
+    let mut s = String::from("Time (ms)\tT1 [kgf]\tT2 [kgf]\n");
+    for i in 0..4200 {
+        let t = i as f64 * 33.333;
+        // The thesis protocol: rest until 10.5 s, 12 levels of 10 s, rest again.
+        let k = ((t / 1000.0 - 0.5) / 10.0).floor();
+        let level = if (1.0..=12.0).contains(&k) { k } else { 0.0 };
+        s += &format!("{t:.1}\t{:.4}\t{:.4}\n", 0.1 * level, 0.2 * level);
+    }
+    std::fs::write(&f, s).unwrap();
+    let out = dir.join("units");
+    let o = capstan(&[
+        "condition",
+        f.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let lv = levels(&out);
+    assert_eq!(lv.len(), 12, "{stderr}");
+    assert!((lv[0].2 - 0.1 * 9.80665).abs() < 1e-9, "{:?}", lv[0]);
+    assert!((lv[11].4 - 2.4 * 9.80665).abs() < 1e-9, "{:?}", lv[11]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The firmware's own raw log (100 Hz of its 1 kHz samples), conditioned again with the
+/// firmware's windows, gives its pairs (to the noise of a tenth of the samples); with other
+/// windows, the windows asked for.
+#[test]
+fn our_raw_log_reconditioned_gives_the_firmwares_pairs_and_other_windows_on_request() {
+    let dir = tmp("raw");
+    let (fw_pairs, _) = simulate(&dir, "updown");
+    let raw = dir.join("sim/raw/d12.7_w360_v10_run1.csv");
+    let out = dir.join("again");
+    let o = capstan(&[
+        "condition",
+        raw.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lv = levels(&out);
+    assert_eq!(lv.len(), 12);
+    for (l, (step, fw1, fw2)) in lv.iter().zip(&fw_pairs) {
+        assert_eq!(l.0, *step);
+        let tol1 = 4.0 * l.3 / l.1.sqrt() + 0.002;
+        let tol2 = 4.0 * l.5 / l.1.sqrt() + 0.002;
+        assert!(
+            (l.2 - fw1).abs() <= tol1,
+            "step {step}: T1 {} against {fw1}",
+            l.2
+        );
+        assert!(
+            (l.4 - fw2).abs() <= tol2,
+            "step {step}: T2 {} against {fw2}",
+            l.4
+        );
+    }
+    let out = dir.join("late");
+    let o = capstan(&[
+        "condition",
+        raw.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+        "--window-after-ms",
+        "5000",
+        "--window-before-ms",
+        "500",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("levels.csv")).unwrap();
+    for row in text.lines().skip(1) {
+        let c: Vec<f64> = row.split(',').take(6).map(|x| x.parse().unwrap()).collect();
+        assert!(
+            (c[4] - c[2] - 5.0).abs() < 1e-9 && (c[3] - c[5] - 0.5).abs() < 1e-9,
+            "{row}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
