@@ -7,6 +7,7 @@ pub mod condition;
 pub mod diagnose;
 pub mod discover;
 pub mod log;
+pub mod plan;
 pub mod predict;
 pub mod rig;
 pub mod signal;
@@ -34,6 +35,9 @@ pub enum Command {
     /// Search a library of physical terms beyond the catalogue for what is left; propose one
     /// only if it earns its evidence and helps held-out cords.
     Discover(discover::Args),
+    /// Plan the experiment that decides between the hypotheses a data set leaves open, with
+    /// each protocol's chance of deciding from simulated campaigns.
+    Plan(plan::Args),
     /// T2 and amplification from an analysis's fitted model, with a 95 % confidence interval
     /// (the mean curve) and a 95 % prediction interval (a new measurement on a new cord).
     Predict(predict::Args),
@@ -55,6 +59,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Discover(a) => discover::run(a),
+        Command::Plan(a) => plan::run(a),
         Command::Log(a) => log::run(a),
         Command::Predict(a) => predict::run(a),
         Command::Rig(a) => rig::run(a),

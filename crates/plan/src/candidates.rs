@@ -1,0 +1,218 @@
+//! Candidate protocols: the data's own design, and what the rig can do instead — without a
+//! rebuild (`capstan rig set`: order, runs, drive voltage through the amplifier control) or
+//! with a physical change the user makes (more wraps, a second capstan), marked as such.
+
+use capstan_engine::diagnose::Diagnosis;
+use firmware::{Calibration, Protocol, StepOrder};
+use serde::Serialize;
+
+/// Re-tensioning the cord, taring and starting a run: the time between runs, s (an estimate).
+pub const BETWEEN_RUNS_S: f64 = 60.0;
+
+/// A design: what is run, on what, how often.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Design {
+    /// Order of the tension levels.
+    #[serde(serialize_with = "order_name")]
+    pub order: StepOrder,
+    /// Runs per cord.
+    pub runs_per_cord: u32,
+    /// Wrap angles, deg.
+    pub wraps_deg: Vec<f64>,
+    /// Capstan diameters, mm.
+    pub diameters_mm: Vec<f64>,
+    /// Drive voltages, V.
+    pub drive_v: Vec<f64>,
+}
+
+fn order_name<S: serde::Serializer>(o: &StepOrder, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(o.name())
+}
+
+impl Design {
+    /// The design of the diagnosed data (`assumed` gets what it had to guess).
+    pub fn of(d: &Diagnosis, assumed: &mut Vec<String>) -> Design {
+        let g = &d.design;
+        let mut pick = |v: &[f64], default: f64, what: &str| {
+            if v.is_empty() {
+                assumed.push(format!("no {what} in the data: {default} assumed"));
+                vec![default]
+            } else {
+                v.to_vec()
+            }
+        };
+        let diameters_mm = pick(&g.diameters_mm, 25.4, "capstan diameter");
+        let drive_v = pick(&g.drive_v, 10.0, "drive voltage");
+        let wraps_deg = pick(&g.wraps_deg, 360.0, "wrap angle");
+        let runs_per_cord = (g.runs as f64 / g.cords.max(1) as f64).round().max(1.0) as u32;
+        let order = if g.both_directions {
+            StepOrder::UpDown
+        } else {
+            StepOrder::Monotone
+        };
+        Design {
+            order,
+            runs_per_cord,
+            wraps_deg,
+            diameters_mm,
+            drive_v,
+        }
+    }
+
+    /// Cords: one per (wrap, diameter, drive voltage), as the simulator makes them.
+    pub fn cords(&self) -> usize {
+        self.wraps_deg.len() * self.diameters_mm.len() * self.drive_v.len()
+    }
+
+    /// Rig time, h: every run's levels and dwell, and [`BETWEEN_RUNS_S`] between runs.
+    pub fn rig_hours(&self, protocol: &Protocol) -> f64 {
+        let run_s = protocol.end_ms() as f64 / 1000.0 + BETWEEN_RUNS_S;
+        (self.cords() as f64 * self.runs_per_cord as f64 * run_s) / 3600.0
+    }
+
+    /// The `capstan simulate` arguments of the design (the protocol only: no effects, noise,
+    /// seed or output).
+    pub fn simulate_args(&self) -> Vec<String> {
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        let order = match self.order {
+            StepOrder::UpDown => "updown",
+            o => o.name(),
+        };
+        [
+            ("--wraps", list(&self.wraps_deg)),
+            ("--diameters", list(&self.diameters_mm)),
+            ("--drive-v", list(&self.drive_v)),
+            ("--runs", self.runs_per_cord.to_string()),
+            ("--order", order.to_string()),
+        ]
+        .into_iter()
+        .flat_map(|(k, v)| [k.to_string(), v])
+        .collect()
+    }
+}
+
+/// A candidate protocol: a design and how to get there from the data's.
+#[derive(Clone, Debug, Serialize)]
+pub struct Candidate {
+    /// Short name.
+    pub name: String,
+    /// The design.
+    #[serde(rename = "protocol")]
+    pub design: Design,
+    /// The `capstan rig` commands that set the protocol on the board.
+    pub rig_commands: Vec<String>,
+    /// What the person at the rig does with it (runs per cord, switching voltages).
+    pub procedure: Vec<String>,
+    /// What the user must change by hand (none for a protocol the firmware runs as is).
+    pub physical_changes: Vec<String>,
+}
+
+/// The data's design and its variants (the data's own first).
+pub fn candidates(current: &Design) -> Vec<Candidate> {
+    let gain = Calibration::default().amp.amp_gain as f64;
+    let mut out = vec![Candidate {
+        name: "current design".to_string(),
+        design: current.clone(),
+        rig_commands: Vec::new(),
+        procedure: vec![format!(
+            "{} runs on each cord, as before",
+            current.runs_per_cord
+        )],
+        physical_changes: Vec::new(),
+    }];
+    let updown = Design {
+        order: StepOrder::UpDown,
+        ..current.clone()
+    };
+    if current.order != StepOrder::UpDown {
+        out.push(rig_only("up-down order", updown.clone()));
+    }
+    let twice = Design {
+        runs_per_cord: current.runs_per_cord * 2,
+        ..current.clone()
+    };
+    out.push(rig_only("twice the runs per cord", twice));
+    if current.drive_v.len() == 1 {
+        let v = current.drive_v[0];
+        let volts = vec![v, (v / 2.0 * 10.0).round() / 10.0];
+        let control = |x: f64| ((x / gain) * 1000.0).round() / 1000.0;
+        let two_v = Design {
+            drive_v: volts.clone(),
+            ..updown.clone()
+        };
+        let mut c = rig_only("up-down order at two drive voltages", two_v);
+        c.rig_commands.insert(
+            1,
+            format!("capstan rig set amp_control_v {}", control(volts[0])),
+        );
+        c.procedure.push(format!(
+            "then `capstan rig set amp_control_v {}` (drive {} V with amp_gain {gain}) and the \
+             same runs again on every cord",
+            control(volts[1]),
+            volts[1]
+        ));
+        out.push(c);
+    }
+    out.extend(physical(current, &updown));
+    out
+}
+
+fn rig_only(name: &str, design: Design) -> Candidate {
+    let rig_commands = vec![
+        format!("capstan rig set order {}", design.order.name()),
+        "capstan rig store".to_string(),
+    ];
+    let procedure = vec![format!("{} runs on each cord", design.runs_per_cord)];
+    Candidate {
+        name: name.to_string(),
+        design,
+        rig_commands,
+        procedure,
+        physical_changes: Vec::new(),
+    }
+}
+
+/// Designs that need the user's hands: a wide span of wraps, a second capstan.
+fn physical(current: &Design, updown: &Design) -> Vec<Candidate> {
+    let mut out = Vec::new();
+    let span = |v: &[f64]| {
+        v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+    };
+    if current.wraps_deg.len() < 3 || span(&current.wraps_deg) < 300.0 {
+        let mut wraps = current.wraps_deg.clone();
+        wraps.extend([270.0, 450.0, 720.0]);
+        wraps.sort_by(f64::total_cmp);
+        wraps.dedup();
+        let mut c = rig_only(
+            "up-down order over 270-720 degree wraps",
+            Design {
+                wraps_deg: wraps.clone(),
+                ..updown.clone()
+            },
+        );
+        c.physical_changes
+            .push(format!("wrap a new cord at each of {wraps:?} degrees"));
+        out.push(c);
+    }
+    if current.diameters_mm.len() == 1 {
+        let d = current.diameters_mm[0];
+        let other = if d > 19.0 { 12.7 } else { 25.4 };
+        let mut c = rig_only(
+            "up-down order on a second capstan",
+            Design {
+                diameters_mm: vec![d.min(other), d.max(other)],
+                ..updown.clone()
+            },
+        );
+        c.physical_changes.push(format!(
+            "fit a {other} mm capstan and repeat every wrap on it"
+        ));
+        out.push(c);
+    }
+    out
+}

@@ -1,0 +1,151 @@
+//! A design's chance of deciding: campaigns simulated end to end under each hypothesis
+//! (`host-sim`: the firmware's protocol, sampling and conditioning against the plant, with the
+//! data's own cord and run scatter and the thesis rig's within-run noise), diagnosed by the same
+//! engine as the data, and scored by the planted-truth scorer (`capstan-truth`). A campaign
+//! *decides* when it names its hypothesis's effects and nothing else, with no rival left and
+//! nothing unexplained.
+
+use crate::candidates::Design;
+use crate::hypotheses::Hypothesis;
+use capstan_friction::Model;
+use capstan_truth::cases::{Case, Class};
+use capstan_truth::score::{self, Outcome};
+use firmware::Protocol;
+use host_sim::campaign::CampaignConfig;
+use host_sim::noise::NoiseProfile;
+use host_sim::plant::rng::derive_seed;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// What the simulated campaigns share: the data's mu and scatter, and the protocol.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// Euler-Eytelwein's mu of the data.
+    pub mu: f64,
+    /// Cord-to-cord scatter of mu, %.
+    pub cord_pct: f64,
+    /// Run-to-run scatter of mu within cords, %.
+    pub run_pct: f64,
+    /// The run protocol (dwell, windows, levels).
+    pub protocol: Protocol,
+}
+
+/// How often campaigns under one hypothesis decided, and what they said otherwise.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rate {
+    /// The hypothesis (its label).
+    pub hypothesis: String,
+    /// Campaigns simulated.
+    pub campaigns: usize,
+    /// Campaigns that named the hypothesis alone.
+    pub decided: usize,
+    /// `decided / campaigns`.
+    pub p_decide: f64,
+    /// The other answers, with how often each was given.
+    pub otherwise: BTreeMap<String, usize>,
+}
+
+/// The simulator's configuration of `design` under `h`.
+pub fn config(design: &Design, h: &Hypothesis, world: &World, seed: u64) -> CampaignConfig {
+    let mut cfg = CampaignConfig {
+        diameters_mm: design.diameters_mm.clone(),
+        wraps_deg: design.wraps_deg.clone(),
+        drive_vs: design.drive_v.clone(),
+        runs: design.runs_per_cord,
+        order: design.order,
+        effects: h.effects.clone(),
+        model: Model::euler_eytelwein(world.mu),
+        protocol: world.protocol,
+        seed,
+        threads: 1,
+        keep_raw: false,
+        // The planted-truth cases' rig (capstan-truth): sensors that read to the ADC's top
+        // rail, the over-force limit just below it, so a high level of a scattered cord is
+        // measured rather than ending its run.
+        limits: firmware::safety::SafetyLimits {
+            over_force_n: 54.0,
+            rail_high_counts: firmware::hal::ADC_MAX_COUNTS - 4,
+            ..firmware::safety::SafetyLimits::default()
+        },
+        ..CampaignConfig::default()
+    };
+    cfg.plant.sensor.saturation_counts = f64::INFINITY;
+    NoiseProfile::Thesis.apply(&mut cfg);
+    cfg.scatter_pct = world.cord_pct;
+    cfg.run_scatter_pct = Some(world.run_pct);
+    cfg
+}
+
+/// `reps` campaigns of `design` under each hypothesis, seeds from `seed` and `salt`; rates in
+/// hypothesis order.
+pub fn rates(
+    design: &Design,
+    hypotheses: &[Hypothesis],
+    world: &World,
+    reps: usize,
+    (seed, salt): (u64, u64),
+    threads: usize,
+) -> Result<Vec<Rate>, String> {
+    let mut cases = Vec::new();
+    for (i, h) in hypotheses.iter().enumerate() {
+        for r in 0..reps {
+            let s = derive_seed(seed, &[salt, i as u64, r as u64]);
+            cases.push(Case {
+                seed: s,
+                class: if h.effects.is_empty() {
+                    Class::Clean
+                } else {
+                    Class::Single
+                },
+                effects: h.effects.clone(),
+                outside: None,
+                config: config(design, h, world, s),
+                drop_columns: Vec::new(),
+            });
+        }
+    }
+    let outcomes = score::run(&cases, threads, capstan_engine::diagnose::diagnose)?;
+    Ok((hypotheses.iter().zip(outcomes.chunks(reps.max(1))))
+        .map(|(h, o)| rate(h, o))
+        .collect())
+}
+
+fn rate(h: &Hypothesis, outcomes: &[Outcome]) -> Rate {
+    let mut otherwise = BTreeMap::new();
+    let mut decided = 0;
+    for o in outcomes {
+        if decides(o) {
+            decided += 1;
+        } else {
+            *otherwise.entry(answer(o)).or_insert(0) += 1;
+        }
+    }
+    Rate {
+        hypothesis: h.label(),
+        campaigns: outcomes.len(),
+        decided,
+        p_decide: decided as f64 / outcomes.len().max(1) as f64,
+        otherwise,
+    }
+}
+
+/// Named the truth alone: right set, no rival, nothing unexplained.
+pub fn decides(o: &Outcome) -> bool {
+    o.correct() && o.rivals.is_empty()
+}
+
+/// A diagnosis's answer in a few words: the set named, its rivals, unexplained.
+fn answer(o: &Outcome) -> String {
+    let mut names: Vec<&str> = o.found_kinds().iter().map(|k| k.name()).collect();
+    if names.is_empty() {
+        names.push("euler_eytelwein");
+    }
+    let mut s = names.join("+");
+    for (of, rival, _) in &o.rivals {
+        s += &format!(" (rival {rival} for {of})");
+    }
+    if o.unexplained {
+        s += " + unexplained";
+    }
+    s
+}

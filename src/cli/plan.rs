@@ -1,0 +1,155 @@
+//! `capstan plan DATA.csv [--json] [--out DIR] [--hours H]`: the experiment that decides
+//! between the hypotheses a data set leaves open. See [`capstan_plan`].
+
+use capstan_data::{load_pairs, thesis_dataset};
+use capstan_plan::{plan, Options, Plan, Scored};
+use std::fmt::Write as _;
+use std::io::{IsTerminal, Write as _};
+use std::path::PathBuf;
+
+/// Arguments of `capstan plan`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Pairs CSV, read as `diagnose` reads it. Without it, the bundled thesis data.
+    pub data: Option<PathBuf>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write `plan.json` and `plan.txt` into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Rig hours available: longer protocols are ranked but not recommended.
+    #[arg(long, value_name = "H")]
+    pub hours: Option<f64>,
+    /// Simulated campaigns per hypothesis and protocol (more: a finer chance, longer).
+    #[arg(long, default_value_t = 8)]
+    pub reps: usize,
+    /// Master seed of the simulated campaigns.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Run `capstan plan`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(h) = args.hours.filter(|h| !(h.is_finite() && *h > 0.0)) {
+        anyhow::bail!("--hours {h}: must be a number of hours above 0");
+    }
+    if !(1..=1000).contains(&args.reps) {
+        anyhow::bail!("--reps {}: must be 1 to 1000", args.reps);
+    }
+    let data = match &args.data {
+        Some(p) => load_pairs(p)?,
+        None => thesis_dataset(),
+    };
+    capstan_data::check_capstan_data(&data)?;
+    let opts = Options {
+        reps: args.reps,
+        seed: args.seed,
+        max_hours: args.hours,
+        ..Options::default()
+    };
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let pb = indicatif::ProgressBar::new(0);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "planning {bar:40} {pos}/{len} protocols [{elapsed_precise}]",
+            )
+            .expect("a valid template"),
+        );
+        pb
+    });
+    let mut progress = |done: usize, total: usize| {
+        if let Some(pb) = &bar {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        }
+    };
+    let p = plan(&data, &opts, &mut progress).map_err(|e| anyhow::anyhow!("{e}"))?;
+    if let Some(pb) = bar {
+        pb.finish_and_clear();
+    }
+    let json = serde_json::to_string_pretty(&p)?;
+    let text = words(&p, &data.source);
+    if let Some(dir) = &args.out {
+        let mut set = crate::outputs::open_out(dir, "plan", &["plan.json", "plan.txt"])?.stage()?;
+        set.create("plan.json")?.write_all(json.as_bytes())?;
+        set.create("plan.txt")?.write_all(text.as_bytes())?;
+        set.commit()?;
+    }
+    if args.json {
+        crate::outln!("{json}");
+    } else {
+        crate::out!("{text}");
+    }
+    Ok(())
+}
+
+/// The plan in words: what is open, the protocols ranked, the recommendation.
+pub fn words(p: &Plan, source: &str) -> String {
+    let mut s = String::new();
+    let labels: Vec<String> = p.hypotheses.iter().map(|h| h.label()).collect();
+    let _ = writeln!(s, "{source}: open hypotheses: {}", labels.join(" | "));
+    for n in &p.not_simulated {
+        let _ = writeln!(s, "  also open, not simulated: {}: {}", n.what, n.why);
+    }
+    for a in &p.assumed {
+        let _ = writeln!(s, "  assumed: {a}");
+    }
+    let _ = writeln!(
+        s,
+        "\n{:<44} {:>9} {:>12}  per hypothesis",
+        "protocol", "rig hours", "worst chance"
+    );
+    for c in &p.candidates {
+        let per: Vec<String> = (c.per_hypothesis.iter())
+            .map(|r| format!("{} {}/{}", r.hypothesis, r.decided, r.campaigns))
+            .collect();
+        let _ = writeln!(
+            s,
+            "{:<44} {:>9.1} {:>11.0} %  {}",
+            c.candidate.name,
+            c.rig_hours,
+            100.0 * c.p_decide_worst,
+            per.join(", ")
+        );
+    }
+    let _ = writeln!(s);
+    recommendation(&mut s, p, &p.recommended);
+    let _ = writeln!(s, "method: {} ({:.1} s)", p.method, p.elapsed_s);
+    s
+}
+
+fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
+    if p.current_decides {
+        let _ = writeln!(
+            s,
+            "The current design already decides ({:.0} % worst case): run it again as it is.",
+            100.0 * p.current_design.p_decide_worst
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "Recommended: {} — {:.0} % worst-case chance of naming the true hypothesis alone \
+             ({:.1} rig hours), against {:.0} % for the current design ({:.1} h).",
+            r.candidate.name,
+            100.0 * r.p_decide_worst,
+            r.rig_hours,
+            100.0 * p.current_design.p_decide_worst,
+            p.current_design.rig_hours
+        );
+    }
+    for c in &r.candidate.physical_changes {
+        let _ = writeln!(s, "  by hand: {c}");
+    }
+    for c in &r.candidate.rig_commands {
+        let _ = writeln!(s, "  {c}");
+    }
+    for c in &r.candidate.procedure {
+        let _ = writeln!(s, "  then: {c}");
+    }
+    let _ = writeln!(
+        s,
+        "  check it: capstan simulate --out DIR {}",
+        r.simulate_args.join(" ")
+    );
+}
