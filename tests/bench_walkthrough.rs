@@ -186,3 +186,15 @@ fn the_simulated_board_keeps_the_safety_rules_between_commands() {
     assert!(text.contains("12 pairs"), "{text}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A new board whose description is refused leaves nothing behind: the same directory then
+/// makes a board as if it had never been tried.
+#[test]
+fn a_refused_new_board_leaves_its_directory_usable() {
+    let dir = tmp("refused");
+    let (ok, text) = rig(&dir, "b", "--sim-mu -1 show");
+    assert!(!ok, "a negative mu was accepted: {text}");
+    let (ok, text) = rig(&dir, "b", "show");
+    assert!(ok, "the directory was left unusable: {text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

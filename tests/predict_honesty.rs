@@ -116,3 +116,47 @@ fn leave_one_wrap_out_prediction_intervals_cover_and_the_model_beats_euler_eytel
         ee.sqrt()
     );
 }
+
+/// An edited or damaged model is refused by name, never turned into intervals that mean
+/// nothing; the unedited one loads.
+#[test]
+fn an_edited_prediction_model_is_refused() {
+    let dir = std::env::temp_dir().join(format!("capstan-edited-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let a = analysis::run(&capstan_data::thesis_dataset(), Options::default()).unwrap();
+    let ctx = capstan_report::Context::library();
+    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let write = |name: &str, v: &serde_json::Value| {
+        let p = dir.join(name);
+        std::fs::write(&p, serde_json::to_string(v).unwrap()).unwrap();
+        p
+    };
+    assert!(load_model(&write("good.json", &m)).is_ok());
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 7] = [
+        ("covariance", |v| {
+            v["covariance"] = serde_json::json!([[1.0, 0.0], [0.0, 1.0]])
+        }),
+        ("negative variance", |v| {
+            v["covariance"][0][0] = serde_json::json!(-1.0)
+        }),
+        ("mu", |v| v["values"]["mu"] = serde_json::json!(50.0)),
+        ("sd_ln_mu_cord", |v| {
+            v["sd_ln_mu_cord"] = serde_json::json!(-1.0)
+        }),
+        ("folds", |v| v["folds"] = serde_json::json!(1)),
+        ("free", |v| {
+            v["free"][0] = serde_json::json!("no_such_parameter")
+        }),
+        ("range", |v| {
+            v["fitted_range"]["wrap_deg"] = serde_json::json!({"min": 900.0, "max": 100.0})
+        }),
+    ];
+    for (what, edit) in edits {
+        let mut bad = m.clone();
+        edit(&mut bad["prediction_model"]);
+        let err = load_model(&write("bad.json", &bad)).err();
+        assert!(err.is_some(), "an edited {what} was accepted");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -120,12 +120,36 @@ pub fn words(p: &Plan, source: &str) -> String {
 }
 
 fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
+    if !p.within_hours {
+        let _ = writeln!(
+            s,
+            "No candidate protocol fits in the hours given; the shortest ({:.1} h) follows.",
+            r.rig_hours
+        );
+    }
+    if !p.any_decides {
+        let _ = writeln!(
+            s,
+            "No candidate protocol named the true hypothesis alone in any simulated campaign: \
+             none of these decides. The least bad follows; more runs, cords or a different \
+             rig are needed."
+        );
+    }
     if p.current_decides {
         let _ = writeln!(
             s,
-            "The current design already decides ({:.0} % worst case): run it again as it is.",
+            "The current design already decides between the simulated hypotheses ({:.0} % \
+             worst case): run it again as it is.",
             100.0 * p.current_design.p_decide_worst
         );
+        if !p.not_simulated.is_empty() {
+            let _ = writeln!(
+                s,
+                "  ({} more open question(s) above were not simulated: this says nothing about \
+                 them.)",
+                p.not_simulated.len()
+            );
+        }
     } else {
         let _ = writeln!(
             s,

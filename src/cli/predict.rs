@@ -64,10 +64,12 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
             if !(step.is_finite() && step > 0.0) || b < a {
                 bail!("--t1-n {s}: A:B:STEP needs A ≤ B and a step above 0");
             }
-            let n = ((b - a) / step + 1e-9).floor() as usize + 1;
-            if n > MAX_POINTS {
-                bail!("--t1-n {s}: {n} values (at most {MAX_POINTS})");
+            // Counted in f64 first: a tiny step would overflow an integer count.
+            let count = ((b - a) / step + 1e-9).floor() + 1.0;
+            if !(count <= MAX_POINTS as f64) {
+                bail!("--t1-n {s}: {count:.0} values (at most {MAX_POINTS})");
             }
+            let n = count as usize;
             (0..n).map(|k| a + step * k as f64).collect()
         }
         [_] => s
@@ -102,15 +104,88 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
     };
     let schema = pm.get("schema").and_then(Value::as_u64);
     if schema != Some(u64::from(prediction::SCHEMA)) {
+        let found = schema.map_or("none".to_string(), |s| s.to_string());
         bail!(
-            "{}: prediction_model schema {:?}, this capstan reads schema {}",
+            "{}: prediction_model schema {found}, this capstan reads schema {}",
             path.display(),
-            schema,
             prediction::SCHEMA
         );
     }
-    serde_json::from_value(pm.clone())
-        .with_context(|| format!("{}: prediction_model is malformed", path.display()))
+    if pm
+        .get("folds")
+        .and_then(Value::as_u64)
+        .is_some_and(|k| k < 2)
+    {
+        bail!(
+            "{}: the analysis had fewer than two cords to leave out, so its model has no \
+             interval; analyse data with at least two cords",
+            path.display()
+        );
+    }
+    let model: PredictionModel = serde_json::from_value(pm.clone())
+        .with_context(|| format!("{}: prediction_model is malformed", path.display()))?;
+    check_model(&model)
+        .map_err(|e| anyhow::anyhow!("{}: prediction_model: {e}", path.display()))?;
+    Ok(model)
+}
+
+/// What `capstan analyze` writes and a prediction relies on: a finite mu in the catalogue's
+/// range, a square covariance of the free parameters with a non-negative diagonal, scatter and
+/// noise at or above 0, known free parameters, and ranges that are ranges. An edited or damaged
+/// file fails here rather than giving intervals that mean nothing.
+fn check_model(pm: &PredictionModel) -> Result<(), String> {
+    let mu = pm.values.get("mu").copied().unwrap_or(f64::NAN);
+    if !(mu.is_finite() && mu > 0.0 && mu <= 2.0) {
+        return Err(format!(
+            "mu {mu} is not a friction coefficient above 0 and up to 2"
+        ));
+    }
+    if let Some((k, v)) = pm.values.iter().find(|(_, v)| !v.is_finite()) {
+        return Err(format!("{k} = {v} is not a number"));
+    }
+    if let Some(name) = pm.free.iter().find(|n| !pm.values.contains_key(n.as_str())) {
+        return Err(format!("free parameter {name} has no value"));
+    }
+    let n = pm.free.len();
+    let square = pm.covariance.len() == n && pm.covariance.iter().all(|r| r.len() == n);
+    if !square {
+        return Err(format!(
+            "the covariance is not {n} × {n} (one row per free parameter)"
+        ));
+    }
+    for (i, row) in pm.covariance.iter().enumerate() {
+        if row.iter().any(|c| !c.is_finite()) || row[i] < 0.0 {
+            return Err(format!(
+                "covariance row {} is not finite or has a negative variance",
+                i + 1
+            ));
+        }
+    }
+    for (name, v) in [
+        ("sd_ln_mu_cord", pm.sd_ln_mu_cord),
+        ("sd_ln_mu_run", pm.sd_ln_mu_run),
+        ("noise_abs_n", pm.noise_abs_n),
+        ("noise_rel", pm.noise_rel),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!("{name} = {v} must be 0 or more"));
+        }
+    }
+    let r = &pm.fitted_range;
+    for (name, s) in [
+        ("wrap_deg", r.wrap_deg),
+        ("diameter_mm", r.diameter_mm),
+        ("t1_n", r.t1_n),
+        ("drive_v", r.drive_v),
+    ] {
+        if !(s.min.is_finite() && s.max.is_finite() && s.min <= s.max) {
+            return Err(format!(
+                "fitted_range.{name} {} to {} is not a range",
+                s.min, s.max
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Run `capstan predict`.
@@ -210,7 +285,18 @@ mod tests {
             vec![1.0, 1.5, 2.0, 2.5, 3.0]
         );
         assert_eq!(parse_t1_list("1:2.9:1").unwrap(), vec![1.0, 2.0]);
-        for bad in ["", "a", "0", "-1", "3:1:1", "1:2:0", "1:2", "1:1e9:1e-9"] {
+        for bad in [
+            "",
+            "a",
+            "0",
+            "-1",
+            "3:1:1",
+            "1:2:0",
+            "1:2",
+            "1:1e9:1e-9",
+            "1:10:1e-19",
+            "1:10:1e-300",
+        ] {
             assert!(parse_t1_list(bad).is_err(), "{bad}");
         }
     }

@@ -80,9 +80,19 @@ impl SimBoard {
     pub fn open(args: &SimArgs, say: &mut dyn FnMut(String)) -> anyhow::Result<SimBoard> {
         let dir = args.sim.clone().context("--sim DIR is needed")?;
         let fresh = !dir.join(SIM_JSON).exists();
+        // A new board's description is checked before anything is written: a refused option
+        // leaves no directory behind that later commands would take for someone else's.
+        let new_config = if fresh {
+            let c = SimConfig::from_args(args)?;
+            let truth = c.truth()?;
+            Some((c, truth))
+        } else {
+            None
+        };
         if fresh {
+            // Empty, or holding only a lock left by an earlier command that stopped early.
             let empty = match std::fs::read_dir(&dir) {
-                Ok(mut d) => d.next().is_none(),
+                Ok(d) => d.flatten().all(|e| e.file_name() == LOCK),
                 Err(_) => !dir.exists(),
             };
             if !empty {
@@ -96,9 +106,7 @@ impl SimBoard {
                 .with_context(|| format!("cannot create {}", dir.display()))?;
         }
         let lock = lock(&dir)?;
-        let config = if fresh {
-            let c = SimConfig::from_args(args)?;
-            let truth = c.truth()?;
+        let config = if let Some((c, truth)) = new_config {
             write_json(&dir.join(SIM_JSON), &c)?;
             write_json(&dir.join(TRUTH_JSON), &truth)?;
             std::fs::write(dir.join(JOURNAL_TXT), "")?;

@@ -99,6 +99,11 @@ pub struct Plan {
     pub recommended: Scored,
     /// The recommended protocol is the data's own: it already decides.
     pub current_decides: bool,
+    /// Some candidate named every simulated hypothesis alone in at least one campaign (false:
+    /// no protocol here decides, and the recommendation is only the least bad).
+    pub any_decides: bool,
+    /// The recommendation fits in `--hours` (false: nothing does; it is the shortest).
+    pub within_hours: bool,
     /// The data's own design.
     pub current_design: Current,
     /// How the chances were estimated.
@@ -139,6 +144,8 @@ pub fn plan(
     };
     let current_decides = current_design.p_decide_worst >= DECIDES;
     let recommended = recommend(&scored, opts, current_decides).clone();
+    let any_decides = scored.iter().any(|s| s.p_decide_worst > 0.0);
+    let within_hours = opts.max_hours.is_none_or(|h| recommended.rig_hours <= h);
     scored.sort_by(|a, b| {
         (b.p_decide_worst.total_cmp(&a.p_decide_worst)).then(a.rig_hours.total_cmp(&b.rig_hours))
     });
@@ -149,6 +156,8 @@ pub fn plan(
         candidates: scored,
         recommended,
         current_decides,
+        any_decides,
+        within_hours,
         current_design,
         method: format!(
             "simulation: {} campaigns per hypothesis and protocol, each run end to end on the \
@@ -230,8 +239,13 @@ fn recommend<'a>(scored: &'a [Scored], opts: &Options, current_decides: bool) ->
     let best = (scored.iter().filter(within))
         .map(|s| s.p_decide_worst)
         .fold(0.0, f64::max);
+    let shortest = || {
+        (scored.iter())
+            .min_by(|a, b| a.rig_hours.total_cmp(&b.rig_hours))
+            .unwrap_or(&scored[0])
+    };
     (scored.iter().filter(within))
         .filter(|s| s.p_decide_worst >= best - step + 1e-9)
         .min_by(|a, b| a.rig_hours.total_cmp(&b.rig_hours))
-        .unwrap_or(&scored[0])
+        .unwrap_or_else(shortest)
 }
