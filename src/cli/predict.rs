@@ -66,7 +66,7 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
             }
             // Counted in f64 first: a tiny step would overflow an integer count.
             let count = ((b - a) / step + 1e-9).floor() + 1.0;
-            if !(count <= MAX_POINTS as f64) {
+            if count.is_nan() || count > MAX_POINTS as f64 {
                 bail!("--t1-n {s}: {count:.0} values (at most {MAX_POINTS})");
             }
             let n = count as usize;
