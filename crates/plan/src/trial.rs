@@ -59,17 +59,10 @@ pub fn config(design: &Design, h: &Hypothesis, world: &World, seed: u64) -> Camp
         seed,
         threads: 1,
         keep_raw: false,
-        // The planted-truth cases' rig (capstan-truth): sensors that read to the ADC's top
-        // rail, the over-force limit just below it, so a high level of a scattered cord is
-        // measured rather than ending its run.
-        limits: firmware::safety::SafetyLimits {
-            over_force_n: 54.0,
-            rail_high_counts: firmware::hal::ADC_MAX_COUNTS - 4,
-            ..firmware::safety::SafetyLimits::default()
-        },
         ..CampaignConfig::default()
     };
-    cfg.plant.sensor.saturation_counts = f64::INFINITY;
+    // The planted-truth cases' rig: sensors that read to the ADC's top rail.
+    capstan_truth::cases::rail_rig(&mut cfg);
     NoiseProfile::Thesis.apply(&mut cfg);
     cfg.scatter_pct = world.cord_pct;
     cfg.run_scatter_pct = Some(world.run_pct);

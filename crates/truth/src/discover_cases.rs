@@ -154,14 +154,9 @@ fn design(rng: &mut Rng, clean: bool, updown: bool) -> CampaignConfig {
         protocol: short_protocol(),
         threads: 1,
         keep_raw: false,
-        limits: firmware::safety::SafetyLimits {
-            over_force_n: 54.0,
-            rail_high_counts: firmware::hal::ADC_MAX_COUNTS - 4,
-            ..firmware::safety::SafetyLimits::default()
-        },
         ..CampaignConfig::default()
     };
-    cfg.plant.sensor.saturation_counts = f64::INFINITY;
+    crate::cases::rail_rig(&mut cfg);
     NoiseProfile::Thesis.apply(&mut cfg);
     cfg.scatter_pct = thesis::CORD_SCATTER_PCT;
     cfg.run_scatter_pct = Some(thesis::RUN_SCATTER_PCT);
