@@ -198,3 +198,29 @@ fn a_refused_new_board_leaves_its_directory_usable() {
     assert!(ok, "the directory was left unusable: {text}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A session never goes into the simulated board's own directory (nor the board into the
+/// session's): the board's journal and flash stay as they were; and a wrong channel is named
+/// in the refusal's words.
+#[test]
+fn a_session_is_not_written_into_the_boards_directory() {
+    let dir = tmp("into-board");
+    let (ok, text) = rig(&dir, "b", "show");
+    assert!(ok, "{text}");
+    let journal = std::fs::read(dir.join("b/journal.txt")).expect("journal");
+    for out in ["b", "b/session", "."] {
+        let o = Command::new(env!("CARGO_BIN_EXE_capstan"))
+            .args(["log", "--sim", "b", "--start", "--runs", "1", "--out", out])
+            .current_dir(&dir)
+            .output()
+            .expect("capstan runs");
+        let text = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "--out {out} accepted: {text}");
+        assert!(text.contains("choose another --out"), "{text}");
+    }
+    assert_eq!(std::fs::read(dir.join("b/journal.txt")).unwrap(), journal);
+    assert!(!dir.join("b/pairs.csv").exists() && !dir.join("b/session").exists());
+    let (ok, text) = rig(&dir, "b", "weigh t3 2");
+    assert!(!ok && text.contains("weigh t1|t2 NEWTONS"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

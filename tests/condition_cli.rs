@@ -421,3 +421,22 @@ fn our_raw_log_reconditioned_gives_the_firmwares_pairs_and_other_windows_on_requ
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--levels 0` is not a protocol: refused before anything is read or written.
+#[test]
+fn zero_levels_are_refused_at_the_command_line() {
+    let out = tmp("zero-levels").join("out");
+    let o = capstan(&[
+        "condition",
+        "no-such.csv",
+        "--wrap-deg",
+        "360",
+        "--levels",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && text.contains("--levels"), "{text}");
+    assert!(!out.exists(), "refused, yet {} was made", out.display());
+}

@@ -70,8 +70,8 @@ pub struct Args {
     #[arg(long, value_name = "S")]
     pub dwell_s: Option<f64>,
     /// Levels per run [default: the firmware protocol's, 12]; found from the tensions, a
-    /// different count is reported as a level not found.
-    #[arg(long, value_name = "N")]
+    /// different count is reported as a level not found. At least 1.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub levels: Option<u32>,
     /// Shortest time between two level changes when finding them, s.
     #[arg(long, value_name = "S", default_value_t = 3.0)]

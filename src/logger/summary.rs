@@ -293,6 +293,17 @@ impl Summary {
         if self.pairs_incomplete == 0 {
             return None;
         }
+        // A simulated board's records come without a defmt stream: nothing to decode again.
+        if self.source.starts_with("the simulated board") {
+            return Some(format!(
+                "{} pair(s) lack a set-up value or their run number and are in \
+                 {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; the simulated board sends no stream to decode \
+                 again: set them on the board before recording (capstan rig --sim DIR set \
+                 wrap_deg DEG, then set diameter_mm MM; the drive voltage is amp_control_v × \
+                 amp_gain) or give --wrap-deg/--diameter-mm/--drive-v to capstan log --sim",
+                self.pairs_incomplete
+            ));
+        }
         // The stream to decode again: the copy the session saved (from a board or stdin),
         // or the file it was decoded from.
         let saved = dir.join(STREAM_FILE);

@@ -171,7 +171,7 @@ impl CommandError {
     pub const fn message(self) -> &'static str {
         match self {
             CommandError::Unknown => "not a command (setup, leave, jog, servo, zero, weigh, set, show, store, defaults, run, abort, ack)",
-            CommandError::Argument => "a number is missing or is not a number, or the line has too much on it",
+            CommandError::Argument => "an argument is missing or wrong (jog DEG, servo DEG, weigh t1|t2 NEWTONS, set KEY VALUE) or the line has too much on it",
             CommandError::UnknownKey => "not the name of a setting",
             CommandError::TooLong => "the line is longer than 64 bytes",
             CommandError::Running => "a run is in progress: only abort and show are taken",

@@ -22,6 +22,17 @@ pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
             r.option(flag, v)?;
         }
     }
+    if let Some(board) = &args.sim.sim {
+        let (b, o) = (absolute(board), absolute(&args.out));
+        if o.starts_with(&b) || b.starts_with(&o) {
+            bail!(
+                "--out {} and --sim {}: the session would be written into the simulated \
+                 board's directory, or the board's into the session's; choose another --out",
+                args.out.display(),
+                board.display()
+            );
+        }
+    }
     if args.runs == Some(0) {
         bail!("--runs 0: must be 1 or more (the number of complete runs to log)");
     }
@@ -43,6 +54,13 @@ pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The path as the file system resolves it (symbolic links followed where it exists).
+fn absolute(p: &std::path::Path) -> std::path::PathBuf {
+    std::fs::canonicalize(p)
+        .or_else(|_| std::path::absolute(p))
+        .unwrap_or_else(|_| p.to_path_buf())
 }
 
 /// A session without a complete run: it replaced nothing; say why, where what was received
