@@ -130,8 +130,9 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
 }
 
 /// What `capstan analyze` writes and a prediction relies on: a finite mu in the catalogue's
-/// range, a square covariance of the free parameters with a non-negative diagonal, scatter and
-/// noise at or above 0, known free parameters, and ranges that are ranges. An edited or damaged
+/// range, a square covariance of the free parameters with a non-negative diagonal, scatter,
+/// noise and model error at or above 0 (the model error no more than its held-out residuals
+/// leave, and estimated from some rows), known free parameters, and ranges that are ranges. An edited or damaged
 /// file fails here rather than giving intervals that mean nothing.
 fn check_model(pm: &PredictionModel) -> Result<(), String> {
     let mu = pm.values.get("mu").copied().unwrap_or(f64::NAN);
@@ -166,10 +167,32 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
         ("sd_ln_mu_run", pm.sd_ln_mu_run),
         ("noise_abs_n", pm.noise_abs_n),
         ("noise_rel", pm.noise_rel),
+        ("model_error.sd_n", pm.model_error.sd_n),
+        ("model_error.heldout_rms_n", pm.model_error.heldout_rms_n),
+        (
+            "model_error.accounted_rms_n",
+            pm.model_error.accounted_rms_n,
+        ),
     ] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(format!("{name} = {v} must be 0 or more"));
         }
+    }
+    let e = &pm.model_error;
+    // sd² = max(0, heldout² − accounted²): an sd that the residuals cannot give was edited.
+    let most = (e.heldout_rms_n.powi(2) - e.accounted_rms_n.powi(2))
+        .max(0.0)
+        .sqrt();
+    if e.sd_n > most * (1.0 + 1e-9) + 1e-12 {
+        return Err(format!(
+            "model_error.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({most})",
+            e.sd_n, e.heldout_rms_n, e.accounted_rms_n
+        ));
+    }
+    if e.rows == 0 {
+        return Err(
+            "model_error has no held-out rows behind it (no cord had a held-out prediction)".into(),
+        );
     }
     let r = &pm.fitted_range;
     for (name, s) in [
@@ -234,6 +257,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "wrap_deg": args.wrap_deg,
             "diameter_mm": args.diameter_mm,
             "drive_v": drive_v,
+            "model_error_sd_n": pm.model_error.sd_n,
             "from": args.from.display().to_string(),
             "note": pm.note,
         });
@@ -248,6 +272,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.wrap_deg,
             args.diameter_mm,
             drive_v
+        );
+        crate::outln!(
+            "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
+            pm.model_error.sd_n
         );
         crate::outln!(
             "{:>9} {:>10} {:>8} {:>21} {:>21}",

@@ -130,6 +130,13 @@ pub fn rows(a: &Analysis) -> Vec<Row> {
             "1",
             "fraction of T2; no interval computed",
         ),
+        (
+            "model_error.sd_n",
+            "model error in T2 (SD)",
+            pm.model_error.sd_n,
+            "N",
+            "what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; no interval computed",
+        ),
     ] {
         out.push(Row {
             key: key.into(),
