@@ -173,27 +173,44 @@ fn model(args: &Args) -> anyhow::Result<(Model, Vec<Effect>)> {
 /// What made this campaign, for `summary.json`: the program, commit and command line, the
 /// master seed, the plant's mu, the effects, the noise and the unmodelled physics.
 fn provenance(args: &Args, cfg: &CampaignConfig) -> serde_json::Value {
-    let p = crate::provenance::without_input();
     let u = &cfg.unmodelled;
-    serde_json::json!({
-        "program": p.program,
-        "commit": p.commit,
-        "command_line": p.command_line,
-        "seed": cfg.seed,
-        "mu": cfg.model.law.mu,
-        "effects": cfg.effects.iter().map(|e| serde_json::json!({"name": e.kind.name(), "value": e.value})).collect::<Vec<_>>(),
-        "noise": {
+    let mut p = provenance_of(
+        cfg.seed,
+        &cfg.model,
+        &cfg.effects,
+        serde_json::json!({
             "profile": args.noise,
             "sensor_noise": cfg.sensor_noise,
             "cord_scatter_pct": cfg.scatter_pct,
             "run_scatter_pct": cfg.run_scatter_pct,
-        },
-        "unmodelled": {
-            "hysteresis": u.hysteresis,
-            "t2_nonlinearity": u.t2_nonlinearity,
-            "regime_change": u.regime_change,
-        },
-        "faults": args.faults,
+        }),
+    );
+    p["unmodelled"] = serde_json::json!({
+        "hysteresis": u.hysteresis,
+        "t2_nonlinearity": u.t2_nonlinearity,
+        "regime_change": u.regime_change,
+    });
+    p["faults"] = serde_json::json!(args.faults);
+    p
+}
+
+/// What every simulation's provenance says: the program, commit and command line, the master
+/// seed, the plant's mu, the effects (name and value) and `noise`.
+fn provenance_of(
+    seed: u64,
+    model: &Model,
+    effects: &[Effect],
+    noise: serde_json::Value,
+) -> serde_json::Value {
+    let p = crate::provenance::without_input();
+    serde_json::json!({
+        "program": p.program,
+        "commit": p.commit,
+        "command_line": p.command_line,
+        "seed": seed,
+        "mu": model.law.mu,
+        "effects": effects.iter().map(|e| serde_json::json!({"name": e.kind.name(), "value": e.value})).collect::<Vec<_>>(),
+        "noise": noise,
     })
 }
 
