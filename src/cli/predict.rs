@@ -14,17 +14,17 @@ pub struct Args {
     /// The `metrics.json` that `capstan analyze` wrote.
     #[arg(long)]
     pub from: PathBuf,
-    /// Wrap angle, degrees.
-    #[arg(long)]
+    /// Wrap angle, degrees (a negative number is taken as a value and refused by range).
+    #[arg(long, allow_negative_numbers = true)]
     pub wrap_deg: f64,
     /// Capstan diameter, mm.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub diameter_mm: f64,
     /// T1 values, N: a comma list (2,5,10) or a range A:B:STEP (1:20:1, B included).
     #[arg(long, allow_hyphen_values = true)]
     pub t1_n: String,
     /// Drive voltage, V (default: the thesis rig's 10 V).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
     /// Include the fitted sensor terms (offsets, gain): what the rig's sensors would read,
     /// T1 being a reading too. Without it, the physical tensions.
@@ -224,8 +224,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     ] {
         r.option(flag, v)?;
     }
+    capstan_data::ranges::DRIVE_V.option("--drive-v", drive_v)?;
     if !(drive_v.is_finite() && drive_v > 0.0) {
-        bail!("--drive-v {drive_v}: must be above 0 V");
+        bail!(
+            "--drive-v {drive_v}: must be above 0 V (the model is of a capstan driven forwards; \
+             the thesis rig's drive is {DEFAULT_DRIVE_V} V)"
+        );
     }
     let t1 = parse_t1_list(&args.t1_n)?;
     let pm = load_model(&args.from)?;
@@ -236,17 +240,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         t1_n,
         as_measured: args.as_measured,
     };
-    let mut warnings: Vec<String> = Vec::new();
-    for t in &t1 {
-        for w in pm.extrapolates(&q(*t)) {
-            if !warnings.contains(&w) {
-                warnings.push(w);
-            }
-        }
-    }
-    let preds: Vec<_> = t1
-        .iter()
-        .map(|t| prediction::predict(&pm, &q(*t)))
+    let queries: Vec<Query> = t1.iter().map(|t| q(*t)).collect();
+    // One warning per quantity, with the range of the values outside: never one per value.
+    let warnings = pm.extrapolation(&queries);
+    let preds: Vec<_> = (queries.iter())
+        .map(|q| prediction::predict(&pm, q))
         .collect();
     if args.json {
         let out = json!({

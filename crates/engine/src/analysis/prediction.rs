@@ -185,24 +185,83 @@ impl PredictionModel {
             .collect()
     }
 
-    /// True when the query lies outside the fitted data's ranges.
-    pub fn extrapolates(&self, q: &Query) -> Vec<String> {
+    /// Each quantity of a query with its value, the fitted span and its unit.
+    fn quantities(&self, q: &Query) -> [(&'static str, f64, Span, &'static str); 4] {
         let r = &self.fitted_range;
-        let mut out = Vec::new();
-        for (name, v, s, unit) in [
+        [
             ("wrap", q.wrap_deg, r.wrap_deg, "°"),
             ("diameter", q.diameter_mm, r.diameter_mm, " mm"),
             ("T1", q.t1_n, r.t1_n, " N"),
             ("drive voltage", q.drive_v, r.drive_v, " V"),
-        ] {
-            if !s.contains(v) {
-                out.push(format!(
-                    "{name} {v}{unit} is outside the fitted {}{unit} to {}{unit}",
-                    s.min, s.max
-                ));
+        ]
+    }
+
+    /// The query's quantities outside the fitted data's ranges, one sentence each (empty when
+    /// it lies inside them).
+    pub fn extrapolates(&self, q: &Query) -> Vec<String> {
+        self.extrapolation(std::slice::from_ref(q))
+    }
+
+    /// The quantities of `queries` outside the fitted data's ranges: one sentence per quantity,
+    /// however many values lie outside ("wrap 900° is outside the fitted 270° to 720°"; for a
+    /// list, how many lie below and above and their range).
+    pub fn extrapolation(&self, queries: &[Query]) -> Vec<String> {
+        let Some(first) = queries.first() else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (k, (name, v0, s, unit)) in self.quantities(first).into_iter().enumerate() {
+            let values = || queries.iter().map(|q| self.quantities(q)[k].1);
+            if !values().any(|v| !s.contains(v)) {
+                continue;
             }
+            let fitted = format!(
+                "the fitted {}{unit} to {}{unit}",
+                short(s.min),
+                short(s.max)
+            );
+            if values().all(|v| v == v0) {
+                out.push(format!("{name} {}{unit} is outside {fitted}", short(v0)));
+                continue;
+            }
+            let side = |below: bool, word: &str| -> Option<String> {
+                let o: Vec<f64> = values()
+                    .filter(|v| !s.contains(*v) && (*v < s.min) == below)
+                    .collect();
+                let r = Span::of(o.iter().copied());
+                let range = if r.min == r.max {
+                    format!("{}{unit}", short(r.min))
+                } else {
+                    format!("{}{unit} to {}{unit}", short(r.min), short(r.max))
+                };
+                (!o.is_empty()).then(|| format!("{} {word} ({range})", o.len()))
+            };
+            let parts: Vec<String> = [side(true, "below"), side(false, "above")]
+                .into_iter()
+                .flatten()
+                .collect();
+            out.push(format!(
+                "{name} outside {fitted}: {} of {} values",
+                parts.join(", "),
+                queries.len()
+            ));
         }
         out
+    }
+}
+
+/// A value in a sentence: six decimals at most, trailing zeros dropped (a range's 1:30:0.1
+/// steps give 22.500000000000004, which reads 22.5); below 1e-3 in scientific notation.
+fn short(v: f64) -> String {
+    if v != 0.0 && v.abs() < 1e-3 {
+        return format!("{v:.3e}");
+    }
+    let s = format!("{v:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
     }
 }
 
@@ -455,3 +514,17 @@ pub fn build(
 
 /// The reference drive voltage (the thesis's runs) for a query that gives none.
 pub const DEFAULT_DRIVE_V: f64 = REF_DRIVE_V;
+
+#[cfg(test)]
+mod tests {
+    use super::short;
+
+    #[test]
+    fn values_in_warnings_read_short() {
+        assert_eq!(short(22.500000000000004), "22.5");
+        assert_eq!(short(0.072014), "0.072014");
+        assert_eq!(short(720.0), "720");
+        assert_eq!(short(-0.0), "0");
+        assert_eq!(short(1e-7), "1.000e-7");
+    }
+}
