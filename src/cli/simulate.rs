@@ -280,39 +280,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bail!("{flag} is for --two-control (a campaign uses --order)");
         }
     }
-    let (model, effects) = model(&args)?;
-    let mut faults = Vec::new();
-    for f in &args.faults {
-        faults.push(checks::fault(f)?);
-    }
-    let noise: NoiseProfile = args
-        .noise
-        .parse()
-        .map_err(|e| anyhow::anyhow!("--noise {e}"))?;
-    let mut defaults = CampaignConfig::default();
-    noise.apply(&mut defaults);
-    let mut cfg = CampaignConfig {
-        diameters_mm: args.diameters.clone().unwrap_or(defaults.diameters_mm),
-        wraps_deg: args.wraps.clone().unwrap_or(defaults.wraps_deg),
-        drive_vs: args.drive_v.clone(),
-        runs: args.runs.unwrap_or(6),
-        order: args.order.into(),
-        effects,
-        model,
-        scatter_pct: args.scatter.unwrap_or(defaults.scatter_pct),
-        run_scatter_pct: args.run_scatter.or(defaults.run_scatter_pct),
-        unmodelled: unmodelled(&args)?,
-        sensor_noise: !args.no_noise,
-        seed: args.seed,
-        faults,
-        protocol: protocol(&args),
-        plant: plant(&args)?,
-        threads: args.threads.unwrap_or(0),
-        keep_raw: !args.no_raw,
-        ..defaults
-    };
-    cfg.plant.disturbances = noise.disturbances();
-    cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cfg = campaign_config(&args)?;
     // Every file the campaign will write is checked before it runs: none may be the user's
     // own (or a link), `raw` must be a directory of ours.
     let writes = |rel: &str| checks::writes_raw(&cfg, rel);
@@ -324,25 +292,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     crate::outputs::say_recovered(&out);
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
-    let bar = progress_bar(&args, cfg.run_count());
-    let stop = super::signal::stop_flag("simulate");
-    let streamed = stream_campaign(&cfg, stop, &mut |r| {
-        files
-            .add(&r)
-            .with_context(|| format!("writing run {} into {}", r.index, args.out.display()))?;
-        if let Some(pb) = &bar {
-            pb.set_position(r.index as u64);
-        }
-        Ok::<(), anyhow::Error>(())
-    });
-    if let Some(pb) = bar {
-        pb.finish_and_clear();
-    }
-    let stats = match streamed {
-        Ok(s) => s,
-        Err(StreamError::Campaign(e)) => bail!("{e}"),
-        Err(StreamError::Sink(e)) => return Err(e),
-    };
+    let stats = stream(&args, &cfg, &mut files)?;
     if stats.done == 0 {
         // Stopped before a single run was made: nothing to replace the previous results with.
         drop(files);
@@ -375,6 +325,73 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// The campaign the options describe (the noise profile's defaults where none is given),
+/// validated.
+fn campaign_config(args: &Args) -> anyhow::Result<CampaignConfig> {
+    let (model, effects) = model(args)?;
+    let mut faults = Vec::new();
+    for f in &args.faults {
+        faults.push(checks::fault(f)?);
+    }
+    let noise: NoiseProfile = args
+        .noise
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--noise {e}"))?;
+    let mut defaults = CampaignConfig::default();
+    noise.apply(&mut defaults);
+    let mut cfg = CampaignConfig {
+        diameters_mm: args.diameters.clone().unwrap_or(defaults.diameters_mm),
+        wraps_deg: args.wraps.clone().unwrap_or(defaults.wraps_deg),
+        drive_vs: args.drive_v.clone(),
+        runs: args.runs.unwrap_or(6),
+        order: args.order.into(),
+        effects,
+        model,
+        scatter_pct: args.scatter.unwrap_or(defaults.scatter_pct),
+        run_scatter_pct: args.run_scatter.or(defaults.run_scatter_pct),
+        unmodelled: unmodelled(args)?,
+        sensor_noise: !args.no_noise,
+        seed: args.seed,
+        faults,
+        protocol: protocol(args),
+        plant: plant(args)?,
+        threads: args.threads.unwrap_or(0),
+        keep_raw: !args.no_raw,
+        ..defaults
+    };
+    cfg.plant.disturbances = noise.disturbances();
+    cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(cfg)
+}
+
+/// Run the campaign, each run into `files` as it is made, with a progress bar on a terminal;
+/// stops early on Ctrl-C (the stats say so).
+fn stream(
+    args: &Args,
+    cfg: &CampaignConfig,
+    files: &mut output::CampaignWriter,
+) -> anyhow::Result<host_sim::campaign::CampaignStats> {
+    let bar = progress_bar(args, cfg.run_count());
+    let stop = super::signal::stop_flag("simulate");
+    let streamed = stream_campaign(cfg, stop, &mut |r| {
+        files
+            .add(&r)
+            .with_context(|| format!("writing run {} into {}", r.index, args.out.display()))?;
+        if let Some(pb) = &bar {
+            pb.set_position(r.index as u64);
+        }
+        Ok::<(), anyhow::Error>(())
+    });
+    if let Some(pb) = bar {
+        pb.finish_and_clear();
+    }
+    match streamed {
+        Ok(s) => Ok(s),
+        Err(StreamError::Campaign(e)) => bail!("{e}"),
+        Err(StreamError::Sink(e)) => Err(e),
+    }
 }
 
 fn progress_bar(args: &Args, runs: usize) -> Option<indicatif::ProgressBar> {
