@@ -247,56 +247,80 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .map(|q| prediction::predict(&pm, q))
         .collect();
     if args.json {
-        let out = json!({
-            "predictions": preds,
-            "extrapolating": !warnings.is_empty(),
-            "warnings": warnings,
-            "physical": !args.as_measured,
-            "wrap_deg": args.wrap_deg,
-            "diameter_mm": args.diameter_mm,
-            "drive_v": drive_v,
-            "model_error_sd_n": pm.model_error.sd_n,
-            "from": args.from.display().to_string(),
-            "note": pm.note,
-        });
-        crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+        print_json(&args, drive_v, &pm, &preds, &warnings)?;
     } else {
-        for w in &warnings {
-            crate::errln!("warning: extrapolating: {w}");
-        }
-        crate::outln!(
-            "{} T2 at {}° wrap, D = {} mm, {} V (95 % CI: mean curve; 95 % PI: a new measurement on a new cord)",
-            if args.as_measured { "as measured:" } else { "physical:" },
-            args.wrap_deg,
-            args.diameter_mm,
-            drive_v
-        );
-        crate::outln!(
-            "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
-            pm.model_error.sd_n
-        );
-        crate::outln!(
-            "{:>9} {:>10} {:>8} {:>21} {:>21}",
-            "T1 (N)",
-            "T2 (N)",
-            "T2/T1",
-            "95 % CI (N)",
-            "95 % PI (N)"
-        );
-        for p in &preds {
-            crate::outln!(
-                "{:>9.3} {:>10.3} {:>8.3} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
-                p.t1_n,
-                p.t2_n,
-                p.amplification,
-                p.t2_ci95.lo,
-                p.t2_ci95.hi,
-                p.t2_pi95.lo,
-                p.t2_pi95.hi
-            );
-        }
+        print_table(&args, drive_v, &pm, &preds, &warnings);
     }
     Ok(())
+}
+
+/// The predictions as one JSON object (the contract, plus the query and the model's
+/// note).
+fn print_json(
+    args: &Args,
+    drive_v: f64,
+    pm: &PredictionModel,
+    preds: &[prediction::Prediction],
+    warnings: &[String],
+) -> anyhow::Result<()> {
+    let out = json!({
+        "predictions": preds,
+        "extrapolating": !warnings.is_empty(),
+        "warnings": warnings,
+        "physical": !args.as_measured,
+        "wrap_deg": args.wrap_deg,
+        "diameter_mm": args.diameter_mm,
+        "drive_v": drive_v,
+        "model_error_sd_n": pm.model_error.sd_n,
+        "from": args.from.display().to_string(),
+        "note": pm.note,
+    });
+    crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
+}
+
+/// The warnings on stderr, the predictions as a table.
+fn print_table(
+    args: &Args,
+    drive_v: f64,
+    pm: &PredictionModel,
+    preds: &[prediction::Prediction],
+    warnings: &[String],
+) {
+    for w in warnings {
+        crate::errln!("warning: extrapolating: {w}");
+    }
+    crate::outln!(
+        "{} T2 at {}° wrap, D = {} mm, {} V (95 % CI: mean curve; 95 % PI: a new measurement on a new cord)",
+        if args.as_measured { "as measured:" } else { "physical:" },
+        args.wrap_deg,
+        args.diameter_mm,
+        drive_v
+    );
+    crate::outln!(
+        "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
+        pm.model_error.sd_n
+    );
+    crate::outln!(
+        "{:>9} {:>10} {:>8} {:>21} {:>21}",
+        "T1 (N)",
+        "T2 (N)",
+        "T2/T1",
+        "95 % CI (N)",
+        "95 % PI (N)"
+    );
+    for p in preds {
+        crate::outln!(
+            "{:>9.3} {:>10.3} {:>8.3} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
+            p.t1_n,
+            p.t2_n,
+            p.amplification,
+            p.t2_ci95.lo,
+            p.t2_ci95.hi,
+            p.t2_pi95.lo,
+            p.t2_pi95.hi
+        );
+    }
 }
 
 #[cfg(test)]
