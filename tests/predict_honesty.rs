@@ -163,7 +163,7 @@ fn an_edited_prediction_model_is_refused() {
     };
     assert!(load_model(&write("good.json", &m)).is_ok());
     type Edit = fn(&mut serde_json::Value);
-    let edits: [(&str, Edit); 10] = [
+    let edits: [(&str, Edit); 11] = [
         ("covariance", |v| {
             v["covariance"] = serde_json::json!([[1.0, 0.0], [0.0, 1.0]])
         }),
@@ -177,6 +177,9 @@ fn an_edited_prediction_model_is_refused() {
         ("folds", |v| v["folds"] = serde_json::json!(1)),
         ("free", |v| {
             v["free"][0] = serde_json::json!("no_such_parameter")
+        }),
+        ("schema 1 (no model error)", |v| {
+            v["schema"] = serde_json::json!(1)
         }),
         ("negative model error", |v| {
             v["model_error"]["sd_n"] = serde_json::json!(-1.0)

@@ -106,7 +106,7 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
     if schema != Some(u64::from(prediction::SCHEMA)) {
         let found = schema.map_or("none".to_string(), |s| s.to_string());
         bail!(
-            "{}: prediction_model schema {found}, this capstan reads schema {}",
+            "{}: prediction_model schema {found}, this capstan reads schema {} (run capstan analyze again)",
             path.display(),
             prediction::SCHEMA
         );
