@@ -1,9 +1,12 @@
 //! `capstan predict` against data it did not see: leave one wrap out of the thesis data,
 //! analyse the rest, predict the held-out wrap's T2 as measured at its measured T1 values.
-//! The 95 % prediction interval must cover at least 85 % of the measured T2 on the wraps
-//! inside the fitted wrap range (reported for every wrap: on 2026-11-27, 75.7 % at 270°, 100 %
-//! at 360°, 95.8 % at 450°, 93.8 % at 630°, 97.2 % at 720°), and the point prediction, pooled
-//! over the held-out wraps, must beat Euler-Eytelwein with one mu fitted to the same rows.
+//! The 95 % prediction interval (with the model error the analysis estimated from its own
+//! leave-one-cord-out residuals) must cover at least 85 % of the measured T2 on the wraps
+//! inside the fitted wrap range. It is reported for every wrap, with and without the model
+//! error: on 2026-11-27, 83.3 % (75.7 % without) at 270°, 100 % at 360°, 95.8 % at 450°,
+//! 93.8 % at 630°, 97.9 % (97.2 %) at 720°. 270° is below 85 % and not asserted: no factor
+//! widens the interval to make it. The point prediction, pooled over the held-out wraps, must
+//! beat Euler-Eytelwein with one mu fitted to the same rows.
 
 use capstan::cli::predict::load_model;
 use capstan_engine::analysis::prediction::{predict, Query};
@@ -24,6 +27,15 @@ fn without_wrap(wrap_deg: f64) -> capstan_data::Dataset {
 struct Held {
     wrap: f64,
     coverage: f64,
+    /// Coverage without the model-error term (the interval before it was added).
+    coverage_without: f64,
+    /// Mean width of the 95 % PI, N, with and without the model-error term.
+    width: f64,
+    width_without: f64,
+    /// The model error the analysis without this wrap estimated, N.
+    model_error_sd_n: f64,
+    /// Its held-out residual RMS and the RMS the other components account for, N.
+    model_error_basis: (f64, f64),
     rmse_model: f64,
     rmse_ee: f64,
     extrapolating: bool,
@@ -37,9 +49,12 @@ fn hold_out(wrap: f64, dir: &std::path::Path) -> Held {
     let path = dir.join(format!("metrics-{wrap}.json"));
     std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
     let pm = load_model(&path).unwrap();
+    let mut pm0 = pm.clone();
+    pm0.model_error.sd_n = 0.0;
     let mu_ee = a.baseline_fit.model(None).law.mu;
     let test = capstan_data::thesis_dataset();
     let (mut inside, mut n, mut se_m, mut se_ee) = (0usize, 0usize, 0.0, 0.0);
+    let (mut inside0, mut width, mut width0) = (0usize, 0.0, 0.0);
     let mut why: Vec<String> = Vec::new();
     for p in test
         .pairs
@@ -60,14 +75,23 @@ fn hold_out(wrap: f64, dir: &std::path::Path) -> Held {
             }
         }
         let r = predict(&pm, &q);
+        let r0 = predict(&pm0, &q);
         n += 1;
         inside += usize::from(r.t2_pi95.lo <= p.t2_n && p.t2_n <= r.t2_pi95.hi);
+        inside0 += usize::from(r0.t2_pi95.lo <= p.t2_n && p.t2_n <= r0.t2_pi95.hi);
+        width += r.t2_pi95.hi - r.t2_pi95.lo;
+        width0 += r0.t2_pi95.hi - r0.t2_pi95.lo;
         se_m += (r.t2_n - p.t2_n).powi(2);
         se_ee += (p.t1_n * (mu_ee * wrap.to_radians()).exp() - p.t2_n).powi(2);
     }
     Held {
         wrap,
         coverage: inside as f64 / n as f64,
+        coverage_without: inside0 as f64 / n as f64,
+        width: width / n as f64,
+        width_without: width0 / n as f64,
+        model_error_sd_n: pm.model_error.sd_n,
+        model_error_basis: (pm.model_error.heldout_rms_n, pm.model_error.accounted_rms_n),
         rmse_model: (se_m / n as f64).sqrt(),
         rmse_ee: (se_ee / n as f64).sqrt(),
         extrapolating: !why.is_empty(),
@@ -88,9 +112,15 @@ fn leave_one_wrap_out_prediction_intervals_cover_and_the_model_beats_euler_eytel
     let held: Vec<Held> = wraps.iter().map(|w| hold_out(*w, &dir)).collect();
     for h in &held {
         eprintln!(
-            "held-out {:.0}°: 95 % PI covers {:.1} % of measured T2; RMSE model {:.3} N vs Euler-Eytelwein {:.3} N{}",
+            "held-out {:.0}°: 95 % PI covers {:.1} % of measured T2 ({:.1} % without the model error, SD {:.3} N from held-out RMS {:.3} N over {:.3} N accounted), mean PI width {:.2} N ({:.2} N without); RMSE model {:.3} N vs Euler-Eytelwein {:.3} N{}",
             h.wrap,
             100.0 * h.coverage,
+            100.0 * h.coverage_without,
+            h.model_error_sd_n,
+            h.model_error_basis.0,
+            h.model_error_basis.1,
+            h.width,
+            h.width_without,
             h.rmse_model,
             h.rmse_ee,
             if h.extrapolating { format!(" (extrapolating in {})", h.why.join(", ")) } else { String::new() }
@@ -133,7 +163,7 @@ fn an_edited_prediction_model_is_refused() {
     };
     assert!(load_model(&write("good.json", &m)).is_ok());
     type Edit = fn(&mut serde_json::Value);
-    let edits: [(&str, Edit); 7] = [
+    let edits: [(&str, Edit); 11] = [
         ("covariance", |v| {
             v["covariance"] = serde_json::json!([[1.0, 0.0], [0.0, 1.0]])
         }),
@@ -147,6 +177,18 @@ fn an_edited_prediction_model_is_refused() {
         ("folds", |v| v["folds"] = serde_json::json!(1)),
         ("free", |v| {
             v["free"][0] = serde_json::json!("no_such_parameter")
+        }),
+        ("schema 1 (no model error)", |v| {
+            v["schema"] = serde_json::json!(1)
+        }),
+        ("negative model error", |v| {
+            v["model_error"]["sd_n"] = serde_json::json!(-1.0)
+        }),
+        ("model error beyond its residuals", |v| {
+            v["model_error"]["sd_n"] = serde_json::json!(1e3)
+        }),
+        ("model error without rows", |v| {
+            v["model_error"]["rows"] = serde_json::json!(0)
         }),
         ("range", |v| {
             v["fitted_range"]["wrap_deg"] = serde_json::json!({"min": 900.0, "max": 100.0})

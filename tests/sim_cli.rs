@@ -169,6 +169,20 @@ fn two_control_writes_the_drive_series_and_the_crosstalk() {
     assert_eq!(v["pairs"], 24);
     assert!(v["crosstalk_events"].as_u64().unwrap() > 10);
     assert!(v["worst_t2_crosstalk_rel"].as_f64().unwrap() < 1e-9);
+    // Provenance, as a campaign's: what made these data, enough to make them again.
+    let prov = &v["provenance"];
+    assert!(prov["program"].as_str().unwrap().starts_with("capstan"));
+    assert!(prov["commit"].is_string());
+    assert!(prov["command_line"]
+        .as_str()
+        .unwrap()
+        .contains("--delays-ms 0,1500"));
+    assert_eq!(prov["seed"], 1);
+    assert_eq!(prov["mu"], 0.115);
+    assert_eq!(prov["effects"], serde_json::json!([]));
+    assert_eq!(prov["noise"]["sensor_noise"], true);
+    assert_eq!(prov["rig"]["channels"][1]["order"], "pulse");
+    assert_eq!(prov["rig"]["channels"][1]["delay_ms"], 1500);
     let series = std::fs::read_to_string(out.join("two_control.csv")).unwrap();
     assert!(series.starts_with("t_s,drive_v,capstan_rpm,current_a,power_w"));
     assert!(out.join("crosstalk.csv").exists() && out.join("pairs_ch2.csv").exists());

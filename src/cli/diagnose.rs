@@ -64,6 +64,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// could not be tested.
 pub fn summary(d: &Diagnosis, source: &str) -> String {
     let mut s = String::new();
+    verdict_lines(&mut s, d, source);
+    effect_lines(&mut s, d);
+    fit_lines(&mut s, d);
+    candidate_lines(&mut s, d);
+    let _ = writeln!(
+        s,
+        "rows used: {} in the T2 fits, {} with T1 and T2 above zero for the logarithms",
+        d.rows_used.t2_fits, d.rows_used.logarithms
+    );
+    let _ = writeln!(s, "({:.3} s)", d.elapsed_s);
+    s
+}
+
+/// The data in one line, how they were read, the verdict and the diagnosis.
+fn verdict_lines(s: &mut String, d: &Diagnosis, source: &str) {
     let g = &d.design;
     let _ = writeln!(
         s,
@@ -88,6 +103,10 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
         let names: Vec<&str> = d.effects.iter().map(|f| f.effect).collect();
         let _ = writeln!(s, "diagnosis: {}", names.join(" + "));
     }
+}
+
+/// Each effect found with its size and level, and the rivals not ruled out in its place.
+fn effect_lines(s: &mut String, d: &Diagnosis) {
     for f in &d.effects {
         let _ = writeln!(
             s,
@@ -104,6 +123,10 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
             );
         }
     }
+}
+
+/// Euler-Eytelwein's and the effects' RMSE, and the scatter of mu and the noise.
+fn fit_lines(s: &mut String, d: &Diagnosis) {
     let b = &d.baseline;
     let _ = writeln!(
         s,
@@ -134,6 +157,10 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
             "not identified (no time order inside runs)".to_string()
         }
     );
+}
+
+/// Every candidate's evidence, then what could not be tested or identified.
+fn candidate_lines(s: &mut String, d: &Diagnosis) {
     let _ = writeln!(
         s,
         "candidates (ΔBIC given the effects found; named if below the threshold of its level and large enough to matter):"
@@ -171,11 +198,4 @@ pub fn summary(d: &Diagnosis, source: &str) -> String {
     for n in &d.adequacy.not_identified {
         let _ = writeln!(s, "  not identified: {n}");
     }
-    let _ = writeln!(
-        s,
-        "rows used: {} in the T2 fits, {} with T1 and T2 above zero for the logarithms",
-        d.rows_used.t2_fits, d.rows_used.logarithms
-    );
-    let _ = writeln!(s, "({:.3} s)", d.elapsed_s);
-    s
 }

@@ -14,17 +14,17 @@ pub struct Args {
     /// The `metrics.json` that `capstan analyze` wrote.
     #[arg(long)]
     pub from: PathBuf,
-    /// Wrap angle, degrees.
-    #[arg(long)]
+    /// Wrap angle, degrees (a negative number is taken as a value and refused by range).
+    #[arg(long, allow_negative_numbers = true)]
     pub wrap_deg: f64,
     /// Capstan diameter, mm.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub diameter_mm: f64,
     /// T1 values, N: a comma list (2,5,10) or a range A:B:STEP (1:20:1, B included).
     #[arg(long, allow_hyphen_values = true)]
     pub t1_n: String,
     /// Drive voltage, V (default: the thesis rig's 10 V).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
     /// Include the fitted sensor terms (offsets, gain): what the rig's sensors would read,
     /// T1 being a reading too. Without it, the physical tensions.
@@ -106,7 +106,7 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
     if schema != Some(u64::from(prediction::SCHEMA)) {
         let found = schema.map_or("none".to_string(), |s| s.to_string());
         bail!(
-            "{}: prediction_model schema {found}, this capstan reads schema {}",
+            "{}: prediction_model schema {found}, this capstan reads schema {} (run capstan analyze again)",
             path.display(),
             prediction::SCHEMA
         );
@@ -130,8 +130,9 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
 }
 
 /// What `capstan analyze` writes and a prediction relies on: a finite mu in the catalogue's
-/// range, a square covariance of the free parameters with a non-negative diagonal, scatter and
-/// noise at or above 0, known free parameters, and ranges that are ranges. An edited or damaged
+/// range, a square covariance of the free parameters with a non-negative diagonal, scatter,
+/// noise and model error at or above 0 (the model error no more than its held-out residuals
+/// leave, and estimated from some rows), known free parameters, and ranges that are ranges. An edited or damaged
 /// file fails here rather than giving intervals that mean nothing.
 fn check_model(pm: &PredictionModel) -> Result<(), String> {
     let mu = pm.values.get("mu").copied().unwrap_or(f64::NAN);
@@ -166,10 +167,32 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
         ("sd_ln_mu_run", pm.sd_ln_mu_run),
         ("noise_abs_n", pm.noise_abs_n),
         ("noise_rel", pm.noise_rel),
+        ("model_error.sd_n", pm.model_error.sd_n),
+        ("model_error.heldout_rms_n", pm.model_error.heldout_rms_n),
+        (
+            "model_error.accounted_rms_n",
+            pm.model_error.accounted_rms_n,
+        ),
     ] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(format!("{name} = {v} must be 0 or more"));
         }
+    }
+    let e = &pm.model_error;
+    // sd² = max(0, heldout² − accounted²): an sd that the residuals cannot give was edited.
+    let most = (e.heldout_rms_n.powi(2) - e.accounted_rms_n.powi(2))
+        .max(0.0)
+        .sqrt();
+    if e.sd_n > most * (1.0 + 1e-9) + 1e-12 {
+        return Err(format!(
+            "model_error.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({most})",
+            e.sd_n, e.heldout_rms_n, e.accounted_rms_n
+        ));
+    }
+    if e.rows == 0 {
+        return Err(
+            "model_error has no held-out rows behind it (no cord had a held-out prediction)".into(),
+        );
     }
     let r = &pm.fitted_range;
     for (name, s) in [
@@ -201,8 +224,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     ] {
         r.option(flag, v)?;
     }
+    capstan_data::ranges::DRIVE_V.option("--drive-v", drive_v)?;
     if !(drive_v.is_finite() && drive_v > 0.0) {
-        bail!("--drive-v {drive_v}: must be above 0 V");
+        bail!(
+            "--drive-v {drive_v}: must be above 0 V (the model is of a capstan driven forwards; \
+             the thesis rig's drive is {DEFAULT_DRIVE_V} V)"
+        );
     }
     let t1 = parse_t1_list(&args.t1_n)?;
     let pm = load_model(&args.from)?;
@@ -213,64 +240,87 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         t1_n,
         as_measured: args.as_measured,
     };
-    let mut warnings: Vec<String> = Vec::new();
-    for t in &t1 {
-        for w in pm.extrapolates(&q(*t)) {
-            if !warnings.contains(&w) {
-                warnings.push(w);
-            }
-        }
-    }
-    let preds: Vec<_> = t1
-        .iter()
-        .map(|t| prediction::predict(&pm, &q(*t)))
+    let queries: Vec<Query> = t1.iter().map(|t| q(*t)).collect();
+    // One warning per quantity, with the range of the values outside: never one per value.
+    let warnings = pm.extrapolation(&queries);
+    let preds: Vec<_> = (queries.iter())
+        .map(|q| prediction::predict(&pm, q))
         .collect();
     if args.json {
-        let out = json!({
-            "predictions": preds,
-            "extrapolating": !warnings.is_empty(),
-            "warnings": warnings,
-            "physical": !args.as_measured,
-            "wrap_deg": args.wrap_deg,
-            "diameter_mm": args.diameter_mm,
-            "drive_v": drive_v,
-            "from": args.from.display().to_string(),
-            "note": pm.note,
-        });
-        crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+        print_json(&args, drive_v, &pm, &preds, &warnings)?;
     } else {
-        for w in &warnings {
-            crate::errln!("warning: extrapolating: {w}");
-        }
-        crate::outln!(
-            "{} T2 at {}° wrap, D = {} mm, {} V (95 % CI: mean curve; 95 % PI: a new measurement on a new cord)",
-            if args.as_measured { "as measured:" } else { "physical:" },
-            args.wrap_deg,
-            args.diameter_mm,
-            drive_v
-        );
-        crate::outln!(
-            "{:>9} {:>10} {:>8} {:>21} {:>21}",
-            "T1 (N)",
-            "T2 (N)",
-            "T2/T1",
-            "95 % CI (N)",
-            "95 % PI (N)"
-        );
-        for p in &preds {
-            crate::outln!(
-                "{:>9.3} {:>10.3} {:>8.3} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
-                p.t1_n,
-                p.t2_n,
-                p.amplification,
-                p.t2_ci95.lo,
-                p.t2_ci95.hi,
-                p.t2_pi95.lo,
-                p.t2_pi95.hi
-            );
-        }
+        print_table(&args, drive_v, &pm, &preds, &warnings);
     }
     Ok(())
+}
+
+/// The predictions as one JSON object (the issue's contract, plus the query and the model's
+/// note).
+fn print_json(
+    args: &Args,
+    drive_v: f64,
+    pm: &PredictionModel,
+    preds: &[prediction::Prediction],
+    warnings: &[String],
+) -> anyhow::Result<()> {
+    let out = json!({
+        "predictions": preds,
+        "extrapolating": !warnings.is_empty(),
+        "warnings": warnings,
+        "physical": !args.as_measured,
+        "wrap_deg": args.wrap_deg,
+        "diameter_mm": args.diameter_mm,
+        "drive_v": drive_v,
+        "model_error_sd_n": pm.model_error.sd_n,
+        "from": args.from.display().to_string(),
+        "note": pm.note,
+    });
+    crate::outln!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
+}
+
+/// The warnings on stderr, the predictions as a table.
+fn print_table(
+    args: &Args,
+    drive_v: f64,
+    pm: &PredictionModel,
+    preds: &[prediction::Prediction],
+    warnings: &[String],
+) {
+    for w in warnings {
+        crate::errln!("warning: extrapolating: {w}");
+    }
+    crate::outln!(
+        "{} T2 at {}° wrap, D = {} mm, {} V (95 % CI: mean curve; 95 % PI: a new measurement on a new cord)",
+        if args.as_measured { "as measured:" } else { "physical:" },
+        args.wrap_deg,
+        args.diameter_mm,
+        drive_v
+    );
+    crate::outln!(
+        "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
+        pm.model_error.sd_n
+    );
+    crate::outln!(
+        "{:>9} {:>10} {:>8} {:>21} {:>21}",
+        "T1 (N)",
+        "T2 (N)",
+        "T2/T1",
+        "95 % CI (N)",
+        "95 % PI (N)"
+    );
+    for p in preds {
+        crate::outln!(
+            "{:>9.3} {:>10.3} {:>8.3} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
+            p.t1_n,
+            p.t2_n,
+            p.amplification,
+            p.t2_ci95.lo,
+            p.t2_ci95.hi,
+            p.t2_pi95.lo,
+            p.t2_pi95.hi
+        );
+    }
 }
 
 #[cfg(test)]

@@ -173,27 +173,44 @@ fn model(args: &Args) -> anyhow::Result<(Model, Vec<Effect>)> {
 /// What made this campaign, for `summary.json`: the program, commit and command line, the
 /// master seed, the plant's mu, the effects, the noise and the unmodelled physics.
 fn provenance(args: &Args, cfg: &CampaignConfig) -> serde_json::Value {
-    let p = crate::provenance::without_input();
     let u = &cfg.unmodelled;
-    serde_json::json!({
-        "program": p.program,
-        "commit": p.commit,
-        "command_line": p.command_line,
-        "seed": cfg.seed,
-        "mu": cfg.model.law.mu,
-        "effects": cfg.effects.iter().map(|e| serde_json::json!({"name": e.kind.name(), "value": e.value})).collect::<Vec<_>>(),
-        "noise": {
+    let mut p = provenance_of(
+        cfg.seed,
+        &cfg.model,
+        &cfg.effects,
+        serde_json::json!({
             "profile": args.noise,
             "sensor_noise": cfg.sensor_noise,
             "cord_scatter_pct": cfg.scatter_pct,
             "run_scatter_pct": cfg.run_scatter_pct,
-        },
-        "unmodelled": {
-            "hysteresis": u.hysteresis,
-            "t2_nonlinearity": u.t2_nonlinearity,
-            "regime_change": u.regime_change,
-        },
-        "faults": args.faults,
+        }),
+    );
+    p["unmodelled"] = serde_json::json!({
+        "hysteresis": u.hysteresis,
+        "t2_nonlinearity": u.t2_nonlinearity,
+        "regime_change": u.regime_change,
+    });
+    p["faults"] = serde_json::json!(args.faults);
+    p
+}
+
+/// What every simulation's provenance says: the program, commit and command line, the master
+/// seed, the plant's mu, the effects (name and value) and `noise`.
+fn provenance_of(
+    seed: u64,
+    model: &Model,
+    effects: &[Effect],
+    noise: serde_json::Value,
+) -> serde_json::Value {
+    let p = crate::provenance::without_input();
+    serde_json::json!({
+        "program": p.program,
+        "commit": p.commit,
+        "command_line": p.command_line,
+        "seed": seed,
+        "mu": model.law.mu,
+        "effects": effects.iter().map(|e| serde_json::json!({"name": e.kind.name(), "value": e.value})).collect::<Vec<_>>(),
+        "noise": noise,
     })
 }
 
@@ -263,39 +280,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bail!("{flag} is for --two-control (a campaign uses --order)");
         }
     }
-    let (model, effects) = model(&args)?;
-    let mut faults = Vec::new();
-    for f in &args.faults {
-        faults.push(checks::fault(f)?);
-    }
-    let noise: NoiseProfile = args
-        .noise
-        .parse()
-        .map_err(|e| anyhow::anyhow!("--noise {e}"))?;
-    let mut defaults = CampaignConfig::default();
-    noise.apply(&mut defaults);
-    let mut cfg = CampaignConfig {
-        diameters_mm: args.diameters.clone().unwrap_or(defaults.diameters_mm),
-        wraps_deg: args.wraps.clone().unwrap_or(defaults.wraps_deg),
-        drive_vs: args.drive_v.clone(),
-        runs: args.runs.unwrap_or(6),
-        order: args.order.into(),
-        effects,
-        model,
-        scatter_pct: args.scatter.unwrap_or(defaults.scatter_pct),
-        run_scatter_pct: args.run_scatter.or(defaults.run_scatter_pct),
-        unmodelled: unmodelled(&args)?,
-        sensor_noise: !args.no_noise,
-        seed: args.seed,
-        faults,
-        protocol: protocol(&args),
-        plant: plant(&args)?,
-        threads: args.threads.unwrap_or(0),
-        keep_raw: !args.no_raw,
-        ..defaults
-    };
-    cfg.plant.disturbances = noise.disturbances();
-    cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cfg = campaign_config(&args)?;
     // Every file the campaign will write is checked before it runs: none may be the user's
     // own (or a link), `raw` must be a directory of ours.
     let writes = |rel: &str| checks::writes_raw(&cfg, rel);
@@ -307,25 +292,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     crate::outputs::say_recovered(&out);
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
-    let bar = progress_bar(&args, cfg.run_count());
-    let stop = super::signal::stop_flag("simulate");
-    let streamed = stream_campaign(&cfg, stop, &mut |r| {
-        files
-            .add(&r)
-            .with_context(|| format!("writing run {} into {}", r.index, args.out.display()))?;
-        if let Some(pb) = &bar {
-            pb.set_position(r.index as u64);
-        }
-        Ok::<(), anyhow::Error>(())
-    });
-    if let Some(pb) = bar {
-        pb.finish_and_clear();
-    }
-    let stats = match streamed {
-        Ok(s) => s,
-        Err(StreamError::Campaign(e)) => bail!("{e}"),
-        Err(StreamError::Sink(e)) => return Err(e),
-    };
+    let stats = stream(&args, &cfg, &mut files)?;
     if stats.done == 0 {
         // Stopped before a single run was made: nothing to replace the previous results with.
         drop(files);
@@ -358,6 +325,73 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// The campaign the options describe (the noise profile's defaults where none is given),
+/// validated.
+fn campaign_config(args: &Args) -> anyhow::Result<CampaignConfig> {
+    let (model, effects) = model(args)?;
+    let mut faults = Vec::new();
+    for f in &args.faults {
+        faults.push(checks::fault(f)?);
+    }
+    let noise: NoiseProfile = args
+        .noise
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--noise {e}"))?;
+    let mut defaults = CampaignConfig::default();
+    noise.apply(&mut defaults);
+    let mut cfg = CampaignConfig {
+        diameters_mm: args.diameters.clone().unwrap_or(defaults.diameters_mm),
+        wraps_deg: args.wraps.clone().unwrap_or(defaults.wraps_deg),
+        drive_vs: args.drive_v.clone(),
+        runs: args.runs.unwrap_or(6),
+        order: args.order.into(),
+        effects,
+        model,
+        scatter_pct: args.scatter.unwrap_or(defaults.scatter_pct),
+        run_scatter_pct: args.run_scatter.or(defaults.run_scatter_pct),
+        unmodelled: unmodelled(args)?,
+        sensor_noise: !args.no_noise,
+        seed: args.seed,
+        faults,
+        protocol: protocol(args),
+        plant: plant(args)?,
+        threads: args.threads.unwrap_or(0),
+        keep_raw: !args.no_raw,
+        ..defaults
+    };
+    cfg.plant.disturbances = noise.disturbances();
+    cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(cfg)
+}
+
+/// Run the campaign, each run into `files` as it is made, with a progress bar on a terminal;
+/// stops early on Ctrl-C (the stats say so).
+fn stream(
+    args: &Args,
+    cfg: &CampaignConfig,
+    files: &mut output::CampaignWriter,
+) -> anyhow::Result<host_sim::campaign::CampaignStats> {
+    let bar = progress_bar(args, cfg.run_count());
+    let stop = super::signal::stop_flag("simulate");
+    let streamed = stream_campaign(cfg, stop, &mut |r| {
+        files
+            .add(&r)
+            .with_context(|| format!("writing run {} into {}", r.index, args.out.display()))?;
+        if let Some(pb) = &bar {
+            pb.set_position(r.index as u64);
+        }
+        Ok::<(), anyhow::Error>(())
+    });
+    if let Some(pb) = bar {
+        pb.finish_and_clear();
+    }
+    match streamed {
+        Ok(s) => Ok(s),
+        Err(StreamError::Campaign(e)) => bail!("{e}"),
+        Err(StreamError::Sink(e)) => Err(e),
+    }
 }
 
 fn progress_bar(args: &Args, runs: usize) -> Option<indicatif::ProgressBar> {

@@ -266,62 +266,114 @@ fn block(
     want: &Columns,
     format: &str,
 ) -> anyhow::Result<(Vec<Series>, Layout)> {
-    let time = pick(
-        &cols,
-        &want.time,
-        &TIME_NAMES,
-        "time",
-        "--time-column",
-        |c| c.time_scale.is_some(),
-    )?;
-    let force = |c: &Col| c.force_scale.is_some();
-    let t1 = pick(&cols, &want.t1, &T1_NAMES, "T1", "--t1-column", force)?;
-    let t2 = pick(&cols, &want.t2, &T2_NAMES, "T2", "--t2-column", force)?;
-    let trigger = match &want.trigger {
-        Some(_) => Some(pick(
-            &cols,
-            &want.trigger,
-            &[],
-            "the trigger",
-            "--trigger-column",
-            |_| true,
-        )?),
-        None => None,
-    };
-    let run = match &want.run {
-        Some(_) => Some(pick(
-            &cols,
-            &want.run,
-            &[],
-            "the run",
-            "--run-column",
-            |_| true,
-        )?),
-        None => cols.iter().position(|c| c.base == "run" && !c.unit_given),
-    };
-    let mut used = vec![
-        (
-            "time".to_string(),
-            cols[time].text.clone(),
-            cols[time].time_scale.unwrap_or(1.0),
-        ),
-        (
-            "t1".to_string(),
-            cols[t1].text.clone(),
-            cols[t1].force_scale.unwrap_or(1.0),
-        ),
-        (
-            "t2".to_string(),
-            cols[t2].text.clone(),
-            cols[t2].force_scale.unwrap_or(1.0),
-        ),
-    ];
-    if let Some(i) = trigger {
-        used.push(("trigger".into(), cols[i].text.clone(), 1.0));
+    let picked = Picked::of(&cols, want)?;
+    let used = picked.used(&cols);
+    let runs = rows(path, (lines, from, d), &cols, &picked, &used)?;
+    if runs.is_empty() {
+        bail!("{}: no rows after the header", path.display());
     }
-    if let Some(i) = run {
-        used.push(("run".into(), cols[i].text.clone(), 1.0));
+    Ok((
+        runs,
+        Layout {
+            format: format.to_string(),
+            used,
+        },
+    ))
+}
+
+/// The columns a block is read from (indices into its header).
+struct Picked {
+    time: usize,
+    t1: usize,
+    t2: usize,
+    trigger: Option<usize>,
+    run: Option<usize>,
+}
+
+impl Picked {
+    /// The columns named by the options, or found by their names and units.
+    fn of(cols: &[Col], want: &Columns) -> anyhow::Result<Picked> {
+        let time = pick(
+            cols,
+            &want.time,
+            &TIME_NAMES,
+            "time",
+            "--time-column",
+            |c| c.time_scale.is_some(),
+        )?;
+        let force = |c: &Col| c.force_scale.is_some();
+        let t1 = pick(cols, &want.t1, &T1_NAMES, "T1", "--t1-column", force)?;
+        let t2 = pick(cols, &want.t2, &T2_NAMES, "T2", "--t2-column", force)?;
+        let trigger = match &want.trigger {
+            Some(_) => Some(pick(
+                cols,
+                &want.trigger,
+                &[],
+                "the trigger",
+                "--trigger-column",
+                |_| true,
+            )?),
+            None => None,
+        };
+        let run = match &want.run {
+            Some(_) => Some(pick(
+                cols,
+                &want.run,
+                &[],
+                "the run",
+                "--run-column",
+                |_| true,
+            )?),
+            None => cols.iter().position(|c| c.base == "run" && !c.unit_given),
+        };
+        Ok(Picked {
+            time,
+            t1,
+            t2,
+            trigger,
+            run,
+        })
     }
+
+    /// (role, header text, scale to s or N) of each column used, time, T1, T2 first.
+    fn used(&self, cols: &[Col]) -> Vec<(String, String, f64)> {
+        let (time, t1, t2) = (self.time, self.t1, self.t2);
+        let mut used = vec![
+            (
+                "time".to_string(),
+                cols[time].text.clone(),
+                cols[time].time_scale.unwrap_or(1.0),
+            ),
+            (
+                "t1".to_string(),
+                cols[t1].text.clone(),
+                cols[t1].force_scale.unwrap_or(1.0),
+            ),
+            (
+                "t2".to_string(),
+                cols[t2].text.clone(),
+                cols[t2].force_scale.unwrap_or(1.0),
+            ),
+        ];
+        if let Some(i) = self.trigger {
+            used.push(("trigger".into(), cols[i].text.clone(), 1.0));
+        }
+        if let Some(i) = self.run {
+            used.push(("run".into(), cols[i].text.clone(), 1.0));
+        }
+        used
+    }
+}
+
+/// The series of the lines from `from` on (delimiter `d`), a new one whenever the run column
+/// changes; times must rise within a series. Blank lines are skipped.
+fn rows(
+    path: &Path,
+    (lines, from, d): (&[&str], usize, char),
+    cols: &[Col],
+    p: &Picked,
+    used: &[(String, String, f64)],
+) -> anyhow::Result<Vec<Series>> {
     let mut runs: Vec<Series> = Vec::new();
     for (i, line) in lines.iter().enumerate().skip(from) {
         if line.trim().is_empty() {
@@ -340,7 +392,7 @@ fn block(
                 range,
             )
         };
-        let label = run.map(|c| row.get(c).copied().unwrap_or("").to_string());
+        let label = p.run.map(|c| row.get(c).copied().unwrap_or("").to_string());
         if runs.last().is_none_or(|r| r.label != label) {
             runs.push(Series {
                 label: label.clone(),
@@ -348,36 +400,27 @@ fn block(
             });
         }
         let s = runs.last_mut().expect("pushed");
-        let t = num(time, used[0].2, None)?;
+        let t = num(p.time, used[0].2, None)?;
         if s.t_s.last().is_some_and(|&prev| t <= prev) {
             bail!(
                 "{}:{lineno}:{}: time {t} s does not follow the row before ({} s): rows must be in \
                  time order",
                 path.display(),
-                time + 1,
+                p.time + 1,
                 s.t_s.last().expect("checked")
             );
         }
-        let v1 = num(t1, used[1].2, Some(&TENSION_N))?;
-        let v2 = num(t2, used[2].2, Some(&TENSION_N))?;
+        let v1 = num(p.t1, used[1].2, Some(&TENSION_N))?;
+        let v2 = num(p.t2, used[2].2, Some(&TENSION_N))?;
         s.t_s.push(t);
         s.t1_n.push(v1);
         s.t2_n.push(v2);
-        if let Some(c) = trigger {
+        if let Some(c) = p.trigger {
             s.trigger.push(num(c, 1.0, None)?);
         }
         s.line.push(lineno);
     }
-    if runs.is_empty() {
-        bail!("{}: no rows after the header", path.display());
-    }
-    Ok((
-        runs,
-        Layout {
-            format: format.to_string(),
-            used,
-        },
-    ))
+    Ok(runs)
 }
 
 /// One cell as a number in the column's unit times `scale`, checked against `range` (the

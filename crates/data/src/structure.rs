@@ -221,69 +221,8 @@ impl Structure {
         way: RunWay,
         has: &dyn Fn(&str) -> bool,
     ) {
-        let named = |r: LabelRole| -> Vec<String> {
-            labels
-                .iter()
-                .filter(|l| l.role == r)
-                .map(|l| l.name.clone())
-                .collect()
-        };
-        let mut cord_cols: Vec<String> = ["capstan_diameter_mm", "wrap_deg", "drive_v"]
-            .into_iter()
-            .filter(|c| header.iter().any(|h| h == c))
-            .map(String::from)
-            .collect();
-        cord_cols.extend(named(LabelRole::Cord));
-        let cords_known = has("capstan_diameter_mm") || !named(LabelRole::Cord).is_empty();
-        self.cord_level = Level {
-            count: self.cords.len(),
-            from: if cords_known {
-                Basis::Columns
-            } else {
-                Basis::Assumed
-            },
-            how: if cords_known {
-                format!("one cord per distinct ({})", cord_cols.join(", "))
-            } else {
-                "no capstan_diameter_mm or cord column: the rows at one wrap (and drive \
-                 voltage) are taken as one cord, so cords of different diameters would merge"
-                    .into()
-            },
-            columns: cord_cols,
-        };
-        let sessions = named(LabelRole::Run);
-        let (from, mut columns, how) = match way {
-            RunWay::Column => (
-                Basis::Columns,
-                vec!["run".to_string()],
-                "from the run column",
-            ),
-            RunWay::Restart(4) => (
-                Basis::Inferred,
-                vec!["step".to_string()],
-                "no run column: a new run wherever step does not rise from one row of a cord \
-                 to its next (file order)",
-            ),
-            RunWay::Restart(_) => (
-                Basis::Inferred,
-                vec!["time_s".to_string()],
-                "no run column: a new run wherever time_s does not rise from one row of a cord \
-                 to its next (file order)",
-            ),
-            RunWay::OnePerCord => (
-                Basis::Assumed,
-                Vec::new(),
-                "no run, step or time_s column: each cord is taken as one run, so what needs \
-                 runs (wear, replicate runs' pure error) is not testable",
-            ),
-        };
-        columns.extend(sessions);
-        self.run_level = Level {
-            count: self.run_cord.len(),
-            from,
-            columns,
-            how: how.to_string(),
-        };
+        self.cord_level = cord_level(header, labels, has, self.cords.len());
+        self.run_level = run_level(labels, way, self.run_cord.len());
         self.assumed.clear();
         if !has("capstan_diameter_mm") {
             self.assumed.push(format!(
@@ -344,5 +283,84 @@ impl Structure {
     /// Is every level read from columns?
     pub fn all_from_columns(&self) -> bool {
         self.cord_level.from == Basis::Columns && self.run_level.from == Basis::Columns
+    }
+}
+
+/// The label columns of `role`, by name.
+fn named(labels: &[LabelColumn], role: LabelRole) -> Vec<String> {
+    labels
+        .iter()
+        .filter(|l| l.role == role)
+        .map(|l| l.name.clone())
+        .collect()
+}
+
+/// How the `count` cords were found: from the cord columns present, or assumed one per wrap
+/// (and drive voltage).
+fn cord_level(
+    header: &[String],
+    labels: &[LabelColumn],
+    has: &dyn Fn(&str) -> bool,
+    count: usize,
+) -> Level {
+    let mut cord_cols: Vec<String> = ["capstan_diameter_mm", "wrap_deg", "drive_v"]
+        .into_iter()
+        .filter(|c| header.iter().any(|h| h == c))
+        .map(String::from)
+        .collect();
+    cord_cols.extend(named(labels, LabelRole::Cord));
+    let cords_known = has("capstan_diameter_mm") || !named(labels, LabelRole::Cord).is_empty();
+    Level {
+        count,
+        from: if cords_known {
+            Basis::Columns
+        } else {
+            Basis::Assumed
+        },
+        how: if cords_known {
+            format!("one cord per distinct ({})", cord_cols.join(", "))
+        } else {
+            "no capstan_diameter_mm or cord column: the rows at one wrap (and drive \
+             voltage) are taken as one cord, so cords of different diameters would merge"
+                .into()
+        },
+        columns: cord_cols,
+    }
+}
+
+/// How the `count` runs were found (`way`), with any session label columns.
+fn run_level(labels: &[LabelColumn], way: RunWay, count: usize) -> Level {
+    let sessions = named(labels, LabelRole::Run);
+    let (from, mut columns, how) = match way {
+        RunWay::Column => (
+            Basis::Columns,
+            vec!["run".to_string()],
+            "from the run column",
+        ),
+        RunWay::Restart(4) => (
+            Basis::Inferred,
+            vec!["step".to_string()],
+            "no run column: a new run wherever step does not rise from one row of a cord \
+             to its next (file order)",
+        ),
+        RunWay::Restart(_) => (
+            Basis::Inferred,
+            vec!["time_s".to_string()],
+            "no run column: a new run wherever time_s does not rise from one row of a cord \
+             to its next (file order)",
+        ),
+        RunWay::OnePerCord => (
+            Basis::Assumed,
+            Vec::new(),
+            "no run, step or time_s column: each cord is taken as one run, so what needs \
+             runs (wear, replicate runs' pure error) is not testable",
+        ),
+    };
+    columns.extend(sessions);
+    Level {
+        count,
+        from,
+        columns,
+        how: how.to_string(),
     }
 }

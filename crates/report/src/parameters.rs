@@ -71,6 +71,16 @@ pub fn describe(name: &str) -> (&'static str, &'static str) {
 /// quantities, Euler-Eytelwein's mu, the variance components, then each cord's mu.
 pub fn rows(a: &Analysis) -> Vec<Row> {
     let mut out = Vec::new();
+    extended_rows(a, &mut out);
+    evidence_rows(a, &mut out);
+    baseline_row(a, &mut out);
+    variance_rows(a, &mut out);
+    cord_rows(a, &mut out);
+    out
+}
+
+/// Each extended-model value, ± t(folds − 1) times its cord-jackknife SE.
+fn extended_rows(a: &Analysis, out: &mut Vec<Row>) {
     let pm = &a.prediction_model;
     let t_cords = t95(pm.folds.saturating_sub(1));
     for v in &a.extended.values {
@@ -87,7 +97,11 @@ pub fn rows(a: &Analysis) -> Vec<Row> {
             note: format!("value ± t({})·SE, SE from the cord jackknife over the leave-one-cord-out refits (cords as the independent units)", pm.folds.saturating_sub(1)),
         });
     }
-    evidence_rows(a, &mut out);
+}
+
+/// Euler-Eytelwein's one mu, ± t(folds − 1) times its SE.
+fn baseline_row(a: &Analysis, out: &mut Vec<Row>) {
+    let t_cords = t95(a.prediction_model.folds.saturating_sub(1));
     let b = a.baseline_fit.model(None).law.mu;
     let bse = a.baseline_mu_se;
     out.push(Row {
@@ -100,6 +114,11 @@ pub fn rows(a: &Analysis) -> Vec<Row> {
         ci95_hi: fin(b + t_cords * bse),
         note: "differs from the extended model's mu because Euler-Eytelwein has no sensor offset or heating term: its one mu absorbs them".into(),
     });
+}
+
+/// The variance components of a new measurement (no intervals computed).
+fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
+    let pm = &a.prediction_model;
     let s = &a.evidence.scatter;
     for (key, q, v, unit, note) in [
         (
@@ -130,6 +149,13 @@ pub fn rows(a: &Analysis) -> Vec<Row> {
             "1",
             "fraction of T2; no interval computed",
         ),
+        (
+            "model_error.sd_n",
+            "model error in T2 (SD)",
+            pm.model_error.sd_n,
+            "N",
+            "what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; no interval computed",
+        ),
     ] {
         out.push(Row {
             key: key.into(),
@@ -152,8 +178,6 @@ pub fn rows(a: &Analysis) -> Vec<Row> {
         ci95_hi: None,
         note: "evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, which explains part of the cord differences by the named causes and shrinks the rest; no interval computed".into(),
     });
-    cord_rows(a, &mut out);
-    out
 }
 
 /// The evidence engine's estimate of each named cause, where the extended model has the same

@@ -2,7 +2,7 @@
 //! writes `two_control.csv` (the drive and the true tensions over time), `crosstalk.csv` and
 //! each channel's `pairs_ch<k>.csv`.
 
-use super::{model, plant, protocol, Args, Order};
+use super::{model, plant, protocol, provenance_of, Args, Order};
 use anyhow::bail;
 use capstan_data::write_pairs_to;
 use capstan_outdir::Staged;
@@ -24,7 +24,9 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     write_two(&mut set, &cfg, &r)?;
     set.commit()?;
     if args.json {
-        crate::outln!("{}", two_json(&r, n));
+        let mut v = two_json(&r, n);
+        v["provenance"] = two_provenance(&cfg);
+        crate::outln!("{v}");
     } else {
         say_two(args, &cfg, &r);
     }
@@ -141,6 +143,34 @@ fn two_json(r: &TwoControlResult, n: usize) -> serde_json::Value {
         "worst_speed_crosstalk_rel": rpm_rel,
         "faults": faults,
     })
+}
+
+/// What made this run (as a campaign's `summary.json` says it): program, commit, command line,
+/// seed, mu, effects (none: the two-control rig runs the base model), noise (sensor noise
+/// only), and the rig: capstan, drive, motor and each channel's wrap, order and delay.
+fn two_provenance(cfg: &TwoControlConfig) -> serde_json::Value {
+    let mut p = provenance_of(
+        cfg.seed,
+        &cfg.model,
+        &[],
+        json!({
+            "profile": "quiet",
+            "sensor_noise": cfg.sensor_noise,
+            "cord_scatter_pct": 0.0,
+            "run_scatter_pct": 0.0,
+        }),
+    );
+    p["rig"] = json!({
+        "diameter_mm": cfg.diameter_mm,
+        "drive_v": cfg.drive_v,
+        "motor_ohm": cfg.plant.motor.resistance_ohm,
+        "channels": cfg.channels.iter().map(|c| json!({
+            "wrap_deg": c.wrap_deg,
+            "order": c.order.name(),
+            "delay_ms": c.delay_ms,
+        })).collect::<Vec<_>>(),
+    });
+    p
 }
 
 /// The run in words.

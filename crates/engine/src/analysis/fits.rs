@@ -84,17 +84,9 @@ pub struct Fits {
 pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: usize) -> Fits {
     let all = obs.all_runs();
     let t0 = Instant::now();
-
-    // Baseline: one global mu, and one mu per cord.
     let base_spec = models::baseline();
     let baseline = fit_fixed(&base_spec, obs, &all, None);
-    let groups: Vec<usize> = (0..obs.groups.len()).collect();
-    let per_cord_fits: Vec<Fit> = par_map(&groups, threads, |&g| {
-        let runs = obs.runs_of_group(g);
-        let rows = obs.rows_of(&runs).len();
-        let budget = Budget::for_fit_within(rows, 1, ONE_MU_UNITS_PER_ROW * rows as u64);
-        fit_fixed_with(&base_spec, obs, &runs, None, &budget)
-    });
+    let per_cord_fits = per_cord(obs, threads);
     let mut per_cord_pred = vec![f64::NAN; obs.len()];
     for f in &per_cord_fits {
         for i in obs.rows_of(&f.runs) {
@@ -102,24 +94,10 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         }
     }
     let cord_mu: Vec<f64> = per_cord_fits.iter().map(|f| f.model(None).law.mu).collect();
-
-    // The thesis's Table 3.
-    let thesis_pred: Vec<f64> = obs
-        .rows
-        .iter()
-        .map(|r| {
-            thesis::thesis_amp(r.op.wrap_rad.to_degrees().round(), r.t1_n)
-                .map_or(f64::NAN, |a| a * r.t1_n)
-        })
-        .collect();
+    let thesis_pred = thesis_predictions(obs);
     let thesis_ok = thesis_pred.iter().all(|p| p.is_finite());
-
     // The extended model (mixed: per-cord random log-mu), within the budget.
-    let budget = MixedOptions {
-        edf_cap: Some(STRICT_BUDGET),
-        ..MixedOptions::default()
-    };
-    let extended = fit_mixed(ext_spec, obs, &all, None, budget);
+    let extended = fit_mixed(ext_spec, obs, &all, None, extended_budget());
     let ext_pop = extended.predict(obs, &all, false);
     let ext_eval = evaluate(
         &extended.spec,
@@ -138,35 +116,8 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         let budget = Budget::for_fit_within(rows as usize, 1, ONE_MU_UNITS_PER_ROW * rows);
         fit_fixed_with(&base_spec, obs, train, None, &budget)
     });
-    let (th, u0) = (extended.theta.clone(), extended.u.clone());
-    let l0 = extended.lambda.unwrap_or(200.0);
-    // Refits warm-started from an in-sample fit that did not converge would not either: they
-    // are not run, and no cord gets a held-out prediction of the extended model.
-    let extended_loco = if extended.converged {
-        loco(obs, threads, |train| {
-            let opts = MixedOptions {
-                lambda0: l0,
-                max_units: Some(LOCO_UNITS_PER_ROW * obs.rows_of(train).len() as u64),
-                ..budget
-            };
-            fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
-        })
-    } else {
-        Loco::skipped(obs)
-    };
-    // Per-cord baseline on a new cord: the mean log-mu of the other cords.
-    let mut per_cord_loco = vec![f64::NAN; obs.len()];
-    for g in 0..obs.groups.len() {
-        let others: Vec<f64> = (0..obs.groups.len())
-            .filter(|&k| k != g)
-            .map(|k| cord_mu[k].ln())
-            .collect();
-        let m = capstan_friction::Model::euler_eytelwein(mean(&others).exp());
-        for i in obs.rows_of_group(g) {
-            let r = &obs.rows[i];
-            per_cord_loco[i] = m.predict_t2_n(r.t1_n, &r.op);
-        }
-    }
+    let extended_loco = extended_refits(obs, ext_spec, &extended, threads);
+    let per_cord_loco = per_cord_on_new_cords(obs, &cord_mu);
     let per_cord_loco_rmse = obs.rmse_t2(&per_cord_loco);
     let loco_s = t1.elapsed().as_secs_f64();
 
@@ -201,6 +152,79 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         loco_s,
         notes,
     }
+}
+
+/// Euler-Eytelwein fitted to each cord alone (one mu per cord), each within its budget.
+fn per_cord(obs: &Observations, threads: usize) -> Vec<Fit> {
+    let base_spec = models::baseline();
+    let groups: Vec<usize> = (0..obs.groups.len()).collect();
+    par_map(&groups, threads, |&g| {
+        let runs = obs.runs_of_group(g);
+        let rows = obs.rows_of(&runs).len();
+        let budget = Budget::for_fit_within(rows, 1, ONE_MU_UNITS_PER_ROW * rows as u64);
+        fit_fixed_with(&base_spec, obs, &runs, None, &budget)
+    })
+}
+
+/// The thesis's Table 3 at every row (amp(T1)·T1 at its angle), NaN where it has none.
+fn thesis_predictions(obs: &Observations) -> Vec<f64> {
+    obs.rows
+        .iter()
+        .map(|r| {
+            thesis::thesis_amp(r.op.wrap_rad.to_degrees().round(), r.t1_n)
+                .map_or(f64::NAN, |a| a * r.t1_n)
+        })
+        .collect()
+}
+
+/// The extended model's options: its cord effects shrunk to [`STRICT_BUDGET`].
+fn extended_budget() -> MixedOptions {
+    MixedOptions {
+        edf_cap: Some(STRICT_BUDGET),
+        ..MixedOptions::default()
+    }
+}
+
+/// The extended model refitted without each cord, warm-started from the in-sample fit.
+/// Refits from an in-sample fit that did not converge would not either: they are not run,
+/// and no cord gets a held-out prediction of the extended model.
+fn extended_refits(
+    obs: &Observations,
+    ext_spec: &crate::fit::ModelSpec,
+    extended: &Fit,
+    threads: usize,
+) -> Loco {
+    if !extended.converged {
+        return Loco::skipped(obs);
+    }
+    let (th, u0) = (extended.theta.clone(), extended.u.clone());
+    let l0 = extended.lambda.unwrap_or(200.0);
+    let budget = extended_budget();
+    loco(obs, threads, |train| {
+        let opts = MixedOptions {
+            lambda0: l0,
+            max_units: Some(LOCO_UNITS_PER_ROW * obs.rows_of(train).len() as u64),
+            ..budget
+        };
+        fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
+    })
+}
+
+/// The per-cord baseline on a new cord: each cord predicted by the mean log-mu of the others.
+fn per_cord_on_new_cords(obs: &Observations, cord_mu: &[f64]) -> Vec<f64> {
+    let mut per_cord_loco = vec![f64::NAN; obs.len()];
+    for g in 0..obs.groups.len() {
+        let others: Vec<f64> = (0..obs.groups.len())
+            .filter(|&k| k != g)
+            .map(|k| cord_mu[k].ln())
+            .collect();
+        let m = capstan_friction::Model::euler_eytelwein(mean(&others).exp());
+        for i in obs.rows_of_group(g) {
+            let r = &obs.rows[i];
+            per_cord_loco[i] = m.predict_t2_n(r.t1_n, &r.op);
+        }
+    }
+    per_cord_loco
 }
 
 /// The fits that did not converge, in words, one line per family.

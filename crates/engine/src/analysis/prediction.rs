@@ -6,7 +6,9 @@
 //! [`SCHEMA`]): the population values of every model parameter, the covariance of the free ones
 //! over the leave-one-cord-out refits (a cord jackknife: cords as the independent units), and
 //! the variance components of a new measurement: cord to cord and run to run in ln mu, and the
-//! within-run noise sd² = a² + (r·T2)². `capstan predict` reads it back ([`predict`]).
+//! within-run noise sd² = a² + (r·T2)², and the model's own error ([`ModelError`]): what the
+//! leave-one-cord-out residuals of the fitted data show beyond all of those. `capstan predict`
+//! reads it back ([`predict`]).
 //!
 //! The operating point of a prediction: the given wrap, diameter and drive voltage, the first
 //! run of a fresh cord at the trigger (time 0), and the contact's load memory settled under the
@@ -19,8 +21,9 @@ use capstan_friction::{Model, Operating, REF_DRIVE_V};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// Version of the `prediction_model` object; `capstan predict` refuses another.
-pub const SCHEMA: u32 = 1;
+/// Version of the `prediction_model` object; `capstan predict` refuses another. 2 added
+/// `model_error`.
+pub const SCHEMA: u32 = 2;
 
 /// A closed range of the fitted data.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -87,14 +90,35 @@ pub struct PredictionModel {
     pub noise_abs_n: f64,
     /// Within-run noise, proportional part (fraction of T2).
     pub noise_rel: f64,
+    /// The model's own error: held-out residual variance the other components do not explain.
+    pub model_error: ModelError,
     /// What the fitted data span.
     pub fitted_range: FittedRange,
     /// The operating point and intervals in words.
     pub note: String,
 }
 
+/// The model's error (discrepancy) in T2, estimated from its own leave-one-cord-out residuals
+/// on the fitted data: each row's held-out residual e = T2 − (a fit on the other cords) should
+/// have variance v = the parameters' (cord jackknife) + a new cord's and a new run's ln-mu
+/// scatter + the within-run noise, if the model were right. What the residuals show beyond
+/// that is the model's error, sd² = max(0, mean e² − mean v) (a method-of-moments estimate,
+/// one constant in N², clamped at 0). The mean square, not the variance about the mean: a bias
+/// on held-out cords is model error too.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelError {
+    /// SD of the model error, N (enters the prediction interval as sd²).
+    pub sd_n: f64,
+    /// RMS of the held-out residuals, N.
+    pub heldout_rms_n: f64,
+    /// RMS the other components account for at those rows (√mean v), N.
+    pub accounted_rms_n: f64,
+    /// Rows with a held-out prediction behind the estimate.
+    pub rows: usize,
+}
+
 /// The note every prediction model carries.
-pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter and the within-run noise (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
+pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter, the within-run noise and the model's own error (the leave-one-cord-out residuals' mean square beyond those components, one SD in N) (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
 
 /// One operating point to predict at.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -161,24 +185,83 @@ impl PredictionModel {
             .collect()
     }
 
-    /// True when the query lies outside the fitted data's ranges.
-    pub fn extrapolates(&self, q: &Query) -> Vec<String> {
+    /// Each quantity of a query with its value, the fitted span and its unit.
+    fn quantities(&self, q: &Query) -> [(&'static str, f64, Span, &'static str); 4] {
         let r = &self.fitted_range;
-        let mut out = Vec::new();
-        for (name, v, s, unit) in [
+        [
             ("wrap", q.wrap_deg, r.wrap_deg, "°"),
             ("diameter", q.diameter_mm, r.diameter_mm, " mm"),
             ("T1", q.t1_n, r.t1_n, " N"),
             ("drive voltage", q.drive_v, r.drive_v, " V"),
-        ] {
-            if !s.contains(v) {
-                out.push(format!(
-                    "{name} {v}{unit} is outside the fitted {}{unit} to {}{unit}",
-                    s.min, s.max
-                ));
+        ]
+    }
+
+    /// The query's quantities outside the fitted data's ranges, one sentence each (empty when
+    /// it lies inside them).
+    pub fn extrapolates(&self, q: &Query) -> Vec<String> {
+        self.extrapolation(std::slice::from_ref(q))
+    }
+
+    /// The quantities of `queries` outside the fitted data's ranges: one sentence per quantity,
+    /// however many values lie outside ("wrap 900° is outside the fitted 270° to 720°"; for a
+    /// list, how many lie below and above and their range).
+    pub fn extrapolation(&self, queries: &[Query]) -> Vec<String> {
+        let Some(first) = queries.first() else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (k, (name, v0, s, unit)) in self.quantities(first).into_iter().enumerate() {
+            let values = || queries.iter().map(|q| self.quantities(q)[k].1);
+            if !values().any(|v| !s.contains(v)) {
+                continue;
             }
+            let fitted = format!(
+                "the fitted {}{unit} to {}{unit}",
+                short(s.min),
+                short(s.max)
+            );
+            if values().all(|v| v == v0) {
+                out.push(format!("{name} {}{unit} is outside {fitted}", short(v0)));
+                continue;
+            }
+            let side = |below: bool, word: &str| -> Option<String> {
+                let o: Vec<f64> = values()
+                    .filter(|v| !s.contains(*v) && (*v < s.min) == below)
+                    .collect();
+                let r = Span::of(o.iter().copied());
+                let range = if r.min == r.max {
+                    format!("{}{unit}", short(r.min))
+                } else {
+                    format!("{}{unit} to {}{unit}", short(r.min), short(r.max))
+                };
+                (!o.is_empty()).then(|| format!("{} {word} ({range})", o.len()))
+            };
+            let parts: Vec<String> = [side(true, "below"), side(false, "above")]
+                .into_iter()
+                .flatten()
+                .collect();
+            out.push(format!(
+                "{name} outside {fitted}: {} of {} values",
+                parts.join(", "),
+                queries.len()
+            ));
         }
         out
+    }
+}
+
+/// A value in a sentence: six decimals at most, trailing zeros dropped (a range's 1:30:0.1
+/// steps give 22.500000000000004, which reads 22.5); below 1e-3 in scientific notation.
+fn short(v: f64) -> String {
+    if v != 0.0 && v.abs() < 1e-3 {
+        return format!("{v:.3e}");
+    }
+    let s = format!("{v:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
     }
 }
 
@@ -225,13 +308,20 @@ fn t95(dof: usize) -> f64 {
     StudentsT::new(0.0, 1.0, dof as f64).map_or(1.959_963_985, |t| t.inverse_cdf(0.975))
 }
 
-/// T2 at `q` with its intervals.
-pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
+/// The predicted T2 at a query and the variances behind its intervals, model error aside.
+struct Spread {
+    /// T2, N.
+    t2: f64,
+    /// Variance of the population curve (delta method through the covariance), N².
+    var_mean: f64,
+    /// Variance of a new cord's and run's ln mu and the within-run noise, N².
+    var_new: f64,
+}
+
+/// Gradient of T2 in the free values, central differences.
+fn gradient(pm: &PredictionModel, q: &Query) -> Vec<f64> {
     let v0 = pm.free_values();
-    let m0 = pm.model(None);
-    let t2 = t2_of(&m0, q);
-    // Gradient of T2 in the free values, central differences.
-    let grad: Vec<f64> = (0..v0.len())
+    (0..v0.len())
         .map(|k| {
             let h = 1e-5 * v0[k].abs().max(1e-3);
             let at = |d: f64| {
@@ -241,7 +331,13 @@ pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
             };
             (at(h) - at(-h)) / (2.0 * h)
         })
-        .collect();
+        .collect()
+}
+
+fn spread(pm: &PredictionModel, q: &Query) -> Spread {
+    let m0 = pm.model(None);
+    let t2 = t2_of(&m0, q);
+    let grad = gradient(pm, q);
     let mut var_mean = 0.0;
     for (a, ga) in grad.iter().enumerate() {
         for (b, gb) in grad.iter().enumerate() {
@@ -268,8 +364,23 @@ pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
         + pm.noise_abs_n.powi(2)
         + (pm.noise_rel * t2).powi(2);
     let finite = |v: f64| if v.is_finite() { v.max(0.0) } else { 0.0 };
-    let ci = t95(pm.folds.saturating_sub(1)) * finite(var_mean).sqrt();
-    let pi = (ci.powi(2) + 1.959_963_985f64.powi(2) * finite(var_new)).sqrt();
+    Spread {
+        t2,
+        var_mean: finite(var_mean),
+        var_new: finite(var_new),
+    }
+}
+
+/// T2 at `q` with its intervals.
+pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
+    let Spread {
+        t2,
+        var_mean,
+        var_new,
+    } = spread(pm, q);
+    let var_new = var_new + pm.model_error.sd_n.powi(2);
+    let ci = t95(pm.folds.saturating_sub(1)) * var_mean.sqrt();
+    let pi = (ci.powi(2) + 1.959_963_985f64.powi(2) * var_new).sqrt();
     // Physics: a capstan that is not driven backwards does not lose tension.
     let floor = if q.as_measured {
         f64::NEG_INFINITY
@@ -288,6 +399,49 @@ pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
             lo: (t2 - pi).max(floor),
             hi: t2 + pi,
         },
+    }
+}
+
+/// The model error of `pm` (whose own `model_error` is ignored) from the held-out predictions
+/// `heldout` of the rows of `obs` (NaN where a row has none): see [`ModelError`]. Each row's
+/// accounted variance is the prediction interval's at its operating point, as measured.
+pub fn model_error(
+    pm: &PredictionModel,
+    obs: &crate::fit::Observations,
+    heldout: &[f64],
+) -> ModelError {
+    let (mut n, mut sum_e2, mut sum_v) = (0usize, 0.0, 0.0);
+    for (r, p) in obs.rows.iter().zip(heldout) {
+        let e = r.t2_n - p;
+        if !e.is_finite() {
+            continue;
+        }
+        let q = Query {
+            wrap_deg: r.op.wrap_rad.to_degrees(),
+            diameter_mm: r.op.diameter_mm,
+            drive_v: r.op.drive_v,
+            t1_n: r.t1_n,
+            as_measured: true,
+        };
+        let s = spread(pm, &q);
+        n += 1;
+        sum_e2 += e * e;
+        sum_v += s.var_mean + s.var_new;
+    }
+    if n == 0 {
+        return ModelError {
+            sd_n: 0.0,
+            heldout_rms_n: 0.0,
+            accounted_rms_n: 0.0,
+            rows: 0,
+        };
+    }
+    let (e2, v) = (sum_e2 / n as f64, sum_v / n as f64);
+    ModelError {
+        sd_n: (e2 - v).max(0.0).sqrt(),
+        heldout_rms_n: e2.sqrt(),
+        accounted_rms_n: v.sqrt(),
+        rows: n,
     }
 }
 
@@ -330,7 +484,7 @@ pub fn build(
     }
     let rows = &obs.rows;
     let run_ln = (1.0 + scatter.run_pct / 100.0).ln();
-    PredictionModel {
+    let mut pm = PredictionModel {
         schema: SCHEMA,
         values,
         free,
@@ -340,6 +494,12 @@ pub fn build(
         sd_ln_mu_run: if run_ln.is_finite() { run_ln } else { 0.0 },
         noise_abs_n: scatter.noise_abs_n,
         noise_rel: scatter.noise_rel,
+        model_error: ModelError {
+            sd_n: 0.0,
+            heldout_rms_n: 0.0,
+            accounted_rms_n: 0.0,
+            rows: 0,
+        },
         fitted_range: FittedRange {
             wrap_deg: Span::of(obs.groups.iter().map(|g| g.wrap_deg)),
             diameter_mm: Span::of(obs.groups.iter().map(|g| g.diameter_mm)),
@@ -347,8 +507,24 @@ pub fn build(
             drive_v: Span::of(rows.iter().map(|r| r.op.drive_v)),
         },
         note: NOTE.into(),
-    }
+    };
+    pm.model_error = model_error(&pm, obs, &fits.pred.extended_loco);
+    pm
 }
 
 /// The reference drive voltage (the thesis's runs) for a query that gives none.
 pub const DEFAULT_DRIVE_V: f64 = REF_DRIVE_V;
+
+#[cfg(test)]
+mod tests {
+    use super::short;
+
+    #[test]
+    fn values_in_warnings_read_short() {
+        assert_eq!(short(22.500000000000004), "22.5");
+        assert_eq!(short(0.072014), "0.072014");
+        assert_eq!(short(720.0), "720");
+        assert_eq!(short(-0.0), "0");
+        assert_eq!(short(1e-7), "1.000e-7");
+    }
+}

@@ -141,18 +141,10 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         .map(|i| (d.t2[i] - fit.fitted[i]) * w.w[i].sqrt())
         .collect();
     let mut not_identified = Vec::new();
-    let lack_of_fit = pure_error(d, &z, fit.k()).filter(|l| {
-        let ok = [l.f, l.p, l.systematic_ratio].iter().all(|v| v.is_finite());
-        if !ok {
-            not_identified.push(
-                "lack of fit: the replicate runs agree exactly (no pure error to compare with)"
-                    .to_string(),
-            );
-        }
-        ok
-    });
+    let lack_of_fit = identified_lack_of_fit(d, &z, fit.k(), &mut not_identified);
     let directed = directed_tests(d, &z);
-    if lack_of_fit.is_none() && directed.is_empty() {
+    let untested = lack_of_fit.is_none() && directed.is_empty();
+    if untested {
         not_identified.push(format!(
             "what is left: {} run(s) are too few for any test of the residuals",
             d.units.len()
@@ -182,24 +174,12 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             d.wraps().len()
         ));
     }
-    let inconstant = constancy
-        .as_ref()
-        .is_some_and(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
-    let unexplained = lack || !at_physical_limit.is_empty() || inconstant;
-    // When the pure error says structure is left, the pattern is the directed test that
-    // comes closest to it (a description of what is left, at p < 0.05: the omnibus test has
-    // made the decision); otherwise a directed test must be significant on its own.
-    let closest = directed
-        .iter()
-        .filter(|t| t.p < 0.05)
-        .min_by(|a, b| a.p.total_cmp(&b.p));
-    let pattern = match (best, &lack_of_fit) {
-        (Some(t), _) => Some(t.structure),
-        (None, Some(l)) if l.p < rule.alpha => Some(closest.map_or("cells", |t| t.structure)),
-        _ => None,
-    };
+    let inconstant =
+        (constancy.as_ref()).filter(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
+    let unexplained = lack || !at_physical_limit.is_empty() || inconstant.is_some();
+    let pattern = pattern(best, lack_of_fit.as_ref(), &directed, rule);
     let mut sentence = sentence(lack, pattern, lack_of_fit.as_ref(), &directed);
-    if lack_of_fit.is_none() && directed.is_empty() {
+    if untested {
         sentence = format!(
             "What is left is not identified: with {} run(s) no test of it can be made (no \
              replicate runs, and too few runs for a test of the residuals against T1, time or \
@@ -207,6 +187,70 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             d.units.len()
         );
     }
+    let sentence = with_limits_and_sizes(sentence, lack, &at_physical_limit, inconstant);
+    Adequacy {
+        unexplained,
+        pattern,
+        tested: lack_of_fit.is_some() || !directed.is_empty(),
+        not_identified,
+        sentence,
+        at_physical_limit,
+        constancy,
+        lack_of_fit,
+        directed,
+        rule,
+    }
+}
+
+/// The pure-error lack-of-fit test, if it could be computed with finite numbers (otherwise
+/// why not, in `not_identified`).
+fn identified_lack_of_fit(
+    d: &Design,
+    z: &[f64],
+    k: usize,
+    not_identified: &mut Vec<String>,
+) -> Option<LackOfFit> {
+    pure_error(d, z, k).filter(|l| {
+        let ok = [l.f, l.p, l.systematic_ratio].iter().all(|v| v.is_finite());
+        if !ok {
+            not_identified.push(
+                "lack of fit: the replicate runs agree exactly (no pure error to compare with)"
+                    .to_string(),
+            );
+        }
+        ok
+    })
+}
+
+/// The pattern of what is left: the significant directed test (`best`), or, when the pure
+/// error says structure is left, the directed test that comes closest to it (a description of
+/// what is left, at p < 0.05: the omnibus test has made the decision).
+fn pattern(
+    best: Option<&Directed>,
+    lack_of_fit: Option<&LackOfFit>,
+    directed: &[Directed],
+    rule: AdequacyRule,
+) -> Option<&'static str> {
+    let closest = directed
+        .iter()
+        .filter(|t| t.p < 0.05)
+        .min_by(|a, b| a.p.total_cmp(&b.p));
+    match (best, lack_of_fit) {
+        (Some(t), _) => Some(t.structure),
+        (None, Some(l)) if l.p < rule.alpha => Some(closest.map_or("cells", |t| t.structure)),
+        _ => None,
+    }
+}
+
+/// The decision's sentence with what else says the catalogue does not explain the data: the
+/// effects pushed to the edge of the physical range, and found effects of different sizes on
+/// different wraps (`inconstant`). Each replaces the sentence when nothing before it said so.
+fn with_limits_and_sizes(
+    mut sentence: String,
+    lack: bool,
+    at_physical_limit: &[(&'static str, f64)],
+    inconstant: Option<&Constancy>,
+) -> String {
     if !at_physical_limit.is_empty() {
         let list: Vec<String> = at_physical_limit
             .iter()
@@ -222,42 +266,28 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             edge
         };
     }
-    if inconstant {
-        if let Some(c) = &constancy {
-            let list: Vec<String> = c
-                .by_wrap
-                .iter()
-                .map(|(k, v)| {
-                    let vals: Vec<String> =
-                        v.iter().map(|(w, x)| format!("{x:.4} at {w}°")).collect();
-                    format!("{k} ({})", vals.join(", "))
-                })
-                .collect();
-            let text = format!(
-                "The found effects take different sizes on different wraps ({}; F = {:.1}, p = {:.1e}), which the same physics would not: they stand in for something no catalogue effect explains.",
-                list.join("; "),
-                c.f,
-                c.p
-            );
-            sentence = if lack || !at_physical_limit.is_empty() {
-                format!("{sentence} {text}")
-            } else {
-                text
-            };
-        }
+    if let Some(c) = inconstant {
+        let list: Vec<String> = c
+            .by_wrap
+            .iter()
+            .map(|(k, v)| {
+                let vals: Vec<String> = v.iter().map(|(w, x)| format!("{x:.4} at {w}°")).collect();
+                format!("{k} ({})", vals.join(", "))
+            })
+            .collect();
+        let text = format!(
+            "The found effects take different sizes on different wraps ({}; F = {:.1}, p = {:.1e}), which the same physics would not: they stand in for something no catalogue effect explains.",
+            list.join("; "),
+            c.f,
+            c.p
+        );
+        sentence = if lack || !at_physical_limit.is_empty() {
+            format!("{sentence} {text}")
+        } else {
+            text
+        };
     }
-    Adequacy {
-        unexplained,
-        pattern,
-        tested: lack_of_fit.is_some() || !directed.is_empty(),
-        not_identified,
-        sentence,
-        at_physical_limit,
-        constancy,
-        lack_of_fit,
-        directed,
-        rule,
-    }
+    sentence
 }
 
 /// The sentence of the decision.
@@ -435,47 +465,14 @@ fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
     let theta0: Vec<f64> = (0..s_n).flat_map(|_| fit.theta.iter().copied()).collect();
     let strata = Strata { k, of_unit };
     let split = fit_strata(d, (&maps, &strata), &theta0, &fit.mu, w);
-    let big_k = k * s_n;
     let q = k * (s_n - 1);
     let g = d.units.len() as f64;
     if g - (q as f64) < 2.0 {
         return None;
     }
-    // Contrasts θ[s, j] − θ[0, j].
-    let mut c = DMatrix::<f64>::zeros(q, big_k);
-    for s in 1..s_n {
-        for j in 0..k {
-            let row = (s - 1) * k + j;
-            c[(row, s * k + j)] = 1.0;
-            c[(row, j)] = -1.0;
-        }
-    }
-    let theta = DVector::from_column_slice(&split.theta);
-    let v = DMatrix::from_row_slice(big_k, big_k, &split.cov_robust);
-    let ct = &c * &theta;
-    let cvc = &c * v * c.transpose();
-    let wald = (ct.transpose() * cvc.try_inverse()? * &ct)[(0, 0)];
     let qf = q as f64;
-    let f = wald / qf * (g - qf) / (g - 1.0);
-    if !f.is_finite() {
-        return None;
-    }
-    let mut spread: f64 = 0.0;
-    let by_wrap: Vec<(&str, Vec<(f64, f64)>)> = (0..k)
-        .map(|j| {
-            let common = fit.value(j);
-            let scale = (common - fit.maps[j].kind.neutral_value()).abs();
-            let vals: Vec<(f64, f64)> = (0..s_n)
-                .map(|s| (wraps[s], split.value(s * k + j)))
-                .collect();
-            for &(_, x) in &vals {
-                if scale > 0.0 {
-                    spread = spread.max((x - common).abs() / scale);
-                }
-            }
-            (fit.maps[j].kind.name(), vals)
-        })
-        .collect();
+    let f = wald_f(&split, k, s_n, g)?;
+    let (by_wrap, spread) = sizes_by_wrap(fit, &split, &wraps);
     let finite = spread.is_finite()
         && by_wrap
             .iter()
@@ -491,6 +488,58 @@ fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
         p: f_p_upper(f, qf, g - qf),
         spread,
     })
+}
+
+/// The F statistic of the Wald test that every effect has one size on every wrap: the
+/// contrasts θ[s, j] − θ[0, j] of the split fit (`s_n` wraps of `k` effects, `g` runs) through
+/// its robust covariance. None when it cannot be computed.
+fn wald_f(split: &WithinFit, k: usize, s_n: usize, g: f64) -> Option<f64> {
+    let big_k = k * s_n;
+    let q = k * (s_n - 1);
+    let mut c = DMatrix::<f64>::zeros(q, big_k);
+    for s in 1..s_n {
+        for j in 0..k {
+            let row = (s - 1) * k + j;
+            c[(row, s * k + j)] = 1.0;
+            c[(row, j)] = -1.0;
+        }
+    }
+    let theta = DVector::from_column_slice(&split.theta);
+    let v = DMatrix::from_row_slice(big_k, big_k, &split.cov_robust);
+    let ct = &c * &theta;
+    let cvc = &c * v * c.transpose();
+    let wald = (ct.transpose() * cvc.try_inverse()? * &ct)[(0, 0)];
+    let qf = q as f64;
+    let f = wald / qf * (g - qf) / (g - 1.0);
+    f.is_finite().then_some(f)
+}
+
+/// Each effect's size on each wrap (from the split fit), and the largest departure from the
+/// common size relative to the common size's distance from neutral.
+#[allow(clippy::type_complexity)]
+fn sizes_by_wrap(
+    fit: &WithinFit,
+    split: &WithinFit,
+    wraps: &[f64],
+) -> (Vec<(&'static str, Vec<(f64, f64)>)>, f64) {
+    let k = fit.k();
+    let mut spread: f64 = 0.0;
+    let by_wrap = (0..k)
+        .map(|j| {
+            let common = fit.value(j);
+            let scale = (common - fit.maps[j].kind.neutral_value()).abs();
+            let vals: Vec<(f64, f64)> = (0..wraps.len())
+                .map(|s| (wraps[s], split.value(s * k + j)))
+                .collect();
+            for &(_, x) in &vals {
+                if scale > 0.0 {
+                    spread = spread.max((x - common).abs() / scale);
+                }
+            }
+            (fit.maps[j].kind.name(), vals)
+        })
+        .collect();
+    (by_wrap, spread)
 }
 
 /// Subtract each run's mean from `v`.

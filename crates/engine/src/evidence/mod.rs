@@ -231,17 +231,7 @@ impl Assessment {
 /// Assess `data`.
 pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
     let d = Design::new(data, opts.protocol_times);
-    let mut not_testable = Vec::new();
-    let mut testable = Vec::new();
-    for kind in EffectKind::ALL.into_iter().skip(1) {
-        match candidates::untestable(kind, &d) {
-            Some(reason) => not_testable.push(NotTestable {
-                effect: kind.name(),
-                reason,
-            }),
-            None => testable.push(kind),
-        }
-    }
+    let (testable, mut not_testable) = testable(&d);
     let within_cands: Vec<EffectKind> = candidates::at_level(Level::WithinRun)
         .into_iter()
         .filter(|k| testable.contains(k))
@@ -249,14 +239,6 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
     // The noise's variance function from the pure error of the replicate runs: what effects
     // the data hold move a cell's runs alike, so what is left is noise.
     let clock = std::time::Instant::now();
-    let lap = |what: &str| {
-        if std::env::var("CAPSTAN_LAPS").is_ok() {
-            crate::trace::line(format_args!(
-                "{what}: {:.1} ms",
-                clock.elapsed().as_secs_f64() * 1e3
-            ));
-        }
-    };
     let cold = within::fit(&d, &[], &[], &within::start_mu(&d), &Weights::equal(d.n()));
     let w0 = Weights::from_pure_error(&d, &cold);
     let null = within::fit(&d, &[], &[], &cold.mu, &w0);
@@ -268,43 +250,25 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
         opts.within_threshold,
         opts.threads,
     );
-    lap("selection");
+    lap(clock, "selection");
     let fit = sel.fit;
     let rivals = rivals::rivals(&d, &fit, &sel.swaps, &sel.alone, opts.rival_gap);
     let w = w0;
-    lap("final fit");
+    lap(clock, "final fit");
     let bt = between::between_tests(&d, &fit.mu, &testable, opts.between_threshold);
-    let between_sel = bt.selected;
-    let mut evidence = sel.evidence;
-    for mut e in bt.evidence {
-        e.relevant = candidates::practically_relevant(e.kind, e.value, &d);
-        e.supported = e.relevant && e.delta_bic < -opts.between_threshold;
-        e.selected = between_sel.contains(&e.kind);
-        evidence.push(e);
-    }
-    let mut alone = sel.alone;
-    alone.extend(bt.alone);
-    // A candidate whose size or evidence could not be computed (a fit that ran off to
-    // infinity, a regression on no spread) is not identified: said so, never shown as inf.
-    let unidentified = |e: &Evidence| !(e.value.is_finite() && e.delta_bic.is_finite());
-    for e in evidence.iter().filter(|e| unidentified(e) && !e.selected) {
-        not_testable.push(NotTestable {
-            effect: e.effect,
-            reason: not_identified_reason(e),
-        });
-    }
-    evidence.retain(|e| e.selected || !unidentified(e));
-    alone.retain(|e| !unidentified(e));
+    let mut selected: Vec<EffectKind> = fit.maps.iter().map(|m| m.kind).collect();
+    selected.extend(bt.selected.iter().copied());
+    let (mut evidence, mut alone) = (sel.evidence, sel.alone);
+    add_between(&mut evidence, &mut alone, bt, &d, opts);
+    drop_unidentified(&mut evidence, &mut alone, &mut not_testable);
     evidence.sort_by(|a, b| {
         b.selected
             .cmp(&a.selected)
             .then(a.delta_bic.total_cmp(&b.delta_bic))
     });
-    let mut selected: Vec<EffectKind> = fit.maps.iter().map(|m| m.kind).collect();
-    selected.extend(between_sel);
-    lap("between");
+    lap(clock, "between");
     let adequacy = adequacy::assess(&d, &fit, &w, opts.adequacy);
-    lap("adequacy");
+    lap(clock, "adequacy");
     let scatter = scatter(&d, &fit, &w);
     let rows_used = RowsUsed {
         t2_fits: d.n(),
@@ -325,6 +289,70 @@ pub fn assess(data: &Dataset, opts: &Options) -> Assessment {
         scatter,
         rows_used,
     }
+}
+
+/// The catalogue's effects (the base model aside) the design can test, and why each other
+/// cannot be.
+fn testable(d: &Design) -> (Vec<EffectKind>, Vec<NotTestable>) {
+    let mut not_testable = Vec::new();
+    let mut testable = Vec::new();
+    for kind in EffectKind::ALL.into_iter().skip(1) {
+        match candidates::untestable(kind, d) {
+            Some(reason) => not_testable.push(NotTestable {
+                effect: kind.name(),
+                reason,
+            }),
+            None => testable.push(kind),
+        }
+    }
+    (testable, not_testable)
+}
+
+/// With `CAPSTAN_LAPS` set, the time since `clock` at `what` on the trace.
+fn lap(clock: std::time::Instant, what: &str) {
+    if std::env::var("CAPSTAN_LAPS").is_ok() {
+        crate::trace::line(format_args!(
+            "{what}: {:.1} ms",
+            clock.elapsed().as_secs_f64() * 1e3
+        ));
+    }
+}
+
+/// The between-run tests' evidence after the within-run ones, each judged for practical
+/// relevance and support, and their evidence alone after the within-run ones'.
+fn add_between(
+    evidence: &mut Vec<Evidence>,
+    alone: &mut Vec<Evidence>,
+    bt: between::BetweenTests,
+    d: &Design,
+    opts: &Options,
+) {
+    for mut e in bt.evidence {
+        e.relevant = candidates::practically_relevant(e.kind, e.value, d);
+        e.supported = e.relevant && e.delta_bic < -opts.between_threshold;
+        e.selected = bt.selected.contains(&e.kind);
+        evidence.push(e);
+    }
+    alone.extend(bt.alone);
+}
+
+/// A candidate whose size or evidence could not be computed (a fit that ran off to infinity,
+/// a regression on no spread) is not identified: said so among the untestable (unless
+/// selected), never shown as inf.
+fn drop_unidentified(
+    evidence: &mut Vec<Evidence>,
+    alone: &mut Vec<Evidence>,
+    not_testable: &mut Vec<NotTestable>,
+) {
+    let unidentified = |e: &Evidence| !(e.value.is_finite() && e.delta_bic.is_finite());
+    for e in evidence.iter().filter(|e| unidentified(e) && !e.selected) {
+        not_testable.push(NotTestable {
+            effect: e.effect,
+            reason: not_identified_reason(e),
+        });
+    }
+    evidence.retain(|e| e.selected || !unidentified(e));
+    alone.retain(|e| !unidentified(e));
 }
 
 /// Why a candidate's numbers could not be computed.

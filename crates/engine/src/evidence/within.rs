@@ -355,6 +355,20 @@ pub fn fit(d: &Design, maps: &[ThetaMap], theta0: &[f64], mu0: &[f64], w: &Weigh
     fit_strata(d, (maps, &Strata::shared(d, maps.len())), theta0, mu0, w)
 }
 
+/// The fit's current point, its predictions and slopes, and the trial point's buffers.
+struct Iterate {
+    theta: Vec<f64>,
+    mu: Vec<f64>,
+    f: Vec<f64>,
+    slopes: Vec<f64>,
+    trial: Vec<f64>,
+    trial_slopes: Vec<f64>,
+    lin: Vec<f64>,
+    wrss: f64,
+    rss: f64,
+    lambda: f64,
+}
+
 /// Fit with θ in blocks by strata of runs (see [`Strata`]).
 pub fn fit_strata(
     d: &Design,
@@ -363,107 +377,145 @@ pub fn fit_strata(
     mu0: &[f64],
     w: &Weights,
 ) -> WithinFit {
-    let n = d.n();
-    let k = maps.len();
-    let nu = d.units.len();
-    let mut theta: Vec<f64> = theta0
-        .iter()
-        .zip(maps)
-        .map(|(t, m)| t.clamp(m.lo, m.hi))
-        .collect();
-    let mut mu = mu0.to_vec();
-    let mut f = vec![0.0; n];
-    let mut trial = vec![0.0; n];
-    let mut lin = vec![0.0; n];
-    let mut slopes = vec![f64::NAN; n];
-    let mut trial_slopes = vec![f64::NAN; n];
+    let (n, k, nu) = (d.n(), maps.len(), d.units.len());
+    let mut it = Iterate {
+        theta: (theta0.iter().zip(maps))
+            .map(|(t, m)| t.clamp(m.lo, m.hi))
+            .collect(),
+        mu: mu0.to_vec(),
+        f: vec![0.0; n],
+        slopes: vec![f64::NAN; n],
+        trial: vec![0.0; n],
+        trial_slopes: vec![f64::NAN; n],
+        lin: vec![0.0; n],
+        wrss: 0.0,
+        rss: 0.0,
+        lambda: 1e-3,
+    };
     let mut sens = Sens::new(n, k);
-    let (mut wrss, mut rss) = predict(
+    (it.wrss, it.rss) = predict(
         d,
         (maps, strata),
-        (&mu, &theta),
+        (&it.mu, &it.theta),
         w,
         None,
-        (&mut f, &mut slopes),
+        (&mut it.f, &mut it.slopes),
     );
-    let mut lambda = 1e-3;
     for _iter in 0..80 {
-        jacobian(d, (maps, strata), (&mu, &theta), (&f, &slopes), &mut sens);
-        let resid: Vec<f64> = (0..n).map(|i| f[i] - d.t2[i]).collect();
+        jacobian(
+            d,
+            (maps, strata),
+            (&it.mu, &it.theta),
+            (&it.f, &it.slopes),
+            &mut sens,
+        );
+        let resid: Vec<f64> = (0..n).map(|i| it.f[i] - d.t2[i]).collect();
         let nm = normal(d, k, w, &resid, &sens.a, &sens.b);
         // A run whose mu sits on its floor and would go lower is held there (a projected
         // step): left free, its clamped update would not be the step the system solved for,
         // and the fit would crawl (a cord worn to no friction, say).
         let held: Vec<bool> = (0..nu)
-            .map(|u| mu[u] <= MU_FLOOR && nm.g[u] > 0.0)
+            .map(|u| it.mu[u] <= MU_FLOOR && nm.g[u] > 0.0)
             .collect();
-        let mut improved = false;
-        for _ in 0..30 {
-            let (s, rhs) = schur(&nm, k, lambda, &held);
-            let dtheta = bounded_step(s, rhs, &theta, maps);
-            let new_theta: Vec<f64> = (0..k)
-                .map(|j| (theta[j] + dtheta[j]).clamp(maps[j].lo, maps[j].hi))
-                .collect();
-            let dt: Vec<f64> = (0..k).map(|j| new_theta[j] - theta[j]).collect();
-            let new_mu: Vec<f64> = (0..nu)
-                .map(|u| {
-                    if held[u] {
-                        return mu[u];
-                    }
-                    let c = &nm.c[u * k..(u + 1) * k];
-                    let cd: f64 = c.iter().zip(&dt).map(|(c, t)| c * t).sum();
-                    (mu[u] + (-nm.g[u] - cd) / (nm.d[u] * (1.0 + lambda))).max(MU_FLOOR)
-                })
-                .collect();
-            // The trial's step equations start from the linearised predictions, with the
-            // slopes of the current point: close enough that one evaluation often settles them.
-            linearised(d, &sens, (&f, &mu, &new_mu, &dt), &mut lin);
-            let hint = Hint {
-                t2: &lin,
-                slope: Some(&slopes),
-            };
-            let (new_wrss, new_rss) = predict(
-                d,
-                (maps, strata),
-                (&new_mu, &new_theta),
-                w,
-                Some(hint),
-                (&mut trial, &mut trial_slopes),
-            );
-            if new_wrss < wrss {
-                let rel = (wrss - new_wrss) / wrss.max(1e-300);
-                theta = new_theta;
-                mu = new_mu;
-                wrss = new_wrss;
-                rss = new_rss;
-                std::mem::swap(&mut f, &mut trial);
-                std::mem::swap(&mut slopes, &mut trial_slopes);
-                lambda = (lambda / 4.0).max(1e-9);
-                improved = rel > 1e-8;
-                break;
-            }
-            lambda *= 5.0;
-            if lambda > 1e12 {
-                break;
-            }
-        }
-        if !improved {
+        if !damped_step(d, (maps, strata), w, (&sens, &nm, &held), &mut it) {
             break;
         }
     }
-    let (cov_model, cov_robust) =
-        covariances(d, (maps, strata), (&mu, &theta), (&f, &slopes), w, wrss);
+    let (cov_model, cov_robust) = covariances(
+        d,
+        (maps, strata),
+        (&it.mu, &it.theta),
+        (&it.f, &it.slopes),
+        w,
+        it.wrss,
+    );
     WithinFit {
         maps: maps.to_vec(),
         strata: strata.clone(),
-        theta,
-        mu,
-        fitted: f,
-        wrss,
-        rss,
+        theta: it.theta,
+        mu: it.mu,
+        fitted: it.f,
+        wrss: it.wrss,
+        rss: it.rss,
         cov_model,
         cov_robust,
     }
+}
+
+/// The trial point of a step with damping `lambda`: θ by the projected Newton step within its
+/// bounds, each run's mu by back-substitution (held runs stay, mu no lower than its floor);
+/// returns (θ, mu, the change of θ).
+fn proposal(
+    nm: &Normal,
+    (theta, mu): (&[f64], &[f64]),
+    maps: &[ThetaMap],
+    lambda: f64,
+    held: &[bool],
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let k = maps.len();
+    let (s, rhs) = schur(nm, k, lambda, held);
+    let dtheta = bounded_step(s, rhs, theta, maps);
+    let new_theta: Vec<f64> = (0..k)
+        .map(|j| (theta[j] + dtheta[j]).clamp(maps[j].lo, maps[j].hi))
+        .collect();
+    let dt: Vec<f64> = (0..k).map(|j| new_theta[j] - theta[j]).collect();
+    let new_mu: Vec<f64> = (0..mu.len())
+        .map(|u| {
+            if held[u] {
+                return mu[u];
+            }
+            let c = &nm.c[u * k..(u + 1) * k];
+            let cd: f64 = c.iter().zip(&dt).map(|(c, t)| c * t).sum();
+            (mu[u] + (-nm.g[u] - cd) / (nm.d[u] * (1.0 + lambda))).max(MU_FLOOR)
+        })
+        .collect();
+    (new_theta, new_mu, dt)
+}
+
+/// One Levenberg-Marquardt step: raise the damping until a trial point lowers the weighted
+/// RSS (then take it and relax the damping) or the damping runs away. True when the step
+/// improved the fit by more than a relative 1e-8 (the fit goes on).
+fn damped_step(
+    d: &Design,
+    (maps, strata): (&[ThetaMap], &Strata),
+    w: &Weights,
+    (sens, nm, held): (&Sens, &Normal, &[bool]),
+    it: &mut Iterate,
+) -> bool {
+    for _ in 0..30 {
+        let (new_theta, new_mu, dt) = proposal(nm, (&it.theta, &it.mu), maps, it.lambda, held);
+        // The trial's step equations start from the linearised predictions, with the
+        // slopes of the current point: close enough that one evaluation often settles them.
+        linearised(d, sens, (&it.f, &it.mu, &new_mu, &dt), &mut it.lin);
+        let hint = Hint {
+            t2: &it.lin,
+            slope: Some(&it.slopes),
+        };
+        let (new_wrss, new_rss) = predict(
+            d,
+            (maps, strata),
+            (&new_mu, &new_theta),
+            w,
+            Some(hint),
+            (&mut it.trial, &mut it.trial_slopes),
+        );
+        if new_wrss < it.wrss {
+            let rel = (it.wrss - new_wrss) / it.wrss.max(1e-300);
+            it.theta = new_theta;
+            it.mu = new_mu;
+            it.wrss = new_wrss;
+            it.rss = new_rss;
+            std::mem::swap(&mut it.f, &mut it.trial);
+            std::mem::swap(&mut it.slopes, &mut it.trial_slopes);
+            it.lambda = (it.lambda / 4.0).max(1e-9);
+            return rel > 1e-8;
+        }
+        it.lambda *= 5.0;
+        if it.lambda > 1e12 {
+            break;
+        }
+    }
+    false
 }
 
 /// f + a·δmu + b·δθ: the predictions to first order after a step.

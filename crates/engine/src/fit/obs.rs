@@ -110,91 +110,50 @@ impl Observations {
             TimingSource::None
         };
         let st = &d.structure;
-        let mut order: Vec<usize> = (0..st.cords.len()).collect();
-        order.sort_by(|&a, &b| {
-            let (x, y) = (&st.cords[a], &st.cords[b]);
-            x.diameter_mm
-                .total_cmp(&y.diameter_mm)
-                .then(x.wrap_deg.total_cmp(&y.wrap_deg))
-                .then(x.drive_v.total_cmp(&y.drive_v))
-                .then(x.labels.cmp(&y.labels))
-        });
-        let mut group_of_cord = vec![0; st.cords.len()];
-        for (g, &c) in order.iter().enumerate() {
-            group_of_cord[c] = g;
-        }
-        let groups: Vec<Group> = order
-            .iter()
-            .map(|&c| Group {
-                label: st.cord_label(c),
-                diameter_mm: st.cords[c].diameter_mm,
-                wrap_deg: st.cords[c].wrap_deg,
+        let (groups, group_of_cord) = groups_in_order(st);
+        let rows: Vec<Row> = (d.pairs.iter().enumerate())
+            .map(|(i, p)| {
+                let c = st.cord_of_row[i];
+                let mut row = row_of(p, &st.cords[c], timing);
+                (row.group, row.run) = (group_of_cord[c], st.run_of_row[i]);
+                row
             })
             .collect();
-        let mut rows = Vec::with_capacity(d.pairs.len());
-        for (i, p) in d.pairs.iter().enumerate() {
-            let cord = &st.cords[st.cord_of_row[i]];
-            let timing_row = match (timing, p.time_s, p.step) {
-                (TimingSource::ThesisProtocolFromStep, _, Some(k)) => StepTiming::thesis_step(k),
-                (TimingSource::TimeColumn, Some(t), _) => StepTiming {
-                    change_s: t - 5.5,
-                    centre_s: t,
-                    end_s: t + 4.5,
-                },
-                _ => StepTiming::thesis_step(1.0),
-            };
-            rows.push(Row {
-                t1_n: p.t1_n,
-                t2_n: p.t2_n,
-                op: Operating {
-                    wrap_rad: p.wrap_rad(),
-                    diameter_mm: cord.diameter_mm,
-                    drive_v: cord.drive_v,
-                    run: p.run.unwrap_or(1.0),
-                    time_s: timing_row.centre_s,
-                    load_memory_ns: 0.0,
-                },
-                group: group_of_cord[st.cord_of_row[i]],
-                run: st.run_of_row[i],
-                timing: timing_row,
-                step: p.step,
-            });
-        }
-        let mut runs: Vec<Vec<usize>> = vec![Vec::new(); st.run_cord.len()];
-        for (i, r) in rows.iter().enumerate() {
-            runs[r.run].push(i);
-        }
-        for run in &mut runs {
-            run.sort_by(|&a, &b| rows[a].timing.centre_s.total_cmp(&rows[b].timing.centre_s));
-        }
-        if timing == TimingSource::TimeColumn {
-            // Dwell from the spacing of window centres; centre = change + (dwell + 1)/2.
-            for run in &runs {
-                let centres: Vec<f64> = run.iter().map(|&i| rows[i].timing.centre_s).collect();
-                for (k, &i) in run.iter().enumerate() {
-                    let dwell = if k + 1 < run.len() {
-                        centres[k + 1] - centres[k]
-                    } else if k > 0 {
-                        centres[k] - centres[k - 1]
-                    } else {
-                        10.0
-                    };
-                    let dwell = if dwell > 1.0 { dwell } else { 10.0 };
-                    let c = centres[k];
-                    let change = c - 0.5 * (dwell + 1.0);
-                    rows[i].timing = StepTiming {
-                        change_s: change,
-                        centre_s: c,
-                        end_s: change + dwell,
-                    };
-                }
-            }
-        }
-        Observations {
+        let mut obs = Observations {
+            runs: runs_in_time_order(&rows, st.run_cord.len()),
             rows,
             groups,
-            runs,
             timing,
+        };
+        if timing == TimingSource::TimeColumn {
+            obs.time_steps_by_spacing();
+        }
+        obs
+    }
+
+    /// With a time column, each row's step from the spacing of its run's window centres: the
+    /// dwell is the gap to the next centre (the previous for a run's last, 10 s alone or when
+    /// under 1 s), and centre = change + (dwell + 1)/2.
+    fn time_steps_by_spacing(&mut self) {
+        for run in &self.runs {
+            let centres: Vec<f64> = run.iter().map(|&i| self.rows[i].timing.centre_s).collect();
+            for (k, &i) in run.iter().enumerate() {
+                let dwell = if k + 1 < run.len() {
+                    centres[k + 1] - centres[k]
+                } else if k > 0 {
+                    centres[k] - centres[k - 1]
+                } else {
+                    10.0
+                };
+                let dwell = if dwell > 1.0 { dwell } else { 10.0 };
+                let c = centres[k];
+                let change = c - 0.5 * (dwell + 1.0);
+                self.rows[i].timing = StepTiming {
+                    change_s: change,
+                    centre_s: c,
+                    end_s: change + dwell,
+                };
+            }
         }
     }
 
@@ -262,6 +221,79 @@ impl Observations {
         }
         (s / n as f64).sqrt()
     }
+}
+
+/// The cords as groups, sorted by diameter, wrap, voltage and labels, and each cord's group.
+fn groups_in_order(st: &capstan_data::Structure) -> (Vec<Group>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..st.cords.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (x, y) = (&st.cords[a], &st.cords[b]);
+        x.diameter_mm
+            .total_cmp(&y.diameter_mm)
+            .then(x.wrap_deg.total_cmp(&y.wrap_deg))
+            .then(x.drive_v.total_cmp(&y.drive_v))
+            .then(x.labels.cmp(&y.labels))
+    });
+    let mut group_of_cord = vec![0; st.cords.len()];
+    for (g, &c) in order.iter().enumerate() {
+        group_of_cord[c] = g;
+    }
+    let groups: Vec<Group> = order
+        .iter()
+        .map(|&c| Group {
+            label: st.cord_label(c),
+            diameter_mm: st.cords[c].diameter_mm,
+            wrap_deg: st.cords[c].wrap_deg,
+        })
+        .collect();
+    (groups, group_of_cord)
+}
+
+/// One pair as a row of its cord (group and run 0: the caller sets them), its step timed by
+/// the thesis's protocol from its step, by its time (a 10 s step, the window centred 5.5 s
+/// after the change, until the spacing says better), or as the protocol's first step.
+fn row_of(
+    p: &capstan_data::Pair,
+    cord: &capstan_data::structure::CordKey,
+    timing: TimingSource,
+) -> Row {
+    let timing_row = match (timing, p.time_s, p.step) {
+        (TimingSource::ThesisProtocolFromStep, _, Some(k)) => StepTiming::thesis_step(k),
+        (TimingSource::TimeColumn, Some(t), _) => StepTiming {
+            change_s: t - 5.5,
+            centre_s: t,
+            end_s: t + 4.5,
+        },
+        _ => StepTiming::thesis_step(1.0),
+    };
+    Row {
+        t1_n: p.t1_n,
+        t2_n: p.t2_n,
+        op: Operating {
+            wrap_rad: p.wrap_rad(),
+            diameter_mm: cord.diameter_mm,
+            drive_v: cord.drive_v,
+            run: p.run.unwrap_or(1.0),
+            time_s: timing_row.centre_s,
+            load_memory_ns: 0.0,
+        },
+        group: 0,
+        run: 0,
+        timing: timing_row,
+        step: p.step,
+    }
+}
+
+/// Each of `n` runs' row indices, sorted by window centre.
+fn runs_in_time_order(rows: &[Row], n: usize) -> Vec<Vec<usize>> {
+    let mut runs: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (i, r) in rows.iter().enumerate() {
+        runs[r.run].push(i);
+    }
+    for run in &mut runs {
+        run.sort_by(|&a, &b| rows[a].timing.centre_s.total_cmp(&rows[b].timing.centre_s));
+    }
+    runs
 }
 
 #[cfg(test)]

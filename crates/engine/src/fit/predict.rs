@@ -420,9 +420,7 @@ fn run_one(
     let mut h_acc = 0.0;
     let mut dh_acc = vec![0.0; nf];
     let mut t_prev_end: Option<f64> = None;
-    let mut dx = vec![0.0; nf];
-    let mut dh_c = vec![0.0; nf];
-    let mut dy = vec![0.0; nf];
+    let mut scratch = (vec![0.0; nf], vec![0.0; nf]);
     // Without step times a run's rows carry no memory from one to the next.
     let carry = obs.timing != super::obs::TimingSource::None;
     for &i in rows {
@@ -440,12 +438,7 @@ fn run_one(
                 let (h, a, _, dtau) = memory_step(h_acc, gap, 0.0, tau);
                 h_acc = h;
                 if jacobian {
-                    for (j, f) in spec.free.iter().enumerate() {
-                        dh_acc[j] *= a;
-                        if f.param.role() == Role::Tau {
-                            dh_acc[j] += dtau * dvalue[j];
-                        }
-                    }
+                    decay_gradient(spec, dvalue, (a, dtau), &mut dh_acc);
                 }
             }
         }
@@ -459,70 +452,134 @@ fn run_one(
         ev.t2_n[i] = sensors.measured_t2_n(y);
         ev.load_memory_ns[i] = h_c;
         if jacobian && y.is_finite() {
-            let op = &row.op;
-            // Central differences of the law in T1, H and each law parameter.
-            let sx = 1e-6 * x.abs().max(1e-3);
-            let f_x = (t2_at(law, x + sx, op, h_c) - t2_at(law, x - sx, op, h_c)) / (2.0 * sx);
-            let sh = 1e-6 * h_c.abs().max(1.0);
-            let f_h = (t2_at(law, x, op, h_c + sh) - t2_at(law, x, op, h_c - sh)) / (2.0 * sh);
-            let ind = if load > 0.0 { 1.0 } else { 0.0 };
-            let denom = 1.0 - f_h * b_c * ind;
-            for (j, f) in spec.free.iter().enumerate() {
-                dx[j] = if f.param.role() == Role::T1Offset {
-                    let off = sensors.t1_offset_n;
-                    let s = 1e-7;
-                    let at = |o: f64| {
-                        capstan_friction::SensorArtefacts {
-                            t1_offset_n: o,
-                            ..*sensors
-                        }
-                        .true_t1_n(row.t1_n)
-                    };
-                    (at(off + s) - at(off - s)) / (2.0 * s) * dvalue[j]
-                } else {
-                    0.0
-                };
-                let mut direct = 0.0;
-                if f.param.role() == Role::Law {
-                    let v = f.param.get(model);
-                    let s = 1e-6 * v.abs().max(f.param.scale());
-                    let mut up = *model;
-                    let mut dn = *model;
-                    f.param.set(&mut up, v + s);
-                    f.param.set(&mut dn, v - s);
-                    direct = (t2_at(&up.law, x, op, h_c) - t2_at(&dn.law, x, op, h_c)) / (2.0 * s)
-                        * dvalue[j];
-                }
-                let tau_c = if f.param.role() == Role::Tau {
-                    dtau_c * dvalue[j]
-                } else {
-                    0.0
-                };
-                let hc_known = a_c * dh_acc[j] + tau_c;
-                dy[j] = (f_x * dx[j] + f_h * (hc_known - b_c * ind * dx[j]) + direct) / denom;
-                dh_c[j] = hc_known + b_c * ind * (dy[j] - dx[j]);
-            }
-            let g = sensors.t2_gain;
+            let pt = StepPoint {
+                x,
+                y,
+                h_c,
+                load,
+                centre: (a_c, b_c, dtau_c),
+                end: (a_s, b_s, dtau_s),
+            };
             let grad = &mut ev.d_theta[i * nf..(i + 1) * nf];
-            for (j, f) in spec.free.iter().enumerate() {
-                grad[j] = g * dy[j]
-                    + match f.param.role() {
-                        Role::T2Gain => y * dvalue[j],
-                        Role::T2Offset => dvalue[j],
-                        _ => 0.0,
-                    };
-                // Memory at the end of the step.
-                let tau_s = if f.param.role() == Role::Tau {
-                    dtau_s * dvalue[j]
-                } else {
-                    0.0
-                };
-                dh_acc[j] = a_s * dh_acc[j] + tau_s + b_s * (dy[j] - dx[j]);
-            }
+            step_gradient(
+                (spec, model, dvalue),
+                row,
+                &pt,
+                &mut dh_acc,
+                &mut scratch,
+                grad,
+            );
         }
         h_acc = h_next;
         t_prev_end = Some(tm.end_s);
     }
+}
+
+/// The memory's gradient over an idle gap: decayed by `a`, plus the gap's own dependence on τ
+/// (`dtau`) for a τ parameter.
+fn decay_gradient(spec: &ModelSpec, dvalue: &[f64], (a, dtau): (f64, f64), dh_acc: &mut [f64]) {
+    for (j, f) in spec.free.iter().enumerate() {
+        dh_acc[j] *= a;
+        if f.param.role() == Role::Tau {
+            dh_acc[j] += dtau * dvalue[j];
+        }
+    }
+}
+
+/// One step's solution for the gradient: the true T1 `x`, true T2 `y`, the memory at the
+/// window centre `h_c`, the load y − x, and the memory's (decay, gain, dτ) to the centre and
+/// to the step's end.
+struct StepPoint {
+    x: f64,
+    y: f64,
+    h_c: f64,
+    load: f64,
+    centre: (f64, f64, f64),
+    end: (f64, f64, f64),
+}
+
+/// The measured T2's gradient in the free values at one step (into `grad`), through the
+/// step equation's implicit derivative, and the memory's gradient carried to the step's end
+/// (`dh_acc`). `scratch` holds dx/dθ and dy/dθ.
+fn step_gradient(
+    (spec, model, dvalue): (&ModelSpec, &Model, &[f64]),
+    row: &super::obs::Row,
+    pt: &StepPoint,
+    dh_acc: &mut [f64],
+    (dx, dy): &mut (Vec<f64>, Vec<f64>),
+    grad: &mut [f64],
+) {
+    let (law, sensors, op) = (&model.law, &model.sensors, &row.op);
+    let (x, h_c) = (pt.x, pt.h_c);
+    let (a_c, b_c, dtau_c) = pt.centre;
+    // Central differences of the law in T1, H and each law parameter.
+    let sx = 1e-6 * x.abs().max(1e-3);
+    let f_x = (t2_at(law, x + sx, op, h_c) - t2_at(law, x - sx, op, h_c)) / (2.0 * sx);
+    let sh = 1e-6 * h_c.abs().max(1.0);
+    let f_h = (t2_at(law, x, op, h_c + sh) - t2_at(law, x, op, h_c - sh)) / (2.0 * sh);
+    let ind = if pt.load > 0.0 { 1.0 } else { 0.0 };
+    let denom = 1.0 - f_h * b_c * ind;
+    for (j, f) in spec.free.iter().enumerate() {
+        dx[j] = if f.param.role() == Role::T1Offset {
+            d_true_t1_d_offset(sensors, row.t1_n) * dvalue[j]
+        } else {
+            0.0
+        };
+        let direct = if f.param.role() == Role::Law {
+            d_law(model, f.param, x, op, h_c) * dvalue[j]
+        } else {
+            0.0
+        };
+        let tau_c = if f.param.role() == Role::Tau {
+            dtau_c * dvalue[j]
+        } else {
+            0.0
+        };
+        let hc_known = a_c * dh_acc[j] + tau_c;
+        dy[j] = (f_x * dx[j] + f_h * (hc_known - b_c * ind * dx[j]) + direct) / denom;
+    }
+    let (a_s, b_s, dtau_s) = pt.end;
+    let g = sensors.t2_gain;
+    for (j, f) in spec.free.iter().enumerate() {
+        grad[j] = g * dy[j]
+            + match f.param.role() {
+                Role::T2Gain => pt.y * dvalue[j],
+                Role::T2Offset => dvalue[j],
+                _ => 0.0,
+            };
+        // Memory at the end of the step.
+        let tau_s = if f.param.role() == Role::Tau {
+            dtau_s * dvalue[j]
+        } else {
+            0.0
+        };
+        dh_acc[j] = a_s * dh_acc[j] + tau_s + b_s * (dy[j] - dx[j]);
+    }
+}
+
+/// d(true T1)/d(T1 offset) at the reading `t1_n`, by a central difference.
+fn d_true_t1_d_offset(sensors: &capstan_friction::SensorArtefacts, t1_n: f64) -> f64 {
+    let off = sensors.t1_offset_n;
+    let s = 1e-7;
+    let at = |o: f64| {
+        capstan_friction::SensorArtefacts {
+            t1_offset_n: o,
+            ..*sensors
+        }
+        .true_t1_n(t1_n)
+    };
+    (at(off + s) - at(off - s)) / (2.0 * s)
+}
+
+/// ∂T2/∂p of the law in parameter `p` at (x, H), by a central difference.
+fn d_law(model: &Model, p: Param, x: f64, op: &Operating, h_c: f64) -> f64 {
+    let v = p.get(model);
+    let s = 1e-6 * v.abs().max(p.scale());
+    let mut up = *model;
+    let mut dn = *model;
+    p.set(&mut up, v + s);
+    p.set(&mut dn, v - s);
+    (t2_at(&up.law, x, op, h_c) - t2_at(&dn.law, x, op, h_c)) / (2.0 * s)
 }
 
 /// The parameter list of a spec, for messages.

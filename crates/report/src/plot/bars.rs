@@ -1,6 +1,6 @@
 //! Grouped bar charts (the gain figure).
 
-use super::axis::{auto_ticks, Frame};
+use super::axis::{auto_ticks, Coord, Frame};
 use super::{
     build, compose, draw_axes, font, render, Chart, Dash, Entry, Key, Layer, LineStyle, Panel,
     TEXT, TICK,
@@ -83,40 +83,11 @@ pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
         draw_axes(root, &panel, &f)?;
         let mut chart = build(root, &f)?;
         let slot_px = f64::from(w.saturating_sub(super::LEFT + super::RIGHT)) / n;
-        let widest = c
-            .categories
-            .iter()
-            .map(|s| s.chars().count())
-            .max()
-            .unwrap_or(0);
-        let stagger = 0.6 * super::LABEL * widest as f64 > 0.95 * slot_px;
-        for (k, name) in c.categories.iter().enumerate() {
-            let dy = if stagger && k % 2 == 1 { 22 } else { 6 };
-            let style = font(super::LABEL, false).pos(Pos::new(HPos::Center, VPos::Top));
-            chart.draw_series(std::iter::once(
-                EmptyElement::at((k as f64 + 0.5, bottom))
-                    + Text::new(name.clone(), (0, dy), style),
-            ))?;
-        }
+        draw_categories(&mut chart, &c.categories, slot_px, bottom)?;
         if bottom < 0.0 {
             chart.draw_series(LineSeries::new([(0.0, 0.0), (n, 0.0)], super::ZERO))?;
         }
-        let red = RGBColor(0xC0, 0x20, 0x20);
-        for (y, label) in &c.lines {
-            chart.draw_series(DashedLineSeries::new(
-                [(0.0, *y), (n, *y)],
-                super::DASH.0,
-                super::DASH.1,
-                red.stroke_width(2),
-            ))?;
-            let style = font(TICK, false)
-                .color(&red)
-                .pos(Pos::new(HPos::Right, VPos::Bottom));
-            chart.draw_series(std::iter::once(
-                EmptyElement::at((n, *y)) + Text::new(label.clone(), (-4, -3), style),
-            ))?;
-        }
-        Ok(())
+        draw_lines(&mut chart, &c.lines, n)
     })?;
     // Bars fill 70 % of each category's slot, with a small gap between neighbours.
     let bw = 0.7 / c.groups.len().max(1) as f64;
@@ -129,33 +100,9 @@ pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
                 let mut chart = build(root, &f)?;
                 // A value that is not identified is drawn as missing, never as "NaN".
                 match v.filter(|x| x.is_finite()) {
-                    Some(v) => {
-                        let label = font(TICK, false).pos(Pos::new(HPos::Center, VPos::Bottom));
-                        chart.draw_series([
-                            Rectangle::new([(x0, 0.0), (x1, v)], color.filled()),
-                            Rectangle::new([(x0, 0.0), (x1, v)], TEXT.stroke_width(1)),
-                        ])?;
-                        chart.draw_series(std::iter::once(
-                            EmptyElement::at(((x0 + x1) / 2.0, v))
-                                + Text::new(format!("{v:.*}", c.decimals), (0, -4), label),
-                        ))?;
-                    }
-                    None => {
-                        let label = font(TICK, false)
-                            .transform(FontTransform::Rotate270)
-                            .pos(Pos::new(HPos::Left, VPos::Center));
-                        let grey = RGBColor(0x99, 0x99, 0x99);
-                        chart.draw_series([Rectangle::new(
-                            [(x0, 0.0), (x1, 0.3 * top)],
-                            grey.stroke_width(1),
-                        )])?;
-                        chart.draw_series(std::iter::once(
-                            EmptyElement::at(((x0 + x1) / 2.0, 0.0))
-                                + Text::new(c.missing.clone(), (0, -8), label),
-                        ))?;
-                    }
+                    Some(v) => draw_bar(&mut chart, (x0, x1), v, *color, c.decimals),
+                    None => draw_missing(&mut chart, (x0, x1), top, &c.missing),
                 }
-                Ok(())
             })?;
             let class = if v.is_some_and(|x| x.is_finite()) {
                 "mark bar"
@@ -166,4 +113,93 @@ pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
         }
     }
     Ok(compose(size, axes, layers))
+}
+
+/// The category names below the axis, staggered in two rows when the widest would not fit
+/// its slot (`slot_px` wide).
+fn draw_categories(
+    chart: &mut ChartContext<SVGBackend, Coord>,
+    categories: &[String],
+    slot_px: f64,
+    bottom: f64,
+) -> Result<()> {
+    let widest = categories
+        .iter()
+        .map(|s| s.chars().count())
+        .max()
+        .unwrap_or(0);
+    let stagger = 0.6 * super::LABEL * widest as f64 > 0.95 * slot_px;
+    for (k, name) in categories.iter().enumerate() {
+        let dy = if stagger && k % 2 == 1 { 22 } else { 6 };
+        let style = font(super::LABEL, false).pos(Pos::new(HPos::Center, VPos::Top));
+        chart.draw_series(std::iter::once(
+            EmptyElement::at((k as f64 + 0.5, bottom)) + Text::new(name.clone(), (0, dy), style),
+        ))?;
+    }
+    Ok(())
+}
+
+/// The horizontal reference lines (a threshold), dashed red, each labelled at the right end.
+fn draw_lines(
+    chart: &mut ChartContext<SVGBackend, Coord>,
+    lines: &[(f64, String)],
+    n: f64,
+) -> Result<()> {
+    let red = RGBColor(0xC0, 0x20, 0x20);
+    for (y, label) in lines {
+        chart.draw_series(DashedLineSeries::new(
+            [(0.0, *y), (n, *y)],
+            super::DASH.0,
+            super::DASH.1,
+            red.stroke_width(2),
+        ))?;
+        let style = font(TICK, false)
+            .color(&red)
+            .pos(Pos::new(HPos::Right, VPos::Bottom));
+        chart.draw_series(std::iter::once(
+            EmptyElement::at((n, *y)) + Text::new(label.clone(), (-4, -3), style),
+        ))?;
+    }
+    Ok(())
+}
+
+/// One bar from 0 to `v` between `x0` and `x1`, outlined, its value above it.
+fn draw_bar(
+    chart: &mut ChartContext<SVGBackend, Coord>,
+    (x0, x1): (f64, f64),
+    v: f64,
+    color: RGBColor,
+    decimals: usize,
+) -> Result<()> {
+    let label = font(TICK, false).pos(Pos::new(HPos::Center, VPos::Bottom));
+    chart.draw_series([
+        Rectangle::new([(x0, 0.0), (x1, v)], color.filled()),
+        Rectangle::new([(x0, 0.0), (x1, v)], TEXT.stroke_width(1)),
+    ])?;
+    chart.draw_series(std::iter::once(
+        EmptyElement::at(((x0 + x1) / 2.0, v))
+            + Text::new(format!("{v:.*}", decimals), (0, -4), label),
+    ))?;
+    Ok(())
+}
+
+/// An empty grey slot (30 % of the axis high) with `missing` written up it.
+fn draw_missing(
+    chart: &mut ChartContext<SVGBackend, Coord>,
+    (x0, x1): (f64, f64),
+    top: f64,
+    missing: &str,
+) -> Result<()> {
+    let label = font(TICK, false)
+        .transform(FontTransform::Rotate270)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let grey = RGBColor(0x99, 0x99, 0x99);
+    chart.draw_series([Rectangle::new(
+        [(x0, 0.0), (x1, 0.3 * top)],
+        grey.stroke_width(1),
+    )])?;
+    chart.draw_series(std::iter::once(
+        EmptyElement::at(((x0 + x1) / 2.0, 0.0)) + Text::new(missing.to_string(), (0, -8), label),
+    ))?;
+    Ok(())
 }

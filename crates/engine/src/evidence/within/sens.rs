@@ -83,8 +83,6 @@ fn run(
     f0: &[f64],
     out: RunOut<'_>,
 ) {
-    let law = &model.law;
-    let sensors = &model.sensors;
     // The memory matters only with heating in the set (at θ = 0 too: its slope needs H).
     let tau = if roles.contains(&Role::Heating) {
         HEAT_TAU_S
@@ -98,85 +96,157 @@ fn run(
     let mut prev_end: Option<f64> = None;
     for &i in rows {
         let tm = d.timing[i];
-        match prev_end {
-            Some(end) if d.timed && tm.change_s > end => {
-                let (a_g, _) = decay(tm.change_s - end, tau);
-                h_acc *= a_g;
-                dh.iter_mut().for_each(|x| *x *= a_g);
-            }
-            Some(_) if d.timed => {}
-            _ => {
-                h_acc = 0.0;
-                dh.iter_mut().for_each(|x| *x = 0.0);
-            }
-        }
-        let t1m = d.t1[i];
-        let x_row = sensors.true_t1_n(t1m);
-        // A reading taken for a slack cord does not move with the offset. At an offset of
-        // exactly 0 (a start value) the right-hand slope, as the forward difference takes it.
-        let slack =
-            sensors.t1_offset_n >= 0.0 && t1m > 0.0 && t1m - sensors.t1_offset_n < SLACK_T1_N;
-        let dx_do = if slack { 0.0 } else { -1.0 };
-        // The law is read at the shape point x (both loaded there, so both move with the
-        // offset) and its amplification applied to the row's T1: y_row = x_row·y/x.
-        let x = shape_point(model, x_row, Some(d.t1_shape[i]));
-        let shaped = x != x_row;
-        let scale = if shaped { x_row / x } else { 1.0 };
-        let y = (f0[i] - sensors.t2_offset_n) / sensors.t2_gain / scale;
-        let load = y - x;
+        carry_gap(d, i, prev_end, tau, (&mut h_acc, &mut dh));
+        let row = row_point(d, i, model, f0);
         let (a_c, b_c) = decay(tm.centre_s - tm.change_s, tau);
-        let h_c = h_acc * a_c + load.max(0.0) * b_c;
+        let h_c = h_acc * a_c + row.load.max(0.0) * b_c;
         let op = Operating {
             load_memory_ns: h_c,
             ..d.op[i]
         };
-        let (g, m) = law.partials_at(x, y, &op);
-        let b_c = if load > 0.0 { b_c } else { 0.0 };
-        let k_h = g.d_k * m.d_memory;
-        let denom = 1.0 - k_h * b_c;
-        let dx_of = |p: usize| {
-            if p > 0 && roles[p - 1] == Role::T1Offset {
-                dx_do
-            } else {
-                0.0
-            }
-        };
-        for p in 0..np {
-            let role = (p > 0).then(|| roles[p - 1]);
-            let dx = dx_of(p);
-            let direct = match role {
-                None => g.d_k * m.d_mu,
-                Some(Role::Exponent) => g.d_n,
-                Some(Role::SqrtB) => g.d_sqrt_b,
-                Some(Role::Drift) => g.d_k * m.d_drift,
-                Some(Role::Heating) => g.d_k * m.d_heat / HEAT_TAU_S,
-                Some(Role::T1Offset | Role::T2Offset) => 0.0,
-            };
-            dy[p] = (direct + k_h * (a_c * dh[p] - b_c * dx) + g.d_t1 * dx) / denom;
-            // d(x_row·y/x), x_row and x moving alike with the offset.
-            let dy_row = if shaped {
-                scale * dy[p] + (y / x) * (dx - scale * dx)
-            } else {
-                dy[p]
-            };
-            let df = sensors.t2_gain * dy_row
-                + if role == Some(Role::T2Offset) {
-                    1.0
-                } else {
-                    0.0
-                };
+        let partials = model.law.partials_at(row.x, row.y, &op);
+        let b_c = if row.load > 0.0 { b_c } else { 0.0 };
+        let memory = (a_c, b_c, &dh[..]);
+        row_sens(&row, partials, memory, roles, &mut dy);
+        for (p, df) in row.df(roles, &dy, model.sensors.t2_gain).enumerate() {
             match p {
                 0 => out.a[i] = df,
                 _ => out.b[i * out.k + out.first + p - 1] = df,
             }
         }
         let (a_s, b_s) = decay(tm.end_s - tm.change_s, tau);
-        let b_s_on = if load > 0.0 { b_s } else { 0.0 };
+        let b_s_on = if row.load > 0.0 { b_s } else { 0.0 };
         for p in 0..np {
-            dh[p] = a_s * dh[p] + b_s_on * (dy[p] - dx_of(p));
+            dh[p] = a_s * dh[p] + b_s_on * (dy[p] - row.dx(roles, p));
         }
-        h_acc = h_acc * a_s + load.max(0.0) * b_s;
+        h_acc = h_acc * a_s + row.load.max(0.0) * b_s;
         prev_end = Some(tm.end_s);
+    }
+}
+
+/// The memory (and its derivatives) at row `i`'s change: decayed over the idle gap since the
+/// run's previous step when timed, or 0 at a run's start or without times.
+fn carry_gap(
+    d: &Design,
+    i: usize,
+    prev_end: Option<f64>,
+    tau: f64,
+    (h_acc, dh): (&mut f64, &mut [f64]),
+) {
+    let tm = d.timing[i];
+    match prev_end {
+        Some(end) if d.timed && tm.change_s > end => {
+            let (a_g, _) = decay(tm.change_s - end, tau);
+            *h_acc *= a_g;
+            dh.iter_mut().for_each(|x| *x *= a_g);
+        }
+        Some(_) if d.timed => {}
+        _ => {
+            *h_acc = 0.0;
+            dh.iter_mut().for_each(|x| *x = 0.0);
+        }
+    }
+}
+
+/// One row's point for the chain rule: the law is read at the shape point `x` (both loaded
+/// there, so both move with the offset) and its amplification applied to the row's true T1:
+/// y_row = x_row·y/x.
+struct RowPoint {
+    /// The shape point, N (the row's true T1 unless shaped).
+    x: f64,
+    /// True T2 at the shape point, N.
+    y: f64,
+    /// x_row/x (1 unless shaped).
+    scale: f64,
+    shaped: bool,
+    /// y − x, N.
+    load: f64,
+    /// dx/d(T1 offset): 0 for a slack reading, else −1.
+    dx_do: f64,
+}
+
+impl RowPoint {
+    /// dx/dp of parameter `p` (0: mu, then θ): only the T1 offset moves x.
+    fn dx(&self, roles: &[Role], p: usize) -> f64 {
+        if p > 0 && roles[p - 1] == Role::T1Offset {
+            self.dx_do
+        } else {
+            0.0
+        }
+    }
+
+    /// ∂f/∂p of the measured T2 f = g·y_row + o₂ from dy/dp, every p in order.
+    fn df<'a>(
+        &'a self,
+        roles: &'a [Role],
+        dy: &'a [f64],
+        t2_gain: f64,
+    ) -> impl Iterator<Item = f64> + 'a {
+        dy.iter().enumerate().map(move |(p, &dy_p)| {
+            let role = (p > 0).then(|| roles[p - 1]);
+            let dx = self.dx(roles, p);
+            // d(x_row·y/x), x_row and x moving alike with the offset.
+            let dy_row = if self.shaped {
+                self.scale * dy_p + (self.y / self.x) * (dx - self.scale * dx)
+            } else {
+                dy_p
+            };
+            t2_gain * dy_row
+                + if role == Some(Role::T2Offset) {
+                    1.0
+                } else {
+                    0.0
+                }
+        })
+    }
+}
+
+/// Row `i`'s point from its reading and the prediction `f0[i]` (measured T2).
+fn row_point(d: &Design, i: usize, model: &capstan_friction::Model, f0: &[f64]) -> RowPoint {
+    let sensors = &model.sensors;
+    let t1m = d.t1[i];
+    let x_row = sensors.true_t1_n(t1m);
+    // A reading taken for a slack cord does not move with the offset. At an offset of
+    // exactly 0 (a start value) the right-hand slope, as the forward difference takes it.
+    let slack = sensors.t1_offset_n >= 0.0 && t1m > 0.0 && t1m - sensors.t1_offset_n < SLACK_T1_N;
+    let x = shape_point(model, x_row, Some(d.t1_shape[i]));
+    let shaped = x != x_row;
+    let scale = if shaped { x_row / x } else { 1.0 };
+    let y = (f0[i] - sensors.t2_offset_n) / sensors.t2_gain / scale;
+    RowPoint {
+        x,
+        y,
+        scale,
+        shaped,
+        load: y - x,
+        dx_do: if slack { 0.0 } else { -1.0 },
+    }
+}
+
+/// dy/dp at one row for every parameter p (0: mu, then θ), into `dy`: the law's partials
+/// through the step equation's implicit derivative, the memory carried in as `dh` (decay
+/// `a_c`, gain `b_c` while loaded).
+fn row_sens(
+    row: &RowPoint,
+    (g, m): (capstan_friction::LawPartials, capstan_friction::MuPartials),
+    (a_c, b_c, dh): (f64, f64, &[f64]),
+    roles: &[Role],
+    dy: &mut [f64],
+) {
+    let k_h = g.d_k * m.d_memory;
+    let denom = 1.0 - k_h * b_c;
+    for (p, dy_p) in dy.iter_mut().enumerate() {
+        let role = (p > 0).then(|| roles[p - 1]);
+        let dx = row.dx(roles, p);
+        let direct = match role {
+            None => g.d_k * m.d_mu,
+            Some(Role::Exponent) => g.d_n,
+            Some(Role::SqrtB) => g.d_sqrt_b,
+            Some(Role::Drift) => g.d_k * m.d_drift,
+            Some(Role::Heating) => g.d_k * m.d_heat / HEAT_TAU_S,
+            Some(Role::T1Offset | Role::T2Offset) => 0.0,
+        };
+        *dy_p = (direct + k_h * (a_c * dh[p] - b_c * dx) + g.d_t1 * dx) / denom;
     }
 }
 

@@ -1,0 +1,104 @@
+//! `capstan predict` as a user meets it: one warning per quantity however long the T1 list,
+//! negative numbers taken as values and refused by name.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn capstan(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_capstan"))
+        .args(args)
+        .output()
+        .expect("capstan runs")
+}
+
+/// metrics.json of the thesis data, as `capstan analyze` writes it.
+fn metrics(dir: &Path) -> PathBuf {
+    use capstan_engine::analysis::{self, Options};
+    let a = analysis::run(&capstan_data::thesis_dataset(), Options::default()).unwrap();
+    let ctx = capstan_report::Context::library();
+    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let path = dir.join("metrics.json");
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+    path
+}
+
+#[test]
+fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name() {
+    let dir = std::env::temp_dir().join(format!("capstan-predict-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let m = metrics(&dir);
+    let from = m.to_str().unwrap();
+
+    // 1000 T1 values from 0.1 N to 100 N, most outside the thesis's fitted T1, at a wrap and a
+    // diameter outside theirs too: one warning for each of the three quantities.
+    let base = ["predict", "--from", from, "--wrap-deg", "900"];
+    let mut args = base.to_vec();
+    args.extend(["--diameter-mm", "50", "--t1-n", "0.1:100:0.1"]);
+    let r = capstan(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let err = String::from_utf8_lossy(&r.stderr);
+    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning")).collect();
+    assert_eq!(warnings.len(), 3, "{err}");
+    let t1 = warnings.iter().find(|w| w.contains("T1")).unwrap();
+    assert!(
+        t1.contains("of 1000 values") && t1.contains("to 100 N"),
+        "{t1}"
+    );
+    assert!(warnings.iter().any(|w| w.contains("wrap 900°")), "{err}");
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(stdout.contains("model's own error"), "{stdout}");
+    assert_eq!(stdout.lines().count(), 3 + 1000);
+
+    // The same in JSON: the warnings once, every prediction in order.
+    args.push("--json");
+    let r = capstan(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(v["warnings"].as_array().unwrap().len(), 3);
+    assert_eq!(v["extrapolating"], true);
+    assert_eq!(v["predictions"].as_array().unwrap().len(), 1000);
+    assert!(v["model_error_sd_n"].as_f64().unwrap() >= 0.0);
+
+    // Negative numbers are values, refused with the flag named (`--drive-v -1` and
+    // `--drive-v=-1` alike), never a parser's "unexpected argument".
+    for (flag, value) in [
+        ("--drive-v", "-1"),
+        ("--drive-v=-1", ""),
+        ("--wrap-deg", "-90"),
+        ("--diameter-mm", "-20"),
+    ] {
+        let mut a = vec!["predict", "--from", from, "--t1-n", "5"];
+        for (f, v) in [("--wrap-deg", "540"), ("--diameter-mm", "20")] {
+            if !flag.starts_with(f) {
+                a.extend([f, v]);
+            }
+        }
+        a.push(flag);
+        if !value.is_empty() {
+            a.push(value);
+        }
+        let r = capstan(&a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{flag} {value} was accepted");
+        let name = flag.split('=').next().unwrap();
+        assert!(
+            err.contains(&format!("{name} -")) && !err.contains("unexpected argument"),
+            "{flag} {value}: {err}"
+        );
+    }
+    // The interval of a query inside the fitted data carries no warning.
+    let r = capstan(&[
+        "predict",
+        "--from",
+        from,
+        "--wrap-deg",
+        "540",
+        "--diameter-mm",
+        "20",
+        "--t1-n",
+        "5",
+        "--drive-v=10",
+    ]);
+    assert!(r.status.success() && r.stderr.is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}
