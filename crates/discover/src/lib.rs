@@ -15,6 +15,7 @@
 pub mod columns;
 pub mod heldout;
 pub mod library;
+pub mod replicate;
 pub mod screen;
 pub mod stability;
 mod verdict;

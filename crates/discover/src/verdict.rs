@@ -17,6 +17,10 @@ use std::time::Instant;
 /// A proposed term must leave no lack of fit against the replicate runs at this level.
 pub const LOF_ALPHA: f64 = 0.01;
 
+/// Fewest cords for the stability (whole-cord resamples) and the held-out gain (leave one
+/// cord out, jackknife over cords): below it neither is computed, and nothing is proposed.
+pub const MIN_CORDS: usize = 3;
+
 /// The default [`Options::max_r2_model`]: VIF 100.
 pub const MAX_R2_MODEL: f64 = 0.99;
 
@@ -152,8 +156,12 @@ pub struct Search {
     pub gamma: f64,
     /// The bar the first term had to pass (ΔBIC below this).
     pub first_bar: f64,
-    /// Cord resamples of the stability, and the least stability proposed.
-    pub resamples: usize,
+    /// Cord resamples of the stability (None: too few cords to resample, see `cord_checks`).
+    pub resamples: Option<usize>,
+    /// Cords in the data set.
+    pub cords: usize,
+    /// Why stability and the held-out gain were not computed (None: they were).
+    pub cord_checks: Option<String>,
     /// Least stability.
     pub min_stability: f64,
     /// Every testable term's screen given the catalogue, best first.
@@ -171,12 +179,14 @@ pub struct ScreenRow {
     pub delta_bic: f64,
     /// θ̂ (first order).
     pub theta: f64,
-    /// Its cluster-robust standard error.
-    pub se: f64,
+    /// Its cluster-robust standard error (None: one run, no run-clustered error).
+    pub se: Option<f64>,
     /// θ̂ keeps the term's physical sign.
     pub sign_ok: bool,
     /// Share of its column the catalogue's columns explain within runs (1 − 1/VIF).
     pub r2_model: f64,
+    /// Its evidence on the replicate cells' means (None: between-level, or no replicates).
+    pub replicate: Option<crate::replicate::Replicate>,
 }
 
 /// The answer of `capstan discover`.
@@ -317,6 +327,13 @@ pub fn discover_assessed(
     let threshold = opts.engine.within_threshold.max(0.0);
     let (testable, not_testable) = classify(&base);
     let p = testable.len().max(1) as f64;
+    let cord_checks = (d.cords.len() < MIN_CORDS).then(|| {
+        format!(
+            "stability and the held-out gain cannot be computed from {} cord{}: whole cords are resampled and held out, and that needs at least {MIN_CORDS}",
+            d.cords.len(),
+            if d.cords.len() == 1 { "" } else { "s" }
+        )
+    });
     let runs = Runs {
         cord: d.unit_cord.clone(),
         cords: d.cords.len(),
@@ -353,21 +370,35 @@ pub fn discover_assessed(
                     level: s.level,
                     delta_bic: s.delta_bic,
                     theta: s.theta,
-                    se: s.se,
+                    se: Some(s.se).filter(|v| v.is_finite()),
                     sign_ok: s.sign_ok,
                     r2_model: s.r2_model,
+                    replicate: s.replicate.clone(),
                 })
                 .collect();
         }
         let kf = step as f64;
         let bar = -threshold - 2.0 * opts.gamma * ((p - kf + 1.0) / kf).max(1.0).ln();
-        let Some(best) = screens
+        // The pick: the best term with its physical sign, separable from the model, and (past
+        // the bar) shared by the replicate runs; a term past the bar that the replicate runs do
+        // not share is declined and the search goes on to the next.
+        let shared_ok = |s: &screen::Screen| s.replicate.as_ref().is_none_or(|r| r.delta_bic < bar);
+        let mut pick = None;
+        for s in screens
             .iter()
-            .find(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
-            .cloned()
-        else {
+            .filter(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
+        {
+            if s.delta_bic < bar && !shared_ok(s) {
+                declined.push(decline(&LIBRARY[s.term], s, None, None, format!(
+                    "the replicate runs do not share it: on the replicate cells' means its ΔBIC is {:.1} (bar {bar:.1}), so what it fits is run-to-run wander",
+                    s.replicate.as_ref().map_or(f64::NAN, |r| r.delta_bic)
+                )));
+                continue;
+            }
+            pick = Some(s.clone());
             break;
-        };
+        }
+        let Some(best) = pick else { break };
         let t = &LIBRARY[best.term];
         if best.delta_bic >= bar {
             if best.delta_bic < -threshold {
@@ -376,6 +407,10 @@ pub fn discover_assessed(
                     best.delta_bic, -threshold, testable.len()
                 )));
             }
+            break;
+        }
+        if let Some(why) = &cord_checks {
+            declined.push(decline(t, &best, None, None, why.clone()));
             break;
         }
         progress("stability", 0.4 + 0.2 * (step - 1) as f64);
@@ -516,7 +551,9 @@ pub fn discover_assessed(
             threshold,
             gamma: opts.gamma,
             first_bar: -threshold - 2.0 * opts.gamma * p.ln(),
-            resamples: opts.resamples,
+            resamples: cord_checks.is_none().then_some(opts.resamples),
+            cords: d.cords.len(),
+            cord_checks,
             min_stability: opts.min_stability,
             screen: first_screen,
         },
@@ -538,6 +575,7 @@ fn screen_all(
         .filter_map(|c| {
             let t = &LIBRARY[c.term];
             let mut r2 = 0.0;
+            let mut replicate = None;
             let (level, (theta, se, dbic, c_hat)) = match (&c.column, &c.g_run) {
                 (Some(x), _) => {
                     let xt = proj.project(base, x);
@@ -545,6 +583,7 @@ fn screen_all(
                     let norm =
                         |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
                     r2 = 1.0 - norm(&xt) / norm(&xa).max(1e-300);
+                    replicate = crate::replicate::replicate_evidence(base, &xt, &st.e);
                     (
                         Level::WithinRun,
                         within_evidence(base, &xt, &st.e, st.shared.len())?,
@@ -556,10 +595,8 @@ fn screen_all(
                 }
                 _ => return None,
             };
-            [theta, se, dbic]
-                .iter()
-                .all(|v| v.is_finite())
-                .then(|| screen::Screen {
+            ([theta, dbic].iter().all(|v| v.is_finite()) && !se.is_infinite()).then(|| {
+                screen::Screen {
                     term: c.term,
                     level,
                     theta,
@@ -568,7 +605,9 @@ fn screen_all(
                     c_hat,
                     sign_ok: sign_ok(t, theta),
                     r2_model: r2,
-                })
+                    replicate,
+                }
+            })
         })
         .collect();
     out.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));

@@ -68,11 +68,42 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
     }
 }
 
+/// The sets, simulated; with `CAPSTAN_DISCOVER_CACHE=DIR` kept in DIR as pairs CSVs
+/// (read back exactly) so that a calibration can be re-run without re-simulating.
+fn generate_cached(
+    seed: u64,
+    per_kind: usize,
+    plain: &[capstan_truth::cases::Case],
+    threads: usize,
+) -> Vec<capstan_data::Dataset> {
+    let dir = std::env::var("CAPSTAN_DISCOVER_CACHE").ok();
+    let path = |i: usize| {
+        dir.as_ref()
+            .map(|d| std::path::Path::new(d).join(format!("s{seed}-k{per_kind}-{i}.csv")))
+    };
+    let cached: Option<Vec<capstan_data::Dataset>> = (0..plain.len())
+        .map(|i| path(i).and_then(|p| capstan_data::load_pairs(&p).ok()))
+        .collect();
+    if let Some(d) = cached {
+        return d;
+    }
+    let data = capstan_truth::score::generate(plain, threads).unwrap_or_else(|e| panic!("{e}"));
+    if let Some(d) = &dir {
+        let _ = std::fs::create_dir_all(d);
+        for (i, ds) in data.iter().enumerate() {
+            if let Some(p) = path(i) {
+                let _ = capstan_data::write_pairs(&p, &ds.pairs);
+            }
+        }
+    }
+    data
+}
+
 /// Simulate and search `per_kind` sets of every kind (kinds by index `every`-th) on `threads`.
 pub fn run(seed: u64, per_kind: usize, threads: usize) -> Vec<Outcome> {
     let cases = discover_cases::draw_all(seed, per_kind);
     let plain: Vec<capstan_truth::cases::Case> = cases.iter().map(|c| c.case.clone()).collect();
-    let data = capstan_truth::score::generate(&plain, threads).unwrap_or_else(|e| panic!("{e}"));
+    let data = generate_cached(seed, per_kind, &plain, threads);
     let mut opts = Options::default();
     if let Ok(v) = std::env::var("CAPSTAN_DISCOVER_MAX_R2") {
         opts.max_r2_model = v.parse().expect("CAPSTAN_DISCOVER_MAX_R2");
