@@ -129,12 +129,14 @@ pub fn summary(d: &Discovery) -> String {
     };
     let _ = writeln!(
         s,
-        "searched {} of {} library terms; bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {} for the search); {checks}",
+        "searched {} of {} library terms, each added to the catalogue or in the place of one of its {} within-run effects ({:.0} models); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}",
         sr.tried,
         sr.library_size,
+        sr.displaceable.len(),
+        sr.models_per_step,
         sr.first_bar,
         sr.threshold,
-        sr.tried,
+        sr.models_per_step,
     );
     let _ = writeln!(s, "strongest candidates (ΔBIC given the catalogue):");
     for r in sr.screen.iter().take(5) {

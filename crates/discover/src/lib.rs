@@ -14,6 +14,7 @@
 
 pub mod columns;
 pub mod heldout;
+pub mod joint;
 pub mod library;
 pub mod replicate;
 pub mod screen;

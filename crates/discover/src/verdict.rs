@@ -2,12 +2,14 @@
 
 use crate::columns::Base;
 use crate::heldout::{self, Ratio};
+use crate::joint;
 use crate::library::{ActsOn, Sign, Term, Var, LIBRARY};
 use crate::screen::{self, between_evidence, sign_ok, within_evidence, Level, Projector, Runs};
 use crate::stability::{self, Candidate};
 use capstan_data::structure::StructureSummary;
 use capstan_data::Dataset;
 use capstan_engine::evidence::adequacy::{lack_of_fit, LackOfFit};
+use capstan_engine::evidence::within::WithinFit;
 use capstan_engine::evidence::{self, Assessment, RIVAL_GAP};
 use capstan_friction::EffectKind;
 use serde::Serialize;
@@ -37,6 +39,8 @@ pub struct Options {
     pub resamples: usize,
     /// Least stability a proposed term needs.
     pub min_stability: f64,
+    /// The joint search: a term may take the place of a within-run catalogue effect.
+    pub joint: bool,
     /// A within-run term whose column the model's columns explain beyond this share
     /// (1 − 1/VIF) is not separable from them at this design: it is screened and shown, never
     /// proposed.
@@ -51,6 +55,7 @@ impl Default for Options {
             max_terms: 2,
             resamples: 100,
             min_stability: 0.5,
+            joint: true,
             max_r2_model: MAX_R2_MODEL,
         }
     }
@@ -104,6 +109,8 @@ pub struct Proposed {
     pub lack_of_fit_after: Option<LackOfFit>,
     /// Library terms within the rival gap of it.
     pub rivals: Vec<Rival>,
+    /// The catalogue effect it takes the place of (the joint search), if any.
+    pub displaced: Option<joint::Displaced>,
     /// How to word it.
     pub words: String,
 }
@@ -119,6 +126,8 @@ pub struct Declined {
     pub stability: Option<f64>,
     /// Its held-out ratio, if it got that far.
     pub loco_rmse_ratio: Option<Ratio>,
+    /// The catalogue effect it was tried in place of (the joint search), if any.
+    pub displaced: Option<joint::Displaced>,
     /// Why not.
     pub reason: String,
 }
@@ -156,6 +165,10 @@ pub struct Search {
     pub gamma: f64,
     /// The bar the first term had to pass (ΔBIC below this).
     pub first_bar: f64,
+    /// Models tried at each step: every term added, and in place of each displaceable effect.
+    pub models_per_step: f64,
+    /// The within-run catalogue effects a term may take the place of (the joint search).
+    pub displaceable: Vec<&'static str>,
     /// Cord resamples of the stability (None: too few cords to resample, see `cord_checks`).
     pub resamples: Option<usize>,
     /// Cords in the data set.
@@ -323,10 +336,22 @@ pub fn discover_assessed(
 ) -> Discovery {
     let d = &a.design;
     progress("linearise", 0.2);
-    let base = Base::new(d, &a.fit, &a.weights.w);
+    let base0 = Base::new(d, &a.fit, &a.weights.w);
     let threshold = opts.engine.within_threshold.max(0.0);
-    let (testable, not_testable) = classify(&base);
-    let p = testable.len().max(1) as f64;
+    let (testable0, not_testable) = classify(&base0);
+    let alts = if opts.joint {
+        joint::alternatives(a)
+    } else {
+        Vec::new()
+    };
+    let p = testable0.len().max(1) as f64;
+    // The models tried at each step: every term added, and every term in place of each
+    // within-run catalogue effect (the joint search); extended BIC pays for all of them.
+    let models = p * (1 + alts.len()) as f64;
+    let bar_of = |step: usize| {
+        let k = step as f64;
+        -threshold - 2.0 * opts.gamma * ((models - k + 1.0) / k).max(1.0).ln()
+    };
     let cord_checks = (d.cords.len() < MIN_CORDS).then(|| {
         format!(
             "stability and the held-out gain cannot be computed from {} cord{}: whole cords are resampled and held out, and that needs at least {MIN_CORDS}",
@@ -334,22 +359,22 @@ pub fn discover_assessed(
             if d.cords.len() == 1 { "" } else { "s" }
         )
     });
-    let runs = Runs {
-        cord: d.unit_cord.clone(),
-        cords: d.cords.len(),
-        ln_mu: a.fit.mu.iter().map(|m| m.max(1e-6).ln()).collect(),
+    let covs0: Vec<Vec<f64>> = a
+        .selected
+        .iter()
+        .filter_map(|&k| catalogue_covariate(a, k))
+        .collect();
+    let (swap, screen0) = choose_swap((&base0, &testable0, &covs0), (&alts, a), bar_of(1), opts);
+    let (base, testable, fit_used): (&Base, Vec<Testable>, &WithinFit) = match swap {
+        Some(s) => (
+            &alts[s.alt].base,
+            classify(&alts[s.alt].base).0,
+            &alts[s.alt].fit,
+        ),
+        None => (&base0, testable0, &a.fit),
     };
-    let mut st = State {
-        shared: base.b.clone(),
-        covs: a
-            .selected
-            .iter()
-            .filter_map(|&k| catalogue_covariate(a, k))
-            .collect(),
-        e: Vec::new(),
-        used: Vec::new(),
-    };
-    st.e = Projector::new(&base, &st.shared).project(&base, &base.e);
+    let runs = runs_of(a, fit_used);
+    let mut st = state_of(base, &covs0);
     let lof_before = a.adequacy.lack_of_fit.clone();
     // After a term, any significant lack of fit keeps "unexplained" (the spike's rule: a
     // partial mimic leaves the replicates disagreeing with the model, whatever its size).
@@ -360,10 +385,10 @@ pub fn discover_assessed(
     let mut partial = false;
     for step in 1..=opts.max_terms {
         progress("screen", 0.3 + 0.2 * (step - 1) as f64);
-        let proj = Projector::new(&base, &st.shared);
-        let screens = screen_all(&base, &testable, &proj, &st, &runs);
+        let proj = Projector::new(base, &st.shared);
+        let screens = screen_all(base, &testable, &proj, &st, &runs);
         if step == 1 {
-            first_screen = screens
+            first_screen = screen0
                 .iter()
                 .map(|s| ScreenRow {
                     name: LIBRARY[s.term].name,
@@ -377,8 +402,9 @@ pub fn discover_assessed(
                 })
                 .collect();
         }
-        let kf = step as f64;
-        let bar = -threshold - 2.0 * opts.gamma * ((p - kf + 1.0) / kf).max(1.0).ln();
+        let bar = bar_of(step);
+        // The first step of a swap takes the swap's term (it beat every addition).
+        let forced = swap.filter(|_| step == 1).map(|s| s.term);
         // The pick: the best term with its physical sign, separable from the model, and (past
         // the bar) shared by the replicate runs; a term past the bar that the replicate runs do
         // not share is declined and the search goes on to the next.
@@ -387,6 +413,7 @@ pub fn discover_assessed(
         for s in screens
             .iter()
             .filter(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
+            .filter(|s| forced.is_none_or(|f| f == s.term))
         {
             if s.delta_bic < bar && !shared_ok(s) {
                 declined.push(decline(&LIBRARY[s.term], s, None, None, format!(
@@ -403,8 +430,8 @@ pub fn discover_assessed(
         if best.delta_bic >= bar {
             if best.delta_bic < -threshold {
                 declined.push(decline(t, &best, None, None, format!(
-                    "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {} terms tried, that much is expected by chance",
-                    best.delta_bic, -threshold, testable.len()
+                    "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {models:.0} models tried at each step, that much is expected by chance",
+                    best.delta_bic, -threshold
                 )));
             }
             break;
@@ -432,7 +459,7 @@ pub fn discover_assessed(
             })
             .collect();
         let problem = stability::Problem {
-            base: &base,
+            base,
             shared: &st.shared,
             e: &base.e,
             candidates: &cands,
@@ -444,7 +471,9 @@ pub fn discover_assessed(
             stability::stability(&problem, best.term, opts.resamples, 0x26_57ab + step as u64);
         progress("held-out cords", 0.5 + 0.2 * (step - 1) as f64);
         let tst = testable.iter().find(|c| c.term == best.term).unwrap();
-        let ratio = held_out(&base, a, &st, tst);
+        // Against the engine's catalogue when the term displaced one of its effects.
+        let without = forced.map(|_| heldout::shape_sse(&base0, &base0.b));
+        let ratio = held_out(base, fit_used, &st, tst, without);
         let Some(ratio) = ratio else {
             declined.push(decline(
                 t,
@@ -482,7 +511,7 @@ pub fn discover_assessed(
             break;
         }
         // Lack of fit with the term in (within-run terms change what the replicates share).
-        let proj_x = tst.column.as_ref().map(|x| proj.project(&base, x));
+        let proj_x = tst.column.as_ref().map(|x| proj.project(base, x));
         let lof_after = match &proj_x {
             Some(xt) => {
                 let z: Vec<f64> = (0..d.n())
@@ -501,8 +530,20 @@ pub fn discover_assessed(
             )));
             break;
         }
-        let rivals = rivals_of(&base, &proj, &screens, &best, &testable, threshold);
-        terms.push(proposed(t, &best, stab, ratio, lof_after, rivals));
+        let rivals = rivals_of(base, &proj, &screens, &best, &testable, threshold);
+        let displaced = forced.and(swap).map(|s| joint::Displaced {
+            effect: alts[s.alt].dropped.name(),
+            effect_delta_bic: alts[s.alt].dropped_delta_bic,
+            delta_bic_swap: s.delta_bic,
+        });
+        terms.push(proposed(
+            t,
+            &best,
+            (stab, ratio),
+            lof_after,
+            rivals,
+            displaced,
+        ));
         // Grow the model.
         match (&tst.column, proj_x) {
             (Some(x), Some(xt)) => {
@@ -516,6 +557,28 @@ pub fn discover_assessed(
         st.used.push(best.term);
     }
     progress("done", 1.0);
+    // A swap's term that was declined says what it was tried in place of.
+    if let Some(sw) = swap {
+        let x = &alts[sw.alt];
+        if let Some(dec) = declined
+            .iter_mut()
+            .find(|x| x.name == LIBRARY[sw.term].name)
+        {
+            dec.reason = format!(
+                "tried in place of the catalogue's {} (ΔBIC of the swap {:.1}; {} alone {:.1}): {}",
+                x.dropped.name(),
+                sw.delta_bic,
+                x.dropped.name(),
+                x.dropped_delta_bic,
+                dec.reason
+            );
+            dec.displaced = Some(joint::Displaced {
+                effect: x.dropped.name(),
+                effect_delta_bic: x.dropped_delta_bic,
+                delta_bic_swap: sw.delta_bic,
+            });
+        }
+    }
     let base_open = a.adequacy.unexplained;
     let last_lof = terms.iter().rev().find_map(|t| t.lack_of_fit_after.clone());
     let unexplained_after = if terms.is_empty() {
@@ -547,10 +610,12 @@ pub fn discover_assessed(
         not_testable,
         search: Search {
             library_size: LIBRARY.len(),
-            tried: testable.len(),
+            tried: p as usize,
             threshold,
             gamma: opts.gamma,
-            first_bar: -threshold - 2.0 * opts.gamma * p.ln(),
+            first_bar: bar_of(1),
+            models_per_step: models,
+            displaceable: alts.iter().map(|x| x.dropped.name()).collect(),
             resamples: cord_checks.is_none().then_some(opts.resamples),
             cords: d.cords.len(),
             cord_checks,
@@ -559,6 +624,63 @@ pub fn discover_assessed(
         },
         elapsed_s: t0.elapsed().as_secs_f64(),
     }
+}
+
+/// The runs' ln mu under `fit`, for the between-level tests.
+fn runs_of(a: &Assessment, fit: &WithinFit) -> Runs {
+    let d = &a.design;
+    Runs {
+        cord: d.unit_cord.clone(),
+        cords: d.cords.len(),
+        ln_mu: fit.mu.iter().map(|m| m.max(1e-6).ln()).collect(),
+    }
+}
+
+/// The search's state on the model linearised in `base`, before any term.
+fn state_of(base: &Base, covs: &[Vec<f64>]) -> State {
+    let shared = base.b.clone();
+    let e = Projector::new(base, &shared).project(base, &base.e);
+    State {
+        shared,
+        covs: covs.to_vec(),
+        e,
+        used: Vec::new(),
+    }
+}
+
+/// The joint search's first step: the best swap of a catalogue effect for a library term, if
+/// one beats every addition (see [`joint`]).
+fn choose_swap(
+    (base0, testable0, covs0): (&Base, &[Testable], &[Vec<f64>]),
+    (alts, a): (&[joint::Alternative<'_>], &Assessment),
+    bar: f64,
+    opts: &Options,
+) -> (Option<joint::Swap>, Vec<screen::Screen>) {
+    let st0 = state_of(base0, covs0);
+    let proj0 = Projector::new(base0, &st0.shared);
+    let sc0 = screen_all(base0, testable0, &proj0, &st0, &runs_of(a, &a.fit));
+    if alts.is_empty() {
+        return (None, sc0);
+    }
+    let best_addition = sc0
+        .iter()
+        .find(|s| {
+            s.sign_ok
+                && s.r2_model <= opts.max_r2_model
+                && s.replicate.as_ref().is_none_or(|r| r.delta_bic < bar)
+        })
+        .map_or(f64::INFINITY, |s| s.delta_bic);
+    let screens: Vec<Vec<screen::Screen>> = alts
+        .iter()
+        .map(|alt| {
+            let (t, _) = classify(&alt.base);
+            let st = state_of(&alt.base, covs0);
+            let proj = Projector::new(&alt.base, &st.shared);
+            screen_all(&alt.base, &t, &proj, &st, &runs_of(a, &alt.fit))
+        })
+        .collect();
+    let swap = joint::best_swap(alts, &screens, bar, opts.max_r2_model, best_addition);
+    (swap, sc0)
 }
 
 /// Every testable, unused term's screen, best (lowest ΔBIC) first.
@@ -615,11 +737,17 @@ fn screen_all(
 }
 
 /// The held-out ratio matched to the term's level.
-fn held_out(base: &Base, a: &Assessment, st: &State, c: &Testable) -> Option<Ratio> {
+fn held_out(
+    base: &Base,
+    fit: &WithinFit,
+    st: &State,
+    c: &Testable,
+    without: Option<Vec<f64>>,
+) -> Option<Ratio> {
     let rows = heldout::rows_per_cord(base);
     match (&c.column, &c.g_run) {
         (Some(x), _) => {
-            let without = heldout::shape_sse(base, &st.shared);
+            let without = without.unwrap_or_else(|| heldout::shape_sse(base, &st.shared));
             let mut cols = st.shared.clone();
             cols.push(x.clone());
             let with = heldout::shape_sse(base, &cols);
@@ -647,8 +775,8 @@ fn held_out(base: &Base, a: &Assessment, st: &State, c: &Testable) -> Option<Rat
                     r
                 })
                 .collect();
-            let without = heldout::population_sse(base, &a.fit, &x0);
-            let with = heldout::population_sse(base, &a.fit, &x1);
+            let without = heldout::population_sse(base, fit, &x0);
+            let with = heldout::population_sse(base, fit, &x1);
             heldout::ratio(
                 &with,
                 &without,
@@ -672,6 +800,7 @@ fn decline(
         delta_bic: s.delta_bic,
         stability,
         loco_rmse_ratio: ratio,
+        displaced: None,
         reason,
     }
 }
@@ -720,10 +849,10 @@ fn rivals_of(
 fn proposed(
     t: &'static Term,
     s: &screen::Screen,
-    stab: f64,
-    ratio: Ratio,
+    (stab, ratio): (f64, Ratio),
     lof: Option<LackOfFit>,
     rivals: Vec<Rival>,
+    displaced: Option<joint::Displaced>,
 ) -> Proposed {
     let shown = ratio.ci95.hi < 1.0;
     let rival_words = if rivals.is_empty() {
@@ -735,6 +864,12 @@ fn proposed(
             names.join(", ")
         )
     };
+    let displace_words = displaced.as_ref().map_or(String::new(), |x| {
+        format!(
+            " It takes the place of the catalogue's {} (ΔBIC of the swap {:.1} against the catalogue as selected).",
+            x.effect, x.delta_bic_swap
+        )
+    });
     let words = format!(
         "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4} {}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
         t.name,
@@ -750,7 +885,7 @@ fn proposed(
         ratio.ci95.hi,
         if shown { ": shown to predict new cords better" } else { ": not shown to predict new cords better" },
         rival_words
-    );
+    ) + &displace_words;
     Proposed {
         name: t.name,
         formula: t.formula,
@@ -768,6 +903,7 @@ fn proposed(
         source: t.source,
         lack_of_fit_after: lof,
         rivals,
+        displaced,
         words,
     }
 }

@@ -40,6 +40,38 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         || d.terms
             .iter()
             .any(|t| t.rivals.iter().any(|r| ok(deps(r.depends_on))));
+    // Where the terms of the right dependence stood in the first screen (a diagnostic).
+    let right_terms: Vec<String> = d
+        .search
+        .screen
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| {
+            capstan_discover::library::LIBRARY
+                .iter()
+                .find(|t| t.name == r.name)
+                .is_some_and(|t| ok(deps(t.depends_on)))
+        })
+        .map(|(i, r)| {
+            format!(
+                "#{} {} {:.1} rep {:.1} r2 {:.2}",
+                i + 1,
+                r.name,
+                r.delta_bic,
+                r.replicate.as_ref().map_or(f64::NAN, |x| x.delta_bic),
+                r.r2_model
+            )
+        })
+        .collect();
+    let displaced: Vec<String> = d
+        .terms
+        .iter()
+        .filter_map(|t| {
+            t.displaced
+                .as_ref()
+                .map(|x| format!("{} for {}", t.name, x.effect))
+        })
+        .collect();
     Outcome {
         kind: c.kind.name,
         group: c.kind.group,
@@ -51,7 +83,7 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         unexplained_after: d.unexplained_after,
         elapsed_s: d.elapsed_s,
         describe: format!(
-            "{} {:+.3}: cat {:?} lof {:?} | {:?} unexplained_after={} declined={:?}",
+            "{} {:+.3}: cat {:?} lof {:?} | {:?} unexplained_after={} right {:?} displaced {:?} declined={:?}",
             c.kind.name,
             c.size,
             d.catalogue_effects,
@@ -60,6 +92,8 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
                 .map(|l| (l.p, l.systematic_ratio)),
             d.terms.iter().map(|t| t.name).collect::<Vec<_>>(),
             d.unexplained_after,
+            right_terms,
+            displaced,
             d.declined
                 .iter()
                 .map(|x| (x.name, x.reason.clone()))
