@@ -15,6 +15,7 @@
 //! runs' mu between cords or runs. The held-out check is [`heldout`], stability [`stability`].
 //! `docs/README-discover.md` states the algorithm, its grammar and its validation.
 
+mod answer;
 pub mod columns;
 pub mod heldout;
 pub mod joint;
@@ -24,4 +25,5 @@ pub mod screen;
 pub mod stability;
 mod verdict;
 
-pub use verdict::{discover, discover_assessed, Discovery, Options, Proposed};
+pub use answer::{DataInfo, Declined, Discovery, NotTestable, Proposed, Rival, ScreenRow, Search};
+pub use verdict::{discover, discover_assessed, Options};
