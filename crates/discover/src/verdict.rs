@@ -243,7 +243,7 @@ pub fn discover_assessed(
         {
             if s.delta_bic < bar && !shared_ok(s) {
                 declined.push(decline(&LIBRARY[s.term], s, None, None, format!(
-                    "the replicate runs do not share it: on the replicate cells' means its ΔBIC is {:.1} (bar {bar:.1}), so what it fits is run-to-run wander",
+                    "the replicate runs do not share it enough: on the replicate cells' means its ΔBIC is {:.1} (bar {bar:.1}); the rest of what it fits is run-to-run wander",
                     s.replicate.as_ref().map_or(f64::NAN, |r| r.delta_bic)
                 )));
                 continue;
