@@ -50,3 +50,57 @@ fn a_bad_file_is_named_with_its_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.csv") && err.contains('3'), "{err}");
 }
+
+/// One cord (the thesis's 12.7 mm capstan at 450°, its six runs; and one run of it): whole
+/// cords can be neither resampled nor held out, so the stability and the held-out gain are not
+/// computed: the summary says so instead of printing a count of resamples, the JSON has nulls
+/// with the reason, and one run has no run-clustered error to print as "± 0.0000".
+#[test]
+fn one_cord_says_stability_and_held_out_cannot_be_computed() {
+    let thesis = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/thesis-conditioned.csv"),
+    )
+    .unwrap();
+    let mut lines = thesis.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.filter(|l| l.starts_with("12.7,450,")).collect();
+    assert_eq!(rows.len(), 72);
+    for (name, keep) in [("one-cord.csv", rows.len()), ("one-run.csv", 12)] {
+        let p = tmp(name);
+        std::fs::write(&p, format!("{header}\n{}\n", rows[..keep].join("\n"))).unwrap();
+        let out = capstan()
+            .args(["discover", p.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains("cannot be computed from 1 cord"), "{text}");
+        assert!(!text.contains("cord resamples"), "{text}");
+        assert!(!text.contains("± 0.0000"), "{text}");
+        let out = capstan()
+            .args(["discover", "--json", p.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        assert_eq!(v["search"]["resamples"], serde_json::Value::Null);
+        assert_eq!(v["search"]["cords"], serde_json::json!(1));
+        assert!(v["search"]["cord_checks"]
+            .as_str()
+            .is_some_and(|s| s.contains("at least 3")));
+        assert_eq!(v["terms"], serde_json::json!([]));
+        let screen = v["search"]["screen"].as_array().unwrap();
+        assert!(!screen.is_empty());
+        for r in screen {
+            let se = &r["se"];
+            if keep == 12 {
+                assert_eq!(se, &serde_json::Value::Null, "one run: {r}");
+            } else {
+                assert!(se.as_f64().is_some_and(|s| s > 0.0), "six runs: {r}");
+            }
+        }
+    }
+}

@@ -119,26 +119,37 @@ pub fn summary(d: &Discovery) -> String {
         let _ = writeln!(s, "    {}", t.words);
     }
     let sr = &d.search;
+    let checks = match (sr.resamples, &sr.cord_checks) {
+        (Some(b), None) => format!(
+            "stability ≥ {:.0} % over {b} cord resamples",
+            100.0 * sr.min_stability
+        ),
+        (_, Some(why)) => format!("{why}, so nothing can be proposed"),
+        (None, None) => "no stability computed".to_string(),
+    };
     let _ = writeln!(
         s,
-        "searched {} of {} library terms; bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {} for the search); stability ≥ {:.0} % over {} cord resamples",
+        "searched {} of {} library terms, each added to the catalogue or in the place of one of its {} within-run effects ({:.0} models); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}",
         sr.tried,
         sr.library_size,
+        sr.displaceable.len(),
+        sr.models_per_step,
         sr.first_bar,
         sr.threshold,
-        sr.tried,
-        100.0 * sr.min_stability,
-        sr.resamples
+        sr.models_per_step,
     );
     let _ = writeln!(s, "strongest candidates (ΔBIC given the catalogue):");
     for r in sr.screen.iter().take(5) {
         let _ = writeln!(
             s,
-            "  {:<20} {:>7.1}  θ = {:.4} ± {:.4}{}{}",
+            "  {:<20} {:>7.1}  θ = {:.4} ± {}{}{}",
             r.name,
             r.delta_bic,
             r.theta,
-            r.se,
+            r.se.map_or(
+                "n/a (one run: no run-clustered error)".to_string(),
+                |se| format!("{se:.4}")
+            ),
             if r.sign_ok {
                 ""
             } else {

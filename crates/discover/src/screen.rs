@@ -40,6 +40,8 @@ pub struct Screen {
     /// Share of its column (each run's mu projected out) the model's columns explain:
     /// 1 − 1/VIF (within-run terms; 0 between).
     pub r2_model: f64,
+    /// Its evidence in what the replicate runs share (within-run terms with replicate cells).
+    pub replicate: Option<crate::replicate::Replicate>,
 }
 
 /// Projection of columns off every run's mu and the model's shared columns (weighted).
@@ -138,10 +140,12 @@ pub fn within_evidence(
         var_rob += (s / info).powi(2);
     }
     var_rob *= (g - 1.0) / g;
+    // One run: no run-clustered error (the screen shows none, and the model's is used for ĉ).
+    let se = if g >= 2.0 { var_rob.sqrt() } else { f64::NAN };
     let c_hat = (var_rob / var_model).max(1.0);
     let c_hat = if c_hat.is_finite() { c_hat } else { 1.0 };
     let chi2 = chi2_of_f(lr / c_hat, 1.0, (g - 1.0).max(1.0));
-    Some((theta, var_rob.sqrt(), -chi2 + n.ln(), c_hat))
+    Some((theta, se, -chi2 + n.ln(), c_hat))
 }
 
 /// The term's g per run, if it acts on mu and is constant inside every run.

@@ -1,21 +1,28 @@
 //! The search and its answer.
 
+use crate::answer::{
+    decline, proposed, verdict_words, DataInfo, Declined, Discovery, NotTestable, Proposed, Rival,
+    ScreenRow, Search,
+};
 use crate::columns::Base;
 use crate::heldout::{self, Ratio};
-use crate::library::{ActsOn, Sign, Term, Var, LIBRARY};
+use crate::joint;
+use crate::library::{Sign, LIBRARY};
 use crate::screen::{self, between_evidence, sign_ok, within_evidence, Level, Projector, Runs};
 use crate::stability::{self, Candidate};
-use capstan_data::structure::StructureSummary;
 use capstan_data::Dataset;
 use capstan_engine::evidence::adequacy::{lack_of_fit, LackOfFit};
+use capstan_engine::evidence::within::WithinFit;
 use capstan_engine::evidence::{self, Assessment, RIVAL_GAP};
 use capstan_friction::EffectKind;
-use serde::Serialize;
-use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// A proposed term must leave no lack of fit against the replicate runs at this level.
 pub const LOF_ALPHA: f64 = 0.01;
+
+/// Fewest cords for the stability (whole-cord resamples) and the held-out gain (leave one
+/// cord out, jackknife over cords): below it neither is computed, and nothing is proposed.
+pub const MIN_CORDS: usize = 3;
 
 /// The default [`Options::max_r2_model`]: VIF 100.
 pub const MAX_R2_MODEL: f64 = 0.99;
@@ -33,6 +40,8 @@ pub struct Options {
     pub resamples: usize,
     /// Least stability a proposed term needs.
     pub min_stability: f64,
+    /// The joint search: a term may take the place of a within-run catalogue effect.
+    pub joint: bool,
     /// A within-run term whose column the model's columns explain beyond this share
     /// (1 − 1/VIF) is not separable from them at this design: it is screened and shown, never
     /// proposed.
@@ -47,169 +56,9 @@ impl Default for Options {
             max_terms: 2,
             resamples: 100,
             min_stability: 0.5,
+            joint: true,
             max_r2_model: MAX_R2_MODEL,
         }
-    }
-}
-
-/// A library term that might explain the data as well as a proposed one.
-#[derive(Clone, Debug, Serialize)]
-pub struct Rival {
-    /// Its name.
-    pub name: &'static str,
-    /// What it depends on.
-    pub depends_on: &'static [Var],
-    /// Its ΔBIC in the same search step.
-    pub delta_bic: f64,
-    /// Correlation of its column with the proposed term's (within runs, after the model).
-    pub correlation: Option<f64>,
-}
-
-/// A proposed term.
-#[derive(Clone, Debug, Serialize)]
-pub struct Proposed {
-    /// Library name.
-    pub name: &'static str,
-    /// Formula (θ = 0 is off).
-    pub formula: &'static str,
-    /// Where it acts.
-    pub acts_on: ActsOn,
-    /// What it depends on.
-    pub depends_on: &'static [Var],
-    /// Its parameter (first-order estimate).
-    pub parameters: BTreeMap<&'static str, f64>,
-    /// Its cluster-robust standard error.
-    pub parameter_se: BTreeMap<&'static str, f64>,
-    /// Its parameter's units.
-    pub units: &'static str,
-    /// ΔBIC given the catalogue effects and any term proposed before it (no search penalty).
-    pub delta_bic_given_others: f64,
-    /// Share of whole-cord resamples in which it is the search's pick and passes the bar.
-    pub stability: f64,
-    /// Held-out RMSE with it over without it.
-    pub loco_rmse_ratio: Ratio,
-    /// The held-out upper end is below 1: shown to predict new cords better.
-    pub shown_to_predict_better: bool,
-    /// Where its evidence comes from.
-    pub level: Level,
-    /// Its physical reading.
-    pub reading: &'static str,
-    /// Where the physics comes from.
-    pub source: &'static str,
-    /// Lack of fit against the replicate runs with it in (None: not testable).
-    pub lack_of_fit_after: Option<LackOfFit>,
-    /// Library terms within the rival gap of it.
-    pub rivals: Vec<Rival>,
-    /// How to word it.
-    pub words: String,
-}
-
-/// A term the search looked at closely and did not propose, and why.
-#[derive(Clone, Debug, Serialize)]
-pub struct Declined {
-    /// Library name.
-    pub name: &'static str,
-    /// ΔBIC given the others.
-    pub delta_bic: f64,
-    /// Its stability, if it got that far.
-    pub stability: Option<f64>,
-    /// Its held-out ratio, if it got that far.
-    pub loco_rmse_ratio: Option<Ratio>,
-    /// Why not.
-    pub reason: String,
-}
-
-/// A term that could not be tested on these data.
-#[derive(Clone, Debug, Serialize)]
-pub struct NotTestable {
-    /// Library name.
-    pub name: &'static str,
-    /// Why.
-    pub reason: &'static str,
-}
-
-/// The data set read.
-#[derive(Clone, Debug, Serialize)]
-pub struct DataInfo {
-    /// Where it came from.
-    pub source: String,
-    /// Rows.
-    pub rows: usize,
-    /// Its structure, and how each level was found.
-    pub structure: StructureSummary,
-}
-
-/// How the search was paid for.
-#[derive(Clone, Debug, Serialize)]
-pub struct Search {
-    /// Terms in the library.
-    pub library_size: usize,
-    /// Terms testable on these data.
-    pub tried: usize,
-    /// The engine's ΔBIC threshold.
-    pub threshold: f64,
-    /// Extended-BIC γ.
-    pub gamma: f64,
-    /// The bar the first term had to pass (ΔBIC below this).
-    pub first_bar: f64,
-    /// Cord resamples of the stability, and the least stability proposed.
-    pub resamples: usize,
-    /// Least stability.
-    pub min_stability: f64,
-    /// Every testable term's screen given the catalogue, best first.
-    pub screen: Vec<ScreenRow>,
-}
-
-/// One term's screen given the catalogue.
-#[derive(Clone, Debug, Serialize)]
-pub struct ScreenRow {
-    /// Library name.
-    pub name: &'static str,
-    /// Where its evidence comes from.
-    pub level: Level,
-    /// ΔBIC given the catalogue (before the search penalty).
-    pub delta_bic: f64,
-    /// θ̂ (first order).
-    pub theta: f64,
-    /// Its cluster-robust standard error.
-    pub se: f64,
-    /// θ̂ keeps the term's physical sign.
-    pub sign_ok: bool,
-    /// Share of its column the catalogue's columns explain within runs (1 − 1/VIF).
-    pub r2_model: f64,
-}
-
-/// The answer of `capstan discover`.
-#[derive(Clone, Debug, Serialize)]
-pub struct Discovery {
-    /// The data set and its structure.
-    pub data: DataInfo,
-    /// The catalogue effects the engine selected.
-    pub catalogue_effects: Vec<&'static str>,
-    /// The terms proposed (empty: nothing in the library explains what is left).
-    pub terms: Vec<Proposed>,
-    /// Structure is still left after the proposed terms.
-    pub unexplained_after: bool,
-    /// The pattern of what is left (the catalogue fit's residuals), if anything is.
-    pub residual_pattern: Option<&'static str>,
-    /// The answer in words.
-    pub verdict: String,
-    /// The lack of fit the catalogue leaves.
-    pub lack_of_fit_before: Option<LackOfFit>,
-    /// Terms looked at closely and not proposed.
-    pub declined: Vec<Declined>,
-    /// Terms not testable here.
-    pub not_testable: Vec<NotTestable>,
-    /// The search.
-    pub search: Search,
-    /// Wall time, s.
-    pub elapsed_s: f64,
-}
-
-impl Discovery {
-    /// One JSON object.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     }
 }
 
@@ -313,26 +162,45 @@ pub fn discover_assessed(
 ) -> Discovery {
     let d = &a.design;
     progress("linearise", 0.2);
-    let base = Base::new(d, &a.fit, &a.weights.w);
+    let base0 = Base::new(d, &a.fit, &a.weights.w);
     let threshold = opts.engine.within_threshold.max(0.0);
-    let (testable, not_testable) = classify(&base);
-    let p = testable.len().max(1) as f64;
-    let runs = Runs {
-        cord: d.unit_cord.clone(),
-        cords: d.cords.len(),
-        ln_mu: a.fit.mu.iter().map(|m| m.max(1e-6).ln()).collect(),
+    let (testable0, not_testable) = classify(&base0);
+    let alts = if opts.joint {
+        joint::alternatives(a)
+    } else {
+        Vec::new()
     };
-    let mut st = State {
-        shared: base.b.clone(),
-        covs: a
-            .selected
-            .iter()
-            .filter_map(|&k| catalogue_covariate(a, k))
-            .collect(),
-        e: Vec::new(),
-        used: Vec::new(),
+    let p = testable0.len().max(1) as f64;
+    // The models tried at each step: every term added, and every term in place of each
+    // within-run catalogue effect (the joint search); extended BIC pays for all of them.
+    let models = p * (1 + alts.len()) as f64;
+    let bar_of = |step: usize| {
+        let k = step as f64;
+        -threshold - 2.0 * opts.gamma * ((models - k + 1.0) / k).max(1.0).ln()
     };
-    st.e = Projector::new(&base, &st.shared).project(&base, &base.e);
+    let cord_checks = (d.cords.len() < MIN_CORDS).then(|| {
+        format!(
+            "stability and the held-out gain cannot be computed from {} cord{}: whole cords are resampled and held out, and that needs at least {MIN_CORDS}",
+            d.cords.len(),
+            if d.cords.len() == 1 { "" } else { "s" }
+        )
+    });
+    let covs0: Vec<Vec<f64>> = a
+        .selected
+        .iter()
+        .filter_map(|&k| catalogue_covariate(a, k))
+        .collect();
+    let (swap, screen0) = choose_swap((&base0, &testable0, &covs0), (&alts, a), bar_of(1), opts);
+    let (base, testable, fit_used): (&Base, Vec<Testable>, &WithinFit) = match swap {
+        Some(s) => (
+            &alts[s.alt].base,
+            classify(&alts[s.alt].base).0,
+            &alts[s.alt].fit,
+        ),
+        None => (&base0, testable0, &a.fit),
+    };
+    let runs = runs_of(a, fit_used);
+    let mut st = state_of(base, &covs0);
     let lof_before = a.adequacy.lack_of_fit.clone();
     // After a term, any significant lack of fit keeps "unexplained" (the spike's rule: a
     // partial mimic leaves the replicates disagreeing with the model, whatever its size).
@@ -343,39 +211,59 @@ pub fn discover_assessed(
     let mut partial = false;
     for step in 1..=opts.max_terms {
         progress("screen", 0.3 + 0.2 * (step - 1) as f64);
-        let proj = Projector::new(&base, &st.shared);
-        let screens = screen_all(&base, &testable, &proj, &st, &runs);
+        let proj = Projector::new(base, &st.shared);
+        let screens = screen_all(base, &testable, &proj, &st, &runs);
         if step == 1 {
-            first_screen = screens
+            first_screen = screen0
                 .iter()
                 .map(|s| ScreenRow {
                     name: LIBRARY[s.term].name,
                     level: s.level,
                     delta_bic: s.delta_bic,
                     theta: s.theta,
-                    se: s.se,
+                    se: Some(s.se).filter(|v| v.is_finite()),
                     sign_ok: s.sign_ok,
                     r2_model: s.r2_model,
+                    replicate: s.replicate.clone(),
                 })
                 .collect();
         }
-        let kf = step as f64;
-        let bar = -threshold - 2.0 * opts.gamma * ((p - kf + 1.0) / kf).max(1.0).ln();
-        let Some(best) = screens
+        let bar = bar_of(step);
+        // The first step of a swap takes the swap's term (it beat every addition).
+        let forced = swap.filter(|_| step == 1).map(|s| s.term);
+        // The pick: the best term with its physical sign, separable from the model, and (past
+        // the bar) shared by the replicate runs; a term past the bar that the replicate runs do
+        // not share is declined and the search goes on to the next.
+        let shared_ok = |s: &screen::Screen| s.replicate.as_ref().is_none_or(|r| r.delta_bic < bar);
+        let mut pick = None;
+        for s in screens
             .iter()
-            .find(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
-            .cloned()
-        else {
+            .filter(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
+            .filter(|s| forced.is_none_or(|f| f == s.term))
+        {
+            if s.delta_bic < bar && !shared_ok(s) {
+                declined.push(decline(&LIBRARY[s.term], s, None, None, format!(
+                    "the replicate runs do not share it enough: on the replicate cells' means its ΔBIC is {:.1} (bar {bar:.1}); the rest of what it fits is run-to-run wander",
+                    s.replicate.as_ref().map_or(f64::NAN, |r| r.delta_bic)
+                )));
+                continue;
+            }
+            pick = Some(s.clone());
             break;
-        };
+        }
+        let Some(best) = pick else { break };
         let t = &LIBRARY[best.term];
         if best.delta_bic >= bar {
             if best.delta_bic < -threshold {
                 declined.push(decline(t, &best, None, None, format!(
-                    "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {} terms tried, that much is expected by chance",
-                    best.delta_bic, -threshold, testable.len()
+                    "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {models:.0} models tried at each step, that much is expected by chance",
+                    best.delta_bic, -threshold
                 )));
             }
+            break;
+        }
+        if let Some(why) = &cord_checks {
+            declined.push(decline(t, &best, None, None, why.clone()));
             break;
         }
         progress("stability", 0.4 + 0.2 * (step - 1) as f64);
@@ -397,7 +285,7 @@ pub fn discover_assessed(
             })
             .collect();
         let problem = stability::Problem {
-            base: &base,
+            base,
             shared: &st.shared,
             e: &base.e,
             candidates: &cands,
@@ -409,7 +297,9 @@ pub fn discover_assessed(
             stability::stability(&problem, best.term, opts.resamples, 0x26_57ab + step as u64);
         progress("held-out cords", 0.5 + 0.2 * (step - 1) as f64);
         let tst = testable.iter().find(|c| c.term == best.term).unwrap();
-        let ratio = held_out(&base, a, &st, tst);
+        // Against the engine's catalogue when the term displaced one of its effects.
+        let without = forced.map(|_| heldout::shape_sse(&base0, &base0.b));
+        let ratio = held_out(base, fit_used, &st, tst, without);
         let Some(ratio) = ratio else {
             declined.push(decline(
                 t,
@@ -447,7 +337,7 @@ pub fn discover_assessed(
             break;
         }
         // Lack of fit with the term in (within-run terms change what the replicates share).
-        let proj_x = tst.column.as_ref().map(|x| proj.project(&base, x));
+        let proj_x = tst.column.as_ref().map(|x| proj.project(base, x));
         let lof_after = match &proj_x {
             Some(xt) => {
                 let z: Vec<f64> = (0..d.n())
@@ -466,8 +356,20 @@ pub fn discover_assessed(
             )));
             break;
         }
-        let rivals = rivals_of(&base, &proj, &screens, &best, &testable, threshold);
-        terms.push(proposed(t, &best, stab, ratio, lof_after, rivals));
+        let rivals = rivals_of(base, &proj, &screens, &best, &testable, threshold);
+        let displaced = forced.and(swap).map(|s| joint::Displaced {
+            effect: alts[s.alt].dropped.name(),
+            effect_delta_bic: alts[s.alt].dropped_delta_bic,
+            delta_bic_swap: s.delta_bic,
+        });
+        terms.push(proposed(
+            t,
+            &best,
+            (stab, ratio),
+            lof_after,
+            rivals,
+            displaced,
+        ));
         // Grow the model.
         match (&tst.column, proj_x) {
             (Some(x), Some(xt)) => {
@@ -481,6 +383,28 @@ pub fn discover_assessed(
         st.used.push(best.term);
     }
     progress("done", 1.0);
+    // A swap's term that was declined says what it was tried in place of.
+    if let Some(sw) = swap {
+        let x = &alts[sw.alt];
+        if let Some(dec) = declined
+            .iter_mut()
+            .find(|x| x.name == LIBRARY[sw.term].name)
+        {
+            dec.reason = format!(
+                "tried in place of the catalogue's {} (ΔBIC of the swap {:.1}; {} alone {:.1}): {}",
+                x.dropped.name(),
+                sw.delta_bic,
+                x.dropped.name(),
+                x.dropped_delta_bic,
+                dec.reason
+            );
+            dec.displaced = Some(joint::Displaced {
+                effect: x.dropped.name(),
+                effect_delta_bic: x.dropped_delta_bic,
+                delta_bic_swap: sw.delta_bic,
+            });
+        }
+    }
     let base_open = a.adequacy.unexplained;
     let last_lof = terms.iter().rev().find_map(|t| t.lack_of_fit_after.clone());
     let unexplained_after = if terms.is_empty() {
@@ -512,16 +436,77 @@ pub fn discover_assessed(
         not_testable,
         search: Search {
             library_size: LIBRARY.len(),
-            tried: testable.len(),
+            tried: p as usize,
             threshold,
             gamma: opts.gamma,
-            first_bar: -threshold - 2.0 * opts.gamma * p.ln(),
-            resamples: opts.resamples,
+            first_bar: bar_of(1),
+            models_per_step: models,
+            displaceable: alts.iter().map(|x| x.dropped.name()).collect(),
+            resamples: cord_checks.is_none().then_some(opts.resamples),
+            cords: d.cords.len(),
+            cord_checks,
             min_stability: opts.min_stability,
             screen: first_screen,
         },
         elapsed_s: t0.elapsed().as_secs_f64(),
     }
+}
+
+/// The runs' ln mu under `fit`, for the between-level tests.
+fn runs_of(a: &Assessment, fit: &WithinFit) -> Runs {
+    let d = &a.design;
+    Runs {
+        cord: d.unit_cord.clone(),
+        cords: d.cords.len(),
+        ln_mu: fit.mu.iter().map(|m| m.max(1e-6).ln()).collect(),
+    }
+}
+
+/// The search's state on the model linearised in `base`, before any term.
+fn state_of(base: &Base, covs: &[Vec<f64>]) -> State {
+    let shared = base.b.clone();
+    let e = Projector::new(base, &shared).project(base, &base.e);
+    State {
+        shared,
+        covs: covs.to_vec(),
+        e,
+        used: Vec::new(),
+    }
+}
+
+/// The joint search's first step: the best swap of a catalogue effect for a library term, if
+/// one beats every addition (see [`joint`]).
+fn choose_swap(
+    (base0, testable0, covs0): (&Base, &[Testable], &[Vec<f64>]),
+    (alts, a): (&[joint::Alternative<'_>], &Assessment),
+    bar: f64,
+    opts: &Options,
+) -> (Option<joint::Swap>, Vec<screen::Screen>) {
+    let st0 = state_of(base0, covs0);
+    let proj0 = Projector::new(base0, &st0.shared);
+    let sc0 = screen_all(base0, testable0, &proj0, &st0, &runs_of(a, &a.fit));
+    if alts.is_empty() {
+        return (None, sc0);
+    }
+    let best_addition = sc0
+        .iter()
+        .find(|s| {
+            s.sign_ok
+                && s.r2_model <= opts.max_r2_model
+                && s.replicate.as_ref().is_none_or(|r| r.delta_bic < bar)
+        })
+        .map_or(f64::INFINITY, |s| s.delta_bic);
+    let screens: Vec<Vec<screen::Screen>> = alts
+        .iter()
+        .map(|alt| {
+            let (t, _) = classify(&alt.base);
+            let st = state_of(&alt.base, covs0);
+            let proj = Projector::new(&alt.base, &st.shared);
+            screen_all(&alt.base, &t, &proj, &st, &runs_of(a, &alt.fit))
+        })
+        .collect();
+    let swap = joint::best_swap(alts, &screens, bar, opts.max_r2_model, best_addition);
+    (swap, sc0)
 }
 
 /// Every testable, unused term's screen, best (lowest ΔBIC) first.
@@ -538,6 +523,7 @@ fn screen_all(
         .filter_map(|c| {
             let t = &LIBRARY[c.term];
             let mut r2 = 0.0;
+            let mut replicate = None;
             let (level, (theta, se, dbic, c_hat)) = match (&c.column, &c.g_run) {
                 (Some(x), _) => {
                     let xt = proj.project(base, x);
@@ -545,6 +531,7 @@ fn screen_all(
                     let norm =
                         |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
                     r2 = 1.0 - norm(&xt) / norm(&xa).max(1e-300);
+                    replicate = crate::replicate::replicate_evidence(base, &xt, &st.e);
                     (
                         Level::WithinRun,
                         within_evidence(base, &xt, &st.e, st.shared.len())?,
@@ -556,10 +543,8 @@ fn screen_all(
                 }
                 _ => return None,
             };
-            [theta, se, dbic]
-                .iter()
-                .all(|v| v.is_finite())
-                .then(|| screen::Screen {
+            ([theta, dbic].iter().all(|v| v.is_finite()) && !se.is_infinite()).then(|| {
+                screen::Screen {
                     term: c.term,
                     level,
                     theta,
@@ -568,7 +553,9 @@ fn screen_all(
                     c_hat,
                     sign_ok: sign_ok(t, theta),
                     r2_model: r2,
-                })
+                    replicate,
+                }
+            })
         })
         .collect();
     out.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
@@ -576,11 +563,17 @@ fn screen_all(
 }
 
 /// The held-out ratio matched to the term's level.
-fn held_out(base: &Base, a: &Assessment, st: &State, c: &Testable) -> Option<Ratio> {
+fn held_out(
+    base: &Base,
+    fit: &WithinFit,
+    st: &State,
+    c: &Testable,
+    without: Option<Vec<f64>>,
+) -> Option<Ratio> {
     let rows = heldout::rows_per_cord(base);
     match (&c.column, &c.g_run) {
         (Some(x), _) => {
-            let without = heldout::shape_sse(base, &st.shared);
+            let without = without.unwrap_or_else(|| heldout::shape_sse(base, &st.shared));
             let mut cols = st.shared.clone();
             cols.push(x.clone());
             let with = heldout::shape_sse(base, &cols);
@@ -608,8 +601,8 @@ fn held_out(base: &Base, a: &Assessment, st: &State, c: &Testable) -> Option<Rat
                     r
                 })
                 .collect();
-            let without = heldout::population_sse(base, &a.fit, &x0);
-            let with = heldout::population_sse(base, &a.fit, &x1);
+            let without = heldout::population_sse(base, fit, &x0);
+            let with = heldout::population_sse(base, fit, &x1);
             heldout::ratio(
                 &with,
                 &without,
@@ -618,22 +611,6 @@ fn held_out(base: &Base, a: &Assessment, st: &State, c: &Testable) -> Option<Rat
             )
         }
         _ => None,
-    }
-}
-
-fn decline(
-    t: &Term,
-    s: &screen::Screen,
-    stability: Option<f64>,
-    ratio: Option<Ratio>,
-    reason: String,
-) -> Declined {
-    Declined {
-        name: t.name,
-        delta_bic: s.delta_bic,
-        stability,
-        loco_rmse_ratio: ratio,
-        reason,
     }
 }
 
@@ -676,96 +653,4 @@ fn rivals_of(
             }
         })
         .collect()
-}
-
-fn proposed(
-    t: &'static Term,
-    s: &screen::Screen,
-    stab: f64,
-    ratio: Ratio,
-    lof: Option<LackOfFit>,
-    rivals: Vec<Rival>,
-) -> Proposed {
-    let shown = ratio.ci95.hi < 1.0;
-    let rival_words = if rivals.is_empty() {
-        String::new()
-    } else {
-        let names: Vec<&str> = rivals.iter().map(|r| r.name).collect();
-        format!(
-            " The data cannot tell it from {} (within {RIVAL_GAP:.0} BIC units).",
-            names.join(", ")
-        )
-    };
-    let words = format!(
-        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4} {}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
-        t.name,
-        t.reading,
-        t.parameter,
-        s.theta,
-        s.se,
-        t.units,
-        s.delta_bic,
-        100.0 * stab,
-        ratio.value,
-        ratio.ci95.lo,
-        ratio.ci95.hi,
-        if shown { ": shown to predict new cords better" } else { ": not shown to predict new cords better" },
-        rival_words
-    );
-    Proposed {
-        name: t.name,
-        formula: t.formula,
-        acts_on: t.acts_on,
-        depends_on: t.depends_on,
-        parameters: BTreeMap::from([(t.parameter, s.theta)]),
-        parameter_se: BTreeMap::from([(t.parameter, s.se)]),
-        units: t.units,
-        delta_bic_given_others: s.delta_bic,
-        stability: stab,
-        loco_rmse_ratio: ratio,
-        shown_to_predict_better: shown,
-        level: s.level,
-        reading: t.reading,
-        source: t.source,
-        lack_of_fit_after: lof,
-        rivals,
-        words,
-    }
-}
-
-fn verdict_words(
-    terms: &[Proposed],
-    unexplained: bool,
-    pattern: Option<&str>,
-    declined: &[Declined],
-) -> String {
-    if !terms.is_empty() {
-        let names: Vec<&str> = terms.iter().map(|t| t.name).collect();
-        let left = if unexplained {
-            format!(
-                " Structure is still left (pattern: {}).",
-                pattern.unwrap_or("cells")
-            )
-        } else {
-            " With it, the lack of fit against the replicate runs is resolved.".to_string()
-        };
-        return format!(
-            "Discovered (a candidate to test, not an established cause): {}.{left}",
-            names.join(" + ")
-        );
-    }
-    let why = declined.first().map_or(String::new(), |d| {
-        format!(
-            " The strongest candidate, {}, was not proposed: {}.",
-            d.name, d.reason
-        )
-    });
-    if unexplained {
-        format!(
-            "Nothing in the library explains what the catalogue leaves (pattern: {}).{why}",
-            pattern.unwrap_or("cells")
-        )
-    } else {
-        format!("Nothing to add: no library term earns its evidence beyond the catalogue.{why}")
-    }
 }

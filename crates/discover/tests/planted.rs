@@ -1,9 +1,9 @@
 //! `capstan discover` against physics planted in data sets made end to end by the
 //! firmware-in-the-loop simulator at the thesis rig's noise (`capstan_truth::discover_cases`).
 //!
-//! The rule (EBIC γ = 1, stability ≥ 0.5, held-out point ratio < 1, no lack of fit left at
-//! p < 0.01, VIF ≤ 100) was set on master seed 26 (`cargo run --release -p capstan-discover
-//! --example validate -- 26 6`); this test asserts on another seed.
+//! The rule (EBIC γ = 1, the same bar on the replicate cells' means, stability ≥ 0.5, held-out
+//! point ratio < 1, no lack of fit left at p < 0.01, VIF ≤ 100) was set on master seed 26 (`cargo run --release -p capstan-discover
+//! --example validate -- 26 12`); this test asserts on another seed.
 //!
 //! * `cargo test` runs a fixed slice: one set of every kind (10 sets);
 //! * `CAPSTAN_CASES=full cargo test --release -p capstan-discover --test planted -- --nocapture`
@@ -63,12 +63,12 @@ fn discover_proposes_only_what_earns_it_and_keeps_unexplained_what_it_cannot_exp
         kept.0 as f64 >= 0.6 * kept.1 as f64,
         "inexpressible sets still flagged unexplained: {kept:?}"
     );
-    // Every proposed term on a null set is a false discovery: at most one set in the slice,
-    // and (full) the catalogue-only sets' rate stays below a fifth (measured 2/12 on this
-    // seed; the 5 % is not met: docs/README-discover.md says why).
+    // Every proposed term on a null set is a false discovery: ≤ 5 % of the null sets (clean and
+    // catalogue-only together; at most one set in the slice). Note-26 measured 2/12
+    // catalogue-only sets here before the replicate-run gate (crates/discover/src/replicate.rs).
     let null = rate(&out, |o| o.group == Group::Null, |o| !o.proposed.is_empty());
     assert!(
-        null.0 as f64 <= (0.2 * null.1 as f64).max(1.0),
+        null.0 as f64 <= (0.05 * null.1 as f64).max(1.0),
         "null sets with a term proposed: {null:?}"
     );
     let expr = rate(

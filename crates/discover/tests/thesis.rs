@@ -1,7 +1,8 @@
 //! `capstan discover` on the thesis data: the JSON contract, and what it finds (the spike's
 //! answer, reproduced by this implementation: nothing in the library explains what the
-//! catalogue leaves; the strongest candidate, a T2 reading error at low force, is unstable
-//! over cords and does not help held-out cords).
+//! catalogue leaves: the strongest added term, a T2 reading error at low force, is not shared
+//! by the replicate runs enough to pass the search's bar, and the strongest swap, a heating law
+//! with one step of memory in the place of contact heating, does not help held-out cords).
 
 use capstan_discover::{discover, Options};
 
@@ -28,17 +29,45 @@ fn thesis_nothing_in_the_library_explains_it() {
     assert_eq!(v["terms"], serde_json::json!([]));
     assert_eq!(v["unexplained_after"], serde_json::json!(true));
     assert_eq!(v["residual_pattern"], serde_json::json!("diameter"));
-    // The strongest candidate passes the search's bar in sample, and is declined for its
-    // instability over cords (the spike: 19-22 %).
+    // The strongest added term (ΔBIC −13.1) passed note-26's bar for additions alone (−12.5),
+    // not the joint search's (−14.7, which pays for the swaps tried too), and not on what the
+    // replicate runs share (the replicate cells' means, judged against sign flips of whole
+    // runs). (Note-26 also measured it unstable over cords, 29 %, with a held-out ratio of
+    // 0.986 [0.95, 1.02]; the spike: 19-22 %.)
     let top = &d.search.screen[0];
     assert_eq!(top.name, "t2_lowforce");
-    assert!(top.delta_bic < d.search.first_bar, "{}", top.delta_bic);
-    let dec = &d.declined[0];
-    assert_eq!(dec.name, "t2_lowforce");
-    let stab = dec.stability.expect("stability");
-    assert!(stab < 0.5, "{stab}");
-    let r = dec.loco_rmse_ratio.as_ref().expect("held-out ratio");
-    assert!(r.ci95.lo < 1.0 && r.ci95.hi > 1.0, "{r:?}");
+    assert!(
+        top.delta_bic < -12.5 && top.delta_bic > d.search.first_bar,
+        "{}",
+        top.delta_bic
+    );
+    let rep = top.replicate.as_ref().expect("replicate cells");
+    assert!(rep.delta_bic > d.search.first_bar, "{rep:?}");
+    // The same sign and size on the cells' means: a shared pattern, too weak to pass the bar.
+    assert!(rep.theta_shared < 0.0 && (rep.theta_shared / top.theta - 1.0).abs() < 0.3);
+    // The joint search's strongest move is a swap: a heating law with one step of memory
+    // (`load_memory_prev`) in the place of the catalogue's contact heating. It is stable over
+    // cords but does not help held-out cords, so it is declined too.
+    let swap = &d.declined[0];
+    assert_eq!(swap.name, "load_memory_prev");
+    let x = swap.displaced.as_ref().expect("a swap");
+    assert_eq!(x.effect, "contact_heating");
+    assert!(x.delta_bic_swap < d.search.first_bar, "{x:?}");
+    assert!(swap.stability.expect("stability") >= 0.5);
+    let r = swap.loco_rmse_ratio.as_ref().expect("held-out ratio");
+    assert!(
+        r.value >= 1.0 && r.ci95.lo < 1.0 && r.ci95.hi > 1.0,
+        "{r:?}"
+    );
+    assert!(
+        swap.reason.contains("does not help held-out cords"),
+        "{}",
+        swap.reason
+    );
+    // The joint search may put a term in the place of either within-run catalogue effect, and
+    // pays for every model it tries (terms × (1 + effects)).
+    assert_eq!(d.search.displaceable, vec!["contact_heating", "t2_offset"]);
+    assert_eq!(d.search.models_per_step, 3.0 * d.search.tried as f64);
     // Adhesion wants the wrong physical sign and is never a candidate.
     let adh = d
         .search

@@ -40,6 +40,38 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         || d.terms
             .iter()
             .any(|t| t.rivals.iter().any(|r| ok(deps(r.depends_on))));
+    // Where the terms of the right dependence stood in the first screen (a diagnostic).
+    let right_terms: Vec<String> = d
+        .search
+        .screen
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| {
+            capstan_discover::library::LIBRARY
+                .iter()
+                .find(|t| t.name == r.name)
+                .is_some_and(|t| ok(deps(t.depends_on)))
+        })
+        .map(|(i, r)| {
+            format!(
+                "#{} {} {:.1} rep {:.1} r2 {:.2}",
+                i + 1,
+                r.name,
+                r.delta_bic,
+                r.replicate.as_ref().map_or(f64::NAN, |x| x.delta_bic),
+                r.r2_model
+            )
+        })
+        .collect();
+    let displaced: Vec<String> = d
+        .terms
+        .iter()
+        .filter_map(|t| {
+            t.displaced
+                .as_ref()
+                .map(|x| format!("{} for {}", t.name, x.effect))
+        })
+        .collect();
     Outcome {
         kind: c.kind.name,
         group: c.kind.group,
@@ -51,7 +83,7 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         unexplained_after: d.unexplained_after,
         elapsed_s: d.elapsed_s,
         describe: format!(
-            "{} {:+.3}: cat {:?} lof {:?} | {:?} unexplained_after={} declined={:?}",
+            "{} {:+.3}: cat {:?} lof {:?} | {:?} unexplained_after={} right {:?} displaced {:?} declined={:?}",
             c.kind.name,
             c.size,
             d.catalogue_effects,
@@ -60,6 +92,8 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
                 .map(|l| (l.p, l.systematic_ratio)),
             d.terms.iter().map(|t| t.name).collect::<Vec<_>>(),
             d.unexplained_after,
+            right_terms,
+            displaced,
             d.declined
                 .iter()
                 .map(|x| (x.name, x.reason.clone()))
@@ -68,11 +102,42 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
     }
 }
 
+/// The sets, simulated; with `CAPSTAN_DISCOVER_CACHE=DIR` kept in DIR as pairs CSVs
+/// (read back exactly) so that a calibration can be re-run without re-simulating.
+fn generate_cached(
+    seed: u64,
+    per_kind: usize,
+    plain: &[capstan_truth::cases::Case],
+    threads: usize,
+) -> Vec<capstan_data::Dataset> {
+    let dir = std::env::var("CAPSTAN_DISCOVER_CACHE").ok();
+    let path = |i: usize| {
+        dir.as_ref()
+            .map(|d| std::path::Path::new(d).join(format!("s{seed}-k{per_kind}-{i}.csv")))
+    };
+    let cached: Option<Vec<capstan_data::Dataset>> = (0..plain.len())
+        .map(|i| path(i).and_then(|p| capstan_data::load_pairs(&p).ok()))
+        .collect();
+    if let Some(d) = cached {
+        return d;
+    }
+    let data = capstan_truth::score::generate(plain, threads).unwrap_or_else(|e| panic!("{e}"));
+    if let Some(d) = &dir {
+        let _ = std::fs::create_dir_all(d);
+        for (i, ds) in data.iter().enumerate() {
+            if let Some(p) = path(i) {
+                let _ = capstan_data::write_pairs(&p, &ds.pairs);
+            }
+        }
+    }
+    data
+}
+
 /// Simulate and search `per_kind` sets of every kind (kinds by index `every`-th) on `threads`.
 pub fn run(seed: u64, per_kind: usize, threads: usize) -> Vec<Outcome> {
     let cases = discover_cases::draw_all(seed, per_kind);
     let plain: Vec<capstan_truth::cases::Case> = cases.iter().map(|c| c.case.clone()).collect();
-    let data = capstan_truth::score::generate(&plain, threads).unwrap_or_else(|e| panic!("{e}"));
+    let data = generate_cached(seed, per_kind, &plain, threads);
     let mut opts = Options::default();
     if let Ok(v) = std::env::var("CAPSTAN_DISCOVER_MAX_R2") {
         opts.max_r2_model = v.parse().expect("CAPSTAN_DISCOVER_MAX_R2");

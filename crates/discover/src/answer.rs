@@ -1,0 +1,303 @@
+//! The answer of `capstan discover`: what it proposes, declines and searched, as data (the JSON
+//! contract of docs/README-discover.md), and how each is worded.
+
+use crate::heldout::Ratio;
+use crate::joint;
+use crate::library::{ActsOn, Term, Var};
+use crate::screen::{self, Level};
+use capstan_data::structure::StructureSummary;
+use capstan_engine::evidence::adequacy::LackOfFit;
+use capstan_engine::evidence::RIVAL_GAP;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A library term that might explain the data as well as a proposed one.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rival {
+    /// Its name.
+    pub name: &'static str,
+    /// What it depends on.
+    pub depends_on: &'static [Var],
+    /// Its ΔBIC in the same search step.
+    pub delta_bic: f64,
+    /// Correlation of its column with the proposed term's (within runs, after the model).
+    pub correlation: Option<f64>,
+}
+
+/// A proposed term.
+#[derive(Clone, Debug, Serialize)]
+pub struct Proposed {
+    /// Library name.
+    pub name: &'static str,
+    /// Formula (θ = 0 is off).
+    pub formula: &'static str,
+    /// Where it acts.
+    pub acts_on: ActsOn,
+    /// What it depends on.
+    pub depends_on: &'static [Var],
+    /// Its parameter (first-order estimate).
+    pub parameters: BTreeMap<&'static str, f64>,
+    /// Its cluster-robust standard error.
+    pub parameter_se: BTreeMap<&'static str, f64>,
+    /// Its parameter's units.
+    pub units: &'static str,
+    /// ΔBIC given the catalogue effects and any term proposed before it (no search penalty).
+    pub delta_bic_given_others: f64,
+    /// Share of whole-cord resamples in which it is the search's pick and passes the bar.
+    pub stability: f64,
+    /// Held-out RMSE with it over without it.
+    pub loco_rmse_ratio: Ratio,
+    /// The held-out upper end is below 1: shown to predict new cords better.
+    pub shown_to_predict_better: bool,
+    /// Where its evidence comes from.
+    pub level: Level,
+    /// Its physical reading.
+    pub reading: &'static str,
+    /// Where the physics comes from.
+    pub source: &'static str,
+    /// Lack of fit against the replicate runs with it in (None: not testable).
+    pub lack_of_fit_after: Option<LackOfFit>,
+    /// Library terms within the rival gap of it.
+    pub rivals: Vec<Rival>,
+    /// The catalogue effect it takes the place of (the joint search), if any.
+    pub displaced: Option<joint::Displaced>,
+    /// How to word it.
+    pub words: String,
+}
+
+/// A term the search looked at closely and did not propose, and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct Declined {
+    /// Library name.
+    pub name: &'static str,
+    /// ΔBIC given the others.
+    pub delta_bic: f64,
+    /// Its stability, if it got that far.
+    pub stability: Option<f64>,
+    /// Its held-out ratio, if it got that far.
+    pub loco_rmse_ratio: Option<Ratio>,
+    /// The catalogue effect it was tried in place of (the joint search), if any.
+    pub displaced: Option<joint::Displaced>,
+    /// Why not.
+    pub reason: String,
+}
+
+/// A term that could not be tested on these data.
+#[derive(Clone, Debug, Serialize)]
+pub struct NotTestable {
+    /// Library name.
+    pub name: &'static str,
+    /// Why.
+    pub reason: &'static str,
+}
+
+/// The data set read.
+#[derive(Clone, Debug, Serialize)]
+pub struct DataInfo {
+    /// Where it came from.
+    pub source: String,
+    /// Rows.
+    pub rows: usize,
+    /// Its structure, and how each level was found.
+    pub structure: StructureSummary,
+}
+
+/// How the search was paid for.
+#[derive(Clone, Debug, Serialize)]
+pub struct Search {
+    /// Terms in the library.
+    pub library_size: usize,
+    /// Terms testable on these data.
+    pub tried: usize,
+    /// The engine's ΔBIC threshold.
+    pub threshold: f64,
+    /// Extended-BIC γ.
+    pub gamma: f64,
+    /// The bar the first term had to pass (ΔBIC below this).
+    pub first_bar: f64,
+    /// Models tried at each step: every term added, and in place of each displaceable effect.
+    pub models_per_step: f64,
+    /// The within-run catalogue effects a term may take the place of (the joint search).
+    pub displaceable: Vec<&'static str>,
+    /// Cord resamples of the stability (None: too few cords to resample, see `cord_checks`).
+    pub resamples: Option<usize>,
+    /// Cords in the data set.
+    pub cords: usize,
+    /// Why stability and the held-out gain were not computed (None: they were).
+    pub cord_checks: Option<String>,
+    /// Least stability.
+    pub min_stability: f64,
+    /// Every testable term's screen given the catalogue, best first.
+    pub screen: Vec<ScreenRow>,
+}
+
+/// One term's screen given the catalogue.
+#[derive(Clone, Debug, Serialize)]
+pub struct ScreenRow {
+    /// Library name.
+    pub name: &'static str,
+    /// Where its evidence comes from.
+    pub level: Level,
+    /// ΔBIC given the catalogue (before the search penalty).
+    pub delta_bic: f64,
+    /// θ̂ (first order).
+    pub theta: f64,
+    /// Its cluster-robust standard error (None: one run, no run-clustered error).
+    pub se: Option<f64>,
+    /// θ̂ keeps the term's physical sign.
+    pub sign_ok: bool,
+    /// Share of its column the catalogue's columns explain within runs (1 − 1/VIF).
+    pub r2_model: f64,
+    /// Its evidence on the replicate cells' means (None: between-level, or no replicates).
+    pub replicate: Option<crate::replicate::Replicate>,
+}
+
+/// The answer of `capstan discover`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Discovery {
+    /// The data set and its structure.
+    pub data: DataInfo,
+    /// The catalogue effects the engine selected.
+    pub catalogue_effects: Vec<&'static str>,
+    /// The terms proposed (empty: nothing in the library explains what is left).
+    pub terms: Vec<Proposed>,
+    /// Structure is still left after the proposed terms.
+    pub unexplained_after: bool,
+    /// The pattern of what is left (the catalogue fit's residuals), if anything is.
+    pub residual_pattern: Option<&'static str>,
+    /// The answer in words.
+    pub verdict: String,
+    /// The lack of fit the catalogue leaves.
+    pub lack_of_fit_before: Option<LackOfFit>,
+    /// Terms looked at closely and not proposed.
+    pub declined: Vec<Declined>,
+    /// Terms not testable here.
+    pub not_testable: Vec<NotTestable>,
+    /// The search.
+    pub search: Search,
+    /// Wall time, s.
+    pub elapsed_s: f64,
+}
+
+impl Discovery {
+    /// One JSON object.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}
+
+pub(crate) fn decline(
+    t: &Term,
+    s: &screen::Screen,
+    stability: Option<f64>,
+    ratio: Option<Ratio>,
+    reason: String,
+) -> Declined {
+    Declined {
+        name: t.name,
+        delta_bic: s.delta_bic,
+        stability,
+        loco_rmse_ratio: ratio,
+        displaced: None,
+        reason,
+    }
+}
+
+pub(crate) fn proposed(
+    t: &'static Term,
+    s: &screen::Screen,
+    (stab, ratio): (f64, Ratio),
+    lof: Option<LackOfFit>,
+    rivals: Vec<Rival>,
+    displaced: Option<joint::Displaced>,
+) -> Proposed {
+    let shown = ratio.ci95.hi < 1.0;
+    let rival_words = if rivals.is_empty() {
+        String::new()
+    } else {
+        let names: Vec<&str> = rivals.iter().map(|r| r.name).collect();
+        format!(
+            " The data cannot tell it from {} (within {RIVAL_GAP:.0} BIC units).",
+            names.join(", ")
+        )
+    };
+    let displace_words = displaced.as_ref().map_or(String::new(), |x| {
+        format!(
+            " It takes the place of the catalogue's {} (ΔBIC of the swap {:.1} against the catalogue as selected).",
+            x.effect, x.delta_bic_swap
+        )
+    });
+    let words = format!(
+        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4} {}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
+        t.name,
+        t.reading,
+        t.parameter,
+        s.theta,
+        s.se,
+        t.units,
+        s.delta_bic,
+        100.0 * stab,
+        ratio.value,
+        ratio.ci95.lo,
+        ratio.ci95.hi,
+        if shown { ": shown to predict new cords better" } else { ": not shown to predict new cords better" },
+        rival_words
+    ) + &displace_words;
+    Proposed {
+        name: t.name,
+        formula: t.formula,
+        acts_on: t.acts_on,
+        depends_on: t.depends_on,
+        parameters: BTreeMap::from([(t.parameter, s.theta)]),
+        parameter_se: BTreeMap::from([(t.parameter, s.se)]),
+        units: t.units,
+        delta_bic_given_others: s.delta_bic,
+        stability: stab,
+        loco_rmse_ratio: ratio,
+        shown_to_predict_better: shown,
+        level: s.level,
+        reading: t.reading,
+        source: t.source,
+        lack_of_fit_after: lof,
+        rivals,
+        displaced,
+        words,
+    }
+}
+
+pub(crate) fn verdict_words(
+    terms: &[Proposed],
+    unexplained: bool,
+    pattern: Option<&str>,
+    declined: &[Declined],
+) -> String {
+    if !terms.is_empty() {
+        let names: Vec<&str> = terms.iter().map(|t| t.name).collect();
+        let left = if unexplained {
+            format!(
+                " Structure is still left (pattern: {}).",
+                pattern.unwrap_or("cells")
+            )
+        } else {
+            " With it, the lack of fit against the replicate runs is resolved.".to_string()
+        };
+        return format!(
+            "Discovered (a candidate to test, not an established cause): {}.{left}",
+            names.join(" + ")
+        );
+    }
+    let why = declined.first().map_or(String::new(), |d| {
+        format!(
+            " The strongest candidate, {}, was not proposed: {}.",
+            d.name, d.reason
+        )
+    });
+    if unexplained {
+        format!(
+            "Nothing in the library explains what the catalogue leaves (pattern: {}).{why}",
+            pattern.unwrap_or("cells")
+        )
+    } else {
+        format!("Nothing to add: no library term earns its evidence beyond the catalogue.{why}")
+    }
+}
