@@ -13,7 +13,7 @@ pub mod trial;
 use candidates::{candidates, Candidate, Design};
 use capstan_data::Dataset;
 use capstan_engine::diagnose::{self, Diagnosis};
-use hypotheses::{open_hypotheses, Hypothesis, NotSimulated};
+use hypotheses::{open_hypotheses, untestable_kinds, Hypothesis, NotSimulated};
 use serde::Serialize;
 use std::time::Instant;
 use trial::{rates, Rate, World};
@@ -121,10 +121,10 @@ pub fn plan(
     let t0 = Instant::now();
     let mut assumed = Vec::new();
     let d = diagnosis(data, &mut assumed);
-    let (hyps, not_simulated) = open_hypotheses(&d);
     let world = world(&d, &mut assumed);
     let current = Design::of(&d, &mut assumed);
-    let cands = candidates(&current);
+    let (hyps, not_simulated) = open_hypotheses(&d, &current, &world);
+    let cands = candidates(&current, &untestable_kinds(&d, &current, &world));
     let mut scored = Vec::new();
     for (i, c) in cands.into_iter().enumerate() {
         progress(i, 0);

@@ -154,6 +154,15 @@ fn scenarios() -> Vec<Scenario> {
             known_short: true,
         },
         Scenario {
+            name: "speed effect at one drive voltage",
+            truth: vec![("speed_dependence", -0.03)],
+            design: Design {
+                runs_per_cord: 4,
+                ..thesis_design(StepOrder::UpDown)
+            },
+            known_short: false,
+        },
+        Scenario {
             name: "control: T2 offset, design decides",
             truth: vec![("t2_offset", 0.8)],
             design: thesis_design(StepOrder::UpDown),
@@ -171,25 +180,41 @@ fn scenarios() -> Vec<Scenario> {
 #[test]
 fn the_recommended_protocol_names_the_planted_truth_alone() {
     if !full() {
-        let s = Scenario {
+        let drift = Scenario {
             name: "drift on monotone runs (slice)",
             truth: vec![("thermal_drift", -0.15)],
             design: small_design(StepOrder::Monotone),
             known_short: false,
         };
-        let (_, rec, orig) = run(&s, 2, 4);
-        assert!(
-            rec >= 0.75,
-            "recommended design named the truth alone in {rec}"
-        );
-        assert!(
-            rec >= orig,
-            "recommended {rec} below the original design's {orig}"
-        );
+        let speed = Scenario {
+            name: "speed effect at one drive voltage (slice)",
+            truth: vec![("speed_dependence", -0.03)],
+            design: Design {
+                runs_per_cord: 3,
+                diameters_mm: vec![12.7, 25.4],
+                ..small_design(StepOrder::UpDown)
+            },
+            known_short: false,
+        };
+        for s in [drift, speed] {
+            let (_, rec, orig) = run(&s, 2, 4);
+            assert!(
+                rec >= 0.75,
+                "{}: recommended design named the truth alone in {rec}",
+                s.name
+            );
+            assert!(
+                rec >= orig,
+                "{}: recommended {rec} below the original design's {orig}",
+                s.name
+            );
+        }
         return;
     }
     let mut failures = Vec::new();
-    for s in scenarios() {
+    // CAPSTAN_PLAN_ONLY=TEXT: only the scenarios whose name contains TEXT (while iterating).
+    let only = std::env::var("CAPSTAN_PLAN_ONLY").unwrap_or_default();
+    for s in scenarios().into_iter().filter(|s| s.name.contains(&only)) {
         let (name, rec, orig) = run(&s, 4, 10);
         if rec < 0.9 && !s.known_short {
             failures.push(format!(
