@@ -105,8 +105,8 @@ pub fn words(p: &Plan, source: &str) -> String {
     );
     for c in &p.candidates {
         let per: Vec<String> = (c.per_hypothesis.iter())
-            .map(|r| match &r.not_testable {
-                Some(_) => format!("{} not testable", r.hypothesis),
+            .map(|r| match &r.not_simulated {
+                Some(_) => format!("{} not simulated", r.hypothesis),
                 None => format!("{} {}/{}", r.hypothesis, r.decided, r.campaigns),
             })
             .collect();

@@ -179,51 +179,91 @@ pub fn candidates(current: &Design, open: &[EffectKind]) -> Vec<Candidate> {
         ..current.clone()
     };
     out.push(rig_only("twice the runs per cord", twice));
-    let need = |f: fn(&mut CaseDesign)| {
-        let mut n = CaseDesign::default();
-        f(&mut n);
-        n
-    };
-    let variants = [
+    // Every combination of the changes that add a covariate: a second drive voltage, a wide
+    // span of wraps, a second capstan (those the design lacks).
+    let changes = [
         (
-            "up-down order at two drive voltages",
-            need(|n| n.voltages = true),
+            " at two drive voltages",
+            CaseDesign {
+                voltages: true,
+                ..CaseDesign::default()
+            },
         ),
         (
-            "up-down order over 270-720 degree wraps",
-            need(|n| n.wide_wraps = true),
+            " over 270-720 degree wraps",
+            CaseDesign {
+                wide_wraps: true,
+                ..CaseDesign::default()
+            },
         ),
         (
-            "up-down order on a second capstan",
-            need(|n| n.diameters = true),
+            " on a second capstan",
+            CaseDesign {
+                diameters: true,
+                ..CaseDesign::default()
+            },
         ),
     ];
-    for (name, needs) in variants {
-        let c = meeting(&updown, needs);
-        if c.design != updown.design {
-            out.push(Candidate {
-                name: name.to_string(),
-                ..c
-            });
+    for mask in 1..(1 << changes.len()) {
+        let mut name = "up-down order".to_string();
+        let mut needs = CaseDesign::default();
+        for (i, (words, n)) in changes.iter().enumerate() {
+            if mask & (1 << i) != 0 {
+                name += words;
+                needs = union(needs, *n);
+            }
         }
+        push_new(
+            &mut out,
+            Candidate {
+                name,
+                ..meeting(&updown, needs)
+            },
+        );
     }
-    let all = (open.iter().map(|k| k.entry().cases.design)).fold(CaseDesign::default(), |a, b| {
-        CaseDesign {
-            wide_wraps: a.wide_wraps || b.wide_wraps,
-            voltages: a.voltages || b.voltages,
-            diameters: a.diameters || b.diameters,
-            min_runs: a.min_runs.max(b.min_runs),
-        }
-    });
-    let c = meeting(&updown, all);
-    if out.iter().all(|o| o.design != c.design) {
-        let names: Vec<&str> = open.iter().map(|k| k.name()).collect();
-        out.push(Candidate {
+    // More runs per cord where the wraps span wide: a T1 and a T2 offset differ only in how
+    // the wrap amplifies them, and each run's own mu leaves few degrees of freedom per cord.
+    let wide = meeting(&updown, changes[1].1);
+    if wide.design != updown.design {
+        let runs = wide.design.runs_per_cord * 2;
+        let mut c = Candidate {
+            name: "up-down order over 270-720 degree wraps, twice the runs".to_string(),
+            ..wide
+        };
+        c.design.runs_per_cord = runs;
+        c.procedure[0] = format!("{runs} runs on each cord");
+        push_new(&mut out, c);
+    }
+    let all = open
+        .iter()
+        .map(|k| k.entry().cases.design)
+        .fold(CaseDesign::default(), union);
+    let names: Vec<&str> = open.iter().map(|k| k.name()).collect();
+    push_new(
+        &mut out,
+        Candidate {
             name: format!("up-down order testing {}", names.join(", ")),
-            ..c
-        });
-    }
+            ..meeting(&updown, all)
+        },
+    );
     out
+}
+
+/// Both designs' needs.
+fn union(a: CaseDesign, b: CaseDesign) -> CaseDesign {
+    CaseDesign {
+        wide_wraps: a.wide_wraps || b.wide_wraps,
+        voltages: a.voltages || b.voltages,
+        diameters: a.diameters || b.diameters,
+        min_runs: a.min_runs.max(b.min_runs),
+    }
+}
+
+/// `c` appended unless a candidate already has its design.
+fn push_new(out: &mut Vec<Candidate>, c: Candidate) {
+    if out.iter().all(|o| o.design != c.design) {
+        out.push(c);
+    }
 }
 
 /// The design that would test `open` (every need of their entries met, up-down order): where
@@ -270,7 +310,8 @@ pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
         let v = d.drive_v[0];
         let volts = vec![v, (v / 2.0 * 10.0).round() / 10.0];
         let control = |x: f64| ((x / gain) * 1000.0).round() / 1000.0;
-        d.drive_v = volts.clone();
+        // Ascending, as the data's design lists them (the first is set first at the rig).
+        d.drive_v = vec![volts[1].min(volts[0]), volts[1].max(volts[0])];
         c.rig_commands.insert(
             1,
             format!("capstan rig set amp_control_v {}", control(volts[0])),

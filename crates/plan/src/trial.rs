@@ -43,11 +43,11 @@ pub struct Rate {
     pub p_decide: f64,
     /// The other answers, with how often each was given.
     pub otherwise: BTreeMap<String, usize>,
-    /// Why the design cannot test one of the hypothesis's effects, if it cannot: then no
-    /// campaign is simulated (the engine never names an effect its design cannot test, so
-    /// the chance is 0 without one).
+    /// Why no campaign was simulated, if none was: the design cannot test one of the
+    /// hypothesis's effects (the engine never names an effect its design cannot test, so the
+    /// chance is 0 without one), or it cannot test another hypothesis's and so cannot decide.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub not_testable: Option<String>,
+    pub not_simulated: Option<String>,
 }
 
 /// The simulator's configuration of `design` under `h`.
@@ -86,12 +86,7 @@ pub fn rates(
     threads: usize,
 ) -> Result<Vec<Rate>, String> {
     let mut cases = Vec::new();
-    let untestable = |h: &Hypothesis| {
-        (h.effects.iter()).find_map(|e| {
-            (design.untestable(e.kind, &world.protocol))
-                .map(|why| format!("{} not testable: {why}", e.kind.name()))
-        })
-    };
+    let untestable = |h: &Hypothesis| untestable(design, h, world);
     let simulated: Vec<&Hypothesis> = hypotheses
         .iter()
         .filter(|h| untestable(h).is_none())
@@ -127,11 +122,33 @@ pub fn rates(
                 decided: 0,
                 p_decide: 0.0,
                 otherwise: BTreeMap::new(),
-                not_testable: Some(why),
+                not_simulated: Some(why),
             },
             None => rate(h, chunks.next().unwrap_or(&[])),
         })
         .collect())
+}
+
+/// Why `design` cannot test one of the effects of `h`, if it cannot.
+pub fn untestable(design: &Design, h: &Hypothesis, world: &World) -> Option<String> {
+    (h.effects.iter()).find_map(|e| {
+        (design.untestable(e.kind, &world.protocol))
+            .map(|why| format!("{} not testable: {why}", e.kind.name()))
+    })
+}
+
+/// The rates of a design not simulated because it cannot test `why` (0: it cannot decide).
+pub fn not_simulated(hypotheses: &[Hypothesis], why: &str) -> Vec<Rate> {
+    (hypotheses.iter())
+        .map(|h| Rate {
+            hypothesis: h.label(),
+            campaigns: 0,
+            decided: 0,
+            p_decide: 0.0,
+            otherwise: BTreeMap::new(),
+            not_simulated: Some(why.to_string()),
+        })
+        .collect()
 }
 
 fn rate(h: &Hypothesis, outcomes: &[Outcome]) -> Rate {
@@ -150,7 +167,7 @@ fn rate(h: &Hypothesis, outcomes: &[Outcome]) -> Rate {
         decided,
         p_decide: decided as f64 / outcomes.len().max(1) as f64,
         otherwise,
-        not_testable: None,
+        not_simulated: None,
     }
 }
 
