@@ -308,7 +308,7 @@ pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
     if needs.voltages && d.drive_v.len() == 1 {
         let gain = Calibration::default().amp.amp_gain as f64;
         let v = d.drive_v[0];
-        let volts = vec![v, (v / 2.0 * 10.0).round() / 10.0];
+        let volts = [v, (v / 2.0 * 10.0).round() / 10.0];
         let control = |x: f64| ((x / gain) * 1000.0).round() / 1000.0;
         // Ascending, as the data's design lists them (the first is set first at the rig).
         d.drive_v = vec![volts[1].min(volts[0]), volts[1].max(volts[0])];
@@ -317,8 +317,8 @@ pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
             format!("capstan rig set amp_control_v {}", control(volts[0])),
         );
         c.procedure.push(format!(
-            "then `capstan rig set amp_control_v {}` (drive {} V with amp_gain {gain}) and the \
-             same runs again on every cord",
+            "`capstan rig set amp_control_v {}` (drive {} V with amp_gain {gain}), `capstan rig \
+             store`, and the same runs again on every cord",
             control(volts[1]),
             volts[1]
         ));
