@@ -179,6 +179,26 @@ pub fn candidates(current: &Design, open: &[EffectKind]) -> Vec<Candidate> {
         ..current.clone()
     };
     out.push(rig_only("twice the runs per cord", twice));
+    with_covariates(&updown, &mut out);
+    let all = open
+        .iter()
+        .map(|k| k.entry().cases.design)
+        .fold(CaseDesign::default(), union);
+    let names: Vec<&str> = open.iter().map(|k| k.name()).collect();
+    push_new(
+        &mut out,
+        Candidate {
+            name: format!("up-down order testing {}", names.join(", ")),
+            ..meeting(&updown, all)
+        },
+    );
+    out
+}
+
+/// The up-down order with every combination of the changes that add a covariate the design
+/// lacks (a second drive voltage, a wide span of wraps, a second capstan), and the wide span
+/// with twice the runs; appended to `out` where new.
+fn with_covariates(updown: &Candidate, out: &mut Vec<Candidate>) {
     // Every combination of the changes that add a covariate: a second drive voltage, a wide
     // span of wraps, a second capstan (those the design lacks).
     let changes = [
@@ -214,16 +234,16 @@ pub fn candidates(current: &Design, open: &[EffectKind]) -> Vec<Candidate> {
             }
         }
         push_new(
-            &mut out,
+            out,
             Candidate {
                 name,
-                ..meeting(&updown, needs)
+                ..meeting(updown, needs)
             },
         );
     }
     // More runs per cord where the wraps span wide: a T1 and a T2 offset differ only in how
     // the wrap amplifies them, and each run's own mu leaves few degrees of freedom per cord.
-    let wide = meeting(&updown, changes[1].1);
+    let wide = meeting(updown, changes[1].1);
     if wide.design != updown.design {
         let runs = wide.design.runs_per_cord * 2;
         let mut c = Candidate {
@@ -232,21 +252,8 @@ pub fn candidates(current: &Design, open: &[EffectKind]) -> Vec<Candidate> {
         };
         c.design.runs_per_cord = runs;
         c.procedure[0] = format!("{runs} runs on each cord");
-        push_new(&mut out, c);
+        push_new(out, c);
     }
-    let all = open
-        .iter()
-        .map(|k| k.entry().cases.design)
-        .fold(CaseDesign::default(), union);
-    let names: Vec<&str> = open.iter().map(|k| k.name()).collect();
-    push_new(
-        &mut out,
-        Candidate {
-            name: format!("up-down order testing {}", names.join(", ")),
-            ..meeting(&updown, all)
-        },
-    );
-    out
 }
 
 /// Both designs' needs.
