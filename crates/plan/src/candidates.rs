@@ -273,15 +273,16 @@ fn push_new(out: &mut Vec<Candidate>, c: Candidate) {
     }
 }
 
-/// The design that would test `open` (every need of their entries met, up-down order): where
-/// the planner reads the span an untestable effect's planted-case size is spread over.
-pub fn testing_design(current: &Design, open: &[EffectKind]) -> Design {
+/// The candidate design that tests the most of `open` (the first such: the fewest changes),
+/// with runs of `protocol`: where the planner reads the span an untestable effect's
+/// planted-case size is spread over.
+pub fn testing_design(current: &Design, open: &[EffectKind], protocol: &Protocol) -> Design {
     let all = candidates(current, open);
     let mut best = all[0].design.clone();
     for c in &all {
         let tests = |d: &Design| {
             (open.iter())
-                .filter(|k| d.untestable(**k, &Protocol::default()).is_none())
+                .filter(|k| d.untestable(**k, protocol).is_none())
                 .count()
         };
         if tests(&c.design) > tests(&best) {

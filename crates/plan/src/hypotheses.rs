@@ -106,7 +106,7 @@ pub fn open_hypotheses(
         }
     }
     let open = untestable_kinds(d, current, world);
-    let testing = testing_design(current, &open);
+    let testing = testing_design(current, &open, &world.protocol);
     let cfg = config(&testing, &named, world, 0);
     let mut sized = Vec::new();
     for kind in open {
