@@ -19,6 +19,7 @@ fn analyze_csv(name: &str, body: &str) -> String {
             width_mm: 170.0,
             font_pt: 8.0,
             thesis_comparison: false,
+            plan: false,
         }),
     });
     format!("{:#}", r.expect_err("bad input must fail"))

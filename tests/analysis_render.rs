@@ -73,6 +73,7 @@ fn report_renders_in_headless_chromium() {
             width_mm: 170.0,
             font_pt: 8.0,
             thesis_comparison: false,
+            plan: false,
         }),
     })
     .unwrap();

@@ -29,6 +29,7 @@ fn outputs() -> &'static PathBuf {
                 width_mm: 170.0,
                 font_pt: 8.0,
                 thesis_comparison: false,
+                plan: false,
             }),
         })
         .unwrap();

@@ -76,6 +76,7 @@ fn plan_on_the_thesis_data_keeps_the_json_contract_and_writes_its_files() {
     assert!(!args
         .iter()
         .any(|a| ["--effect", "--noise", "--seed", "--out"].contains(a)));
+    every_rig_command_is_one_the_board_takes_and_stores(&v);
     // The same plan in the files.
     let saved: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
@@ -83,6 +84,57 @@ fn plan_on_the_thesis_data_keeps_the_json_contract_and_writes_its_files() {
     assert!(std::fs::read_to_string(out.join("plan.txt"))
         .unwrap()
         .contains("open hypotheses"));
+}
+
+/// Every `capstan rig` command the plan gives (in any candidate's commands and procedure) is
+/// parsed by the board's own command parser (its keys derived from the wire schema), its value
+/// is one the board's settings take, and the changed settings survive the flash record's
+/// encoding: settable with `capstan rig set` and stored on the board.
+fn every_rig_command_is_one_the_board_takes_and_stores(plan: &serde_json::Value) {
+    use firmware::{Calibration, Command, Protocol, Settings};
+    let board = Settings {
+        protocol: Protocol::default(),
+        calibration: Calibration::default(),
+    };
+    let mut lines = Vec::new();
+    for c in plan["candidates"].as_array().unwrap() {
+        for cmd in c["rig_commands"].as_array().unwrap() {
+            lines.push(cmd.as_str().unwrap().to_string());
+        }
+        // Commands quoted in the procedure (`capstan rig set ...`).
+        for step in c["procedure"].as_array().unwrap() {
+            let text = step.as_str().unwrap();
+            for (i, quoted) in text.split('`').enumerate() {
+                if i % 2 == 1 && quoted.starts_with("capstan rig") {
+                    lines.push(quoted.to_string());
+                }
+            }
+        }
+    }
+    let mut keys = std::collections::BTreeSet::new();
+    for line in &lines {
+        let rest = line
+            .strip_prefix("capstan rig ")
+            .unwrap_or_else(|| panic!("{line}: not a `capstan rig` command"));
+        let cmd = Command::parse(rest).unwrap_or_else(|e| panic!("{line}: the board says {e:?}"));
+        match cmd {
+            Command::Set(key, value) => {
+                let s = board
+                    .with(key, value)
+                    .unwrap_or_else(|e| panic!("{line}: refused by the settings ({e:?})"));
+                let (back, _) = Settings::decode(&s.encode(1)).expect("the flash record");
+                assert_eq!(back.get(key.setting()), s.get(key.setting()), "{line}");
+                keys.insert(key.name());
+            }
+            Command::Store => {}
+            other => panic!("{line}: {other:?} is not a protocol setting"),
+        }
+    }
+    // The thesis data's plan sets the order and the drive voltage.
+    assert!(
+        keys.contains("order") && keys.contains("amp_control_v"),
+        "{keys:?} from {lines:#?}"
+    );
 }
 
 #[test]

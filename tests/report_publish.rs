@@ -21,6 +21,7 @@ fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_
             width_mm,
             font_pt: 8.0,
             thesis_comparison: false,
+            plan: false,
         }),
     })
     .unwrap();
@@ -196,4 +197,30 @@ fn other_data_get_no_thesis_comparison() {
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(!html.contains("Table 3 applied per angle") && !html.contains("thesis Table 3"));
     assert!(!out.join("figures").exists(), "no --figures, no files");
+}
+
+#[test]
+fn the_next_experiment_section_is_rendered_from_its_metrics_object() {
+    let dir = thesis_out();
+    let m = metrics(dir);
+    let next = &m["next_experiment"];
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let section = capstan_report::next::next_html(next);
+    assert!(
+        html.contains(&section),
+        "the section is not the metrics' object rendered"
+    );
+    // Without --plan: what is open (the thesis data name a T2 offset and heating at one drive
+    // voltage, so a speed effect is open too) and the command that plans it.
+    assert_eq!(next["planned"], false);
+    assert_eq!(next["command"], "capstan plan");
+    let open: Vec<&str> = (next["open"].as_array().unwrap().iter())
+        .map(|h| h["label"].as_str().unwrap())
+        .collect();
+    assert!(
+        open.contains(&"t2_offset+contact_heating")
+            && open.iter().any(|l| l.contains("speed_dependence")),
+        "{open:?}"
+    );
+    assert!(section.contains("<code>capstan plan</code>"));
 }

@@ -44,6 +44,11 @@ pub struct Args {
     /// only the thesis data, recognised by their SHA-256, are compared with it).
     #[arg(long)]
     pub thesis_comparison: bool,
+    /// Also run the planner (`capstan plan`, about a minute) and put its recommendation in the
+    /// report's "Next experiment" section; without it the section lists what is open and the
+    /// `capstan plan` command to run.
+    #[arg(long)]
+    pub plan: bool,
 }
 
 /// Run `capstan analyze`.
@@ -116,6 +121,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         html,
         &capstan_report::discovered::discovered_html(&disc),
     );
+    let next = next_experiment(&args, &ds)?;
+    let html =
+        capstan_report::discovered::insert_section(html, &capstan_report::next::next_html(&next));
     let t_files = Instant::now();
     let files = capstan_report::figure_files(&figs, &ctx.figures)?;
     if !files.is_empty() && !capstan_report::export::have_fonts() {
@@ -140,6 +148,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut metrics = capstan_report::metrics_json(&a, &closed, &ctx);
     metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
     metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
+    metrics["next_experiment"] = next;
     set.write("report.html", html.as_bytes())?;
     set.write(
         "metrics.json",
@@ -160,6 +169,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::outln!("{}", serde_json::to_string_pretty(&metrics)?);
     }
     Ok(())
+}
+
+/// The "Next experiment" object: what is open (one diagnosis), and with `--plan` the plan.
+fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<serde_json::Value> {
+    let open = serde_json::to_value(capstan_plan::open(ds))?;
+    let plan = if args.plan {
+        crate::errln!("planning the next experiment (--plan: about a minute) ...");
+        let p = capstan_plan::plan(ds, &Default::default(), &mut |_, _| {})
+            .map_err(|e| anyhow::anyhow!("the planner: {e}"))?;
+        Some(serde_json::to_value(p)?)
+    } else {
+        None
+    };
+    let command = match &args.data {
+        Some(p) => format!("capstan plan {}", p.display()),
+        None => "capstan plan".to_string(),
+    };
+    Ok(capstan_report::next::next_json(
+        &open,
+        plan.as_ref(),
+        &command,
+    ))
 }
 
 /// `capstan analyze --validate`.

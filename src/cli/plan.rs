@@ -89,6 +89,9 @@ pub fn words(p: &Plan, source: &str) -> String {
     let mut s = String::new();
     let labels: Vec<String> = p.hypotheses.iter().map(|h| h.label()).collect();
     let _ = writeln!(s, "{source}: open hypotheses: {}", labels.join(" | "));
+    for h in p.hypotheses.iter().filter(|h| h.origin != "named") {
+        let _ = writeln!(s, "  {}: {}", h.label(), h.origin);
+    }
     for n in &p.not_simulated {
         let _ = writeln!(s, "  also open, not simulated: {}: {}", n.what, n.why);
     }
@@ -102,7 +105,10 @@ pub fn words(p: &Plan, source: &str) -> String {
     );
     for c in &p.candidates {
         let per: Vec<String> = (c.per_hypothesis.iter())
-            .map(|r| format!("{} {}/{}", r.hypothesis, r.decided, r.campaigns))
+            .map(|r| match &r.not_simulated {
+                Some(_) => format!("{} not simulated", r.hypothesis),
+                None => format!("{} {}/{}", r.hypothesis, r.decided, r.campaigns),
+            })
             .collect();
         let _ = writeln!(
             s,

@@ -3,6 +3,8 @@
 //! with a physical change the user makes (more wraps, a second capstan), marked as such.
 
 use capstan_engine::diagnose::Diagnosis;
+use capstan_friction::entry::CaseDesign;
+use capstan_friction::{EffectKind, Facts};
 use firmware::{Calibration, Protocol, StepOrder};
 use serde::Serialize;
 
@@ -64,6 +66,42 @@ impl Design {
         self.wraps_deg.len() * self.diameters_mm.len() * self.drive_v.len()
     }
 
+    /// What the campaign of this design offers the entries' testability conditions (the
+    /// engine's facts of the data it would produce, for the fields those conditions read).
+    pub fn facts(&self, protocol: &Protocol) -> Facts {
+        let span = |v: &[f64]| {
+            let max = v.iter().cloned().fold(f64::MIN, f64::max);
+            let min = v.iter().cloned().fold(f64::MAX, f64::min);
+            if v.is_empty() {
+                0.0
+            } else {
+                max - min
+            }
+        };
+        let cords = self.cords();
+        let run_s = protocol.end_ms() as f64 / 1000.0;
+        Facts {
+            wraps: self.wraps_deg.len(),
+            diameters: self.diameters_mm.len(),
+            voltages: self.drive_v.len(),
+            cords,
+            runs: cords * self.runs_per_cord as usize,
+            max_runs_per_cord: self.runs_per_cord as usize,
+            max_time_spread_s: run_s,
+            latest_time_s: run_s.max(1.0),
+            run_span: self.runs_per_cord.saturating_sub(1) as f64,
+            diameter_span_mm: span(&self.diameters_mm),
+            voltage_span_v: span(&self.drive_v),
+            max_load_n: 0.0,
+            max_wrap_rad: (self.wraps_deg.iter().cloned().fold(0.0, f64::max)).to_radians(),
+        }
+    }
+
+    /// Why a campaign of this design cannot test `kind` (its entry's condition), if it cannot.
+    pub fn untestable(&self, kind: EffectKind, protocol: &Protocol) -> Option<&'static str> {
+        (kind.entry().untestable)(&self.facts(protocol))
+    }
+
     /// Rig time, h: every run's levels and dwell, and [`BETWEEN_RUNS_S`] between runs.
     pub fn rig_hours(&self, protocol: &Protocol) -> f64 {
         let run_s = protocol.end_ms() as f64 / 1000.0 + BETWEEN_RUNS_S;
@@ -112,9 +150,10 @@ pub struct Candidate {
     pub physical_changes: Vec<String>,
 }
 
-/// The data's design and its variants (the data's own first).
-pub fn candidates(current: &Design) -> Vec<Candidate> {
-    let gain = Calibration::default().amp.amp_gain as f64;
+/// The data's design and its variants (the data's own first); `open`: effects the data could
+/// not test, for which a variant that tests them all is added (what each needs of a design is
+/// its catalogue entry's `cases.design`).
+pub fn candidates(current: &Design, open: &[EffectKind]) -> Vec<Candidate> {
     let mut out = vec![Candidate {
         name: "current design".to_string(),
         design: current.clone(),
@@ -125,41 +164,132 @@ pub fn candidates(current: &Design) -> Vec<Candidate> {
         )],
         physical_changes: Vec::new(),
     }];
-    let updown = Design {
-        order: StepOrder::UpDown,
-        ..current.clone()
-    };
+    let updown = rig_only(
+        "up-down order",
+        Design {
+            order: StepOrder::UpDown,
+            ..current.clone()
+        },
+    );
     if current.order != StepOrder::UpDown {
-        out.push(rig_only("up-down order", updown.clone()));
+        out.push(updown.clone());
     }
     let twice = Design {
         runs_per_cord: current.runs_per_cord * 2,
         ..current.clone()
     };
     out.push(rig_only("twice the runs per cord", twice));
-    if current.drive_v.len() == 1 {
-        let v = current.drive_v[0];
-        let volts = vec![v, (v / 2.0 * 10.0).round() / 10.0];
-        let control = |x: f64| ((x / gain) * 1000.0).round() / 1000.0;
-        let two_v = Design {
-            drive_v: volts.clone(),
-            ..updown.clone()
-        };
-        let mut c = rig_only("up-down order at two drive voltages", two_v);
-        c.rig_commands.insert(
-            1,
-            format!("capstan rig set amp_control_v {}", control(volts[0])),
+    with_covariates(&updown, &mut out);
+    let all = open
+        .iter()
+        .map(|k| k.entry().cases.design)
+        .fold(CaseDesign::default(), union);
+    let names: Vec<&str> = open.iter().map(|k| k.name()).collect();
+    push_new(
+        &mut out,
+        Candidate {
+            name: format!("up-down order testing {}", names.join(", ")),
+            ..meeting(&updown, all)
+        },
+    );
+    out
+}
+
+/// The up-down order with every combination of the changes that add a covariate the design
+/// lacks (a second drive voltage, a wide span of wraps, a second capstan), and the wide span
+/// with twice the runs; appended to `out` where new.
+fn with_covariates(updown: &Candidate, out: &mut Vec<Candidate>) {
+    // Every combination of the changes that add a covariate: a second drive voltage, a wide
+    // span of wraps, a second capstan (those the design lacks).
+    let changes = [
+        (
+            " at two drive voltages",
+            CaseDesign {
+                voltages: true,
+                ..CaseDesign::default()
+            },
+        ),
+        (
+            " over 270-720 degree wraps",
+            CaseDesign {
+                wide_wraps: true,
+                ..CaseDesign::default()
+            },
+        ),
+        (
+            " on a second capstan",
+            CaseDesign {
+                diameters: true,
+                ..CaseDesign::default()
+            },
+        ),
+    ];
+    for mask in 1..(1 << changes.len()) {
+        let mut name = "up-down order".to_string();
+        let mut needs = CaseDesign::default();
+        for (i, (words, n)) in changes.iter().enumerate() {
+            if mask & (1 << i) != 0 {
+                name += words;
+                needs = union(needs, *n);
+            }
+        }
+        push_new(
+            out,
+            Candidate {
+                name,
+                ..meeting(updown, needs)
+            },
         );
-        c.procedure.push(format!(
-            "then `capstan rig set amp_control_v {}` (drive {} V with amp_gain {gain}) and the \
-             same runs again on every cord",
-            control(volts[1]),
-            volts[1]
-        ));
+    }
+    // More runs per cord where the wraps span wide: a T1 and a T2 offset differ only in how
+    // the wrap amplifies them, and each run's own mu leaves few degrees of freedom per cord.
+    let wide = meeting(updown, changes[1].1);
+    if wide.design != updown.design {
+        let runs = wide.design.runs_per_cord * 2;
+        let mut c = Candidate {
+            name: "up-down order over 270-720 degree wraps, twice the runs".to_string(),
+            ..wide
+        };
+        c.design.runs_per_cord = runs;
+        c.procedure[0] = format!("{runs} runs on each cord");
+        push_new(out, c);
+    }
+}
+
+/// Both designs' needs.
+fn union(a: CaseDesign, b: CaseDesign) -> CaseDesign {
+    CaseDesign {
+        wide_wraps: a.wide_wraps || b.wide_wraps,
+        voltages: a.voltages || b.voltages,
+        diameters: a.diameters || b.diameters,
+        min_runs: a.min_runs.max(b.min_runs),
+    }
+}
+
+/// `c` appended unless a candidate already has its design.
+fn push_new(out: &mut Vec<Candidate>, c: Candidate) {
+    if out.iter().all(|o| o.design != c.design) {
         out.push(c);
     }
-    out.extend(physical(current, &updown));
-    out
+}
+
+/// The candidate design that tests the most of `open` (the first such: the fewest changes),
+/// with runs of `protocol`: where the planner reads the span an untestable effect's
+/// planted-case size is spread over.
+pub fn testing_design(current: &Design, open: &[EffectKind], protocol: &Protocol) -> Design {
+    let all = candidates(current, open);
+    let mut best = all[0].design.clone();
+    for c in &all {
+        let tests = |d: &Design| {
+            (open.iter())
+                .filter(|k| d.untestable(**k, protocol).is_none())
+                .count()
+        };
+        if tests(&c.design) > tests(&best) {
+            best = c.design.clone();
+        }
+    }
+    best
 }
 
 fn rig_only(name: &str, design: Design) -> Candidate {
@@ -177,42 +307,53 @@ fn rig_only(name: &str, design: Design) -> Candidate {
     }
 }
 
-/// Designs that need the user's hands: a wide span of wraps, a second capstan.
-fn physical(current: &Design, updown: &Design) -> Vec<Candidate> {
-    let mut out = Vec::new();
+/// `base` changed as far as `needs` asks and the design lacks it: a second drive voltage (the
+/// amplifier control, a rig setting), a span of wraps from 270° to 720° and a second capstan
+/// (physical changes, marked as such), more runs per cord.
+pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
+    let mut c = base.clone();
+    let d = &mut c.design;
+    if needs.voltages && d.drive_v.len() == 1 {
+        let gain = Calibration::default().amp.amp_gain as f64;
+        let v = d.drive_v[0];
+        let volts = [v, (v / 2.0 * 10.0).round() / 10.0];
+        let control = |x: f64| ((x / gain) * 1000.0).round() / 1000.0;
+        // Ascending, as the data's design lists them (the first is set first at the rig).
+        d.drive_v = vec![volts[1].min(volts[0]), volts[1].max(volts[0])];
+        c.rig_commands.insert(
+            1,
+            format!("capstan rig set amp_control_v {}", control(volts[0])),
+        );
+        c.procedure.push(format!(
+            "`capstan rig set amp_control_v {}` (drive {} V with amp_gain {gain}), `capstan rig \
+             store`, and the same runs again on every cord",
+            control(volts[1]),
+            volts[1]
+        ));
+    }
     let span = |v: &[f64]| {
         v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
     };
-    if current.wraps_deg.len() < 3 || span(&current.wraps_deg) < 300.0 {
-        let mut wraps = current.wraps_deg.clone();
-        wraps.extend([270.0, 450.0, 720.0]);
-        wraps.sort_by(f64::total_cmp);
-        wraps.dedup();
-        let mut c = rig_only(
-            "up-down order over 270-720 degree wraps",
-            Design {
-                wraps_deg: wraps.clone(),
-                ..updown.clone()
-            },
-        );
-        c.physical_changes
-            .push(format!("wrap a new cord at each of {wraps:?} degrees"));
-        out.push(c);
+    if needs.wide_wraps && (d.wraps_deg.len() < 3 || span(&d.wraps_deg) < 300.0) {
+        d.wraps_deg.extend([270.0, 450.0, 720.0]);
+        d.wraps_deg.sort_by(f64::total_cmp);
+        d.wraps_deg.dedup();
+        c.physical_changes.push(format!(
+            "wrap a new cord at each of {:?} degrees",
+            d.wraps_deg
+        ));
     }
-    if current.diameters_mm.len() == 1 {
-        let d = current.diameters_mm[0];
-        let other = if d > 19.0 { 12.7 } else { 25.4 };
-        let mut c = rig_only(
-            "up-down order on a second capstan",
-            Design {
-                diameters_mm: vec![d.min(other), d.max(other)],
-                ..updown.clone()
-            },
-        );
+    if needs.diameters && d.diameters_mm.len() == 1 {
+        let one = d.diameters_mm[0];
+        let other = if one > 19.0 { 12.7 } else { 25.4 };
+        d.diameters_mm = vec![one.min(other), one.max(other)];
         c.physical_changes.push(format!(
             "fit a {other} mm capstan and repeat every wrap on it"
         ));
-        out.push(c);
     }
-    out
+    if needs.min_runs > d.runs_per_cord {
+        d.runs_per_cord = needs.min_runs;
+        c.procedure[0] = format!("{} runs on each cord", d.runs_per_cord);
+    }
+    c
 }

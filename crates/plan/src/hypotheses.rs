@@ -1,8 +1,13 @@
 //! The hypotheses a data set leaves open, from its diagnosis: the effects it names (at their
 //! fitted sizes), and the same set with one named effect swapped for each rival the engine
-//! could not rule out (at the rival's fitted size). What cannot be simulated — effects the
-//! design could not test, structure no catalogue effect explains — is listed, not guessed.
+//! could not rule out (at the rival's fitted size); and the named set with each effect the
+//! design could not test, at the smallest size of the catalogue's planted cases that matters
+//! (its entry's `cases.care`, spread over the span of the design that would test it). What
+//! cannot be simulated — structure no catalogue effect explains, an effect no candidate could
+//! test — is listed, not guessed.
 
+use crate::candidates::{testing_design, Design};
+use crate::trial::{config, World};
 use capstan_engine::diagnose::Diagnosis;
 use capstan_friction::{Effect, EffectKind};
 use serde::Serialize;
@@ -53,8 +58,22 @@ pub struct NotSimulated {
     pub why: String,
 }
 
-/// The hypotheses of `d`: the named set first, then one per rival (duplicates dropped).
-pub fn open_hypotheses(d: &Diagnosis) -> (Vec<Hypothesis>, Vec<NotSimulated>) {
+/// The effects `d` could not test that a campaign of some design could (by their entries'
+/// conditions on the data's own design `current`).
+pub fn untestable_kinds(d: &Diagnosis, current: &Design, world: &World) -> Vec<EffectKind> {
+    (d.not_testable.iter())
+        .filter_map(|n| EffectKind::from_name(n.effect))
+        .filter(|k| current.untestable(*k, &world.protocol).is_some())
+        .collect()
+}
+
+/// The hypotheses of `d` on the data's design `current`: the named set first, then one per
+/// rival, then one per effect the design could not test (duplicates dropped).
+pub fn open_hypotheses(
+    d: &Diagnosis,
+    current: &Design,
+    world: &World,
+) -> (Vec<Hypothesis>, Vec<NotSimulated>) {
     let named = Hypothesis {
         effects: d.found_effects(),
         origin: "named".to_string(),
@@ -86,11 +105,36 @@ pub fn open_hypotheses(d: &Diagnosis) -> (Vec<Hypothesis>, Vec<NotSimulated>) {
             all.push(h);
         }
     }
-    (all, not_simulated(d))
+    let open = untestable_kinds(d, current, world);
+    let testing = testing_design(current, &open, &world.protocol);
+    let cfg = config(&testing, &named, world, 0);
+    let mut sized = Vec::new();
+    for kind in open {
+        if testing.untestable(kind, &world.protocol).is_some() {
+            continue;
+        }
+        let value = capstan_truth::cases::smallest_that_matters(kind, &cfg);
+        let reason = (d.not_testable.iter())
+            .find(|n| n.effect == kind.name())
+            .map_or(String::new(), |n| n.reason.clone());
+        let mut effects = named.effects.clone();
+        effects.push(Effect { kind, value });
+        all.push(Hypothesis {
+            effects,
+            origin: format!(
+                "not testable in these data ({reason}); at the smallest size of the catalogue's \
+                 planted cases that matters ({} = {value:.4})",
+                kind.parameter().unwrap_or("value")
+            ),
+        });
+        sized.push(kind.name());
+    }
+    (all, not_simulated(d, &sized))
 }
 
-fn not_simulated(d: &Diagnosis) -> Vec<NotSimulated> {
+fn not_simulated(d: &Diagnosis, sized: &[&str]) -> Vec<NotSimulated> {
     let mut v: Vec<NotSimulated> = (d.not_testable.iter())
+        .filter(|n| !sized.contains(&n.effect))
         .map(|n| NotSimulated {
             what: n.effect.to_string(),
             why: format!(

@@ -13,7 +13,7 @@ pub mod trial;
 use candidates::{candidates, Candidate, Design};
 use capstan_data::Dataset;
 use capstan_engine::diagnose::{self, Diagnosis};
-use hypotheses::{open_hypotheses, Hypothesis, NotSimulated};
+use hypotheses::{open_hypotheses, untestable_kinds, Hypothesis, NotSimulated};
 use serde::Serialize;
 use std::time::Instant;
 use trial::{rates, Rate, World};
@@ -112,6 +112,31 @@ pub struct Plan {
     pub elapsed_s: f64,
 }
 
+/// What a data set leaves open, without simulating anything (one diagnosis: cheap).
+#[derive(Clone, Debug, Serialize)]
+pub struct Open {
+    /// The hypotheses the planner would simulate.
+    pub hypotheses: Vec<Hypothesis>,
+    /// What the data leave open that would not be simulated, and why.
+    pub not_simulated: Vec<NotSimulated>,
+    /// What the planner had to assume.
+    pub assumed: Vec<String>,
+}
+
+/// The hypotheses `data` leave open (what [`plan`] would simulate), without simulating.
+pub fn open(data: &Dataset) -> Open {
+    let mut assumed = Vec::new();
+    let d = diagnosis(data, &mut assumed);
+    let world = world(&d, &mut assumed);
+    let current = Design::of(&d, &mut assumed);
+    let (hypotheses, not_simulated) = open_hypotheses(&d, &current, &world);
+    Open {
+        hypotheses,
+        not_simulated,
+        assumed,
+    }
+}
+
 /// Plan the next campaign for `data`; `progress(done, total)` after every protocol.
 pub fn plan(
     data: &Dataset,
@@ -121,23 +146,40 @@ pub fn plan(
     let t0 = Instant::now();
     let mut assumed = Vec::new();
     let d = diagnosis(data, &mut assumed);
-    let (hyps, not_simulated) = open_hypotheses(&d);
     let world = world(&d, &mut assumed);
     let current = Design::of(&d, &mut assumed);
-    let cands = candidates(&current);
+    let (hyps, not_simulated) = open_hypotheses(&d, &current, &world);
+    let cands = candidates(&current, &untestable_kinds(&d, &current, &world));
+    // A protocol that cannot test some hypothesis cannot decide (worst case 0): when another
+    // can test them all, it is not simulated (the data's own design always is).
+    let blind = |c: &Candidate| {
+        hyps.iter()
+            .find_map(|h| trial::untestable(&c.design, h, &world))
+    };
+    let some_tests_all = cands.iter().any(|c| blind(c).is_none());
+    let total = cands.len();
     let mut scored = Vec::new();
     for (i, c) in cands.into_iter().enumerate() {
-        progress(i, 0);
-        let r = rates(
-            &c.design,
-            &hyps,
-            &world,
-            opts.reps,
-            (opts.seed, i as u64),
-            opts.threads,
-        )?;
+        progress(i, total);
+        let r = match blind(&c).filter(|_| i > 0 && some_tests_all) {
+            Some(why) => trial::not_simulated(
+                &hyps,
+                &format!(
+                    "{why}: this protocol cannot decide, and another can test every hypothesis"
+                ),
+            ),
+            None => rates(
+                &c.design,
+                &hyps,
+                &world,
+                opts.reps,
+                (opts.seed, i as u64),
+                opts.threads,
+            )?,
+        };
         scored.push(score(c, r, &world));
     }
+    progress(total, total);
     let current_design = Current {
         p_decide_worst: scored[0].p_decide_worst,
         rig_hours: scored[0].rig_hours,
@@ -162,7 +204,10 @@ pub fn plan(
         method: format!(
             "simulation: {} campaigns per hypothesis and protocol, each run end to end on the \
              simulated rig (the firmware's protocol, sampling and conditioning) and diagnosed by \
-             the same evidence engine; no expected-evidence shortcut",
+             the same evidence engine; no expected-evidence shortcut. A hypothesis with an \
+             effect a protocol cannot test scores 0 there without simulation (the engine never \
+             names an effect its design cannot test); such a protocol is not simulated at all \
+             when another can test every hypothesis",
             opts.reps
         ),
         elapsed_s: t0.elapsed().as_secs_f64(),

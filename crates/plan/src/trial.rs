@@ -43,6 +43,11 @@ pub struct Rate {
     pub p_decide: f64,
     /// The other answers, with how often each was given.
     pub otherwise: BTreeMap<String, usize>,
+    /// Why no campaign was simulated, if none was: the design cannot test one of the
+    /// hypothesis's effects (the engine never names an effect its design cannot test, so the
+    /// chance is 0 without one), or it cannot test another hypothesis's and so cannot decide.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_simulated: Option<String>,
 }
 
 /// The simulator's configuration of `design` under `h`.
@@ -70,7 +75,8 @@ pub fn config(design: &Design, h: &Hypothesis, world: &World, seed: u64) -> Camp
 }
 
 /// `reps` campaigns of `design` under each hypothesis, seeds from `seed` and `salt`; rates in
-/// hypothesis order.
+/// hypothesis order. A hypothesis with an effect the design cannot test gets 0 without
+/// simulation.
 pub fn rates(
     design: &Design,
     hypotheses: &[Hypothesis],
@@ -80,7 +86,15 @@ pub fn rates(
     threads: usize,
 ) -> Result<Vec<Rate>, String> {
     let mut cases = Vec::new();
+    let untestable = |h: &Hypothesis| untestable(design, h, world);
+    let simulated: Vec<&Hypothesis> = hypotheses
+        .iter()
+        .filter(|h| untestable(h).is_none())
+        .collect();
     for (i, h) in hypotheses.iter().enumerate() {
+        if untestable(h).is_some() {
+            continue;
+        }
         for r in 0..reps {
             let s = derive_seed(seed, &[salt, i as u64, r as u64]);
             cases.push(Case {
@@ -98,9 +112,43 @@ pub fn rates(
         }
     }
     let outcomes = score::run(&cases, threads, capstan_engine::diagnose::diagnose)?;
-    Ok((hypotheses.iter().zip(outcomes.chunks(reps.max(1))))
-        .map(|(h, o)| rate(h, o))
+    let mut chunks = outcomes.chunks(reps.max(1));
+    debug_assert_eq!(chunks.len(), simulated.len());
+    Ok((hypotheses.iter())
+        .map(|h| match untestable(h) {
+            Some(why) => Rate {
+                hypothesis: h.label(),
+                campaigns: 0,
+                decided: 0,
+                p_decide: 0.0,
+                otherwise: BTreeMap::new(),
+                not_simulated: Some(why),
+            },
+            None => rate(h, chunks.next().unwrap_or(&[])),
+        })
         .collect())
+}
+
+/// Why `design` cannot test one of the effects of `h`, if it cannot.
+pub fn untestable(design: &Design, h: &Hypothesis, world: &World) -> Option<String> {
+    (h.effects.iter()).find_map(|e| {
+        (design.untestable(e.kind, &world.protocol))
+            .map(|why| format!("{} not testable: {why}", e.kind.name()))
+    })
+}
+
+/// The rates of a design not simulated because it cannot test `why` (0: it cannot decide).
+pub fn not_simulated(hypotheses: &[Hypothesis], why: &str) -> Vec<Rate> {
+    (hypotheses.iter())
+        .map(|h| Rate {
+            hypothesis: h.label(),
+            campaigns: 0,
+            decided: 0,
+            p_decide: 0.0,
+            otherwise: BTreeMap::new(),
+            not_simulated: Some(why.to_string()),
+        })
+        .collect()
 }
 
 fn rate(h: &Hypothesis, outcomes: &[Outcome]) -> Rate {
@@ -119,6 +167,7 @@ fn rate(h: &Hypothesis, outcomes: &[Outcome]) -> Rate {
         decided,
         p_decide: decided as f64 / outcomes.len().max(1) as f64,
         otherwise,
+        not_simulated: None,
     }
 }
 

@@ -4,10 +4,11 @@
 //! original one, and diagnosed. The recommendation must name the truth alone in ≥ 90 % of them
 //! (the target); the original design's rate is printed beside it.
 //!
-//! * `cargo test -p capstan-plan --test validate` runs a fixed slice (one scenario, a small
-//!   design, few campaigns: about a minute);
+//! * `cargo test -p capstan-plan --test validate` runs a fixed slice (drift on monotone runs
+//!   and a speed effect at one drive voltage, small designs, few campaigns: about a minute);
 //! * `CAPSTAN_PLAN=full cargo test --release -p capstan-plan --test validate -- --nocapture`
-//!   runs every scenario at the thesis's design with 10 fresh campaigns each (CI).
+//!   runs every scenario at the thesis's design with 10 fresh campaigns each (CI);
+//!   `CAPSTAN_PLAN_ONLY=TEXT` beside it runs only the scenarios whose name contains TEXT.
 
 use capstan_friction::{Effect, EffectKind};
 use capstan_plan::candidates::Design;
@@ -38,6 +39,18 @@ fn thesis_design(order: StepOrder) -> Design {
         wraps_deg: vec![270.0, 360.0, 450.0, 630.0, 720.0],
         diameters_mm: vec![12.7, 25.4],
         drive_v: vec![10.0],
+    }
+}
+
+/// A design that can test every effect of the catalogue (wide wraps, two capstans, two drive
+/// voltages): the clean control's, so that nothing is left untestable.
+fn complete_design(order: StepOrder) -> Design {
+    Design {
+        order,
+        runs_per_cord: 4,
+        wraps_deg: vec![270.0, 450.0, 720.0],
+        diameters_mm: vec![12.7, 25.4],
+        drive_v: vec![5.0, 10.0],
     }
 }
 
@@ -117,6 +130,21 @@ fn run(s: &Scenario, reps: usize, fresh: u64) -> (String, f64, f64) {
         100.0 * rec_rate,
         100.0 * orig_rate
     );
+    let counts = |c: &capstan_plan::Scored| {
+        (c.per_hypothesis.iter())
+            .map(|r| format!("{} {}/{}", r.hypothesis, r.decided, r.campaigns))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let current = p
+        .candidates
+        .iter()
+        .find(|c| c.candidate.name == "current design");
+    eprintln!(
+        "    planner: recommended {}; current design {}",
+        counts(&p.recommended),
+        current.map(counts).unwrap_or_default()
+    );
     (rec.name.clone(), rec_rate, orig_rate)
 }
 
@@ -138,7 +166,7 @@ fn scenarios() -> Vec<Scenario> {
         Scenario {
             name: "wear on monotone runs",
             truth: vec![("wear", -0.03)],
-            design: thesis.clone(),
+            design: thesis,
             known_short: false,
         },
         Scenario {
@@ -151,18 +179,30 @@ fn scenarios() -> Vec<Scenario> {
                 diameters_mm: vec![25.4],
                 drive_v: vec![10.0],
             },
-            known_short: true,
+            known_short: false,
+        },
+        Scenario {
+            name: "speed effect at one drive voltage",
+            truth: vec![("speed_dependence", -0.03)],
+            design: Design {
+                runs_per_cord: 4,
+                ..thesis_design(StepOrder::UpDown)
+            },
+            known_short: false,
         },
         Scenario {
             name: "control: T2 offset, design decides",
             truth: vec![("t2_offset", 0.8)],
-            design: thesis_design(StepOrder::UpDown),
+            design: Design {
+                drive_v: vec![5.0, 10.0],
+                ..thesis_design(StepOrder::UpDown)
+            },
             known_short: false,
         },
         Scenario {
             name: "control: nothing, design decides",
             truth: vec![],
-            design: thesis,
+            design: complete_design(StepOrder::Monotone),
             known_short: false,
         },
     ]
@@ -171,29 +211,51 @@ fn scenarios() -> Vec<Scenario> {
 #[test]
 fn the_recommended_protocol_names_the_planted_truth_alone() {
     if !full() {
-        let s = Scenario {
+        let drift = Scenario {
             name: "drift on monotone runs (slice)",
             truth: vec![("thermal_drift", -0.15)],
             design: small_design(StepOrder::Monotone),
             known_short: false,
         };
-        let (_, rec, orig) = run(&s, 2, 4);
-        assert!(
-            rec >= 0.75,
-            "recommended design named the truth alone in {rec}"
-        );
-        assert!(
-            rec >= orig,
-            "recommended {rec} below the original design's {orig}"
-        );
+        let speed = Scenario {
+            name: "speed effect at one drive voltage (slice)",
+            truth: vec![("speed_dependence", -0.03)],
+            design: Design {
+                runs_per_cord: 3,
+                diameters_mm: vec![12.7, 25.4],
+                ..small_design(StepOrder::UpDown)
+            },
+            known_short: false,
+        };
+        for s in [drift, speed] {
+            let (_, rec, orig) = run(&s, 2, 4);
+            assert!(
+                rec >= 0.75,
+                "{}: recommended design named the truth alone in {rec}",
+                s.name
+            );
+            assert!(
+                rec >= orig,
+                "{}: recommended {rec} below the original design's {orig}",
+                s.name
+            );
+        }
         return;
     }
     let mut failures = Vec::new();
-    for s in scenarios() {
+    // CAPSTAN_PLAN_ONLY=TEXT: only the scenarios whose name contains TEXT (while iterating).
+    let only = std::env::var("CAPSTAN_PLAN_ONLY").unwrap_or_default();
+    for s in scenarios().into_iter().filter(|s| s.name.contains(&only)) {
         let (name, rec, orig) = run(&s, 4, 10);
         if rec < 0.9 && !s.known_short {
             failures.push(format!(
                 "{}: {name} names the truth alone in {rec} (< 0.9)",
+                s.name
+            ));
+        }
+        if s.name.starts_with("control") && name != "current design" {
+            failures.push(format!(
+                "{}: recommended {name}, not the current design",
                 s.name
             ));
         }

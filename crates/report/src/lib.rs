@@ -6,6 +6,7 @@
 //! * [`html`]: the page and its sections; [`tables`]: its tables; [`cells`]: the text in them
 //!   (numbers or a dash, escaped text).
 //! * [`headline`]: the plain headline; [`parameters`]: the one parameter table;
+//! * [`next`]: the "Next experiment" section (from `capstan plan`);
 //! * [`context`]: provenance and the thesis comparison; [`export`]: the figure files;
 //! * [`figures`]: the figures; [`plot`]: their charts (panels and bar charts, drawn by
 //!   `plotters`).
@@ -18,6 +19,7 @@ pub mod figures;
 pub mod files;
 pub mod headline;
 pub mod html;
+pub mod next;
 pub mod parameters;
 pub mod plot;
 pub mod tables;

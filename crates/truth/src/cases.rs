@@ -294,6 +294,17 @@ fn value(rng: &mut Rng, kind: EffectKind, small: bool, cfg: &CampaignConfig) -> 
     (c.value)(change, span(c.span, cfg))
 }
 
+/// The smallest size of `kind` that matters in the planted cases (the low end of its entry's
+/// `cases.care` range, positive), for the design `cfg`: a plausible size for an effect whose
+/// size the data could not measure.
+pub fn smallest_that_matters(kind: EffectKind, cfg: &CampaignConfig) -> f64 {
+    if kind == EffectKind::None {
+        return 0.0;
+    }
+    let c = &kind.entry().cases;
+    (c.value)(c.care.0, span(c.span, cfg))
+}
+
 /// Optional columns a case may lose without hiding its truth or merging its runs (a voltage or
 /// diameter column can go only when it has one value).
 fn droppable(kinds: &[EffectKind], cfg: &CampaignConfig) -> Vec<&'static str> {

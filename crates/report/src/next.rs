@@ -1,0 +1,205 @@
+//! The report's "Next experiment" section and its `next_experiment` object in `metrics.json`:
+//! what the data leave open and, when `capstan analyze --plan` ran the planner, the protocol
+//! that decides (its `capstan rig` commands, physical changes, rig hours and chance of deciding,
+//! with the current design's chance beside it). Without the planner (it simulates for about a
+//! minute) the section lists what is open and gives the `capstan plan` command that answers it.
+//! The section is rendered from the `metrics.json` object alone; the crate takes the plan as
+//! JSON (it does not depend on `capstan-plan`).
+
+use crate::cells::esc;
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+
+/// The `next_experiment` object from the planner's open hypotheses (`capstan_plan::Open` as
+/// JSON: `hypotheses`, `not_simulated`, `assumed`), the plan if it ran (`capstan_plan::Plan`
+/// as JSON), and the `capstan plan` command that plans these data.
+pub fn next_json(open: &Value, plan: Option<&Value>, command: &str) -> Value {
+    let hyps = |v: &Value| -> Vec<Value> {
+        (v["hypotheses"].as_array().into_iter().flatten())
+            .map(|h| json!({"label": h["label"], "origin": h["origin"]}))
+            .collect()
+    };
+    let mut next = json!({
+        "planned": plan.is_some(),
+        "command": command,
+        "open": hyps(plan.unwrap_or(open)),
+        "not_simulated": plan.unwrap_or(open)["not_simulated"],
+        "assumed": plan.unwrap_or(open)["assumed"],
+    });
+    if let Some(p) = plan {
+        let r = &p["recommended"];
+        next["recommended"] = json!({
+            "name": r["name"],
+            "protocol": r["protocol"],
+            "rig_commands": r["rig_commands"],
+            "physical_changes": r["physical_changes"],
+            "procedure": r["procedure"],
+            "simulate_args": r["simulate_args"],
+            "rig_hours": r["rig_hours"],
+            "p_decide_worst": r["p_decide_worst"],
+        });
+        for key in [
+            "current_design",
+            "current_decides",
+            "any_decides",
+            "within_hours",
+        ] {
+            next[key] = p[key].clone();
+        }
+        next["method"] = p["method"].clone();
+        next["elapsed_s"] = p["elapsed_s"].clone();
+    }
+    next
+}
+
+/// The report's section, from the `next_experiment` object of `metrics.json`.
+pub fn next_html(n: &Value) -> String {
+    let mut h = String::from("<h2>Next experiment</h2>");
+    let s = |v: &Value| esc(v.as_str().unwrap_or(""));
+    let pct = |v: &Value| {
+        v.as_f64()
+            .map_or("-".to_string(), |x| format!("{:.0} %", 100.0 * x))
+    };
+    let hours = |v: &Value| v.as_f64().map_or("-".to_string(), |x| format!("{x:.1}"));
+    h.push_str("<p>What these data leave open:</p><ul>");
+    for o in n["open"].as_array().into_iter().flatten() {
+        let _ = write!(
+            h,
+            "<li><code>{}</code> ({})</li>",
+            s(&o["label"]),
+            s(&o["origin"])
+        );
+    }
+    for o in n["not_simulated"].as_array().into_iter().flatten() {
+        let _ = write!(
+            h,
+            "<li><code>{}</code>, not simulated: {}</li>",
+            s(&o["what"]),
+            s(&o["why"])
+        );
+    }
+    h.push_str("</ul>");
+    if n["planned"].as_bool() != Some(true) {
+        let _ = write!(
+            h,
+            "<p>The planner did not run (it simulates campaigns for about a minute). <code>{}</code> ranks the protocols that would decide between these, with the <code>capstan rig</code> commands of the best and its chance of deciding; <code>capstan analyze --plan</code> puts that here.</p>",
+            s(&n["command"])
+        );
+        return h;
+    }
+    let r = &n["recommended"];
+    let cur = &n["current_design"];
+    if n["current_decides"].as_bool() == Some(true) {
+        let _ = write!(
+            h,
+            "<p>The current design already decides between the simulated hypotheses: chance of naming the true one alone {} (worst case), {} rig hours. Run it again as it is.</p>",
+            pct(&cur["p_decide_worst"]),
+            hours(&cur["rig_hours"])
+        );
+    } else {
+        let _ = write!(
+            h,
+            "<p>Recommended: <b>{}</b>, {} rig hours: chance of naming the true hypothesis alone {} (worst case over the open hypotheses), against {} for the current design ({} h).</p>",
+            s(&r["name"]),
+            hours(&r["rig_hours"]),
+            pct(&r["p_decide_worst"]),
+            pct(&cur["p_decide_worst"]),
+            hours(&cur["rig_hours"])
+        );
+    }
+    if n["any_decides"].as_bool() == Some(false) {
+        h.push_str("<p>No candidate protocol named the true hypothesis alone in any simulated campaign: this is only the least bad.</p>");
+    }
+    let list = |h: &mut String, title: &str, v: &Value| {
+        if let Some(items) = v.as_array().filter(|a| !a.is_empty()) {
+            let _ = write!(h, "<p>{title}</p><ul>");
+            for i in items {
+                let _ = write!(h, "<li>{}</li>", s(i));
+            }
+            h.push_str("</ul>");
+        }
+    };
+    list(
+        &mut h,
+        "Physical changes (by hand):",
+        &r["physical_changes"],
+    );
+    if let Some(cmds) = r["rig_commands"].as_array().filter(|a| !a.is_empty()) {
+        let lines: Vec<String> = cmds.iter().map(s).collect();
+        let _ = write!(h, "<p>On the board:</p><pre>{}</pre>", lines.join("\n"));
+    }
+    list(&mut h, "Then:", &r["procedure"]);
+    let args: Vec<String> = (r["simulate_args"].as_array().into_iter().flatten())
+        .map(s)
+        .collect();
+    let _ = write!(
+        h,
+        "<p>Check it: <code>capstan simulate --out DIR {}</code>. Method: {} ({} s; <code>{}</code> gives the full ranking).</p>",
+        args.join(" "),
+        s(&n["method"]),
+        n["elapsed_s"].as_f64().map_or("-".to_string(), |x| format!("{x:.1}")),
+        s(&n["command"])
+    );
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn open() -> Value {
+        json!({"hypotheses": [
+                {"label": "t2_offset", "origin": "named", "effects": []},
+                {"label": "t2_offset+speed_dependence", "origin": "not testable in these data (a single drive voltage)", "effects": []}],
+               "not_simulated": [{"what": "unexplained", "why": "structure no catalogue effect explains"}],
+               "assumed": []})
+    }
+
+    #[test]
+    fn without_the_planner_the_section_lists_what_is_open_and_the_command() {
+        let n = next_json(&open(), None, "capstan plan data.csv");
+        assert_eq!(n["planned"], json!(false));
+        let h = next_html(&n);
+        for s in [
+            "t2_offset+speed_dependence",
+            "unexplained",
+            "capstan plan data.csv",
+            "--plan",
+        ] {
+            assert!(h.contains(s), "no {s} in {h}");
+        }
+        assert!(!h.contains("Recommended"));
+    }
+
+    #[test]
+    fn the_section_is_rendered_from_the_metrics_object() {
+        let plan = json!({"hypotheses": open()["hypotheses"], "not_simulated": [], "assumed": [],
+            "recommended": {"name": "up-down order at two drive voltages", "protocol": {},
+                "rig_commands": ["capstan rig set order updown", "capstan rig set amp_control_v 2.5", "capstan rig store"],
+                "physical_changes": [], "procedure": ["6 runs on each cord"],
+                "simulate_args": ["--drive-v", "10,5"], "rig_hours": 6.25, "p_decide_worst": 0.875},
+            "current_design": {"p_decide_worst": 0.0, "rig_hours": 3.125},
+            "current_decides": false, "any_decides": true, "within_hours": true,
+            "method": "simulation: 8 campaigns", "elapsed_s": 41.0});
+        let n = next_json(&open(), Some(&plan), "capstan plan");
+        // What the metrics carry, the section says; change the metrics and the section follows.
+        let h = next_html(&n);
+        for s in [
+            "up-down order at two drive voltages",
+            "88 %",
+            "0 %",
+            "6.2",
+            "3.1",
+            "capstan rig set amp_control_v 2.5",
+            "--drive-v 10,5",
+            "simulation: 8 campaigns",
+        ] {
+            assert!(h.contains(s), "no {s} in {h}");
+        }
+        let mut m = n.clone();
+        m["recommended"]["p_decide_worst"] = json!(0.5);
+        m["recommended"]["rig_commands"][1] = json!("capstan rig set amp_control_v 1.25");
+        let h = next_html(&m);
+        assert!(h.contains("50 %") && h.contains("amp_control_v 1.25") && !h.contains("88 %"));
+    }
+}
