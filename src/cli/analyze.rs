@@ -60,25 +60,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return validate(&args);
     }
     let t0 = Instant::now();
-    let figures = capstan_report::FigureOptions {
-        formats: match &args.figures {
-            Some(f) => capstan_report::Format::parse_list(f)?,
-            None => Vec::new(),
-        },
-        width_mm: args.width_mm,
-        font_pt: args.font_pt,
-    };
-    figures.check()?;
-    let provenance = crate::provenance::of_input(args.data.as_deref())?;
-    let thesis = capstan_report::ThesisComparison::decide(
-        crate::provenance::is_thesis(&provenance),
-        args.thesis_comparison,
-    );
-    let ctx = capstan_report::Context {
-        provenance,
-        thesis,
-        figures,
-    };
+    let ctx = report_context(&args)?;
     // Lock the output directory and prove it writable before the analysis, not after it.
     let names = ["report.html", "metrics.json", "predictions.csv"];
     let ours = |rel: &str| rel.starts_with("figures/figure-");
@@ -105,25 +87,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::errln!("warning: {note}");
     }
     let t_report = Instant::now();
-    let t_cl = Instant::now();
-    let (curves, closed, note) = match capstan_truth::closed_loop::run(&a, opts.threads) {
-        Ok(cl) => (Some(cl.curves), cl.summary, "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string()),
-        Err(e) => (None, serde_json::json!({"error": format!("{e:#}")}), format!("The closed-loop simulation failed: {e:#}")),
-    };
-    a.elapsed.closed_loop_s = t_cl.elapsed().as_secs_f64();
-    // Beyond the catalogue (`capstan discover`): kept apart from the catalogue's causes.
-    let t_disc = Instant::now();
-    let disc = capstan_discover::discover(&ds, &Default::default(), &mut |_, _| {});
-    let disc = serde_json::to_value(&disc)?;
-    let disc_s = t_disc.elapsed().as_secs_f64();
-    let (html, figs) = capstan_report::report_html(&a, curves.as_deref(), &note, &ctx)?;
-    let html = capstan_report::discovered::insert_section(
-        html,
-        &capstan_report::discovered::discovered_html(&disc),
-    );
+    let closed = closed_loop(&mut a, opts.threads);
+    let (disc, disc_s) = discovery(&ds)?;
     let next = next_experiment(&args, &ds)?;
-    let html =
-        capstan_report::discovered::insert_section(html, &capstan_report::next::next_html(&next));
+    let (html, figs) =
+        capstan_report::report_html(&a, closed.curves.as_deref(), &closed.note, &ctx)?;
+    let html = with_sections(html, &disc, &next);
     let t_files = Instant::now();
     let files = capstan_report::figure_files(&figs, &ctx.figures)?;
     if !files.is_empty() && !capstan_report::export::have_fonts() {
@@ -133,19 +102,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         set.write(&f.name, &f.bytes)?;
     }
     a.elapsed.figure_files_s = t_files.elapsed().as_secs_f64();
-    let mut csv = set.create("predictions.csv")?;
-    capstan_report::write_predictions_csv(&mut csv, &ds, &a)
-        .and_then(|()| csv.flush())
-        .with_context(|| {
-            format!(
-                "cannot write {}",
-                args.out.join("predictions.csv").display()
-            )
-        })?;
-    drop(csv);
+    write_predictions(&mut set, &args, &ds, &a)?;
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
-    let mut metrics = capstan_report::metrics_json(&a, &closed, &ctx);
+    let mut metrics = capstan_report::metrics_json(&a, &closed.summary, &ctx);
     metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
     metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
     metrics["next_experiment"] = next;
@@ -155,20 +115,109 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         serde_json::to_string_pretty(&metrics)?.as_bytes(),
     )?;
     set.commit()?;
-    crate::errln!(
-        "wrote {}/report.html, metrics.json, predictions.csv{} in {:.2} s",
-        args.out.display(),
-        if files.is_empty() {
-            String::new()
-        } else {
-            format!(" and {} figure files in figures/", files.len())
-        },
-        t0.elapsed().as_secs_f64()
-    );
+    say_written(&args, files.len(), t0);
     if args.json {
         crate::outln!("{}", serde_json::to_string_pretty(&metrics)?);
     }
     Ok(())
+}
+
+/// What the report needs besides the analysis: figure options (checked), provenance, and
+/// whether to compare with the thesis's Table 3.
+fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
+    let figures = capstan_report::FigureOptions {
+        formats: match &args.figures {
+            Some(f) => capstan_report::Format::parse_list(f)?,
+            None => Vec::new(),
+        },
+        width_mm: args.width_mm,
+        font_pt: args.font_pt,
+    };
+    figures.check()?;
+    let provenance = crate::provenance::of_input(args.data.as_deref())?;
+    let thesis = capstan_report::ThesisComparison::decide(
+        crate::provenance::is_thesis(&provenance),
+        args.thesis_comparison,
+    );
+    Ok(capstan_report::Context {
+        provenance,
+        thesis,
+        figures,
+    })
+}
+
+/// The firmware in the loop with the extended model: its curves for the report, its summary
+/// for metrics.json, and the sentence that says what was run (or why it failed).
+struct ClosedLoop {
+    curves: Option<Vec<capstan_engine::analysis::closed_loop::SimCurve>>,
+    summary: serde_json::Value,
+    note: String,
+}
+
+/// Run the closed loop (its time into the analysis's timings).
+fn closed_loop(a: &mut capstan_engine::analysis::Analysis, threads: usize) -> ClosedLoop {
+    let t = Instant::now();
+    let out = match capstan_truth::closed_loop::run(a, threads) {
+        Ok(cl) => ClosedLoop {
+            curves: Some(cl.curves),
+            summary: cl.summary,
+            note: "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string(),
+        },
+        Err(e) => ClosedLoop {
+            curves: None,
+            summary: serde_json::json!({"error": format!("{e:#}")}),
+            note: format!("The closed-loop simulation failed: {e:#}"),
+        },
+    };
+    a.elapsed.closed_loop_s = t.elapsed().as_secs_f64();
+    out
+}
+
+/// Beyond the catalogue (`capstan discover`), kept apart from the catalogue's causes: the
+/// search as JSON and its time, s.
+fn discovery(ds: &capstan_data::Dataset) -> anyhow::Result<(serde_json::Value, f64)> {
+    let t = Instant::now();
+    let disc = capstan_discover::discover(ds, &Default::default(), &mut |_, _| {});
+    Ok((serde_json::to_value(&disc)?, t.elapsed().as_secs_f64()))
+}
+
+/// The report with its "discovered" and "Next experiment" sections in place.
+fn with_sections(html: String, disc: &serde_json::Value, next: &serde_json::Value) -> String {
+    use capstan_report::discovered::{discovered_html, insert_section};
+    let html = insert_section(html, &discovered_html(disc));
+    insert_section(html, &capstan_report::next::next_html(next))
+}
+
+/// predictions.csv into the staged set.
+fn write_predictions(
+    set: &mut capstan_outdir::Staged,
+    args: &Args,
+    ds: &capstan_data::Dataset,
+    a: &capstan_engine::analysis::Analysis,
+) -> anyhow::Result<()> {
+    let mut csv = set.create("predictions.csv")?;
+    capstan_report::write_predictions_csv(&mut csv, ds, a)
+        .and_then(|()| csv.flush())
+        .with_context(|| {
+            format!(
+                "cannot write {}",
+                args.out.join("predictions.csv").display()
+            )
+        })
+}
+
+/// The closing line: what was written where, and how long it took.
+fn say_written(args: &Args, figure_files: usize, t0: Instant) {
+    crate::errln!(
+        "wrote {}/report.html, metrics.json, predictions.csv{} in {:.2} s",
+        args.out.display(),
+        if figure_files == 0 {
+            String::new()
+        } else {
+            format!(" and {figure_files} figure files in figures/")
+        },
+        t0.elapsed().as_secs_f64()
+    );
 }
 
 /// The "Next experiment" object: what is open (one diagnosis), and with `--plan` the plan.

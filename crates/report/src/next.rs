@@ -55,38 +55,82 @@ pub fn next_json(open: &Value, plan: Option<&Value>, command: &str) -> Value {
 /// The report's section, from the `next_experiment` object of `metrics.json`.
 pub fn next_html(n: &Value) -> String {
     let mut h = String::from("<h2>Next experiment</h2>");
-    let s = |v: &Value| esc(v.as_str().unwrap_or(""));
-    let pct = |v: &Value| {
-        v.as_f64()
-            .map_or("-".to_string(), |x| format!("{:.0} %", 100.0 * x))
-    };
-    let hours = |v: &Value| v.as_f64().map_or("-".to_string(), |x| format!("{x:.1}"));
+    open_list(&mut h, n);
+    if n["planned"].as_bool() != Some(true) {
+        let _ = write!(
+            h,
+            "<p>The planner did not run (it simulates campaigns for about a minute). <code>{}</code> ranks the protocols that would decide between these, with the <code>capstan rig</code> commands of the best and its chance of deciding; <code>capstan analyze --plan</code> puts that here.</p>",
+            text(&n["command"])
+        );
+        return h;
+    }
+    recommendation(&mut h, n);
+    let r = &n["recommended"];
+    list(
+        &mut h,
+        "Physical changes (by hand):",
+        &r["physical_changes"],
+    );
+    if let Some(cmds) = r["rig_commands"].as_array().filter(|a| !a.is_empty()) {
+        let lines: Vec<String> = cmds.iter().map(text).collect();
+        let _ = write!(h, "<p>On the board:</p><pre>{}</pre>", lines.join("\n"));
+    }
+    list(&mut h, "Then:", &r["procedure"]);
+    let args: Vec<String> = (r["simulate_args"].as_array().into_iter().flatten())
+        .map(text)
+        .collect();
+    let _ = write!(
+        h,
+        "<p>Check it: <code>capstan simulate --out DIR {}</code>. Method: {} ({} s; <code>{}</code> gives the full ranking).</p>",
+        args.join(" "),
+        text(&n["method"]),
+        n["elapsed_s"].as_f64().map_or("-".to_string(), |x| format!("{x:.1}")),
+        text(&n["command"])
+    );
+    h
+}
+
+/// A string value, escaped for HTML ("" for anything else).
+fn text(v: &Value) -> String {
+    esc(v.as_str().unwrap_or(""))
+}
+
+/// A chance as a percentage ("-" if missing).
+fn pct(v: &Value) -> String {
+    v.as_f64()
+        .map_or("-".to_string(), |x| format!("{:.0} %", 100.0 * x))
+}
+
+/// Rig hours to one decimal ("-" if missing).
+fn hours(v: &Value) -> String {
+    v.as_f64().map_or("-".to_string(), |x| format!("{x:.1}"))
+}
+
+/// What the data leave open: the hypotheses, and those not simulated with why.
+fn open_list(h: &mut String, n: &Value) {
     h.push_str("<p>What these data leave open:</p><ul>");
     for o in n["open"].as_array().into_iter().flatten() {
         let _ = write!(
             h,
             "<li><code>{}</code> ({})</li>",
-            s(&o["label"]),
-            s(&o["origin"])
+            text(&o["label"]),
+            text(&o["origin"])
         );
     }
     for o in n["not_simulated"].as_array().into_iter().flatten() {
         let _ = write!(
             h,
             "<li><code>{}</code>, not simulated: {}</li>",
-            s(&o["what"]),
-            s(&o["why"])
+            text(&o["what"]),
+            text(&o["why"])
         );
     }
     h.push_str("</ul>");
-    if n["planned"].as_bool() != Some(true) {
-        let _ = write!(
-            h,
-            "<p>The planner did not run (it simulates campaigns for about a minute). <code>{}</code> ranks the protocols that would decide between these, with the <code>capstan rig</code> commands of the best and its chance of deciding; <code>capstan analyze --plan</code> puts that here.</p>",
-            s(&n["command"])
-        );
-        return h;
-    }
+}
+
+/// The recommendation against the current design (or that the current design decides), and a
+/// warning when no candidate decided at all.
+fn recommendation(h: &mut String, n: &Value) {
     let r = &n["recommended"];
     let cur = &n["current_design"];
     if n["current_decides"].as_bool() == Some(true) {
@@ -100,7 +144,7 @@ pub fn next_html(n: &Value) -> String {
         let _ = write!(
             h,
             "<p>Recommended: <b>{}</b>, {} rig hours: chance of naming the true hypothesis alone {} (worst case over the open hypotheses), against {} for the current design ({} h).</p>",
-            s(&r["name"]),
+            text(&r["name"]),
             hours(&r["rig_hours"]),
             pct(&r["p_decide_worst"]),
             pct(&cur["p_decide_worst"]),
@@ -110,37 +154,17 @@ pub fn next_html(n: &Value) -> String {
     if n["any_decides"].as_bool() == Some(false) {
         h.push_str("<p>No candidate protocol named the true hypothesis alone in any simulated campaign: this is only the least bad.</p>");
     }
-    let list = |h: &mut String, title: &str, v: &Value| {
-        if let Some(items) = v.as_array().filter(|a| !a.is_empty()) {
-            let _ = write!(h, "<p>{title}</p><ul>");
-            for i in items {
-                let _ = write!(h, "<li>{}</li>", s(i));
-            }
-            h.push_str("</ul>");
+}
+
+/// A titled list of strings, if there are any.
+fn list(h: &mut String, title: &str, v: &Value) {
+    if let Some(items) = v.as_array().filter(|a| !a.is_empty()) {
+        let _ = write!(h, "<p>{title}</p><ul>");
+        for i in items {
+            let _ = write!(h, "<li>{}</li>", text(i));
         }
-    };
-    list(
-        &mut h,
-        "Physical changes (by hand):",
-        &r["physical_changes"],
-    );
-    if let Some(cmds) = r["rig_commands"].as_array().filter(|a| !a.is_empty()) {
-        let lines: Vec<String> = cmds.iter().map(s).collect();
-        let _ = write!(h, "<p>On the board:</p><pre>{}</pre>", lines.join("\n"));
+        h.push_str("</ul>");
     }
-    list(&mut h, "Then:", &r["procedure"]);
-    let args: Vec<String> = (r["simulate_args"].as_array().into_iter().flatten())
-        .map(s)
-        .collect();
-    let _ = write!(
-        h,
-        "<p>Check it: <code>capstan simulate --out DIR {}</code>. Method: {} ({} s; <code>{}</code> gives the full ranking).</p>",
-        args.join(" "),
-        s(&n["method"]),
-        n["elapsed_s"].as_f64().map_or("-".to_string(), |x| format!("{x:.1}")),
-        s(&n["command"])
-    );
-    h
 }
 
 #[cfg(test)]
