@@ -21,9 +21,15 @@
 use super::design::Design;
 use super::within::{fit_strata, Strata, Weights, WithinFit};
 use crate::fit::stats::f_p_upper;
-use capstan_plant::rng::Rng;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+
+mod directed;
+mod pure_error;
+
+use directed::directed_tests;
+pub use pure_error::lack_of_fit;
+use pure_error::pure_error;
 
 /// The decision rule's constants.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -334,106 +340,6 @@ pub fn sentence(
     }
 }
 
-/// Sign-flip replications of the lack-of-fit statistic.
-const FLIPS: usize = 1999;
-
-/// The pure-error lack-of-fit test (None without at least 4 replicated cells).
-///
-/// F = MS_LOF/MS_PE as in Draper & Smith, but its p comes from flipping the sign of whole
-/// runs' residual vectors (a wild cluster bootstrap with Rademacher weights, Cameron, Gelbach
-/// & Miller 2008): the runs' residuals are correlated from step to step (a run's tare, the
-/// wander of its mu), which makes the cell means of a cord move together and the nominal F
-/// distribution far too narrow; flipping whole runs keeps that correlation and destroys only a
-/// pattern the runs share.
-/// The lack-of-fit test alone, on standardised residuals `z` (residual × √weight per row) of
-/// a model with `k` shared parameters: the replicate runs' pure error against what the cells
-/// share (sign flips of whole runs). `None` without at least four replicated cells. Used by
-/// `capstan discover` to ask whether a proposed term resolves what the catalogue leaves.
-pub fn lack_of_fit(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
-    pure_error(d, z, k).filter(|l| [l.f, l.p, l.systematic_ratio].iter().all(|v| v.is_finite()))
-}
-
-fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
-    let n_cells = d.cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
-    let mut cnt = vec![0usize; n_cells];
-    let mut cord_of_cell = vec![usize::MAX; n_cells];
-    for (u, rows) in d.units.iter().enumerate() {
-        for &i in rows {
-            if let Some(c) = d.cell[i] {
-                cnt[c] += 1;
-                cord_of_cell[c] = d.unit_cord[u];
-            }
-        }
-    }
-    let used: Vec<bool> = cnt.iter().map(|&c| c >= 2).collect();
-    let n_used = used.iter().filter(|&&u| u).count();
-    if n_used < 4 {
-        return None;
-    }
-    // The rows that enter, as (run, cell) pairs.
-    let entries: Vec<(usize, usize, usize)> = d
-        .units
-        .iter()
-        .enumerate()
-        .flat_map(|(u, rows)| rows.iter().map(move |&i| (u, i)))
-        .filter_map(|(u, i)| d.cell[i].filter(|&c| used[c]).map(|c| (u, i, c)))
-        .collect();
-    let ss_lof = |sign: &dyn Fn(usize) -> f64| {
-        let mut sum = vec![0.0; n_cells];
-        for &(u, i, c) in &entries {
-            sum[c] += sign(u) * z[i];
-        }
-        (0..n_cells)
-            .filter(|&c| used[c])
-            .map(|c| sum[c] * sum[c] / cnt[c] as f64)
-            .sum::<f64>()
-    };
-    let observed = ss_lof(&|_| 1.0);
-    let mut mean = vec![0.0; n_cells];
-    for &(_, i, c) in &entries {
-        mean[c] += z[i] / cnt[c] as f64;
-    }
-    let ss_pe: f64 = entries
-        .iter()
-        .map(|&(_, i, c)| (z[i] - mean[c]).powi(2))
-        .sum();
-    let df_pe: f64 = (0..n_cells)
-        .filter(|&c| used[c])
-        .map(|c| (cnt[c] - 1) as f64)
-        .sum();
-    let cords: std::collections::HashSet<usize> = (0..n_cells)
-        .filter(|&c| used[c])
-        .map(|c| cord_of_cell[c])
-        .collect();
-    let df_lof = (n_used as f64 - cords.len() as f64 - k as f64).max(1.0);
-    let ms_pe = ss_pe / df_pe.max(1.0);
-    // Rademacher flips of whole runs, from a fixed seed (the answer is reproducible).
-    let mut rng = Rng::new(0x01ac_0f17);
-    let (mut above, mut total) = (0usize, 0.0);
-    let mut signs = vec![1.0; d.units.len()];
-    for _ in 0..FLIPS {
-        for s in signs.iter_mut() {
-            *s = if rng.next_u64() >> 63 == 0 { 1.0 } else { -1.0 };
-        }
-        let t = ss_lof(&|u| signs[u]);
-        total += t;
-        if t >= observed {
-            above += 1;
-        }
-    }
-    let null_mean = total / FLIPS as f64;
-    let n_obs = entries.len() as f64;
-    let systematic = ((observed - null_mean).max(0.0) / n_obs).sqrt();
-    Some(LackOfFit {
-        cells: n_used,
-        f: (observed / df_lof) / ms_pe,
-        df_lof,
-        df_pe,
-        p: (above + 1) as f64 / (FLIPS + 1) as f64,
-        systematic_ratio: systematic / ms_pe.sqrt(),
-    })
-}
-
 /// The most wraps the constancy test refits one size per wrap for: beyond, it is not
 /// identified (a data set of a few rows at each of hundreds of wraps cannot say an effect's
 /// size per wrap, and the refit would grow with the square of their number).
@@ -540,111 +446,4 @@ fn sizes_by_wrap(
         })
         .collect();
     (by_wrap, spread)
-}
-
-/// Subtract each run's mean from `v`.
-fn run_centred(d: &Design, v: &[f64]) -> Vec<f64> {
-    let mut out = v.to_vec();
-    for rows in &d.units {
-        let m = rows.iter().map(|&i| v[i]).sum::<f64>() / rows.len() as f64;
-        for &i in rows {
-            out[i] = v[i] - m;
-        }
-    }
-    out
-}
-
-/// The structures to test on this design, each as its basis columns.
-fn structures(d: &Design) -> Vec<(&'static str, Vec<Vec<f64>>)> {
-    let n = d.n();
-    let s: Vec<f64> = d.t1.iter().map(|t| (t / 0.5).asinh()).collect();
-    let mut out = vec![(
-        "t1_shape",
-        vec![s.clone(), s.iter().map(|x| x * x).collect()],
-    )];
-    if d.columns.time_s && d.max_time_spread_s() > 0.0 {
-        let t: Vec<f64> = d.op.iter().map(|o| o.time_s / 100.0).collect();
-        out.push(("time", vec![t.clone(), t.iter().map(|x| x * x).collect()]));
-    }
-    if d.has_both_directions() {
-        let f: Vec<f64> = d
-            .falling
-            .iter()
-            .map(|f| if *f == Some(true) { 1.0 } else { 0.0 })
-            .collect();
-        out.push(("step_direction", vec![f]));
-    }
-    if d.wraps().len() >= 2 {
-        let b_bar = d.op.iter().map(|o| o.wrap_rad).sum::<f64>() / n as f64;
-        let x = (0..n).map(|i| s[i] * (d.op[i].wrap_rad - b_bar)).collect();
-        out.push(("wrap", vec![x]));
-    }
-    if d.diameters().len() >= 2 {
-        let d_bar = d.op.iter().map(|o| o.diameter_mm).sum::<f64>() / n as f64;
-        let x = (0..n)
-            .map(|i| s[i] * (d.op[i].diameter_mm - d_bar) / 10.0)
-            .collect();
-        out.push(("diameter", vec![x]));
-    }
-    out
-}
-
-fn directed_tests(d: &Design, z: &[f64]) -> Vec<Directed> {
-    let y = run_centred(d, z);
-    structures(d)
-        .into_iter()
-        .filter_map(|(name, cols)| {
-            let x: Vec<Vec<f64>> = cols.iter().map(|c| run_centred(d, c)).collect();
-            wald(d, &x, &y).map(|(f, q, g, r2)| Directed {
-                structure: name,
-                f,
-                df1: q,
-                df2: g - q,
-                p: f_p_upper(f, q, g - q),
-                partial_r2: r2,
-            })
-        })
-        .collect()
-}
-
-/// Cluster-robust (runs) Wald test that y has no component along the columns `x`:
-/// (F, q, G, share of y's sum of squares explained).
-fn wald(d: &Design, x: &[Vec<f64>], y: &[f64]) -> Option<(f64, f64, f64, f64)> {
-    let q = x.len();
-    let g = d.units.len() as f64;
-    if g <= q as f64 + 1.0 {
-        return None;
-    }
-    let mut xtx = DMatrix::<f64>::zeros(q, q);
-    let mut xty = DVector::<f64>::zeros(q);
-    for i in 0..d.n() {
-        for a in 0..q {
-            xty[a] += x[a][i] * y[i];
-            for b in 0..q {
-                xtx[(a, b)] += x[a][i] * x[b][i];
-            }
-        }
-    }
-    let inv = xtx.try_inverse()?;
-    let beta = &inv * &xty;
-    let mut meat = DMatrix::<f64>::zeros(q, q);
-    let mut rss = 0.0;
-    for rows in &d.units {
-        let mut s = DVector::<f64>::zeros(q);
-        for &i in rows {
-            let fit: f64 = (0..q).map(|a| x[a][i] * beta[a]).sum();
-            let r = y[i] - fit;
-            rss += r * r;
-            for a in 0..q {
-                s[a] += x[a][i] * r;
-            }
-        }
-        meat += &s * s.transpose();
-    }
-    let cov = &inv * meat * &inv * (g / (g - 1.0));
-    let w = (beta.transpose() * cov.try_inverse()? * &beta)[(0, 0)];
-    let tss: f64 = y.iter().map(|v| v * v).sum();
-    let f = w / q as f64 * (g - q as f64) / (g - 1.0);
-    let r2 = if tss > 0.0 { 1.0 - rss / tss } else { 0.0 };
-    f.is_finite().then_some((f, q as f64, g, r2))
 }
