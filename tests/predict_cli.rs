@@ -47,7 +47,10 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
     assert!(warnings.iter().any(|w| w.contains("wrap 900°")), "{err}");
     let stdout = String::from_utf8_lossy(&r.stdout);
     assert!(stdout.contains("model's own error"), "{stdout}");
-    assert_eq!(stdout.lines().count(), 3 + 1000);
+    // Wrap 900° lies beyond the fitted wraps: the interval holds what extrapolating in wrap
+    // cost on the fitted data, and says so.
+    assert!(stdout.contains("extrapolating in wrap cost"), "{stdout}");
+    assert_eq!(stdout.lines().count(), 4 + 1000);
 
     // The same in JSON: the warnings once, every prediction in order.
     args.push("--json");
@@ -58,6 +61,7 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
     assert_eq!(v["extrapolating"], true);
     assert_eq!(v["predictions"].as_array().unwrap().len(), 1000);
     assert!(v["model_error_sd_n"].as_f64().unwrap() >= 0.0);
+    assert!(v["wrap_extrapolation_error_sd_n"].as_f64().unwrap() >= 0.0);
 
     // Negative numbers are values, refused with the flag named (`--drive-v -1` and
     // `--drive-v=-1` alike), never a parser's "unexpected argument".

@@ -129,6 +129,30 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
     Ok(model)
 }
 
+/// A model error's numbers: finite, not negative, and an SD its held-out and accounted RMS
+/// can give (sd² = max(0, held-out² − accounted²); more was edited).
+fn check_error(name: &str, e: &prediction::ModelError) -> Result<(), String> {
+    for (part, v) in [
+        ("sd_n", e.sd_n),
+        ("heldout_rms_n", e.heldout_rms_n),
+        ("accounted_rms_n", e.accounted_rms_n),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!("{name}.{part} = {v} must be 0 or more"));
+        }
+    }
+    let most = (e.heldout_rms_n.powi(2) - e.accounted_rms_n.powi(2))
+        .max(0.0)
+        .sqrt();
+    if e.sd_n > most * (1.0 + 1e-9) + 1e-12 {
+        return Err(format!(
+            "{name}.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({most})",
+            e.sd_n, e.heldout_rms_n, e.accounted_rms_n
+        ));
+    }
+    Ok(())
+}
+
 /// What `capstan analyze` writes and a prediction relies on: a finite mu in the catalogue's
 /// range, a square covariance of the free parameters with a non-negative diagonal, scatter,
 /// noise and model error at or above 0 (the model error no more than its held-out residuals
@@ -167,32 +191,22 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
         ("sd_ln_mu_run", pm.sd_ln_mu_run),
         ("noise_abs_n", pm.noise_abs_n),
         ("noise_rel", pm.noise_rel),
-        ("model_error.sd_n", pm.model_error.sd_n),
-        ("model_error.heldout_rms_n", pm.model_error.heldout_rms_n),
-        (
-            "model_error.accounted_rms_n",
-            pm.model_error.accounted_rms_n,
-        ),
     ] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(format!("{name} = {v} must be 0 or more"));
         }
     }
-    let e = &pm.model_error;
-    // sd² = max(0, heldout² − accounted²): an sd that the residuals cannot give was edited.
-    let most = (e.heldout_rms_n.powi(2) - e.accounted_rms_n.powi(2))
-        .max(0.0)
-        .sqrt();
-    if e.sd_n > most * (1.0 + 1e-9) + 1e-12 {
-        return Err(format!(
-            "model_error.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({most})",
-            e.sd_n, e.heldout_rms_n, e.accounted_rms_n
-        ));
-    }
-    if e.rows == 0 {
+    check_error("model_error", &pm.model_error)?;
+    if pm.model_error.rows == 0 {
         return Err(
             "model_error has no held-out rows behind it (no cord had a held-out prediction)".into(),
         );
+    }
+    // Without three wraps there is nothing to extrapolate from: no rows, and then no error.
+    let w = &pm.wrap_extrapolation_error;
+    check_error("wrap_extrapolation_error", w)?;
+    if w.rows == 0 && w.sd_n != 0.0 {
+        return Err("wrap_extrapolation_error has an SD but no held-out rows behind it".into());
     }
     let r = &pm.fitted_range;
     for (name, s) in [
@@ -254,6 +268,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The wrap-extrapolation error's SD, N, when the query's wrap lies outside the fitted wraps
+/// (there it is in the prediction interval), else `None`.
+fn wrap_error(args: &Args, drive_v: f64, pm: &PredictionModel) -> Option<f64> {
+    let q = prediction::Query {
+        wrap_deg: args.wrap_deg,
+        diameter_mm: args.diameter_mm,
+        drive_v,
+        t1_n: 1.0,
+        as_measured: args.as_measured,
+    };
+    pm.extrapolates_in_wrap(&q)
+        .then_some(pm.wrap_extrapolation_error.sd_n)
+}
+
 /// The predictions as one JSON object (the contract, plus the query and the model's
 /// note).
 fn print_json(
@@ -272,6 +300,7 @@ fn print_json(
         "diameter_mm": args.diameter_mm,
         "drive_v": drive_v,
         "model_error_sd_n": pm.model_error.sd_n,
+        "wrap_extrapolation_error_sd_n": wrap_error(args, drive_v, pm),
         "from": args.from.display().to_string(),
         "note": pm.note,
     });
@@ -301,6 +330,11 @@ fn print_table(
         "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
         pm.model_error.sd_n
     );
+    if let Some(sd) = wrap_error(args, drive_v, pm) {
+        crate::outln!(
+            "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data: SD {sd:.3} N"
+        );
+    }
     crate::outln!(
         "{:>9} {:>10} {:>8} {:>21} {:>21}",
         "T1 (N)",

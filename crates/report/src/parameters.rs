@@ -156,6 +156,13 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
             "N",
             "what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; no interval computed",
         ),
+        (
+            "wrap_extrapolation_error.sd_n",
+            "error of extrapolating in wrap (SD)",
+            pm.wrap_extrapolation_error.sd_n,
+            "N",
+            "what fits without the smallest or the largest wrap miss there beyond all the above (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; no interval computed",
+        ),
     ] {
         out.push(Row {
             key: key.into(),

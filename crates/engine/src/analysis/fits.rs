@@ -7,7 +7,8 @@ use super::{models, thesis};
 use crate::fit::par::par_map;
 use crate::fit::predict::evaluate;
 use crate::fit::solve::{
-    fit_fixed, fit_fixed_with, fit_mixed, fit_mixed_from, loco, Budget, Fit, Loco, MixedOptions,
+    fit_fixed, fit_fixed_with, fit_mixed, fit_mixed_from, loco, loco_over, Budget, Fit, Loco,
+    MixedOptions,
 };
 use crate::fit::stats::mean;
 use crate::fit::Observations;
@@ -46,6 +47,10 @@ pub struct Predictions {
     pub baseline_per_cord_loco: Vec<f64>,
     /// Extended, leave-one-cord-out (population values of a fit on the other cords).
     pub extended_loco: Vec<f64>,
+    /// Extended, the smallest and the largest wrap left out in turn (population values of a
+    /// fit on the other wraps): what extrapolating in wrap costs. NaN on the other wraps, and
+    /// everywhere with fewer than three wraps.
+    pub extended_edge_wrap: Vec<f64>,
     /// Load memory H of the extended model at each window centre, N s.
     pub extended_load_memory_ns: Vec<f64>,
 }
@@ -116,7 +121,13 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         let budget = Budget::for_fit_within(rows as usize, 1, ONE_MU_UNITS_PER_ROW * rows);
         fit_fixed_with(&base_spec, obs, train, None, &budget)
     });
-    let extended_loco = extended_refits(obs, ext_spec, &extended, threads);
+    let extended_loco = extended_refits(obs, ext_spec, &extended, threads, None);
+    let edge_wrap = edge_wrap_folds(obs);
+    let extended_edge_wrap = if edge_wrap.is_empty() {
+        vec![f64::NAN; obs.len()]
+    } else {
+        extended_refits(obs, ext_spec, &extended, threads, Some(&edge_wrap)).t2_n
+    };
     let per_cord_loco = per_cord_on_new_cords(obs, &cord_mu);
     let per_cord_loco_rmse = obs.rmse_t2(&per_cord_loco);
     let loco_s = t1.elapsed().as_secs_f64();
@@ -137,6 +148,7 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         baseline_loco: baseline_loco.t2_n.clone(),
         baseline_per_cord_loco: per_cord_loco,
         extended_loco: extended_loco.t2_n.clone(),
+        extended_edge_wrap,
         extended_load_memory_ns: ext_eval.load_memory_ns,
     };
     Fits {
@@ -193,6 +205,7 @@ fn extended_refits(
     ext_spec: &crate::fit::ModelSpec,
     extended: &Fit,
     threads: usize,
+    folds: Option<&[Vec<usize>]>,
 ) -> Loco {
     if !extended.converged {
         return Loco::skipped(obs);
@@ -200,14 +213,36 @@ fn extended_refits(
     let (th, u0) = (extended.theta.clone(), extended.u.clone());
     let l0 = extended.lambda.unwrap_or(200.0);
     let budget = extended_budget();
-    loco(obs, threads, |train| {
+    let refit = |train: &[usize]| {
         let opts = MixedOptions {
             lambda0: l0,
             max_units: Some(LOCO_UNITS_PER_ROW * obs.rows_of(train).len() as u64),
             ..budget
         };
         fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
-    })
+    };
+    match folds {
+        None => loco(obs, threads, refit),
+        Some(f) => loco_over(obs, threads, f, refit),
+    }
+}
+
+/// Two folds: the cords of the smallest wrap, and those of the largest (none with fewer than
+/// three wraps: the rest would not span a wrap to extrapolate from).
+fn edge_wrap_folds(obs: &Observations) -> Vec<Vec<usize>> {
+    let wraps = crate::fit::stats::distinct(obs.groups.iter().map(|g| g.wrap_deg));
+    let (Some(lo), Some(hi)) = (wraps.first(), wraps.last()) else {
+        return Vec::new();
+    };
+    if wraps.len() < 3 {
+        return Vec::new();
+    }
+    let of = |w: f64| -> Vec<usize> {
+        (0..obs.groups.len())
+            .filter(|&g| obs.groups[g].wrap_deg == w)
+            .collect()
+    };
+    vec![of(*lo), of(*hi)]
 }
 
 /// The per-cord baseline on a new cord: each cord predicted by the mean log-mu of the others.

@@ -23,7 +23,7 @@ use std::collections::BTreeMap;
 
 /// Version of the `prediction_model` object; `capstan predict` refuses another. 2 added
 /// `model_error`.
-pub const SCHEMA: u32 = 2;
+pub const SCHEMA: u32 = 3;
 
 /// A closed range of the fitted data.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -92,6 +92,11 @@ pub struct PredictionModel {
     pub noise_rel: f64,
     /// The model's own error: held-out residual variance the other components do not explain.
     pub model_error: ModelError,
+    /// What extrapolating in wrap adds: the residuals of fits without the smallest or the
+    /// largest wrap, on that wrap, beyond every other component and `model_error` (see
+    /// [`wrap_extrapolation`]); in the prediction interval only at wraps outside the fitted
+    /// ones' span.
+    pub wrap_extrapolation_error: ModelError,
     /// What the fitted data span.
     pub fitted_range: FittedRange,
     /// The operating point and intervals in words.
@@ -117,8 +122,18 @@ pub struct ModelError {
     pub rows: usize,
 }
 
+impl ModelError {
+    /// No error, from no rows.
+    pub const NONE: ModelError = ModelError {
+        sd_n: 0.0,
+        heldout_rms_n: 0.0,
+        accounted_rms_n: 0.0,
+        rows: 0,
+    };
+}
+
 /// The note every prediction model carries.
-pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter, the within-run noise and the model's own error (the leave-one-cord-out residuals' mean square beyond those components, one SD in N) (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
+pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter, the within-run noise and the model's own error (the leave-one-cord-out residuals' mean square beyond those components, one SD in N), and at a wrap outside the fitted wraps' span what extrapolating in wrap cost on the fitted data (fits without the smallest or the largest wrap, their residuals there beyond all that) (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
 
 /// One operating point to predict at.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -194,6 +209,12 @@ impl PredictionModel {
             ("T1", q.t1_n, r.t1_n, " N"),
             ("drive voltage", q.drive_v, r.drive_v, " V"),
         ]
+    }
+
+    /// `q`'s wrap lies outside the fitted wraps' span: there the prediction interval holds
+    /// [`PredictionModel::wrap_extrapolation_error`] too.
+    pub fn extrapolates_in_wrap(&self, q: &Query) -> bool {
+        !self.fitted_range.wrap_deg.contains(q.wrap_deg)
     }
 
     /// The query's quantities outside the fitted data's ranges, one sentence each (empty when
@@ -378,7 +399,13 @@ pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
         var_mean,
         var_new,
     } = spread(pm, q);
-    let var_new = var_new + pm.model_error.sd_n.powi(2);
+    let var_new = var_new
+        + pm.model_error.sd_n.powi(2)
+        + if pm.extrapolates_in_wrap(q) {
+            pm.wrap_extrapolation_error.sd_n.powi(2)
+        } else {
+            0.0
+        };
     let ci = t95(pm.folds.saturating_sub(1)) * var_mean.sqrt();
     let pi = (ci.powi(2) + 1.959_963_985f64.powi(2) * var_new).sqrt();
     // Physics: a capstan that is not driven backwards does not lose tension.
@@ -429,12 +456,7 @@ pub fn model_error(
         sum_v += s.var_mean + s.var_new;
     }
     if n == 0 {
-        return ModelError {
-            sd_n: 0.0,
-            heldout_rms_n: 0.0,
-            accounted_rms_n: 0.0,
-            rows: 0,
-        };
+        return ModelError::NONE;
     }
     let (e2, v) = (sum_e2 / n as f64, sum_v / n as f64);
     ModelError {
@@ -442,6 +464,30 @@ pub fn model_error(
         heldout_rms_n: e2.sqrt(),
         accounted_rms_n: v.sqrt(),
         rows: n,
+    }
+}
+
+/// The error of extrapolating in wrap, from the held-out predictions `edge` of the smallest
+/// and the largest wrap by fits on the other wraps: their mean square beyond what the other
+/// components and the model error `me` account for, sd² = max(0, mean e² − mean v − sd_me²).
+/// Zero, from no rows, with fewer than three wraps.
+pub fn wrap_extrapolation(
+    pm: &PredictionModel,
+    obs: &crate::fit::Observations,
+    edge: &[f64],
+    me: &ModelError,
+) -> ModelError {
+    let raw = model_error(pm, obs, edge);
+    let accounted2 = raw.accounted_rms_n.powi(2) + me.sd_n.powi(2);
+    ModelError {
+        sd_n: (raw.heldout_rms_n.powi(2) - accounted2).max(0.0).sqrt(),
+        heldout_rms_n: raw.heldout_rms_n,
+        accounted_rms_n: if raw.rows == 0 {
+            0.0
+        } else {
+            accounted2.sqrt()
+        },
+        rows: raw.rows,
     }
 }
 
@@ -494,12 +540,8 @@ pub fn build(
         sd_ln_mu_run: if run_ln.is_finite() { run_ln } else { 0.0 },
         noise_abs_n: scatter.noise_abs_n,
         noise_rel: scatter.noise_rel,
-        model_error: ModelError {
-            sd_n: 0.0,
-            heldout_rms_n: 0.0,
-            accounted_rms_n: 0.0,
-            rows: 0,
-        },
+        model_error: ModelError::NONE,
+        wrap_extrapolation_error: ModelError::NONE,
         fitted_range: FittedRange {
             wrap_deg: Span::of(obs.groups.iter().map(|g| g.wrap_deg)),
             diameter_mm: Span::of(obs.groups.iter().map(|g| g.diameter_mm)),
@@ -509,6 +551,8 @@ pub fn build(
         note: NOTE.into(),
     };
     pm.model_error = model_error(&pm, obs, &fits.pred.extended_loco);
+    pm.wrap_extrapolation_error =
+        wrap_extrapolation(&pm, obs, &fits.pred.extended_edge_wrap, &pm.model_error);
     pm
 }
 

@@ -76,8 +76,15 @@ pub fn loco<F>(obs: &Observations, threads: usize, refit: F) -> Loco
 where
     F: Fn(&[usize]) -> Fit + Sync,
 {
-    let folds = folds(obs.groups.len());
-    let results = par_map(&folds, threads, |held: &Vec<usize>| {
+    loco_over(obs, threads, &folds(obs.groups.len()), refit)
+}
+
+/// [`loco`] with the folds given: each a set of groups left out together.
+pub fn loco_over<F>(obs: &Observations, threads: usize, folds: &[Vec<usize>], refit: F) -> Loco
+where
+    F: Fn(&[usize]) -> Fit + Sync,
+{
+    let results = par_map(folds, threads, |held: &Vec<usize>| {
         let train: Vec<usize> = (0..obs.runs.len())
             .filter(|&r| !held.contains(&obs.rows[obs.runs[r][0]].group))
             .collect();

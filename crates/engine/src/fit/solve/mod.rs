@@ -26,7 +26,7 @@ pub mod result;
 
 pub use budget::Budget;
 pub use fixed::{fit_fixed, fit_fixed_multistart, fit_fixed_with};
-pub use loco::{loco, Loco};
+pub use loco::{loco, loco_over, Loco};
 pub use mixed::{fit_mixed, fit_mixed_from, fit_penalised, MixedOptions};
 pub use problem::FitProblem;
 pub use result::{information_criteria, Fit};
