@@ -3,8 +3,8 @@
 //! it or say why not.
 
 use crate::answer::{
-    decline, proposed, verdict_words, DataInfo, Declined, Discovery, NotTestable, Proposed,
-    ScreenRow, Search,
+    decline, displaced, proposed, screen_row, verdict_words, DataInfo, Declined, Discovery,
+    NotTestable, Proposed, ScreenRow, Search,
 };
 use crate::checks::{candidates, held_out, lack_of_fit_with, rivals_of};
 use crate::columns::Base;
@@ -209,29 +209,6 @@ fn cord_checks(cords: usize) -> Option<String> {
 /// mimic leaves the replicates disagreeing with the model, whatever its size).
 fn lof_open(l: &Option<LackOfFit>) -> bool {
     l.as_ref().is_some_and(|l| l.p < LOF_ALPHA)
-}
-
-/// The answer's row of a first-step screen.
-fn screen_row(s: &screen::Screen) -> ScreenRow {
-    ScreenRow {
-        name: LIBRARY[s.term].name,
-        level: s.level,
-        delta_bic: s.delta_bic,
-        theta: s.theta,
-        se: Some(s.se).filter(|v| v.is_finite()),
-        sign_ok: s.sign_ok,
-        r2_model: s.r2_model,
-        replicate: s.replicate.clone(),
-    }
-}
-
-/// The catalogue effect a swap's term takes the place of.
-fn displaced(alt: &joint::Alternative<'_>, s: joint::Swap) -> joint::Displaced {
-    joint::Displaced {
-        effect: alt.dropped.name(),
-        effect_delta_bic: alt.dropped_delta_bic,
-        delta_bic_swap: s.delta_bic,
-    }
 }
 
 impl Ctx<'_> {
