@@ -3,7 +3,7 @@
 
 use crate::heldout::Ratio;
 use crate::joint;
-use crate::library::{ActsOn, Term, Var};
+use crate::library::{ActsOn, Term, Var, LIBRARY};
 use crate::screen::{self, Level};
 use capstan_data::structure::StructureSummary;
 use capstan_engine::evidence::adequacy::LackOfFit;
@@ -183,6 +183,29 @@ impl Discovery {
     /// One JSON object.
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}
+
+/// The answer's row of a first-step screen.
+pub(crate) fn screen_row(s: &screen::Screen) -> ScreenRow {
+    ScreenRow {
+        name: LIBRARY[s.term].name,
+        level: s.level,
+        delta_bic: s.delta_bic,
+        theta: s.theta,
+        se: Some(s.se).filter(|v| v.is_finite()),
+        sign_ok: s.sign_ok,
+        r2_model: s.r2_model,
+        replicate: s.replicate.clone(),
+    }
+}
+
+/// The catalogue effect a swap's term takes the place of.
+pub(crate) fn displaced(alt: &joint::Alternative<'_>, s: joint::Swap) -> joint::Displaced {
+    joint::Displaced {
+        effect: alt.dropped.name(),
+        effect_delta_bic: alt.dropped_delta_bic,
+        delta_bic_swap: s.delta_bic,
     }
 }
 

@@ -65,45 +65,46 @@ fn predict_all(
     }
 }
 
-impl<'a> Base<'a> {
-    /// Linearise `fit` (weights `w`) on `d`.
-    pub fn new(d: &'a Design, fit: &WithinFit, w: &[f64]) -> Base<'a> {
-        let n = d.n();
-        let models: Vec<Model> = fit
-            .mu
-            .iter()
-            .map(|&mu| run_model(&fit.maps, mu, &fit.theta))
-            .collect();
-        let (mut f0, mut slope) = (vec![0.0; n], vec![f64::NAN; n]);
-        predict_all(
-            d,
-            &models,
-            (&d.t1, &d.t1_shape),
-            None,
-            &mut f0,
-            Some(&mut slope),
-        );
-        let hint = Some(Hint {
-            t2: &f0,
-            slope: Some(&slope),
-        });
-        let mut scratch = vec![0.0; n];
-        // a: each run's mu.
-        let bumped: Vec<Model> = fit
-            .mu
-            .iter()
-            .map(|&mu| run_model(&fit.maps, mu * (1.0 + 1e-6), &fit.theta))
-            .collect();
-        predict_all(d, &bumped, (&d.t1, &d.t1_shape), hint, &mut scratch, None);
+/// Every run's model at its mu (as `mu_of` moves it) and the within-run parameters `theta`.
+fn run_models(fit: &WithinFit, mu_of: impl Fn(f64) -> f64, theta: &[f64]) -> Vec<Model> {
+    fit.mu
+        .iter()
+        .map(|&mu| run_model(&fit.maps, mu_of(mu), theta))
+        .collect()
+}
+
+/// The catalogue fit and its prediction `f0`, which every derivative is taken from.
+struct Fitted<'f> {
+    d: &'f Design,
+    fit: &'f WithinFit,
+    /// Every run's model.
+    models: &'f [Model],
+    /// The fitted T2m per row.
+    f0: &'f [f64],
+    /// `f0` and its slopes, to start the moved predictions from.
+    hint: Option<Hint<'f>>,
+}
+
+impl Fitted<'_> {
+    /// a: ∂T2m/∂mu_run per row (forward difference, mu·(1 + 10⁻⁶)), and each row's run.
+    fn d_mu(&self, scratch: &mut [f64]) -> (Vec<f64>, Vec<usize>) {
+        let (d, fit, n) = (self.d, self.fit, self.f0.len());
+        let bumped = run_models(fit, |mu| mu * (1.0 + 1e-6), &fit.theta);
+        predict_all(d, &bumped, (&d.t1, &d.t1_shape), self.hint, scratch, None);
         let mut run_of_row = vec![0; n];
         let mut a = vec![0.0; n];
         for (u, rows) in d.units.iter().enumerate() {
             for &i in rows {
                 run_of_row[i] = u;
-                a[i] = (scratch[i] - f0[i]) / (fit.mu[u] * 1e-6);
+                a[i] = (scratch[i] - self.f0[i]) / (fit.mu[u] * 1e-6);
             }
         }
-        // B: the catalogue's within-run parameters.
+        (a, run_of_row)
+    }
+
+    /// B: ∂T2m/∂θ for each of the catalogue's within-run parameters (a step inside its map).
+    fn d_theta(&self, scratch: &mut [f64]) -> Vec<Vec<f64>> {
+        let (d, fit, n) = (self.d, self.fit, self.f0.len());
         let mut b = Vec::with_capacity(fit.k());
         for j in 0..fit.k() {
             let map = fit.maps[j];
@@ -115,33 +116,72 @@ impl<'a> Base<'a> {
             };
             let mut th = fit.theta.clone();
             th[j] += hb;
-            let ms: Vec<Model> = fit
-                .mu
-                .iter()
-                .map(|&mu| run_model(&fit.maps, mu, &th))
-                .collect();
-            predict_all(d, &ms, (&d.t1, &d.t1_shape), hint, &mut scratch, None);
-            b.push((0..n).map(|i| (scratch[i] - f0[i]) / hb).collect());
+            let ms = run_models(fit, |mu| mu, &th);
+            predict_all(d, &ms, (&d.t1, &d.t1_shape), self.hint, scratch, None);
+            b.push((0..n).map(|i| (scratch[i] - self.f0[i]) / hb).collect());
         }
-        // ∂T2m/∂T1m: the whole T1 (and its shape point) moved by h.
+        b
+    }
+
+    /// ∂T2m/∂T1m: the whole T1 (and its shape point) moved by h.
+    fn d_t1(&self, scratch: &mut [f64]) -> Vec<f64> {
+        let (d, n) = (self.d, self.f0.len());
         let h = 1e-5;
         let t1p: Vec<f64> = d.t1.iter().map(|t| t + h).collect();
         let t1sp: Vec<f64> = d.t1_shape.iter().map(|t| t + h).collect();
-        predict_all(d, &models, (&t1p, &t1sp), hint, &mut scratch, None);
-        let dt1: Vec<f64> = (0..n).map(|i| (scratch[i] - f0[i]) / h).collect();
+        predict_all(d, self.models, (&t1p, &t1sp), self.hint, scratch, None);
+        (0..n).map(|i| (scratch[i] - self.f0[i]) / h).collect()
+    }
+
+    /// Per row: its run's mu and T2 gain, and the model's true T2 and T1.
+    fn per_row(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (d, n) = (self.d, self.f0.len());
         let mut mu_row = vec![0.0; n];
         let mut gain = vec![1.0; n];
         let mut t2_true = vec![0.0; n];
         let mut t1_true = vec![0.0; n];
         for (u, rows) in d.units.iter().enumerate() {
-            let s = models[u].sensors;
+            let s = self.models[u].sensors;
             for &i in rows {
-                mu_row[i] = fit.mu[u];
+                mu_row[i] = self.fit.mu[u];
                 gain[i] = s.t2_gain;
-                t2_true[i] = (f0[i] - s.t2_offset_n) / s.t2_gain;
+                t2_true[i] = (self.f0[i] - s.t2_offset_n) / s.t2_gain;
                 t1_true[i] = s.true_t1_n(d.t1[i]);
             }
         }
+        (mu_row, gain, t2_true, t1_true)
+    }
+}
+
+impl<'a> Base<'a> {
+    /// Linearise `fit` (weights `w`) on `d`.
+    pub fn new(d: &'a Design, fit: &WithinFit, w: &[f64]) -> Base<'a> {
+        let n = d.n();
+        let models = run_models(fit, |mu| mu, &fit.theta);
+        let (mut f0, mut slope) = (vec![0.0; n], vec![f64::NAN; n]);
+        predict_all(
+            d,
+            &models,
+            (&d.t1, &d.t1_shape),
+            None,
+            &mut f0,
+            Some(&mut slope),
+        );
+        let at = Fitted {
+            d,
+            fit,
+            models: &models,
+            f0: &f0,
+            hint: Some(Hint {
+                t2: &f0,
+                slope: Some(&slope),
+            }),
+        };
+        let mut scratch = vec![0.0; n];
+        let (a, run_of_row) = at.d_mu(&mut scratch);
+        let b = at.d_theta(&mut scratch);
+        let dt1 = at.d_t1(&mut scratch);
+        let (mu_row, gain, t2_true, t1_true) = at.per_row();
         let rows = row_quantities(d, &t1_true, &t2_true);
         let cord_of_row = run_of_row.iter().map(|&u| d.unit_cord[u]).collect();
         Base {

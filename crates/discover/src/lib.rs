@@ -16,10 +16,12 @@
 //! `docs/README-discover.md` states the algorithm, its grammar and its validation.
 
 mod answer;
+mod checks;
 pub mod columns;
 pub mod heldout;
 pub mod joint;
 pub mod library;
+mod model;
 pub mod replicate;
 pub mod screen;
 pub mod stability;

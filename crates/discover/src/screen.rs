@@ -180,9 +180,23 @@ pub struct Runs {
 /// between covariates, one value per run). Cord-level g: the cords' means, t with G − p df,
 /// N = G; run-level g: cord intercepts, t with R − G − p df, N = R. Returns (θ̂, SE, ΔBIC).
 pub fn between_evidence(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Option<(f64, f64, f64)> {
-    let nc = runs.cords;
-    let nr = runs.cord.len();
-    let mut first = vec![f64::NAN; nc];
+    let cord_level = is_cord_level(runs, g);
+    let spread = g.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - g.iter().cloned().fold(f64::INFINITY, f64::min);
+    if spread.is_nan() || spread <= 1e-12 {
+        return None;
+    }
+    let problem = if cord_level {
+        Between::on_cord_means(runs, g, covs)
+    } else {
+        Between::within_cords(runs, g, covs)
+    };
+    problem.evidence()
+}
+
+/// Is g one value per cord (the same for every run of a cord)?
+fn is_cord_level(runs: &Runs, g: &[f64]) -> bool {
+    let mut first = vec![f64::NAN; runs.cords];
     let mut cord_level = true;
     for (&c, &gu) in runs.cord.iter().zip(g) {
         if first[c].is_nan() {
@@ -191,17 +205,27 @@ pub fn between_evidence(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Option<(f6
             cord_level = false;
         }
     }
-    let spread = g.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-        - g.iter().cloned().fold(f64::INFINITY, f64::min);
-    if spread.is_nan() || spread <= 1e-12 {
-        return None;
-    }
-    let y = &runs.ln_mu;
-    let (x, yy, n_level, extra) = if cord_level {
+    cord_level
+}
+
+/// A between-level regression of ln mu on the covariates and g (last column).
+struct Between {
+    x: Vec<Vec<f64>>,
+    y: Vec<f64>,
+    /// Observations at the level tested (N of the BIC).
+    n_level: usize,
+    /// Parameters absorbed beyond x's columns (the cord intercepts).
+    extra: usize,
+}
+
+impl Between {
+    /// Cord-level g: the cords' means of ln mu on an intercept, the covariates and g.
+    fn on_cord_means(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Between {
+        let (nc, y) = (runs.cords, &runs.ln_mu);
         let mut sx = vec![vec![0.0; covs.len() + 2]; nc];
         let mut sy = vec![0.0; nc];
         let mut cnt = vec![0.0; nc];
-        for u in 0..nr {
+        for u in 0..runs.cord.len() {
             let c = runs.cord[u];
             cnt[c] += 1.0;
             sy[c] += y[u];
@@ -216,10 +240,19 @@ pub fn between_evidence(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Option<(f6
             .iter()
             .map(|&c| sx[c].iter().map(|v| v / cnt[c]).collect())
             .collect();
-        let yy: Vec<f64> = keep.iter().map(|&c| sy[c] / cnt[c]).collect();
-        let n = keep.len();
-        (x, yy, n, 0)
-    } else {
+        let y: Vec<f64> = keep.iter().map(|&c| sy[c] / cnt[c]).collect();
+        let n_level = keep.len();
+        Between {
+            x,
+            y,
+            n_level,
+            extra: 0,
+        }
+    }
+
+    /// Run-level g: ln mu, the covariates and g taken off their cords' means (cord intercepts).
+    fn within_cords(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Between {
+        let (nc, nr) = (runs.cords, runs.cord.len());
         let demean = |v: &[f64]| -> Vec<f64> {
             let mut s = vec![0.0; nc];
             let mut c = vec![0.0; nc];
@@ -245,21 +278,31 @@ pub fn between_evidence(runs: &Runs, g: &[f64], covs: &[Vec<f64>]) -> Option<(f6
             .iter()
             .collect::<std::collections::BTreeSet<_>>()
             .len();
-        (x, demean(y), nr, used)
-    };
-    let p = x.first()?.len();
-    if n_level < p + extra + 2 {
-        return None;
+        Between {
+            x,
+            y: demean(&runs.ln_mu),
+            n_level: nr,
+            extra: used,
+        }
     }
-    let reg = regress(&x, &yy, None, None)?;
-    let j = p - 1;
-    let df = (n_level - p - extra) as f64;
-    let se = reg.se[j] * (reg.df / df).sqrt();
-    let chi2 = chi2_of_t(reg.coef[j] / se, df);
-    [reg.coef[j], se, chi2]
-        .iter()
-        .all(|v| v.is_finite())
-        .then(|| (reg.coef[j], se, -chi2 + (n_level as f64).ln()))
+
+    /// g's slope: (θ̂, SE, ΔBIC), t with n_level − p − extra df; None if too few observations
+    /// or not finite.
+    fn evidence(&self) -> Option<(f64, f64, f64)> {
+        let p = self.x.first()?.len();
+        if self.n_level < p + self.extra + 2 {
+            return None;
+        }
+        let reg = regress(&self.x, &self.y, None, None)?;
+        let j = p - 1;
+        let df = (self.n_level - p - self.extra) as f64;
+        let se = reg.se[j] * (reg.df / df).sqrt();
+        let chi2 = chi2_of_t(reg.coef[j] / se, df);
+        [reg.coef[j], se, chi2]
+            .iter()
+            .all(|v| v.is_finite())
+            .then(|| (reg.coef[j], se, -chi2 + (self.n_level as f64).ln()))
+    }
 }
 
 /// Does θ̂ keep the term's physical sign?

@@ -45,80 +45,134 @@ pub struct Problem<'a> {
 
 /// Share of `b` cord resamples in which `target` (a library index) is the pick and passes.
 pub fn stability(p: &Problem, target: usize, b: usize, seed: u64) -> f64 {
-    let base = p.base;
-    let d = base.d;
-    let nc = d.cords.len();
-    let within: Vec<(usize, &Candidate)> = p
-        .candidates
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.column.is_some())
-        .collect();
-    let mut cols: Vec<Vec<f64>> = p.shared.iter().map(|c| off_run_mu(base, c)).collect();
-    let k0 = cols.len();
-    for (_, c) in &within {
-        cols.push(off_run_mu(base, c.column.as_ref().unwrap()));
-    }
-    let e = off_run_mu(base, p.e);
-    let m = cols.len();
-    let mut gc = vec![DMatrix::<f64>::zeros(m, m); nc];
-    let mut hc = vec![DVector::<f64>::zeros(m); nc];
-    let mut ec = vec![0.0; nc];
-    let mut nrow = vec![0.0; nc];
-    for i in 0..d.n() {
-        let c = base.cord_of_row[i];
-        let w = base.w[i];
-        nrow[c] += 1.0;
-        ec[c] += w * e[i] * e[i];
-        for a in 0..m {
-            let za = w * cols[a][i];
-            hc[c][a] += za * e[i];
-            for bb in a..m {
-                gc[c][(a, bb)] += za * cols[bb][i];
-            }
-        }
-    }
-    for g in gc.iter_mut() {
-        for a in 0..m {
-            for bb in 0..a {
-                g[(a, bb)] = g[(bb, a)];
-            }
-        }
-    }
-    let mut runs_of = vec![Vec::new(); nc];
-    for (u, &c) in p.runs.cord.iter().enumerate() {
-        runs_of[c].push(u);
-    }
+    let within: Vec<&Candidate> = p.candidates.iter().filter(|c| c.column.is_some()).collect();
+    let cords = PerCord::new(p, &within);
     let mut rng = Rng::new(seed);
     let mut hits = 0usize;
     for _ in 0..b {
+        let mult = cords.draw(&mut rng);
+        let mut best = Best(None);
+        cords.screen_within(&mult, &within, &mut best);
+        screen_between(p, &cords.runs_of, &mult, &mut best);
+        if let Some((term, dbic)) = best.0 {
+            if term == target && dbic < p.bar {
+                hits += 1;
+            }
+        }
+    }
+    hits as f64 / b.max(1) as f64
+}
+
+/// The resample's pick so far: the term with the lowest finite ΔBIC (the first of ties).
+struct Best(Option<(usize, f64)>);
+
+impl Best {
+    fn consider(&mut self, term: usize, dbic: f64) {
+        if dbic.is_finite() && self.0.is_none_or(|(_, v)| dbic < v) {
+            self.0 = Some((term, dbic));
+        }
+    }
+}
+
+/// Per cord: the cross-products of the model's columns (first `k0`) and the within-run
+/// candidates' columns, each projected off its runs' mu, with the residuals; and the cord's runs.
+struct PerCord {
+    /// Shared columns in the cross-products.
+    k0: usize,
+    /// Σ w·x_a·x_b per cord.
+    gc: Vec<DMatrix<f64>>,
+    /// Σ w·x_a·e per cord.
+    hc: Vec<DVector<f64>>,
+    /// Σ w·e² per cord.
+    ec: Vec<f64>,
+    /// Rows per cord.
+    nrow: Vec<f64>,
+    /// Runs of each cord.
+    runs_of: Vec<Vec<usize>>,
+}
+
+impl PerCord {
+    fn new(p: &Problem, within: &[&Candidate]) -> PerCord {
+        let base = p.base;
+        let d = base.d;
+        let nc = d.cords.len();
+        let mut cols: Vec<Vec<f64>> = p.shared.iter().map(|c| off_run_mu(base, c)).collect();
+        let k0 = cols.len();
+        for c in within {
+            cols.push(off_run_mu(base, c.column.as_ref().unwrap()));
+        }
+        let e = off_run_mu(base, p.e);
+        let m = cols.len();
+        let mut gc = vec![DMatrix::<f64>::zeros(m, m); nc];
+        let mut hc = vec![DVector::<f64>::zeros(m); nc];
+        let mut ec = vec![0.0; nc];
+        let mut nrow = vec![0.0; nc];
+        for i in 0..d.n() {
+            let c = base.cord_of_row[i];
+            let w = base.w[i];
+            nrow[c] += 1.0;
+            ec[c] += w * e[i] * e[i];
+            for a in 0..m {
+                let za = w * cols[a][i];
+                hc[c][a] += za * e[i];
+                for bb in a..m {
+                    gc[c][(a, bb)] += za * cols[bb][i];
+                }
+            }
+        }
+        for g in gc.iter_mut() {
+            for a in 0..m {
+                for bb in 0..a {
+                    g[(a, bb)] = g[(bb, a)];
+                }
+            }
+        }
+        let mut runs_of = vec![Vec::new(); nc];
+        for (u, &c) in p.runs.cord.iter().enumerate() {
+            runs_of[c].push(u);
+        }
+        PerCord {
+            k0,
+            gc,
+            hc,
+            ec,
+            nrow,
+            runs_of,
+        }
+    }
+
+    /// A resample: how many times each cord is drawn.
+    fn draw(&self, rng: &mut Rng) -> Vec<f64> {
+        let nc = self.gc.len();
         let mut mult = vec![0.0; nc];
         for _ in 0..nc {
             mult[(rng.uniform() * nc as f64) as usize % nc] += 1.0;
         }
+        mult
+    }
+
+    /// The within-run candidates' screen on the resample `mult`, into `best`.
+    fn screen_within(&self, mult: &[f64], within: &[&Candidate], best: &mut Best) {
+        let (k0, nc, m) = (self.k0, self.gc.len(), self.k0 + within.len());
         let mut g = DMatrix::<f64>::zeros(m, m);
         let mut h = DVector::<f64>::zeros(m);
         let (mut ee, mut n) = (0.0, 0.0);
-        for c in 0..nc {
-            if mult[c] > 0.0 {
-                g += &gc[c] * mult[c];
-                h += &hc[c] * mult[c];
-                ee += ec[c] * mult[c];
-                n += nrow[c] * mult[c];
+        for (c, &k) in mult.iter().enumerate() {
+            if k > 0.0 {
+                g += &self.gc[c] * k;
+                h += &self.hc[c] * k;
+                ee += self.ec[c] * k;
+                n += self.nrow[c] * k;
             }
         }
-        let n_runs: f64 = (0..nc).map(|c| mult[c] * runs_of[c].len() as f64).sum();
+        let n_runs: f64 = (0..nc)
+            .map(|c| mult[c] * self.runs_of[c].len() as f64)
+            .sum();
         let gbb = g.view((0, 0), (k0, k0)).into_owned();
         let inv = gbb.try_inverse().unwrap_or_else(|| DMatrix::zeros(k0, k0));
         let hb = h.rows(0, k0).into_owned();
         let wrss0 = ee - (hb.transpose() * &inv * &hb)[(0, 0)];
-        let mut best: Option<(usize, f64)> = None;
-        let mut consider = |term: usize, dbic: f64| {
-            if dbic.is_finite() && best.is_none_or(|(_, v)| dbic < v) {
-                best = Some((term, dbic));
-            }
-        };
-        for (j, (_, cand)) in within.iter().enumerate() {
+        for (j, cand) in within.iter().enumerate() {
             let col = k0 + j;
             let gjb = g.view((col, 0), (1, k0)).into_owned();
             let s = g[(col, col)] - (&gjb * &inv * gjb.transpose())[(0, 0)];
@@ -133,44 +187,42 @@ pub fn stability(p: &Problem, target: usize, b: usize, seed: u64) -> f64 {
             let wrss1 = (wrss0 - num * num / s).max(1e-300);
             let lr = (n * (wrss0 / wrss1).ln()).max(0.0);
             let chi2 = chi2_of_f(lr / cand.c_hat, 1.0, (n_runs - 1.0).max(1.0));
-            consider(cand.term, -chi2 + n.ln());
+            best.consider(cand.term, -chi2 + n.ln());
         }
-        // Between terms on the resampled runs (each copy of a cord is a cord of its own).
-        let mut rs = Runs {
-            cord: Vec::new(),
-            cords: 0,
-            ln_mu: Vec::new(),
-        };
-        let mut pick: Vec<usize> = Vec::new();
-        for c in 0..nc {
-            for _ in 0..mult[c] as usize {
-                for &u in &runs_of[c] {
-                    rs.cord.push(rs.cords);
-                    rs.ln_mu.push(p.runs.ln_mu[u]);
-                    pick.push(u);
-                }
-                rs.cords += 1;
+    }
+}
+
+/// The between-level candidates retested on the resampled runs (each copy of a cord is a cord
+/// of its own), into `best`.
+fn screen_between(p: &Problem, runs_of: &[Vec<usize>], mult: &[f64], best: &mut Best) {
+    let mut rs = Runs {
+        cord: Vec::new(),
+        cords: 0,
+        ln_mu: Vec::new(),
+    };
+    let mut pick: Vec<usize> = Vec::new();
+    for (c, runs) in runs_of.iter().enumerate() {
+        for _ in 0..mult[c] as usize {
+            for &u in runs {
+                rs.cord.push(rs.cords);
+                rs.ln_mu.push(p.runs.ln_mu[u]);
+                pick.push(u);
             }
+            rs.cords += 1;
         }
-        let covs: Vec<Vec<f64>> = p
-            .covs
-            .iter()
-            .map(|cv| pick.iter().map(|&u| cv[u]).collect())
-            .collect();
-        for cand in p.candidates.iter().filter(|c| c.column.is_none()) {
-            let Some(gr) = &cand.g_run else { continue };
-            let g: Vec<f64> = pick.iter().map(|&u| gr[u]).collect();
-            if let Some((theta, _, dbic)) = between_evidence(&rs, &g, &covs) {
-                if (cand.sign_ok)(theta) {
-                    consider(cand.term, dbic);
-                }
-            }
-        }
-        if let Some((term, dbic)) = best {
-            if term == target && dbic < p.bar {
-                hits += 1;
+    }
+    let covs: Vec<Vec<f64>> = p
+        .covs
+        .iter()
+        .map(|cv| pick.iter().map(|&u| cv[u]).collect())
+        .collect();
+    for cand in p.candidates.iter().filter(|c| c.column.is_none()) {
+        let Some(gr) = &cand.g_run else { continue };
+        let g: Vec<f64> = pick.iter().map(|&u| gr[u]).collect();
+        if let Some((theta, _, dbic)) = between_evidence(&rs, &g, &covs) {
+            if (cand.sign_ok)(theta) {
+                best.consider(cand.term, dbic);
             }
         }
     }
-    hits as f64 / b.max(1) as f64
 }

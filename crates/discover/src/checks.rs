@@ -1,0 +1,156 @@
+//! The checks a picked term must pass beyond its screen, computed: its stability's candidates,
+//! its held-out ratio, the lack of fit with it in, and its rivals.
+
+use crate::answer::Rival;
+use crate::columns::Base;
+use crate::heldout::{self, Ratio};
+use crate::library::{Sign, LIBRARY};
+use crate::model::{State, Testable};
+use crate::screen::{self, Projector};
+use crate::stability::Candidate;
+use capstan_engine::evidence::adequacy::{lack_of_fit, LackOfFit};
+use capstan_engine::evidence::design::Design;
+use capstan_engine::evidence::within::WithinFit;
+use capstan_engine::evidence::RIVAL_GAP;
+
+/// The stability's candidates: every testable term not yet in the model, with its
+/// overdispersion from this step's screen.
+pub(crate) fn candidates(
+    testable: &[Testable],
+    st: &State,
+    screens: &[screen::Screen],
+) -> Vec<Candidate> {
+    testable
+        .iter()
+        .filter(|c| !st.used.contains(&c.term))
+        .map(|c| Candidate {
+            term: c.term,
+            column: c.column.clone(),
+            g_run: c.g_run.clone(),
+            c_hat: screens
+                .iter()
+                .find(|s| s.term == c.term)
+                .map_or(1.0, |s| s.c_hat),
+            sign_ok: match LIBRARY[c.term].sign {
+                Sign::Free => |_| true,
+                Sign::NonNegative => |t| t >= 0.0,
+            },
+        })
+        .collect()
+}
+
+/// The lack of fit against the replicate runs with a within-run term in at `theta` (`xt`: its
+/// column projected off the model; within-run terms change what the replicates share). A
+/// between-level term leaves it as it was (`before`).
+pub(crate) fn lack_of_fit_with(
+    (d, base): (&Design, &Base),
+    st: &State,
+    theta: f64,
+    xt: Option<&[f64]>,
+    before: &Option<LackOfFit>,
+) -> Option<LackOfFit> {
+    match xt {
+        Some(xt) => {
+            let z: Vec<f64> = (0..d.n())
+                .map(|i| (st.e[i] - theta * xt[i]) * base.w[i].sqrt())
+                .collect();
+            lack_of_fit(d, &z, st.shared.len() + 1)
+        }
+        None => before.clone(),
+    }
+}
+
+/// The held-out ratio matched to the term's level.
+pub(crate) fn held_out(
+    base: &Base,
+    fit: &WithinFit,
+    st: &State,
+    c: &Testable,
+    without: Option<Vec<f64>>,
+) -> Option<Ratio> {
+    let rows = heldout::rows_per_cord(base);
+    match (&c.column, &c.g_run) {
+        (Some(x), _) => {
+            let without = without.unwrap_or_else(|| heldout::shape_sse(base, &st.shared));
+            let mut cols = st.shared.clone();
+            cols.push(x.clone());
+            let with = heldout::shape_sse(base, &cols);
+            heldout::ratio(
+                &with,
+                &without,
+                &rows,
+                "each held-out run keeps its own mu; the shape comes from the other cords",
+            )
+        }
+        (None, Some(g)) => {
+            let x0: Vec<Vec<f64>> = (0..g.len())
+                .map(|u| {
+                    std::iter::once(1.0)
+                        .chain(st.covs.iter().map(|cv| cv[u]))
+                        .collect()
+                })
+                .collect();
+            let x1: Vec<Vec<f64>> = x0
+                .iter()
+                .zip(g)
+                .map(|(r, gv)| {
+                    let mut r = r.clone();
+                    r.push(*gv);
+                    r
+                })
+                .collect();
+            let without = heldout::population_sse(base, fit, &x0);
+            let with = heldout::population_sse(base, fit, &x1);
+            heldout::ratio(
+                &with,
+                &without,
+                &rows,
+                "the held-out cord's mu predicted from the other cords",
+            )
+        }
+        _ => None,
+    }
+}
+
+/// The terms within the engine's rival gap of the pick, with their columns' correlation with
+/// its column (within-run terms).
+pub(crate) fn rivals_of(
+    base: &Base,
+    proj: &Projector,
+    screens: &[screen::Screen],
+    best: &screen::Screen,
+    testable: &[Testable],
+    threshold: f64,
+) -> Vec<Rival> {
+    let col = |term: usize| {
+        testable
+            .iter()
+            .find(|c| c.term == term)
+            .and_then(|c| c.column.as_ref())
+            .map(|x| proj.project(base, x))
+    };
+    let xb = col(best.term);
+    screens
+        .iter()
+        .filter(|s| s.term != best.term && s.sign_ok)
+        .filter(|s| s.delta_bic < -threshold && s.delta_bic - best.delta_bic <= RIVAL_GAP)
+        .map(|s| {
+            let correlation = match (&xb, col(s.term)) {
+                (Some(a), Some(b)) => {
+                    let w = &base.w;
+                    let ab: f64 = (0..a.len()).map(|i| w[i] * a[i] * b[i]).sum();
+                    let aa: f64 = (0..a.len()).map(|i| w[i] * a[i] * a[i]).sum();
+                    let bb: f64 = (0..a.len()).map(|i| w[i] * b[i] * b[i]).sum();
+                    Some(ab / (aa * bb).sqrt())
+                }
+                _ => None,
+            };
+            Rival {
+                name: LIBRARY[s.term].name,
+                depends_on: LIBRARY[s.term].depends_on,
+                delta_bic: s.delta_bic,
+                correlation,
+            }
+        })
+        .collect()
+}
