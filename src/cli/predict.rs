@@ -208,6 +208,12 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
     if w.rows == 0 && w.sd_n != 0.0 {
         return Err("wrap_extrapolation_error has an SD but no held-out rows behind it".into());
     }
+    let step = pm.wrap_extrapolation_step_deg;
+    if !(step.is_finite() && step >= 0.0) || (w.rows > 0 && step == 0.0) {
+        return Err(format!(
+            "wrap_extrapolation_step_deg = {step} is not the distance the error was measured at"
+        ));
+    }
     let r = &pm.fitted_range;
     for (name, s) in [
         ("wrap_deg", r.wrap_deg),
@@ -268,9 +274,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The wrap-extrapolation error's SD, N, when the query's wrap lies outside the fitted wraps
-/// (there it is in the prediction interval), else `None`.
-fn wrap_error(args: &Args, drive_v: f64, pm: &PredictionModel) -> Option<f64> {
+/// When the query's wrap lies outside the fitted wraps, the wrap-extrapolation error's SD, N,
+/// at that distance (`Some(None)`: not measured), else `None`.
+fn wrap_error(args: &Args, drive_v: f64, pm: &PredictionModel) -> Option<Option<f64>> {
     let q = prediction::Query {
         wrap_deg: args.wrap_deg,
         diameter_mm: args.diameter_mm,
@@ -279,7 +285,7 @@ fn wrap_error(args: &Args, drive_v: f64, pm: &PredictionModel) -> Option<f64> {
         as_measured: args.as_measured,
     };
     pm.extrapolates_in_wrap(&q)
-        .then_some(pm.wrap_extrapolation_error.sd_n)
+        .then(|| pm.wrap_extrapolation_sd(q.wrap_deg))
 }
 
 /// The predictions as one JSON object (the contract, plus the query and the model's
@@ -300,7 +306,8 @@ fn print_json(
         "diameter_mm": args.diameter_mm,
         "drive_v": drive_v,
         "model_error_sd_n": pm.model_error.sd_n,
-        "wrap_extrapolation_error_sd_n": wrap_error(args, drive_v, pm),
+        "wrap_extrapolation_error_sd_n": wrap_error(args, drive_v, pm).flatten(),
+        "wrap_extrapolation_measured": pm.wrap_extrapolation_error.rows > 0,
         "from": args.from.display().to_string(),
         "note": pm.note,
     });
@@ -330,10 +337,14 @@ fn print_table(
         "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
         pm.model_error.sd_n
     );
-    if let Some(sd) = wrap_error(args, drive_v, pm) {
-        crate::outln!(
-            "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data: SD {sd:.3} N"
-        );
+    match wrap_error(args, drive_v, pm) {
+        Some(Some(sd)) => crate::outln!(
+            "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data, scaled to this distance: SD {sd:.3} N"
+        ),
+        Some(None) => crate::outln!(
+            "but not what extrapolating in wrap costs: with fewer than three fitted wraps it could not be measured, so the PI holds none of it"
+        ),
+        None => {}
     }
     crate::outln!(
         "{:>9} {:>10} {:>8} {:>21} {:>21}",

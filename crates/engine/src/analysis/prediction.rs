@@ -95,8 +95,13 @@ pub struct PredictionModel {
     /// What extrapolating in wrap adds: the residuals of fits without the smallest or the
     /// largest wrap, on that wrap, beyond every other component and `model_error` (see
     /// [`wrap_extrapolation`]); in the prediction interval only at wraps outside the fitted
-    /// ones' span.
+    /// ones' span, growing with the distance (see [`PredictionModel::wrap_extrapolation_sd`]).
+    /// No rows: not measured (fewer than three wraps).
     pub wrap_extrapolation_error: ModelError,
+    /// The distance, deg, over which `wrap_extrapolation_error` was measured: the mean gap
+    /// between the smallest wrap and the next, and the largest and the one before (0 when not
+    /// measured).
+    pub wrap_extrapolation_step_deg: f64,
     /// What the fitted data span.
     pub fitted_range: FittedRange,
     /// The operating point and intervals in words.
@@ -133,7 +138,7 @@ impl ModelError {
 }
 
 /// The note every prediction model carries.
-pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter, the within-run noise and the model's own error (the leave-one-cord-out residuals' mean square beyond those components, one SD in N), and at a wrap outside the fitted wraps' span what extrapolating in wrap cost on the fitted data (fits without the smallest or the largest wrap, their residuals there beyond all that) (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
+pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter, the within-run noise and the model's own error (the leave-one-cord-out residuals' mean square beyond those components, one SD in N), and at a wrap outside the fitted wraps' span what extrapolating in wrap cost on the fitted data (fits without the smallest or the largest wrap, their residuals there beyond all that), scaled by the distance beyond the span over the distance it was measured at (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
 
 /// One operating point to predict at.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -215,6 +220,22 @@ impl PredictionModel {
     /// [`PredictionModel::wrap_extrapolation_error`] too.
     pub fn extrapolates_in_wrap(&self, q: &Query) -> bool {
         !self.fitted_range.wrap_deg.contains(q.wrap_deg)
+    }
+
+    /// The error of extrapolating to `wrap_deg`, N: 0 inside the fitted span; beyond it the
+    /// measured SD scaled by the distance from the span over the distance it was measured at
+    /// (an extrapolation's error grows with how far it reaches; the interval is continuous at
+    /// the span's edge). `None` beyond the span when it was not measured (fewer than three
+    /// fitted wraps): the interval then holds no extrapolation error, and the output says so.
+    pub fn wrap_extrapolation_sd(&self, wrap_deg: f64) -> Option<f64> {
+        let s = self.fitted_range.wrap_deg;
+        let beyond = (s.min - wrap_deg).max(wrap_deg - s.max).max(0.0);
+        if beyond == 0.0 {
+            return Some(0.0);
+        }
+        let e = &self.wrap_extrapolation_error;
+        (e.rows > 0 && self.wrap_extrapolation_step_deg > 0.0)
+            .then(|| e.sd_n * beyond / self.wrap_extrapolation_step_deg)
     }
 
     /// The query's quantities outside the fitted data's ranges, one sentence each (empty when
@@ -401,11 +422,7 @@ pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
     } = spread(pm, q);
     let var_new = var_new
         + pm.model_error.sd_n.powi(2)
-        + if pm.extrapolates_in_wrap(q) {
-            pm.wrap_extrapolation_error.sd_n.powi(2)
-        } else {
-            0.0
-        };
+        + pm.wrap_extrapolation_sd(q.wrap_deg).unwrap_or(0.0).powi(2);
     let ci = t95(pm.folds.saturating_sub(1)) * var_mean.sqrt();
     let pi = (ci.powi(2) + 1.959_963_985f64.powi(2) * var_new).sqrt();
     // Physics: a capstan that is not driven backwards does not lose tension.
@@ -491,6 +508,17 @@ pub fn wrap_extrapolation(
     }
 }
 
+/// The mean of the gaps between the two smallest and the two largest wraps, deg (0 with fewer
+/// than three wraps).
+fn edge_step_deg(obs: &crate::fit::Observations) -> f64 {
+    let w = crate::fit::stats::distinct(obs.groups.iter().map(|g| g.wrap_deg));
+    if w.len() < 3 {
+        return 0.0;
+    }
+    let n = w.len();
+    0.5 * ((w[1] - w[0]) + (w[n - 1] - w[n - 2]))
+}
+
 /// The prediction model of a fitted analysis: population values, the cord-jackknife
 /// covariance of the free values, and the variance components.
 pub fn build(
@@ -542,6 +570,7 @@ pub fn build(
         noise_rel: scatter.noise_rel,
         model_error: ModelError::NONE,
         wrap_extrapolation_error: ModelError::NONE,
+        wrap_extrapolation_step_deg: 0.0,
         fitted_range: FittedRange {
             wrap_deg: Span::of(obs.groups.iter().map(|g| g.wrap_deg)),
             diameter_mm: Span::of(obs.groups.iter().map(|g| g.diameter_mm)),
@@ -553,6 +582,9 @@ pub fn build(
     pm.model_error = model_error(&pm, obs, &fits.pred.extended_loco);
     pm.wrap_extrapolation_error =
         wrap_extrapolation(&pm, obs, &fits.pred.extended_edge_wrap, &pm.model_error);
+    if pm.wrap_extrapolation_error.rows > 0 {
+        pm.wrap_extrapolation_step_deg = edge_step_deg(obs);
+    }
     pm
 }
 
