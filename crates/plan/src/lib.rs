@@ -84,6 +84,17 @@ pub struct Current {
     pub rig_hours: f64,
 }
 
+/// A protocol the hours left out.
+#[derive(Clone, Debug, Serialize)]
+pub struct Beyond {
+    /// Its name.
+    pub name: String,
+    /// Its worst chance over the hypotheses.
+    pub p_decide_worst: f64,
+    /// Its rig time, h.
+    pub rig_hours: f64,
+}
+
 /// What `capstan plan` says.
 #[derive(Clone, Debug, Serialize)]
 pub struct Plan {
@@ -104,6 +115,9 @@ pub struct Plan {
     pub any_decides: bool,
     /// The recommendation fits in `--hours` (false: nothing does; it is the shortest).
     pub within_hours: bool,
+    /// With `--hours`: the best protocol beyond them, when it does better than the
+    /// recommendation (what the hours cost).
+    pub better_beyond_hours: Option<Beyond>,
     /// The data's own design.
     pub current_design: Current,
     /// How the chances were estimated.
@@ -188,6 +202,19 @@ pub fn plan(
     let recommended = recommend(&scored, opts, current_decides).clone();
     let any_decides = scored.iter().any(|s| s.p_decide_worst > 0.0);
     let within_hours = opts.max_hours.is_none_or(|h| recommended.rig_hours <= h);
+    let better_beyond_hours = opts.max_hours.and_then(|h| {
+        (scored.iter())
+            .filter(|s| s.rig_hours > h && s.p_decide_worst > recommended.p_decide_worst)
+            .max_by(|a, b| {
+                (a.p_decide_worst.total_cmp(&b.p_decide_worst))
+                    .then(b.rig_hours.total_cmp(&a.rig_hours))
+            })
+            .map(|s| Beyond {
+                name: s.candidate.name.clone(),
+                p_decide_worst: s.p_decide_worst,
+                rig_hours: s.rig_hours,
+            })
+    });
     scored.sort_by(|a, b| {
         (b.p_decide_worst.total_cmp(&a.p_decide_worst)).then(a.rig_hours.total_cmp(&b.rig_hours))
     });
@@ -200,6 +227,7 @@ pub fn plan(
         current_decides,
         any_decides,
         within_hours,
+        better_beyond_hours,
         current_design,
         method: format!(
             "simulation: {} campaigns per hypothesis and protocol, each run end to end on the \
