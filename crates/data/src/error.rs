@@ -123,6 +123,28 @@ pub fn quote(s: &str) -> String {
     }
 }
 
+/// How a message names `separator`: "tabs", or the character in backticks.
+fn separator_name(separator: char) -> String {
+    match separator {
+        '\t' => "tabs".to_string(),
+        c => format!("`{c}`"),
+    }
+}
+
+/// The command that turns `path`, separated by `separator`, into comma-separated values (its
+/// decimal commas into points first, when it has them).
+fn separator_fix(path: &str, separator: char, decimal_comma: bool) -> String {
+    let e = separator.escape_default();
+    if decimal_comma {
+        format!(
+            "its decimals are written with commas, so turn them into points first: \
+             `sed -e 's/,/./g' -e 's/{e}/,/g' {path} > fixed.csv`"
+        )
+    } else {
+        format!("e.g. `tr '{e}' ',' < {path} > fixed.csv`")
+    }
+}
+
 impl fmt::Display for DataError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use DataError::*;
@@ -191,27 +213,14 @@ impl fmt::Display for DataError {
                 header,
                 separator,
                 decimal_comma,
-            } => {
-                let sep = match separator {
-                    '\t' => "tabs".to_string(),
-                    c => format!("`{c}`"),
-                };
-                let e = separator.escape_default();
-                let fix = if *decimal_comma {
-                    format!(
-                        "its decimals are written with commas, so turn them into points first: \
-                         `sed -e 's/,/./g' -e 's/{e}/,/g' {path} > fixed.csv`"
-                    )
-                } else {
-                    format!("e.g. `tr '{e}' ',' < {path} > fixed.csv`")
-                };
-                write!(
-                    f,
-                    "{path}:1: the header `{}` is one column: the file looks separated by {sep}; \
-                     capstan reads comma-separated values ({fix})",
-                    quote(header)
-                )
-            }
+            } => write!(
+                f,
+                "{path}:1: the header `{}` is one column: the file looks separated by {}; \
+                 capstan reads comma-separated values ({})",
+                quote(header),
+                separator_name(*separator),
+                separator_fix(path, *separator, *decimal_comma)
+            ),
             TooLong {
                 path,
                 line,

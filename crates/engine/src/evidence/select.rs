@@ -183,6 +183,195 @@ pub struct WithinSelection {
     pub swaps: Vec<Swap>,
 }
 
+/// What every step of the selection needs: the data, the weights, the threads, and when a
+/// candidate counts as supported.
+struct Selector<'a> {
+    d: &'a Design,
+    w: &'a Weights,
+    threads: usize,
+    supported: &'a (dyn Fn(&Evidence) -> bool + Sync),
+}
+
+/// What the first round learns about every candidate alone (added to every run's own mu, no
+/// other effect).
+#[derive(Default)]
+struct Alone {
+    /// Each candidate's θ when fitted alone (from all its starts): later rounds start there.
+    theta: Vec<(EffectKind, f64)>,
+    /// Each candidate's evidence alone, marked supported or not.
+    evidence: Vec<Evidence>,
+    /// Each candidate alone as a one-effect set (the alternatives when one effect is selected).
+    fits: Vec<Swap>,
+}
+
+impl Alone {
+    /// The first round's `fits` (each candidate added to the null) and their `evidence`.
+    fn of(
+        fits: &[WithinFit],
+        evidence: &[Evidence],
+        supported: &(dyn Fn(&Evidence) -> bool + Sync),
+    ) -> Alone {
+        let mut evidence = evidence.to_vec();
+        for e in &mut evidence {
+            e.supported = supported(e);
+        }
+        Alone {
+            theta: fits.iter().map(|f| (f.maps[0].kind, f.theta[0])).collect(),
+            evidence,
+            fits: fits
+                .iter()
+                .map(|f| Swap {
+                    slot: 0,
+                    kind: f.maps[0].kind,
+                    wrss: f.wrss,
+                    value: f.value(0),
+                })
+                .collect(),
+        }
+    }
+
+    /// `k`'s θ alone, where the first round fitted it.
+    fn start(&self, k: EffectKind) -> Option<f64> {
+        self.theta.iter().find(|a| a.0 == k).map(|a| a.1)
+    }
+}
+
+/// The set grown one effect at a time, and what its rounds found.
+struct Grown {
+    /// The set when no supported candidate is left (or the cap is reached).
+    current: WithinFit,
+    /// The order in which effects were added, with their ΔBIC when added.
+    path: Vec<(EffectKind, f64)>,
+    /// The last round's evidence of each candidate added to the set then.
+    last: Vec<Evidence>,
+    /// The set `last` was computed against (it is reused when the selection ends there).
+    last_for: Vec<EffectKind>,
+    alone: Alone,
+}
+
+impl Selector<'_> {
+    /// Rounds of forward selection from `null`: each adds the best-fitting supported candidate
+    /// and drops any earlier effect it made redundant.
+    fn grow(&self, null: WithinFit, candidates: &[EffectKind]) -> Grown {
+        let (d, w) = (self.d, self.w);
+        let mut g = Grown {
+            current: null,
+            path: Vec::new(),
+            last: Vec::new(),
+            last_for: Vec::new(),
+            alone: Alone::default(),
+        };
+        // An effect that a later one made redundant does not come back (stepwise selection can
+        // otherwise cycle), so the loop ends after at most two rounds per candidate.
+        let mut retired: Vec<EffectKind> = Vec::new();
+        for _round in 0..=2 * candidates.len() {
+            if g.current.k() >= MAX_WITHIN {
+                // Structure beyond this many effects at once is left to the adequacy check.
+                break;
+            }
+            let pool: Vec<EffectKind> = candidates
+                .iter()
+                .copied()
+                .filter(|&k| !g.current.maps.iter().any(|m| m.kind == k) && !retired.contains(&k))
+                .collect();
+            let fits: Vec<WithinFit> = par(&pool, self.threads, |&k| {
+                add(d, &g.current, k, w, g.alone.start(k))
+            });
+            g.last = fits
+                .iter()
+                .map(|f| evidence(d, &g.current, f, f.k() - 1))
+                .collect();
+            g.last_for = kinds(&g.current);
+            if g.alone.theta.is_empty() {
+                g.alone = Alone::of(&fits, &g.last, self.supported);
+            }
+            // Among the supported candidates the best fit comes in: each one's overdispersion
+            // decides whether it is supported, not which of two rival shapes the data prefer.
+            let best = (0..fits.len())
+                .filter(|&i| (self.supported)(&g.last[i]))
+                .min_by(|&a, &b| fits[a].wrss.total_cmp(&fits[b].wrss));
+            let Some(b) = best else { break };
+            g.path.push((pool[b], g.last[b].delta_bic));
+            let grown = fits.into_iter().nth(b).expect("index in range");
+            g.current = self.drop_redundant(grown, &mut retired);
+        }
+        g
+    }
+
+    /// `current` less each earlier effect that its newest one makes redundant (the weakest
+    /// unsupported first, until every one is supported); those that leave are `retired`.
+    fn drop_redundant(&self, mut current: WithinFit, retired: &mut Vec<EffectKind>) -> WithinFit {
+        let (d, w) = (self.d, self.w);
+        while current.k() > 1 {
+            let earlier: Vec<usize> = (0..current.k() - 1).collect();
+            let drops: Vec<(WithinFit, Evidence)> = par(&earlier, self.threads, |&j| {
+                let less = drop(d, &current, j, w);
+                let e = evidence(d, &less, &current, j);
+                (less, e)
+            });
+            let weakest = (0..drops.len())
+                .filter(|&j| !(self.supported)(&drops[j].1))
+                .max_by(|&a, &b| drops[a].1.delta_bic.total_cmp(&drops[b].1.delta_bic));
+            match weakest {
+                Some(j) => {
+                    retired.push(current.maps[j].kind);
+                    current = drops.into_iter().nth(j).expect("index in range").0;
+                }
+                None => break,
+            }
+        }
+        current
+    }
+
+    /// Every candidate's evidence given the final set `fit`, marked supported or not: the
+    /// selected effects each given the others, and every other candidate added to `fit` (the
+    /// last round's, unless it was against another set: the selection stopped at its cap, or
+    /// an effect left; then recomputed in the same batch of fits).
+    fn final_evidence(
+        &self,
+        fit: &WithinFit,
+        candidates: &[EffectKind],
+        last: Vec<Evidence>,
+        last_for: &[EffectKind],
+        alone: &Alone,
+    ) -> Vec<Evidence> {
+        let (d, w) = (self.d, self.w);
+        let recompute = last_for != kinds(fit) || last.len() + fit.k() < candidates.len();
+        let mut jobs: Vec<Option<EffectKind>> = (0..fit.k()).map(|_| None).collect();
+        if recompute {
+            jobs.extend(
+                candidates
+                    .iter()
+                    .filter(|&&k| !fit.maps.iter().any(|m| m.kind == k))
+                    .map(|&k| Some(k)),
+            );
+        }
+        let mut evidence: Vec<Evidence> = par(
+            &(0..jobs.len()).collect::<Vec<_>>(),
+            self.threads,
+            |&x| match jobs[x] {
+                None => {
+                    let less = drop(d, fit, x, w);
+                    let mut e = evidence(d, &less, fit, x);
+                    e.selected = true;
+                    e
+                }
+                Some(k) => {
+                    let f = add(d, fit, k, w, alone.start(k));
+                    evidence(d, fit, &f, f.k() - 1)
+                }
+            },
+        );
+        if !recompute {
+            evidence.extend(last);
+        }
+        for e in &mut evidence {
+            e.supported = (self.supported)(e);
+        }
+        evidence
+    }
+}
+
 /// Forward selection from `null` over `candidates`. A candidate is supported when it is
 /// practically relevant and its ΔBIC is below −`threshold`.
 pub fn forward(
@@ -194,135 +383,38 @@ pub fn forward(
     threads: usize,
 ) -> WithinSelection {
     let supported = |e: &Evidence| e.relevant && e.delta_bic < -threshold;
-    let mut last: Vec<Evidence> = Vec::new();
-    // The set `last` was computed against (it is reused when the selection ends there).
-    let mut last_for: Vec<EffectKind> = Vec::new();
-    let mut current = null;
-    let mut path = Vec::new();
-    // An effect that a later one made redundant does not come back (stepwise selection can
-    // otherwise cycle), so the loop ends after at most two rounds per candidate.
-    let mut retired: Vec<EffectKind> = Vec::new();
-    // Each candidate's θ when fitted alone (from all its starts): later rounds start there.
-    let mut alone: Vec<(EffectKind, f64)> = Vec::new();
-    let mut alone_evidence: Vec<Evidence> = Vec::new();
-    let mut alone_fits: Vec<Swap> = Vec::new();
-    let start_of =
-        |alone: &[(EffectKind, f64)], k: EffectKind| alone.iter().find(|a| a.0 == k).map(|a| a.1);
-    for _round in 0..=2 * candidates.len() {
-        if current.k() >= MAX_WITHIN {
-            // Structure beyond this many effects at once is left to the adequacy check.
-            break;
-        }
-        let pool: Vec<EffectKind> = candidates
-            .iter()
-            .copied()
-            .filter(|&k| !current.maps.iter().any(|m| m.kind == k) && !retired.contains(&k))
-            .collect();
-        let fits: Vec<WithinFit> = par(&pool, threads, |&k| {
-            add(d, &current, k, w, start_of(&alone, k))
-        });
-        if alone.is_empty() {
-            alone = fits.iter().map(|f| (f.maps[0].kind, f.theta[0])).collect();
-            alone_fits = fits
-                .iter()
-                .map(|f| Swap {
-                    slot: 0,
-                    kind: f.maps[0].kind,
-                    wrss: f.wrss,
-                    value: f.value(0),
-                })
-                .collect();
-        }
-        let first_round = alone_evidence.is_empty();
-        last = fits
-            .iter()
-            .map(|f| evidence(d, &current, f, f.k() - 1))
-            .collect();
-        last_for = kinds(&current);
-        if first_round {
-            alone_evidence = last.clone();
-            for e in &mut alone_evidence {
-                e.supported = supported(e);
-            }
-        }
-        // Among the supported candidates the best fit comes in: each one's overdispersion
-        // decides whether it is supported, not which of two rival shapes the data prefer.
-        let best = (0..fits.len())
-            .filter(|&i| supported(&last[i]))
-            .min_by(|&a, &b| fits[a].wrss.total_cmp(&fits[b].wrss));
-        let Some(b) = best else { break };
-        path.push((pool[b], last[b].delta_bic));
-        current = fits.into_iter().nth(b).expect("index in range");
-        // An earlier effect that the new one makes redundant leaves again.
-        while current.k() > 1 {
-            let earlier: Vec<usize> = (0..current.k() - 1).collect();
-            let drops: Vec<(WithinFit, Evidence)> = par(&earlier, threads, |&j| {
-                let less = drop(d, &current, j, w);
-                let e = evidence(d, &less, &current, j);
-                (less, e)
-            });
-            let weakest = (0..drops.len())
-                .filter(|&j| !supported(&drops[j].1))
-                .max_by(|&a, &b| drops[a].1.delta_bic.total_cmp(&drops[b].1.delta_bic));
-            match weakest {
-                Some(j) => {
-                    retired.push(current.maps[j].kind);
-                    current = drops.into_iter().nth(j).expect("index in range").0;
-                }
-                None => break,
-            }
-        }
-    }
-    let (fit, mut alternatives) = swaps(d, current, candidates, w, &supported, &alone, threads);
-    current = fit;
-    if current.k() == 1 {
+    let s = Selector {
+        d,
+        w,
+        threads,
+        supported: &supported,
+    };
+    let g = s.grow(null, candidates);
+    let (fit, mut alternatives) = swaps(
+        d,
+        g.current,
+        candidates,
+        w,
+        &supported,
+        &g.alone.theta,
+        threads,
+    );
+    if fit.k() == 1 {
         // One effect: its alternatives are the other candidates alone.
-        alternatives = alone_fits
-            .into_iter()
-            .filter(|a| a.kind != current.maps[0].kind)
+        alternatives = g
+            .alone
+            .fits
+            .iter()
+            .filter(|a| a.kind != fit.maps[0].kind)
+            .copied()
             .collect();
     }
-    // The selected effects, each given the others, and every other candidate added to the
-    // final set (recomputed if the last round's were against another set: the selection
-    // stopped at its cap, or an effect left): one batch of fits.
-    let recompute = last_for != kinds(&current) || last.len() + current.k() < candidates.len();
-    let mut jobs: Vec<Option<EffectKind>> = (0..current.k()).map(|_| None).collect();
-    if recompute {
-        jobs.extend(
-            candidates
-                .iter()
-                .filter(|&&k| !current.maps.iter().any(|m| m.kind == k))
-                .map(|&k| Some(k)),
-        );
-    }
-    let mut evidence: Vec<Evidence> =
-        par(
-            &(0..jobs.len()).collect::<Vec<_>>(),
-            threads,
-            |&x| match jobs[x] {
-                None => {
-                    let less = drop(d, &current, x, w);
-                    let mut e = evidence(d, &less, &current, x);
-                    e.selected = true;
-                    e
-                }
-                Some(k) => {
-                    let f = add(d, &current, k, w, start_of(&alone, k));
-                    evidence(d, &current, &f, f.k() - 1)
-                }
-            },
-        );
-    if !recompute {
-        evidence.extend(last);
-    }
-    for e in &mut evidence {
-        e.supported = supported(e);
-    }
+    let evidence = s.final_evidence(&fit, candidates, g.last, &g.last_for, &g.alone);
     WithinSelection {
-        fit: current,
+        fit,
         evidence,
-        path,
-        alone: alone_evidence,
+        path: g.path,
+        alone: g.alone.evidence,
         swaps: alternatives,
     }
 }
