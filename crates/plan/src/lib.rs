@@ -202,19 +202,7 @@ pub fn plan(
     let recommended = recommend(&scored, opts, current_decides).clone();
     let any_decides = scored.iter().any(|s| s.p_decide_worst > 0.0);
     let within_hours = opts.max_hours.is_none_or(|h| recommended.rig_hours <= h);
-    let better_beyond_hours = opts.max_hours.and_then(|h| {
-        (scored.iter())
-            .filter(|s| s.rig_hours > h && s.p_decide_worst > recommended.p_decide_worst)
-            .max_by(|a, b| {
-                (a.p_decide_worst.total_cmp(&b.p_decide_worst))
-                    .then(b.rig_hours.total_cmp(&a.rig_hours))
-            })
-            .map(|s| Beyond {
-                name: s.candidate.name.clone(),
-                p_decide_worst: s.p_decide_worst,
-                rig_hours: s.rig_hours,
-            })
-    });
+    let better_beyond_hours = better_beyond(&scored, &recommended, opts);
     scored.sort_by(|a, b| {
         (b.p_decide_worst.total_cmp(&a.p_decide_worst)).then(a.rig_hours.total_cmp(&b.rig_hours))
     });
@@ -229,17 +217,37 @@ pub fn plan(
         within_hours,
         better_beyond_hours,
         current_design,
-        method: format!(
-            "simulation: {} campaigns per hypothesis and protocol, each run end to end on the \
-             simulated rig (the firmware's protocol, sampling and conditioning) and diagnosed by \
-             the same evidence engine; no expected-evidence shortcut. A hypothesis with an \
-             effect a protocol cannot test scores 0 there without simulation (the engine never \
-             names an effect its design cannot test); such a protocol is not simulated at all \
-             when another can test every hypothesis",
-            opts.reps
-        ),
+        method: method(opts.reps),
         elapsed_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// How the chances were estimated, in words.
+fn method(reps: usize) -> String {
+    format!(
+        "simulation: {reps} campaigns per hypothesis and protocol, each run end to end on the \
+         simulated rig (the firmware's protocol, sampling and conditioning) and diagnosed by \
+         the same evidence engine; no expected-evidence shortcut. A hypothesis with an \
+         effect a protocol cannot test scores 0 there without simulation (the engine never \
+         names an effect its design cannot test); such a protocol is not simulated at all \
+         when another can test every hypothesis"
+    )
+}
+
+/// With `--hours`: the best protocol beyond them, if it does better than `recommended`.
+fn better_beyond(scored: &[Scored], recommended: &Scored, opts: &Options) -> Option<Beyond> {
+    let h = opts.max_hours?;
+    (scored.iter())
+        .filter(|s| s.rig_hours > h && s.p_decide_worst > recommended.p_decide_worst)
+        .max_by(|a, b| {
+            (a.p_decide_worst.total_cmp(&b.p_decide_worst))
+                .then(b.rig_hours.total_cmp(&a.rig_hours))
+        })
+        .map(|s| Beyond {
+            name: s.candidate.name.clone(),
+            p_decide_worst: s.p_decide_worst,
+            rig_hours: s.rig_hours,
+        })
 }
 
 /// The data's diagnosis; without a time column, window times from the thesis protocol (so
