@@ -231,8 +231,12 @@ fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<se
     } else {
         None
     };
+    // The data's absolute path, quoted for a shell: the command runs from anywhere.
     let command = match &args.data {
-        Some(p) => format!("capstan plan {}", p.display()),
+        Some(p) => {
+            let abs = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
+            format!("capstan plan {}", shell_quoted(&abs.display().to_string()))
+        }
         None => "capstan plan".to_string(),
     };
     Ok(capstan_report::next::next_json(
@@ -240,6 +244,17 @@ fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<se
         plan.as_ref(),
         &command,
     ))
+}
+
+/// `s` as one shell word: as it is when it holds only characters no shell treats specially,
+/// else in single quotes (a quote inside written '\'').
+fn shell_quoted(s: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "/._-+,:@%=".contains(c);
+    if !s.is_empty() && s.chars().all(plain) {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
 }
 
 /// `capstan analyze --validate`.
@@ -294,4 +309,20 @@ fn validate(args: &Args) -> anyhow::Result<()> {
         anyhow::bail!("validation missed its targets: {}", why.join("; "));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shell_quoted;
+
+    #[test]
+    fn a_path_is_one_shell_word() {
+        assert_eq!(shell_quoted("/data/run1.csv"), "/data/run1.csv");
+        assert_eq!(
+            shell_quoted("/tmp/my data/run (1).csv"),
+            "'/tmp/my data/run (1).csv'"
+        );
+        assert_eq!(shell_quoted("/tmp/it's.csv"), "'/tmp/it'\\''s.csv'");
+        assert_eq!(shell_quoted(""), "''");
+    }
 }

@@ -120,6 +120,8 @@ pub struct Plan {
     pub better_beyond_hours: Option<Beyond>,
     /// The data's own design.
     pub current_design: Current,
+    /// Simulated campaigns per hypothesis and protocol behind each chance.
+    pub reps: usize,
     /// How the chances were estimated.
     pub method: String,
     /// Wall time, s.
@@ -217,6 +219,7 @@ pub fn plan(
         within_hours,
         better_beyond_hours,
         current_design,
+        reps: opts.reps,
         method: method(opts.reps),
         elapsed_s: t0.elapsed().as_secs_f64(),
     })
