@@ -84,6 +84,38 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
     Ok(vals)
 }
 
+/// The first field of `v` holding a `null` (where a number was expected), as a path.
+fn null_field(v: &Value) -> Option<String> {
+    match v {
+        Value::Null => Some(String::new()),
+        Value::Object(m) => m.iter().find_map(|(k, x)| {
+            null_field(x).map(|rest| {
+                format!(
+                    "{k}{}",
+                    if rest.is_empty() {
+                        rest
+                    } else {
+                        format!(".{rest}")
+                    }
+                )
+            })
+        }),
+        Value::Array(a) => a.iter().enumerate().find_map(|(i, x)| {
+            null_field(x).map(|rest| {
+                format!(
+                    "[{i}]{}",
+                    if rest.is_empty() {
+                        rest
+                    } else {
+                        format!(".{rest}")
+                    }
+                )
+            })
+        }),
+        _ => None,
+    }
+}
+
 /// Read the prediction model from `metrics.json`.
 pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
     let text =
@@ -102,14 +134,28 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
             path.display()
         );
     };
-    let schema = pm.get("schema").and_then(Value::as_u64);
-    if schema != Some(u64::from(prediction::SCHEMA)) {
-        let found = schema.map_or("none".to_string(), |s| s.to_string());
-        bail!(
-            "{}: prediction_model schema {found}, this capstan reads schema {} (run capstan analyze again)",
-            path.display(),
-            prediction::SCHEMA
-        );
+    let want = u64::from(prediction::SCHEMA);
+    match pm.get("schema").map(|s| (s, s.as_u64())) {
+        Some((_, Some(s))) if s == want => {}
+        Some((_, Some(s))) if s > want => bail!(
+            "{}: prediction_model schema {s} is newer than this capstan reads ({want}): use the \
+             capstan that wrote it, or a newer one",
+            path.display()
+        ),
+        Some((_, Some(s))) => bail!(
+            "{}: prediction_model schema {s}, this capstan reads schema {want} (run capstan \
+             analyze again)",
+            path.display()
+        ),
+        Some((v, None)) => bail!(
+            "{}: prediction_model schema {v} is not a schema number (this capstan reads {want})",
+            path.display()
+        ),
+        None => bail!(
+            "{}: prediction_model has no schema (this capstan reads {want}; run capstan analyze \
+             again)",
+            path.display()
+        ),
     }
     if pm
         .get("folds")
@@ -122,8 +168,13 @@ pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
             path.display()
         );
     }
-    let model: PredictionModel = serde_json::from_value(pm.clone())
-        .with_context(|| format!("{}: prediction_model is malformed", path.display()))?;
+    let model: PredictionModel = serde_json::from_value(pm.clone()).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: prediction_model is malformed: {e}{}",
+            path.display(),
+            null_field(pm).map_or(String::new(), |f| format!(" (at {f})"))
+        )
+    })?;
     check_model(&model)
         .map_err(|e| anyhow::anyhow!("{}: prediction_model: {e}", path.display()))?;
     Ok(model)
