@@ -251,7 +251,7 @@ fn with_covariates(updown: &Candidate, out: &mut Vec<Candidate>) {
             ..wide
         };
         c.design.runs_per_cord = runs;
-        c.procedure[0] = format!("{runs} runs on each cord");
+        c.procedure[0] = runs_on_each_cord(runs);
         push_new(out, c);
     }
 }
@@ -297,7 +297,7 @@ fn rig_only(name: &str, design: Design) -> Candidate {
         format!("capstan rig set order {}", design.order.name()),
         "capstan rig store".to_string(),
     ];
-    let procedure = vec![format!("{} runs on each cord", design.runs_per_cord)];
+    let procedure = vec![runs_on_each_cord(design.runs_per_cord)];
     Candidate {
         name: name.to_string(),
         design,
@@ -338,10 +338,9 @@ pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
         d.wraps_deg.extend([270.0, 450.0, 720.0]);
         d.wraps_deg.sort_by(f64::total_cmp);
         d.wraps_deg.dedup();
-        c.physical_changes.push(format!(
-            "wrap a new cord at each of {:?} degrees",
-            d.wraps_deg
-        ));
+        let wraps: Vec<String> = d.wraps_deg.iter().map(|w| format!("{w}°")).collect();
+        c.physical_changes
+            .push(format!("wrap a new cord at each of {}", wraps.join(", ")));
     }
     if needs.diameters && d.diameters_mm.len() == 1 {
         let one = d.diameters_mm[0];
@@ -353,7 +352,13 @@ pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
     }
     if needs.min_runs > d.runs_per_cord {
         d.runs_per_cord = needs.min_runs;
-        c.procedure[0] = format!("{} runs on each cord", d.runs_per_cord);
+        c.procedure[0] = runs_on_each_cord(d.runs_per_cord);
     }
     c
+}
+
+/// "1 run on each cord", "6 runs on each cord".
+fn runs_on_each_cord(n: impl Into<u64>) -> String {
+    let n = n.into();
+    format!("{n} run{} on each cord", if n == 1 { "" } else { "s" })
 }
