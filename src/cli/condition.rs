@@ -279,14 +279,22 @@ fn say(runs: &[RunResult], layout: &table::Layout, a: &Args, pairs: usize) {
             r.levels.len()
         );
         for l in &r.levels {
+            // A level without samples has no mean: said, not printed as NaN.
+            let force = |v: f64| {
+                if v.is_finite() {
+                    format!("{v:.4} N")
+                } else {
+                    "none".to_string()
+                }
+            };
             crate::errln!(
-                "  step {:>2}: window {:.3}..{:.3} s, {} samples: T1 {:.4} N, T2 {:.4} N{}",
+                "  step {:>2}: window {:.3}..{:.3} s, {} samples: T1 {}, T2 {}{}",
                 l.step,
                 l.window_from_s,
                 l.window_to_s,
                 l.samples,
-                l.t1.0,
-                l.t2.0,
+                force(l.t1.0),
+                force(l.t2.0),
                 if l.status == "ok" {
                     String::new()
                 } else {
