@@ -7,7 +7,7 @@
 //! test — is listed, not guessed.
 
 use crate::candidates::{testing_design, Design};
-use crate::trial::{config, World};
+use crate::world::{campaign, World};
 use capstan_engine::diagnose::Diagnosis;
 use capstan_friction::{Effect, EffectKind};
 use serde::Serialize;
@@ -107,7 +107,7 @@ pub fn open_hypotheses(
     }
     let open = untestable_kinds(d, current, world);
     let testing = testing_design(current, &open, &world.protocol);
-    let cfg = config(&testing, &named, world, 0);
+    let cfg = campaign(&testing, &named.effects, world, 0);
     let mut sized = Vec::new();
     for kind in open {
         if testing.untestable(kind, &world.protocol).is_some() {

@@ -9,6 +9,7 @@
 pub mod candidates;
 pub mod hypotheses;
 pub mod trial;
+pub mod world;
 
 use candidates::{candidates, Candidate, Design};
 use capstan_data::Dataset;

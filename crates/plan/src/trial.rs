@@ -7,28 +7,14 @@
 
 use crate::candidates::Design;
 use crate::hypotheses::Hypothesis;
-use capstan_friction::Model;
+use crate::world::campaign;
+pub use crate::world::World;
 use capstan_truth::cases::{Case, Class};
 use capstan_truth::score::{self, Outcome};
-use firmware::Protocol;
 use host_sim::campaign::CampaignConfig;
-use host_sim::noise::NoiseProfile;
 use host_sim::plant::rng::derive_seed;
 use serde::Serialize;
 use std::collections::BTreeMap;
-
-/// What the simulated campaigns share: the data's mu and scatter, and the protocol.
-#[derive(Clone, Debug)]
-pub struct World {
-    /// Euler-Eytelwein's mu of the data.
-    pub mu: f64,
-    /// Cord-to-cord scatter of mu, %.
-    pub cord_pct: f64,
-    /// Run-to-run scatter of mu within cords, %.
-    pub run_pct: f64,
-    /// The run protocol (dwell, windows, levels).
-    pub protocol: Protocol,
-}
 
 /// How often campaigns under one hypothesis decided, and what they said otherwise.
 #[derive(Clone, Debug, Serialize)]
@@ -52,26 +38,7 @@ pub struct Rate {
 
 /// The simulator's configuration of `design` under `h`.
 pub fn config(design: &Design, h: &Hypothesis, world: &World, seed: u64) -> CampaignConfig {
-    let mut cfg = CampaignConfig {
-        diameters_mm: design.diameters_mm.clone(),
-        wraps_deg: design.wraps_deg.clone(),
-        drive_vs: design.drive_v.clone(),
-        runs: design.runs_per_cord,
-        order: design.order,
-        effects: h.effects.clone(),
-        model: Model::euler_eytelwein(world.mu),
-        protocol: world.protocol,
-        seed,
-        threads: 1,
-        keep_raw: false,
-        ..CampaignConfig::default()
-    };
-    // The planted-truth cases' rig: sensors that read to the ADC's top rail.
-    capstan_truth::cases::rail_rig(&mut cfg);
-    NoiseProfile::Thesis.apply(&mut cfg);
-    cfg.scatter_pct = world.cord_pct;
-    cfg.run_scatter_pct = Some(world.run_pct);
-    cfg
+    campaign(design, &h.effects, world, seed)
 }
 
 /// `reps` campaigns of `design` under each hypothesis, seeds from `seed` and `salt`; rates in
