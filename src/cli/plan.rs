@@ -136,7 +136,7 @@ fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
     if let Some(b) = &p.better_beyond_hours {
         let _ = writeln!(
             s,
-            "Within the hours given no protocol does better than {:.0} %: {} reaches {:.0} %              (worst case) but needs {:.1} rig hours.",
+            "Within the hours given no protocol does better than {:.0} %: {} reaches {:.0} % (worst case) but needs {:.1} rig hours.",
             100.0 * r.p_decide_worst,
             b.name,
             100.0 * b.p_decide_worst,
@@ -169,7 +169,7 @@ fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
     } else if r.p_decide_worst == 0.0 && p.any_decides {
         let _ = writeln!(
             s,
-            "No protocol within the hours decides (0 % worst case); the shortest, {} ({:.1}              rig hours), follows only as a place to start.",
+            "No protocol within the hours decides (0 % worst case); the shortest, {} ({:.1} rig hours), follows only as a place to start.",
             r.candidate.name, r.rig_hours
         );
     } else {
