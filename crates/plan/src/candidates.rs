@@ -159,8 +159,8 @@ pub fn candidates(current: &Design, open: &[EffectKind]) -> Vec<Candidate> {
         design: current.clone(),
         rig_commands: Vec::new(),
         procedure: vec![format!(
-            "{} runs on each cord, as before",
-            current.runs_per_cord
+            "{}, as before",
+            runs_on_each_cord(current.runs_per_cord)
         )],
         physical_changes: Vec::new(),
     }];
