@@ -260,6 +260,8 @@ fn a_run_refused_at_its_tare_does_not_overwrite_a_recorded_session() {
         .map(|f| std::fs::read(sess.join(f)).unwrap())
         .collect();
     assert_eq!(String::from_utf8_lossy(&before[0]).lines().count(), 13);
+    // The simulated board sends records, not a defmt stream: no stream.defmt to decode again.
+    assert!(!sess.join("stream.defmt").exists());
 
     ok("bench load t2 20");
     let o = log(&["--overwrite"]);

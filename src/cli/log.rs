@@ -181,7 +181,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = LogOptions {
         out_dir: args.out.clone(),
         overwrite: args.overwrite,
-        save_stream: args.from.as_deref().is_none_or(|f| f == "-"),
+        // A board's or stdin's bytes; a simulated board sends records, not bytes: none.
+        save_stream: args.sim.sim.is_none() && args.from.as_deref().is_none_or(|f| f == "-"),
         setup: SetupFlags {
             capstan_diameter_mm: args.diameter_mm,
             wrap_deg: args.wrap_deg,

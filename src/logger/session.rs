@@ -72,7 +72,8 @@ impl<'f> Logger<'f> {
     }
 
     /// A session fed records already decoded ([`Logger::take_records`]): the simulated board,
-    /// which runs the firmware's code on the host. `stream.defmt` stays empty.
+    /// which runs the firmware's code on the host. Nothing is encoded, so there is no
+    /// `stream.defmt` to keep: give it [`LogOptions::save_stream`] false.
     pub fn create_for_records(opts: LogOptions, source: &str) -> anyhow::Result<Self> {
         Self::with_decoder(Decoder::records_only(), opts, source)
     }

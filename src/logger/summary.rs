@@ -325,11 +325,11 @@ impl Summary {
             return None;
         }
         // A simulated board's records come without a defmt stream: nothing to decode again.
-        if self.source.starts_with("the simulated board") {
+        if let Some(board) = self.source.strip_prefix("the simulated board in ") {
             return Some(format!(
                 "{} pair(s) lack a set-up value or their run number and are in \
                  {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; the simulated board sends no stream to decode \
-                 again: set them on the board before recording (capstan rig --sim DIR set \
+                 again: set them on the board before recording (capstan rig --sim {board} set \
                  wrap_deg DEG, then set diameter_mm MM; the drive voltage is amp_control_v × \
                  amp_gain) or give --wrap-deg/--diameter-mm/--drive-v to capstan log --sim",
                 self.pairs_incomplete
