@@ -224,3 +224,69 @@ fn a_session_is_not_written_into_the_boards_directory() {
     assert!(!ok && text.contains("weigh t1|t2 NEWTONS"), "{text}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A run the firmware refuses at its tare (a weight left on the T2 hook: `tare_load`, no pair,
+/// no raw sample) is cut short, not complete: `log --overwrite` with it replaces nothing. The
+/// recorded session stays byte for byte, what came in is kept apart, the exit status says so.
+#[test]
+fn a_run_refused_at_its_tare_does_not_overwrite_a_recorded_session() {
+    let dir = tmp("tare-overwrite");
+    let ok = |words: &str| {
+        let (ok, text) = rig(&dir, "b", words);
+        assert!(ok, "`rig {words}` failed: {text}");
+    };
+    ok("set wrap_deg 360");
+    ok("set diameter_mm 12.7");
+    ok("store");
+    let log = |extra: &[&str]| {
+        let mut args = vec![
+            "log", "--sim", "b", "--start", "--runs", "1", "--out", "sess",
+        ];
+        args.extend(extra);
+        Command::new(env!("CARGO_BIN_EXE_capstan"))
+            .args(&args)
+            .current_dir(&dir)
+            .output()
+            .expect("capstan runs")
+    };
+    let o = log(&[]);
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{text}");
+    assert!(text.contains("(1 complete)"), "{text}");
+    let sess = dir.join("sess");
+    let files = ["pairs.csv", "raw.csv", "faults.csv", "summary.json"];
+    let before: Vec<Vec<u8>> = files
+        .iter()
+        .map(|f| std::fs::read(sess.join(f)).unwrap())
+        .collect();
+    assert_eq!(String::from_utf8_lossy(&before[0]).lines().count(), 13);
+    // The simulated board sends records, not a defmt stream: no stream.defmt to decode again.
+    assert!(!sess.join("stream.defmt").exists());
+
+    ok("bench load t2 20");
+    let o = log(&["--overwrite"]);
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(text.contains("FAULT tare_load"), "{text}");
+    assert_eq!(o.status.code(), Some(1), "{text}");
+    assert!(text.contains("0 complete, 1 ended by a fault"), "{text}");
+    assert!(text.contains("cut short by the fault tare_load"), "{text}");
+    assert!(text.contains("sess is as it was"), "{text}");
+    for (f, old) in files.iter().zip(&before) {
+        assert_eq!(&std::fs::read(sess.join(f)).unwrap(), old, "{f} changed");
+    }
+    // What came in is kept apart: its fault, no pair.
+    let kept: Vec<PathBuf> = std::fs::read_dir(&sess)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("incomplete-")
+        })
+        .collect();
+    assert_eq!(kept.len(), 1, "{kept:?}");
+    let faults = std::fs::read_to_string(kept[0].join("faults.csv")).unwrap();
+    assert!(faults.contains("tare_load"), "{faults}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

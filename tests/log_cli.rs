@@ -80,7 +80,9 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
     assert!(err.contains("run 1 step 1: T1 "), "{err}");
     assert!(err.contains("FAULT over_force at 1.302 s (run 2)"), "{err}");
     assert!(
-        err.contains("2 run(s) (2 complete), 4 pairs, 202 raw samples, 1 faults"),
+        err.contains(
+            "2 run(s) (1 complete, 1 ended by a fault), 4 pairs, 202 raw samples, 1 faults"
+        ),
         "{err}"
     );
     for f in [

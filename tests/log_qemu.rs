@@ -310,6 +310,7 @@ fn qemu_run_decoded_by_capstan_log_agrees_with_host_sim() {
     assert_eq!(s["runs"][0]["complete"], true);
     assert_eq!(s["runs"][0]["ended_by_fault"], serde_json::Value::Null);
     assert_eq!(s["runs"][1]["ended_by_fault"], "over_force");
+    assert_eq!(s["runs"][1]["complete"], false);
 
     let pairs = load_pairs(&q.out_dir.join("pairs.csv")).unwrap().pairs;
     let n_per_count = qemu_fw::calibration().t1.n_per_count as f64;

@@ -206,6 +206,10 @@ fn bad_arguments_are_clear_errors_not_panics() {
             vec!["--two-control", "--wraps", "720,720,720,720,720"],
             "1 to 4",
         ),
+        // A campaign's option given to the two-control rig is refused, never dropped.
+        (vec!["--two-control", "--order", "updown"], "use --orders"),
+        (vec!["--two-control", "--order", "monotone"], "use --orders"),
+        (vec!["--orders", "updown,pulse"], "is for --two-control"),
     ] {
         let mut a = vec!["simulate", "--out", o];
         a.extend(&args);
@@ -214,5 +218,6 @@ fn bad_arguments_are_clear_errors_not_panics() {
         assert!(!r.status.success(), "{args:?} succeeded");
         assert!(err.contains(want), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} wrote {o}");
     }
 }

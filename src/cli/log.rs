@@ -42,7 +42,8 @@ LOGGING A RUN ON THE PICO
      A fault in setup mode goes to faults.csv with an empty run and its time since boot.
   4. Stop with Ctrl-C (or --runs N / --duration S). Everything received is kept, files
      flushed; a lost probe (cable pulled) also keeps everything and exits with an error.
-     A session becomes DIR's files only with at least one complete run (or --allow-empty):
+     A session becomes DIR's files only with at least one complete run (its run_end came
+     and no fault ended it: a run refused at its tare or aborted is not one; or --allow-empty):
      otherwise what was received is kept in DIR/incomplete-<id>, DIR stays as it was (a
      recorded session there is never replaced by an empty or broken one), and the exit
      status is 1 (130 after Ctrl-C).
@@ -128,7 +129,7 @@ pub struct Args {
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
 
-    /// Stop after this many complete runs.
+    /// Stop after this many complete runs (a run a fault ended is not one).
     #[arg(long, value_name = "N")]
     pub runs: Option<usize>,
 
@@ -141,8 +142,8 @@ pub struct Args {
     #[arg(long)]
     pub overwrite: bool,
 
-    /// Keep a session without a complete run (nothing received, a run cut short) as DIR's
-    /// files. Without it such a session replaces nothing: what was received is kept in
+    /// Keep a session without a complete run (nothing received, a run cut short by Ctrl-C or
+    /// a fault) as DIR's files. Without it such a session replaces nothing: what was received is kept in
     /// DIR/incomplete-<id>, and the exit status is 1 (130 if stopped by a signal).
     #[arg(long)]
     pub allow_empty: bool,
@@ -180,7 +181,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = LogOptions {
         out_dir: args.out.clone(),
         overwrite: args.overwrite,
-        save_stream: args.from.as_deref().is_none_or(|f| f == "-"),
+        // A board's or stdin's bytes; a simulated board sends records, not bytes: none.
+        save_stream: args.sim.sim.is_none() && args.from.as_deref().is_none_or(|f| f == "-"),
         setup: SetupFlags {
             capstan_diameter_mm: args.diameter_mm,
             wrap_deg: args.wrap_deg,

@@ -77,9 +77,10 @@ pub struct Args {
     /// Drive voltages, V (at most 13.2: 3.3 V of control x the amplifier's gain of 4).
     #[arg(long = "drive-v", value_delimiter = ',', value_name = "V", default_values_t = [10.0], allow_negative_numbers = true)]
     pub drive_v: Vec<f64>,
-    /// Order of the tension levels.
-    #[arg(long, value_enum, default_value = "monotone")]
-    pub order: Order,
+    /// Order of the tension levels [default: monotone]. (Two-control: --orders, one per
+    /// channel.)
+    #[arg(long, value_enum)]
+    pub order: Option<Order>,
     /// A catalogue effect, NAME=VALUE (repeatable), e.g. pressure_friction=0.85.
     #[arg(long = "effect", value_name = "NAME=VALUE")]
     pub effects: Vec<String>,
@@ -346,7 +347,7 @@ fn campaign_config(args: &Args) -> anyhow::Result<CampaignConfig> {
         wraps_deg: args.wraps.clone().unwrap_or(defaults.wraps_deg),
         drive_vs: args.drive_v.clone(),
         runs: args.runs.unwrap_or(6),
-        order: args.order.into(),
+        order: args.order.unwrap_or(Order::Monotone).into(),
         effects,
         model,
         scatter_pct: args.scatter.unwrap_or(defaults.scatter_pct),

@@ -15,7 +15,9 @@
 //!
 //! The files become the directory's set only when the session holds a complete run (or
 //! [`LogOptions::allow_empty`]): a recorded session is never replaced by an empty or broken
-//! one ([`Outcome`]).
+//! one ([`Outcome`]). A complete run is one whose run-end record arrived with no fault that
+//! ended it ([`completes`]): a run refused at its tare, aborted by the button or stopped by a
+//! safety check is cut short, not complete.
 //!
 //! Times are seconds since the logger trigger's rising edge (negative before it), except in
 //! `live.csv` and for a fault in setup mode (no trigger there): seconds since boot.
@@ -32,7 +34,7 @@ mod files;
 mod session;
 mod summary;
 
-pub use session::Logger;
+pub use session::{completes, Logger};
 pub use summary::{RecordCounts, RunCalibration, RunSummary, Sourced, Summary, TruncatedTail};
 
 use std::path::PathBuf;

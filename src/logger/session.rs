@@ -34,7 +34,7 @@ pub struct Logger<'f> {
     runs: Vec<RunSummary>,
     current: Option<Current>,
     pairs_incomplete: u64,
-    /// Runs whose run-end record has arrived.
+    /// Complete runs: their run-end record arrived and no fault ended them.
     completed: usize,
     /// The rig is in setup mode as far as the records tell (`setup::keeps_setup`): a fault
     /// while no run is under way is a setup-mode fault, not the start of a run whose
@@ -47,6 +47,13 @@ pub struct Logger<'f> {
     boot: u32,
     /// What `summary.json` says made the session ([`Logger::set_provenance`]).
     provenance: Option<serde_json::Value>,
+}
+
+/// Does this run-end record close a complete run? Only if no fault ended it: a run the
+/// firmware stopped (the button's abort, a load at its tare, over-force, a broken cord, ...)
+/// did not run its protocol to the end, whatever pairs it made before.
+pub fn completes(e: &RunEnd) -> bool {
+    e.fault.is_none()
 }
 
 /// A run number for messages: `?` when unknown.
@@ -65,7 +72,8 @@ impl<'f> Logger<'f> {
     }
 
     /// A session fed records already decoded ([`Logger::take_records`]): the simulated board,
-    /// which runs the firmware's code on the host. `stream.defmt` stays empty.
+    /// which runs the firmware's code on the host. Nothing is encoded, so there is no
+    /// `stream.defmt` to keep: give it [`LogOptions::save_stream`] false.
     pub fn create_for_records(opts: LogOptions, source: &str) -> anyhow::Result<Self> {
         Self::with_decoder(Decoder::records_only(), opts, source)
     }
@@ -95,7 +103,8 @@ impl<'f> Logger<'f> {
         self.provenance = Some(p);
     }
 
-    /// Runs whose run-end record has arrived.
+    /// Complete runs: their run-end record arrived and no fault ended them (what `--runs`
+    /// counts, and what a session needs to replace an earlier one).
     pub fn completed_runs(&self) -> usize {
         self.completed
     }
@@ -369,10 +378,11 @@ impl<'f> Logger<'f> {
         self.current_run(seq);
         let c = self.current.take().expect("set");
         let rs = &mut self.runs[c.index];
-        if !rs.complete {
+        if completes(e) && !rs.complete {
             self.completed += 1;
+            rs.complete = true;
         }
-        rs.complete = true;
+        rs.ended = true;
         rs.pairs_reported = Some(e.pairs);
         rs.ended_by_fault = e.fault.map(|k| k.name());
         rs.end_time_s = Some(e.t_us as f64 / 1e6);
@@ -382,8 +392,10 @@ impl<'f> Logger<'f> {
                 rs.run.map_or("?".to_string(), |r| r.to_string()),
                 e.t_us as f64 / 1e6,
                 e.pairs,
-                e.fault
-                    .map_or(String::new(), |k| format!(", fault {}", k.name()))
+                e.fault.map_or(String::new(), |k| format!(
+                    ", fault {} (cut short: not a complete run)",
+                    k.name()
+                ))
             );
         }
     }

@@ -28,6 +28,11 @@ pub struct RunSummary {
     /// Sequence number of its first record seen.
     pub first_seq: u32,
     /// Its run-end record arrived.
+    pub ended: bool,
+    /// It ran its protocol to the end: its run-end record arrived and no fault ended it. A
+    /// run ended by a fault (the button's abort, a load at its tare, over-force, ...) was cut
+    /// short whatever pairs it made: it is not complete (a session of such runs replaces
+    /// nothing, [`crate::logger::Outcome`]).
     pub complete: bool,
     /// Raw samples received.
     pub raw: u64,
@@ -187,6 +192,7 @@ impl Summary {
     /// The human report (a few lines, for stderr).
     pub fn human(&self, dir: &Path) -> String {
         let mut lines = vec![self.totals_line(dir)];
+        lines.extend(self.faulted_lines());
         lines.extend(self.setup_line());
         lines.extend(self.damage_lines());
         lines.extend(self.incomplete_line(dir));
@@ -201,9 +207,19 @@ impl Summary {
     fn totals_line(&self, dir: &Path) -> String {
         let r = &self.records;
         let complete = self.runs.iter().filter(|r| r.complete).count();
+        let faulted = self
+            .runs
+            .iter()
+            .filter(|r| r.ended_by_fault.is_some())
+            .count();
+        let cut = if faulted > 0 {
+            format!(", {faulted} ended by a fault")
+        } else {
+            String::new()
+        };
         format!(
-            "{} run(s) ({} complete), {} pairs, {} raw samples, {} faults, {} messages from {} \
-             bytes ({}); files in {}",
+            "{} run(s) ({} complete{cut}), {} pairs, {} raw samples, {} faults, {} messages \
+             from {} bytes ({}); files in {}",
             self.runs.len(),
             complete,
             r.pair,
@@ -214,6 +230,21 @@ impl Summary {
             self.stopped,
             dir.display()
         )
+    }
+
+    /// Each run a fault ended: cut short, not complete, with what it made.
+    fn faulted_lines(&self) -> Vec<String> {
+        (self.runs.iter())
+            .filter_map(|r| {
+                let fault = r.ended_by_fault?;
+                let run = r.run.map_or("?".to_string(), |n| n.to_string());
+                Some(format!(
+                    "run {run} was cut short by the fault {fault} after {} pair(s): not a \
+                     complete run",
+                    r.pairs
+                ))
+            })
+            .collect()
     }
 
     /// The setup-mode records and their files, if any came.
@@ -294,11 +325,11 @@ impl Summary {
             return None;
         }
         // A simulated board's records come without a defmt stream: nothing to decode again.
-        if self.source.starts_with("the simulated board") {
+        if let Some(board) = self.source.strip_prefix("the simulated board in ") {
             return Some(format!(
                 "{} pair(s) lack a set-up value or their run number and are in \
                  {PAIRS_INCOMPLETE_CSV}, not {PAIRS_CSV}; the simulated board sends no stream to decode \
-                 again: set them on the board before recording (capstan rig --sim DIR set \
+                 again: set them on the board before recording (capstan rig --sim {board} set \
                  wrap_deg DEG, then set diameter_mm MM; the drive voltage is amp_control_v × \
                  amp_gain) or give --wrap-deg/--diameter-mm/--drive-v to capstan log --sim",
                 self.pairs_incomplete
@@ -355,6 +386,7 @@ impl RunSummary {
         RunSummary {
             run,
             first_seq,
+            ended: false,
             complete: false,
             raw: 0,
             pairs: 0,

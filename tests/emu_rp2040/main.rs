@@ -397,7 +397,9 @@ fn fault_case(setup: &Setup, c: Case) {
     // In the log: the fault record, the run ended by it, the latch.
     let s = &e.log;
     assert_eq!(s["runs"].as_array().unwrap().len(), 1, "{name}: {s:#}");
-    assert_eq!(s["runs"][0]["complete"], true, "{name}");
+    // Ended, but cut short by the fault: not a complete run.
+    assert_eq!(s["runs"][0]["ended"], true, "{name}");
+    assert_eq!(s["runs"][0]["complete"], false, "{name}");
     assert_eq!(s["runs"][0]["ended_by_fault"], kind.name(), "{name}");
     assert_eq!(e.faults.len(), 1, "{name}: {:?}", e.faults);
     assert_eq!(e.faults[0].2, kind.name(), "{name}");

@@ -290,7 +290,10 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
     // completes, a case without a press has no run, a host that stops reading loses records
     // and a press late in the case leaves its run unfinished, which `--strict` would refuse on
     // its own (checked from summary.json below).
+    // A run a fault ends (an injected fault, a load at the tare) is cut short, not complete.
     let strict = (case.core_fault.is_none()
+        && case.injections.is_empty()
+        && case.hung_n == [0.0; 2]
         && case.cord.press_at_us.is_some()
         && case.rtt_stall_us.is_none()
         && case.held_from_power_up_us == 0)

@@ -84,8 +84,23 @@ pub(super) fn not_committed(
             super::elf_name(args)
         )
     } else {
+        let faulted: Vec<String> = (summary.runs.iter())
+            .filter_map(|r| {
+                let run = r.run.map_or("?".to_string(), |n| n.to_string());
+                Some(format!(
+                    "run {run} was cut short by the fault {}",
+                    r.ended_by_fault?
+                ))
+            })
+            .collect();
+        let cut = if faulted.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", faulted.join(", "))
+        };
         format!(
-            "no complete run in {} records (a run ends with its run_end record)",
+            "no complete run in {} records{cut} (a complete run ends with its run_end record, \
+             and no fault ended it)",
             summary.records.total()
         )
     };

@@ -65,7 +65,8 @@ fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
     (steps, Some(runs))
 }
 
-/// The records up to the end of the `runs`-th complete run, and why the session stopped.
+/// The records up to the end of the `runs`-th complete run (a run a fault ended is not one:
+/// `logger::completes`), and why the session stopped.
 fn cut(mut events: Vec<Event>, runs: Option<usize>, args: &Args) -> (Vec<Event>, Stop) {
     if let Some(n) = runs {
         let mut seen = 0;
@@ -73,9 +74,9 @@ fn cut(mut events: Vec<Event>, runs: Option<usize>, args: &Args) -> (Vec<Event>,
             let done = matches!(
                 e,
                 Event::Record {
-                    record: Record::RunEnd(_),
+                    record: Record::RunEnd(end),
                     ..
-                }
+                } if crate::logger::completes(end)
             );
             seen += done as usize;
             seen == n

@@ -36,6 +36,12 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
 /// The two-control rig's configuration from the options, refusing the campaign-only ones.
 fn two_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
     let (model, effects) = model(args)?;
+    if args.order.is_some() {
+        bail!(
+            "--order is for campaigns; --two-control takes one order per channel: use \
+             --orders (e.g. --orders updown,pulse; default monotone,pulse)"
+        );
+    }
     if !effects.is_empty() {
         bail!("--effect is for campaigns; the two-control rig runs the base model (--mu)");
     }
