@@ -104,3 +104,116 @@ fn one_cord_says_stability_and_held_out_cannot_be_computed() {
         }
     }
 }
+
+/// Simulate a campaign into a fresh directory `name` (the simulator's default seed) and return
+/// its pairs.csv.
+fn simulate(name: &str, args: &[&str]) -> std::path::PathBuf {
+    let dir = tmp(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = capstan()
+        .args([
+            "simulate",
+            "--out",
+            dir.to_str().unwrap(),
+            "--noise",
+            "thesis",
+        ])
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir.join("pairs.csv")
+}
+
+fn discover_json(p: &std::path::Path) -> serde_json::Value {
+    let out = capstan()
+        .args(["discover", "--json", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+/// One capstan diameter (and the catalogue's T2 offset selected): every term that depends on
+/// the diameter is "not testable" with that reason, whatever the catalogue holds; none is
+/// screened, ranked or gated on round-off (before: `t2_offset_diameter` θ = −4·10²³ ranked
+/// first).
+#[test]
+fn one_diameter_terms_of_the_diameter_are_not_testable() {
+    let p = simulate(
+        "one-diameter",
+        &[
+            "--diameters",
+            "12.7",
+            "--wraps",
+            "270,450,720",
+            "--runs",
+            "4",
+            "--order",
+            "updown",
+            "--unmodelled",
+            "t2_lowforce=0.8",
+            "--no-raw",
+        ],
+    );
+    let v = discover_json(&p);
+    let lib = |name: &str| capstan_discover::library::term(name).unwrap();
+    let on_diameter = |name: &str| {
+        lib(name)
+            .depends_on
+            .contains(&capstan_discover::library::Var::Diameter)
+    };
+    let not: Vec<(&str, &str)> = v["not_testable"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| (n["name"].as_str().unwrap(), n["reason"].as_str().unwrap()))
+        .collect();
+    for t in capstan_discover::library::LIBRARY.iter() {
+        if on_diameter(t.name) {
+            let why = not.iter().find(|(n, _)| *n == t.name).map(|(_, r)| *r);
+            assert!(
+                why.is_some_and(|r| r.contains("one capstan diameter")),
+                "{}: {why:?}",
+                t.name
+            );
+        }
+    }
+    let screen = v["search"]["screen"].as_array().unwrap();
+    assert!(!screen.is_empty());
+    assert_eq!(
+        v["search"]["tried"].as_u64().unwrap() as usize,
+        capstan_discover::library::LIBRARY.len() - not.len()
+    );
+    for r in screen {
+        let name = r["name"].as_str().unwrap();
+        assert!(!on_diameter(name), "{r}");
+        // No round-off estimates: θ and its SE are of a physical size.
+        assert!(r["theta"].as_f64().is_some_and(|t| t.abs() < 1e3), "{r}");
+        assert!(r["se"].as_f64().is_none_or(|s| s < 1e3), "{r}");
+    }
+    // The summary ranks none of them either.
+    let out = capstan()
+        .args(["discover", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let ranked = text
+        .split("strongest candidates")
+        .nth(1)
+        .and_then(|s| s.split("not testable").next())
+        .unwrap();
+    assert!(!ranked.contains("t2_offset_diameter"), "{text}");
+    assert!(
+        text.contains("not testable: t2_offset_diameter: one capstan diameter"),
+        "{text}"
+    );
+}
