@@ -217,3 +217,61 @@ fn one_diameter_terms_of_the_diameter_are_not_testable() {
         "{text}"
     );
 }
+
+/// One run per cord: there are no replicate cells, so a term proposed (here the planted
+/// hysteresis) is proposed without the replicate gate, and the verdict, its words and the JSON
+/// say so; its dimensionless parameter has no bare "1" for a unit. With two runs in all, no
+/// run-clustered standard error is shown (two clusters claim more than they know).
+#[test]
+fn one_run_per_cord_says_the_replicate_gate_was_not_applied() {
+    let p = simulate(
+        "one-run-per-cord",
+        &[
+            "--diameters",
+            "12.7,25.4",
+            "--wraps",
+            "270,450,630,720",
+            "--runs",
+            "1",
+            "--order",
+            "updown",
+            "--unmodelled",
+            "hysteresis=0.3",
+            "--no-raw",
+        ],
+    );
+    let v = discover_json(&p);
+    let terms = v["terms"].as_array().unwrap();
+    assert_eq!(terms.len(), 1, "{}", v["verdict"]);
+    let t = &terms[0];
+    assert_eq!(t["name"], "hysteresis");
+    assert_eq!(t["replicate"], serde_json::Value::Null);
+    assert!(t["replicate_gate_not_applied"]
+        .as_str()
+        .is_some_and(|s| s.contains("replicate cells")));
+    let words = t["words"].as_str().unwrap();
+    assert!(words.contains("replicate gate was not applied"), "{words}");
+    let se = t["parameter_se"]["c"].as_f64().unwrap();
+    assert!(!words.contains(&format!("{se:.4} 1)")), "{words}");
+    assert!(words.contains(&format!("{se:.4})")), "{words}");
+    assert!(v["verdict"]
+        .as_str()
+        .unwrap()
+        .contains("hysteresis (without the replicate gate)"));
+
+    let p = simulate(
+        "two-runs",
+        &["--diameters", "12.7", "--wraps", "360,540", "--runs", "1"],
+    );
+    let v = discover_json(&p);
+    for r in v["search"]["screen"].as_array().unwrap() {
+        assert_eq!(r["se"], serde_json::Value::Null, "two runs: {r}");
+    }
+    let out = capstan()
+        .args(["discover", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("SE n/a: fewer than 3 runs"), "{text}");
+    assert!(!text.contains(" ± "), "{text}");
+}
