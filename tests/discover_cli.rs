@@ -104,3 +104,174 @@ fn one_cord_says_stability_and_held_out_cannot_be_computed() {
         }
     }
 }
+
+/// Simulate a campaign into a fresh directory `name` (the simulator's default seed) and return
+/// its pairs.csv.
+fn simulate(name: &str, args: &[&str]) -> std::path::PathBuf {
+    let dir = tmp(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = capstan()
+        .args([
+            "simulate",
+            "--out",
+            dir.to_str().unwrap(),
+            "--noise",
+            "thesis",
+        ])
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir.join("pairs.csv")
+}
+
+fn discover_json(p: &std::path::Path) -> serde_json::Value {
+    let out = capstan()
+        .args(["discover", "--json", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+/// One capstan diameter (and the catalogue's T2 offset selected): every term that depends on
+/// the diameter is "not testable" with that reason, whatever the catalogue holds; none is
+/// screened, ranked or gated on round-off (before: `t2_offset_diameter` θ = −4·10²³ ranked
+/// first).
+#[test]
+fn one_diameter_terms_of_the_diameter_are_not_testable() {
+    let p = simulate(
+        "one-diameter",
+        &[
+            "--diameters",
+            "12.7",
+            "--wraps",
+            "270,450,720",
+            "--runs",
+            "4",
+            "--order",
+            "updown",
+            "--unmodelled",
+            "t2_lowforce=0.8",
+            "--no-raw",
+        ],
+    );
+    let v = discover_json(&p);
+    let lib = |name: &str| capstan_discover::library::term(name).unwrap();
+    let on_diameter = |name: &str| {
+        lib(name)
+            .depends_on
+            .contains(&capstan_discover::library::Var::Diameter)
+    };
+    let not: Vec<(&str, &str)> = v["not_testable"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| (n["name"].as_str().unwrap(), n["reason"].as_str().unwrap()))
+        .collect();
+    for t in capstan_discover::library::LIBRARY.iter() {
+        if on_diameter(t.name) {
+            let why = not.iter().find(|(n, _)| *n == t.name).map(|(_, r)| *r);
+            assert!(
+                why.is_some_and(|r| r.contains("one capstan diameter")),
+                "{}: {why:?}",
+                t.name
+            );
+        }
+    }
+    let screen = v["search"]["screen"].as_array().unwrap();
+    assert!(!screen.is_empty());
+    assert_eq!(
+        v["search"]["tried"].as_u64().unwrap() as usize,
+        capstan_discover::library::LIBRARY.len() - not.len()
+    );
+    for r in screen {
+        let name = r["name"].as_str().unwrap();
+        assert!(!on_diameter(name), "{r}");
+        // No round-off estimates: θ and its SE are of a physical size.
+        assert!(r["theta"].as_f64().is_some_and(|t| t.abs() < 1e3), "{r}");
+        assert!(r["se"].as_f64().is_none_or(|s| s < 1e3), "{r}");
+    }
+    // The summary ranks none of them either.
+    let out = capstan()
+        .args(["discover", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let ranked = text
+        .split("strongest candidates")
+        .nth(1)
+        .and_then(|s| s.split("not testable").next())
+        .unwrap();
+    assert!(!ranked.contains("t2_offset_diameter"), "{text}");
+    assert!(
+        text.contains("not testable: t2_offset_diameter: one capstan diameter"),
+        "{text}"
+    );
+}
+
+/// One run per cord: there are no replicate cells, so a term proposed (here the planted
+/// hysteresis) is proposed without the replicate gate, and the verdict, its words and the JSON
+/// say so; its dimensionless parameter has no bare "1" for a unit. With two runs in all, no
+/// run-clustered standard error is shown (two clusters claim more than they know).
+#[test]
+fn one_run_per_cord_says_the_replicate_gate_was_not_applied() {
+    let p = simulate(
+        "one-run-per-cord",
+        &[
+            "--diameters",
+            "12.7,25.4",
+            "--wraps",
+            "270,450,630,720",
+            "--runs",
+            "1",
+            "--order",
+            "updown",
+            "--unmodelled",
+            "hysteresis=0.3",
+            "--no-raw",
+        ],
+    );
+    let v = discover_json(&p);
+    let terms = v["terms"].as_array().unwrap();
+    assert_eq!(terms.len(), 1, "{}", v["verdict"]);
+    let t = &terms[0];
+    assert_eq!(t["name"], "hysteresis");
+    assert_eq!(t["replicate"], serde_json::Value::Null);
+    assert!(t["replicate_gate_not_applied"]
+        .as_str()
+        .is_some_and(|s| s.contains("replicate cells")));
+    let words = t["words"].as_str().unwrap();
+    assert!(words.contains("replicate gate was not applied"), "{words}");
+    let se = t["parameter_se"]["c"].as_f64().unwrap();
+    assert!(!words.contains(&format!("{se:.4} 1)")), "{words}");
+    assert!(words.contains(&format!("{se:.4})")), "{words}");
+    assert!(v["verdict"]
+        .as_str()
+        .unwrap()
+        .contains("hysteresis (without the replicate gate)"));
+
+    let p = simulate(
+        "two-runs",
+        &["--diameters", "12.7", "--wraps", "360,540", "--runs", "1"],
+    );
+    let v = discover_json(&p);
+    for r in v["search"]["screen"].as_array().unwrap() {
+        assert_eq!(r["se"], serde_json::Value::Null, "two runs: {r}");
+    }
+    let out = capstan()
+        .args(["discover", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("SE n/a: fewer than 3 runs"), "{text}");
+    assert!(!text.contains(" ± "), "{text}");
+}

@@ -142,13 +142,13 @@ pub fn summary(d: &Discovery) -> String {
     for r in sr.screen.iter().take(5) {
         let _ = writeln!(
             s,
-            "  {:<20} {:>7.1}  θ = {:.4} ± {}{}{}",
+            "  {:<20} {:>7.1}  θ = {:.4}{}{}{}",
             r.name,
             r.delta_bic,
             r.theta,
             r.se.map_or(
-                "n/a (one run: no run-clustered error)".to_string(),
-                |se| format!("{se:.4}")
+                " (SE n/a: fewer than 3 runs, no run-clustered error)".to_string(),
+                |se| format!(" ± {se:.4}")
             ),
             if r.sign_ok {
                 ""

@@ -57,6 +57,12 @@ pub struct Proposed {
     pub source: &'static str,
     /// Lack of fit against the replicate runs with it in (None: not testable).
     pub lack_of_fit_after: Option<LackOfFit>,
+    /// Its evidence on the replicate cells' means: the replicate gate it passed (None:
+    /// between-level, or the gate could not be computed, see `replicate_gate_not_applied`).
+    pub replicate: Option<crate::replicate::Replicate>,
+    /// Why a within-run term was proposed without the replicate gate (None: it passed it, or
+    /// it is between-level, where the gate does not apply).
+    pub replicate_gate_not_applied: Option<&'static str>,
     /// Library terms within the rival gap of it.
     pub rivals: Vec<Rival>,
     /// The catalogue effect it takes the place of (the joint search), if any.
@@ -142,7 +148,7 @@ pub struct ScreenRow {
     pub delta_bic: f64,
     /// θ̂ (first order).
     pub theta: f64,
-    /// Its cluster-robust standard error (None: one run, no run-clustered error).
+    /// Its cluster-robust standard error (None: fewer than 3 runs, no run-clustered error).
     pub se: Option<f64>,
     /// θ̂ keeps the term's physical sign.
     pub sign_ok: bool,
@@ -226,6 +232,17 @@ pub(crate) fn decline(
     }
 }
 
+/// Why a within-run term's replicate gate could not be computed (the gate returns nothing).
+const NO_GATE: &str = "fewer than 4 replicate cells (a cell is a cord's step seen by two runs or more; with one run per cord there are none), so the run-to-run wander of mu is not ruled out as what it fits (without the gate, a false term was proposed in 2 to 3 of 12 catalogue-only planted sets)";
+
+/// A parameter's unit after its value: none for a dimensionless one ("1").
+fn unit_words(units: &str) -> String {
+    match units {
+        "1" | "" => String::new(),
+        u => format!(" {u}"),
+    }
+}
+
 pub(crate) fn proposed(
     t: &'static Term,
     s: &screen::Screen,
@@ -250,14 +267,18 @@ pub(crate) fn proposed(
             x.effect, x.delta_bic_swap
         )
     });
+    let no_gate = (s.level == Level::WithinRun && s.replicate.is_none()).then_some(NO_GATE);
+    let gate_words = no_gate.map_or(String::new(), |why| {
+        format!(" The replicate gate was not applied: {why}.")
+    });
     let words = format!(
-        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4} {}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
+        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4}{}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
         t.name,
         t.reading,
         t.parameter,
         s.theta,
         s.se,
-        t.units,
+        unit_words(t.units),
         s.delta_bic,
         100.0 * stab,
         ratio.value,
@@ -265,7 +286,8 @@ pub(crate) fn proposed(
         ratio.ci95.hi,
         if shown { ": shown to predict new cords better" } else { ": not shown to predict new cords better" },
         rival_words
-    ) + &displace_words;
+    ) + &displace_words
+        + &gate_words;
     Proposed {
         name: t.name,
         formula: t.formula,
@@ -282,6 +304,8 @@ pub(crate) fn proposed(
         reading: t.reading,
         source: t.source,
         lack_of_fit_after: lof,
+        replicate: s.replicate.clone(),
+        replicate_gate_not_applied: no_gate,
         rivals,
         displaced,
         words,
@@ -295,7 +319,13 @@ pub(crate) fn verdict_words(
     declined: &[Declined],
 ) -> String {
     if !terms.is_empty() {
-        let names: Vec<&str> = terms.iter().map(|t| t.name).collect();
+        let names: Vec<String> = terms
+            .iter()
+            .map(|t| match t.replicate_gate_not_applied {
+                Some(_) => format!("{} (without the replicate gate)", t.name),
+                None => t.name.to_string(),
+            })
+            .collect();
         let left = if unexplained {
             format!(
                 " Structure is still left (pattern: {}).",

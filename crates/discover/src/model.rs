@@ -5,7 +5,7 @@
 use crate::answer::NotTestable;
 use crate::columns::Base;
 use crate::joint;
-use crate::library::LIBRARY;
+use crate::library::{Row, Var, LIBRARY};
 use crate::screen::{self, between_evidence, sign_ok, within_evidence, Level, Projector, Runs};
 use capstan_engine::evidence::within::WithinFit;
 use capstan_engine::evidence::Assessment;
@@ -57,11 +57,24 @@ pub(crate) struct Testable {
     pub(crate) g_run: Option<Vec<f64>>,
 }
 
-/// The terms these data can test, and why each other cannot be.
+/// The terms these data can test, and why each other cannot be. A term is tested only where
+/// every variable it depends on varies (with one capstan diameter, `t2_offset_diameter` is
+/// zero but for round-off and `heat_per_radius` is the catalogue's contact heating: its ΔBIC
+/// and θ would be round-off or another term's), and where its column, each run's mu projected
+/// out, is neither null nor the catalogue's own within-run columns.
 pub(crate) fn classify(base: &Base) -> (Vec<Testable>, Vec<NotTestable>) {
     let (mut ok, mut not) = (Vec::new(), Vec::new());
     let proj0 = Projector::new(base, &[]);
+    let proj_b = (!base.b.is_empty()).then(|| Projector::new(base, &base.b));
+    let norm = |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
     for (j, t) in LIBRARY.iter().enumerate() {
+        if let Some(reason) = t.depends_on.iter().find_map(|&v| fixed_variable(base, v)) {
+            not.push(NotTestable {
+                name: t.name,
+                reason,
+            });
+            continue;
+        }
         if let Some(g) = screen::run_level_g(base, t) {
             let spread = g.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
                 - g.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -80,24 +93,78 @@ pub(crate) fn classify(base: &Base) -> (Vec<Testable>, Vec<NotTestable>) {
             continue;
         }
         let x = base.column(t);
-        let xt = proj0.project(base, &x);
-        let raw: f64 = x.iter().zip(&base.w).map(|(v, w)| w * v * v).sum();
-        let left: f64 = xt.iter().zip(&base.w).map(|(v, w)| w * v * v).sum();
-        if raw > 0.0 && left > 1e-9 * raw {
-            ok.push(Testable {
+        let left = norm(&proj0.project(base, &x));
+        let reason = if !(norm(&x) > 0.0 && left > 1e-9 * norm(&x)) {
+            Some("its column is all absorbed by every run's own mu (no spread of its variable)")
+        } else if proj_b
+            .as_ref()
+            .is_some_and(|p| norm(&p.project(base, &x)) <= 1e-9 * left)
+        {
+            Some("its column within runs is the catalogue's (numerically collinear with the selected effects)")
+        } else {
+            None
+        };
+        match reason {
+            Some(reason) => not.push(NotTestable {
+                name: t.name,
+                reason,
+            }),
+            None => ok.push(Testable {
                 term: j,
                 column: Some(x),
                 g_run: None,
-            });
-        } else {
-            not.push(NotTestable {
-                name: t.name,
-                reason:
-                    "its column is all absorbed by every run's own mu (no spread of its variable)",
-            });
+            }),
         }
     }
     (ok, not)
+}
+
+/// Why a term that depends on `v` cannot be tested on these data (`v` does not vary), if so.
+fn fixed_variable(base: &Base, v: Var) -> Option<&'static str> {
+    let rows = &base.rows;
+    let spread = |f: fn(&Row) -> f64| {
+        let (lo, hi) = rows
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                (lo.min(x), hi.max(x))
+            });
+        hi - lo > 1e-9 * lo.abs().max(hi.abs())
+    };
+    let (varies, reason) = match v {
+        Var::T1 => (spread(|r| r.t1), "T1 does not vary in these data"),
+        Var::T2 => (spread(|r| r.t2), "T2 does not vary in these data"),
+        Var::Load => (spread(|r| r.load), "the load does not vary in these data"),
+        Var::Wrap => (
+            spread(|r| r.wrap),
+            "one wrap angle in these data: its dependence on the wrap cannot be tested",
+        ),
+        Var::Diameter => (
+            spread(|r| r.diameter),
+            "one capstan diameter in these data: its dependence on the diameter cannot be tested",
+        ),
+        Var::DriveV => (
+            spread(|r| r.drive_v),
+            "one drive voltage in these data: its dependence on the drive voltage cannot be tested",
+        ),
+        Var::Run => (
+            spread(|r| r.run),
+            "one run per cord in these data: its dependence on the run cannot be tested",
+        ),
+        Var::Time => (
+            spread(|r| r.time_in_run),
+            "one step per run in these data: its dependence on time cannot be tested",
+        ),
+        Var::Step => (
+            base.d.units.iter().any(|u| u.len() >= 2),
+            "one step per run in these data: its dependence on the step cannot be tested",
+        ),
+        Var::StepDirection => (
+            rows.iter().any(|r| r.falling) && rows.iter().any(|r| !r.falling),
+            "the tension never falls between steps in these data: its dependence on the step direction cannot be tested",
+        ),
+    };
+    (!varies).then_some(reason)
 }
 
 /// The runs' ln mu under `fit`, for the between-level tests.

@@ -140,8 +140,9 @@ pub fn within_evidence(
         var_rob += (s / info).powi(2);
     }
     var_rob *= (g - 1.0) / g;
-    // One run: no run-clustered error (the screen shows none, and the model's is used for ĉ).
-    let se = if g >= 2.0 { var_rob.sqrt() } else { f64::NAN };
+    // Fewer than 3 runs: no run-clustered error worth the name (from 2 clusters it claims more
+    // than it knows; the screen shows none). ĉ still uses what there is (1 at one run).
+    let se = if g >= 3.0 { var_rob.sqrt() } else { f64::NAN };
     let c_hat = (var_rob / var_model).max(1.0);
     let c_hat = if c_hat.is_finite() { c_hat } else { 1.0 };
     let chi2 = chi2_of_f(lr / c_hat, 1.0, (g - 1.0).max(1.0));
