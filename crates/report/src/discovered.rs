@@ -32,6 +32,7 @@ pub fn discovered_json(d: &Value) -> Value {
                             "method": t["loco_rmse_ratio"]["method"],
                         },
                         "rivals": t["rivals"],
+                        "replicate_gate_not_applied": t["replicate_gate_not_applied"],
                     })
                 })
                 .collect()
@@ -63,10 +64,14 @@ pub fn discovered_html(d: &Value) -> String {
         h.push_str("<table><tr><th>term (discovered, not an established cause)</th><th>acts on</th><th>depends on</th><th>held-out RMSE without → with (N)</th><th>ratio [95 %]</th><th>stability</th></tr>");
         for t in ts {
             let r = &t["loco_rmse_ratio"];
+            let gate = match t["replicate_gate_not_applied"].as_str() {
+                Some(why) => format!(" (without the replicate gate: {})", esc(why)),
+                None => String::new(),
+            };
             let f = |v: &Value| v.as_f64().map_or("-".into(), |x| format!("{x:.3}"));
             let _ = write!(
                 h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{} → {}</td><td>{} [{}, {}]</td><td>{}</td></tr>",
+                "<tr><td>{}{gate}</td><td>{}</td><td>{}</td><td>{} → {}</td><td>{} [{}, {}]</td><td>{}</td></tr>",
                 esc(t["name"].as_str().unwrap_or("")),
                 esc(t["acts_on"].as_str().unwrap_or("")),
                 esc(&t["depends_on"].to_string()),
