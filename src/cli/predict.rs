@@ -327,16 +327,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// When the query's wrap lies outside the fitted wraps, the wrap-extrapolation error's SD, N,
 /// at that distance (`Some(None)`: not measured), else `None`.
-fn wrap_error(args: &Args, drive_v: f64, pm: &PredictionModel) -> Option<Option<f64>> {
-    let q = prediction::Query {
-        wrap_deg: args.wrap_deg,
-        diameter_mm: args.diameter_mm,
-        drive_v,
-        t1_n: 1.0,
-        as_measured: args.as_measured,
-    };
-    pm.extrapolates_in_wrap(&q)
-        .then(|| pm.wrap_extrapolation_sd(q.wrap_deg))
+fn wrap_error(args: &Args, pm: &PredictionModel) -> Option<Option<f64>> {
+    pm.extrapolates_in_wrap(args.wrap_deg)
+        .then(|| pm.wrap_extrapolation_sd(args.wrap_deg))
 }
 
 /// The predictions as one JSON object (the contract, plus the query and the model's
@@ -357,7 +350,7 @@ fn print_json(
         "diameter_mm": args.diameter_mm,
         "drive_v": drive_v,
         "model_error_sd_n": pm.model_error.sd_n,
-        "wrap_extrapolation_error_sd_n": wrap_error(args, drive_v, pm).flatten(),
+        "wrap_extrapolation_error_sd_n": wrap_error(args, pm).flatten(),
         "wrap_extrapolation_measured": pm.wrap_extrapolation_error.rows > 0,
         "from": args.from.display().to_string(),
         "note": pm.note,
@@ -388,7 +381,7 @@ fn print_table(
         "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
         pm.model_error.sd_n
     );
-    match wrap_error(args, drive_v, pm) {
+    match wrap_error(args, pm) {
         Some(Some(sd)) => crate::outln!(
             "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data, scaled to this distance: SD {sd:.3} N"
         ),

@@ -216,10 +216,10 @@ impl PredictionModel {
         ]
     }
 
-    /// `q`'s wrap lies outside the fitted wraps' span: there the prediction interval holds
+    /// `wrap_deg` lies outside the fitted wraps' span: there the prediction interval holds
     /// [`PredictionModel::wrap_extrapolation_error`] too.
-    pub fn extrapolates_in_wrap(&self, q: &Query) -> bool {
-        !self.fitted_range.wrap_deg.contains(q.wrap_deg)
+    pub fn extrapolates_in_wrap(&self, wrap_deg: f64) -> bool {
+        !self.fitted_range.wrap_deg.contains(wrap_deg)
     }
 
     /// The error of extrapolating to `wrap_deg`, N: 0 inside the fitted span; beyond it the
