@@ -1,15 +1,15 @@
 //! `capstan predict` against data it did not see: leave one wrap out of the thesis data,
 //! analyse the rest, predict the held-out wrap's T2 as measured at its measured T1 values.
 //! The 95 % prediction interval (with the model error the analysis estimated from its own
-//! leave-one-cord-out residuals) must cover at least 85 % of the measured T2 on the wraps
-//! inside the fitted wrap range. It is reported for every wrap, with and without the model
-//! error: on 2026-11-27, 83.3 % (75.7 % without) at 270°, 100 % at 360°, 95.8 % at 450°,
-//! 93.8 % at 630°, 97.9 % (97.2 %) at 720°; with the error of extrapolating in wrap (fits
-//! without the smallest or the largest fitted wrap, beyond the fitted span only) 270° stays at
-//! 83.3 % (those fits saw no extra error) and 720° reaches 99.3 % (the error scaled by the
-//! distance beyond the span, 90°, over the distance it was measured at, 180°). 270° is below 85 % and not
-//! asserted: no factor widens the interval to make it. The point prediction, pooled over the held-out wraps, must
-//! beat Euler-Eytelwein with one mu fitted to the same rows.
+//! leave-one-cord-out residuals, and beyond the fitted wraps the error of extrapolating in
+//! wrap) must cover at least 85 % of all the held-out measured T2, and of each wrap's inside
+//! the fitted wrap range. Every wrap's figure is reported, with and without the model errors,
+//! and per cord: on 2026-11-27, 94.4 % over all 720 rows; 83.3 % at 270° (its 12.7 mm cord
+//! 72/72, its 25.4 mm cord 48/72: that cord's mu lies 12 % below the curve, about 3 SD of a
+//! new cord), 100 % at 360°, 95.8 % at 450°, 93.8 % at 630°, 99.3 % at 720°. A wrap beyond the
+//! fitted span is two draws of a new cord and is reported, not asserted: no factor widens the
+//! interval to cover one. The point prediction, pooled over the held-out wraps, must beat
+//! Euler-Eytelwein with one mu fitted to the same rows.
 
 use capstan::cli::predict::load_model;
 use capstan_engine::analysis::prediction::{predict, Query};
@@ -43,6 +43,8 @@ struct Held {
     model_error_basis: (f64, f64),
     rmse_model: f64,
     rmse_ee: f64,
+    /// Per cord (capstan diameter, mm): rows inside the PI, rows.
+    per_cord: Vec<(f64, usize, usize)>,
     extrapolating: bool,
     why: Vec<String>,
 }
@@ -62,6 +64,7 @@ fn hold_out(wrap: f64, dir: &std::path::Path) -> Held {
     let (mut inside, mut n, mut se_m, mut se_ee) = (0usize, 0usize, 0.0, 0.0);
     let (mut inside0, mut width, mut width0) = (0usize, 0.0, 0.0);
     let mut why: Vec<String> = Vec::new();
+    let mut per_cord: Vec<(f64, usize, usize)> = Vec::new();
     for p in test
         .pairs
         .iter()
@@ -83,7 +86,15 @@ fn hold_out(wrap: f64, dir: &std::path::Path) -> Held {
         let r = predict(&pm, &q);
         let r0 = predict(&pm0, &q);
         n += 1;
-        inside += usize::from(r.t2_pi95.lo <= p.t2_n && p.t2_n <= r.t2_pi95.hi);
+        let hit = r.t2_pi95.lo <= p.t2_n && p.t2_n <= r.t2_pi95.hi;
+        inside += usize::from(hit);
+        match per_cord.iter_mut().find(|c| c.0 == q.diameter_mm) {
+            Some(c) => {
+                c.1 += usize::from(hit);
+                c.2 += 1;
+            }
+            None => per_cord.push((q.diameter_mm, usize::from(hit), 1)),
+        }
         inside0 += usize::from(r0.t2_pi95.lo <= p.t2_n && p.t2_n <= r0.t2_pi95.hi);
         width += r.t2_pi95.hi - r.t2_pi95.lo;
         width0 += r0.t2_pi95.hi - r0.t2_pi95.lo;
@@ -101,6 +112,7 @@ fn hold_out(wrap: f64, dir: &std::path::Path) -> Held {
         model_error_basis: (pm.model_error.heldout_rms_n, pm.model_error.accounted_rms_n),
         rmse_model: (se_m / n as f64).sqrt(),
         rmse_ee: (se_ee / n as f64).sqrt(),
+        per_cord,
         extrapolating: !why.is_empty(),
         why,
     }
@@ -134,8 +146,32 @@ fn leave_one_wrap_out_prediction_intervals_cover_and_the_model_beats_euler_eytel
             if h.extrapolating { format!(" (extrapolating in {})", h.why.join(", ")) } else { String::new() }
         );
     }
-    // Inside the fitted wraps the interval must hold; beyond them (270° and 720° held out) the
-    // coverage is reported, not asserted: no fudge factor widens the interval there.
+    for h in &held {
+        let cords: Vec<String> = h
+            .per_cord
+            .iter()
+            .map(|c| format!("{} mm {}/{}", c.0, c.1, c.2))
+            .collect();
+        eprintln!(
+            "  {:.0}° per cord, inside the PI: {}",
+            h.wrap,
+            cords.join(", ")
+        );
+    }
+    // Over every held-out measurement the interval must cover ≥ 85 % (the figure).
+    let (inside, rows) = held
+        .iter()
+        .flat_map(|h| &h.per_cord)
+        .fold((0, 0), |s, c| (s.0 + c.1, s.1 + c.2));
+    let pooled = inside as f64 / rows as f64;
+    eprintln!(
+        "pooled over the held-out wraps: {inside}/{rows} = {:.1} %",
+        100.0 * pooled
+    );
+    assert!(pooled >= 0.85, "pooled coverage {pooled:.3}");
+    // Inside the fitted wraps it must hold wrap by wrap too; beyond them (270° and 720° held
+    // out) each wrap's figure is reported, not asserted: there a wrap's two cords are two draws
+    // of a new cord, and no fudge factor widens the interval to cover one that falls outside.
     for h in held.iter().filter(|h| !h.why.iter().any(|w| w == "wrap")) {
         assert!(
             h.coverage >= 0.85,
