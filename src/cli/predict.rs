@@ -47,7 +47,8 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
             .map_err(|_| anyhow::anyhow!("--t1-n {s}: {x:?} is not a number"))?;
         if !(v.is_finite() && v > 0.0 && v <= capstan_data::MAX_TENSION_N) {
             bail!(
-                "--t1-n {s}: {v} N is not a tension above 0 and up to {} N",
+                "--t1-n {s}: {} N is not a tension above 0 and up to {} N",
+                capstan_data::ranges::shown(v),
                 capstan_data::MAX_TENSION_N
             );
         }

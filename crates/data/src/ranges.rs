@@ -69,7 +69,17 @@ impl Range {
     /// A command-line value: `flag value: must be ...` when out of range.
     pub fn option(&self, flag: &str, v: f64) -> anyhow::Result<f64> {
         self.check(v)
-            .map_err(|why| anyhow::anyhow!("{flag} {v}: {why}"))
+            .map_err(|why| anyhow::anyhow!("{flag} {}: {why}", shown(v)))
+    }
+}
+
+/// A value a user gave, as a message repeats it: as Rust prints it, except that very large or
+/// very small magnitudes read in scientific notation (1e308 is not three hundred digits).
+pub fn shown(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
