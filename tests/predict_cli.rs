@@ -90,6 +90,32 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
             "{flag} {value}: {err}"
         );
     }
+    // A huge number is repeated as the user could read it, not as 309 digits.
+    for (flag, value, shown) in [
+        ("--wrap-deg", "1e308", "--wrap-deg 1e308:"),
+        ("--t1-n", "5,1e300", "1e300 N is not a tension"),
+    ] {
+        let mut a = vec![
+            "predict",
+            "--from",
+            from,
+            "--wrap-deg",
+            "540",
+            "--diameter-mm",
+            "20",
+        ];
+        if flag == "--wrap-deg" {
+            a.truncate(3);
+            a.extend(["--diameter-mm", "20", "--t1-n", "5"]);
+        }
+        a.extend([flag, value]);
+        let r = capstan(&a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && err.contains(shown) && err.len() < 200,
+            "{err}"
+        );
+    }
     // The interval of a query inside the fitted data carries no warning.
     let r = capstan(&[
         "predict",
