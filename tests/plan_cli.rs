@@ -150,3 +150,30 @@ fn plan_refuses_bad_options_before_simulating() {
         assert!(!o.stderr.is_empty());
     }
 }
+
+/// What `analyze` refuses (fewer than 10 rows), `plan` refuses with the same words, before any
+/// simulation.
+#[test]
+fn plan_refuses_data_too_few_to_analyse() {
+    let dir = std::env::temp_dir().join(format!("capstan-plan-few-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("six.csv");
+    let text: Vec<&str> = capstan_data::THESIS_CSV.lines().take(7).collect();
+    std::fs::write(&path, text.join("\n") + "\n").unwrap();
+    let p = path.to_str().unwrap();
+    for cmd in ["plan", "analyze"] {
+        let mut args = vec![cmd, p];
+        let out = dir.join(format!("out-{cmd}"));
+        if cmd == "analyze" {
+            args.extend(["--out", out.to_str().unwrap()]);
+        }
+        let o = capstan(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{cmd} accepted six rows");
+        assert!(
+            err.contains("6 rows is too few to analyse (need at least 10)"),
+            "{cmd}: {err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

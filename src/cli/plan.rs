@@ -42,6 +42,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => thesis_dataset(),
     };
     capstan_data::check_capstan_data(&data)?;
+    // A plan is built on the analysis of these data: what analyze refuses, plan refuses too.
+    capstan_engine::analysis::enough_rows(&data)?;
     let opts = Options {
         reps: args.reps,
         seed: args.seed,

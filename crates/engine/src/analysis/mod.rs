@@ -130,16 +130,25 @@ fn causes_text(m: &Mechanisms) -> String {
     }
 }
 
-/// Fit every model to `ds`, name the causes and measure the gain.
-pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
-    let obs = Observations::from_dataset(ds);
-    if obs.len() < 10 {
+/// The fewest usable rows an analysis (and a plan built on one) works from.
+pub const MIN_ROWS: usize = 10;
+
+/// `ds` has the rows an analysis needs ([`MIN_ROWS`] usable pairs), or the error that says so.
+pub fn enough_rows(ds: &Dataset) -> anyhow::Result<()> {
+    let n = Observations::from_dataset(ds).len();
+    if n < MIN_ROWS {
         anyhow::bail!(
-            "{}: {} rows is too few to analyse (need at least 10)",
-            ds.source,
-            obs.len()
+            "{}: {n} rows is too few to analyse (need at least {MIN_ROWS})",
+            ds.source
         );
     }
+    Ok(())
+}
+
+/// Fit every model to `ds`, name the causes and measure the gain.
+pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
+    enough_rows(ds)?;
+    let obs = Observations::from_dataset(ds);
     let threads = opts.threads;
     let t0 = Instant::now();
     let eopts = evidence::Options {
