@@ -4,7 +4,7 @@
 //!
 //! Finding them: at every sample, the median of the next `h` samples minus the median of the
 //! `h` before, for each channel, in units of that channel's noise (the median absolute first
-//! difference); a change is a local peak of the larger of the two above a threshold, and peaks
+//! difference, and never less than one count of a quantised reading); a change is a local peak of the larger of the two above a threshold, and peaks
 //! closer than `min_dwell` keep only the largest (a transient after a change, an overshoot,
 //! is not a change of its own), and a change under [`RELATIVE_FLOOR`] of the median change
 //! is a drift inside a level, not a level. Medians make it robust to spikes and to the servo's transient;
@@ -171,15 +171,37 @@ fn detect(s: &Series, min_dwell_s: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The step of a quantised, noise-dithered channel (an ADC count in newtons): its smallest
+/// non-zero first difference, when at least a quarter of the differences are non-zero (the
+/// noise moves the reading between counts); 0 otherwise — a noiseless staircase's only
+/// differences are its changes of level.
+fn quantum(x: &[f64]) -> f64 {
+    let moves: Vec<f64> = x
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 0.0)
+        .collect();
+    if moves.is_empty() || moves.len() * 4 < x.len().saturating_sub(1) {
+        return 0.0;
+    }
+    moves.into_iter().fold(f64::INFINITY, f64::min)
+}
+
 /// At each sample i: |median(x[i..i+h]) - median(x[i-h..i])| / (noise·√(π/2h)·√2), the
-/// larger of the two channels (a median of h samples has sd ≈ σ·√(π/2h)).
+/// larger of the two channels (a median of h samples has sd ≈ σ·√(π/2h)). The unit is never
+/// below the channel's quantum: the median of a quantised reading moves by whole counts, and
+/// with the noise under a count it flips by one whenever the level sits near a count's edge —
+/// a one-count change is not a change of level (the thesis-noise series split every dwell in
+/// two without this).
 fn change_score(s: &Series, h: usize) -> Vec<f64> {
     let n = s.t_s.len();
     let mut score = vec![0.0; n];
     let unit = (std::f64::consts::PI / (2.0 * h as f64)).sqrt() * std::f64::consts::SQRT_2;
     let mut buf = Vec::with_capacity(h);
     for x in [&s.t1_n, &s.t2_n] {
+        let q = quantum(x);
         let sd = noise(x).max(1e-6);
+        let unit_n = (sd * unit).max(q);
         for i in h..=n.saturating_sub(h) {
             buf.clear();
             buf.extend_from_slice(&x[i - h..i]);
@@ -187,7 +209,7 @@ fn change_score(s: &Series, h: usize) -> Vec<f64> {
             buf.clear();
             buf.extend_from_slice(&x[i..i + h]);
             let after = median(&mut buf);
-            let z = (after - before).abs() / (sd * unit);
+            let z = (after - before).abs() / unit_n;
             if i < n && z > score[i] {
                 score[i] = z;
             }
