@@ -335,8 +335,8 @@ impl Ctx<'_> {
                 lof_after.as_ref().map_or(f64::NAN, |l| l.systematic_ratio),
             );
             let share = 1.0 - (after / before).powi(2);
-            // NaN (no lack of fit before) compares false: declined.
-            if !(share >= self.opts.min_share_resolved) {
+            // No lack of fit before (NaN): declined.
+            if share.is_nan() || share < self.opts.min_share_resolved {
                 return Err(Box::new(decline(t, best, Some(stab), Some(ratio), format!(
                     "a partial mimic: with it the lack of fit against the replicate runs stays (p = {:.3}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
                     lof_after.as_ref().map_or(f64::NAN, |l| l.p),
