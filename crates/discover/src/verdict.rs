@@ -278,7 +278,7 @@ impl Ctx<'_> {
             let t = &LIBRARY[best.term];
             if best.delta_bic >= bar {
                 let threshold = self.bar.threshold;
-                if j == 1 && best.delta_bic < -threshold {
+                if j == first && best.delta_bic < -threshold {
                     out.declined.push(decline(t, &best, None, None, format!(
                         "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {:.0} models tried at each step, that much is expected by chance",
                         best.delta_bic, -threshold, self.bar.models

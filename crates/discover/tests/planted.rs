@@ -49,6 +49,10 @@ fn discover_proposes_only_what_earns_it_and_keeps_unexplained_what_it_cannot_exp
     for o in &out {
         println!("{}", o.describe);
     }
+    // A term proposed as partial never claims the lack of fit resolved.
+    for o in out.iter().filter(|o| o.partial) {
+        assert!(o.unexplained_after && !o.confident, "{}", o.describe);
+    }
     // Clean sets (nothing planted, not even the catalogue): a term in ≤ 5 %.
     let clean = rate(&out, |o| o.kind == "clean", |o| !o.proposed.is_empty());
     assert!(

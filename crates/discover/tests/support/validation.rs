@@ -21,6 +21,8 @@ pub struct Outcome {
     pub right_or_rival: bool,
     /// A term proposed and the lack of fit resolved.
     pub confident: bool,
+    /// A term proposed as partial (the lack of fit stays, most of it removed).
+    pub partial: bool,
     pub unexplained_after: bool,
     /// The oracle (expressible kinds): the best ΔBIC of a library term of the right dependence
     /// in the first screen (given the catalogue as the engine selected it), with its physical
@@ -91,6 +93,7 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         right,
         right_or_rival,
         confident: !d.terms.is_empty() && !d.unexplained_after,
+        partial: d.terms.iter().any(|t| t.partial),
         unexplained_after: d.unexplained_after,
         oracle_dbic,
         oracle_detects,
