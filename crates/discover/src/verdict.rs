@@ -279,8 +279,13 @@ impl Ctx<'_> {
             if best.delta_bic >= bar {
                 let threshold = self.bar.threshold;
                 if j == first && best.delta_bic < -threshold {
+                    let nth = if j > 1 {
+                        format!(" and this the step's try {j} (2·ln {j} more)")
+                    } else {
+                        String::new()
+                    };
                     out.declined.push(decline(t, &best, None, None, format!(
-                        "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {:.0} models tried at each step, that much is expected by chance",
+                        "ΔBIC {:.1} passes the engine's bar ({:.0}) but not the search's ({bar:.1}): with {:.0} models tried at each step{nth}, that much is expected by chance",
                         best.delta_bic, -threshold, self.bar.models
                     )));
                 }
