@@ -57,6 +57,9 @@ pub struct Proposed {
     pub source: &'static str,
     /// Lack of fit against the replicate runs with it in (None: not testable).
     pub lack_of_fit_after: Option<LackOfFit>,
+    /// The lack of fit stays significant with it, but it removes most of its systematic part
+    /// (`Options::min_share_resolved`): proposed with "unexplained" kept.
+    pub partial: bool,
     /// Its evidence on the replicate cells' means: the replicate gate it passed (None:
     /// between-level, or the gate could not be computed, see `replicate_gate_not_applied`).
     pub replicate: Option<crate::replicate::Replicate>,
@@ -304,6 +307,7 @@ pub(crate) fn proposed(
         reading: t.reading,
         source: t.source,
         lack_of_fit_after: lof,
+        partial: false,
         replicate: s.replicate.clone(),
         replicate_gate_not_applied: no_gate,
         rivals,

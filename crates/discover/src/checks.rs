@@ -13,16 +13,17 @@ use capstan_engine::evidence::design::Design;
 use capstan_engine::evidence::within::WithinFit;
 use capstan_engine::evidence::RIVAL_GAP;
 
-/// The stability's candidates: every testable term not yet in the model, with its
-/// overdispersion from this step's screen.
+/// The stability's candidates: every testable term not yet in the model and not already
+/// failed at this step (`failed`), with its overdispersion from this step's screen.
 pub(crate) fn candidates(
     testable: &[Testable],
     st: &State,
     screens: &[screen::Screen],
+    failed: &[usize],
 ) -> Vec<Candidate> {
     testable
         .iter()
-        .filter(|c| !st.used.contains(&c.term))
+        .filter(|c| !st.used.contains(&c.term) && !failed.contains(&c.term))
         .map(|c| Candidate {
             term: c.term,
             column: c.column.clone(),

@@ -123,8 +123,13 @@ pub fn shape_sse(base: &Base, cols: &[Vec<f64>]) -> Vec<f64> {
     }
     let gt: DMatrix<f64> = gc.iter().fold(DMatrix::zeros(k, k), |s, g| s + g);
     let ht: DVector<f64> = hc.iter().fold(DVector::zeros(k), |s, h| s + h);
+    // Without shared columns (no within-run effect, no term) there is nothing to fit: the
+    // held-out residuals are the runs' own (nalgebra's LU of a 0×0 matrix panics).
     let beta: Vec<DVector<f64>> = (0..nc)
         .map(|c| {
+            if k == 0 {
+                return DVector::zeros(0);
+            }
             (&gt - &gc[c])
                 .lu()
                 .solve(&(&ht - &hc[c]))

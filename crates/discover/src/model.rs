@@ -48,6 +48,7 @@ pub(crate) struct State {
 }
 
 /// One testable term's column or run-level g.
+#[derive(Clone)]
 pub(crate) struct Testable {
     /// Library index.
     pub(crate) term: usize,

@@ -64,6 +64,13 @@ fn thesis_nothing_in_the_library_explains_it() {
         "{}",
         swap.reason
     );
+    // The failed swap gives way to the catalogue as selected, whose best addition is the step's
+    // second try: its bar is 2·ln 2 stricter, and t2_lowforce is short of it (s33).
+    let next = &d.declined[1];
+    assert_eq!(next.name, "t2_lowforce");
+    let bar2 = d.search.first_bar - 2.0 * 2f64.ln();
+    assert!(next.delta_bic > bar2, "{} vs {bar2}", next.delta_bic);
+    assert!(next.reason.contains("not the search's"), "{}", next.reason);
     // The joint search may put a term in the place of either within-run catalogue effect, and
     // pays for every model it tries (terms × (1 + effects)).
     assert_eq!(d.search.displaceable, vec!["contact_heating", "t2_offset"]);
