@@ -34,6 +34,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => thesis_dataset(),
     };
     capstan_data::check_capstan_data(&data)?;
+    // What analyze refuses, discover refuses too (a search needs the analysis's data).
+    capstan_engine::analysis::enough_rows(&data)?;
     // Lock the output directory before the work, not after it.
     let mut set = match &args.out {
         Some(dir) => Some(crate::outputs::open_out(dir, "discover", &["discover.json"])?.stage()?),

@@ -3,6 +3,7 @@
 //! curve) and a 95 % prediction interval (a new measurement on a new cord). See
 //! [`capstan_engine::analysis::prediction`].
 
+use capstan_data::ranges::shown;
 use anyhow::{bail, Context};
 use capstan_engine::analysis::prediction::{self, PredictionModel, Query, DEFAULT_DRIVE_V};
 use serde_json::{json, Value};
@@ -65,10 +66,16 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
             if !(step.is_finite() && step > 0.0) || b < a {
                 bail!("--t1-n {s}: A:B:STEP needs A ≤ B and a step above 0");
             }
-            // Counted in f64 first: a tiny step would overflow an integer count.
-            let count = ((b - a) / step + 1e-9).floor() + 1.0;
+            // Counted in f64 first: a tiny step would overflow an integer count. B counts as
+            // landed on within a relative 1e-9 of the ratio (1:1.0001:1e-9 is 100,001 values,
+            // B included, not 100,000 that stop short of it).
+            let ratio = (b - a) / step;
+            let count = (ratio * (1.0 + 1e-9) + 1e-9).floor() + 1.0;
             if count.is_nan() || count > MAX_POINTS as f64 {
-                bail!("--t1-n {s}: {count:.0} values (at most {MAX_POINTS})");
+                bail!(
+                    "--t1-n {s}: {} values (at most {MAX_POINTS})",
+                    shown((ratio + 1.0).round())
+                );
             }
             let n = count as usize;
             (0..n).map(|k| a + step * k as f64).collect()
@@ -190,7 +197,7 @@ fn check_error(name: &str, e: &prediction::ModelError) -> Result<(), String> {
         ("accounted_rms_n", e.accounted_rms_n),
     ] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("{name}.{part} = {v} must be 0 or more"));
+            return Err(format!("{name}.{part} = {} must be 0 or more", shown(v)));
         }
     }
     let most = (e.heldout_rms_n.powi(2) - e.accounted_rms_n.powi(2))
@@ -198,8 +205,11 @@ fn check_error(name: &str, e: &prediction::ModelError) -> Result<(), String> {
         .sqrt();
     if e.sd_n > most * (1.0 + 1e-9) + 1e-12 {
         return Err(format!(
-            "{name}.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({most})",
-            e.sd_n, e.heldout_rms_n, e.accounted_rms_n
+            "{name}.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({})",
+            shown(e.sd_n),
+            shown(e.heldout_rms_n),
+            shown(e.accounted_rms_n),
+            shown(most)
         ));
     }
     Ok(())
@@ -214,11 +224,15 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
     let mu = pm.values.get("mu").copied().unwrap_or(f64::NAN);
     if !(mu.is_finite() && mu > 0.0 && mu <= 2.0) {
         return Err(format!(
-            "mu {mu} is not a friction coefficient above 0 and up to 2"
+            "mu {} is not a friction coefficient above 0 and up to 2",
+            shown(mu)
         ));
     }
     if let Some((k, v)) = pm.values.iter().find(|(_, v)| !v.is_finite()) {
-        return Err(format!("{k} = {v} is not a number"));
+        return Err(format!("{k} = {} is not a number", shown(*v)));
+    }
+    if pm.free.is_empty() {
+        return Err("no free parameters (an analysis fits mu at least)".into());
     }
     if let Some(name) = pm.free.iter().find(|n| !pm.values.contains_key(n.as_str())) {
         return Err(format!("free parameter {name} has no value"));
@@ -245,7 +259,7 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
         ("noise_rel", pm.noise_rel),
     ] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("{name} = {v} must be 0 or more"));
+            return Err(format!("{name} = {} must be 0 or more", shown(v)));
         }
     }
     check_error("model_error", &pm.model_error)?;
@@ -318,12 +332,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let preds: Vec<_> = (queries.iter())
         .map(|q| prediction::predict(&pm, q))
         .collect();
+    if let Some(why) = preds.iter().find_map(|p| unusable(p, args.as_measured)) {
+        bail!(
+            "{}: prediction_model: {why}: its values are not ones an analysis writes (edited?); \
+             run capstan analyze again",
+            args.from.display()
+        );
+    }
     if args.json {
         print_json(&args, drive_v, &pm, &preds, &warnings)?;
     } else {
         print_table(&args, drive_v, &pm, &preds, &warnings);
     }
     Ok(())
+}
+
+/// Why a prediction cannot be printed, if it cannot: a T2 or an interval end that is not a
+/// finite number, or a physical T2 below T1 (a capstan not driven backwards does not lose
+/// tension; the law's parameters are then outside physics).
+fn unusable(p: &prediction::Prediction, as_measured: bool) -> Option<String> {
+    let at = format!("at T1 = {} N", capstan_data::ranges::shown(p.t1_n));
+    let ends = [p.t2_n, p.t2_ci95.lo, p.t2_ci95.hi, p.t2_pi95.lo, p.t2_pi95.hi];
+    if ends.iter().any(|v| !v.is_finite()) {
+        return Some(format!("it gives T2 or an interval without a finite value {at}"));
+    }
+    (!as_measured && p.t2_n < p.t1_n * (1.0 - 1e-9)).then(|| {
+        format!(
+            "it gives a physical T2 of {} N below T1 {at}",
+            capstan_data::ranges::shown(p.t2_n)
+        )
+    })
 }
 
 /// When the query's wrap lies outside the fitted wraps, the wrap-extrapolation error's SD, N,

@@ -74,12 +74,30 @@ impl Range {
 }
 
 /// A value a user gave, as a message repeats it: as Rust prints it, except that very large or
-/// very small magnitudes read in scientific notation (1e308 is not three hundred digits).
+/// very small magnitudes read in scientific notation with six significant digits at most
+/// (1e308 is not three hundred digits, nor 9.999999999999999e299).
 pub fn shown(v: f64) -> String {
     if v.is_finite() && v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
-        format!("{v:e}")
+        let s = format!("{v:.5e}");
+        let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        format!("{mantissa}e{exp}")
     } else {
         format!("{v}")
+    }
+}
+
+#[cfg(test)]
+mod shown_tests {
+    use super::shown;
+
+    #[test]
+    fn huge_and_tiny_values_read_short() {
+        assert_eq!(shown(1e308), "1e308");
+        assert_eq!(shown(9.999999999999999e299), "1e300");
+        assert_eq!(shown(-2.5e-7), "-2.5e-7");
+        assert_eq!(shown(12.25), "12.25");
+        assert_eq!(shown(f64::INFINITY), "inf");
     }
 }
 

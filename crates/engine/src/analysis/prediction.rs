@@ -405,7 +405,9 @@ fn spread(pm: &PredictionModel, q: &Query) -> Spread {
     let var_new = d_ln_mu.powi(2) * (pm.sd_ln_mu_cord.powi(2) + pm.sd_ln_mu_run.powi(2))
         + pm.noise_abs_n.powi(2)
         + (pm.noise_rel * t2).powi(2);
-    let finite = |v: f64| if v.is_finite() { v.max(0.0) } else { 0.0 };
+    // A variance that overflows stays infinite (an interval without bounds, which `predict`
+    // refuses to print), never 0 (an interval of no width that looks certain).
+    let finite = |v: f64| if v.is_nan() { f64::INFINITY } else { v.max(0.0) };
     Spread {
         t2,
         var_mean: finite(var_mean),
