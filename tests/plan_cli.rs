@@ -151,8 +151,8 @@ fn plan_refuses_bad_options_before_simulating() {
     }
 }
 
-/// What `analyze` refuses (fewer than 10 rows), `plan` refuses with the same words, before any
-/// simulation.
+/// What `analyze` refuses (fewer than 10 rows), `plan` (before any simulation) and `discover`
+/// refuse with the same words.
 #[test]
 fn plan_refuses_data_too_few_to_analyse() {
     let dir = std::env::temp_dir().join(format!("capstan-plan-few-{}", std::process::id()));
@@ -161,7 +161,7 @@ fn plan_refuses_data_too_few_to_analyse() {
     let text: Vec<&str> = capstan_data::THESIS_CSV.lines().take(7).collect();
     std::fs::write(&path, text.join("\n") + "\n").unwrap();
     let p = path.to_str().unwrap();
-    for cmd in ["plan", "analyze"] {
+    for cmd in ["plan", "analyze", "discover"] {
         let mut args = vec![cmd, p];
         let out = dir.join(format!("out-{cmd}"));
         if cmd == "analyze" {

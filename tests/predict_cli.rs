@@ -116,6 +116,53 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
             "{err}"
         );
     }
+    // An edited model whose numbers give no finite interval, or a physical T2 below T1, is
+    // refused by name: never an interval of no width, never "inf" in the table.
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    for (what, edit) in [
+        (
+            "a variance of 1e308",
+            ("covariance", serde_json::json!(1e308)),
+        ),
+        (
+            "a cord scatter of 1e308",
+            ("sd_ln_mu_cord", serde_json::json!(1e308)),
+        ),
+        (
+            "a negative heating",
+            ("heat_per_ns", serde_json::json!(-10.0)),
+        ),
+        ("an exponent of 1e308", ("n", serde_json::json!(1e308))),
+    ] {
+        let mut v = model.clone();
+        let pm = &mut v["prediction_model"];
+        match edit.0 {
+            "covariance" => pm["covariance"][0][0] = edit.1,
+            "sd_ln_mu_cord" => pm["sd_ln_mu_cord"] = edit.1,
+            name => pm["values"][name] = edit.1,
+        }
+        let path = dir.join("edited.json");
+        std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+        let r = capstan(&[
+            "predict",
+            "--from",
+            path.to_str().unwrap(),
+            "--wrap-deg",
+            "540",
+            "--diameter-mm",
+            "20",
+            "--t1-n",
+            "0.5,5,20",
+        ]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        let out = String::from_utf8_lossy(&r.stdout);
+        assert!(!r.status.success(), "{what} was accepted: {out}");
+        assert!(
+            err.contains("edited?") && !out.contains("inf"),
+            "{what}: {err}"
+        );
+    }
     // The interval of a query inside the fitted data carries no warning.
     let r = capstan(&[
         "predict",

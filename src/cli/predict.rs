@@ -3,8 +3,8 @@
 //! curve) and a 95 % prediction interval (a new measurement on a new cord). See
 //! [`capstan_engine::analysis::prediction`].
 
-use capstan_data::ranges::shown;
 use anyhow::{bail, Context};
+use capstan_data::ranges::shown;
 use capstan_engine::analysis::prediction::{self, PredictionModel, Query, DEFAULT_DRIVE_V};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -352,9 +352,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// tension; the law's parameters are then outside physics).
 fn unusable(p: &prediction::Prediction, as_measured: bool) -> Option<String> {
     let at = format!("at T1 = {} N", capstan_data::ranges::shown(p.t1_n));
-    let ends = [p.t2_n, p.t2_ci95.lo, p.t2_ci95.hi, p.t2_pi95.lo, p.t2_pi95.hi];
+    let ends = [
+        p.t2_n,
+        p.t2_ci95.lo,
+        p.t2_ci95.hi,
+        p.t2_pi95.lo,
+        p.t2_pi95.hi,
+    ];
     if ends.iter().any(|v| !v.is_finite()) {
-        return Some(format!("it gives T2 or an interval without a finite value {at}"));
+        return Some(format!(
+            "it gives T2 or an interval without a finite value {at}"
+        ));
     }
     (!as_measured && p.t2_n < p.t1_n * (1.0 - 1e-9)).then(|| {
         format!(

@@ -407,7 +407,13 @@ fn spread(pm: &PredictionModel, q: &Query) -> Spread {
         + (pm.noise_rel * t2).powi(2);
     // A variance that overflows stays infinite (an interval without bounds, which `predict`
     // refuses to print), never 0 (an interval of no width that looks certain).
-    let finite = |v: f64| if v.is_nan() { f64::INFINITY } else { v.max(0.0) };
+    let finite = |v: f64| {
+        if v.is_nan() {
+            f64::INFINITY
+        } else {
+            v.max(0.0)
+        }
+    };
     Spread {
         t2,
         var_mean: finite(var_mean),
