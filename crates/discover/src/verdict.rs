@@ -234,6 +234,15 @@ fn cord_checks(cords: usize) -> Option<String> {
     })
 }
 
+/// Who left what a term is measured against: the catalogue, and the terms proposed before it.
+fn left_by(earlier: &[Proposed]) -> String {
+    if earlier.is_empty() {
+        return "the catalogue leaves".into();
+    }
+    let names: Vec<&str> = earlier.iter().map(|t| t.name).collect();
+    format!("the catalogue with {} leaves", names.join(" + "))
+}
+
 /// A significant lack of fit: after a term it keeps "unexplained" (the spike's rule: a partial
 /// mimic leaves the replicates disagreeing with the model, whatever its size).
 fn lof_open(l: &Option<LackOfFit>) -> bool {
@@ -330,7 +339,12 @@ impl Ctx<'_> {
     ) -> Result<(), Box<Declined>> {
         let t = &LIBRARY[best.term];
         let proj_x = tst.column.as_ref().map(|x| proj.project(self.base, x));
-        let lof_before = &self.a.adequacy.lack_of_fit;
+        // What is left before this term: after the terms already proposed, or what the
+        // catalogue alone left for the first. A later term's share is its own, not theirs.
+        let lof_before = match out.terms.last() {
+            Some(prev) => &prev.lack_of_fit_after,
+            None => &self.a.adequacy.lack_of_fit,
+        };
         let on = (&self.a.design, self.base);
         let lof_after = lack_of_fit_with(on, st, best.theta, proj_x.as_deref(), lof_before);
         let mut partial = None;
@@ -361,7 +375,8 @@ impl Ctx<'_> {
             out.partial = true;
             term.partial = true;
             term.words += &format!(
-                " It explains most, not all, of what the catalogue leaves: the lack of fit against the replicate runs stays significant (systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed).",
+                " It explains most, not all, of what {}: the lack of fit against the replicate runs stays significant (systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed).",
+                left_by(&out.terms),
                 100.0 * share
             );
         }
