@@ -234,6 +234,24 @@ fn cord_checks(cords: usize) -> Option<String> {
     })
 }
 
+/// The catalogue's residual pattern, still named after the proposed terms unless one of them
+/// depends on its variable (it fitted that pattern; what is left was not re-tested for one).
+fn left_pattern(pattern: &'static str, terms: &[Proposed]) -> Option<&'static str> {
+    use crate::library::Var;
+    let vars: &[Var] = match pattern {
+        "wrap" => &[Var::Wrap],
+        "diameter" => &[Var::Diameter],
+        "time" => &[Var::Time],
+        "step_direction" => &[Var::StepDirection],
+        "t1_shape" => &[Var::T1, Var::T2, Var::Load],
+        _ => &[],
+    };
+    let fitted = terms
+        .iter()
+        .any(|t| t.depends_on.iter().any(|v| vars.contains(v)));
+    (!fitted).then_some(pattern)
+}
+
 /// Who left what a term is measured against: the catalogue, and the terms proposed before it.
 fn left_by(earlier: &[Proposed]) -> String {
     if earlier.is_empty() {
@@ -470,27 +488,22 @@ impl Ctx<'_> {
     ) -> Discovery {
         let (a, opts, d) = (self.a, self.opts, &self.a.design);
         let lof_before = a.adequacy.lack_of_fit.clone();
-        let last_lof = out
-            .terms
-            .iter()
-            .rev()
-            .find_map(|t| t.lack_of_fit_after.clone());
-        let unexplained_after = if out.terms.is_empty() {
-            a.adequacy.unexplained
-        } else {
-            out.partial
-                || !a.adequacy.at_physical_limit.is_empty()
-                || lof_open(&last_lof.or(lof_before.clone()))
+        // Judged on the final model: the lack of fit after the last proposed term (None: it
+        // could not be tested), or the catalogue's own decision when nothing is proposed.
+        let last_lof = out.terms.last().map(|t| t.lack_of_fit_after.clone());
+        let unexplained_after = match &last_lof {
+            None => a.adequacy.tested.then_some(a.adequacy.unexplained),
+            Some(_) if !a.adequacy.at_physical_limit.is_empty() => Some(true),
+            Some(l) => l.as_ref().map(|l| l.p < LOF_ALPHA),
         };
-        let residual_pattern = if unexplained_after {
-            Some(a.adequacy.pattern.unwrap_or("cells"))
-        } else {
-            None
+        let residual_pattern = match unexplained_after {
+            Some(true) => left_pattern(a.adequacy.pattern.unwrap_or("cells"), &out.terms),
+            _ => None,
         };
         let verdict = verdict_words(
             &out.terms,
-            unexplained_after,
-            residual_pattern,
+            (unexplained_after, residual_pattern),
+            (&lof_before, last_lof.flatten().as_ref()),
             &out.declined,
         );
         Discovery {

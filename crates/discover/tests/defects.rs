@@ -53,3 +53,59 @@ fn d1_a_later_partial_term_is_judged_on_what_is_left() {
         assert!(x.reason.contains("partial mimic"), "{}", x.reason);
     }
 }
+
+/// The answer's words and flags agree with the last proposed term's lack of fit (D3), and say
+/// "cannot be tested" when no lack-of-fit test could be made (D2).
+fn consistent(d: &Discovery) {
+    let Some(last) = d.terms.last() else { return };
+    match &last.lack_of_fit_after {
+        Some(l) => {
+            assert_eq!(d.unexplained_after, Some(l.p < 0.01), "{}", d.verdict);
+            if l.p >= 0.01 {
+                assert!(!d.verdict.contains("still left"), "{}", d.verdict);
+                assert_eq!(d.residual_pattern, None);
+            }
+        }
+        None => {
+            assert_eq!(d.unexplained_after, None, "{}", d.verdict);
+            assert!(!d.verdict.contains("resolved"), "{}", d.verdict);
+            assert!(d.verdict.contains("cannot be tested"), "{}", d.verdict);
+        }
+    }
+    if let Some(p) = d.residual_pattern {
+        for t in &d.terms {
+            assert!(
+                t.depends_on.iter().all(|v| v.name() != p),
+                "{} fits the pattern still named: {p}",
+                t.name
+            );
+        }
+    }
+}
+
+/// D3: `$CAT --order updown --unmodelled hysteresis=0.15 --seed 3`: the last term left p 0.37,
+/// yet the answer said "Structure is still left (pattern: wrap)", the pattern the term fitted.
+#[test]
+fn d3_the_answer_is_judged_after_the_last_term() {
+    for f in ["hysteresis_updown_seed3.csv", "tare_catalogue_seed4.csv"] {
+        let d = run(f);
+        assert!(!d.terms.is_empty(), "{f}: {}", d.verdict);
+        consistent(&d);
+    }
+}
+
+/// D2: one run per cord (`$CAT --order updown --unmodelled hysteresis=0.2 --runs 1 --seed
+/// 11`) has no replicate runs: the lack of fit was "resolved" though it was never tested.
+#[test]
+fn d2_no_lack_of_fit_test_is_not_resolved() {
+    let d = run("hysteresis_one_run_seed11.csv");
+    assert!(d.lack_of_fit_before.is_none());
+    assert!(!d.terms.is_empty(), "{}", d.verdict);
+    consistent(&d);
+    let v: serde_json::Value = serde_json::from_str(&d.to_json()).unwrap();
+    assert!(v["unexplained_after"].is_null());
+    // 720 rows, T1 = 2 and T2 = 5 everywhere: the replicate runs agree exactly.
+    let d = run("constant.csv");
+    consistent(&d);
+    assert!(!d.verdict.contains("resolved"), "{}", d.verdict);
+}
