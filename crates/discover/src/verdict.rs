@@ -6,7 +6,7 @@ use crate::answer::{
     decline, displaced, proposed, screen_row, verdict_words, DataInfo, Declined, Discovery,
     NotTestable, Proposed, ScreenRow, Search,
 };
-use crate::checks::{candidates, held_out, lack_of_fit_with, rivals_of};
+use crate::checks::{candidates, catalogue_repair, held_out, lack_of_fit_with, rivals_of, Repair};
 use crate::columns::Base;
 use crate::heldout::{self, Ratio};
 use crate::joint;
@@ -261,6 +261,9 @@ fn left_by(earlier: &[Proposed]) -> String {
     format!("the catalogue with {} leaves", names.join(" + "))
 }
 
+/// How an unstable pick's decline begins.
+const UNSTABLE: &str = "unstable";
+
 /// A significant lack of fit: after a term it keeps "unexplained" (the spike's rule: a partial
 /// mimic leaves the replicates disagreeing with the model, whatever its size).
 fn lof_open(l: &Option<LackOfFit>) -> bool {
@@ -295,6 +298,8 @@ impl Ctx<'_> {
         // The first step of a swap takes the swap's term (it beat every addition).
         let forced = self.swap.filter(|_| step == 1).map(|s| s.term);
         let mut failed: Vec<usize> = Vec::new();
+        // The failed picks that were unstable: a rival of one is not proposed in its place.
+        let mut unstable: Vec<usize> = Vec::new();
         let first = if step == 1 { self.first_try } else { 1 };
         for j in first..=self.opts.max_tries.max(1) {
             let bar = self.bar.at(step) - 2.0 * self.bar.gamma * (j as f64).ln();
@@ -328,11 +333,15 @@ impl Ctx<'_> {
             let checked = self
                 .stable_and_held_out(on, st, &screens, &best, tst, progress)
                 .and_then(|checks| {
-                    self.accept(step, st, out, (&proj, &screens), (&best, tst), checks)
+                    let on = (step, &failed[..], &unstable[..]);
+                    self.accept(on, st, out, (&proj, &screens), (&best, tst), checks)
                 });
             match checked {
                 Ok(()) => return true,
                 Err(dec) => {
+                    if dec.reason.starts_with(UNSTABLE) {
+                        unstable.push(best.term);
+                    }
                     out.declined.push(*dec);
                     if forced.is_some() {
                         return false;
@@ -348,7 +357,7 @@ impl Ctx<'_> {
     /// (and the model grown), or declined as a partial mimic.
     fn accept(
         &self,
-        step: usize,
+        (step, failed, unstable): (usize, &[usize], &[usize]),
         st: &mut State,
         out: &mut Outcome,
         (proj, screens): (&Projector, &[screen::Screen]),
@@ -383,12 +392,53 @@ impl Ctx<'_> {
             }
             partial = Some((before, after, share));
         }
+        // A later term that only stands in for a catalogue effect the engine mis-selected.
+        if step > 1 && self.swap.is_none() {
+            let threshold = self.bar.threshold;
+            if let Some(r) = catalogue_repair(self.a, self.alts, st, best, threshold) {
+                let why = match r {
+                    Repair::LeansOn(k, dbic) => format!(
+                        "its evidence exists only beside the catalogue's {k}: without {k} its ΔBIC is {dbic:.1} (the engine's bar −{threshold:.0}), so it corrects what {k} does rather than adding to the catalogue; a catalogue effect the engine did not select (another sensor's offset, say) may be what the data want"
+                    ),
+                    Repair::StandsIn(k, swap) => format!(
+                        "it stands in for the catalogue's {k}: in its place it does as well (ΔBIC of that swap {swap:.1}, as an addition {:.1}), so the data no longer want {k} once it is in",
+                        best.delta_bic
+                    ),
+                };
+                return Err(Box::new(decline(
+                    t,
+                    best,
+                    Some(stab),
+                    Some(ratio),
+                    format!("a repair of the catalogue's selection, not physics beyond it: {why}"),
+                )));
+            }
+        }
         let threshold = self.bar.threshold;
         let rivals = rivals_of(self.base, proj, screens, best, &self.testable, threshold);
+        // A rival the data cannot tell from it failed stability at this step: the resamples
+        // split between the two, and the one left is not the more likely for it (D6).
+        let name_of = |k: &usize| LIBRARY[*k].name;
+        if let Some(r) = rivals
+            .iter()
+            .find(|r| unstable.iter().map(name_of).any(|n| n == r.name))
+        {
+            return Err(Box::new(decline(t, best, Some(stab), Some(ratio), format!(
+                "the data cannot tell it from {}, which failed stability at this step: the cord resamples split between them, so neither is proposed",
+                r.name
+            ))));
+        }
         let forced = self.swap.filter(|_| step == 1);
         let displaced = forced.map(|s| displaced(&self.alts[s.alt], s));
         let checks = (stab, ratio);
         let mut term = proposed(t, best, checks, lof_after, rivals, displaced);
+        if !failed.is_empty() {
+            let names: Vec<&str> = failed.iter().map(name_of).collect();
+            term.words += &format!(
+                " Its stability was computed with {} left out of the resamples (tried before it at this step and declined).",
+                names.join(", ")
+            );
+        }
         if let Some((before, after, share)) = partial {
             out.partial = true;
             term.partial = true;
@@ -443,7 +493,7 @@ impl Ctx<'_> {
         if stab < self.opts.min_stability {
             let (pct, need) = (100.0 * stab, 100.0 * self.opts.min_stability);
             return no(Some(ratio), format!(
-                "unstable: the search picks it in {pct:.0} % of whole-cord resamples (needs {need:.0} %)"
+                "{UNSTABLE}: the search picks it in {pct:.0} % of whole-cord resamples (needs {need:.0} %)"
             ));
         }
         if ratio.value >= 1.0 {
