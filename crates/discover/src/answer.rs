@@ -255,7 +255,7 @@ pub(crate) fn proposed(
     (stab, ratio): (f64, Ratio),
     lof: Option<LackOfFit>,
     rivals: Vec<Rival>,
-    displaced: Option<joint::Displaced>,
+    (displaced, given): (Option<joint::Displaced>, &str),
 ) -> Proposed {
     let shown = ratio.ci95.hi < 1.0;
     let rival_words = if rivals.is_empty() {
@@ -278,7 +278,7 @@ pub(crate) fn proposed(
         format!(" The replicate gate was not applied: {why}.")
     });
     let words = format!(
-        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4}{}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
+        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4}{}), ΔBIC {:.1} given {given}, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
         t.name,
         t.reading,
         t.parameter,

@@ -384,7 +384,8 @@ impl Ctx<'_> {
             // No lack of fit before (NaN): declined.
             if share.is_nan() || share < self.opts.min_share_resolved {
                 return Err(Box::new(decline(t, best, Some(stab), Some(ratio), format!(
-                    "a partial mimic: with it the lack of fit against the replicate runs stays (p = {:.3}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
+                    "a partial mimic: with it the lack of fit against the replicate runs {} (p = {:.3}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
+                    if lof_open(lof_before) { "stays" } else { "appears (it was not significant before it)" },
                     lof_after.as_ref().map_or(f64::NAN, |l| l.p),
                     100.0 * share.max(0.0),
                     100.0 * self.opts.min_share_resolved.min(1.0)
@@ -431,7 +432,18 @@ impl Ctx<'_> {
         let forced = self.swap.filter(|_| step == 1);
         let displaced = forced.map(|s| displaced(&self.alts[s.alt], s));
         let checks = (stab, ratio);
-        let mut term = proposed(t, best, checks, lof_after, rivals, displaced);
+        let given = match out.terms.is_empty() {
+            true => "the catalogue".to_string(),
+            false => format!(
+                "the catalogue and {}",
+                out.terms
+                    .iter()
+                    .map(|t| t.name)
+                    .collect::<Vec<_>>()
+                    .join(" + ")
+            ),
+        };
+        let mut term = proposed(t, best, checks, lof_after, rivals, (displaced, &given));
         if !failed.is_empty() {
             let names: Vec<&str> = failed.iter().map(name_of).collect();
             term.words += &format!(

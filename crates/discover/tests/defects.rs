@@ -176,3 +176,36 @@ fn d4_a_later_term_that_repairs_the_catalogue_is_declined() {
     );
     consistent(&d);
 }
+
+/// D9: a later term's ΔBIC is given the catalogue and the terms before it, and says so.
+/// `$CAT --order updown --unmodelled hysteresis=0.12 --seed 42`.
+#[test]
+fn d9_a_later_term_says_what_its_evidence_is_given() {
+    let d = run("hysteresis_updown_seed42.csv");
+    assert!(d.terms.len() >= 2, "{}", d.verdict);
+    assert!(
+        d.terms[0].words.contains("given the catalogue, chosen"),
+        "{}",
+        d.terms[0].words
+    );
+    let given = format!("given the catalogue and {}, chosen", d.terms[0].name);
+    assert!(d.terms[1].words.contains(&given), "{}", d.terms[1].words);
+}
+
+/// D10: s_hyst without its run, step and time columns: the step order is unknown, which is
+/// why hysteresis cannot be tested (the tension does fall, in file order); and "nothing to
+/// add" says the lack of fit could not be tested.
+#[test]
+fn d10_unknown_step_order_is_the_reason() {
+    let d = run("hysteresis_no_run_columns.csv");
+    let h = d
+        .not_testable
+        .iter()
+        .find(|n| n.name == "hysteresis")
+        .expect("hysteresis not testable");
+    assert!(h.reason.contains("step order is not known"), "{}", h.reason);
+    assert!(d.lack_of_fit_before.is_none());
+    if d.terms.is_empty() {
+        assert!(d.verdict.contains("cannot be tested"), "{}", d.verdict);
+    }
+}
