@@ -402,7 +402,7 @@ impl Ctx<'_> {
                         "its evidence exists only beside the catalogue's {k}: without {k} its ΔBIC is {dbic:.1} (the engine's bar −{threshold:.0}), so it corrects what {k} does rather than adding to the catalogue; a catalogue effect the engine did not select (another sensor's offset, say) may be what the data want"
                     ),
                     Repair::StandsIn(k, swap) => format!(
-                        "it stands in for the catalogue's {k}: in its place it does as well (ΔBIC of that swap {swap:.1}, as an addition {:.1}), so the data no longer want {k} once it is in",
+                        "it stands in for the catalogue's {k}: in its place it explains at least what {k} did (ΔBIC of that swap {swap:.1} against the catalogue as selected; as an addition {:.1}), so it may be what the data wanted instead of {k}",
                         best.delta_bic
                     ),
                 };
@@ -558,16 +558,36 @@ impl Ctx<'_> {
             Some(_) if !a.adequacy.at_physical_limit.is_empty() => Some(true),
             Some(l) => l.as_ref().map(|l| l.p < LOF_ALPHA),
         };
+        // With terms whose last lack of fit is not significant, what is left is only a
+        // catalogue effect at the edge of its physical range: no residual pattern is named.
+        let lof_left = last_lof.as_ref().is_none_or(|l| lof_open(l) || l.is_none());
         let residual_pattern = match unexplained_after {
-            Some(true) => left_pattern(a.adequacy.pattern.unwrap_or("cells"), &out.terms),
+            Some(true) if lof_left => {
+                left_pattern(a.adequacy.pattern.unwrap_or("cells"), &out.terms)
+            }
             _ => None,
         };
-        let verdict = verdict_words(
+        let mut verdict = verdict_words(
             &out.terms,
             (unexplained_after, residual_pattern),
             (&lof_before, last_lof.flatten().as_ref()),
             &out.declined,
         );
+        if !lof_left && unexplained_after == Some(true) {
+            let names: Vec<String> = a
+                .adequacy
+                .at_physical_limit
+                .iter()
+                .map(|(k, v)| format!("{k} ({v:.3})"))
+                .collect();
+            let head = verdict.split(" Structure is still left").next();
+            verdict = format!(
+                "{} Structure is still left: the lack of fit against the replicate runs is no longer significant with {}, but the catalogue's {} sits at the edge of its physical range (the data want more than it can be).",
+                head.unwrap_or_default(),
+                if out.terms.len() == 1 { "it" } else { "them" },
+                names.join(", ")
+            );
+        }
         Discovery {
             data: DataInfo {
                 source: data.source.clone(),
