@@ -275,3 +275,22 @@ fn one_run_per_cord_says_the_replicate_gate_was_not_applied() {
     assert!(text.contains("SE n/a: fewer than 3 runs"), "{text}");
     assert!(!text.contains(" ± "), "{text}");
 }
+
+/// The search line does not count "one of its 0 within-run effects" (a catalogue of one
+/// between-level effect: `diameter_dependence` on a planted T1 tare, crates/discover/tests/data).
+#[test]
+fn the_search_line_words_a_catalogue_without_within_run_effects() {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("crates/discover/tests/data/tare_catalogue_seed4.csv");
+    let out = capstan()
+        .args(["discover", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("one of its 0"), "{text}");
+    assert!(
+        text.contains("each added to the catalogue (it has no within-run effect"),
+        "{text}"
+    );
+}

@@ -129,12 +129,19 @@ pub fn summary(d: &Discovery) -> String {
         (_, Some(why)) => format!("{why}, so nothing can be proposed"),
         (None, None) => "no stability computed".to_string(),
     };
+    let how = match sr.displaceable.len() {
+        0 => "each added to the catalogue (it has no within-run effect to take the place of)"
+            .to_string(),
+        1 => "each added to the catalogue or in the place of its within-run effect".to_string(),
+        k => format!(
+            "each added to the catalogue or in the place of one of its {k} within-run effects"
+        ),
+    };
     let _ = writeln!(
         s,
-        "searched {} of {} library terms, each added to the catalogue or in the place of one of its {} within-run effects ({:.0} models); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}",
+        "searched {} of {} library terms, {how} ({:.0} models); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}",
         sr.tried,
         sr.library_size,
-        sr.displaceable.len(),
         sr.models_per_step,
         sr.first_bar,
         sr.threshold,

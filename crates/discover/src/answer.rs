@@ -170,9 +170,12 @@ pub struct Discovery {
     pub catalogue_effects: Vec<&'static str>,
     /// The terms proposed (empty: nothing in the library explains what is left).
     pub terms: Vec<Proposed>,
-    /// Structure is still left after the proposed terms.
-    pub unexplained_after: bool,
-    /// The pattern of what is left (the catalogue fit's residuals), if anything is.
+    /// Structure is still left after the proposed terms: the lack of fit against the replicate
+    /// runs after the last one (or the catalogue's decision when none is proposed). None: it
+    /// could not be tested (no replicate runs, or they agree exactly).
+    pub unexplained_after: Option<bool>,
+    /// The pattern of what is left (the catalogue fit's residuals), if anything is; None also
+    /// when a proposed term depends on that pattern's variable (it was not re-tested).
     pub residual_pattern: Option<&'static str>,
     /// The answer in words.
     pub verdict: String,
@@ -252,7 +255,7 @@ pub(crate) fn proposed(
     (stab, ratio): (f64, Ratio),
     lof: Option<LackOfFit>,
     rivals: Vec<Rival>,
-    displaced: Option<joint::Displaced>,
+    (displaced, given): (Option<joint::Displaced>, &str),
 ) -> Proposed {
     let shown = ratio.ci95.hi < 1.0;
     let rival_words = if rivals.is_empty() {
@@ -275,7 +278,7 @@ pub(crate) fn proposed(
         format!(" The replicate gate was not applied: {why}.")
     });
     let words = format!(
-        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4}{}), ΔBIC {:.1} given the catalogue, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
+        "Discovered, not an established cause: {} ({}; {} = {:.4} ± {:.4}{}), ΔBIC {:.1} given {given}, chosen in {:.0} % of cord resamples; held-out RMSE ratio {:.3} (95 % {:.3}–{:.3}){}.{}",
         t.name,
         t.reading,
         t.parameter,
@@ -318,8 +321,8 @@ pub(crate) fn proposed(
 
 pub(crate) fn verdict_words(
     terms: &[Proposed],
-    unexplained: bool,
-    pattern: Option<&str>,
+    (unexplained, pattern): (Option<bool>, Option<&str>),
+    (lof_before, lof_last): (&Option<LackOfFit>, Option<&LackOfFit>),
     declined: &[Declined],
 ) -> String {
     if !terms.is_empty() {
@@ -330,13 +333,21 @@ pub(crate) fn verdict_words(
                 None => t.name.to_string(),
             })
             .collect();
-        let left = if unexplained {
-            format!(
-                " Structure is still left (pattern: {}).",
-                pattern.unwrap_or("cells")
-            )
-        } else {
-            " With it, the lack of fit against the replicate runs is resolved.".to_string()
+        let with = if terms.len() == 1 { "it" } else { "them" };
+        let left = match (unexplained, lof_last) {
+            (Some(true), _) => match pattern {
+                Some(p) => format!(" Structure is still left (pattern: {p})."),
+                None => format!(" Structure is still left with {with} (its pattern was not re-tested: the catalogue's is what a proposed term fits)."),
+            },
+            (Some(false), Some(l)) if lof_before.as_ref().is_some_and(|b| b.p < crate::verdict::LOF_ALPHA) => format!(
+                " With {with}, the lack of fit against the replicate runs is resolved (p = {:.3}).",
+                l.p
+            ),
+            (Some(false), Some(l)) => format!(
+                " No significant lack of fit against the replicate runs is left with {with} (p = {:.3}); the catalogue left none significant either.",
+                l.p
+            ),
+            _ => format!(" Whether structure is left with {with} cannot be tested: {NO_LOF}."),
         };
         return format!(
             "Discovered (a candidate to test, not an established cause): {}.{left}",
@@ -349,12 +360,22 @@ pub(crate) fn verdict_words(
             d.name, d.reason
         )
     });
-    if unexplained {
-        format!(
+    match unexplained {
+        Some(true) => format!(
             "Nothing in the library explains what the catalogue leaves (pattern: {}).{why}",
             pattern.unwrap_or("cells")
-        )
-    } else {
-        format!("Nothing to add: no library term earns its evidence beyond the catalogue.{why}")
+        ),
+        Some(false) if lof_before.is_none() => format!(
+            "Nothing to add: no library term earns its evidence beyond the catalogue (the lack of fit against the replicate runs cannot be tested: {NO_LOF}; the tests of the residuals against T1, time and wrap find nothing that matters).{why}"
+        ),
+        Some(false) => format!(
+            "Nothing to add: no library term earns its evidence beyond the catalogue.{why}"
+        ),
+        None => format!(
+            "Nothing to add that can be judged: no library term earns its evidence beyond the catalogue, and what the catalogue leaves cannot be tested ({NO_LOF}).{why}"
+        ),
     }
 }
+
+/// Why the lack of fit against the replicate runs could not be tested.
+const NO_LOF: &str = "no cord step is seen by two runs or more, or the runs that repeat one agree exactly, so there is no pure error to judge the model against";

@@ -155,3 +155,71 @@ pub(crate) fn rivals_of(
         })
         .collect()
 }
+
+/// How a later term repairs the catalogue's selection rather than adding to it (D4).
+pub(crate) enum Repair {
+    /// Without the catalogue's effect it is not past the engine's bar: it only corrects what
+    /// that effect does (ΔBIC of the term on the catalogue without it).
+    LeansOn(&'static str, f64),
+    /// In place of the catalogue's effect it explains at least what the effect did (the swap
+    /// beats the catalogue as selected, or does as well as the term beside the effect; ΔBIC of
+    /// that swap): it stands in for the effect.
+    StandsIn(&'static str, f64),
+}
+
+/// A later term that repairs the catalogue's selection rather than adding to it (D4). For
+/// each within-run catalogue effect k, the term is screened on the catalogue without k (with
+/// the terms proposed before it). If it is not past the engine's bar there (`threshold`), its
+/// evidence exists only beside k: it corrects what k does, as `t2_offset_wrap` beside a
+/// T1 offset the engine took for the planted T2 offset (the T1 offset, amplified by
+/// e^(mu beta), leaves a pattern in wrap that the term undoes; up-down hysteresis sets). If
+/// "catalogue − k + term" beats the catalogue as selected, or is as good as "catalogue +
+/// term", it stands in for k (`t2_lowforce` in place of that T1 offset: 4 of 12 seed-26
+/// hysteresis sets got it as a second term; no other seed-26 set changed).
+pub(crate) fn catalogue_repair(
+    a: &capstan_engine::evidence::Assessment,
+    alts: &[crate::joint::Alternative<'_>],
+    st: &State,
+    best: &screen::Screen,
+    threshold: f64,
+) -> Option<Repair> {
+    use crate::model::{classify, runs_of, screen_all};
+    for alt in alts {
+        let (testable, _) = classify(&alt.base);
+        let col = |term: usize| testable.iter().find(|c| c.term == term);
+        let mut shared = alt.base.b.clone();
+        for &u in &st.used {
+            if let Some(x) = col(u).and_then(|c| c.column.clone()) {
+                shared.push(x);
+            }
+        }
+        let e = Projector::new(&alt.base, &shared).project(&alt.base, &alt.base.e);
+        let st_alt = State {
+            shared,
+            covs: st.covs.clone(),
+            e,
+            used: st.used.clone(),
+        };
+        let Some(c) = col(best.term) else { continue };
+        let proj = Projector::new(&alt.base, &st_alt.shared);
+        let sc = screen_all(
+            &alt.base,
+            std::slice::from_ref(c),
+            &proj,
+            &st_alt,
+            &runs_of(a, &alt.fit),
+        );
+        let Some(s) = sc.first().filter(|s| s.delta_bic.is_finite()) else {
+            continue;
+        };
+        let k = alt.dropped.name();
+        if s.delta_bic >= -threshold {
+            return Some(Repair::LeansOn(k, s.delta_bic));
+        }
+        let swap = s.delta_bic - alt.dropped_delta_bic;
+        if swap <= best.delta_bic.max(0.0) {
+            return Some(Repair::StandsIn(k, swap));
+        }
+    }
+    None
+}

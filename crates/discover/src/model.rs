@@ -160,6 +160,10 @@ fn fixed_variable(base: &Base, v: Var) -> Option<&'static str> {
             base.d.units.iter().any(|u| u.len() >= 2),
             "one step per run in these data: its dependence on the step cannot be tested",
         ),
+        Var::StepDirection if base.d.falling.iter().all(|f| f.is_none()) => (
+            false,
+            "the step order is not known (no run, step or time column), so whether the tension rose or fell to a step cannot be told: its dependence on the step direction cannot be tested",
+        ),
         Var::StepDirection => (
             rows.iter().any(|r| r.falling) && rows.iter().any(|r| !r.falling),
             "the tension never falls between steps in these data: its dependence on the step direction cannot be tested",

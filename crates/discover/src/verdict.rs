@@ -6,7 +6,7 @@ use crate::answer::{
     decline, displaced, proposed, screen_row, verdict_words, DataInfo, Declined, Discovery,
     NotTestable, Proposed, ScreenRow, Search,
 };
-use crate::checks::{candidates, held_out, lack_of_fit_with, rivals_of};
+use crate::checks::{candidates, catalogue_repair, held_out, lack_of_fit_with, rivals_of, Repair};
 use crate::columns::Base;
 use crate::heldout::{self, Ratio};
 use crate::joint;
@@ -234,6 +234,36 @@ fn cord_checks(cords: usize) -> Option<String> {
     })
 }
 
+/// The catalogue's residual pattern, still named after the proposed terms unless one of them
+/// depends on its variable (it fitted that pattern; what is left was not re-tested for one).
+fn left_pattern(pattern: &'static str, terms: &[Proposed]) -> Option<&'static str> {
+    use crate::library::Var;
+    let vars: &[Var] = match pattern {
+        "wrap" => &[Var::Wrap],
+        "diameter" => &[Var::Diameter],
+        "time" => &[Var::Time],
+        "step_direction" => &[Var::StepDirection],
+        "t1_shape" => &[Var::T1, Var::T2, Var::Load],
+        _ => &[],
+    };
+    let fitted = terms
+        .iter()
+        .any(|t| t.depends_on.iter().any(|v| vars.contains(v)));
+    (!fitted).then_some(pattern)
+}
+
+/// Who left what a term is measured against: the catalogue, and the terms proposed before it.
+fn left_by(earlier: &[Proposed]) -> String {
+    if earlier.is_empty() {
+        return "the catalogue leaves".into();
+    }
+    let names: Vec<&str> = earlier.iter().map(|t| t.name).collect();
+    format!("the catalogue with {} leaves", names.join(" + "))
+}
+
+/// How an unstable pick's decline begins.
+const UNSTABLE: &str = "unstable";
+
 /// A significant lack of fit: after a term it keeps "unexplained" (the spike's rule: a partial
 /// mimic leaves the replicates disagreeing with the model, whatever its size).
 fn lof_open(l: &Option<LackOfFit>) -> bool {
@@ -268,6 +298,8 @@ impl Ctx<'_> {
         // The first step of a swap takes the swap's term (it beat every addition).
         let forced = self.swap.filter(|_| step == 1).map(|s| s.term);
         let mut failed: Vec<usize> = Vec::new();
+        // The failed picks that were unstable: a rival of one is not proposed in its place.
+        let mut unstable: Vec<usize> = Vec::new();
         let first = if step == 1 { self.first_try } else { 1 };
         for j in first..=self.opts.max_tries.max(1) {
             let bar = self.bar.at(step) - 2.0 * self.bar.gamma * (j as f64).ln();
@@ -301,11 +333,15 @@ impl Ctx<'_> {
             let checked = self
                 .stable_and_held_out(on, st, &screens, &best, tst, progress)
                 .and_then(|checks| {
-                    self.accept(step, st, out, (&proj, &screens), (&best, tst), checks)
+                    let on = (step, &failed[..], &unstable[..]);
+                    self.accept(on, st, out, (&proj, &screens), (&best, tst), checks)
                 });
             match checked {
                 Ok(()) => return true,
                 Err(dec) => {
+                    if dec.reason.starts_with(UNSTABLE) {
+                        unstable.push(best.term);
+                    }
                     out.declined.push(*dec);
                     if forced.is_some() {
                         return false;
@@ -321,7 +357,7 @@ impl Ctx<'_> {
     /// (and the model grown), or declined as a partial mimic.
     fn accept(
         &self,
-        step: usize,
+        (step, failed, unstable): (usize, &[usize], &[usize]),
         st: &mut State,
         out: &mut Outcome,
         (proj, screens): (&Projector, &[screen::Screen]),
@@ -330,7 +366,12 @@ impl Ctx<'_> {
     ) -> Result<(), Box<Declined>> {
         let t = &LIBRARY[best.term];
         let proj_x = tst.column.as_ref().map(|x| proj.project(self.base, x));
-        let lof_before = &self.a.adequacy.lack_of_fit;
+        // What is left before this term: after the terms already proposed, or what the
+        // catalogue alone left for the first. A later term's share is its own, not theirs.
+        let lof_before = match out.terms.last() {
+            Some(prev) => &prev.lack_of_fit_after,
+            None => &self.a.adequacy.lack_of_fit,
+        };
         let on = (&self.a.design, self.base);
         let lof_after = lack_of_fit_with(on, st, best.theta, proj_x.as_deref(), lof_before);
         let mut partial = None;
@@ -343,7 +384,8 @@ impl Ctx<'_> {
             // No lack of fit before (NaN): declined.
             if share.is_nan() || share < self.opts.min_share_resolved {
                 return Err(Box::new(decline(t, best, Some(stab), Some(ratio), format!(
-                    "a partial mimic: with it the lack of fit against the replicate runs stays (p = {:.3}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
+                    "a partial mimic: with it the lack of fit against the replicate runs {} (p = {:.3}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
+                    if lof_open(lof_before) { "stays" } else { "appears (it was not significant before it)" },
                     lof_after.as_ref().map_or(f64::NAN, |l| l.p),
                     100.0 * share.max(0.0),
                     100.0 * self.opts.min_share_resolved.min(1.0)
@@ -351,17 +393,70 @@ impl Ctx<'_> {
             }
             partial = Some((before, after, share));
         }
+        // A later term that only stands in for a catalogue effect the engine mis-selected.
+        if step > 1 && self.swap.is_none() {
+            let threshold = self.bar.threshold;
+            if let Some(r) = catalogue_repair(self.a, self.alts, st, best, threshold) {
+                let why = match r {
+                    Repair::LeansOn(k, dbic) => format!(
+                        "its evidence exists only beside the catalogue's {k}: without {k} its ΔBIC is {dbic:.1} (the engine's bar −{threshold:.0}), so it corrects what {k} does rather than adding to the catalogue; a catalogue effect the engine did not select (another sensor's offset, say) may be what the data want"
+                    ),
+                    Repair::StandsIn(k, swap) => format!(
+                        "it stands in for the catalogue's {k}: in its place it explains at least what {k} did (ΔBIC of that swap {swap:.1} against the catalogue as selected; as an addition {:.1}), so it may be what the data wanted instead of {k}",
+                        best.delta_bic
+                    ),
+                };
+                return Err(Box::new(decline(
+                    t,
+                    best,
+                    Some(stab),
+                    Some(ratio),
+                    format!("a repair of the catalogue's selection, not physics beyond it: {why}"),
+                )));
+            }
+        }
         let threshold = self.bar.threshold;
         let rivals = rivals_of(self.base, proj, screens, best, &self.testable, threshold);
+        // A rival the data cannot tell from it failed stability at this step: the resamples
+        // split between the two, and the one left is not the more likely for it (D6).
+        let name_of = |k: &usize| LIBRARY[*k].name;
+        if let Some(r) = rivals
+            .iter()
+            .find(|r| unstable.iter().map(name_of).any(|n| n == r.name))
+        {
+            return Err(Box::new(decline(t, best, Some(stab), Some(ratio), format!(
+                "the data cannot tell it from {}, which failed stability at this step: the cord resamples split between them, so neither is proposed",
+                r.name
+            ))));
+        }
         let forced = self.swap.filter(|_| step == 1);
         let displaced = forced.map(|s| displaced(&self.alts[s.alt], s));
         let checks = (stab, ratio);
-        let mut term = proposed(t, best, checks, lof_after, rivals, displaced);
+        let given = match out.terms.is_empty() {
+            true => "the catalogue".to_string(),
+            false => format!(
+                "the catalogue and {}",
+                out.terms
+                    .iter()
+                    .map(|t| t.name)
+                    .collect::<Vec<_>>()
+                    .join(" + ")
+            ),
+        };
+        let mut term = proposed(t, best, checks, lof_after, rivals, (displaced, &given));
+        if !failed.is_empty() {
+            let names: Vec<&str> = failed.iter().map(name_of).collect();
+            term.words += &format!(
+                " Its stability was computed with {} left out of the resamples (tried before it at this step and declined).",
+                names.join(", ")
+            );
+        }
         if let Some((before, after, share)) = partial {
             out.partial = true;
             term.partial = true;
             term.words += &format!(
-                " It explains most, not all, of what the catalogue leaves: the lack of fit against the replicate runs stays significant (systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed).",
+                " It explains most, not all, of what {}: the lack of fit against the replicate runs stays significant (systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed).",
+                left_by(&out.terms),
                 100.0 * share
             );
         }
@@ -410,7 +505,7 @@ impl Ctx<'_> {
         if stab < self.opts.min_stability {
             let (pct, need) = (100.0 * stab, 100.0 * self.opts.min_stability);
             return no(Some(ratio), format!(
-                "unstable: the search picks it in {pct:.0} % of whole-cord resamples (needs {need:.0} %)"
+                "{UNSTABLE}: the search picks it in {pct:.0} % of whole-cord resamples (needs {need:.0} %)"
             ));
         }
         if ratio.value >= 1.0 {
@@ -455,29 +550,44 @@ impl Ctx<'_> {
     ) -> Discovery {
         let (a, opts, d) = (self.a, self.opts, &self.a.design);
         let lof_before = a.adequacy.lack_of_fit.clone();
-        let last_lof = out
-            .terms
-            .iter()
-            .rev()
-            .find_map(|t| t.lack_of_fit_after.clone());
-        let unexplained_after = if out.terms.is_empty() {
-            a.adequacy.unexplained
-        } else {
-            out.partial
-                || !a.adequacy.at_physical_limit.is_empty()
-                || lof_open(&last_lof.or(lof_before.clone()))
+        // Judged on the final model: the lack of fit after the last proposed term (None: it
+        // could not be tested), or the catalogue's own decision when nothing is proposed.
+        let last_lof = out.terms.last().map(|t| t.lack_of_fit_after.clone());
+        let unexplained_after = match &last_lof {
+            None => a.adequacy.tested.then_some(a.adequacy.unexplained),
+            Some(_) if !a.adequacy.at_physical_limit.is_empty() => Some(true),
+            Some(l) => l.as_ref().map(|l| l.p < LOF_ALPHA),
         };
-        let residual_pattern = if unexplained_after {
-            Some(a.adequacy.pattern.unwrap_or("cells"))
-        } else {
-            None
+        // With terms whose last lack of fit is not significant, what is left is only a
+        // catalogue effect at the edge of its physical range: no residual pattern is named.
+        let lof_left = last_lof.as_ref().is_none_or(|l| lof_open(l) || l.is_none());
+        let residual_pattern = match unexplained_after {
+            Some(true) if lof_left => {
+                left_pattern(a.adequacy.pattern.unwrap_or("cells"), &out.terms)
+            }
+            _ => None,
         };
-        let verdict = verdict_words(
+        let mut verdict = verdict_words(
             &out.terms,
-            unexplained_after,
-            residual_pattern,
+            (unexplained_after, residual_pattern),
+            (&lof_before, last_lof.flatten().as_ref()),
             &out.declined,
         );
+        if !lof_left && unexplained_after == Some(true) {
+            let names: Vec<String> = a
+                .adequacy
+                .at_physical_limit
+                .iter()
+                .map(|(k, v)| format!("{k} ({v:.3})"))
+                .collect();
+            let head = verdict.split(" Structure is still left").next();
+            verdict = format!(
+                "{} Structure is still left: the lack of fit against the replicate runs is no longer significant with {}, but the catalogue's {} sits at the edge of its physical range (the data want more than it can be).",
+                head.unwrap_or_default(),
+                if out.terms.len() == 1 { "it" } else { "them" },
+                names.join(", ")
+            );
+        }
         Discovery {
             data: DataInfo {
                 source: data.source.clone(),

@@ -49,7 +49,7 @@ fn discover_proposes_only_what_earns_it_and_keeps_unexplained_what_it_cannot_exp
     for o in &out {
         println!("{}", o.describe);
     }
-    // A term proposed as partial never claims the lack of fit resolved.
+    // An answer whose last term is partial never claims the lack of fit resolved.
     for o in out.iter().filter(|o| o.partial) {
         assert!(o.unexplained_after && !o.confident, "{}", o.describe);
     }

@@ -21,7 +21,8 @@ pub struct Outcome {
     pub right_or_rival: bool,
     /// A term proposed and the lack of fit resolved.
     pub confident: bool,
-    /// A term proposed as partial (the lack of fit stays, most of it removed).
+    /// The last term proposed is partial (the lack of fit stays, most of it removed; a later
+    /// term may resolve what an earlier partial one left).
     pub partial: bool,
     pub unexplained_after: bool,
     /// The oracle (expressible kinds): the best ΔBIC of a library term of the right dependence
@@ -92,14 +93,15 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         proposed: d.terms.iter().map(|t| t.name).collect(),
         right,
         right_or_rival,
-        confident: !d.terms.is_empty() && !d.unexplained_after,
-        partial: d.terms.iter().any(|t| t.partial),
-        unexplained_after: d.unexplained_after,
+        // A term with nothing shown left (or nothing testable left) counts as confident.
+        confident: !d.terms.is_empty() && d.unexplained_after != Some(true),
+        partial: d.terms.last().is_some_and(|t| t.partial),
+        unexplained_after: d.unexplained_after == Some(true),
         oracle_dbic,
         oracle_detects,
         elapsed_s: d.elapsed_s,
         describe: format!(
-            "{} {:+.3}: oracle {:?} {} cat {:?} lof {:?} | {:?} unexplained_after={} right {:?} displaced {:?} declined={:?}",
+            "{} {:+.3}: oracle {:?} {} cat {:?} lof {:?} | {:?} unexplained_after={:?} right {:?} displaced {:?} declined={:?}",
             c.kind.name,
             c.size,
             oracle_dbic.map(|x| (x * 10.0).round() / 10.0),
