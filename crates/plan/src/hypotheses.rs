@@ -149,7 +149,8 @@ fn not_simulated(d: &Diagnosis, sized: &[&str]) -> Vec<NotSimulated> {
             what: "unexplained".to_string(),
             why: format!(
                 "structure no catalogue effect explains{}; the planner simulates catalogue \
-                 hypotheses only (see `capstan discover`)",
+                 hypotheses only (the discovery search beyond the catalogue is capstan \
+                 discover's, and analyze reports its terms under Discovered)",
                 d.residual_pattern
                     .map(|p| format!(" (pattern: {p})"))
                     .unwrap_or_default()
