@@ -24,7 +24,8 @@
 //! load (1/N); the memory is short against any conditioning window, so the data see
 //! mu·exp(−heat_per_n·(T2 − T1)).
 //!
-//! To add an effect: a variant, its entry below (in the variant's place), and its law.
+//! To add an effect: a variant, its entry below (in the variant's place), and its law (with, for
+//! a new scalar of the model, its row in [`crate::scalars::SCALARS`], which the fitter reads).
 
 use crate::entry::{
     always, as_drawn, no_range, nothing, one_percent_over, over_span, CaseDesign, Cases, CordTest,

@@ -15,6 +15,7 @@ mod effect;
 pub mod entry;
 mod law;
 mod partials;
+pub mod scalars;
 mod sensor;
 
 /// The elementary functions, shared by the friction law and the plant's hot path: the
@@ -52,6 +53,7 @@ pub use effect::{Effect, ParseEffectError};
 pub use entry::{EffectEntry, Facts, Level};
 pub use law::{FrictionLaw, LoadMemory};
 pub use partials::{LawPartials, MuPartials};
+pub use scalars::{Enters, Scalar, SCALARS};
 pub use sensor::{SensorArtefacts, SLACK_T1_N};
 
 /// Reference capstan diameter for [`FrictionLaw::mu_change_per_mm`] (0.5 in), mm.

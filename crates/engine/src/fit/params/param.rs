@@ -1,38 +1,14 @@
 //! The scalars of a [`Model`] a fit may move ([`Param`]) and the maps from an unbounded
 //! internal coordinate θ to their values ([`Transform`]).
 
+use capstan_friction::scalars::{index_of, Enters, SCALARS};
 use capstan_friction::{EffectKind, Model};
 
-/// One scalar of [`Model`] (friction law or sensor artefact).
+/// One scalar of [`Model`] (friction law or sensor artefact): a row of `friction`'s
+/// [`SCALARS`], which says its name, how to read and set it, how it enters a prediction, its
+/// transform and size. The fitter lists none by hand.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Param {
-    /// `law.mu`: friction coefficient at the reference conditions.
-    Mu,
-    /// `law.tension_exponent`: n of dT/dθ = k·Tⁿ.
-    TensionExponent,
-    /// `law.bending_b_nm2`: bending stiffness, N m².
-    BendingB,
-    /// `law.mu_change_per_100s`: drift of mu with time since the trigger.
-    MuChangePer100s,
-    /// `law.mu_change_per_run`: wear between runs.
-    MuChangePerRun,
-    /// `law.mu_change_per_mm`: diameter dependence.
-    MuChangePerMm,
-    /// `law.mu_change_per_v`: speed dependence.
-    MuChangePerV,
-    /// `law.mu_log_slope_per_rad`: wrap dependence of ln mu (anchored at 540°).
-    MuLogSlopePerRad,
-    /// `law.heat_per_ns`: contact heating, 1/(N s).
-    HeatPerNs,
-    /// `law.heat_tau_s`: memory time of the friction load, s.
-    HeatTauS,
-    /// `sensors.t1_offset_n`: T1 zero offset / T1-path loss, N.
-    T1Offset,
-    /// `sensors.t2_offset_n`: T2 zero offset, N.
-    T2Offset,
-    /// `sensors.t2_gain`: T2 gain relative to T1.
-    T2Gain,
-}
+pub struct Param(u8);
 
 /// How a parameter enters the prediction (decides how its sensitivity is computed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,79 +25,59 @@ pub(crate) enum Role {
     T2Gain,
 }
 
+/// The parameter of the scalar named `name` (a compile-time error when there is none).
+const fn named(name: &str) -> Param {
+    Param(index_of(name) as u8)
+}
+
+// The parameters the engine's own model specs name (the rest it reaches through the entries).
+#[allow(non_upper_case_globals)]
 impl Param {
-    /// Every parameter.
-    pub const ALL: [Param; 13] = [
-        Param::Mu,
-        Param::TensionExponent,
-        Param::BendingB,
-        Param::MuChangePer100s,
-        Param::MuChangePerRun,
-        Param::MuChangePerMm,
-        Param::MuChangePerV,
-        Param::MuLogSlopePerRad,
-        Param::HeatPerNs,
-        Param::HeatTauS,
-        Param::T1Offset,
-        Param::T2Offset,
-        Param::T2Gain,
-    ];
+    /// `law.mu`: friction coefficient at the reference conditions.
+    pub const Mu: Param = named("mu");
+    /// `law.tension_exponent`: n of dT/dθ = k·Tⁿ.
+    pub const TensionExponent: Param = named("n");
+    /// `law.mu_change_per_100s`: drift of mu with time since the trigger.
+    pub const MuChangePer100s: Param = named("mu_change_per_100s");
+    /// `law.mu_log_slope_per_rad`: wrap dependence of ln mu (anchored at 540°).
+    pub const MuLogSlopePerRad: Param = named("mu_log_slope_per_rad");
+    /// `law.heat_per_ns`: contact heating, 1/(N s).
+    pub const HeatPerNs: Param = named("heat_per_ns");
+    /// `law.heat_tau_s`: memory time of the friction load, s.
+    pub const HeatTauS: Param = named("heat_tau_s");
+    /// `sensors.t1_offset_n`: T1 zero offset / T1-path loss, N.
+    pub const T1Offset: Param = named("t1_offset_n");
+    /// `sensors.t2_offset_n`: T2 zero offset, N.
+    pub const T2Offset: Param = named("t2_offset_n");
+    /// `sensors.t2_gain`: T2 gain relative to T1.
+    pub const T2Gain: Param = named("t2_gain");
+}
+
+impl Param {
+    /// Every parameter, in the table's order.
+    pub const ALL: [Param; SCALARS.len()] = {
+        let mut all = [Param(0); SCALARS.len()];
+        let mut i = 0;
+        while i < all.len() {
+            all[i] = Param(i as u8);
+            i += 1;
+        }
+        all
+    };
 
     /// Short name used in JSON and reports.
     pub const fn name(self) -> &'static str {
-        match self {
-            Param::Mu => "mu",
-            Param::TensionExponent => "n",
-            Param::BendingB => "b_nm2",
-            Param::MuChangePer100s => "mu_change_per_100s",
-            Param::MuChangePerRun => "mu_change_per_run",
-            Param::MuChangePerMm => "mu_change_per_mm",
-            Param::MuChangePerV => "mu_change_per_v",
-            Param::MuLogSlopePerRad => "mu_log_slope_per_rad",
-            Param::HeatPerNs => "heat_per_ns",
-            Param::HeatTauS => "heat_tau_s",
-            Param::T1Offset => "t1_offset_n",
-            Param::T2Offset => "t2_offset_n",
-            Param::T2Gain => "t2_gain",
-        }
+        SCALARS[self.0 as usize].name
     }
 
     /// The value in `model`.
     pub fn get(self, m: &Model) -> f64 {
-        match self {
-            Param::Mu => m.law.mu,
-            Param::TensionExponent => m.law.tension_exponent,
-            Param::BendingB => m.law.bending_b_nm2,
-            Param::MuChangePer100s => m.law.mu_change_per_100s,
-            Param::MuChangePerRun => m.law.mu_change_per_run,
-            Param::MuChangePerMm => m.law.mu_change_per_mm,
-            Param::MuChangePerV => m.law.mu_change_per_v,
-            Param::MuLogSlopePerRad => m.law.mu_log_slope_per_rad,
-            Param::HeatPerNs => m.law.heat_per_ns,
-            Param::HeatTauS => m.law.heat_tau_s,
-            Param::T1Offset => m.sensors.t1_offset_n,
-            Param::T2Offset => m.sensors.t2_offset_n,
-            Param::T2Gain => m.sensors.t2_gain,
-        }
+        (SCALARS[self.0 as usize].get)(m)
     }
 
     /// Set the value in `model`.
     pub fn set(self, m: &mut Model, v: f64) {
-        match self {
-            Param::Mu => m.law.mu = v,
-            Param::TensionExponent => m.law.tension_exponent = v,
-            Param::BendingB => m.law.bending_b_nm2 = v,
-            Param::MuChangePer100s => m.law.mu_change_per_100s = v,
-            Param::MuChangePerRun => m.law.mu_change_per_run = v,
-            Param::MuChangePerMm => m.law.mu_change_per_mm = v,
-            Param::MuChangePerV => m.law.mu_change_per_v = v,
-            Param::MuLogSlopePerRad => m.law.mu_log_slope_per_rad = v,
-            Param::HeatPerNs => m.law.heat_per_ns = v,
-            Param::HeatTauS => m.law.heat_tau_s = v,
-            Param::T1Offset => m.sensors.t1_offset_n = v,
-            Param::T2Offset => m.sensors.t2_offset_n = v,
-            Param::T2Gain => m.sensors.t2_gain = v,
-        }
+        (SCALARS[self.0 as usize].set)(m, v)
     }
 
     /// The parameter behind a catalogue effect (`None` for `none`): the model scalar its entry
@@ -140,34 +96,27 @@ impl Param {
 
     /// A natural transform for this parameter (`Log` for the positive ones).
     pub fn default_transform(self) -> Transform {
-        match self {
-            Param::Mu | Param::HeatTauS | Param::T2Gain | Param::HeatPerNs => Transform::Log,
-            Param::BendingB => Transform::Log,
-            Param::TensionExponent => Transform::Logistic { lo: 0.3, hi: 1.7 },
-            _ => Transform::Identity,
+        use capstan_friction::entry::Transform as T;
+        match SCALARS[self.0 as usize].transform {
+            T::Identity => Transform::Identity,
+            T::Log => Transform::Log,
+            T::Logistic { lo, hi } => Transform::Logistic { lo, hi },
         }
     }
 
     pub(crate) fn role(self) -> Role {
-        match self {
-            Param::HeatTauS => Role::Tau,
-            Param::T1Offset => Role::T1Offset,
-            Param::T2Offset => Role::T2Offset,
-            Param::T2Gain => Role::T2Gain,
-            _ => Role::Law,
+        match SCALARS[self.0 as usize].enters {
+            Enters::Law => Role::Law,
+            Enters::MemoryTime => Role::Tau,
+            Enters::T1Offset => Role::T1Offset,
+            Enters::T2Offset => Role::T2Offset,
+            Enters::T2Gain => Role::T2Gain,
         }
     }
 
     /// A typical magnitude, to size finite-difference steps.
     pub(crate) fn scale(self) -> f64 {
-        match self {
-            Param::Mu => 0.1,
-            Param::TensionExponent => 1.0,
-            Param::BendingB => 1e-5,
-            Param::HeatPerNs => 1e-3,
-            Param::MuChangePerMm => 1e-3,
-            _ => 0.01,
-        }
+        SCALARS[self.0 as usize].scale
     }
 }
 
