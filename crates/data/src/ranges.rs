@@ -73,11 +73,15 @@ impl Range {
     }
 }
 
-/// A value a user gave, as a message repeats it: as Rust prints it, except that very large or
-/// very small magnitudes read in scientific notation with six significant digits at most
-/// (1e308 is not three hundred digits, nor 9.999999999999999e299).
+/// A value a user gave, as a message repeats it: whole numbers below 1e16 in full, others as
+/// Rust prints them, except that very large or very small magnitudes read in scientific
+/// notation with six significant digits at most (1e308 is not three hundred digits, nor
+/// 9.999999999999999e299).
 pub fn shown(v: f64) -> String {
-    if v.is_finite() && v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
+    if v.fract() == 0.0 && v.abs() < 1e16 {
+        // A whole number as typed (4294967295, 1000000000), never in exponent form.
+        format!("{v:.0}")
+    } else if v.is_finite() && v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
         let s = format!("{v:.5e}");
         let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
         let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
@@ -97,6 +101,8 @@ mod shown_tests {
         assert_eq!(shown(9.999999999999999e299), "1e300");
         assert_eq!(shown(-2.5e-7), "-2.5e-7");
         assert_eq!(shown(12.25), "12.25");
+        assert_eq!(shown(4294967295.0), "4294967295");
+        assert_eq!(shown(-0.0), "-0");
         assert_eq!(shown(f64::INFINITY), "inf");
     }
 }
