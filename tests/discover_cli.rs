@@ -7,6 +7,21 @@ fn capstan() -> Command {
     Command::new(env!("CARGO_BIN_EXE_capstan"))
 }
 
+/// `capstan ARGS`, which must succeed (its stderr in the failure if not).
+fn ok<I, S>(args: I) -> std::process::Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    let out = capstan().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn tmp(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("capstan-discover-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -16,15 +31,7 @@ fn tmp(name: &str) -> std::path::PathBuf {
 #[test]
 fn thesis_json_through_the_binary_and_out_dir() {
     let out_dir = tmp("out");
-    let out = capstan()
-        .args(["discover", "--json", "--out", out_dir.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = ok(["discover", "--json", "--out", out_dir.to_str().unwrap()]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert_eq!(v["terms"], serde_json::json!([]));
     assert_eq!(v["unexplained_after"], serde_json::json!(true));
@@ -68,15 +75,7 @@ fn one_cord_says_stability_and_held_out_cannot_be_computed() {
     for (name, keep) in [("one-cord.csv", rows.len()), ("one-run.csv", 12)] {
         let p = tmp(name);
         std::fs::write(&p, format!("{header}\n{}\n", rows[..keep].join("\n"))).unwrap();
-        let out = capstan()
-            .args(["discover", p.to_str().unwrap()])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = ok(["discover", p.to_str().unwrap()]);
         let text = String::from_utf8_lossy(&out.stdout);
         assert!(text.contains("cannot be computed from 1 cord"), "{text}");
         assert!(!text.contains("cord resamples"), "{text}");
@@ -130,15 +129,7 @@ fn simulate(name: &str, args: &[&str]) -> std::path::PathBuf {
 }
 
 fn discover_json(p: &std::path::Path) -> serde_json::Value {
-    let out = capstan()
-        .args(["discover", "--json", p.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = ok(["discover", "--json", p.to_str().unwrap()]);
     serde_json::from_slice(&out.stdout).expect("one JSON object")
 }
 
@@ -282,11 +273,7 @@ fn one_run_per_cord_says_the_replicate_gate_was_not_applied() {
 fn the_search_line_words_a_catalogue_without_within_run_effects() {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("crates/discover/tests/data/tare_catalogue_seed4.csv");
-    let out = capstan()
-        .args(["discover", p.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
+    let out = ok(["discover", p.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(!text.contains("one of its 0"), "{text}");
     assert!(
