@@ -11,6 +11,23 @@ fn capstan(args: &[&str]) -> Output {
         .expect("capstan runs")
 }
 
+/// `capstan predict --from FROM --wrap-deg WRAP --diameter-mm 20 --t1-n T1` and `more`.
+fn predict_at(from: &str, wrap: &str, t1: &str, more: &[&str]) -> Output {
+    let mut a = vec![
+        "predict",
+        "--from",
+        from,
+        "--wrap-deg",
+        wrap,
+        "--diameter-mm",
+        "20",
+        "--t1-n",
+        t1,
+    ];
+    a.extend(more);
+    capstan(&a)
+}
+
 /// metrics.json of the thesis data, as `capstan analyze` writes it.
 fn metrics(dir: &Path) -> PathBuf {
     use capstan_engine::analysis::{self, Options};
@@ -91,25 +108,13 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
         );
     }
     // A huge number is repeated as the user could read it, not as 309 digits.
-    for (flag, value, shown) in [
-        ("--wrap-deg", "1e308", "--wrap-deg 1e308:"),
-        ("--t1-n", "5,1e300", "1e300 N is not a tension"),
+    for (r, shown) in [
+        (predict_at(from, "1e308", "5", &[]), "--wrap-deg 1e308:"),
+        (
+            predict_at(from, "540", "5,1e300", &[]),
+            "1e300 N is not a tension",
+        ),
     ] {
-        let mut a = vec![
-            "predict",
-            "--from",
-            from,
-            "--wrap-deg",
-            "540",
-            "--diameter-mm",
-            "20",
-        ];
-        if flag == "--wrap-deg" {
-            a.truncate(3);
-            a.extend(["--diameter-mm", "20", "--t1-n", "5"]);
-        }
-        a.extend([flag, value]);
-        let r = capstan(&a);
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(
             !r.status.success() && err.contains(shown) && err.len() < 200,
@@ -144,17 +149,7 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
         }
         let path = dir.join("edited.json");
         std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
-        let r = capstan(&[
-            "predict",
-            "--from",
-            path.to_str().unwrap(),
-            "--wrap-deg",
-            "540",
-            "--diameter-mm",
-            "20",
-            "--t1-n",
-            "0.5,5,20",
-        ]);
+        let r = predict_at(path.to_str().unwrap(), "540", "0.5,5,20", &[]);
         let err = String::from_utf8_lossy(&r.stderr);
         let out = String::from_utf8_lossy(&r.stdout);
         assert!(!r.status.success(), "{what} was accepted: {out}");
@@ -164,18 +159,7 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
         );
     }
     // The interval of a query inside the fitted data carries no warning.
-    let r = capstan(&[
-        "predict",
-        "--from",
-        from,
-        "--wrap-deg",
-        "540",
-        "--diameter-mm",
-        "20",
-        "--t1-n",
-        "5",
-        "--drive-v=10",
-    ]);
+    let r = predict_at(from, "540", "5", &["--drive-v=10"]);
     assert!(r.status.success() && r.stderr.is_empty());
     let _ = std::fs::remove_dir_all(&dir);
 }
