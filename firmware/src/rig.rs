@@ -112,6 +112,9 @@ enum Phase {
         /// Where the host asked the servo to go, deg.
         target_deg: f32,
         measure: Option<Measure>,
+        /// A zero was measured in this setup session: `weigh` measures from it, so it is
+        /// refused before one (a zero stored in flash may be days old, or never measured).
+        zeroed: bool,
         /// The sample on which setup mode began: the origin of its sample grid.
         origin_us: u64,
         next_live_us: u64,

@@ -130,6 +130,8 @@ fn a_reversed_sensor_is_refused_at_the_weigh_and_stops_a_run() {
     let out = session(&[
         Step::ReverseSensor(Channel::T1),
         send("setup"),
+        send("zero"),
+        Step::Wait(700),
         Step::Hang(Channel::T1, 2.0),
         Step::Wait(100),
         send("weigh t1 2"),
@@ -139,6 +141,7 @@ fn a_reversed_sensor_is_refused_at_the_weigh_and_stops_a_run() {
     assert_eq!(
         got,
         [
+            None,
             None,
             Some(CommandError::Reversed),
             Some(CommandError::Invalid)

@@ -112,7 +112,7 @@ pub fn reply_sentence(reply: &Reply, sent: Option<&Command>) -> String {
                 _ => "",
             };
             let npc = significant(v1, 4);
-            format!("weigh{channel}: {npc} N/count (mean {v2:.1} counts; measured from the zero in force, so zero first with nothing hanging)")
+            format!("weigh{channel}: {npc} N/count (mean {v2:.1} counts; measured from the zero taken in this setup session)")
         }
         CommandKind::Set => match Key::ALL.get(v1 as usize).filter(|_| v1 >= 0.0) {
             Some(&key) => format!("set {} = {}", key.name(), set_value(key, v2)),
@@ -197,9 +197,9 @@ mod tests {
         let sent = Command::Weigh(Channel::T1, 9.80665);
         assert_eq!(
             reply_sentence(&weigh, Some(&sent)),
-            "weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero in force, so zero first with nothing hanging)"
+            "weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session)"
         );
-        assert_eq!(say(weigh), "weigh: 0.01630 N/count (mean 1012.4 counts; measured from the zero in force, so zero first with nothing hanging)");
+        assert_eq!(say(weigh), "weigh: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session)");
         let dwell = Key::DwellMs.code() as f32;
         assert_eq!(
             say(ok(CommandKind::Set, [dwell, 8000.0])),

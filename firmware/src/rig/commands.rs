@@ -252,6 +252,7 @@ impl Rig {
                     servo_deg: self.idle_servo_deg,
                     target_deg: self.idle_servo_deg,
                     measure: None,
+                    zeroed: false,
                     origin_us: now_us,
                     next_live_us: now_us,
                 };
@@ -307,13 +308,19 @@ impl Rig {
     fn start_measure(&mut self, what: Measuring, now_us: u64) -> Result<[f32; 2], CommandError> {
         let period_us = self.period_us;
         let Phase::Setup {
-            measure, origin_us, ..
+            measure,
+            zeroed,
+            origin_us,
+            ..
         } = &mut self.phase
         else {
             return Err(CommandError::NotInSetup);
         };
         if measure.is_some() {
             return Err(CommandError::Measuring);
+        }
+        if matches!(what, Measuring::Weigh(..)) && !*zeroed {
+            return Err(CommandError::NotZeroed);
         }
         *measure = Some(Measure::new(what, on_grid(now_us, *origin_us, period_us)));
         Ok([0.0; 2])
@@ -355,6 +362,7 @@ impl Rig {
             mut servo_deg,
             target_deg,
             mut measure,
+            mut zeroed,
             mut origin_us,
             mut next_live_us,
         } = self.phase
@@ -396,6 +404,7 @@ impl Rig {
                 Some(Measuring::Zero) => CommandKind::Zero,
                 _ => CommandKind::Weigh,
             };
+            zeroed |= kind == CommandKind::Zero && result.is_ok();
             self.reply(sink, kind, result);
         }
         if now_us >= next_live_us {
@@ -413,6 +422,7 @@ impl Rig {
             servo_deg,
             target_deg,
             measure,
+            zeroed,
             origin_us,
             next_live_us,
         };

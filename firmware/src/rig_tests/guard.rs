@@ -182,6 +182,10 @@ fn a_weight_that_lowers_the_reading_or_a_negative_weight_is_refused() {
         one(rig, &mut sink, t, counts, false, cmd)
     };
     step(&mut rig, rest, Some(Command::Setup));
+    step(&mut rig, rest, Some(Command::Zero));
+    for _ in 0..600 {
+        step(&mut rig, rest, None);
+    }
     step(&mut rig, rest, Some(Command::Weigh(Channel::T1, -9.8)));
     // A reversed T1 sensor: a 2 N weight takes 133 counts off its reading. (A heavier one
     // reads below -3 N: a `negative_force` fault, which interrupts the measurement.)
@@ -198,11 +202,88 @@ fn a_weight_that_lowers_the_reading_or_a_negative_weight_is_refused() {
         errors,
         [
             (CommandKind::Setup, None),
+            (CommandKind::Zero, None),
             (CommandKind::Weigh, Some(CommandError::Invalid)),
             (CommandKind::Weigh, Some(CommandError::Reversed)),
         ]
     );
-    assert_eq!(rig.calibration().t1, Calibration::default().t1);
+    // The zero was taken; the sensitivity is unchanged.
+    assert_eq!(
+        rig.calibration().t1.n_per_count,
+        Calibration::default().t1.n_per_count
+    );
+}
+
+#[test]
+fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
+    // The stored zero may be days old or the firmware's default: a weight measured from it
+    // gives a wrong sensitivity (a zero 200 counts low makes a 1 kg weight's N/count 23 %
+    // small at 0.015 N/count, and every force then reads low, the over-force check's too).
+    let mut rig = thesis_rig();
+    let mut sink = VecSink::default();
+    let rest = rest_counts();
+    // 1 kg on T1 at 0.015 N/count: 654 counts above the zero.
+    let hung = [rest[0] + 654, rest[1]];
+    let mut t = 0;
+    let mut step = |rig: &mut Rig, counts, cmd, samples: usize| {
+        for k in 0..samples {
+            t += 1000;
+            one(
+                rig,
+                &mut sink,
+                t,
+                counts,
+                false,
+                if k == 0 { cmd } else { None },
+            );
+        }
+    };
+    step(&mut rig, rest, Some(Command::Setup), 1);
+    // Before any zero: refused at once, nothing measured.
+    step(
+        &mut rig,
+        hung,
+        Some(Command::Weigh(Channel::T1, 9.80665)),
+        1,
+    );
+    step(&mut rig, rest, Some(Command::Zero), 600);
+    step(
+        &mut rig,
+        hung,
+        Some(Command::Weigh(Channel::T1, 9.80665)),
+        600,
+    );
+    let weighed = rig.calibration().t1.n_per_count;
+    // Leaving setup mode forgets the zero: the next session must zero again.
+    step(&mut rig, rest, Some(Command::Leave), 3000);
+    step(&mut rig, rest, Some(Command::Setup), 1);
+    step(
+        &mut rig,
+        hung,
+        Some(Command::Weigh(Channel::T2, 9.80665)),
+        1,
+    );
+    let got: Vec<_> = replies(&sink)
+        .iter()
+        .map(|r| (r.command, r.error))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            (CommandKind::Setup, None),
+            (CommandKind::Weigh, Some(CommandError::NotZeroed)),
+            (CommandKind::Zero, None),
+            (CommandKind::Weigh, None),
+            (CommandKind::Leave, None),
+            (CommandKind::Setup, None),
+            (CommandKind::Weigh, Some(CommandError::NotZeroed)),
+        ]
+    );
+    assert!((weighed - 9.80665 / 654.0).abs() < 1e-6, "{weighed}");
+    assert_eq!(
+        rig.calibration().t2.n_per_count,
+        Calibration::default().t2.n_per_count
+    );
 }
 
 #[test]

@@ -109,7 +109,7 @@ mod tests {
         let cmd = Command::Weigh(Channel::T1, 9.80665);
         assert_eq!(
             answer_lines(&a, &cmd).unwrap(),
-            ["weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero in force, so zero first with nothing hanging)"]
+            ["weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session)"]
         );
         let a = reply(CommandKind::Zero, None, [412.3, 388.1]);
         assert_eq!(
