@@ -33,7 +33,32 @@ pub struct Outcome {
     /// replicate cells' means (the gate): the planted physics is detectable at all.
     pub oracle_detects: bool,
     pub elapsed_s: f64,
+    /// Runs of the design the firmware cut short or never logged (a planted T1 tare can make
+    /// it read a slack cord at the first level and stop the run with `cord_break`, as it
+    /// should), and the design's runs.
+    pub runs_short: (usize, usize),
     pub describe: String,
+}
+
+/// Runs of `c`'s design missing from `data` or shorter than its longest run: the firmware
+/// stopped them (a fault) — the set is smaller than the design.
+fn runs_short(c: &DiscoverCase, data: &capstan_data::Dataset) -> (usize, usize) {
+    let cfg = &c.case.config;
+    let design =
+        cfg.diameters_mm.len() * cfg.wraps_deg.len() * cfg.drive_vs.len() * cfg.runs as usize;
+    let mut rows: std::collections::BTreeMap<[u64; 4], usize> = Default::default();
+    for p in &data.pairs {
+        let key = [
+            p.capstan_diameter_mm.unwrap_or(0.0).to_bits(),
+            p.wrap_deg.to_bits(),
+            p.drive_v.unwrap_or(0.0).to_bits(),
+            p.run.unwrap_or(0.0).to_bits(),
+        ];
+        *rows.entry(key).or_default() += 1;
+    }
+    let full = rows.values().copied().max().unwrap_or(0);
+    let short = rows.values().filter(|&&n| n < full).count();
+    (short + design.saturating_sub(rows.len()), design)
 }
 
 fn deps(d: &[capstan_discover::library::Var]) -> BTreeSet<&'static str> {
@@ -100,6 +125,7 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         oracle_dbic,
         oracle_detects,
         elapsed_s: d.elapsed_s,
+        runs_short: (0, 0),
         describe: format!(
             "{} {:+.3}: oracle {:?} {} cat {:?} lof {:?} | {:?} unexplained_after={:?} right {:?} displaced {:?} declined={:?}",
             c.kind.name,
@@ -248,7 +274,16 @@ pub fn run(seed: u64, per_kind: usize, threads: usize) -> Vec<Outcome> {
                     break;
                 }
                 let d = discover(&data[i], &opts, &mut |_, _| {});
-                let o = score(&cases[i], &d);
+                let mut o = score(&cases[i], &d);
+                o.runs_short = runs_short(&cases[i], &data[i]);
+                if o.runs_short.0 > 0 {
+                    o.describe += &format!(
+                        " | {} of {} runs cut short by the firmware ({} rows)",
+                        o.runs_short.0,
+                        o.runs_short.1,
+                        data[i].pairs.len()
+                    );
+                }
                 out.lock().unwrap()[i] = Some(o);
             });
         }
@@ -298,6 +333,17 @@ pub fn table(out: &[Outcome]) -> String {
             o.len()
         )
     };
+    let cut: Vec<&Outcome> = out.iter().filter(|o| o.runs_short.0 > 0).collect();
+    if !cut.is_empty() {
+        let kinds: BTreeSet<&str> = cut.iter().map(|o| o.kind).collect();
+        s += &format!(
+            "\n{} sets ({}) lost {} of their {} runs to the firmware's safety stops (planted physics it reads as a fault, e.g. a T1 tare that makes the first level look slack: cord_break); they are scored as the smaller sets they are.\n",
+            cut.len(),
+            kinds.into_iter().collect::<Vec<_>>().join(", "),
+            cut.iter().map(|o| o.runs_short.0).sum::<usize>(),
+            cut.iter().map(|o| o.runs_short.1).sum::<usize>()
+        );
+    }
     s += &format!(
         "\nexpressible, all: {}\nexpressible, distinguishable at this design: {}\nexpressible, near-twins (indistinguishable at this design): {}\n",
         expr(None),
