@@ -120,35 +120,9 @@ pub fn summary(d: &Discovery) -> String {
         let _ = writeln!(s, "  {}  [{:?} → {}]", t.name, t.acts_on, t.formula);
         let _ = writeln!(s, "    {}", t.words);
     }
-    let sr = &d.search;
-    let checks = match (sr.resamples, &sr.cord_checks) {
-        (Some(b), None) => format!(
-            "stability ≥ {:.0} % over {b} cord resamples",
-            100.0 * sr.min_stability
-        ),
-        (_, Some(why)) => format!("{why}, so nothing can be proposed"),
-        (None, None) => "no stability computed".to_string(),
-    };
-    let how = match sr.displaceable.len() {
-        0 => "each added to the catalogue (it has no within-run effect to take the place of)"
-            .to_string(),
-        1 => "each added to the catalogue or in the place of its within-run effect".to_string(),
-        k => format!(
-            "each added to the catalogue or in the place of one of its {k} within-run effects"
-        ),
-    };
-    let _ = writeln!(
-        s,
-        "searched {} of {} library terms, {how} ({:.0} models); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}",
-        sr.tried,
-        sr.library_size,
-        sr.models_per_step,
-        sr.first_bar,
-        sr.threshold,
-        sr.models_per_step,
-    );
+    s += &search_line(&d.search);
     let _ = writeln!(s, "strongest candidates (ΔBIC given the catalogue):");
-    for r in sr.screen.iter().take(5) {
+    for r in d.search.screen.iter().take(5) {
         let _ = writeln!(
             s,
             "  {:<20} {:>7.1}  θ = {:.4}{}{}{}",
@@ -186,4 +160,33 @@ pub fn summary(d: &Discovery) -> String {
     }
     let _ = writeln!(s, "({:.3} s)", d.elapsed_s);
     s
+}
+
+/// The search's size and bar, in one line: what a reader needs to weigh a proposed term.
+fn search_line(sr: &capstan_discover::Search) -> String {
+    let checks = match (sr.resamples, &sr.cord_checks) {
+        (Some(b), None) => format!(
+            "stability ≥ {:.0} % over {b} cord resamples",
+            100.0 * sr.min_stability
+        ),
+        (_, Some(why)) => format!("{why}, so nothing can be proposed"),
+        (None, None) => "no stability computed".to_string(),
+    };
+    let how = match sr.displaceable.len() {
+        0 => "each added to the catalogue (it has no within-run effect to take the place of)"
+            .to_string(),
+        1 => "each added to the catalogue or in the place of its within-run effect".to_string(),
+        k => format!(
+            "each added to the catalogue or in the place of one of its {k} within-run effects"
+        ),
+    };
+    format!(
+        "searched {} of {} library terms, {how} ({:.0} models); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}\n",
+        sr.tried,
+        sr.library_size,
+        sr.models_per_step,
+        sr.first_bar,
+        sr.threshold,
+        sr.models_per_step,
+    )
 }

@@ -252,6 +252,21 @@ fn left_pattern(pattern: &'static str, terms: &[Proposed]) -> Option<&'static st
     (!fitted).then_some(pattern)
 }
 
+/// What a term is judged given: the catalogue, and the terms proposed before it.
+fn given_words(earlier: &[Proposed]) -> String {
+    match earlier.is_empty() {
+        true => "the catalogue".to_string(),
+        false => format!(
+            "the catalogue and {}",
+            earlier
+                .iter()
+                .map(|t| t.name)
+                .collect::<Vec<_>>()
+                .join(" + ")
+        ),
+    }
+}
+
 /// Who left what a term is measured against: the catalogue, and the terms proposed before it.
 fn left_by(earlier: &[Proposed]) -> String {
     if earlier.is_empty() {
@@ -374,46 +389,16 @@ impl Ctx<'_> {
         };
         let on = (&self.a.design, self.base);
         let lof_after = lack_of_fit_with(on, st, best.theta, proj_x.as_deref(), lof_before);
-        let mut partial = None;
-        if proj_x.is_some() && lof_open(&lof_after) {
-            let (before, after) = (
-                lof_before.as_ref().map_or(f64::NAN, |l| l.systematic_ratio),
-                lof_after.as_ref().map_or(f64::NAN, |l| l.systematic_ratio),
-            );
-            let share = 1.0 - (after / before).powi(2);
-            // No lack of fit before (NaN): declined.
-            if share.is_nan() || share < self.opts.min_share_resolved {
-                return Err(Box::new(decline(t, best, Some(stab), Some(ratio), format!(
-                    "a partial mimic: with it the lack of fit against the replicate runs {} (p = {:.3}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
-                    if lof_open(lof_before) { "stays" } else { "appears (it was not significant before it)" },
-                    lof_after.as_ref().map_or(f64::NAN, |l| l.p),
-                    100.0 * share.max(0.0),
-                    100.0 * self.opts.min_share_resolved.min(1.0)
-                ))));
-            }
-            partial = Some((before, after, share));
-        }
+        let no = |why: String| Box::new(decline(t, best, Some(stab), Some(ratio.clone()), why));
+        let partial = match proj_x.is_some() && lof_open(&lof_after) {
+            true => Some(self.partial_share(lof_before, &lof_after).map_err(no)?),
+            false => None,
+        };
         // A later term that only stands in for a catalogue effect the engine mis-selected.
-        if step > 1 && self.swap.is_none() {
-            let threshold = self.bar.threshold;
-            if let Some(r) = catalogue_repair(self.a, self.alts, st, best, threshold) {
-                let why = match r {
-                    Repair::LeansOn(k, dbic) => format!(
-                        "its evidence exists only beside the catalogue's {k}: without {k} its ΔBIC is {dbic:.1} (the engine's bar −{threshold:.0}), so it corrects what {k} does rather than adding to the catalogue; a catalogue effect the engine did not select (another sensor's offset, say) may be what the data want"
-                    ),
-                    Repair::StandsIn(k, swap) => format!(
-                        "it stands in for the catalogue's {k}: in its place it explains at least what {k} did (ΔBIC of that swap {swap:.1} against the catalogue as selected; as an addition {:.1}), so it may be what the data wanted instead of {k}",
-                        best.delta_bic
-                    ),
-                };
-                return Err(Box::new(decline(
-                    t,
-                    best,
-                    Some(stab),
-                    Some(ratio),
-                    format!("a repair of the catalogue's selection, not physics beyond it: {why}"),
-                )));
-            }
+        if let Some(why) = self.repair(step, st, best) {
+            return Err(no(format!(
+                "a repair of the catalogue's selection, not physics beyond it: {why}"
+            )));
         }
         let threshold = self.bar.threshold;
         let rivals = rivals_of(self.base, proj, screens, best, &self.testable, threshold);
@@ -424,25 +409,15 @@ impl Ctx<'_> {
             .iter()
             .find(|r| unstable.iter().map(name_of).any(|n| n == r.name))
         {
-            return Err(Box::new(decline(t, best, Some(stab), Some(ratio), format!(
+            return Err(no(format!(
                 "the data cannot tell it from {}, which failed stability at this step: the cord resamples split between them, so neither is proposed",
                 r.name
-            ))));
+            )));
         }
         let forced = self.swap.filter(|_| step == 1);
         let displaced = forced.map(|s| displaced(&self.alts[s.alt], s));
         let checks = (stab, ratio);
-        let given = match out.terms.is_empty() {
-            true => "the catalogue".to_string(),
-            false => format!(
-                "the catalogue and {}",
-                out.terms
-                    .iter()
-                    .map(|t| t.name)
-                    .collect::<Vec<_>>()
-                    .join(" + ")
-            ),
-        };
+        let given = given_words(&out.terms);
         let mut term = proposed(t, best, checks, lof_after, rivals, (displaced, &given));
         if !failed.is_empty() {
             let names: Vec<&str> = failed.iter().map(name_of).collect();
@@ -463,6 +438,50 @@ impl Ctx<'_> {
         out.terms.push(term);
         st.grow(tst, best.theta, proj_x);
         Ok(())
+    }
+
+    /// A term after which the lack of fit stays open: the systematic part before and after it
+    /// and the share of its variance removed, or why it is declined (a share under
+    /// `min_share_resolved`, or no lack of fit before it).
+    fn partial_share(
+        &self,
+        lof_before: &Option<LackOfFit>,
+        lof_after: &Option<LackOfFit>,
+    ) -> Result<(f64, f64, f64), String> {
+        let (before, after) = (
+            lof_before.as_ref().map_or(f64::NAN, |l| l.systematic_ratio),
+            lof_after.as_ref().map_or(f64::NAN, |l| l.systematic_ratio),
+        );
+        let share = 1.0 - (after / before).powi(2);
+        // No lack of fit before (NaN): declined.
+        if share.is_nan() || share < self.opts.min_share_resolved {
+            return Err(format!(
+                "a partial mimic: with it the lack of fit against the replicate runs {} (p = {:.3}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
+                if lof_open(lof_before) { "stays" } else { "appears (it was not significant before it)" },
+                lof_after.as_ref().map_or(f64::NAN, |l| l.p),
+                100.0 * share.max(0.0),
+                100.0 * self.opts.min_share_resolved.min(1.0)
+            ));
+        }
+        Ok((before, after, share))
+    }
+
+    /// Why a later term (step > 1, no catalogue effect displaced) only repairs the engine's
+    /// catalogue selection, if it does.
+    fn repair(&self, step: usize, st: &State, best: &screen::Screen) -> Option<String> {
+        if step <= 1 || self.swap.is_some() {
+            return None;
+        }
+        let threshold = self.bar.threshold;
+        Some(match catalogue_repair(self.a, self.alts, st, best, threshold)? {
+            Repair::LeansOn(k, dbic) => format!(
+                "its evidence exists only beside the catalogue's {k}: without {k} its ΔBIC is {dbic:.1} (the engine's bar −{threshold:.0}), so it corrects what {k} does rather than adding to the catalogue; a catalogue effect the engine did not select (another sensor's offset, say) may be what the data want"
+            ),
+            Repair::StandsIn(k, swap) => format!(
+                "it stands in for the catalogue's {k}: in its place it explains at least what {k} did (ΔBIC of that swap {swap:.1} against the catalogue as selected; as an addition {:.1}), so it may be what the data wanted instead of {k}",
+                best.delta_bic
+            ),
+        })
     }
 
     /// The pick's stability over whole-cord resamples and its held-out ratio (against the
