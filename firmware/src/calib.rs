@@ -229,6 +229,11 @@ fn within(v: f32, lo: f32, hi: f32) -> bool {
 }
 
 impl Calibration {
+    /// Both channels' zeros, counts (T1, T2).
+    pub fn zeros(&self) -> [f32; 2] {
+        [self.t1.zero_counts, self.t2.zero_counts]
+    }
+
     /// Refuse a calibration the rig cannot work with, with the reason.
     pub fn validate(&self) -> Result<(), CalibrationError> {
         for ch in [&self.t1, &self.t2] {

@@ -112,9 +112,10 @@ enum Phase {
         /// Where the host asked the servo to go, deg.
         target_deg: f32,
         measure: Option<Measure>,
-        /// A zero was measured in this setup session: `weigh` measures from it, so it is
-        /// refused before one (a zero stored in flash may be days old, or never measured).
-        zeroed: bool,
+        /// The zeros measured in this setup session, counts: `weigh` measures from the zero in
+        /// force, so it is refused unless that is this one (a zero from flash, `defaults` or a
+        /// `set` may be days old, or never measured).
+        zeroed: Option<[f32; 2]>,
         /// The sample on which setup mode began: the origin of its sample grid.
         origin_us: u64,
         next_live_us: u64,
@@ -177,7 +178,7 @@ impl Rig {
             },
             protocol,
             cal,
-            zeros: [cal.t1.zero_counts, cal.t2.zero_counts],
+            zeros: cal.zeros(),
             limits,
             phase: Phase::Idle { latched: None },
             button: Debouncer::new(debounce),

@@ -132,7 +132,7 @@ pub enum CommandError {
     Blind = 17,
     /// `store` holds the loop for the flash write: only with the servo at rest.
     NotAtRest = 18,
-    /// `weigh` measures from the zero: it needs a zero measured in this setup session.
+    /// `weigh` measures from the zero in force: it must be one measured in this setup session.
     NotZeroed = 19,
 }
 
@@ -191,7 +191,7 @@ impl CommandError {
             CommandError::Reversed => "the reading fell under the weight: the sensor is reversed or wired to the other input (a tension must raise the counts); nothing changed",
             CommandError::Blind => "with that calibration the over-force limit would read above the rail check, so it could never trip (the sensor's range, or the value, is wrong); nothing changed",
             CommandError::NotAtRest => "store only with the servo at rest: the flash write holds the safety loop (send servo <rest> and wait, or leave setup mode and let it home)",
-            CommandError::NotZeroed => "weigh measures from the zero, and none was measured in this setup session: take the weight off, send zero, then hang it and weigh; nothing changed",
+            CommandError::NotZeroed => "weigh measures from the zero in force, and that is not one measured in this setup session (none yet, or set or defaults replaced it): take the weight off, send zero, then hang it and weigh; nothing changed",
         }
     }
 }

@@ -96,7 +96,7 @@ impl Rig {
         self.settings_changed = true;
         self.protocol = s.protocol;
         self.cal = s.calibration;
-        self.zeros = [self.cal.t1.zero_counts, self.cal.t2.zero_counts];
+        self.zeros = self.cal.zeros();
     }
 
     /// True when the servo is commanded to rest and stays there (idle at rest, or setup mode
@@ -252,7 +252,7 @@ impl Rig {
                     servo_deg: self.idle_servo_deg,
                     target_deg: self.idle_servo_deg,
                     measure: None,
-                    zeroed: false,
+                    zeroed: None,
                     origin_us: now_us,
                     next_live_us: now_us,
                 };
@@ -307,6 +307,7 @@ impl Rig {
 
     fn start_measure(&mut self, what: Measuring, now_us: u64) -> Result<[f32; 2], CommandError> {
         let period_us = self.period_us;
+        let in_force = self.cal.zeros();
         let Phase::Setup {
             measure,
             zeroed,
@@ -319,7 +320,7 @@ impl Rig {
         if measure.is_some() {
             return Err(CommandError::Measuring);
         }
-        if matches!(what, Measuring::Weigh(..)) && !*zeroed {
+        if matches!(what, Measuring::Weigh(..)) && *zeroed != Some(in_force) {
             return Err(CommandError::NotZeroed);
         }
         *measure = Some(Measure::new(what, on_grid(now_us, *origin_us, period_us)));
@@ -404,7 +405,9 @@ impl Rig {
                 Some(Measuring::Zero) => CommandKind::Zero,
                 _ => CommandKind::Weigh,
             };
-            zeroed |= kind == CommandKind::Zero && result.is_ok();
+            if kind == CommandKind::Zero && result.is_ok() {
+                zeroed = Some(self.cal.zeros());
+            }
             self.reply(sink, kind, result);
         }
         if now_us >= next_live_us {
@@ -444,7 +447,7 @@ impl Rig {
         let values = setup::apply(what, m, &mut cal)?;
         self.limits.visible(&cal).map_err(|_| CommandError::Blind)?;
         self.cal = cal;
-        self.zeros = [cal.t1.zero_counts, cal.t2.zero_counts];
+        self.zeros = cal.zeros();
         Ok(values)
     }
 

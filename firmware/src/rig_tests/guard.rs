@@ -238,21 +238,16 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
             );
         }
     };
+    let weigh_t1 = Some(Command::Weigh(Channel::T1, 9.80665));
     step(&mut rig, rest, Some(Command::Setup), 1);
     // Before any zero: refused at once, nothing measured.
-    step(
-        &mut rig,
-        hung,
-        Some(Command::Weigh(Channel::T1, 9.80665)),
-        1,
-    );
+    step(&mut rig, hung, weigh_t1, 1);
     step(&mut rig, rest, Some(Command::Zero), 600);
-    step(
-        &mut rig,
-        hung,
-        Some(Command::Weigh(Channel::T1, 9.80665)),
-        600,
-    );
+    // A zero typed over the measured one (or `defaults`) is not this session's zero either.
+    step(&mut rig, rest, Some(Command::Set(Key::T1Zero, 380.0)), 1);
+    step(&mut rig, hung, weigh_t1, 1);
+    step(&mut rig, rest, Some(Command::Zero), 600);
+    step(&mut rig, hung, weigh_t1, 600);
     let weighed = rig.calibration().t1.n_per_count;
     // Leaving setup mode forgets the zero: the next session must zero again.
     step(&mut rig, rest, Some(Command::Leave), 3000);
@@ -271,6 +266,9 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
         got,
         [
             (CommandKind::Setup, None),
+            (CommandKind::Weigh, Some(CommandError::NotZeroed)),
+            (CommandKind::Zero, None),
+            (CommandKind::Set, None),
             (CommandKind::Weigh, Some(CommandError::NotZeroed)),
             (CommandKind::Zero, None),
             (CommandKind::Weigh, None),
