@@ -265,7 +265,7 @@ fn show_prints_the_settings_record_and_weigh_names_its_channel() {
     out.clear();
     let (line, cmd) = command_line(&words("weigh t2 9.80665")).unwrap();
     send(&mut rig, &line, &cmd, &mut |l| out.push(l), &mut |_| {}).unwrap();
-    assert_eq!(out, ["weigh t2: 0.01226 N/count (mean 1212.0 counts; measured from the zero taken in this setup session)"]);
+    assert_eq!(out, ["weigh t2: 0.01226 N/count (mean 1212.0 counts; measured from the zero taken in this setup session with nothing hanging)"]);
 }
 
 #[test]

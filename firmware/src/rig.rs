@@ -112,10 +112,11 @@ enum Phase {
         /// Where the host asked the servo to go, deg.
         target_deg: f32,
         measure: Option<Measure>,
-        /// The zeros measured in this setup session, counts: `weigh` measures from the zero in
-        /// force, so it is refused unless that is this one (a zero from flash, `defaults` or a
-        /// `set` may be days old, or never measured).
-        zeroed: Option<[f32; 2]>,
+        /// The zeros measured in this setup session (counts) and the servo angle they were
+        /// measured at (deg): `weigh` measures from the zero in force, so it is refused unless
+        /// that is this one (a zero from flash, `defaults` or a `set` may be days old, or never
+        /// measured) with the servo where it was (the cord's pull would add to the weight).
+        zeroed: Option<([f32; 2], f32)>,
         /// The sample on which setup mode began: the origin of its sample grid.
         origin_us: u64,
         next_live_us: u64,

@@ -269,10 +269,10 @@ fn commands_are_refused_where_they_do_not_belong() {
             ("store", code(E::Measuring)),
             ("zero", code(E::Unsteady)),
             // At 95° the cord carries ~12 N: a zero there would put the 45 N limit above the
-            // rail check (the over-force check blinded by the load), and a weight's reading on
-            // top of that load would give a sensitivity that cannot show 45 N either.
+            // rail check (the over-force check blinded by the load); and a weigh there would add
+            // the cord's pull to the weight: the servo moved since this session's zero.
             ("zero", code(E::Blind)),
-            ("weigh", code(E::Blind)),
+            ("weigh", code(E::NotZeroed)),
         ]
     );
     let servo = replies(&out)

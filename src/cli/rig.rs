@@ -29,7 +29,8 @@ SETTING UP THE RIG AT THE BENCH
     $R live 10                  T1/T2 in N and counts, servo angle, ~10 a second (Ctrl-C stops)
     $R jog 5                    move the servo 5° (jog -5 back)
     $R zero                     cord slack, nothing hanging: both zeros (0.5 s mean)
-    $R weigh t1 9.80665         a 1 kg weight hanging on T1: its N/count
+    $R weigh t1 9.80665         a 1 kg weight hanging on T1: its N/count (after a zero
+                                in this setup session)
     $R weigh t2 9.80665         the same weight on T2
     $R servo 125                check the rest angle, then servo 65 for the final one
     $R set diameter_mm 12.7     and set wrap_deg 360 (capstan rig keys: every key, its unit)

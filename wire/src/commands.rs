@@ -132,13 +132,17 @@ pub enum CommandError {
     Blind = 17,
     /// `store` holds the loop for the flash write: only with the servo at rest.
     NotAtRest = 18,
-    /// `weigh` measures from the zero in force: it must be one measured in this setup session.
+    /// `weigh` measures from the zero in force: it must be one measured in this setup session,
+    /// with the servo where it was then.
     NotZeroed = 19,
+    /// A zero that would move the zero in force by more than a tare may (1 N): something hangs
+    /// on a hook, or the cord pulls.
+    ZeroMoved = 20,
 }
 
 impl CommandError {
     /// Every error, by code.
-    pub const ALL: [CommandError; 19] = [
+    pub const ALL: [CommandError; 20] = [
         CommandError::Unknown,
         CommandError::Argument,
         CommandError::UnknownKey,
@@ -158,6 +162,7 @@ impl CommandError {
         CommandError::Blind,
         CommandError::NotAtRest,
         CommandError::NotZeroed,
+        CommandError::ZeroMoved,
     ];
 
     /// Wire code (never 0).
@@ -191,7 +196,8 @@ impl CommandError {
             CommandError::Reversed => "the reading fell under the weight: the sensor is reversed or wired to the other input (a tension must raise the counts); nothing changed",
             CommandError::Blind => "with that calibration the over-force limit would read above the rail check, so it could never trip (the sensor's range, or the value, is wrong); nothing changed",
             CommandError::NotAtRest => "store only with the servo at rest: the flash write holds the safety loop (send servo <rest> and wait, or leave setup mode and let it home)",
-            CommandError::NotZeroed => "weigh measures from the zero in force, and that is not one measured in this setup session (none yet, or set or defaults replaced it): take the weight off, send zero, then hang it and weigh; nothing changed",
+            CommandError::NotZeroed => "weigh measures from the zero taken in this setup session, with the servo where it was then, and this is not that (no zero yet, a set or defaults replaced it, or the servo moved since): take the weight off, send zero, then hang the weight and weigh without moving the servo; nothing changed",
+            CommandError::ZeroMoved => "the readings are more than 1 N from the zero in force: take off anything hanging on either hook, slacken the cord, and zero again (a new or re-wired sensor whose zero really moved: set t1_zero or t2_zero to the counts rig live shows, then zero); nothing changed",
         }
     }
 }

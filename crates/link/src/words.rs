@@ -103,7 +103,7 @@ pub fn reply_sentence(reply: &Reply, sent: Option<&Command>) -> String {
         CommandKind::Leave => "leave: setup mode left, the servo homes to rest".into(),
         CommandKind::Jog | CommandKind::Servo => format!("{word}: servo at {v1:.1}°"),
         CommandKind::Zero => {
-            format!("zero: T1 zero {v1:.1} counts, T2 zero {v2:.1} counts")
+            format!("zero: T1 zero {v1:.1} counts, T2 zero {v2:.1} counts (taken as no load: nothing hanging on either hook, the cord slack)")
         }
         CommandKind::Weigh => {
             let channel = match sent {
@@ -112,7 +112,7 @@ pub fn reply_sentence(reply: &Reply, sent: Option<&Command>) -> String {
                 _ => "",
             };
             let npc = significant(v1, 4);
-            format!("weigh{channel}: {npc} N/count (mean {v2:.1} counts; measured from the zero taken in this setup session)")
+            format!("weigh{channel}: {npc} N/count (mean {v2:.1} counts; measured from the zero taken in this setup session with nothing hanging)")
         }
         CommandKind::Set => match Key::ALL.get(v1 as usize).filter(|_| v1 >= 0.0) {
             Some(&key) => format!("set {} = {}", key.name(), set_value(key, v2)),
@@ -191,15 +191,15 @@ mod tests {
         );
         assert_eq!(
             say(ok(CommandKind::Zero, [412.3, 388.1])),
-            "zero: T1 zero 412.3 counts, T2 zero 388.1 counts"
+            "zero: T1 zero 412.3 counts, T2 zero 388.1 counts (taken as no load: nothing hanging on either hook, the cord slack)"
         );
         let weigh = ok(CommandKind::Weigh, [0.0163, 1012.4]);
         let sent = Command::Weigh(Channel::T1, 9.80665);
         assert_eq!(
             reply_sentence(&weigh, Some(&sent)),
-            "weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session)"
+            "weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session with nothing hanging)"
         );
-        assert_eq!(say(weigh), "weigh: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session)");
+        assert_eq!(say(weigh), "weigh: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session with nothing hanging)");
         let dwell = Key::DwellMs.code() as f32;
         assert_eq!(
             say(ok(CommandKind::Set, [dwell, 8000.0])),

@@ -1,7 +1,8 @@
 //! The rig's answers to host commands, and setup mode's sample period: what each command may
 //! do in each phase, its `reply` record, and the settings it changes. Pure, like `rig.rs`.
 
-use super::{on_grid, Inputs, Outputs, Phase, Rig};
+use super::{on_grid, Inputs, Outputs, Phase, Rig, TARE_MAX_N};
+use crate::calib::ChannelCal;
 use crate::command::{Command, CommandError, CommandKind};
 use crate::record::{Fault, Live, LogSink, Record, Reply, SettingsReport, SettingsSource};
 use crate::safety::{SafetyInput, Supervisor};
@@ -312,6 +313,8 @@ impl Rig {
             measure,
             zeroed,
             origin_us,
+            servo_deg,
+            target_deg,
             ..
         } = &mut self.phase
         else {
@@ -320,8 +323,16 @@ impl Rig {
         if measure.is_some() {
             return Err(CommandError::Measuring);
         }
-        if matches!(what, Measuring::Weigh(..)) && *zeroed != Some(in_force) {
-            return Err(CommandError::NotZeroed);
+        // The weighed channel's zero in force must be the one measured in this session, and
+        // the servo still where it was then.
+        if let Measuring::Weigh(ch, _) = what {
+            let ch = ch as usize;
+            let same = |(z, at): ([f32; 2], f32)| {
+                z[ch] == in_force[ch] && *servo_deg == at && *target_deg == at
+            };
+            if !zeroed.is_some_and(same) {
+                return Err(CommandError::NotZeroed);
+            }
         }
         *measure = Some(Measure::new(what, on_grid(now_us, *origin_us, period_us)));
         Ok([0.0; 2])
@@ -406,7 +417,7 @@ impl Rig {
                 _ => CommandKind::Weigh,
             };
             if kind == CommandKind::Zero && result.is_ok() {
-                zeroed = Some(self.cal.zeros());
+                zeroed = Some((self.cal.zeros(), servo_deg));
             }
             self.reply(sink, kind, result);
         }
@@ -446,6 +457,17 @@ impl Rig {
         let mut cal = self.cal;
         let values = setup::apply(what, m, &mut cal)?;
         self.limits.visible(&cal).map_err(|_| CommandError::Blind)?;
+        // A zero taken under a load hides that load from every force, the over-force check's
+        // included: one that moves the zero in force by more than a tare may is refused.
+        let moved = |old: &ChannelCal, new: &ChannelCal| {
+            (new.zero_counts - old.zero_counts).abs() * old.n_per_count
+        };
+        if what == Measuring::Zero
+            && (moved(&self.cal.t1, &cal.t1) > TARE_MAX_N
+                || moved(&self.cal.t2, &cal.t2) > TARE_MAX_N)
+        {
+            return Err(CommandError::ZeroMoved);
+        }
         self.cal = cal;
         self.zeros = cal.zeros();
         Ok(values)

@@ -246,7 +246,19 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
     // A zero typed over the measured one (or `defaults`) is not this session's zero either.
     step(&mut rig, rest, Some(Command::Set(Key::T1Zero, 380.0)), 1);
     step(&mut rig, hung, weigh_t1, 1);
+    // ... T2's is still this session's: it weighs (1 kg on T2 now).
+    let hung_t2 = [rest[0], rest[1] + 654];
+    step(
+        &mut rig,
+        hung_t2,
+        Some(Command::Weigh(Channel::T2, 9.80665)),
+        600,
+    );
     step(&mut rig, rest, Some(Command::Zero), 600);
+    // The servo jogged since the zero: the cord's pull would add to the weight.
+    step(&mut rig, rest, Some(Command::Jog(2.0)), 200);
+    step(&mut rig, hung, weigh_t1, 1);
+    step(&mut rig, rest, Some(Command::Jog(-2.0)), 200);
     step(&mut rig, hung, weigh_t1, 600);
     let weighed = rig.calibration().t1.n_per_count;
     // Leaving setup mode forgets the zero: the next session must zero again.
@@ -270,7 +282,11 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
             (CommandKind::Zero, None),
             (CommandKind::Set, None),
             (CommandKind::Weigh, Some(CommandError::NotZeroed)),
+            (CommandKind::Weigh, None),
             (CommandKind::Zero, None),
+            (CommandKind::Jog, None),
+            (CommandKind::Weigh, Some(CommandError::NotZeroed)),
+            (CommandKind::Jog, None),
             (CommandKind::Weigh, None),
             (CommandKind::Leave, None),
             (CommandKind::Setup, None),
@@ -278,10 +294,51 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
         ]
     );
     assert!((weighed - 9.80665 / 654.0).abs() < 1e-6, "{weighed}");
+    let t2 = rig.calibration().t2.n_per_count;
+    assert!((t2 - 9.80665 / 654.0).abs() < 1e-6, "{t2}");
+}
+
+#[test]
+fn a_zero_under_a_load_is_refused() {
+    // 2.5 N hanging on T1 (167 counts at 0.015 N/count) while zeroing: taken as zero, it would
+    // hide 2.5 N of every force from the over-force check in setup mode.
+    let mut rig = thesis_rig();
+    let mut sink = VecSink::default();
+    let rest = rest_counts();
+    let loaded = [rest[0] + 167, rest[1]];
+    let mut t = 0;
+    let mut step = |rig: &mut Rig, counts, cmd, samples: usize| {
+        for k in 0..samples {
+            t += 1000;
+            one(
+                rig,
+                &mut sink,
+                t,
+                counts,
+                false,
+                if k == 0 { cmd } else { None },
+            );
+        }
+    };
+    step(&mut rig, rest, Some(Command::Setup), 1);
+    step(&mut rig, loaded, Some(Command::Zero), 600);
+    let after_refusal = *rig.calibration();
+    // Nothing hanging (0.1 N from the stored zero): taken.
+    step(&mut rig, rest, Some(Command::Zero), 600);
+    let got: Vec<_> = replies(&sink)
+        .iter()
+        .map(|r| (r.command, r.error))
+        .collect();
     assert_eq!(
-        rig.calibration().t2.n_per_count,
-        Calibration::default().t2.n_per_count
+        got,
+        [
+            (CommandKind::Setup, None),
+            (CommandKind::Zero, Some(CommandError::ZeroMoved)),
+            (CommandKind::Zero, None),
+        ]
     );
+    assert_eq!(after_refusal, Calibration::default());
+    assert_eq!(rig.calibration().zeros(), [rest[0] as f32, rest[1] as f32]);
 }
 
 #[test]
@@ -537,4 +594,47 @@ fn a_fault_in_setup_mode_never_pulls_the_servo_toward_tension() {
         t += 1000;
     }
     assert_eq!(rig.idle_outputs().servo_deg, 125.0);
+}
+
+#[test]
+fn a_weigh_whose_sensitivity_would_blind_the_over_force_check_is_refused() {
+    // "weigh t1 2" with 3 N hanging: 200 counts for 2 N is 0.01 N/count, under which 45 N
+    // would read above the rail check (the over-force check could never trip).
+    let mut rig = thesis_rig();
+    let mut sink = VecSink::default();
+    let rest = rest_counts();
+    let hung = [rest[0] + 200, rest[1]];
+    let mut t = 0;
+    let mut step = |rig: &mut Rig, counts, cmd, samples: usize| {
+        for k in 0..samples {
+            t += 1000;
+            one(
+                rig,
+                &mut sink,
+                t,
+                counts,
+                false,
+                if k == 0 { cmd } else { None },
+            );
+        }
+    };
+    step(&mut rig, rest, Some(Command::Setup), 1);
+    step(&mut rig, rest, Some(Command::Zero), 600);
+    step(&mut rig, hung, Some(Command::Weigh(Channel::T1, 2.0)), 600);
+    let got: Vec<_> = replies(&sink)
+        .iter()
+        .map(|r| (r.command, r.error))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            (CommandKind::Setup, None),
+            (CommandKind::Zero, None),
+            (CommandKind::Weigh, Some(CommandError::Blind)),
+        ]
+    );
+    assert_eq!(
+        rig.calibration().t1.n_per_count,
+        Calibration::default().t1.n_per_count
+    );
 }

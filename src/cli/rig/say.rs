@@ -109,12 +109,12 @@ mod tests {
         let cmd = Command::Weigh(Channel::T1, 9.80665);
         assert_eq!(
             answer_lines(&a, &cmd).unwrap(),
-            ["weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session)"]
+            ["weigh t1: 0.01630 N/count (mean 1012.4 counts; measured from the zero taken in this setup session with nothing hanging)"]
         );
         let a = reply(CommandKind::Zero, None, [412.3, 388.1]);
         assert_eq!(
             answer_lines(&a, &Command::Zero).unwrap(),
-            ["zero: T1 zero 412.3 counts, T2 zero 388.1 counts"]
+            ["zero: T1 zero 412.3 counts, T2 zero 388.1 counts (taken as no load: nothing hanging on either hook, the cord slack)"]
         );
         let a = reply(CommandKind::Jog, Some(CommandError::NotInSetup), [0.0; 2]);
         let e = answer_lines(&a, &Command::Jog(5.0)).unwrap_err();
