@@ -100,6 +100,29 @@ pub struct Case {
 }
 
 impl Case {
+    /// Runs of the design missing from `data` or shorter than its longest run, and the
+    /// design's runs: the firmware stopped them (a planted physics it reads as a fault, e.g. a
+    /// T1 tare or a T2 error that makes the first level look like a parted cord: `cord_break`),
+    /// so the set is smaller than the design.
+    pub fn runs_short(&self, data: &Dataset) -> (usize, usize) {
+        let cfg = &self.config;
+        let design =
+            cfg.diameters_mm.len() * cfg.wraps_deg.len() * cfg.drive_vs.len() * cfg.runs as usize;
+        let mut rows: std::collections::BTreeMap<[u64; 4], usize> = Default::default();
+        for p in &data.pairs {
+            let key = [
+                p.capstan_diameter_mm.unwrap_or(0.0).to_bits(),
+                p.wrap_deg.to_bits(),
+                p.drive_v.unwrap_or(0.0).to_bits(),
+                p.run.unwrap_or(0.0).to_bits(),
+            ];
+            *rows.entry(key).or_default() += 1;
+        }
+        let full = rows.values().copied().max().unwrap_or(0);
+        let short = rows.values().filter(|&&n| n < full).count();
+        (short + design.saturating_sub(rows.len()), design)
+    }
+
     /// A one-line description.
     pub fn describe(&self) -> String {
         let c = &self.config;

@@ -76,6 +76,9 @@ pub struct Metrics {
     /// place of another), every planted effect missed a within-run one (rivals are within-run
     /// effects), that report each missed planted effect as a rival of a wrong found one.
     pub rival_catches: (usize, usize),
+    /// Runs the firmware stopped (a planted physics it reads as a fault), of the designs' runs:
+    /// reported, not a target (the sets are scored as the smaller sets they are).
+    pub runs_lost: (usize, usize),
 }
 
 fn frac(x: (usize, usize)) -> f64 {
@@ -116,6 +119,9 @@ impl Metrics {
             .filter(|o| o.class == Class::Single && o.correct())
             .collect();
         Metrics {
+            runs_lost: outcomes
+                .iter()
+                .fold((0, 0), |(a, b), o| (a + o.runs_short.0, b + o.runs_short.1)),
             single: count(Class::Single, &|o| o.correct()),
             single_parameters: (
                 named_singles.iter().filter(|o| o.parameters_ok()).count(),
@@ -247,6 +253,11 @@ impl Metrics {
                 "one effect in place of another: truth a rival",
                 self.rival_catches,
                 "(the doubt that was needed)",
+            )
+            + &row(
+                "runs the firmware stopped (e.g. cord_break)",
+                self.runs_lost,
+                "(scored as the smaller sets)",
             )
     }
 }

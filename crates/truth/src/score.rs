@@ -43,6 +43,8 @@ pub struct Outcome {
     pub rows: usize,
     /// Diagnosis wall time, s.
     pub elapsed_s: f64,
+    /// Runs the firmware stopped, and the design's runs ([`Case::runs_short`]).
+    pub runs_short: (usize, usize),
 }
 
 impl Outcome {
@@ -161,7 +163,10 @@ fn outcome(
     data: &capstan_data::Dataset,
     diagnose: &dyn Fn(&capstan_data::Dataset) -> Diagnosis,
 ) -> Outcome {
-    judge(case, data.pairs.len(), &diagnose(data))
+    Outcome {
+        runs_short: case.runs_short(data),
+        ..judge(case, data.pairs.len(), &diagnose(data))
+    }
 }
 
 /// The outcome of the answer `d` on `case` (whose data have `rows` rows).
@@ -196,6 +201,7 @@ pub fn judge(case: &Case, rows: usize, d: &Diagnosis) -> Outcome {
             .join(", "),
         rows,
         elapsed_s: d.elapsed_s,
+        runs_short: (0, 0),
     }
 }
 

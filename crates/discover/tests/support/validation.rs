@@ -40,27 +40,6 @@ pub struct Outcome {
     pub describe: String,
 }
 
-/// Runs of `c`'s design missing from `data` or shorter than its longest run: the firmware
-/// stopped them (a fault) — the set is smaller than the design.
-fn runs_short(c: &DiscoverCase, data: &capstan_data::Dataset) -> (usize, usize) {
-    let cfg = &c.case.config;
-    let design =
-        cfg.diameters_mm.len() * cfg.wraps_deg.len() * cfg.drive_vs.len() * cfg.runs as usize;
-    let mut rows: std::collections::BTreeMap<[u64; 4], usize> = Default::default();
-    for p in &data.pairs {
-        let key = [
-            p.capstan_diameter_mm.unwrap_or(0.0).to_bits(),
-            p.wrap_deg.to_bits(),
-            p.drive_v.unwrap_or(0.0).to_bits(),
-            p.run.unwrap_or(0.0).to_bits(),
-        ];
-        *rows.entry(key).or_default() += 1;
-    }
-    let full = rows.values().copied().max().unwrap_or(0);
-    let short = rows.values().filter(|&&n| n < full).count();
-    (short + design.saturating_sub(rows.len()), design)
-}
-
 fn deps(d: &[capstan_discover::library::Var]) -> BTreeSet<&'static str> {
     d.iter().map(|v| v.name()).collect()
 }
@@ -275,7 +254,7 @@ pub fn run(seed: u64, per_kind: usize, threads: usize) -> Vec<Outcome> {
                 }
                 let d = discover(&data[i], &opts, &mut |_, _| {});
                 let mut o = score(&cases[i], &d);
-                o.runs_short = runs_short(&cases[i], &data[i]);
+                o.runs_short = cases[i].case.runs_short(&data[i]);
                 if o.runs_short.0 > 0 {
                     o.describe += &format!(
                         " | {} of {} runs cut short by the firmware ({} rows)",
