@@ -11,6 +11,9 @@ use capstan_engine::evidence::RIVAL_GAP;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+/// A proposed term must leave no lack of fit against the replicate runs at this level.
+pub const LOF_ALPHA: f64 = 0.01;
+
 /// A library term that might explain the data as well as a proposed one.
 #[derive(Clone, Debug, Serialize)]
 pub struct Rival {
@@ -339,7 +342,7 @@ pub(crate) fn verdict_words(
                 Some(p) => format!(" Structure is still left (pattern: {p})."),
                 None => format!(" Structure is still left with {with} (its pattern was not re-tested: the catalogue's is what a proposed term fits)."),
             },
-            (Some(false), Some(l)) if lof_before.as_ref().is_some_and(|b| b.p < crate::verdict::LOF_ALPHA) => format!(
+            (Some(false), Some(l)) if lof_before.as_ref().is_some_and(|b| b.p < LOF_ALPHA) => format!(
                 " With {with}, the lack of fit against the replicate runs is resolved (p = {:.3}).",
                 l.p
             ),

@@ -4,7 +4,7 @@
 
 use crate::answer::{
     decline, displaced, proposed, screen_row, verdict_words, DataInfo, Declined, Discovery,
-    NotTestable, Proposed, ScreenRow, Search,
+    NotTestable, Proposed, ScreenRow, Search, LOF_ALPHA,
 };
 use crate::checks::{candidates, catalogue_repair, held_out, lack_of_fit_with, rivals_of, Repair};
 use crate::columns::Base;
@@ -21,9 +21,6 @@ use capstan_engine::evidence::adequacy::LackOfFit;
 use capstan_engine::evidence::within::WithinFit;
 use capstan_engine::evidence::{self, Assessment};
 use std::time::Instant;
-
-/// A proposed term must leave no lack of fit against the replicate runs at this level.
-pub const LOF_ALPHA: f64 = 0.01;
 
 /// Fewest cords for the stability (whole-cord resamples) and the held-out gain (leave one
 /// cord out, jackknife over cords): below it neither is computed, and nothing is proposed.
