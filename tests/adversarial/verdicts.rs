@@ -118,3 +118,57 @@ fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
     assert!(html.contains("5 cords ASSUMED"), "the report says it");
     checked();
 }
+
+/// The thesis data with only the columns `keep` (by header name), and only the rows `pick`
+/// takes (by their cells).
+fn thesis_columns(keep: &[&str], pick: impl Fn(&[&str]) -> bool) -> Dataset {
+    let mut lines = capstan_data::THESIS_CSV.lines();
+    let header: Vec<&str> = lines.next().unwrap().trim_end().split(',').collect();
+    let at: Vec<usize> = keep
+        .iter()
+        .map(|k| header.iter().position(|h| h == k).unwrap())
+        .collect();
+    let mut s = keep.join(",") + "\n";
+    for l in lines {
+        let c: Vec<&str> = l.trim_end().split(',').collect();
+        if pick(&c) {
+            s += &at.iter().map(|&i| c[i]).collect::<Vec<_>>().join(",");
+            s.push('\n');
+        }
+    }
+    data(&s)
+}
+
+#[test]
+fn without_replicate_runs_or_with_too_few_no_verdict_says_euler_eytelwein_explains() {
+    // The thesis data without their run and step columns: each cord is one run, so no pure
+    // error; the same measurements with the columns are "unexplained".
+    let merged = thesis_columns(&["capstan_diameter_mm", "wrap_deg", "t1_n", "t2_n"], |_| {
+        true
+    });
+    let a = capstan_engine::diagnose::diagnose(&merged);
+    assert!(a.verdict.starts_with("Not identified:"), "{}", a.verdict);
+    // One cord's 6 runs: the lack of fit is not significant (p ≈ 0.04) but its systematic part
+    // is estimated far above the rule's size: too few replicates to tell, not "explained".
+    let one = thesis_columns(
+        &[
+            "capstan_diameter_mm",
+            "wrap_deg",
+            "run",
+            "step",
+            "t1_n",
+            "t2_n",
+        ],
+        |c| c[0] == "12.7" && c[1] == "270",
+    );
+    let a = capstan_engine::diagnose::diagnose(&one);
+    assert!(a.verdict.starts_with("Not identified:"), "{}", a.verdict);
+    assert!(a.verdict.contains("too few to rule out"), "{}", a.verdict);
+    for v in [&a.verdict] {
+        assert!(
+            !v.contains("within their noise") && !v.contains("p = 0.00"),
+            "{v}"
+        );
+    }
+    checked();
+}

@@ -185,6 +185,18 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
     let unexplained = lack || !at_physical_limit.is_empty() || inconstant.is_some();
     let pattern = pattern(best, lack_of_fit.as_ref(), &directed, rule);
     let mut sentence = sentence(lack, pattern, lack_of_fit.as_ref(), &directed);
+    if let Some(l) = lack_of_fit
+        .as_ref()
+        .filter(|l| !lack && underpowered(l, rule))
+    {
+        sentence = format!(
+            "The lack of fit against the replicate runs is not significant (F = {:.2}, p = {}), but its systematic part is estimated at {:.2}× the noise, above the rule's {:.2}×: these replicate runs are too few to rule out structure that matters.",
+            l.f,
+            p_shown(l.p),
+            l.systematic_ratio,
+            rule.min_ratio
+        );
+    }
     if untested {
         sentence = format!(
             "What is left is not identified: with {} run(s) no test of it can be made (no \
@@ -333,10 +345,27 @@ pub fn sentence(
             None => {
                 let p_min = directed.iter().map(|t| t.p).fold(1.0, f64::min);
                 format!(
-                    "No replicate runs give a pure error; no test of the residuals against T1, time, step direction, wrap or diameter finds structure that matters (smallest p = {p_min:.2})."
+                    "No replicate runs give a pure error; no test of the residuals against T1, time, step direction, wrap or diameter finds structure that matters (smallest p = {}).",
+                    p_shown(p_min)
                 )
             }
         }
+    }
+}
+
+/// A lack-of-fit test that found nothing significant while its estimate of the systematic
+/// part is as large as the rule calls large: too few replicate runs to tell.
+pub fn underpowered(l: &LackOfFit, rule: AdequacyRule) -> bool {
+    l.p >= rule.alpha && l.systematic_ratio >= rule.min_ratio
+}
+
+/// A p-value for a sentence: two decimals down to 0.01, then two significant digits (0.004
+/// must not read "0.00").
+pub fn p_shown(p: f64) -> String {
+    if p >= 0.01 {
+        format!("{p:.2}")
+    } else {
+        format!("{p:.1e}")
     }
 }
 

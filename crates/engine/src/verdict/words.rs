@@ -4,6 +4,7 @@
 //! it. What each effect is comes from its catalogue entry.
 
 use super::{Found, Numbers, Verdict};
+use crate::evidence::adequacy::underpowered;
 use crate::evidence::{Adequacy, Design, Rival};
 use capstan_data::structure::StructureSummary;
 use capstan_data::Basis;
@@ -117,8 +118,15 @@ pub fn rival_sentences(rivals: &[Rival]) -> String {
 /// The verdict on the found set and the adequacy decision alone.
 fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
     let names: Vec<String> = effects.iter().map(effect_phrase).collect();
+    // Euler-Eytelwein "explains" the data only where a pure-error test could have shown
+    // otherwise: with replicate runs enough for it to see structure the rule calls large.
+    let inconclusive = !adequacy.tested
+        || adequacy
+            .lack_of_fit
+            .as_ref()
+            .is_none_or(|l| underpowered(l, adequacy.rule));
     match (effects.is_empty(), adequacy.unexplained) {
-        (true, false) if !adequacy.tested => format!(
+        (true, false) if inconclusive => format!(
             "Not identified: no catalogue effect is supported, but these data are too few to tell whether Euler-Eytelwein explains them. {}",
             adequacy.sentence
         ),
