@@ -277,23 +277,41 @@ fn a_stopped_campaign_keeps_every_finished_run_and_a_second_writer_is_refused() 
     assert!(kill.success());
     let st = wait_with_deadline(&mut child, 60);
     assert_eq!(st.code(), Some(130), "{st:?}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["interrupted"], true);
-    let runs = summary["runs"].as_u64().unwrap();
-    assert!((1..100_000).contains(&runs), "{summary}");
-    // Every finished run is on disk, whole: its raw log, and its pairs (3 s steps: 12 each).
-    let raw: Vec<String> = std::fs::read_dir(dir.join("raw"))
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .collect();
-    assert_eq!(raw.len() as u64, runs + 1, "{raw:?}");
+    assert!(
+        stderr(&child_output(child)).contains("the complete campaign in"),
+        "the stop says the complete campaign is as it was"
+    );
+    // The complete campaign is as it was: a stopped one replaces no complete one.
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p.join("summary.json")).unwrap()).unwrap()
+    };
+    let first = read(&dir);
+    assert_eq!(first["interrupted"], false, "{first}");
     assert_eq!(
         std::fs::read_to_string(dir.join("raw/d12.7_w360_v10_run0.csv")).unwrap(),
         "mine"
     );
-    let pairs = std::fs::read_to_string(dir.join("pairs.csv")).unwrap();
+    // The stopped one is kept beside it, as incomplete-<id>, every finished run whole.
+    let kept: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("incomplete-")
+        })
+        .collect();
+    assert_eq!(kept.len(), 1, "{kept:?}");
+    let summary = read(&kept[0]);
+    assert_eq!(summary["interrupted"], true);
+    let runs = summary["runs"].as_u64().unwrap();
+    assert!((1..100_000).contains(&runs), "{summary}");
+    // Every finished run is on disk, whole: its raw log, and its pairs (3 s steps: 12 each).
+    let raw = std::fs::read_dir(kept[0].join("raw")).unwrap().count();
+    assert_eq!(raw as u64, runs, "raw logs");
+    let pairs = std::fs::read_to_string(kept[0].join("pairs.csv")).unwrap();
     assert_eq!(
         pairs.lines().count() as u64 - 1,
         summary["pairs"].as_u64().unwrap()
@@ -304,9 +322,48 @@ fn a_stopped_campaign_keeps_every_finished_run_and_a_second_writer_is_refused() 
         .unwrap()
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.contains("staging") || n.starts_with("incomplete"))
+        .filter(|n| n.contains("staging"))
         .collect();
     assert!(hidden.is_empty(), "{hidden:?}");
+    // Into a directory without a campaign, a stopped one is the set (summary.json says so).
+    let fresh = tmp("stop-fresh");
+    let mut args = vec![
+        "simulate",
+        "--out",
+        s(&fresh),
+        "--runs",
+        "100000",
+        "--threads",
+        "1",
+    ];
+    args.extend(SHORT);
+    let mut child = bin()
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    assert_eq!(wait_with_deadline(&mut child, 60).code(), Some(130));
+    assert_eq!(read(&fresh)["interrupted"], true);
+}
+
+/// What a finished child wrote to its piped stderr.
+fn child_output(mut child: Child) -> Output {
+    let mut err = Vec::new();
+    if let Some(mut e) = child.stderr.take() {
+        let _ = e.read_to_end(&mut err);
+    }
+    Output {
+        status: child.wait().unwrap(),
+        stdout: Vec::new(),
+        stderr: err,
+    }
 }
 
 /// Case 4: two SIGINTs a few ms apart (a double Ctrl-C, or `timeout -s INT` signalling the

@@ -292,6 +292,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &[("raw", &writes)],
     )?;
     crate::outputs::say_recovered(&out);
+    // An interrupted campaign replaces no complete one: it is kept beside it instead.
+    let previous = (out.path()).join(capstan_outdir::manifest_name("simulate"));
+    let had_previous = previous.exists();
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
     let stats = stream(&args, &cfg, &mut files)?;
     if stats.done == 0 {
@@ -310,18 +313,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         std::mem::take(&mut files.faults),
         files.faults_total,
     );
-    files.finish(&summary)?;
+    let kept = files.finish(&summary, stats.interrupted && had_previous)?;
+    let at = kept.clone().unwrap_or_else(|| args.out.clone());
     if args.json {
         crate::outln!("{summary}");
     } else {
-        output::print_summary(&args.out, &stats, rows, &faults, faults_total, !args.no_raw);
+        output::print_summary(&at, &stats, rows, &faults, faults_total, !args.no_raw);
     }
     if stats.interrupted {
+        let previous = match kept {
+            Some(_) => format!(
+                "; the complete campaign in {} is as it was",
+                args.out.display()
+            ),
+            None => String::new(),
+        };
         return Err(super::signal::Interrupted(format!(
-            "interrupted: {} of {} runs made; they are in {} (summary.json says \"interrupted\")",
+            "interrupted: {} of {} runs made; they are in {} (summary.json says \"interrupted\"){previous}",
             stats.done,
             stats.planned,
-            args.out.display()
+            at.display()
         ))
         .into());
     }

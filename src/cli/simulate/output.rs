@@ -11,7 +11,7 @@ use host_sim::campaign::{pair_rows, CampaignStats, FaultSummary, RunResult};
 use serde_json::{json, Value};
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 const FAULTS_HEADER: &str = "run,capstan_diameter_mm,wrap_deg,drive_v,repeat,injected,fault,at_s,detected_s,safe_after_ms,pairs_kept";
 
@@ -77,8 +77,9 @@ impl CampaignWriter {
     }
 
     /// Close the set: `summary.json`, then replace the previous results (the writers closed
-    /// first: a directory with open files cannot be renamed everywhere).
-    pub fn finish(mut self, summary: &Value) -> anyhow::Result<()> {
+    /// first: a directory with open files cannot be renamed everywhere) or, with `keep`, put
+    /// it beside them as `incomplete-<id>` (returned).
+    pub fn finish(mut self, summary: &Value, keep: bool) -> anyhow::Result<Option<PathBuf>> {
         let at = |name: &str| format!("cannot write {}", self.set.target().join(name).display());
         self.pairs.flush().with_context(|| at("pairs.csv"))?;
         self.faults_csv.flush().with_context(|| at("faults.csv"))?;
@@ -87,8 +88,12 @@ impl CampaignWriter {
         let text = serde_json::to_string_pretty(summary)? + "\n";
         set.write("summary.json", text.as_bytes())?;
         let dir = set.target().display().to_string();
+        if keep {
+            return set.keep().map(Some);
+        }
         set.commit()
-            .with_context(|| format!("writing the campaign into {dir}"))
+            .with_context(|| format!("writing the campaign into {dir}"))?;
+        Ok(None)
     }
 }
 
