@@ -154,6 +154,13 @@ fn values_no_sensor_produces_and_data_without_friction_are_refused() {
             "wrap_deg\tt1_n\tt2_n\n360\t1\t2\n",
             "looks separated by tabs",
         ),
+        (
+            // One run's T1 sensor reversed: every reading at or below zero, down to -22 N.
+            "reversed.csv",
+            "wrap_deg,run,t1_n,t2_n\n360,1,1,2\n360,1,2,4\n360,1,3,6\n\
+             360,2,-0.5,1\n360,2,-22,3\n360,2,-1,5\n360,3,1,2\n360,3,2,4\n",
+            "reversed.csv:6:3: t1_n = -22 N, and every t1_n reading of cord",
+        ),
     ];
     for (name, body, want) in cases {
         let p = write(&dir, name, body);

@@ -92,6 +92,16 @@ pub enum DataError {
         rows: usize,
         below: usize,
     },
+    /// One run's readings of a channel are all at or below zero, down to below
+    /// [`crate::REVERSED_BELOW_N`]: that run's sensor reads reversed.
+    ReversedRun {
+        path: String,
+        line: u64,
+        column: usize,
+        name: &'static str,
+        value: f64,
+        run: String,
+    },
     /// Most rows have a tension at or below zero: not tensions as a rig reads them.
     NotPositive {
         path: String,
@@ -273,6 +283,21 @@ impl fmt::Display for DataError {
                 "{path}: T2 is below T1 in {below} of {rows} rows: a capstan amplifies tension \
                  (T2 > T1), so the t1_n and t2_n columns look swapped; t1_n is the servo (low) \
                  side: swap the two names in the header"
+            ),
+            ReversedRun {
+                path,
+                line,
+                column,
+                name,
+                value,
+                run,
+            } => write!(
+                f,
+                "{path}:{line}:{column}: {name} = {value} N, and every {name} reading of {run} \
+                 is at or below zero: a cord under load cannot push, so that run's sensor reads \
+                 reversed (or its zero is far off: a rig's negative-force check stops at \
+                 {below} N); fix the run's sign or leave the run out",
+                below = -crate::REVERSED_BELOW_N
             ),
             NotPositive {
                 path,

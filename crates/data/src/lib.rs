@@ -222,6 +222,62 @@ pub fn check_capstan_data(ds: &Dataset) -> Result<(), DataError> {
     if 2 * below > rows {
         return Err(DataError::Swapped { path, rows, below });
     }
+    reversed_run(ds)
+}
+
+/// A reading below minus this, N, in a run whose readings of that channel are all at or below
+/// zero is a reversed sensor, not a zero offset (the firmware's `negative_force` check stops a
+/// run at −3 N; the catalogue's zero offsets stay within it).
+pub const REVERSED_BELOW_N: f64 = 3.0;
+
+/// A tension column's name and its reading in a pair.
+type ChannelOf = (&'static str, fn(&Pair) -> f64);
+
+/// The first run whose T1 (or T2) readings are all at or below zero and reach below
+/// −[`REVERSED_BELOW_N`]: refused, naming its lowest reading's line and column.
+fn reversed_run(ds: &Dataset) -> Result<(), DataError> {
+    let st = &ds.structure;
+    let channels: [ChannelOf; 2] = [("t1_n", |p| p.t1_n), ("t2_n", |p| p.t2_n)];
+    for (name, read) in channels {
+        // Per run: any reading above zero, and the lowest reading's row.
+        let mut runs: Vec<(bool, Option<usize>)> = vec![(false, None); st.run_cord.len()];
+        for (i, p) in ds.pairs.iter().enumerate() {
+            let Some(r) = st.run_of_row.get(i).and_then(|&r| runs.get_mut(r)) else {
+                continue;
+            };
+            r.0 |= read(p) > 0.0;
+            if r.1.is_none_or(|j| read(p) < read(&ds.pairs[j])) {
+                r.1 = Some(i);
+            }
+        }
+        let hit = runs
+            .iter()
+            .enumerate()
+            .find_map(|(run, &(positive, lowest))| {
+                lowest
+                    .filter(|&i| !positive && read(&ds.pairs[i]) < -REVERSED_BELOW_N)
+                    .map(|i| (run, i))
+            });
+        if let Some((run, i)) = hit {
+            let p = &ds.pairs[i];
+            let cord = st.cord_label(st.run_cord[run]);
+            return Err(DataError::ReversedRun {
+                path: ds.source.clone(),
+                line: ds.lines.get(i).copied().unwrap_or(0),
+                column: ds
+                    .header
+                    .iter()
+                    .position(|h| h == name)
+                    .map_or(0, |c| c + 1),
+                name,
+                value: read(p),
+                run: match p.run {
+                    Some(n) => format!("cord {cord} run {n}"),
+                    None => format!("cord {cord}"),
+                },
+            });
+        }
+    }
     Ok(())
 }
 
