@@ -81,9 +81,18 @@ fn plan_on_the_thesis_data_keeps_the_json_contract_and_writes_its_files() {
     let saved: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
     assert_eq!(saved["hypotheses"], v["hypotheses"]);
-    assert!(std::fs::read_to_string(out.join("plan.txt"))
-        .unwrap()
-        .contains("open hypotheses"));
+    let text = std::fs::read_to_string(out.join("plan.txt")).unwrap();
+    assert!(text.contains("open hypotheses"), "{text}");
+    // How the data were read, and their provenance, as diagnose and analyze give them.
+    assert!(text.contains("10 cords from columns"), "{text}");
+    assert!(
+        saved["data"]["structure"]["statement"]
+            .as_str()
+            .unwrap()
+            .contains("60 runs"),
+        "{saved}"
+    );
+    assert!(saved["provenance"].is_object(), "{saved}");
 }
 
 /// Every `capstan rig` command the plan gives (in any candidate's commands and procedure) is

@@ -70,8 +70,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(pb) = bar {
         pb.finish_and_clear();
     }
-    let json = serde_json::to_string_pretty(&p)?;
-    let text = words(&p, &data.source);
+    // How the data were read and where they came from, as diagnose and analyze say it.
+    let structure = data.structure.summary();
+    let mut v = serde_json::to_value(&p)?;
+    v["data"] = serde_json::json!({"source": data.source, "structure": structure});
+    v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
+    let json = serde_json::to_string_pretty(&v)?;
+    let text = words(&p, &data.source, &structure.statement);
     if let Some(dir) = &args.out {
         let mut set = crate::outputs::open_out(dir, "plan", &["plan.json", "plan.txt"])?.stage()?;
         set.create("plan.json")?.write_all(json.as_bytes())?;
@@ -87,10 +92,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// The plan in words: what is open, the protocols ranked, the recommendation.
-pub fn words(p: &Plan, source: &str) -> String {
+pub fn words(p: &Plan, source: &str, structure: &str) -> String {
     let mut s = String::new();
     let labels: Vec<String> = p.hypotheses.iter().map(|h| h.label()).collect();
-    let _ = writeln!(s, "{source}: open hypotheses: {}", labels.join(" | "));
+    let _ = writeln!(s, "{source}: {structure}");
+    let _ = writeln!(s, "open hypotheses: {}", labels.join(" | "));
     for h in p.hypotheses.iter().filter(|h| h.origin != "named") {
         let _ = writeln!(s, "  {}: {}", h.label(), h.origin);
     }

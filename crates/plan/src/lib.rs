@@ -262,12 +262,20 @@ fn diagnosis(data: &Dataset, assumed: &mut Vec<String>) -> Diagnosis {
         protocol_times: !has_time,
         ..diagnose::Options::default()
     };
-    if !has_time {
-        assumed.push(
+    let has_step = data.pairs.iter().any(|p| p.step.is_some());
+    match (has_time, has_step) {
+        (false, true) => assumed.push(
             "no time_s column: window times taken from the step numbers with the thesis \
              protocol (10 s steps)"
                 .to_string(),
-        );
+        ),
+        (false, false) => assumed.push(
+            "no time_s or step column: these data have no window times, so nothing that \
+             changes with time in a run can be tested in them (the simulated campaigns have \
+             times)"
+                .to_string(),
+        ),
+        _ => {}
     }
     diagnose::diagnose_with(data, &opts)
 }
