@@ -88,11 +88,12 @@ fn verdict_lines(s: &mut String, d: &Diagnosis, source: &str) {
     let _ = writeln!(s, "{}", d.data.structure.statement);
     let _ = writeln!(s, "{}", d.verdict);
     if d.unexplained {
-        let _ = writeln!(
-            s,
-            "diagnosis: UNEXPLAINED ({})",
-            d.residual_pattern.unwrap_or("cells")
-        );
+        // The pattern the JSON gives, or none (sizes that differ by wrap, or an effect at the
+        // edge of its range, say it in the verdict above).
+        let pattern = d
+            .residual_pattern
+            .map_or(String::new(), |p| format!(" ({p})"));
+        let _ = writeln!(s, "diagnosis: UNEXPLAINED{pattern}");
     } else if d.effects.is_empty() {
         let _ = writeln!(
             s,
