@@ -221,3 +221,35 @@ fn bad_arguments_are_clear_errors_not_panics() {
         assert!(!out.exists(), "{args:?} wrote {o}");
     }
 }
+
+#[test]
+fn a_campaign_that_makes_no_pair_fails_and_replaces_nothing() {
+    let dir = tmp("sim-empty");
+    let d = dir.to_str().unwrap();
+    let first = capstan(&["simulate", "--out", d, "--runs", "1", "--no-raw"]);
+    assert!(first.status.success());
+    let pairs = std::fs::read_to_string(dir.join("pairs.csv")).unwrap();
+    // A T2 offset of 1e9 N: every run ends with a fault, no pair is made.
+    let o = capstan(&[
+        "simulate",
+        "--out",
+        d,
+        "--runs",
+        "1",
+        "--no-raw",
+        "--effect",
+        "t2_offset=1e9",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("no usable pair was made"), "{err}");
+    assert!(err.contains("faults.csv"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("pairs.csv")).unwrap(),
+        pairs
+    );
+    // `none` takes no value.
+    let o = capstan(&["simulate", "--out", d, "--effect", "none=1"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("takes no value"));
+}

@@ -74,6 +74,8 @@ pub enum ParseEffectError {
     MissingValue,
     /// The value is not a finite number.
     BadValue,
+    /// `none` was given a value.
+    NoneTakesNoValue,
 }
 
 impl fmt::Display for ParseEffectError {
@@ -91,6 +93,9 @@ impl fmt::Display for ParseEffectError {
             }
             ParseEffectError::MissingValue => f.write_str("expected NAME=VALUE"),
             ParseEffectError::BadValue => f.write_str("the value is not a finite number"),
+            ParseEffectError::NoneTakesNoValue => {
+                f.write_str("`none` takes no value (it is Euler-Eytelwein with no effect)")
+            }
         }
     }
 }
@@ -110,6 +115,7 @@ impl FromStr for Effect {
         let kind = EffectKind::from_name(name).ok_or(ParseEffectError::UnknownEffect)?;
         match (kind, value) {
             (EffectKind::None, None) => Ok(Effect::NONE),
+            (EffectKind::None, Some(_)) => Err(ParseEffectError::NoneTakesNoValue),
             (_, None) => Err(ParseEffectError::MissingValue),
             (_, Some(v)) => {
                 let value: f64 = v.parse().map_err(|_| ParseEffectError::BadValue)?;

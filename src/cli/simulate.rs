@@ -313,7 +313,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         std::mem::take(&mut files.faults),
         files.faults_total,
     );
-    let kept = files.finish(&summary, stats.interrupted && had_previous)?;
+    // A campaign that made no usable pair (every run ended with a fault) replaces nothing.
+    let empty = rows == 0;
+    let kept = files.finish(&summary, empty || (stats.interrupted && had_previous))?;
+    if let (true, Some(at)) = (empty && !stats.interrupted, &kept) {
+        anyhow::bail!(
+            "no usable pair was made: all {} runs ended with a fault (why: {}); {} is as it was",
+            stats.done,
+            at.join("faults.csv").display(),
+            args.out.display()
+        );
+    }
     let at = kept.clone().unwrap_or_else(|| args.out.clone());
     if args.json {
         crate::outln!("{summary}");
