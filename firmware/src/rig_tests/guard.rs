@@ -52,6 +52,40 @@ fn rest_counts() -> [u16; 2] {
     [c.t1.counts(0.1) as u16, c.t2.counts(0.1) as u16]
 }
 
+/// A thesis rig driven sample by sample (1 ms apart) with host commands; its records kept.
+struct Bench {
+    rig: Rig,
+    sink: VecSink,
+    t: u64,
+}
+
+impl Bench {
+    fn new() -> Self {
+        Bench {
+            rig: thesis_rig(),
+            sink: VecSink::default(),
+            t: 0,
+        }
+    }
+
+    /// `samples` samples reading `counts`, `cmd` sent with the first.
+    fn step(&mut self, counts: [u16; 2], cmd: Option<Command>, samples: usize) {
+        for k in 0..samples {
+            self.t += 1000;
+            let cmd = if k == 0 { cmd } else { None };
+            one(&mut self.rig, &mut self.sink, self.t, counts, false, cmd);
+        }
+    }
+
+    /// Every reply so far: its command and error.
+    fn replies(&self) -> Vec<(CommandKind, Option<CommandError>)> {
+        replies(&self.sink)
+            .iter()
+            .map(|r| (r.command, r.error))
+            .collect()
+    }
+}
+
 #[test]
 fn a_tare_under_load_refuses_the_run_before_the_drive_is_on() {
     // 8 N hangs on both sensors during the tare (the reproduction), then a 50 N snag.
@@ -219,63 +253,34 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
     // The stored zero may be days old or the firmware's default: a weight measured from it
     // gives a wrong sensitivity (a zero 200 counts low makes a 1 kg weight's N/count 23 %
     // small at 0.015 N/count, and every force then reads low, the over-force check's too).
-    let mut rig = thesis_rig();
-    let mut sink = VecSink::default();
+    let mut b = Bench::new();
     let rest = rest_counts();
     // 1 kg on T1 at 0.015 N/count: 654 counts above the zero.
     let hung = [rest[0] + 654, rest[1]];
-    let mut t = 0;
-    let mut step = |rig: &mut Rig, counts, cmd, samples: usize| {
-        for k in 0..samples {
-            t += 1000;
-            one(
-                rig,
-                &mut sink,
-                t,
-                counts,
-                false,
-                if k == 0 { cmd } else { None },
-            );
-        }
-    };
     let weigh_t1 = Some(Command::Weigh(Channel::T1, 9.80665));
-    step(&mut rig, rest, Some(Command::Setup), 1);
+    b.step(rest, Some(Command::Setup), 1);
     // Before any zero: refused at once, nothing measured.
-    step(&mut rig, hung, weigh_t1, 1);
-    step(&mut rig, rest, Some(Command::Zero), 600);
+    b.step(hung, weigh_t1, 1);
+    b.step(rest, Some(Command::Zero), 600);
     // A zero typed over the measured one (or `defaults`) is not this session's zero either.
-    step(&mut rig, rest, Some(Command::Set(Key::T1Zero, 380.0)), 1);
-    step(&mut rig, hung, weigh_t1, 1);
+    b.step(rest, Some(Command::Set(Key::T1Zero, 380.0)), 1);
+    b.step(hung, weigh_t1, 1);
     // ... T2's is still this session's: it weighs (1 kg on T2 now).
     let hung_t2 = [rest[0], rest[1] + 654];
-    step(
-        &mut rig,
-        hung_t2,
-        Some(Command::Weigh(Channel::T2, 9.80665)),
-        600,
-    );
-    step(&mut rig, rest, Some(Command::Zero), 600);
+    b.step(hung_t2, Some(Command::Weigh(Channel::T2, 9.80665)), 600);
+    b.step(rest, Some(Command::Zero), 600);
     // The servo jogged since the zero: the cord's pull would add to the weight.
-    step(&mut rig, rest, Some(Command::Jog(2.0)), 200);
-    step(&mut rig, hung, weigh_t1, 1);
-    step(&mut rig, rest, Some(Command::Jog(-2.0)), 200);
-    step(&mut rig, hung, weigh_t1, 600);
-    let weighed = rig.calibration().t1.n_per_count;
+    b.step(rest, Some(Command::Jog(2.0)), 200);
+    b.step(hung, weigh_t1, 1);
+    b.step(rest, Some(Command::Jog(-2.0)), 200);
+    b.step(hung, weigh_t1, 600);
+    let weighed = b.rig.calibration().t1.n_per_count;
     // Leaving setup mode forgets the zero: the next session must zero again.
-    step(&mut rig, rest, Some(Command::Leave), 3000);
-    step(&mut rig, rest, Some(Command::Setup), 1);
-    step(
-        &mut rig,
-        hung,
-        Some(Command::Weigh(Channel::T2, 9.80665)),
-        1,
-    );
-    let got: Vec<_> = replies(&sink)
-        .iter()
-        .map(|r| (r.command, r.error))
-        .collect();
+    b.step(rest, Some(Command::Leave), 3000);
+    b.step(rest, Some(Command::Setup), 1);
+    b.step(hung, Some(Command::Weigh(Channel::T2, 9.80665)), 1);
     assert_eq!(
-        got,
+        b.replies(),
         [
             (CommandKind::Setup, None),
             (CommandKind::Weigh, Some(CommandError::NotZeroed)),
@@ -294,7 +299,7 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
         ]
     );
     assert!((weighed - 9.80665 / 654.0).abs() < 1e-6, "{weighed}");
-    let t2 = rig.calibration().t2.n_per_count;
+    let t2 = b.rig.calibration().t2.n_per_count;
     assert!((t2 - 9.80665 / 654.0).abs() < 1e-6, "{t2}");
 }
 
@@ -302,35 +307,16 @@ fn a_weigh_needs_a_zero_measured_in_the_same_setup_session() {
 fn a_zero_under_a_load_is_refused() {
     // 2.5 N hanging on T1 (167 counts at 0.015 N/count) while zeroing: taken as zero, it would
     // hide 2.5 N of every force from the over-force check in setup mode.
-    let mut rig = thesis_rig();
-    let mut sink = VecSink::default();
+    let mut b = Bench::new();
     let rest = rest_counts();
     let loaded = [rest[0] + 167, rest[1]];
-    let mut t = 0;
-    let mut step = |rig: &mut Rig, counts, cmd, samples: usize| {
-        for k in 0..samples {
-            t += 1000;
-            one(
-                rig,
-                &mut sink,
-                t,
-                counts,
-                false,
-                if k == 0 { cmd } else { None },
-            );
-        }
-    };
-    step(&mut rig, rest, Some(Command::Setup), 1);
-    step(&mut rig, loaded, Some(Command::Zero), 600);
-    let after_refusal = *rig.calibration();
+    b.step(rest, Some(Command::Setup), 1);
+    b.step(loaded, Some(Command::Zero), 600);
+    let after_refusal = *b.rig.calibration();
     // Nothing hanging (0.1 N from the stored zero): taken.
-    step(&mut rig, rest, Some(Command::Zero), 600);
-    let got: Vec<_> = replies(&sink)
-        .iter()
-        .map(|r| (r.command, r.error))
-        .collect();
+    b.step(rest, Some(Command::Zero), 600);
     assert_eq!(
-        got,
+        b.replies(),
         [
             (CommandKind::Setup, None),
             (CommandKind::Zero, Some(CommandError::ZeroMoved)),
@@ -338,7 +324,10 @@ fn a_zero_under_a_load_is_refused() {
         ]
     );
     assert_eq!(after_refusal, Calibration::default());
-    assert_eq!(rig.calibration().zeros(), [rest[0] as f32, rest[1] as f32]);
+    assert_eq!(
+        b.rig.calibration().zeros(),
+        [rest[0] as f32, rest[1] as f32]
+    );
 }
 
 #[test]
@@ -600,33 +589,14 @@ fn a_fault_in_setup_mode_never_pulls_the_servo_toward_tension() {
 fn a_weigh_whose_sensitivity_would_blind_the_over_force_check_is_refused() {
     // "weigh t1 2" with 3 N hanging: 200 counts for 2 N is 0.01 N/count, under which 45 N
     // would read above the rail check (the over-force check could never trip).
-    let mut rig = thesis_rig();
-    let mut sink = VecSink::default();
+    let mut b = Bench::new();
     let rest = rest_counts();
     let hung = [rest[0] + 200, rest[1]];
-    let mut t = 0;
-    let mut step = |rig: &mut Rig, counts, cmd, samples: usize| {
-        for k in 0..samples {
-            t += 1000;
-            one(
-                rig,
-                &mut sink,
-                t,
-                counts,
-                false,
-                if k == 0 { cmd } else { None },
-            );
-        }
-    };
-    step(&mut rig, rest, Some(Command::Setup), 1);
-    step(&mut rig, rest, Some(Command::Zero), 600);
-    step(&mut rig, hung, Some(Command::Weigh(Channel::T1, 2.0)), 600);
-    let got: Vec<_> = replies(&sink)
-        .iter()
-        .map(|r| (r.command, r.error))
-        .collect();
+    b.step(rest, Some(Command::Setup), 1);
+    b.step(rest, Some(Command::Zero), 600);
+    b.step(hung, Some(Command::Weigh(Channel::T1, 2.0)), 600);
     assert_eq!(
-        got,
+        b.replies(),
         [
             (CommandKind::Setup, None),
             (CommandKind::Zero, None),
@@ -634,7 +604,7 @@ fn a_weigh_whose_sensitivity_would_blind_the_over_force_check_is_refused() {
         ]
     );
     assert_eq!(
-        rig.calibration().t1.n_per_count,
+        b.rig.calibration().t1.n_per_count,
         Calibration::default().t1.n_per_count
     );
 }
