@@ -254,16 +254,7 @@ fn a_stopped_campaign_keeps_every_finished_run_and_a_second_writer_is_refused() 
     args.extend(SHORT);
     assert!(capstan(&args).status.success());
     // A long one, stopped by SIGTERM while it runs.
-    let mut args = vec![
-        "simulate",
-        "--out",
-        s(&dir),
-        "--runs",
-        "100000",
-        "--threads",
-        "1",
-    ];
-    args.extend(SHORT);
+    let args = long_campaign(&dir);
     let mut child = bin()
         .args(&args)
         .stdout(Stdio::piped())
@@ -271,18 +262,13 @@ fn a_stopped_campaign_keeps_every_finished_run_and_a_second_writer_is_refused() 
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_millis(1500));
-    let second = capstan(&args);
+    let second = bin().args(&args).output().unwrap();
     assert!(
         stderr(&second).contains("in use by another capstan process"),
         "{}",
         stderr(&second)
     );
-    let kill = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let st = wait_with_deadline(&mut child, 60);
+    let st = terminate(&mut child);
     assert_eq!(st.code(), Some(130), "{st:?}");
     assert!(
         stderr(&child_output(child)).contains("the complete campaign in"),
@@ -334,30 +320,43 @@ fn a_stopped_campaign_keeps_every_finished_run_and_a_second_writer_is_refused() 
     assert!(hidden.is_empty(), "{hidden:?}");
     // Into a directory without a campaign, a stopped one is the set (summary.json says so).
     let fresh = tmp("stop-fresh");
-    let mut args = vec![
-        "simulate",
-        "--out",
-        s(&fresh),
-        "--runs",
-        "100000",
-        "--threads",
-        "1",
-    ];
-    args.extend(SHORT);
     let mut child = bin()
-        .args(&args)
+        .args(long_campaign(&fresh))
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_millis(1500));
+    assert_eq!(terminate(&mut child).code(), Some(130));
+    assert_eq!(read(&fresh)["interrupted"], true);
+}
+
+/// A 100,000-run campaign into `out` (short steps, one thread): long enough to stop.
+fn long_campaign(out: &Path) -> Vec<String> {
+    let mut args: Vec<String> = [
+        "simulate",
+        "--out",
+        s(out),
+        "--runs",
+        "100000",
+        "--threads",
+        "1",
+    ]
+    .iter()
+    .map(|a| a.to_string())
+    .collect();
+    args.extend(SHORT.iter().map(|a| a.to_string()));
+    args
+}
+
+/// SIGTERM to `child`, and its exit status (within a minute).
+fn terminate(child: &mut Child) -> std::process::ExitStatus {
     let kill = Command::new("kill")
         .args(["-TERM", &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
-    assert_eq!(wait_with_deadline(&mut child, 60).code(), Some(130));
-    assert_eq!(read(&fresh)["interrupted"], true);
+    wait_with_deadline(child, 60)
 }
 
 /// What a finished child wrote to its piped stderr.
