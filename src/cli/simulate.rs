@@ -293,8 +293,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     crate::outputs::say_recovered(&out);
     // An interrupted campaign replaces no complete one: it is kept beside it instead.
-    let previous = (out.path()).join(capstan_outdir::manifest_name("simulate"));
-    let had_previous = previous.exists();
+    let had_previous = (out.path())
+        .join(capstan_outdir::manifest_name("simulate"))
+        .exists();
     let mut files = output::CampaignWriter::new(out, !args.no_raw)?;
     let stats = stream(&args, &cfg, &mut files)?;
     if stats.done == 0 {
@@ -332,11 +333,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if stats.interrupted {
         let previous = match kept {
-            Some(_) => format!(
+            Some(_) if had_previous => format!(
                 "; the complete campaign in {} is as it was",
                 args.out.display()
             ),
-            None => String::new(),
+            _ => String::new(),
         };
         return Err(super::signal::Interrupted(format!(
             "interrupted: {} of {} runs made; they are in {} (summary.json says \"interrupted\"){previous}",
