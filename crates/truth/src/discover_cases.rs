@@ -253,3 +253,13 @@ pub fn draw_all(master_seed: u64, per_kind: usize) -> Vec<DiscoverCase> {
         .flat_map(|k| (0..per_kind as u64).map(move |i| draw(master_seed, k, i)))
         .collect()
 }
+
+/// The same sets as [`draw_all`] (the same seeds, sizes and cords) with every run's levels in
+/// up-down order: level is nearly uncorrelated with time in the run.
+pub fn draw_all_updown(master_seed: u64, per_kind: usize) -> Vec<DiscoverCase> {
+    let mut cases = draw_all(master_seed, per_kind);
+    for c in &mut cases {
+        c.case.config.order = StepOrder::UpDown;
+    }
+    cases
+}

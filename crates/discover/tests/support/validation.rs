@@ -178,6 +178,11 @@ fn size_scale() -> f64 {
         .unwrap_or(1.0)
 }
 
+/// Every set's runs in up-down order (`CAPSTAN_DISCOVER_DESIGN=updown`).
+fn updown() -> bool {
+    std::env::var("CAPSTAN_DISCOVER_DESIGN").is_ok_and(|v| v == "updown")
+}
+
 /// The sets, simulated; with `CAPSTAN_DISCOVER_CACHE=DIR` kept in DIR as pairs CSVs
 /// (read back exactly) so that a calibration can be re-run without re-simulating.
 fn generate_cached(
@@ -188,11 +193,14 @@ fn generate_cached(
 ) -> Vec<capstan_data::Dataset> {
     let dir = std::env::var("CAPSTAN_DISCOVER_CACHE").ok();
     let scale = size_scale();
-    let tag = if scale == 1.0 {
+    let mut tag = if scale == 1.0 {
         String::new()
     } else {
         format!("-x{scale}")
     };
+    if updown() {
+        tag += "-updown";
+    }
     let path = |i: usize| {
         dir.as_ref()
             .map(|d| std::path::Path::new(d).join(format!("s{seed}-k{per_kind}{tag}-{i}.csv")))
@@ -217,7 +225,11 @@ fn generate_cached(
 
 /// Simulate and search `per_kind` sets of every kind (kinds by index `every`-th) on `threads`.
 pub fn run(seed: u64, per_kind: usize, threads: usize) -> Vec<Outcome> {
-    let mut cases = discover_cases::draw_all(seed, per_kind);
+    let mut cases = if updown() {
+        discover_cases::draw_all_updown(seed, per_kind)
+    } else {
+        discover_cases::draw_all(seed, per_kind)
+    };
     let scale = size_scale();
     if scale != 1.0 {
         for c in cases.iter_mut().filter(|c| c.kind.group != Group::Null) {
