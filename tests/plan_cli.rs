@@ -186,3 +186,43 @@ fn plan_refuses_data_too_few_to_analyse() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Data whose cords are told apart by a `cord` label rather than by their design: the current
+/// design is simulated with all of the data's runs (adversarial pass 2, defect 3: it was
+/// simulated and priced at half of them), and the plan says how it shared them out.
+#[test]
+fn plan_keeps_the_runs_of_cords_told_apart_by_a_label() {
+    let dir = std::env::temp_dir().join(format!("capstan-plan-cord-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("cordlab.csv");
+    // The thesis data with the diameter as a cord label: 10 cords on 5 wraps.
+    let mut text = String::from("cord,wrap_deg,drive_v,run,step,t1_n,t2_n\n");
+    for line in capstan_data::THESIS_CSV.lines().skip(1) {
+        let (d, rest) = line.split_once(',').unwrap();
+        text += &format!("D{d},{rest}\n");
+    }
+    std::fs::write(&path, text).unwrap();
+    let o = capstan(&["plan", path.to_str().unwrap(), "--reps", "1", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let current = v["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "current design")
+        .expect("the current design is a candidate");
+    let design = &current["protocol"];
+    assert_eq!(design["wraps_deg"].as_array().unwrap().len(), 5);
+    assert_eq!(design["diameters_mm"].as_array().unwrap().len(), 1);
+    // 60 runs on 5 simulated cords: 12 each, as many runs as the data hold.
+    assert_eq!(design["runs_per_cord"], 12, "{design}");
+    // Its rig time is the data's: 60 runs of the thesis protocol (131.5 s) and a minute between.
+    let hours = v["current_design"]["rig_hours"].as_f64().unwrap();
+    assert!((hours - 60.0 * 191.5 / 3600.0).abs() < 0.01, "{hours} h");
+    let assumed = v["assumed"].to_string();
+    assert!(
+        assumed.contains("10 cords on 5") && assumed.contains("60 in all, the data's 60"),
+        "{assumed}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

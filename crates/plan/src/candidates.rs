@@ -46,7 +46,21 @@ impl Design {
         let diameters_mm = pick(&g.diameters_mm, 25.4, "capstan diameter");
         let drive_v = pick(&g.drive_v, 10.0, "drive voltage");
         let wraps_deg = pick(&g.wraps_deg, 360.0, "wrap angle");
-        let runs_per_cord = (g.runs as f64 / g.cords.max(1) as f64).round().max(1.0) as u32;
+        // The simulator makes one cord per (wrap, diameter, voltage); the data's runs are shared
+        // out over those so that the simulated campaign is as large as the data's.
+        let cells = wraps_deg.len() * diameters_mm.len() * drive_v.len();
+        let runs_per_cord = (g.runs as f64 / cells as f64).round().max(1.0) as u32;
+        if g.cords != cells {
+            assumed.push(format!(
+                "the data hold {} cords on {cells} (wrap, diameter, drive voltage) combinations; \
+                 the simulator makes one cord per combination, so {} runs on each ({} in all, \
+                 the data's {})",
+                g.cords,
+                runs_per_cord,
+                runs_per_cord as usize * cells,
+                g.runs
+            ));
+        }
         let order = if g.both_directions {
             StepOrder::UpDown
         } else {
