@@ -11,6 +11,11 @@ use serde::Serialize;
 /// Re-tensioning the cord, taring and starting a run: the time between runs, s (an estimate).
 pub const BETWEEN_RUNS_S: f64 = 60.0;
 
+/// The most runs per cord the planner simulates (4× the thesis's 6): a larger data set's
+/// design is planned at this size, and says so; without a cap a million-row file made one
+/// simulated campaign of ~83,000 runs.
+pub const MAX_RUNS_PER_CORD: u32 = 24;
+
 /// A design: what is run, on what, how often.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Design {
@@ -49,7 +54,15 @@ impl Design {
         // The simulator makes one cord per (wrap, diameter, voltage); the data's runs are shared
         // out over those so that the simulated campaign is as large as the data's.
         let cells = wraps_deg.len() * diameters_mm.len() * drive_v.len();
-        let runs_per_cord = (g.runs as f64 / cells as f64).round().max(1.0) as u32;
+        let data_runs = (g.runs as f64 / cells as f64).round().max(1.0) as u32;
+        let runs_per_cord = data_runs.min(MAX_RUNS_PER_CORD);
+        if data_runs > MAX_RUNS_PER_CORD {
+            assumed.push(format!(
+                "the data's {data_runs} runs per cord are planned as {MAX_RUNS_PER_CORD}: \
+                 a campaign of more would take the planner minutes per simulation, and \
+                 decides at least as often"
+            ));
+        }
         if g.cords != cells {
             assumed.push(format!(
                 "the data hold {} cords on {cells} (wrap, diameter, drive voltage) combinations; \
