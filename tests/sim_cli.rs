@@ -229,7 +229,8 @@ fn a_campaign_that_makes_no_pair_fails_and_replaces_nothing() {
     let first = capstan(&["simulate", "--out", d, "--runs", "1", "--no-raw"]);
     assert!(first.status.success());
     let pairs = std::fs::read_to_string(dir.join("pairs.csv")).unwrap();
-    // A T2 offset of 1e9 N: every run ends with a fault, no pair is made.
+    // A sensor unplugged half a second into every run: every run ends with a fault, no pair
+    // is made.
     let o = capstan(&[
         "simulate",
         "--out",
@@ -237,8 +238,8 @@ fn a_campaign_that_makes_no_pair_fails_and_replaces_nothing() {
         "--runs",
         "1",
         "--no-raw",
-        "--effect",
-        "t2_offset=1e9",
+        "--fault",
+        "sensor_unplugged@0.5",
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
@@ -248,8 +249,23 @@ fn a_campaign_that_makes_no_pair_fails_and_replaces_nothing() {
         std::fs::read_to_string(dir.join("pairs.csv")).unwrap(),
         pairs
     );
-    // `none` takes no value.
+    // `none` takes no value; a size no rig holds is refused before anything is simulated
+    // (a T2 zero 1e9 N off, a sensor of no gain: the catalogue entry's physical range).
     let o = capstan(&["simulate", "--out", d, "--effect", "none=1"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("takes no value"));
+    // And so is a wrap given twice (two cords of one key, which every reader refuses).
+    for (flag, value, says) in [
+        ("--effect", "t2_offset=1e9", "offset_n must be -5 to 5 N"),
+        ("--effect", "sensor_gain=0", "gain must be 0.5 to 2"),
+        ("--wraps", "270,360,270", "--wraps 270 is given twice"),
+    ] {
+        let o = capstan(&["simulate", "--out", d, flag, value]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{value}: {err}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.join("pairs.csv")).unwrap(),
+        pairs
+    );
 }

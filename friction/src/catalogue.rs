@@ -165,6 +165,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: None,
         unit: "",
         neutral: 0.0,
+        // none takes no value.
+        physical: (0.0, 0.0),
         level: Level::WithinRun,
         title: "Euler-Eytelwein",
         named_note: None,
@@ -188,6 +190,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("n"),
         unit: "",
         neutral: 1.0,
+        // a pressure exponent: 1 is Amontons, polymers on metal 0.67-1.
+        physical: (0.4, 1.0),
         level: Level::WithinRun,
         title: "pressure-dependent friction (Howell's power law dT/dθ = k·Tⁿ, n < 1)",
         named_note: None,
@@ -218,6 +222,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("b_nm2"),
         unit: "N m²",
         neutral: 0.0,
+        // N m²: a 1 mm steel wire is ~1e-3; a textile cord far less.
+        physical: (0.0, 1e-3),
         level: Level::WithinRun,
         title: "bending stiffness (the cord lifts off the capstan at low tension)",
         named_note: None,
@@ -256,6 +262,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("offset_n"),
         unit: "N",
         neutral: 0.0,
+        // N: the firmware faults a reading below -3 N.
+        physical: (-3.0, 3.0),
         level: Level::WithinRun,
         title: "a loss or zero offset on the T1 (servo) path",
         named_note: None,
@@ -277,6 +285,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("offset_n"),
         unit: "N",
         neutral: 0.0,
+        // N.
+        physical: (-5.0, 5.0),
         level: Level::WithinRun,
         title: "a zero offset of the T2 sensor",
         named_note: None,
@@ -299,6 +309,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("gain"),
         unit: "",
         neutral: 1.0,
+        // a load cell amplifier off by a factor of two at most.
+        physical: (0.5, 2.0),
         level: Level::BetweenCord,
         title: "a gain error of the T2 sensor relative to T1",
         named_note: None,
@@ -341,6 +353,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("mu_change_per_100s"),
         unit: "1/(100 s)",
         neutral: 0.0,
+        // mu changing by at most half per 100 s.
+        physical: (-0.5, 0.5),
         level: Level::WithinRun,
         title: "a drift of mu with time since the trigger",
         named_note: None,
@@ -371,6 +385,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("mu_change_per_run"),
         unit: "1/run",
         neutral: 0.0,
+        // mu changing by at most a tenth per run.
+        physical: (-0.1, 0.1),
         level: Level::BetweenRun,
         title: "wear or polishing: mu changing from run to run",
         named_note: None,
@@ -406,6 +422,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("mu_change_per_mm"),
         unit: "1/mm",
         neutral: 0.0,
+        // at most half of mu across the thesis's 12.7 mm span.
+        physical: (-0.04, 0.04),
         level: Level::BetweenCord,
         title: "a dependence of mu on the capstan diameter",
         named_note: None,
@@ -444,6 +462,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("mu_change_per_v"),
         unit: "1/V",
         neutral: 0.0,
+        // at most all of mu across a 10 V span.
+        physical: (-0.1, 0.1),
         level: Level::BetweenCord,
         title: "a dependence of mu on the drive voltage (speed)",
         named_note: None,
@@ -485,6 +505,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("heat_per_n"),
         unit: "1/N",
         neutral: 0.0,
+        // the population fit's bounds: ln mu falls by at most 0.1 per newton.
+        physical: (0.0, 0.1),
         level: Level::WithinRun,
         title: "contact heating: mu falling with the friction load T2 − T1 the contact carries",
         named_note: Some("Contact heating is fitted with the catalogue's short load memory (τ = 0.25 s): window means taken ≥ 1 s after each change cannot resolve a memory shorter than the settling, so a contact temperature that settles within a second cannot be told from a friction law that depends on the load itself. Logging the samples inside each dwell would show the transient."),

@@ -76,6 +76,15 @@ pub enum ParseEffectError {
     BadValue,
     /// `none` was given a value.
     NoneTakesNoValue,
+    /// The value is outside what a real rig can hold (the entry's `physical` range).
+    OutOfRange {
+        /// The effect.
+        kind: EffectKind,
+        /// Lowest value.
+        lo: f64,
+        /// Highest value.
+        hi: f64,
+    },
 }
 
 impl fmt::Display for ParseEffectError {
@@ -95,6 +104,17 @@ impl fmt::Display for ParseEffectError {
             ParseEffectError::BadValue => f.write_str("the value is not a finite number"),
             ParseEffectError::NoneTakesNoValue => {
                 f.write_str("`none` takes no value (it is Euler-Eytelwein with no effect)")
+            }
+            ParseEffectError::OutOfRange { kind, lo, hi } => {
+                let e = kind.entry();
+                write!(
+                    f,
+                    "{} must be {lo} to {hi}{}{} (what a real rig can hold; neutral {})",
+                    e.parameter.unwrap_or("the value"),
+                    if e.unit.is_empty() { "" } else { " " },
+                    e.unit,
+                    e.neutral
+                )
             }
         }
     }
@@ -122,6 +142,10 @@ impl FromStr for Effect {
                 if !value.is_finite() {
                     return Err(ParseEffectError::BadValue);
                 }
+                let (lo, hi) = kind.entry().physical;
+                if !(lo..=hi).contains(&value) {
+                    return Err(ParseEffectError::OutOfRange { kind, lo, hi });
+                }
                 Ok(Effect { kind, value })
             }
         }
@@ -143,6 +167,56 @@ mod tests {
             });
             assert_eq!(neutral, base, "{kind}");
         }
+    }
+
+    /// Every range holds its neutral value and the sizes the generated cases plant, spread over
+    /// the thesis-like designs they are planted on (so the cases a user can reproduce with
+    /// `capstan simulate --effect` parse), and refuses what no rig holds.
+    #[cfg(feature = "std")]
+    #[test]
+    fn physical_ranges_hold_the_planted_sizes_and_refuse_the_rest() {
+        use crate::entry::Span;
+        for kind in EffectKind::ALL {
+            let e = kind.entry();
+            let (lo, hi) = e.physical;
+            assert!(lo <= e.neutral && e.neutral <= hi, "{kind}");
+            if kind == EffectKind::None {
+                continue;
+            }
+            let span = match e.cases.span {
+                Span::One => 1.0,
+                Span::Time100s => 1.315,
+                Span::Runs => 5.0,
+                Span::Diameters => 12.7,
+                Span::Voltages => 5.0,
+            };
+            for change in [e.cases.care.0, e.cases.care.1] {
+                for sign in [1.0, -1.0] {
+                    if sign < 0.0 && !e.cases.signed {
+                        continue;
+                    }
+                    let v = (e.cases.value)(sign * change, span);
+                    let text = format!("{kind}={v}");
+                    assert!(
+                        text.parse::<Effect>().is_ok(),
+                        "{text}: {:?}",
+                        text.parse::<Effect>()
+                    );
+                }
+            }
+            let beyond = format!("{kind}={}", hi + (hi - lo).max(1.0));
+            let err = beyond.parse::<Effect>().unwrap_err();
+            assert!(
+                matches!(err, ParseEffectError::OutOfRange { .. }),
+                "{beyond}"
+            );
+            assert!(
+                err.to_string().contains("what a real rig can hold"),
+                "{err}"
+            );
+        }
+        assert!("sensor_gain=0".parse::<Effect>().is_err());
+        assert!("t2_offset=1e9".parse::<Effect>().is_err());
     }
 
     #[test]

@@ -208,6 +208,9 @@ pub struct EffectEntry {
     pub unit: &'static str,
     /// The parameter value at which the effect vanishes.
     pub neutral: f64,
+    /// The values a real rig can hold (inclusive), in its units: what `capstan simulate
+    /// --effect` accepts. The fits have their own bounds (`theta`, `population`).
+    pub physical: (f64, f64),
     /// Where in the data it shows.
     pub level: Level,
     /// What it is, physically (the report's and the verdicts' words).

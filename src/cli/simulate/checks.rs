@@ -17,10 +17,15 @@ pub(super) fn check_ranges(args: &Args) -> anyhow::Result<()> {
         for &v in list.iter().flatten() {
             r.option(flag, v)?;
         }
+        // The two-control rig's wraps are its channels' (two may be alike).
+        if !args.two_control {
+            no_repeats(flag, list.iter().flatten())?;
+        }
     }
     for &v in &args.drive_v {
         ranges::DRIVE_V.option("--drive-v", v)?;
     }
+    no_repeats("--drive-v", &args.drive_v)?;
     if let Some(n) = args.runs {
         ranges::RUNS_PER_CORD.option("--runs", n.into())?;
     }
@@ -38,6 +43,19 @@ pub(super) fn check_ranges(args: &Args) -> anyhow::Result<()> {
     }
     for &d in args.delays_ms.iter().flatten() {
         ranges::DELAY_MS.option("--delays-ms", d.into())?;
+    }
+    Ok(())
+}
+
+/// A value given twice in a list would make two cords of one key, whose runs every reader
+/// refuses as the same run again ("cord D12.7/270deg run 1 step 1 again").
+fn no_repeats<'a>(flag: &str, list: impl IntoIterator<Item = &'a f64>) -> anyhow::Result<()> {
+    let mut seen: Vec<f64> = Vec::new();
+    for &v in list {
+        if seen.contains(&v) {
+            anyhow::bail!("{flag} {v} is given twice: each value makes its own cords");
+        }
+        seen.push(v);
     }
     Ok(())
 }
