@@ -147,9 +147,9 @@ fn fit_lines(s: &mut String, d: &Diagnosis) {
     let sc = &d.scatter;
     let _ = writeln!(
         s,
-        "scatter of mu: {} % cord to cord, {} % run to run; noise {} N + {} % of T2, lag-1 autocorrelation {}",
-        fixed(sc.cord_pct, 2),
-        fixed(sc.run_pct, 2),
+        "scatter of mu: cord to cord {}, run to run {}; noise {} N + {} % of T2, lag-1 autocorrelation {}",
+        percent_or(sc.cord_pct, "not estimable (one cord)"),
+        percent_or(sc.run_pct, "not estimable (one run per cord)"),
         fixed(sc.noise_abs_n, 3),
         fixed(100.0 * sc.noise_rel, 2),
         if sc.lag1_autocorrelation.is_finite() {
@@ -158,6 +158,15 @@ fn fit_lines(s: &mut String, d: &Diagnosis) {
             "not identified (no time order inside runs)".to_string()
         }
     );
+}
+
+/// "5.83 %", or why the spread could not be estimated.
+fn percent_or(v: f64, why: &str) -> String {
+    if v.is_finite() {
+        format!("{v:.2} %")
+    } else {
+        why.to_string()
+    }
 }
 
 /// Every candidate's evidence, then what could not be tested or identified.
@@ -174,8 +183,10 @@ fn candidate_lines(s: &mut String, d: &Diagnosis) {
             .map_or("-".to_string(), |(k, v)| {
                 if c.parameter_se.is_finite() {
                     format!("{k} = {v:.4e} ± {:.1e}", c.parameter_se)
+                } else if let Some((lo, hi)) = c.edge_interval {
+                    format!("{k} = {v:.4e} (at the edge of its range; 95 % interval {lo:.1e} to {hi:.1e})")
                 } else {
-                    format!("{k} = {v:.4e} (standard error not identified)")
+                    format!("{k} = {v:.4e} (no standard error: one run, or at the edge of its range)")
                 }
             });
         let _ = writeln!(

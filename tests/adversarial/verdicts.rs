@@ -171,3 +171,57 @@ fn without_replicate_runs_or_with_too_few_no_verdict_says_euler_eytelwein_explai
     );
     checked();
 }
+
+/// A standard error or a scatter the data cannot give is not a measured zero (adversarial pass
+/// 2, defect 8): one run gives no cluster-robust standard error (a sandwich over one cluster
+/// is 0 whatever the data) and no scatter of mu; a parameter fitted on an edge of its range
+/// gives an interval from θ's, and is not ruled out on a standard error of 0 (bending
+/// stiffness on the thesis data at b = 0: it was "ruled out" until s35).
+#[test]
+fn a_standard_error_or_scatter_the_data_cannot_give_is_not_zero() {
+    let one_run = thesis_columns(
+        &[
+            "capstan_diameter_mm",
+            "wrap_deg",
+            "run",
+            "step",
+            "t1_n",
+            "t2_n",
+        ],
+        |c| c[0] == "12.7" && c[1] == "270" && c[3] == "1",
+    );
+    let d = capstan_engine::diagnose::diagnose(&one_run);
+    assert!(d.scatter.cord_pct.is_nan() && d.scatter.run_pct.is_nan());
+    for c in d.candidates.iter().filter(|c| c.parameters.len() == 1) {
+        assert!(
+            c.parameter_se.is_nan(),
+            "{}: ± {}",
+            c.effect,
+            c.parameter_se
+        );
+    }
+    let thesis = capstan_engine::diagnose::diagnose(&capstan_data::thesis_dataset());
+    assert!(thesis.scatter.run_pct > 1.0 && thesis.scatter.cord_pct > 1.0);
+    for c in &thesis.candidates {
+        assert!(c.parameter_se != 0.0, "{}: ± 0", c.effect);
+    }
+    let bending = thesis
+        .candidates
+        .iter()
+        .find(|c| c.effect == "bending_stiffness")
+        .expect("bending stiffness is a candidate");
+    let (lo, hi) = bending
+        .edge_interval
+        .expect("b = 0 is the edge of its range");
+    assert_eq!(lo, 0.0);
+    // 1.6e-5 N m²: eight times the 2e-6 N m² that would matter.
+    assert!(hi > 1e-5 && hi < 3e-5, "{hi}");
+    let a = capstan_engine::evidence::assess(
+        &capstan_data::thesis_dataset(),
+        &capstan_engine::diagnose::Options::default(),
+    );
+    let v = capstan_engine::verdict::of(&a);
+    let m = v.mechanisms.get("bending_stiffness").unwrap();
+    assert_eq!(m.verdict.name(), "not_established", "{}", m.summary);
+    checked();
+}

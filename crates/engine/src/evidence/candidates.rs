@@ -172,6 +172,13 @@ pub fn relevance_width(kind: EffectKind, d: &Design) -> f64 {
     (kind.entry().relevance)(&facts(d))
 }
 
+/// Does the interval [lo, hi] lie inside the region of practical equivalence with no effect?
+pub fn inside_equivalence(kind: EffectKind, lo: f64, hi: f64, d: &Design) -> bool {
+    let n = kind.neutral_value();
+    let w = relevance_width(kind, d);
+    lo.is_finite() && hi.is_finite() && (lo - n).abs() < w && (hi - n).abs() < w
+}
+
 /// Is an effect of this size more than the rig can resolve (outside the region of practical
 /// equivalence, [`relevance_width`])?
 pub fn practically_relevant(kind: EffectKind, value: f64, d: &Design) -> bool {

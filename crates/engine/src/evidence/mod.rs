@@ -98,8 +98,13 @@ pub struct Evidence {
     /// The fitted catalogue parameter.
     pub parameters: BTreeMap<&'static str, f64>,
     /// Its standard error (cluster-robust within runs; from the cord or run regression
-    /// between them).
+    /// between them). NaN (null) where none is defined: from one run, or at an edge of the
+    /// parameter's range.
     pub parameter_se: f64,
+    /// At an edge of its range (within runs, two runs or more): its 95 % interval, from θ's
+    /// cluster-robust interval (the value's own SE is not defined there).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edge_interval: Option<(f64, f64)>,
     /// ΔBIC given the other selected effects (negative: the data want it).
     pub delta_bic: f64,
     /// The evidence on the χ²₁ scale.
@@ -134,6 +139,7 @@ impl Evidence {
             level: candidates::level(kind),
             parameters,
             parameter_se: se,
+            edge_interval: None,
             delta_bic,
             chi2,
             df,
@@ -384,13 +390,26 @@ fn scatter(d: &Design, fit: &WithinFit, w: &Weights) -> Scatter {
             }
         }
     }
+    // A spread needs two of what spreads: with one cord there is no cord-to-cord scatter to
+    // estimate, and with no cord of two runs none from run to run (the model's variance
+    // component then sits at its bound, e.g. 7.5e-148 %): not estimable (NaN → null, and
+    // "not estimable" in the text), never a measured 0.
+    let mut runs_of = vec![0usize; d.cords.len()];
+    for &c in &d.unit_cord {
+        runs_of[c] += 1;
+    }
+    let estimable = |ok: bool, v: f64| if ok { v } else { f64::NAN };
     Scatter {
-        cord_pct: lmm
-            .as_ref()
-            .map_or(f64::NAN, |m| 100.0 * m.sigma2_c.sqrt() / mu_bar),
-        run_pct: lmm
-            .as_ref()
-            .map_or(f64::NAN, |m| 100.0 * m.sigma2_e.sqrt() / mu_bar),
+        cord_pct: estimable(
+            d.cords.len() >= 2,
+            lmm.as_ref()
+                .map_or(f64::NAN, |m| 100.0 * m.sigma2_c.sqrt() / mu_bar),
+        ),
+        run_pct: estimable(
+            runs_of.iter().any(|&n| n >= 2),
+            lmm.as_ref()
+                .map_or(f64::NAN, |m| 100.0 * m.sigma2_e.sqrt() / mu_bar),
+        ),
         within_run_rms_n: (fit.rss / d.n() as f64).sqrt(),
         noise_abs_n: w.sd_abs_n,
         noise_rel: w.sd_rel,

@@ -31,14 +31,54 @@ fn evidence(d: &Design, without: &WithinFit, with: &WithinFit, j: usize) -> Evid
     let mut e = Evidence::new(
         kind,
         with.value(j),
-        with.se_robust(j),
+        se_if_defined(with, j, g),
         -chi2 + n.ln(),
         chi2,
         g - 1.0,
     );
     e.overdispersion = c_hat;
+    e.edge_interval = edge_interval(with, j, g);
     e.relevant = practically_relevant(kind, e.value, d);
     e
+}
+
+/// The cluster-robust standard error of parameter `j`, where it means one: not from one run
+/// (a sandwich over one cluster is 0, whatever the data), and not at an edge of the
+/// parameter's range (a fit pinned there has no curvature to measure: bending stiffness at
+/// b = 0 came out "± 0", which then "excluded" the effect). NaN otherwise: "not identified"
+/// in words, null in JSON.
+fn se_if_defined(fit: &WithinFit, j: usize, runs: f64) -> f64 {
+    if runs < 2.0 || at_edge(fit, j) {
+        f64::NAN
+    } else {
+        fit.se_robust(j)
+    }
+}
+
+/// θ of parameter `j` sits on an edge of its range.
+fn at_edge(fit: &WithinFit, j: usize) -> bool {
+    let m = &fit.maps[j];
+    let tol = 1e-6 * (m.hi - m.lo);
+    let theta = fit.theta[j];
+    (theta - m.lo).abs() <= tol || (m.hi - theta).abs() <= tol
+}
+
+/// For a parameter on an edge of its range (from two runs up): its 95 % interval in values,
+/// the cluster-robust interval of θ (whose predictions move with θ even where the value,
+/// θ², does not: bending stiffness at b = 0) cut to θ's range and mapped to values.
+fn edge_interval(fit: &WithinFit, j: usize, runs: f64) -> Option<(f64, f64)> {
+    if runs < 2.0 || !at_edge(fit, j) {
+        return None;
+    }
+    let k = fit.k();
+    let se_theta = fit.cov_robust[j * k + j].max(0.0).sqrt();
+    if !se_theta.is_finite() {
+        return None;
+    }
+    let m = &fit.maps[j];
+    let ends =
+        [-1.96, 1.96].map(|z| fit.maps[j].value((fit.theta[j] + z * se_theta).clamp(m.lo, m.hi)));
+    Some((ends[0].min(ends[1]), ends[0].max(ends[1])))
 }
 
 /// `fit`'s set with `kind` added, the others warm. Its θ starts from `start` if given (its

@@ -53,8 +53,11 @@ pub struct Numbers {
     pub parameter: &'static str,
     /// Its value given the named causes (or added to them).
     pub value: f64,
-    /// Its cluster-robust standard error.
+    /// Its cluster-robust standard error (null where none is defined).
     pub se: f64,
+    /// At an edge of its range: its 95 % interval (from θ's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edge_interval: Option<(f64, f64)>,
     /// ΔBIC given the named causes (dropping it if named, adding it if not).
     pub delta_bic_given_causes: f64,
     /// ΔBIC alone (added to every run's own mu, nothing else).
@@ -78,6 +81,7 @@ pub fn decide(a: &Assessment, kind: EffectKind) -> (Verdict, Option<Numbers>) {
         parameter: kind.parameter().unwrap_or(""),
         value: given.value,
         se: given.parameter_se,
+        edge_interval: given.edge_interval,
         delta_bic_given_causes: given.delta_bic,
         delta_bic_alone: alone.map_or(f64::NAN, |e| e.delta_bic),
         value_alone: alone.map_or(f64::NAN, |e| e.value),
@@ -88,7 +92,11 @@ pub fn decide(a: &Assessment, kind: EffectKind) -> (Verdict, Option<Numbers>) {
         Verdict::RuledIn
     } else if alone.is_some_and(|e| e.supported) && !given.supported {
         Verdict::ExplainedAway
-    } else if candidates::excluded(kind, given.value, given.parameter_se, d) {
+    } else if candidates::excluded(kind, given.value, given.parameter_se, d)
+        || given
+            .edge_interval
+            .is_some_and(|(lo, hi)| candidates::inside_equivalence(kind, lo, hi, d))
+    {
         Verdict::RuledOut
     } else {
         Verdict::NotEstablished

@@ -229,7 +229,14 @@ pub fn sentence(
             list(&causes.iter().map(|c| c.to_string()).collect::<Vec<_>>())
         )
     };
-    let v = value_text(kind, n.value, n.se);
+    let mut v = value_text(kind, n.value, n.se);
+    if let Some((lo, hi)) = n.edge_interval {
+        v += &format!(
+            " (at the edge of its range; 95 % interval {} to {})",
+            sig(lo),
+            sig(hi)
+        );
+    }
     match verdict {
         Verdict::RuledIn => format!(
             "{} is in the data: {v}; dropping it costs ΔBIC {} {} (evidence computed with runs as clusters).",
