@@ -86,6 +86,9 @@ pub fn check(metrics: &Value, html: &str) {
                 parameter: kind.parameter().unwrap(),
                 value: num(&e["value"]),
                 se: num(&e["se"]),
+                edge_interval: e["edge_interval"]
+                    .as_array()
+                    .map(|a| (num(&a[0]), num(&a[1]))),
                 delta_bic_given_causes: num(&e["delta_bic_given_causes"]),
                 delta_bic_alone: num(&e["delta_bic_alone"]),
                 value_alone: num(&e["value_alone"]),

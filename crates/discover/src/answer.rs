@@ -6,6 +6,7 @@ use crate::joint;
 use crate::library::{ActsOn, Term, Var, LIBRARY};
 use crate::screen::{self, Level};
 use capstan_data::structure::StructureSummary;
+use capstan_engine::evidence::adequacy::p_equals;
 use capstan_engine::evidence::adequacy::LackOfFit;
 use capstan_engine::evidence::RIVAL_GAP;
 use serde::Serialize;
@@ -343,12 +344,12 @@ pub(crate) fn verdict_words(
                 None => format!(" Structure is still left with {with} (its pattern was not re-tested: the catalogue's is what a proposed term fits)."),
             },
             (Some(false), Some(l)) if lof_before.as_ref().is_some_and(|b| b.p < LOF_ALPHA) => format!(
-                " With {with}, the lack of fit against the replicate runs is resolved (p = {:.3}).",
-                l.p
+                " With {with}, the lack of fit against the replicate runs is resolved (p {}).",
+                p_equals(l.p)
             ),
             (Some(false), Some(l)) => format!(
-                " No significant lack of fit against the replicate runs is left with {with} (p = {:.3}); the catalogue left none significant either.",
-                l.p
+                " No significant lack of fit against the replicate runs is left with {with} (p {}); the catalogue left none significant either.",
+                p_equals(l.p)
             ),
             _ => format!(" Whether structure is left with {with} cannot be tested: {NO_LOF}."),
         };

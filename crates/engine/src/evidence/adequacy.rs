@@ -327,16 +327,16 @@ pub fn sentence(
         let mut s = format!("{what}; no catalogue effect explains it");
         if let Some(l) = lof {
             s += &format!(
-                " (lack of fit against the replicate runs F = {:.1}, p = {:.1e}; the systematic part is {:.2}× the noise)",
-                l.f, l.p, l.systematic_ratio
+                " (lack of fit against the replicate runs F = {:.1}, p {}; the systematic part is {:.2}× the noise)",
+                l.f, p_equals(l.p), l.systematic_ratio
             );
         }
         s + "."
     } else {
         match lof {
             Some(l) if l.p < 1e-3 => format!(
-                "What remains is detectable but small (lack of fit F = {:.1}, p = {:.1e}; the systematic part is {:.2}× the noise, under the rule's size): the fitted effects explain the data.",
-                l.f, l.p, l.systematic_ratio
+                "What remains is detectable but small (lack of fit F = {:.1}, p {}; the systematic part is {:.2}× the noise, under the rule's size): the fitted effects explain the data.",
+                l.f, p_equals(l.p), l.systematic_ratio
             ),
             Some(l) => format!(
                 "No structure is left beyond the noise (lack of fit against the replicate runs F = {:.2}, p = {:.2}).",
@@ -362,10 +362,24 @@ pub fn underpowered(l: &LackOfFit, rule: AdequacyRule) -> bool {
 /// A p-value for a sentence: two decimals down to 0.01, then two significant digits (0.004
 /// must not read "0.00").
 pub fn p_shown(p: f64) -> String {
+    if p <= pure_error::P_FLOOR * (1.0 + 1e-9) {
+        // No sign flip was as large: the bootstrap says p is at most this, not that it is this.
+        return format!("≤ {:.1e}", pure_error::P_FLOOR);
+    }
     if p >= 0.01 {
         format!("{p:.2}")
     } else {
         format!("{p:.1e}")
+    }
+}
+
+/// "= 4.0e-3", or "≤ 5.0e-4" at the bootstrap's floor.
+pub fn p_equals(p: f64) -> String {
+    let shown = p_shown(p);
+    if shown.starts_with('≤') {
+        shown
+    } else {
+        format!("= {shown}")
     }
 }
 

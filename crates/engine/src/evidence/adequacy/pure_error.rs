@@ -8,6 +8,9 @@ use capstan_plant::rng::Rng;
 /// Sign-flip replications of the lack-of-fit statistic.
 const FLIPS: usize = 1999;
 
+/// The smallest p the wild bootstrap can give: no flip as large, 1/(FLIPS + 1).
+pub const P_FLOOR: f64 = 1.0 / (FLIPS as f64 + 1.0);
+
 /// The pure-error lack-of-fit test (None without at least 4 replicated cells).
 ///
 /// F = MS_LOF/MS_PE as in Draper & Smith, but its p comes from flipping the sign of whole
