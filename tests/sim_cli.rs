@@ -68,6 +68,10 @@ fn simulate_writes_pairs_raw_logs_and_one_json_object() {
     assert_eq!(prov["effects"][0]["name"], "t2_offset");
     assert_eq!(prov["effects"][0]["value"], -0.5);
     assert!(prov["noise"]["profile"].is_string() && prov["commit"].is_string());
+    // The scatter used, never null: run to run is half the cord-to-cord when not given.
+    let cord = prov["noise"]["cord_scatter_pct"].as_f64().unwrap();
+    let run = prov["noise"]["run_scatter_pct"].as_f64().unwrap();
+    assert!((run - 0.5 * cord).abs() < 1e-12, "{run} {cord}");
     assert!(prov["command_line"].as_str().unwrap().contains("--seed 77"));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();

@@ -184,7 +184,7 @@ fn provenance(args: &Args, cfg: &CampaignConfig) -> serde_json::Value {
             "profile": args.noise,
             "sensor_noise": cfg.sensor_noise,
             "cord_scatter_pct": cfg.scatter_pct,
-            "run_scatter_pct": cfg.run_scatter_pct,
+            "run_scatter_pct": cfg.run_scatter(),
         }),
     );
     p["unmodelled"] = serde_json::json!({

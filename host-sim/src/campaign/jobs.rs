@@ -87,7 +87,9 @@ impl CampaignConfig {
         Ok(())
     }
 
-    fn run_scatter(&self) -> f64 {
+    /// The run-to-run scatter of mu the campaign uses, %: as given, or half the cord-to-cord
+    /// scatter (what provenance reports).
+    pub fn run_scatter(&self) -> f64 {
         self.run_scatter_pct.unwrap_or(0.5 * self.scatter_pct)
     }
 
