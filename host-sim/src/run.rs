@@ -215,7 +215,7 @@ impl fmt::Display for SetupError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SetupError::Protocol(e) => {
-                write!(f, "the firmware refuses the protocol ({e:?}): {e}")
+                write!(f, "the firmware refuses the protocol: {e}")
             }
             SetupError::Plant(e) => write!(f, "{e}"),
             SetupError::Range(e) => write!(f, "{e}"),

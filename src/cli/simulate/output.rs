@@ -217,20 +217,27 @@ pub(super) fn print_summary(
         crate::outln!("raw logs -> {}", out.join("raw").display());
     }
     for f in faults {
-        let injected = f.injected.map_or("-".into(), |k| k.name().to_string());
         let seen = f
             .fault
             .map_or("NOT DETECTED".into(), |k| k.name().to_string());
         let safe = f
             .safe_after_ms
             .map_or("never".into(), |ms| format!("{ms} ms"));
+        let what = match f.injected {
+            Some(k) => format!(
+                "injected {} at {:.3} s, firmware: {seen}, safe after {safe}",
+                k.name(),
+                f.at_s
+            ),
+            // The firmware stopped the run on its own reading (planted physics it took for a
+            // fault): nothing was injected, so there is no time to safety to measure.
+            None => format!("the firmware stopped it at {:.3} s: {seen}", f.at_s),
+        };
         crate::outln!(
-            "run {} ({} run {}): injected {injected} at {} s, firmware: {seen}, safe after \
-             {safe}, {} pairs kept",
+            "run {} ({} run {}): {what}, {} pairs kept",
             f.run,
             f.cord.label(),
             f.repeat,
-            f.at_s,
             f.pairs_kept
         );
     }

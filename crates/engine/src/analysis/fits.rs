@@ -305,6 +305,14 @@ fn notes(
             "Euler-Eytelwein with one mu per cord: the fit did not converge on {s}"
         ));
     }
+    if obs.groups.len() < 2 {
+        // Nothing to refit without the only cord: not a failure to converge.
+        notes.push(
+            "leave one cord out needs two cords or more: with one there is no held-out prediction"
+                .to_string(),
+        );
+        return notes;
+    }
     for (what, l) in [
         ("Euler-Eytelwein", locos[0]),
         ("the extended model", locos[1]),
