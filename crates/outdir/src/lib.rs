@@ -95,6 +95,7 @@ impl OutputDir {
         names: &[&str],
         subdirs: &[Subdir<'_>],
     ) -> anyhow::Result<OutputDir> {
+        let existed = dir.exists();
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
         let lock = take_lock(dir)?;
@@ -104,6 +105,26 @@ impl OutputDir {
             _lock: lock,
             recovered: Vec::new(),
         };
+        match out.prepare(names, subdirs) {
+            Ok(()) => Ok(out),
+            Err(e) => {
+                // Refused: leave the directory as it was found (no lock file, and no
+                // directory if this made it), keeping what the recovery above kept.
+                drop(out);
+                let _ = std::fs::remove_file(dir.join(LOCK));
+                if !existed {
+                    let _ = std::fs::remove_dir(dir);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Recover what an earlier process left, and refuse files of others (see [`Self::open_with`]).
+    fn prepare(&mut self, names: &[&str], subdirs: &[Subdir<'_>]) -> anyhow::Result<()> {
+        let (dir, kind) = (self.dir.clone(), self.kind);
+        let dir = dir.as_path();
+        let out = self;
         if dir.join(COMMIT).exists() {
             commit::roll_forward(dir, &mut commit::NoCrash)
                 .with_context(|| format!("finishing an interrupted commit in {}", dir.display()))?;
@@ -141,7 +162,7 @@ impl OutputDir {
             commit::refuse_others(dir, kind, &ours)?;
             commit::refuse_foreign(dir, kind, &ours)?;
         }
-        Ok(out)
+        Ok(())
     }
 
     /// The directory.

@@ -174,6 +174,9 @@ fn links_and_files_we_did_not_write_are_refused_never_replaced_or_written_throug
         std::fs::read_to_string(dir.join("metrics.json")).unwrap(),
         "the user's"
     );
+    // A refused directory is left as it was found: no lock file (adversarial pass 2, 10a).
+    assert!(!dir.join(LOCK).exists());
+    assert!(OutputDir::open(&dir, "test", &["other.json"]).is_ok());
     // A linked or plain-file sub-directory is refused before any work, and nothing lands
     // outside.
     std::os::unix::fs::symlink(&outside, dir.join("raw")).unwrap();
