@@ -487,3 +487,35 @@ fn log_from(from: &Path, out: &Path, extra: &[&str]) -> Output {
     args.extend(extra);
     capstan(&args)
 }
+
+/// A plan stopped by a signal says so, and writes nothing: its directory keeps no file
+/// (adversarial pass 2, 10b: it exited 130 without a word).
+#[cfg(unix)]
+#[test]
+fn a_stopped_plan_says_so_and_writes_nothing() {
+    let dir = tmp("plan-stopped");
+    let mut child = bin()
+        .args(["plan", "--out", s(&dir), "--reps", "8"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let st = terminate(&mut child);
+    let out = child_output(child);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(st.code(), Some(130), "{err}");
+    assert!(
+        err.contains("stopped (SIGTERM): the plan was not finished, nothing was written"),
+        "{err}"
+    );
+    let left: Vec<String> = std::fs::read_dir(&dir)
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| !n.starts_with('.'))
+                .collect()
+        })
+        .unwrap_or_default();
+    assert!(left.is_empty(), "{left:?}");
+}

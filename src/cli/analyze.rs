@@ -225,8 +225,15 @@ fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<se
     let open = serde_json::to_value(capstan_plan::open(ds))?;
     let plan = if args.plan {
         crate::errln!("planning the next experiment (--plan: about a minute) ...");
-        let p = capstan_plan::plan(ds, &Default::default(), &mut |_, _| {})
-            .map_err(|e| anyhow::anyhow!("the planner: {e}"))?;
+        let stop = super::signal::stop_flag("analyze");
+        let mut go_on = |_, _| !stop.load(std::sync::atomic::Ordering::SeqCst);
+        let p = match capstan_plan::plan(ds, &Default::default(), &mut go_on) {
+            Ok(p) => p,
+            Err(e) if e == capstan_plan::STOPPED => {
+                return Err(super::plan::stopped_plan(Some(args.out.as_path())))
+            }
+            Err(e) => anyhow::bail!("the planner: {e}"),
+        };
         Some(serde_json::to_value(p)?)
     } else {
         None

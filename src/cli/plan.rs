@@ -60,13 +60,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         pb
     });
+    // Ctrl-C or SIGTERM stops between protocols: nothing is written, and DIR stays as it was.
+    let stop = super::signal::stop_flag("plan");
     let mut progress = |done: usize, total: usize| {
         if let Some(pb) = &bar {
             pb.set_length(total as u64);
             pb.set_position(done as u64);
         }
+        !stop.load(std::sync::atomic::Ordering::SeqCst)
     };
-    let p = plan(&data, &opts, &mut progress).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let p = match plan(&data, &opts, &mut progress) {
+        Ok(p) => p,
+        Err(e) if e == capstan_plan::STOPPED => {
+            if let Some(pb) = &bar {
+                pb.abandon();
+            }
+            return Err(stopped_plan(args.out.as_deref()));
+        }
+        Err(e) => anyhow::bail!("{e}"),
+    };
     if let Some(pb) = bar {
         pb.finish_and_clear();
     }
@@ -206,4 +218,13 @@ fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
         "  check it: capstan simulate --out DIR {}",
         r.simulate_args.join(" ")
     );
+}
+
+/// The error of a plan stopped by a signal: what was (not) written.
+pub(super) fn stopped_plan(out: Option<&std::path::Path>) -> anyhow::Error {
+    let kept = out.map_or(String::new(), |d| format!("; {} is as it was", d.display()));
+    anyhow::Error::new(super::signal::Interrupted(format!(
+        "stopped ({}): the plan was not finished, nothing was written{kept}",
+        super::signal::stop_reason().unwrap_or("Ctrl-C")
+    )))
 }

@@ -212,6 +212,11 @@ impl Drop for Staged {
             return;
         }
         self.forget();
+        // Nothing written yet: nothing to keep (an empty `incomplete-` directory says nothing).
+        if crate::is_empty_tree(&self.path) {
+            let _ = std::fs::remove_dir_all(&self.path);
+            return;
+        }
         if let Some(say) = self.keep_on_failure {
             let kept = self
                 .out

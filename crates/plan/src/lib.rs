@@ -154,11 +154,15 @@ pub fn open(data: &Dataset) -> Open {
     }
 }
 
-/// Plan the next campaign for `data`; `progress(done, total)` after every protocol.
+/// What [`plan`] returns when `progress` asked it to stop.
+pub const STOPPED: &str = "stopped before every protocol was simulated";
+
+/// Plan the next campaign for `data`; `progress(done, total)` before every protocol and at the
+/// end: it returns false to stop (the plan is then [`STOPPED`]).
 pub fn plan(
     data: &Dataset,
     opts: &Options,
-    progress: &mut dyn FnMut(usize, usize),
+    progress: &mut dyn FnMut(usize, usize) -> bool,
 ) -> Result<Plan, String> {
     let t0 = Instant::now();
     let mut assumed = Vec::new();
@@ -177,7 +181,9 @@ pub fn plan(
     let total = cands.len();
     let mut scored = Vec::new();
     for (i, c) in cands.into_iter().enumerate() {
-        progress(i, total);
+        if !progress(i, total) {
+            return Err(STOPPED.to_string());
+        }
         let r = match blind(&c).filter(|_| i > 0 && some_tests_all) {
             Some(why) => trial::not_simulated(
                 &hyps,
@@ -196,7 +202,7 @@ pub fn plan(
         };
         scored.push(score(c, r, &world));
     }
-    progress(total, total);
+    let _ = progress(total, total);
     let current_design = Current {
         p_decide_worst: scored[0].p_decide_worst,
         rig_hours: scored[0].rig_hours,

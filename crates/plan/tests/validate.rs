@@ -118,7 +118,7 @@ fn run(s: &Scenario, reps: usize, fresh: u64) -> (String, f64, f64) {
         threads: 2,
         max_hours: None,
     };
-    let p = plan(&data, &opts, &mut |_, _| {}).expect("plans");
+    let p = plan(&data, &opts, &mut |_, _| true).expect("plans");
     let rec = &p.recommended.candidate;
     let rec_rate = rate(&rec.design, &h, 50_000, fresh);
     let orig_rate = rate(&s.design, &h, 60_000, fresh);
