@@ -110,8 +110,10 @@ impl OutputDir {
             Err(e) => {
                 // Refused: leave the directory as it was found (no lock file, and no
                 // directory if this made it), keeping what the recovery above kept.
-                drop(out);
+                // The lock file goes while the lock is still held: a process that opened it
+                // meanwhile finds it locked and stops; one that comes later makes a new one.
                 let _ = std::fs::remove_file(dir.join(LOCK));
+                drop(out);
                 if !existed {
                     let _ = std::fs::remove_dir(dir);
                 }
