@@ -6,7 +6,7 @@ use crate::joint;
 use crate::library::{ActsOn, Term, Var, LIBRARY};
 use crate::screen::{self, Level};
 use capstan_data::structure::StructureSummary;
-use capstan_engine::evidence::adequacy::p_equals;
+use capstan_engine::evidence::adequacy::lof_p_equals;
 use capstan_engine::evidence::adequacy::LackOfFit;
 use capstan_engine::evidence::RIVAL_GAP;
 use serde::Serialize;
@@ -345,11 +345,11 @@ pub(crate) fn verdict_words(
             },
             (Some(false), Some(l)) if lof_before.as_ref().is_some_and(|b| b.p < LOF_ALPHA) => format!(
                 " With {with}, the lack of fit against the replicate runs is resolved (p {}).",
-                p_equals(l.p)
+                lof_p_equals(l.p)
             ),
             (Some(false), Some(l)) => format!(
                 " No significant lack of fit against the replicate runs is left with {with} (p {}); the catalogue left none significant either.",
-                p_equals(l.p)
+                lof_p_equals(l.p)
             ),
             _ => format!(" Whether structure is left with {with} cannot be tested: {NO_LOF}."),
         };

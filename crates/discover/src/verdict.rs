@@ -17,7 +17,7 @@ use crate::model::{
 use crate::screen::{self, Projector, Runs};
 use crate::stability;
 use capstan_data::Dataset;
-use capstan_engine::evidence::adequacy::p_equals;
+use capstan_engine::evidence::adequacy::lof_p_equals;
 use capstan_engine::evidence::adequacy::LackOfFit;
 use capstan_engine::evidence::within::WithinFit;
 use capstan_engine::evidence::{self, Assessment};
@@ -456,7 +456,7 @@ impl Ctx<'_> {
             return Err(format!(
                 "a partial mimic: with it the lack of fit against the replicate runs {} (p {}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
                 if lof_open(lof_before) { "stays" } else { "appears (it was not significant before it)" },
-                lof_after.as_ref().map_or("not computed".to_string(), |l| p_equals(l.p)),
+                lof_after.as_ref().map_or("not computed".to_string(), |l| lof_p_equals(l.p)),
                 100.0 * share.max(0.0),
                 100.0 * self.opts.min_share_resolved.min(1.0)
             ));

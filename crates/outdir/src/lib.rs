@@ -212,8 +212,46 @@ impl OutputDir {
     }
 }
 
-/// Lock `dir` for this process, or say who holds it.
+/// Lock `dir` for this process, or say who holds it. A lock file unlinked by a refused
+/// process between our open and our lock is not the directory's lock any more: the lock is
+/// taken again on the file at the path (a few tries), so two processes never hold locks on
+/// two different files of one directory.
 fn take_lock(dir: &Path) -> anyhow::Result<File> {
+    for _ in 0..LOCK_TRIES {
+        let f = lock_file_at(dir)?;
+        if still_at_path(&f, &dir.join(LOCK)) {
+            return Ok(f);
+        }
+    }
+    anyhow::bail!(
+        "{}: its lock file keeps changing under capstan (another capstan process opening and \
+         leaving it?): try again",
+        dir.display()
+    )
+}
+
+/// How often [`take_lock`] tries for a lock file that stays at its path.
+const LOCK_TRIES: usize = 5;
+
+/// The locked file is the one at `path` (same device and inode).
+fn still_at_path(f: &File, path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (f.metadata(), std::fs::metadata(path)) {
+            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (f, path);
+        true
+    }
+}
+
+/// Open `dir`'s lock file and lock it, or say who holds it.
+fn lock_file_at(dir: &Path) -> anyhow::Result<File> {
     let path = dir.join(LOCK);
     if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_file()) {
         anyhow::bail!(

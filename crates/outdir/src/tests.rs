@@ -385,3 +385,25 @@ fn a_process_exiting_at_once_keeps_its_open_sets_where_it_says() {
     assert!(out.recovered.is_empty(), "{:?}", out.recovered);
     assert!(kept[0].join("pairs.csv").exists());
 }
+
+/// A lock taken on a lock file that was then unlinked (a refused process removes its lock
+/// file; a second process had opened it just before) is not the directory's lock: the check
+/// after locking sees it, and `take_lock` locks the file at the path instead (adversarial read
+/// s35, D1: two processes wrote one directory at once, and the second moved the first's live
+/// work to `incomplete-`).
+#[test]
+fn a_lock_on_an_unlinked_lock_file_is_not_the_directorys_lock() {
+    let dir = scratch();
+    let stale = lock_file_at(&dir).unwrap();
+    std::fs::remove_file(dir.join(LOCK)).unwrap();
+    assert!(!still_at_path(&stale, &dir.join(LOCK)));
+    drop(stale);
+    let f = take_lock(&dir).unwrap();
+    assert!(still_at_path(&f, &dir.join(LOCK)));
+    // While it is held, no other open of the directory gets in.
+    let e = OutputDir::open(&dir, "test", &["a.json"]).unwrap_err();
+    assert!(
+        format!("{e:#}").contains("in use by another capstan process"),
+        "{e:#}"
+    );
+}

@@ -294,10 +294,10 @@ fn with_limits_and_sizes(
             })
             .collect();
         let text = format!(
-            "The found effects take different sizes on different wraps ({}; F = {:.1}, p = {:.1e}), which the same physics would not: they stand in for something no catalogue effect explains.",
+            "The found effects take different sizes on different wraps ({}; F = {}, p {}), which the same physics would not: they stand in for something no catalogue effect explains.",
             list.join("; "),
-            c.f,
-            c.p
+            f_shown(c.f, 1),
+            p_equals(c.p)
         );
         sentence = if lack || !at_physical_limit.is_empty() {
             format!("{sentence} {text}")
@@ -327,16 +327,16 @@ pub fn sentence(
         let mut s = format!("{what}; no catalogue effect explains it");
         if let Some(l) = lof {
             s += &format!(
-                " (lack of fit against the replicate runs F = {:.1}, p {}; the systematic part is {:.2}× the noise)",
-                l.f, p_equals(l.p), l.systematic_ratio
+                " (lack of fit against the replicate runs F = {}, p {}; the systematic part is {:.2}× the noise)",
+                f_shown(l.f, 1), lof_p_equals(l.p), l.systematic_ratio
             );
         }
         s + "."
     } else {
         match lof {
             Some(l) if l.p < 1e-3 => format!(
-                "What remains is detectable but small (lack of fit F = {:.1}, p {}; the systematic part is {:.2}× the noise, under the rule's size): the fitted effects explain the data.",
-                l.f, p_equals(l.p), l.systematic_ratio
+                "What remains is detectable but small (lack of fit F = {}, p {}; the systematic part is {:.2}× the noise, under the rule's size): the fitted effects explain the data.",
+                f_shown(l.f, 1), lof_p_equals(l.p), l.systematic_ratio
             ),
             Some(l) => format!(
                 "No structure is left beyond the noise (lack of fit against the replicate runs F = {:.2}, p = {:.2}).",
@@ -362,9 +362,9 @@ pub fn underpowered(l: &LackOfFit, rule: AdequacyRule) -> bool {
 /// A p-value for a sentence: two decimals down to 0.01, then two significant digits (0.004
 /// must not read "0.00").
 pub fn p_shown(p: f64) -> String {
-    if p <= pure_error::P_FLOOR * (1.0 + 1e-9) {
-        // No sign flip was as large: the bootstrap says p is at most this, not that it is this.
-        return format!("≤ {:.1e}", pure_error::P_FLOOR);
+    if p < 1e-15 {
+        // Below what a double resolves in an upper tail: not a measured 0.
+        return "< 1e-15".to_string();
     }
     if p >= 0.01 {
         format!("{p:.2}")
@@ -373,13 +373,33 @@ pub fn p_shown(p: f64) -> String {
     }
 }
 
-/// "= 4.0e-3", or "≤ 5.0e-4" at the bootstrap's floor.
+/// An F statistic: `decimals` decimals, or three significant digits from a million up (a
+/// copied run's zero pure error once gave a 34-digit F).
+pub fn f_shown(f: f64, decimals: usize) -> String {
+    if f.abs() >= 1e6 {
+        format!("{f:.2e}")
+    } else {
+        format!("{f:.decimals$}")
+    }
+}
+
+/// "= 4.0e-3", or "< 1e-15".
 pub fn p_equals(p: f64) -> String {
     let shown = p_shown(p);
-    if shown.starts_with('≤') {
+    if shown.starts_with('<') {
         shown
     } else {
         format!("= {shown}")
+    }
+}
+
+/// The lack of fit's p ([`p_equals`]), or "≤ 5.0e-4" at the wild bootstrap's floor: no sign
+/// flip was as large, so the bootstrap says p is at most this, not that it is this.
+pub fn lof_p_equals(p: f64) -> String {
+    if p <= pure_error::P_FLOOR * (1.0 + 1e-9) {
+        format!("≤ {:.1e}", pure_error::P_FLOOR)
+    } else {
+        p_equals(p)
     }
 }
 
