@@ -5,6 +5,7 @@
 
 use capstan_data::{load_pairs, thesis_dataset};
 use capstan_discover::{discover, Discovery, Options};
+use capstan_engine::evidence::adequacy;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -151,8 +152,10 @@ pub fn summary(d: &Discovery) -> String {
     if let Some(l) = &d.lack_of_fit_before {
         let _ = writeln!(
             s,
-            "lack of fit the catalogue leaves: F = {:.2}, p = {:.4}, systematic part {:.2}× the noise",
-            l.f, l.p, l.systematic_ratio
+            "lack of fit the catalogue leaves: F = {}, p {}, systematic part {:.2}× the noise",
+            adequacy::f_shown(l.f, 2),
+            adequacy::lof_p_equals(l.p),
+            l.systematic_ratio
         );
     }
     for n in &d.not_testable {

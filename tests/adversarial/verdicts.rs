@@ -204,6 +204,7 @@ fn a_standard_error_or_scatter_the_data_cannot_give_is_not_zero() {
     assert!(thesis.scatter.run_pct > 1.0 && thesis.scatter.cord_pct > 1.0);
     // No sign flip of the 1,999 was as large as the thesis's lack of fit: p is at most 1/2000.
     assert!(thesis.verdict.contains("p ≤ 5.0e-4"), "{}", thesis.verdict);
+    assert!(thesis.adequacy.lack_of_fit.as_ref().unwrap().p_at_floor);
     for c in &thesis.candidates {
         assert!(c.parameter_se != 0.0, "{}: ± 0", c.effect);
     }

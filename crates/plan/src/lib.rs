@@ -202,7 +202,10 @@ pub fn plan(
         };
         scored.push(score(c, r, &world));
     }
-    let _ = progress(total, total);
+    // A stop asked for during the last protocol stops too: nothing is written.
+    if !progress(total, total) {
+        return Err(STOPPED.to_string());
+    }
     let current_design = Current {
         p_decide_worst: scored[0].p_decide_worst,
         rig_hours: scored[0].rig_hours,

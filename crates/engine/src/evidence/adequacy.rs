@@ -69,8 +69,10 @@ pub struct LackOfFit {
     pub df_lof: f64,
     /// Degrees of freedom of the pure error.
     pub df_pe: f64,
-    /// Upper-tail p of F.
+    /// Upper-tail p of F (from the wild bootstrap).
     pub p: f64,
+    /// `p` is the bootstrap's floor, 1/2000: no sign flip was as large, so p is at most this.
+    pub p_at_floor: bool,
     /// RMS of the systematic part over the RMS of the pure error.
     pub systematic_ratio: f64,
 }

@@ -104,6 +104,7 @@ pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
         df_lof,
         df_pe,
         p: (above + 1) as f64 / (FLIPS + 1) as f64,
+        p_at_floor: above == 0,
         systematic_ratio: systematic / ms_pe.sqrt(),
     })
 }
