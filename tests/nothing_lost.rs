@@ -519,3 +519,31 @@ fn a_stopped_plan_says_so_and_writes_nothing() {
         .unwrap_or_default();
     assert!(left.is_empty(), "{left:?}");
 }
+
+/// `plan --out DIR` checks DIR before it plans (adversarial read s35, D2: a user's own
+/// plan.json was refused only after minutes of simulation, and the plan was thrown away).
+/// With 1000 campaigns per protocol the planning would take far longer than the deadline.
+#[test]
+fn plan_refuses_a_directory_it_cannot_write_before_it_plans() {
+    let dir = tmp("plan-foreign");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("plan.json"), "{\"my\": \"plan\"}").unwrap();
+    let mut child = bin()
+        .args(["plan", "--out", s(&dir), "--reps", "1000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let st = wait_with_deadline(&mut child, 60);
+    let out = child_output(child);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!st.success());
+    assert!(
+        err.contains("plan.json is a file that `capstan plan` did not write"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("plan.json")).unwrap(),
+        "{\"my\": \"plan\"}"
+    );
+}

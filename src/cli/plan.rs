@@ -44,6 +44,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     capstan_data::check_capstan_data(&data)?;
     // A plan is built on the analysis of these data: what analyze refuses, plan refuses too.
     capstan_engine::analysis::enough_rows(&data)?;
+    // The output directory is locked and checked before the planning (minutes), not after it.
+    let out = match &args.out {
+        Some(dir) => Some(crate::outputs::open_out(
+            dir,
+            "plan",
+            &["plan.json", "plan.txt"],
+        )?),
+        None => None,
+    };
     let opts = Options {
         reps: args.reps,
         seed: args.seed,
@@ -89,8 +98,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
     let json = serde_json::to_string_pretty(&v)?;
     let text = words(&p, &data.source, &structure.statement);
-    if let Some(dir) = &args.out {
-        let mut set = crate::outputs::open_out(dir, "plan", &["plan.json", "plan.txt"])?.stage()?;
+    if let Some(out) = out {
+        let mut set = out.stage()?;
         set.create("plan.json")?.write_all(json.as_bytes())?;
         set.create("plan.txt")?.write_all(text.as_bytes())?;
         set.commit()?;
