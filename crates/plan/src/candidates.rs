@@ -63,11 +63,22 @@ impl Design {
                  decides at least as often"
             ));
         }
-        if g.cords != cells {
+        if g.cords > cells {
             assumed.push(format!(
                 "the data hold {} cords on {cells} (wrap, diameter, drive voltage) combinations; \
                  the simulator makes one cord per combination, so {} runs on each ({} in all, \
                  the data's {})",
+                g.cords,
+                runs_per_cord,
+                runs_per_cord as usize * cells,
+                g.runs
+            ));
+        } else if g.cords < cells {
+            assumed.push(format!(
+                "the data hold {} cords, not every combination of their wraps, diameters and \
+                 drive voltages ({cells}); the simulator crosses them all, so the current design \
+                 is planned as that crossing: {} runs on each of {cells} cords ({} in all, the \
+                 data's {})",
                 g.cords,
                 runs_per_cord,
                 runs_per_cord as usize * cells,
@@ -86,6 +97,13 @@ impl Design {
             diameters_mm,
             drive_v,
         }
+    }
+
+    /// This design is the data's own: as many cords and runs on each (the data are a full
+    /// crossing of their wraps, diameters and voltages, with no cap on their runs).
+    pub fn is_the_datas(&self, d: &Diagnosis) -> bool {
+        let g = &d.design;
+        self.cords() == g.cords && self.runs_per_cord as usize * g.cords == g.runs
     }
 
     /// Cords: one per (wrap, diameter, drive voltage), as the simulator makes them.
@@ -180,15 +198,24 @@ pub struct Candidate {
 /// The data's design and its variants (the data's own first); `open`: effects the data could
 /// not test, for which a variant that tests them all is added (what each needs of a design is
 /// its catalogue entry's `cases.design`).
-pub fn candidates(current: &Design, open: &[EffectKind]) -> Vec<Candidate> {
+/// `as_data`: the current design is the data's own ([`Design::is_the_datas`]); else the
+/// procedure does not say "as before".
+pub fn candidates(current: &Design, open: &[EffectKind], as_data: bool) -> Vec<Candidate> {
     let mut out = vec![Candidate {
         name: "current design".to_string(),
         design: current.clone(),
         rig_commands: Vec::new(),
-        procedure: vec![format!(
-            "{}, as before",
-            runs_on_each_cord(current.runs_per_cord)
-        )],
+        procedure: vec![if as_data {
+            format!("{}, as before", runs_on_each_cord(current.runs_per_cord))
+        } else {
+            format!(
+                "{} run{} on each of {} (the data's design as the simulator makes it: see \
+                 assumed)",
+                current.runs_per_cord,
+                if current.runs_per_cord == 1 { "" } else { "s" },
+                cords_text(current.cords())
+            )
+        }],
         physical_changes: Vec::new(),
     }];
     let updown = rig_only(
@@ -304,7 +331,7 @@ fn push_new(out: &mut Vec<Candidate>, c: Candidate) {
 /// with runs of `protocol`: where the planner reads the span an untestable effect's
 /// planted-case size is spread over.
 pub fn testing_design(current: &Design, open: &[EffectKind], protocol: &Protocol) -> Design {
-    let all = candidates(current, open);
+    let all = candidates(current, open, true);
     let mut best = all[0].design.clone();
     for c in &all {
         let tests = |d: &Design| {
@@ -385,6 +412,10 @@ pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
 }
 
 /// "1 run on each cord", "6 runs on each cord".
+fn cords_text(n: usize) -> String {
+    format!("{n} cord{}", if n == 1 { "" } else { "s" })
+}
+
 fn runs_on_each_cord(n: impl Into<u64>) -> String {
     let n = n.into();
     format!("{n} run{} on each cord", if n == 1 { "" } else { "s" })

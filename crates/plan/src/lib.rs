@@ -170,7 +170,8 @@ pub fn plan(
     let world = world(&d, &mut assumed);
     let current = Design::of(&d, &mut assumed);
     let (hyps, not_simulated) = open_hypotheses(&d, &current, &world);
-    let cands = candidates(&current, &untestable_kinds(&d, &current, &world));
+    let as_data = current.is_the_datas(&d);
+    let cands = candidates(&current, &untestable_kinds(&d, &current, &world), as_data);
     // A protocol that cannot test some hypothesis cannot decide (worst case 0): when another
     // can test them all, it is not simulated (the data's own design always is).
     let blind = |c: &Candidate| {

@@ -38,3 +38,42 @@ fn a_design_with_many_runs_per_cord_is_planned_at_the_cap_and_says_so() {
         thesis.assumed
     );
 }
+
+/// Data that are not a full crossing of their wraps and diameters are planned as the crossing,
+/// and say so; no "as before" where the planned design is not the data's (adversarial read
+/// s35, D3).
+#[test]
+fn an_unbalanced_design_is_planned_as_the_crossing_and_says_so() {
+    let mut lines = capstan_data::THESIS_CSV.lines();
+    let mut text = format!("{}\n", lines.next().unwrap());
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        let keep = (f[0] == "25.4" && ["270", "360", "450"].contains(&f[1]))
+            || (f[0] == "12.7" && ["630", "720"].contains(&f[1]));
+        if keep {
+            text += &format!("{line}\n");
+        }
+    }
+    let data = capstan_data::read_pairs(text.as_bytes(), "unbalanced.csv").unwrap();
+    let open = capstan_plan::open(&data);
+    let said = open.assumed.join("\n");
+    assert!(
+        said.contains("the data hold 5 cords, not every combination")
+            && said.contains("(30 in all, the data's 30)"),
+        "{said}"
+    );
+    let d = capstan_engine::diagnose::diagnose(&data);
+    let mut assumed = Vec::new();
+    let current = capstan_plan::candidates::Design::of(&d, &mut assumed);
+    assert!(!current.is_the_datas(&d));
+    let c = capstan_plan::candidates::candidates(&current, &[], false);
+    assert!(
+        !c[0].procedure[0].contains("as before"),
+        "{}",
+        c[0].procedure[0]
+    );
+    // The thesis data are their own design.
+    let thesis = capstan_engine::diagnose::diagnose(&capstan_data::thesis_dataset());
+    let current = capstan_plan::candidates::Design::of(&thesis, &mut assumed);
+    assert!(current.is_the_datas(&thesis));
+}
