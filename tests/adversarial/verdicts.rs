@@ -228,3 +228,26 @@ fn a_standard_error_or_scatter_the_data_cannot_give_is_not_zero() {
     assert_eq!(m.verdict.name(), "not_established", "{}", m.summary);
     checked();
 }
+
+/// One cord: no held-out RMSE (leaving one cord out needs two), not one of 0 N with an
+/// interval [0, 0] (adversarial read s35, D4).
+#[test]
+fn one_cord_has_no_held_out_rmse() {
+    let one = thesis_columns(
+        &[
+            "capstan_diameter_mm",
+            "wrap_deg",
+            "run",
+            "step",
+            "t1_n",
+            "t2_n",
+        ],
+        |c| c[0] == "12.7" && c[1] == "720",
+    );
+    let a = capstan_engine::analysis::run(&one, Default::default()).unwrap();
+    for m in &a.models {
+        assert!(m.loco_rmse_t2_n.is_none(), "{}: {:?}", m.name, m.loco_rmse_t2_n);
+    }
+    assert!(a.evidence.scatter.cord_pct.is_nan());
+    checked();
+}

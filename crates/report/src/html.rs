@@ -45,8 +45,12 @@ fn technical_summary(h: &mut String, a: &Analysis) {
     let _ = write!(h, "<li>The extended model ({} parameters: {} fixed values + {} effective degrees of freedom of the cord effects): RMSE {} N in-sample, {} N leave-one-cord-out.</li>", cells::fx(e.n_params, 1), e.n_params_detail.fixed, cells::fx(e.n_params_detail.edf_random, 1), cells::with_ci(&e.rmse_t2_uncertainty), loco(e));
     let better = a.held_out.iter().filter(|c| c.extended_better).count();
     let g = &a.gain;
-    let _ = write!(h, "<li>The held-out gain: the extended model's leave-one-cord-out RMSE is {} of Euler-Eytelwein's (95 % interval {} to {}, cord-jackknife SE {}); it predicts {better} of {} cords better. {}</li>",
-        cells::fx(g.value, 3), cells::fx(g.ci95.lo, 3), cells::fx(g.ci95.hi, 3), cells::fx(g.jackknife_se, 3), a.held_out.len(), esc(&gain_words(g.ci95.hi)));
+    if a.held_out.len() < 2 {
+        h.push_str("<li>The held-out gain: not computed (leaving one cord out needs two cords or more).</li>");
+    } else {
+        let _ = write!(h, "<li>The held-out gain: the extended model's leave-one-cord-out RMSE is {} of Euler-Eytelwein's (95 % interval {} to {}, cord-jackknife SE {}); it predicts {better} of {} cords better. {}</li>",
+            cells::fx(g.value, 3), cells::fx(g.ci95.lo, 3), cells::fx(g.ci95.hi, 3), cells::fx(g.jackknife_se, 3), a.held_out.len(), esc(&gain_words(g.ci95.hi)));
+    }
     let causes: Vec<String> = a
         .mechanisms
         .causes

@@ -94,7 +94,11 @@ fn extended_rows(a: &Analysis, out: &mut Vec<Row>) {
             unit,
             ci95_lo: fin(v.value - half),
             ci95_hi: fin(v.value + half),
-            note: format!("value ± t({})·SE, SE from the cord jackknife over the leave-one-cord-out refits (cords as the independent units)", pm.folds.saturating_sub(1)),
+            note: if pm.folds >= 2 {
+                format!("value ± t({})·SE, SE from the cord jackknife over the leave-one-cord-out refits (cords as the independent units)", pm.folds - 1)
+            } else {
+                "no interval: the cord jackknife needs two cords or more".to_string()
+            },
         });
     }
 }
@@ -120,18 +124,20 @@ fn baseline_row(a: &Analysis, out: &mut Vec<Row>) {
 fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
     let pm = &a.prediction_model;
     let s = &a.evidence.scatter;
+    // A spread the data cannot show (one cord; one run per cord) is not estimable, not 0.
+    let shown = |v: f64, estimable: f64| if estimable.is_finite() { v } else { f64::NAN };
     for (key, q, v, unit, note) in [
         (
             "scatter.cord_ln_mu_sd",
             "cord-to-cord SD of ln mu",
-            pm.sd_ln_mu_cord,
+            shown(pm.sd_ln_mu_cord, s.cord_pct),
             "1",
             "the extended model's σ_u; no interval computed",
         ),
         (
             "scatter.run_ln_mu_sd",
             "run-to-run SD of ln mu on one cord",
-            pm.sd_ln_mu_run,
+            shown(pm.sd_ln_mu_run, s.run_pct),
             "1",
             "evidence engine (every run its own mu); no interval computed",
         ),

@@ -148,8 +148,11 @@ fn metrics(obs: &Observations, e: Entry<'_>) -> ModelMetrics {
         .name
         .bytes()
         .fold(0u64, |a, b| a.wrapping_mul(31).wrapping_add(b as u64));
+    // Leaving one cord out needs two: with one (or no held-out prediction at all) there is no
+    // held-out RMSE, not one of 0 N.
     let loco = e
         .loco
+        .filter(|p| obs.groups.len() >= 2 && p.iter().any(|x| x.is_finite()))
         .map(|p| uncertainty::rmse(&CordErrors::of(obs, p), seed ^ 1));
     ModelMetrics {
         name: e.name.into(),
