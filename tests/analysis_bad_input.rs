@@ -22,7 +22,10 @@ fn analyze_csv(name: &str, body: &str) -> String {
             plan: false,
         }),
     });
-    format!("{:#}", r.expect_err("bad input must fail"))
+    let e = format!("{:#}", r.expect_err("bad input must fail"));
+    // Refused data leave no output directory behind (it was made, holding only a lock file).
+    assert!(!dir.join("out").exists(), "{e}");
+    e
 }
 
 #[test]

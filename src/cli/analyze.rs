@@ -61,18 +61,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t0 = Instant::now();
     let ctx = report_context(&args)?;
-    // Lock the output directory and prove it writable before the analysis, not after it.
+    // The data first (a file it refuses leaves no output directory behind), then the output
+    // directory, locked and proved writable before the analysis, not after it.
+    let ds = match &args.data {
+        Some(p) => load_pairs(p)?,
+        None => thesis_dataset(),
+    };
+    capstan_data::check_capstan_data(&ds)?;
     let names = ["report.html", "metrics.json", "predictions.csv"];
     let ours = |rel: &str| rel.starts_with("figures/figure-");
     let out =
         capstan_outdir::OutputDir::open_with(&args.out, "analyze", &names, &[("figures", &ours)])?;
     crate::outputs::say_recovered(&out);
     let mut set = out.stage()?;
-    let ds = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
-    capstan_data::check_capstan_data(&ds)?;
     let mut opts = capstan_engine::analysis::Options::default();
     if let Some(t) = args.threads {
         opts.threads = t.max(1);

@@ -135,9 +135,12 @@ impl SimConfig {
         let mut model = Model::euler_eytelwein(self.mu);
         let mut seen = Vec::new();
         for e in &self.effects {
-            let eff: Effect = e
-                .parse()
-                .map_err(|err| anyhow::anyhow!("--sim-effect {e}: {err}"))?;
+            let eff: Effect = e.parse().map_err(|err| {
+                anyhow::anyhow!(
+                    "effect {e} of the simulated board (given with --sim-effect, or stored \
+                         with the board when it was made): {err}"
+                )
+            })?;
             if seen.contains(&eff.kind) {
                 bail!("--sim-effect {e}: {} is given twice", eff.kind);
             }

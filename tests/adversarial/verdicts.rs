@@ -246,7 +246,12 @@ fn one_cord_has_no_held_out_rmse() {
     );
     let a = capstan_engine::analysis::run(&one, Default::default()).unwrap();
     for m in &a.models {
-        assert!(m.loco_rmse_t2_n.is_none(), "{}: {:?}", m.name, m.loco_rmse_t2_n);
+        assert!(
+            m.loco_rmse_t2_n.is_none(),
+            "{}: {:?}",
+            m.name,
+            m.loco_rmse_t2_n
+        );
     }
     assert!(a.evidence.scatter.cord_pct.is_nan());
     checked();
