@@ -68,6 +68,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => thesis_dataset(),
     };
     capstan_data::check_capstan_data(&ds)?;
+    capstan_engine::analysis::enough_rows(&ds)?;
     let names = ["report.html", "metrics.json", "predictions.csv"];
     let ours = |rel: &str| rel.starts_with("figures/figure-");
     let out =
