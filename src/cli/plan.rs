@@ -53,44 +53,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )?),
         None => None,
     };
-    let opts = Options {
-        reps: args.reps,
-        seed: args.seed,
-        max_hours: args.hours,
-        ..Options::default()
-    };
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let pb = indicatif::ProgressBar::new(0);
-        pb.set_style(
-            indicatif::ProgressStyle::with_template(
-                "planning {bar:40} {pos}/{len} protocols [{elapsed_precise}]",
-            )
-            .expect("a valid template"),
-        );
-        pb
-    });
-    // Ctrl-C or SIGTERM stops between protocols: nothing is written, and DIR stays as it was.
-    let stop = super::signal::stop_flag("plan");
-    let mut progress = |done: usize, total: usize| {
-        if let Some(pb) = &bar {
-            pb.set_length(total as u64);
-            pb.set_position(done as u64);
-        }
-        !stop.load(std::sync::atomic::Ordering::SeqCst)
-    };
-    let p = match plan(&data, &opts, &mut progress) {
-        Ok(p) => p,
-        Err(e) if e == capstan_plan::STOPPED => {
-            if let Some(pb) = &bar {
-                pb.abandon();
-            }
-            return Err(stopped_plan(args.out.as_deref()));
-        }
-        Err(e) => anyhow::bail!("{e}"),
-    };
-    if let Some(pb) = bar {
-        pb.finish_and_clear();
-    }
+    let p = planned(&data, &args)?;
     // How the data were read and where they came from, as diagnose and analyze say it.
     let structure = data.structure.summary();
     let mut v = serde_json::to_value(&p)?;
@@ -110,6 +73,44 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::out!("{text}");
     }
     Ok(())
+}
+
+/// The plan of `data`, with a progress bar on a terminal; Ctrl-C or SIGTERM stops between
+/// protocols (nothing is written, and DIR stays as it was).
+fn planned(data: &capstan_data::Dataset, args: &Args) -> anyhow::Result<Plan> {
+    let opts = Options {
+        reps: args.reps,
+        seed: args.seed,
+        max_hours: args.hours,
+        ..Options::default()
+    };
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let pb = indicatif::ProgressBar::new(0);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "planning {bar:40} {pos}/{len} protocols [{elapsed_precise}]",
+            )
+            .expect("a valid template"),
+        );
+        pb
+    });
+    let stop = super::signal::stop_flag("plan");
+    let mut progress = |done: usize, total: usize| {
+        if let Some(pb) = &bar {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        }
+        !stop.load(std::sync::atomic::Ordering::SeqCst)
+    };
+    let p = plan(data, &opts, &mut progress);
+    if let Some(pb) = bar {
+        pb.finish_and_clear();
+    }
+    match p {
+        Ok(p) => Ok(p),
+        Err(e) if e == capstan_plan::STOPPED => Err(stopped_plan(args.out.as_deref())),
+        Err(e) => anyhow::bail!("{e}"),
+    }
 }
 
 /// The plan in words: what is open, the protocols ranked, the recommendation.

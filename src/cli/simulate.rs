@@ -333,22 +333,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         output::print_summary(&at, &stats, rows, &faults, faults_total, !args.no_raw);
     }
     if stats.interrupted {
-        let previous = match kept {
-            Some(_) if had_previous => format!(
-                "; the complete campaign in {} is as it was",
-                args.out.display()
-            ),
-            _ => String::new(),
-        };
-        return Err(super::signal::Interrupted(format!(
-            "interrupted: {} of {} runs made; they are in {} (summary.json says \"interrupted\"){previous}",
-            stats.done,
-            stats.planned,
-            at.display()
-        ))
-        .into());
+        return Err(interrupted(
+            &stats,
+            &at,
+            kept.is_some() && had_previous,
+            &args.out,
+        ));
     }
     Ok(())
+}
+
+/// The error of a campaign stopped by a signal: what was made and where it is, and whether
+/// the complete campaign already in `out` is as it was (`kept_beside`).
+fn interrupted(
+    stats: &host_sim::campaign::CampaignStats,
+    at: &std::path::Path,
+    kept_beside: bool,
+    out: &std::path::Path,
+) -> anyhow::Error {
+    let previous = if kept_beside {
+        format!("; the complete campaign in {} is as it was", out.display())
+    } else {
+        String::new()
+    };
+    super::signal::Interrupted(format!(
+        "interrupted: {} of {} runs made; they are in {} (summary.json says \"interrupted\"){previous}",
+        stats.done,
+        stats.planned,
+        at.display()
+    ))
+    .into()
 }
 
 /// The campaign the options describe (the noise profile's defaults where none is given),

@@ -408,18 +408,9 @@ impl Rig {
         if let Some(done) = measure.as_mut().and_then(|m| m.push(now_us, counts_ok)) {
             let what = measure.map(|m| m.what);
             measure = None;
-            let result = match what {
-                Some(w) => done.and_then(|m| self.apply_measure(w, m)),
-                None => Err(CommandError::NoLoad),
-            };
-            let kind = match what {
-                Some(Measuring::Zero) => CommandKind::Zero,
-                _ => CommandKind::Weigh,
-            };
-            if kind == CommandKind::Zero && result.is_ok() {
+            if self.finish_measure(what, done, sink) {
                 zeroed = Some((self.cal.zeros(), servo_deg));
             }
-            self.reply(sink, kind, result);
         }
         if now_us >= next_live_us {
             next_live_us += LIVE_EVERY_MS as u64 * 1000;
@@ -445,6 +436,27 @@ impl Rig {
             led: (inp.now_us / 1000 / 250).is_multiple_of(2),
             ..self.safe_outputs()
         }
+    }
+
+    /// A finished zero or weigh: put into the calibration (or refused) and replied to; true
+    /// when a zero was taken (the servo's position then is where a weigh must be made).
+    fn finish_measure(
+        &mut self,
+        what: Option<Measuring>,
+        done: Result<setup::Means, CommandError>,
+        sink: &mut impl LogSink,
+    ) -> bool {
+        let result = match what {
+            Some(w) => done.and_then(|m| self.apply_measure(w, m)),
+            None => Err(CommandError::NoLoad),
+        };
+        let kind = match what {
+            Some(Measuring::Zero) => CommandKind::Zero,
+            _ => CommandKind::Weigh,
+        };
+        let zero_taken = kind == CommandKind::Zero && result.is_ok();
+        self.reply(sink, kind, result);
+        zero_taken
     }
 
     /// A zero or weigh put into the calibration, if the over-force limit stays visible under

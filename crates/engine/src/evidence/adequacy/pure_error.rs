@@ -81,21 +81,7 @@ pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
         .collect();
     let df_lof = (n_used as f64 - cords.len() as f64 - k as f64).max(1.0);
     let ms_pe = ss_pe / df_pe.max(1.0);
-    // Rademacher flips of whole runs, from a fixed seed (the answer is reproducible).
-    let mut rng = Rng::new(0x01ac_0f17);
-    let (mut above, mut total) = (0usize, 0.0);
-    let mut signs = vec![1.0; d.units.len()];
-    for _ in 0..FLIPS {
-        for s in signs.iter_mut() {
-            *s = if rng.next_u64() >> 63 == 0 { 1.0 } else { -1.0 };
-        }
-        let t = ss_lof(&|u| signs[u]);
-        total += t;
-        if t >= observed {
-            above += 1;
-        }
-    }
-    let null_mean = total / FLIPS as f64;
+    let (above, null_mean) = flips(d.units.len(), observed, &ss_lof);
     let n_obs = entries.len() as f64;
     let systematic = ((observed - null_mean).max(0.0) / n_obs).sqrt();
     Some(LackOfFit {
@@ -107,4 +93,27 @@ pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
         p_at_floor: above == 0,
         systematic_ratio: systematic / ms_pe.sqrt(),
     })
+}
+
+/// [`FLIPS`] Rademacher flips of whole runs, from a fixed seed (the answer is reproducible):
+/// how many give a lack of fit `ss_lof` at least `observed`, and their mean.
+fn flips(
+    runs: usize,
+    observed: f64,
+    ss_lof: &dyn Fn(&dyn Fn(usize) -> f64) -> f64,
+) -> (usize, f64) {
+    let mut rng = Rng::new(0x01ac_0f17);
+    let (mut above, mut total) = (0usize, 0.0);
+    let mut signs = vec![1.0; runs];
+    for _ in 0..FLIPS {
+        for s in signs.iter_mut() {
+            *s = if rng.next_u64() >> 63 == 0 { 1.0 } else { -1.0 };
+        }
+        let t = ss_lof(&|u| signs[u]);
+        total += t;
+        if t >= observed {
+            above += 1;
+        }
+    }
+    (above, total / FLIPS as f64)
 }
