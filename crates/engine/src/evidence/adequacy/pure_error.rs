@@ -95,13 +95,12 @@ pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     })
 }
 
+/// The lack of fit's sum of squares with each run's residuals times its sign.
+type SignedLof<'a> = &'a dyn Fn(&dyn Fn(usize) -> f64) -> f64;
+
 /// [`FLIPS`] Rademacher flips of whole runs, from a fixed seed (the answer is reproducible):
 /// how many give a lack of fit `ss_lof` at least `observed`, and their mean.
-fn flips(
-    runs: usize,
-    observed: f64,
-    ss_lof: &dyn Fn(&dyn Fn(usize) -> f64) -> f64,
-) -> (usize, f64) {
+fn flips(runs: usize, observed: f64, ss_lof: SignedLof<'_>) -> (usize, f64) {
     let mut rng = Rng::new(0x01ac_0f17);
     let (mut above, mut total) = (0usize, 0.0);
     let mut signs = vec![1.0; runs];
