@@ -260,7 +260,7 @@ fn a_campaign_that_makes_no_pair_fails_and_replaces_nothing() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("takes no value"));
     // And so is a wrap given twice (two cords of one key, which every reader refuses).
     for (flag, value, says) in [
-        ("--effect", "t2_offset=1e9", "offset_n must be -5 to 5 N"),
+        ("--effect", "t2_offset=1e9", "offset_n must be -3 to 5 N"),
         ("--effect", "sensor_gain=0", "gain must be 0.5 to 2"),
         ("--wraps", "270,360,270", "--wraps 270 is given twice"),
     ] {

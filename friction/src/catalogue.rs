@@ -285,8 +285,10 @@ const CATALOGUE: [EffectEntry; 11] = [
         parameter: Some("offset_n"),
         unit: "N",
         neutral: 0.0,
-        // N.
-        physical: (-5.0, 5.0),
+        // N: below −3 N the sensor reads below the firmware's negative-force limit at rest and
+        // no run starts (from about −1.2 N the low levels of some runs fault already, as they
+        // would on the rig).
+        physical: (-3.0, 5.0),
         level: Level::WithinRun,
         title: "a zero offset of the T2 sensor",
         named_note: None,

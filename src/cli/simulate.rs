@@ -82,7 +82,7 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub order: Option<Order>,
     /// A catalogue effect, NAME=VALUE (repeatable), e.g. pressure_friction=0.85; each value
-    /// within what a real rig can hold (t2_offset -5 to 5 N, sensor_gain 0.5 to 2, ...).
+    /// within what a real rig can hold (t2_offset -3 to 5 N, sensor_gain 0.5 to 2, ...).
     #[arg(long = "effect", value_name = "NAME=VALUE")]
     pub effects: Vec<String>,
     /// Friction coefficient of the base model.
