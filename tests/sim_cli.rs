@@ -205,6 +205,8 @@ fn bad_arguments_are_clear_errors_not_panics() {
         (vec!["--runs", "0"], "runs"),
         (vec!["--wraps", "-5"], "wrap"),
         (vec!["--dwell-ms", "100"], "protocol"),
+        // The refusal gives the values in force, the defaults the user did not type too.
+        (vec!["--dwell-ms", "100"], "--window-after-ms 2000"),
         (vec!["--scatter", "-3"], "scatter"),
         (
             vec!["--two-control", "--wraps", "720,720,720,720,720"],

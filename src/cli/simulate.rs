@@ -243,6 +243,22 @@ fn unmodelled(args: &Args) -> anyhow::Result<host_sim::plant::Unmodelled> {
     Ok(u)
 }
 
+/// The protocol, refused with the values in force (the defaults where none was given) when
+/// the firmware would refuse it.
+fn checked_protocol(args: &Args) -> anyhow::Result<firmware::Protocol> {
+    let p = protocol(args);
+    if let Err(e) = p.validate() {
+        bail!(
+            "the firmware refuses the protocol: {e} (in force: --dwell-ms {}, --window-after-ms \
+             {}, --window-before-ms {}; defaults where not given)",
+            p.dwell_ms,
+            p.window_after_change_ms,
+            p.window_before_next_ms
+        );
+    }
+    Ok(p)
+}
+
 fn protocol(args: &Args) -> firmware::Protocol {
     let mut p = firmware::Protocol::default();
     if let Some(v) = args.dwell_ms {
@@ -393,7 +409,7 @@ fn campaign_config(args: &Args) -> anyhow::Result<CampaignConfig> {
         sensor_noise: !args.no_noise,
         seed: args.seed,
         faults,
-        protocol: protocol(args),
+        protocol: checked_protocol(args)?,
         plant: plant(args)?,
         threads: args.threads.unwrap_or(0),
         keep_raw: !args.no_raw,
