@@ -53,7 +53,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )?),
         None => None,
     };
-    let p = planned(&data, &args)?;
+    let p = match planned(&data, &args) {
+        Ok(p) => p,
+        Err(e) => {
+            // Nothing was written: the directory is left as it was found.
+            if let Some(out) = out {
+                out.abandon();
+            }
+            return Err(e);
+        }
+    };
     // How the data were read and where they came from, as diagnose and analyze say it.
     let structure = data.structure.summary();
     let mut v = serde_json::to_value(&p)?;

@@ -73,6 +73,8 @@ pub struct OutputDir {
     dir: PathBuf,
     kind: &'static str,
     _lock: File,
+    /// This process made the directory.
+    made: bool,
     /// What `open` found and did (an interrupted commit finished, an abandoned set kept).
     pub recovered: Vec<String>,
 }
@@ -103,22 +105,29 @@ impl OutputDir {
             dir: dir.to_path_buf(),
             kind,
             _lock: lock,
+            made: !existed,
             recovered: Vec::new(),
         };
         match out.prepare(names, subdirs) {
             Ok(()) => Ok(out),
             Err(e) => {
-                // Refused: leave the directory as it was found (no lock file, and no
-                // directory if this made it), keeping what the recovery above kept.
-                // The lock file goes while the lock is still held: a process that opened it
-                // meanwhile finds it locked and stops; one that comes later makes a new one.
-                let _ = std::fs::remove_file(dir.join(LOCK));
-                drop(out);
-                if !existed {
-                    let _ = std::fs::remove_dir(dir);
-                }
+                // Refused: leave the directory as found, keeping what the recovery kept.
+                out.abandon();
                 Err(e)
             }
+        }
+    }
+
+    /// Nothing will be written (refused, or stopped before any output): leave the directory
+    /// as it was found — no lock file, and no directory if this process made it and it is
+    /// empty. The lock file goes while the lock is still held: a process that opened it
+    /// meanwhile finds it locked and stops; one that comes later makes a new one.
+    pub fn abandon(self) {
+        let _ = std::fs::remove_file(self.dir.join(LOCK));
+        let (dir, made) = (self.dir.clone(), self.made);
+        drop(self);
+        if made {
+            let _ = std::fs::remove_dir(&dir);
         }
     }
 
