@@ -494,12 +494,7 @@ fn log_from(from: &Path, out: &Path, extra: &[&str]) -> Output {
 #[test]
 fn a_stopped_plan_says_so_and_writes_nothing() {
     let dir = tmp("plan-stopped");
-    let mut child = bin()
-        .args(["plan", "--out", s(&dir), "--reps", "8"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = plan_into(&dir, "8");
     std::thread::sleep(Duration::from_millis(1500));
     let st = terminate(&mut child);
     let out = child_output(child);
@@ -521,12 +516,7 @@ fn plan_refuses_a_directory_it_cannot_write_before_it_plans() {
     let dir = tmp("plan-foreign");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("plan.json"), "{\"my\": \"plan\"}").unwrap();
-    let mut child = bin()
-        .args(["plan", "--out", s(&dir), "--reps", "1000"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = plan_into(&dir, "1000");
     let st = wait_with_deadline(&mut child, 60);
     let out = child_output(child);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -539,4 +529,14 @@ fn plan_refuses_a_directory_it_cannot_write_before_it_plans() {
         std::fs::read_to_string(dir.join("plan.json")).unwrap(),
         "{\"my\": \"plan\"}"
     );
+}
+
+/// `capstan plan --out DIR --reps REPS` on the thesis data, started with piped output.
+fn plan_into(dir: &Path, reps: &str) -> Child {
+    bin()
+        .args(["plan", "--out", s(dir), "--reps", reps])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
 }

@@ -119,6 +119,16 @@ fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
     checked();
 }
 
+/// The thesis data's columns without the (single) drive voltage.
+const WITHOUT_DRIVE: &[&str] = &[
+    "capstan_diameter_mm",
+    "wrap_deg",
+    "run",
+    "step",
+    "t1_n",
+    "t2_n",
+];
+
 /// The thesis data with only the columns `keep` (by header name), and only the rows `pick`
 /// takes (by their cells).
 fn thesis_columns(keep: &[&str], pick: impl Fn(&[&str]) -> bool) -> Dataset {
@@ -150,17 +160,7 @@ fn without_replicate_runs_or_with_too_few_no_verdict_says_euler_eytelwein_explai
     assert!(a.verdict.starts_with("Not identified:"), "{}", a.verdict);
     // One cord's 6 runs: the lack of fit is not significant (p ≈ 0.04) but its systematic part
     // is estimated far above the rule's size: too few replicates to tell, not "explained".
-    let one = thesis_columns(
-        &[
-            "capstan_diameter_mm",
-            "wrap_deg",
-            "run",
-            "step",
-            "t1_n",
-            "t2_n",
-        ],
-        |c| c[0] == "12.7" && c[1] == "270",
-    );
+    let one = thesis_columns(WITHOUT_DRIVE, |c| c[0] == "12.7" && c[1] == "270");
     let a = capstan_engine::diagnose::diagnose(&one);
     assert!(a.verdict.starts_with("Not identified:"), "{}", a.verdict);
     assert!(a.verdict.contains("too few to rule out"), "{}", a.verdict);
@@ -179,17 +179,9 @@ fn without_replicate_runs_or_with_too_few_no_verdict_says_euler_eytelwein_explai
 /// stiffness on the thesis data at b = 0: it was "ruled out" until s35).
 #[test]
 fn a_standard_error_or_scatter_the_data_cannot_give_is_not_zero() {
-    let one_run = thesis_columns(
-        &[
-            "capstan_diameter_mm",
-            "wrap_deg",
-            "run",
-            "step",
-            "t1_n",
-            "t2_n",
-        ],
-        |c| c[0] == "12.7" && c[1] == "270" && c[3] == "1",
-    );
+    let one_run = thesis_columns(WITHOUT_DRIVE, |c| {
+        c[0] == "12.7" && c[1] == "270" && c[3] == "1"
+    });
     let d = capstan_engine::diagnose::diagnose(&one_run);
     assert!(d.scatter.cord_pct.is_nan() && d.scatter.run_pct.is_nan());
     for c in d.candidates.iter().filter(|c| c.parameters.len() == 1) {
@@ -233,17 +225,7 @@ fn a_standard_error_or_scatter_the_data_cannot_give_is_not_zero() {
 /// interval [0, 0] (adversarial read s35, D4).
 #[test]
 fn one_cord_has_no_held_out_rmse() {
-    let one = thesis_columns(
-        &[
-            "capstan_diameter_mm",
-            "wrap_deg",
-            "run",
-            "step",
-            "t1_n",
-            "t2_n",
-        ],
-        |c| c[0] == "12.7" && c[1] == "720",
-    );
+    let one = thesis_columns(WITHOUT_DRIVE, |c| c[0] == "12.7" && c[1] == "720");
     let a = capstan_engine::analysis::run(&one, Default::default()).unwrap();
     for m in &a.models {
         assert!(
