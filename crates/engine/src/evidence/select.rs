@@ -76,8 +76,7 @@ fn edge_interval(fit: &WithinFit, j: usize, runs: f64) -> Option<(f64, f64)> {
         return None;
     }
     let m = &fit.maps[j];
-    let ends =
-        [-1.96, 1.96].map(|z| fit.maps[j].value((fit.theta[j] + z * se_theta).clamp(m.lo, m.hi)));
+    let ends = [-1.96, 1.96].map(|z| m.value((fit.theta[j] + z * se_theta).clamp(m.lo, m.hi)));
     Some((ends[0].min(ends[1]), ends[0].max(ends[1])))
 }
 
