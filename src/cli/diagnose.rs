@@ -82,8 +82,15 @@ fn verdict_lines(s: &mut String, d: &Diagnosis, source: &str) {
     let g = &d.design;
     let _ = writeln!(
         s,
-        "{source}: {} rows, {} cords, {} runs; wraps {:?} deg, diameters {:?} mm, drive {:?} V",
-        g.rows, g.cords, g.runs, g.wraps_deg, g.diameters_mm, g.drive_v
+        "{source}: {} rows, {} cord{}, {} run{}; wraps {:?} deg, diameters {:?} mm, drive {:?} V",
+        g.rows,
+        g.cords,
+        if g.cords == 1 { "" } else { "s" },
+        g.runs,
+        if g.runs == 1 { "" } else { "s" },
+        g.wraps_deg,
+        g.diameters_mm,
+        g.drive_v
     );
     let _ = writeln!(s, "{}", d.data.structure.statement);
     let _ = writeln!(s, "{}", d.verdict);

@@ -264,15 +264,24 @@ impl Structure {
 
     /// One line for the terminal: how many cords and runs, and how each was found.
     pub fn describe(&self) -> String {
-        let level = |l: &Level, what: &str| match l.from {
-            Basis::Columns => format!("{} {what} from columns ({})", l.count, l.columns.join(", ")),
-            Basis::Inferred => format!("{} {what} INFERRED: {}", l.count, l.how),
-            Basis::Assumed => format!("{} {what} ASSUMED: {}", l.count, l.how),
+        let level = |l: &Level, one: &str| {
+            let what = if l.count == 1 {
+                one.to_string()
+            } else {
+                format!("{one}s")
+            };
+            match l.from {
+                Basis::Columns => {
+                    format!("{} {what} from columns ({})", l.count, l.columns.join(", "))
+                }
+                Basis::Inferred => format!("{} {what} INFERRED: {}", l.count, l.how),
+                Basis::Assumed => format!("{} {what} ASSUMED: {}", l.count, l.how),
+            }
         };
         let mut s = format!(
             "structure: {}; {}",
-            level(&self.cord_level, "cords"),
-            level(&self.run_level, "runs")
+            level(&self.cord_level, "cord"),
+            level(&self.run_level, "run")
         );
         if !self.assumed.is_empty() {
             s += &format!("; assumed {}", self.assumed.join(", "));
