@@ -111,9 +111,15 @@ impl OutputDir {
         match out.prepare(names, subdirs) {
             Ok(()) => Ok(out),
             Err(e) => {
-                // Refused: leave the directory as found, keeping what the recovery kept.
+                // Refused: leave the directory as found, keeping what the recovery kept, and
+                // say what it kept (an earlier run's work moved to `incomplete-`).
+                let kept = std::mem::take(&mut out.recovered);
                 out.abandon();
-                Err(e)
+                if kept.is_empty() {
+                    Err(e)
+                } else {
+                    Err(anyhow::anyhow!("{e:#}\nnote: {}", kept.join("\nnote: ")))
+                }
             }
         }
     }

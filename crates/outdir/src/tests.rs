@@ -407,3 +407,26 @@ fn a_lock_on_an_unlinked_lock_file_is_not_the_directorys_lock() {
         "{e:#}"
     );
 }
+
+/// A refused open still says what its recovery kept (adversarial read s35, D1's last point: an
+/// earlier run's staging directory was moved to `incomplete-` without a word).
+#[test]
+fn a_refused_open_says_what_it_kept() {
+    let dir = scratch();
+    let staging = dir.join(format!("{STAGING_PREFIX}999-1"));
+    std::fs::create_dir_all(&staging).unwrap();
+    std::fs::write(staging.join("pairs.csv"), "x").unwrap();
+    std::fs::write(dir.join("metrics.json"), "the user's").unwrap();
+    let e = format!(
+        "{:#}",
+        OutputDir::open(&dir, "test", &["metrics.json"]).unwrap_err()
+    );
+    assert!(
+        e.contains("did not write") && e.contains("note: an earlier run"),
+        "{e}"
+    );
+    assert!(dir
+        .join(format!("{INCOMPLETE_PREFIX}999-1"))
+        .join("pairs.csv")
+        .exists());
+}
