@@ -163,3 +163,35 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
     assert!(r.status.success() && r.stderr.is_empty());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// One run per cord: the run-to-run scatter cannot be estimated, and `predict` says where it
+/// went (into the cord-to-cord scatter) in words and JSON; the thesis data estimate it.
+#[test]
+fn predict_says_when_the_run_scatter_was_not_estimable() {
+    use capstan_engine::analysis::{self, Options};
+    let dir = std::env::temp_dir().join(format!("capstan-predict-run1-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut lines = capstan_data::THESIS_CSV.lines();
+    let mut text = format!("{}\n", lines.next().unwrap());
+    for l in lines.filter(|l| l.split(',').nth(3) == Some("1")) {
+        text += &format!("{l}\n");
+    }
+    let data = capstan_data::read_pairs(text.as_bytes(), "run1.csv").unwrap();
+    let a = analysis::run(&data, Options::default()).unwrap();
+    let ctx = capstan_report::Context::library();
+    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let path = dir.join("metrics.json");
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+    let o = predict_at(path.to_str().unwrap(), "450", "2", &[]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("run-to-run scatter was not estimable"), "{text}");
+    let o = predict_at(path.to_str().unwrap(), "450", "2", &["--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["run_scatter_estimated"], false);
+    let thesis = metrics(&dir);
+    let o = predict_at(thesis.to_str().unwrap(), "450", "2", &["--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["run_scatter_estimated"], true);
+    let _ = std::fs::remove_dir_all(&dir);
+}

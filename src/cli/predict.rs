@@ -397,6 +397,7 @@ fn print_json(
         "diameter_mm": args.diameter_mm,
         "drive_v": drive_v,
         "model_error_sd_n": pm.model_error.sd_n,
+        "run_scatter_estimated": pm.run_scatter_estimated,
         "wrap_extrapolation_error_sd_n": wrap_error(args, pm).flatten(),
         "wrap_extrapolation_measured": pm.wrap_extrapolation_error.rows > 0,
         "from": args.from.display().to_string(),
@@ -428,6 +429,11 @@ fn print_table(
         "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
         pm.model_error.sd_n
     );
+    if !pm.run_scatter_estimated {
+        crate::outln!(
+            "the run-to-run scatter was not estimable (one run per cord): a new run's scatter is counted in the cord-to-cord one"
+        );
+    }
     match wrap_error(args, pm) {
         Some(Some(sd)) => crate::outln!(
             "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data, scaled to this distance: SD {sd:.3} N"

@@ -84,8 +84,13 @@ pub struct PredictionModel {
     pub folds: usize,
     /// SD of ln mu from cord to cord (the extended fit's σ_u).
     pub sd_ln_mu_cord: f64,
-    /// SD of ln mu from run to run on one cord (the evidence engine's run scatter).
+    /// SD of ln mu from run to run on one cord (the evidence engine's run scatter; 0 where
+    /// it could not be estimated, see `run_scatter_estimated`).
     pub sd_ln_mu_run: f64,
+    /// The run-to-run scatter was estimated (false with one run per cord: a new run's scatter
+    /// is then inside the cord-to-cord one).
+    #[serde(default = "estimated")]
+    pub run_scatter_estimated: bool,
     /// Within-run noise, absolute part, N.
     pub noise_abs_n: f64,
     /// Within-run noise, proportional part (fraction of T2).
@@ -106,6 +111,11 @@ pub struct PredictionModel {
     pub fitted_range: FittedRange,
     /// The operating point and intervals in words.
     pub note: String,
+}
+
+/// Older `metrics.json` files carry no `run_scatter_estimated`: they estimated it.
+fn estimated() -> bool {
+    true
 }
 
 /// The model's error (discrepancy) in T2, estimated from its own leave-one-cord-out residuals
@@ -574,6 +584,7 @@ pub fn build(
         folds: k,
         sd_ln_mu_cord: ext.sigma_u.unwrap_or(0.0),
         sd_ln_mu_run: if run_ln.is_finite() { run_ln } else { 0.0 },
+        run_scatter_estimated: run_ln.is_finite(),
         noise_abs_n: scatter.noise_abs_n,
         noise_rel: scatter.noise_rel,
         model_error: ModelError::NONE,
