@@ -185,7 +185,10 @@ fn predict_says_when_the_run_scatter_was_not_estimable() {
     let o = predict_at(path.to_str().unwrap(), "450", "2", &[]);
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("run-to-run scatter was not estimable"), "{text}");
+    assert!(
+        text.contains("run-to-run scatter was not estimable"),
+        "{text}"
+    );
     let o = predict_at(path.to_str().unwrap(), "450", "2", &["--json"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["run_scatter_estimated"], false);
