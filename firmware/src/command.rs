@@ -11,7 +11,7 @@
 //! is a few hundred bytes of flash. The words, the keys, the step orders' and channels' names
 //! and the reply's codes are the wire schema's (`capstan-wire`), which the host builds from too.
 
-use capstan_wire::{Channel, StepOrder};
+use capstan_wire::{Channel, Value};
 
 pub use capstan_wire::{CommandError, CommandKind, Key, MAX_LINE};
 
@@ -108,10 +108,11 @@ impl Command {
                     } else {
                         CommandError::UnknownKey
                     })?;
-                let value = match key {
-                    Key::Order => {
-                        let order = StepOrder::from_name(b).ok_or(CommandError::Argument)?;
-                        order.code() as f32
+                // A code (the order, the mode, the force profile) by its name.
+                let value = match key.setting().value() {
+                    Value::Code => {
+                        let code = key.setting().code_of_name(b);
+                        code.ok_or(CommandError::Argument)? as f32
                     }
                     _ => number(b)?,
                 };
@@ -286,6 +287,18 @@ mod tests {
             Command::parse("set order updown"),
             Ok(Command::Set(Key::Order, 1.0))
         );
+        assert_eq!(
+            Command::parse("set mode force"),
+            Ok(Command::Set(Key::Mode, 1.0))
+        );
+        assert_eq!(
+            Command::parse("set force_profile sine"),
+            Ok(Command::Set(Key::ForceProfile, 2.0))
+        );
+        assert_eq!(
+            Command::parse("set model_t2_offset_n -0.82"),
+            Ok(Command::Set(Key::ModelT2OffsetN, -0.82))
+        );
         for k in Key::ALL {
             assert_eq!(Key::from_name(k.name()), Some(k));
         }
@@ -336,6 +349,7 @@ mod tests {
         assert_eq!(Command::parse("weigh t3 1"), Err(CommandError::Argument));
         assert_eq!(Command::parse("set speed 3"), Err(CommandError::UnknownKey));
         assert_eq!(Command::parse("set order up"), Err(CommandError::Argument));
+        assert_eq!(Command::parse("set mode 1"), Err(CommandError::Argument));
     }
 
     #[test]

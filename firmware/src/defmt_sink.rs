@@ -78,6 +78,7 @@ fn write(seq: u32, record: &Record) {
             c2 = r.counts[1],
             t1_n = r.force_n[0],
             t2_n = r.force_n[1],
+            t2_target_n = r.t2_target_n,
             crc = crc
         ),
         Record::Pair(p) => wire_record!(pair:
@@ -92,6 +93,7 @@ fn write(seq: u32, record: &Record) {
             t2_mean_n = p.t2.mean_n,
             t2_std_n = p.t2.std_n,
             t2_count = p.t2.count,
+            t2_target_n = p.t2_target_n,
             crc = crc
         ),
         Record::Fault(f) => wire_record!(fault:

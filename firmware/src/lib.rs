@@ -27,6 +27,7 @@ pub mod command;
 pub mod condition;
 #[cfg(target_os = "none")]
 pub mod defmt_sink;
+pub mod force;
 pub mod hal;
 pub mod protocol;
 pub mod record;
@@ -43,6 +44,7 @@ pub mod store;
 
 pub use calib::{AmpMap, Calibration, CalibrationError, ChannelCal, ServoMap};
 pub use command::{Command, CommandError};
+pub use force::{BoardLaw, ControlMode, ForceConfig, ForceError, ForceProfile};
 pub use protocol::{Protocol, ProtocolError, StepOrder};
 pub use record::{FaultKind, LogSink, Record};
 pub use rig::Rig;

@@ -18,6 +18,8 @@
 /// schema's).
 pub use capstan_wire::StepOrder;
 
+use crate::force::{ForceConfig, ForceError};
+
 /// Everything the rig does in a run. `Protocol::default()` is the thesis's protocol.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]
@@ -50,8 +52,12 @@ pub struct Protocol {
     pub window_before_next_ms: u32,
     /// Capstan diameter, mm, as set up on the rig (metadata for the log; 0 = not given).
     pub capstan_diameter_mm: f32,
-    /// Wrap angle, deg, as set up on the rig (metadata for the log; 0 = not given).
+    /// Wrap angle, deg, as set up on the rig (metadata for the log; 0 = not given; in force
+    /// mode the fitted law's wrap, and required).
     pub wrap_deg: f32,
+    /// Force control (issue 43): in force mode the steps are the T2 target's segments and the
+    /// servo holds T2 at the target; the angles above bound its travel (rest to final).
+    pub force: ForceConfig,
 }
 
 impl Default for Protocol {
@@ -72,6 +78,7 @@ impl Default for Protocol {
             window_before_next_ms: 1_000,
             capstan_diameter_mm: 0.0,
             wrap_deg: 0.0,
+            force: ForceConfig::default(),
         }
     }
 }
@@ -100,6 +107,8 @@ pub enum ProtocolError {
     AmpVoltage,
     /// The whole run must fit in u32 milliseconds (49 days) — and in practice much less.
     TooLong,
+    /// Force control's settings are refused.
+    Force(ForceError),
 }
 
 impl ProtocolError {
@@ -120,6 +129,7 @@ impl ProtocolError {
             ProtocolError::RawLogRate => "the raw log rate must divide the sample rate",
             ProtocolError::AmpVoltage => "the amplifier control voltage must be 0..=3.3 V",
             ProtocolError::TooLong => "the run is too long",
+            ProtocolError::Force(e) => e.message(),
         }
     }
 }
@@ -173,28 +183,39 @@ impl Protocol {
         if !(self.amp_control_v.is_finite() && (0.0..=3.3).contains(&self.amp_control_v)) {
             return Err(ProtocolError::AmpVoltage);
         }
+        self.force
+            .validate(self.wrap_deg)
+            .map_err(ProtocolError::Force)?;
         let total = self.pre_trigger_ms as u64
             + self.trigger_ms as u64
-            + (levels as u64 + 1) * self.dwell_ms as u64;
+            + (self.levels().max(levels as u32) as u64 + 1) * self.dwell_ms as u64;
         if total > u32::MAX as u64 / 1000 {
             return Err(ProtocolError::TooLong);
         }
         Ok(())
     }
 
-    /// Number of tension levels N (steps 1..=N). Meaningful once validated.
+    /// Number of tension levels N (steps 1..=N; in force mode the target's segments).
+    /// Meaningful once validated.
     pub fn levels(&self) -> u32 {
+        if self.force.is_on() {
+            return self.force.segments();
+        }
         // Called several times per sample: a validated span is within 1e-3 of a whole number,
         // so adding ½ and truncating rounds it as `roundf` would, without the libm call.
         let span = (self.rest_deg - self.final_deg) / self.step_deg;
         (span + 0.5) as u32
     }
 
-    /// Level held during step `k` (0 = rest, 1..=N the levels in this protocol's order).
+    /// Level held during step `k` (0 = rest, 1..=N the levels in this protocol's order; in
+    /// force mode the segment, in order).
     pub fn level(&self, k: u32) -> u32 {
         let n = self.levels();
         if k == 0 || k > n {
             return 0;
+        }
+        if self.force.is_on() {
+            return k;
         }
         match self.order {
             StepOrder::Monotone => k,
@@ -216,8 +237,12 @@ impl Protocol {
         }
     }
 
-    /// Servo angle during step `k`, deg.
+    /// Servo angle during step `k`, deg (in force mode the controller's: rest is where it
+    /// starts).
     pub fn angle_deg(&self, k: u32) -> f32 {
+        if self.force.is_on() {
+            return self.rest_deg;
+        }
         self.rest_deg - self.level(k) as f32 * self.step_deg
     }
 

@@ -39,6 +39,8 @@ pub struct RawSample {
     pub counts: [u16; 2],
     /// Calibrated forces, N, T1 then T2.
     pub force_n: [f32; 2],
+    /// The T2 target of force control, N (0: none).
+    pub t2_target_n: f32,
 }
 
 /// The conditioned pair of one step.
@@ -57,6 +59,8 @@ pub struct StepPair {
     pub t1: ChannelStats,
     /// T2 statistics over the window.
     pub t2: ChannelStats,
+    /// The T2 target of force control at the window's middle (a sine's mean), N (0: none).
+    pub t2_target_n: f32,
 }
 
 /// A safety fault: the rig went to its safe state.
@@ -282,6 +286,7 @@ impl Record {
                 f(U16(r.counts[1]));
                 f(F32(r.force_n[0]));
                 f(F32(r.force_n[1]));
+                f(F32(r.t2_target_n));
             }
             Record::Pair(p) => {
                 f(U32(p.step));
@@ -293,6 +298,7 @@ impl Record {
                     f(F32(t.std_n));
                     f(U32(t.count));
                 }
+                f(F32(p.t2_target_n));
             }
             Record::Fault(x) => {
                 f(U8(x.kind.code()));
@@ -387,6 +393,7 @@ impl Record {
                 t_us: r.i64()?,
                 counts: [r.u16()?, r.u16()?],
                 force_n: [r.f32()?, r.f32()?],
+                t2_target_n: r.f32()?,
             }),
             RecordKind::Pair => Record::Pair(StepPair {
                 step: r.u32()?,
@@ -395,6 +402,7 @@ impl Record {
                 t_mid_ms: r.u32()?,
                 t1: r.stats()?,
                 t2: r.stats()?,
+                t2_target_n: r.f32()?,
             }),
             RecordKind::Fault => Record::Fault(Fault {
                 kind: r.code(FaultKind::from_code)?,
@@ -532,6 +540,7 @@ mod tests {
                 t_us: -500,
                 counts: [400, 410],
                 force_n: [0.1, 0.2],
+                t2_target_n: 5.0,
             }),
             Record::Pair(StepPair {
                 step: 3,
@@ -540,6 +549,7 @@ mod tests {
                 t_mid_ms: 26_000,
                 t1: stats,
                 t2: stats,
+                t2_target_n: 0.0,
             }),
             Record::Fault(Fault {
                 kind: FaultKind::CordBreak,
@@ -616,8 +626,10 @@ mod tests {
             t_us: -500,
             counts: [400, 410],
             force_n: [f32::from_bits(0x7fc0_0001), 0.2],
+            t2_target_n: 0.0,
         });
-        // seq, t_us, c1, c2, t1_n (a NaN with a payload: checksummed as the canonical NaN), t2_n.
+        // seq, t_us, c1, c2, t1_n (a NaN with a payload: checksummed as the canonical NaN), t2_n,
+        // t2_target_n.
         let mut bytes = std::vec::Vec::new();
         bytes.extend(9u32.to_le_bytes());
         bytes.extend((-500i64).to_le_bytes());
@@ -625,6 +637,7 @@ mod tests {
         bytes.extend(410u16.to_le_bytes());
         bytes.extend(f32::NAN.to_bits().to_le_bytes());
         bytes.extend(0.2f32.to_bits().to_le_bytes());
+        bytes.extend(0.0f32.to_bits().to_le_bytes());
         assert_eq!(record_crc(9, &raw), RECORD_CRC.checksum(&bytes));
     }
 }

@@ -15,6 +15,7 @@
 use crate::button::Debouncer;
 use crate::calib::Calibration;
 use crate::command::Command;
+use crate::force::ForceRun;
 use crate::hal::AdcError;
 use crate::protocol::{Protocol, ProtocolError};
 use crate::record::{FaultKind, LogSink, Record, RunEnd, Sequencer};
@@ -160,6 +161,8 @@ pub struct Rig {
     reanchor: bool,
     /// [`Rig::use_settings`] ran since the last sample's outputs.
     settings_changed: bool,
+    /// Force control's controller (used in force mode; made anew at every run's start).
+    force: ForceRun,
 }
 
 impl Rig {
@@ -196,6 +199,7 @@ impl Rig {
             settings_source: crate::record::SettingsSource::DefaultsNoRecord,
             reanchor: false,
             settings_changed: false,
+            force: ForceRun::new(&protocol, &limits),
         })
     }
 

@@ -10,17 +10,24 @@
 //! ([`capstan_wire::Setting`]); this file says where each lives in [`Settings`].
 
 use crate::calib::{Calibration, CalibrationError};
+use crate::force::{ControlMode, ForceProfile};
 use crate::protocol::{Protocol, ProtocolError, StepOrder};
 use capstan_wire::{Key, Scalar, Setting, Value};
 
-/// Version of the byte layout below. Change it whenever the layout changes.
-pub const SETTINGS_VERSION: u8 = 1;
+/// Version of the byte layout below. Change it whenever the layout changes. (2: force control's
+/// values appended; a version-1 record is read with force control's defaults.)
+pub const SETTINGS_VERSION: u8 = 2;
 
-/// Values in [`Settings::fields`]: 15 of the protocol, 10 of the calibration.
+/// Values in [`Settings::fields`]: 15 of the protocol, 10 of the calibration, 18 of force
+/// control.
 pub const FIELDS: usize = capstan_wire::settings::SETTINGS;
 
-/// Encoded length, bytes: version, generation, the order's code, 24 values of 4 bytes.
+/// Encoded length, bytes: version, generation, the order's code, the other values of 4 bytes.
 pub const SETTINGS_BYTES: usize = 1 + 4 + 1 + 4 * (FIELDS - 1);
+
+/// Values a version-1 record holds (before force control), and its length.
+const V1_FIELDS: usize = 25;
+const V1_BYTES: usize = 1 + 4 + 1 + 4 * (V1_FIELDS - 1);
 
 /// What the rig runs with: the protocol and the calibration.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,7 +54,7 @@ pub enum SettingsError {
     Rates,
     /// A time in ms must be a whole number, 0 to 10⁹.
     NotWhole,
-    /// Not a step order's code.
+    /// Not a code of its setting (a step order, a control mode, a force profile).
     Order,
     /// The diameter and wrap metadata must be 0..=3600.
     Metadata,
@@ -59,6 +66,62 @@ pub enum SettingsError {
     /// Under this calibration the over-force limit would read above the rail check: the
     /// over-force check could not trip ([`crate::safety::SafetyLimits::visible`]).
     Blind,
+}
+
+/// One of force control's values as 32 bits (see [`Settings::get`]).
+fn force_bits(p: &Protocol, setting: Setting) -> u32 {
+    let (c, law) = (&p.force, &p.force.law);
+    let f = |v: f32| if v.is_nan() { f32::NAN } else { v }.to_bits();
+    match setting {
+        Setting::Mode => c.mode.code() as u32,
+        Setting::ForceProfile => c.profile.code() as u32,
+        Setting::ForceLevel1N => f(c.levels_n[0]),
+        Setting::ForceLevel2N => f(c.levels_n[1]),
+        Setting::ForceLevel3N => f(c.levels_n[2]),
+        Setting::ForceLevel4N => f(c.levels_n[3]),
+        Setting::ForceSineHz => f(c.sine_hz),
+        Setting::ForceSineToHz => f(c.sine_to_hz),
+        Setting::ForceSineSteps => c.sine_steps,
+        Setting::ForceKp => f(c.kp),
+        Setting::ForceKi => f(c.ki),
+        Setting::ForceT1Gain => f(c.t1_gain),
+        Setting::ForceRateDegS => f(c.rate_deg_s),
+        Setting::ForceShapeMs => c.shape_ms,
+        Setting::ModelMu => f(law.mu),
+        Setting::ModelHeatPerN => f(law.heat_per_n),
+        Setting::ModelT2OffsetN => f(law.t2_offset_n),
+        Setting::ModelExponent => f(law.exponent),
+        // The protocol's and the calibration's are `Settings::get`'s.
+        _ => 0,
+    }
+}
+
+/// Set one of force control's values from its 32 bits (`None` for an unknown code).
+fn set_force(p: &mut Protocol, setting: Setting, bits: u32) -> Option<()> {
+    let (c, f) = (&mut p.force, f32::from_bits(bits));
+    let code = || u8::try_from(bits).ok();
+    match setting {
+        Setting::Mode => c.mode = ControlMode::from_code(code()?)?,
+        Setting::ForceProfile => c.profile = ForceProfile::from_code(code()?)?,
+        Setting::ForceLevel1N => c.levels_n[0] = f,
+        Setting::ForceLevel2N => c.levels_n[1] = f,
+        Setting::ForceLevel3N => c.levels_n[2] = f,
+        Setting::ForceLevel4N => c.levels_n[3] = f,
+        Setting::ForceSineHz => c.sine_hz = f,
+        Setting::ForceSineToHz => c.sine_to_hz = f,
+        Setting::ForceSineSteps => c.sine_steps = bits,
+        Setting::ForceKp => c.kp = f,
+        Setting::ForceKi => c.ki = f,
+        Setting::ForceT1Gain => c.t1_gain = f,
+        Setting::ForceRateDegS => c.rate_deg_s = f,
+        Setting::ForceShapeMs => c.shape_ms = bits,
+        Setting::ModelMu => c.law.mu = f,
+        Setting::ModelHeatPerN => c.law.heat_per_n = f,
+        Setting::ModelT2OffsetN => c.law.t2_offset_n = f,
+        Setting::ModelExponent => c.law.exponent = f,
+        _ => {}
+    }
+    Some(())
 }
 
 /// A setting's 32 bits ([`Settings::get`]) at its wire type.
@@ -85,7 +148,9 @@ impl SettingsError {
             SettingsError::Calibration(e) => e.message(),
             SettingsError::Rates => "the sample and raw-log rates are fixed by the firmware",
             SettingsError::NotWhole => "a time in ms must be a whole number from 0 to 10⁹",
-            SettingsError::Order => "the order must be monotone, updown or pulse",
+            SettingsError::Order => {
+                "not one of the setting's names (order: monotone, updown, pulse; mode: protocol, force; force_profile: steps, ramp, sine)"
+            }
             SettingsError::Metadata => "the diameter (mm) and wrap (deg) must be 0 to 3600",
             SettingsError::ServoRange => {
                 "the rest and final angles must be at least 5° inside the servo map (5 to servo_max_deg - 5): no end stops"
@@ -134,10 +199,12 @@ impl Settings {
                     .then_some(value as u32)
                     .ok_or(SettingsError::NotWhole)?
             }
-            Value::Code => StepOrder::from_code(value as u8)
-                .filter(|o| o.code() as f32 == value)
-                .ok_or(SettingsError::Order)?
-                .code() as u32,
+            Value::Code => key
+                .setting()
+                .code_name(value as u8)
+                .filter(|_| (value as u8) as f32 == value)
+                .map(|_| value as u32)
+                .ok_or(SettingsError::Order)?,
         };
         let mut fields = self.fields();
         fields[i] = bits;
@@ -201,6 +268,7 @@ impl Settings {
             Setting::ServoMaxUs => f(c.servo.pulse_at_max_us),
             Setting::ServoMaxDeg => f(c.servo.max_deg),
             Setting::AmpFullScaleV => f(c.amp.full_scale_v),
+            force => force_bits(p, force),
         }
     }
 
@@ -240,6 +308,7 @@ impl Settings {
             Setting::ServoMaxUs => c.servo.pulse_at_max_us = f,
             Setting::ServoMaxDeg => c.servo.max_deg = f,
             Setting::AmpFullScaleV => c.amp.full_scale_v = f,
+            force => set_force(p, force, bits)?,
         }
         Some(())
     }
@@ -258,18 +327,26 @@ impl Settings {
         buf
     }
 
-    /// Settings and generation from stored bytes; refused unless of this version and valid.
+    /// Settings and generation from stored bytes; refused unless of this version (or version
+    /// 1, read with force control's defaults) and valid.
     pub fn decode(bytes: &[u8]) -> Result<(Settings, u32), SettingsError> {
         let version = *bytes.first().ok_or(SettingsError::Length)?;
-        if version != SETTINGS_VERSION {
-            return Err(SettingsError::Version(version));
-        }
-        if bytes.len() != SETTINGS_BYTES {
+        let length = match version {
+            SETTINGS_VERSION => SETTINGS_BYTES,
+            1 => V1_BYTES,
+            _ => return Err(SettingsError::Version(version)),
+        };
+        if bytes.len() != length {
             return Err(SettingsError::Length);
         }
         let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
         let generation = word(&bytes[1..5]);
-        let mut fields = [0u32; FIELDS];
+        // What a version-1 record lacks keeps its default.
+        let mut fields = Settings {
+            protocol: Protocol::default(),
+            calibration: Calibration::default(),
+        }
+        .fields();
         fields[0] = bytes[5] as u32;
         for (v, chunk) in fields[1..].iter_mut().zip(bytes[6..].chunks_exact(4)) {
             *v = word(chunk);
@@ -294,6 +371,7 @@ mod tests {
         s.protocol.order = StepOrder::UpDown;
         s.calibration.t1.n_per_count = 0.0123;
         s.calibration.servo.pulse_at_min_us = 500.0;
+        s.protocol.force.law.mu = 0.145;
         s
     }
 
@@ -355,6 +433,9 @@ mod tests {
                 Key::TareMs => 900.0,
                 Key::AmpControlV => 3.0,
                 Key::T1NPerCount | Key::T2NPerCount => 0.016,
+                Key::Mode => 1.0,
+                Key::ForceSineSteps => 9.0,
+                Key::ModelExponent => 0.8,
                 _ => value,
             };
             let t = s
@@ -368,11 +449,63 @@ mod tests {
     }
 
     #[test]
+    fn a_version_1_record_is_read_with_force_controls_defaults() {
+        let mut s = bench_settings();
+        s.protocol.force = crate::force::ForceConfig::default();
+        let v2 = s.encode(4);
+        // Version 1: the same first 25 values, nothing after them.
+        let mut v1 = v2[..V1_BYTES].to_vec();
+        v1[0] = 1;
+        assert_eq!(Settings::decode(&v1), Ok((s, 4)));
+        assert_eq!(
+            Settings::decode(&v2[..V1_BYTES]),
+            Err(SettingsError::Length)
+        );
+    }
+
+    #[test]
+    fn force_mode_needs_a_model_and_a_wrap_and_targets_the_rig_can_hold() {
+        use crate::force::ForceError;
+        let mut s = bench_settings();
+        s.protocol.force.law.mu = 0.0;
+        let refused = |r: Result<Settings, SettingsError>| match r {
+            Err(SettingsError::Protocol(ProtocolError::Force(e))) => Some(e),
+            _ => None,
+        };
+        assert_eq!(refused(s.with(Key::Mode, 1.0)), Some(ForceError::NoModel));
+        let s = s.with(Key::ModelMu, 0.145).unwrap();
+        let s = s.with(Key::Mode, 1.0).unwrap();
+        assert_eq!(s.protocol.levels(), 4, "steps of 5, 10, 20 and 30 N");
+        assert_eq!(refused(s.with(Key::WrapDeg, 0.0)), Some(ForceError::NoWrap));
+        assert_eq!(
+            refused(s.with(Key::ModelMu, 0.0)),
+            Some(ForceError::NoModel)
+        );
+        assert_eq!(
+            refused(s.with(Key::ForceLevel4N, 44.0)),
+            Some(ForceError::Level)
+        );
+        // A sine of 10 N about 5 N would pull below 1 N.
+        assert_eq!(
+            refused(s.with(Key::ForceProfile, 2.0)),
+            Some(ForceError::Level)
+        );
+        assert_eq!(
+            refused(s.with(Key::ForceSineToHz, 0.1)),
+            Some(ForceError::Sine)
+        );
+        assert_eq!(refused(s.with(Key::ForceKi, -1.0)), Some(ForceError::Gain));
+        // Back to the protocol: the steps are the angles again.
+        let p = s.with(Key::Mode, 0.0).unwrap();
+        assert_eq!(p.protocol.levels(), 12);
+    }
+
+    #[test]
     fn another_version_a_short_record_or_invalid_values_are_refused() {
         let s = bench_settings();
         let mut b = s.encode(1);
-        b[0] = 2;
-        assert_eq!(Settings::decode(&b), Err(SettingsError::Version(2)));
+        b[0] = 3;
+        assert_eq!(Settings::decode(&b), Err(SettingsError::Version(3)));
         assert_eq!(
             Settings::decode(&s.encode(1)[..SETTINGS_BYTES - 1]),
             Err(SettingsError::Length)

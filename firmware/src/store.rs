@@ -24,7 +24,7 @@ const SETTINGS_KEY: u8 = 1;
 /// Map key of the generation counter.
 const GENERATION_KEY: u8 = 2;
 /// Work buffer: the longest item (key + settings), rounded up to any flash's word.
-const BUFFER_BYTES: usize = 128;
+const BUFFER_BYTES: usize = 256;
 const _: () = assert!(SETTINGS_BYTES < BUFFER_BYTES);
 
 /// The flash range is not whole erase pages, or fewer than two.

@@ -9,6 +9,8 @@
 //! * [`flash`]: a NOR flash in RAM, the board's flash traits, for the settings store.
 //! * [`session`]: a bench session: boot from flash, host commands, weights, presses, resets.
 //! * [`campaign`]: many runs over diameters, wraps and voltages, in parallel threads.
+//! * [`force`]: force control (issue 43): the firmware holding T2 at a target on the plant,
+//!   open loop against feedback.
 //! * [`two_control`]: several cords, each with its own servo and firmware, on one capstan and
 //!   one drive motor (the thesis's two-control, single-drive rig).
 //!
@@ -17,6 +19,7 @@
 
 pub mod campaign;
 pub mod flash;
+pub mod force;
 pub mod noise;
 pub mod panic;
 pub mod run;

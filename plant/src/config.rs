@@ -100,6 +100,8 @@ pub struct ServoConfig {
     /// (assumed: 2000, so 21 N on the lever swings it at ~260 deg/s; capped at the no-load
     /// slew rate).
     pub backdrive_deg_per_s_per_nm: f64,
+    /// The position control's dead band in the motion (`crate::servo`; off by default).
+    pub dynamics: crate::servo::ServoDynamics,
 }
 
 impl Default for ServoConfig {
@@ -113,6 +115,7 @@ impl Default for ServoConfig {
             lever_m: 6.35e-3,
             unpowered_hold_nm: 0.003,
             backdrive_deg_per_s_per_nm: 2_000.0,
+            dynamics: crate::servo::ServoDynamics::EXACT,
         }
     }
 }

@@ -44,6 +44,7 @@ pub mod hal;
 mod injection;
 mod plant;
 pub mod rng;
+pub mod servo;
 
 pub use config::{
     CordConfig, CordSetup, FaultConfig, MotorConfig, PlantConfig, SensorConfig,
@@ -56,6 +57,7 @@ pub use plant::{
     CordTruth, DriveState, Plant, PlantError, ServoEvent, MAX_CORDS, MAX_INJECTIONS,
     MAX_SERVO_EVENTS, MAX_TRIGGER_EDGES,
 };
+pub use servo::ServoDynamics;
 
 /// The thesis's friction coefficient for its plain exponential fit (Table 1).
 pub const THESIS_MU: f64 = 0.115;

@@ -49,6 +49,7 @@ pub fn protocol() -> Protocol {
         window_before_next_ms: 100,
         capstan_diameter_mm: 12.7,
         wrap_deg: 360.0,
+        force: firmware::ForceConfig::default(),
     }
 }
 

@@ -66,6 +66,7 @@ fn pair(step: u32) -> Record {
         t_mid_ms: 5000 + 10_000 * step,
         t1: stats(2.0 * step as f32),
         t2: stats(4.1 * step as f32),
+        t2_target_n: 0.0,
     })
 }
 
@@ -94,6 +95,7 @@ fn session() -> Vec<(u32, Record)> {
         t_us: 10_000,
         counts: [540, 680],
         force_n: [2.0, 4.1],
+        t2_target_n: 0.0,
     });
     let end = Record::RunEnd(RunEnd {
         t_us: 60_000_000,

@@ -7,6 +7,7 @@
 //! * [`records`]: the log records, each kind's fields with their wire types and units, and
 //!   their defmt format strings;
 //! * [`codes`]: the codes the records carry (step order, channel, fault kind, settings source);
+//! * [`force`]: force control's codes (the control mode, the T2 target profile);
 //! * [`commands`]: the command words and the `reply` record's codes and messages;
 //! * [`pins`]: the Pico's pin map.
 //!
@@ -17,6 +18,7 @@
 
 pub mod codes;
 pub mod commands;
+pub mod force;
 pub mod pins;
 mod prim;
 pub mod records;
@@ -24,6 +26,7 @@ pub mod settings;
 
 pub use codes::{Channel, FaultKind, SettingsSource, StepOrder, NONE_CODE};
 pub use commands::{CommandError, CommandKind, MAX_LINE};
+pub use force::{ControlMode, ForceProfile};
 pub use prim::{Prim, Scalar};
 pub use records::{Field, Level, RecordKind};
 pub use settings::{Group, Key, Setting, Since, Value};

@@ -95,6 +95,14 @@ const CRC_SINCE_LATER: Part = Part::Field(Field {
     required: false,
 });
 const CRC: Part = field("crc", U32, "");
+/// The T2 target of force control (issue 43), in the run records: 0 when there is none (the
+/// protocol's runs, a force run's rest). A firmware built before it is still read (0).
+const T2_TARGET: Part = Part::Field(Field {
+    name: "t2_target_n",
+    prim: F32,
+    unit: "N",
+    required: false,
+});
 
 const RUN_START: &[Part] = &[SEQ, field("run", U32, ""), Part::Settings, CRC_SINCE_LATER];
 const SETTINGS: &[Part] = &[SEQ, field("source", U8, ""), Part::Settings, CRC];
@@ -105,6 +113,7 @@ const RAW: &[Part] = &[
     field("c2", U16, "counts"),
     field("t1_n", F32, "N"),
     field("t2_n", F32, "N"),
+    T2_TARGET,
     CRC_SINCE_LATER,
 ];
 const PAIR: &[Part] = &[
@@ -119,6 +128,7 @@ const PAIR: &[Part] = &[
     field("t2_mean_n", F32, "N"),
     field("t2_std_n", F32, "N"),
     field("t2_count", U32, ""),
+    T2_TARGET,
     CRC_SINCE_LATER,
 ];
 const FAULT: &[Part] = &[
@@ -232,14 +242,19 @@ impl RecordKind {
         })
     }
 
-    /// A setting as a field of this record: required in `settings`, and in `run_start` unless
-    /// it came with setup mode.
+    /// A setting as a field of this record: required in `settings` (but force control's, which
+    /// an older firmware lacks), and in `run_start` unless it came with setup mode or later.
     pub const fn setting_field(self, s: Setting) -> Field {
+        let required = match s.since() {
+            Since::First => true,
+            Since::SetupMode => matches!(self, RecordKind::Settings),
+            Since::ForceControl => false,
+        };
         Field {
             name: s.name(),
             prim: s.value().prim(),
             unit: s.unit(),
-            required: matches!(self, RecordKind::Settings) || matches!(s.since(), Since::First),
+            required,
         }
     }
 
@@ -271,7 +286,7 @@ mod tests {
     fn formats_are_the_wire_format() {
         assert_eq!(
             RecordKind::Raw.format().to_string(),
-            "raw seq={=u32} t_us={=i64} c1={=u16} c2={=u16} t1_n={=f32} t2_n={=f32} crc={=u32}"
+            "raw seq={=u32} t_us={=i64} c1={=u16} c2={=u16} t1_n={=f32} t2_n={=f32} t2_target_n={=f32} crc={=u32}"
         );
         assert_eq!(
             RecordKind::RunEnd.format().to_string(),
@@ -281,7 +296,8 @@ mod tests {
         assert!(settings.starts_with(
             "settings seq={=u32} source={=u8} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32}"
         ));
-        assert!(settings.ends_with("servo_max_deg={=f32} amp_full_scale_v={=f32} crc={=u32}"));
+        assert!(settings.contains("servo_max_deg={=f32} amp_full_scale_v={=f32} mode={=u8}"));
+        assert!(settings.ends_with("model_exponent={=f32} crc={=u32}"));
     }
 
     #[test]
@@ -295,7 +311,7 @@ mod tests {
             }
             assert_eq!(RecordKind::from_word(k.word()), Some(k));
         }
-        assert_eq!(RecordKind::RunStart.fields().count(), 2 + 25 + 1);
+        assert_eq!(RecordKind::RunStart.fields().count(), 2 + 43 + 1);
         let optional: std::vec::Vec<&str> = RecordKind::RunStart
             .fields()
             .filter(|f| !f.required)
@@ -309,6 +325,24 @@ mod tests {
                 "servo_max_us",
                 "servo_max_deg",
                 "amp_full_scale_v",
+                "mode",
+                "force_profile",
+                "force_level1_n",
+                "force_level2_n",
+                "force_level3_n",
+                "force_level4_n",
+                "force_sine_hz",
+                "force_sine_to_hz",
+                "force_sine_steps",
+                "force_kp",
+                "force_ki",
+                "force_t1_gain",
+                "force_rate_deg_s",
+                "force_shape_ms",
+                "model_mu",
+                "model_heat_per_n",
+                "model_t2_offset_n",
+                "model_exponent",
                 "crc"
             ]
         );

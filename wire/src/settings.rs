@@ -7,7 +7,8 @@
 /// How a setting is held (and sent: its wire type, [`Value::prim`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Value {
-    /// A code, one byte: the step order ([`crate::StepOrder::code`]).
+    /// A code, one byte: the step order ([`crate::StepOrder::code`]), the control mode, the
+    /// force profile ([`Setting::code_name`]).
     Code,
     /// A whole number (ms, Hz), `u32`.
     Whole,
@@ -33,6 +34,9 @@ pub enum Group {
     Protocol,
     /// The calibration (how counts and angles map to forces and pulses).
     Calibration,
+    /// Force control (issue 43): the mode, the T2 target profile, the controller's gains and
+    /// the fitted capstan law its feedforward goes through.
+    Force,
 }
 
 /// Since when the `run_start` record carries a setting (the `settings` record carries all).
@@ -43,6 +47,9 @@ pub enum Since {
     /// Since setup mode (the tare reference, the servo map and the amplifier's full scale): a
     /// `run_start` of a firmware built before it lacks them, and the host reads it anyway.
     SetupMode,
+    /// Since force control (issue 43): a `run_start` of an older firmware lacks them (the host
+    /// takes the defaults: protocol mode).
+    ForceControl,
 }
 
 /// The table: `Variant "name" group value "unit" since key "meaning";` one row per setting, in
@@ -133,11 +140,11 @@ macro_rules! keys {
     };
 }
 
-/// Values in the settings: 15 of the protocol, 10 of the calibration.
-pub const SETTINGS: usize = 25;
+/// Values in the settings: 15 of the protocol, 10 of the calibration, 18 of force control.
+pub const SETTINGS: usize = 43;
 
 /// Settings the host may set by name (all but the two rates).
-pub const KEYS: usize = 23;
+pub const KEYS: usize = 41;
 
 settings! {
     // variant     name               group       value unit      run_start key meaning
@@ -166,6 +173,24 @@ settings! {
     ServoMaxUs     "servo_max_us"     Calibration Real  "µs"      SetupMode 19 "servo pulse at servo_max_deg";
     ServoMaxDeg    "servo_max_deg"    Calibration Real  "°"       SetupMode 20 "servo angle reached at servo_max_us";
     AmpFullScaleV  "amp_full_scale_v" Calibration Real  "V"       SetupMode 21 "amplifier control voltage at full PWM duty";
+    Mode           "mode"             Force       Code  ""        ForceControl 23 "what a run does: protocol (servo steps) or force (T2 held to a target)";
+    ForceProfile   "force_profile"    Force       Code  ""        ForceControl 24 "force mode's T2 target: steps, ramp or sine";
+    ForceLevel1N   "force_level1_n"   Force       Real  "N"       ForceControl 25 "T2 target of segment 1 (ramp: start; sine: mean)";
+    ForceLevel2N   "force_level2_n"   Force       Real  "N"       ForceControl 26 "T2 target of segment 2 (ramp: end; sine: amplitude; 0 ends the steps)";
+    ForceLevel3N   "force_level3_n"   Force       Real  "N"       ForceControl 27 "T2 target of segment 3 (steps; 0 ends them)";
+    ForceLevel4N   "force_level4_n"   Force       Real  "N"       ForceControl 28 "T2 target of segment 4 (steps; 0 ends them)";
+    ForceSineHz    "force_sine_hz"    Force       Real  "Hz"      ForceControl 29 "sine: first frequency";
+    ForceSineToHz  "force_sine_to_hz" Force       Real  "Hz"      ForceControl 30 "sine: last frequency (log-spaced between)";
+    ForceSineSteps "force_sine_steps" Force       Whole ""        ForceControl 31 "sine: frequencies, one per segment (1 to 16)";
+    ForceKp        "force_kp"         Force       Real  "N/N"     ForceControl 32 "T2 feedback: proportional gain (0 with force_ki 0: open loop)";
+    ForceKi        "force_ki"         Force       Real  "1/s"     ForceControl 33 "T2 feedback: integral gain";
+    ForceT1Gain    "force_t1_gain"    Force       Real  "°/s/N"   ForceControl 34 "servo speed per N of T1 error (the T1 loop)";
+    ForceRateDegS  "force_rate_deg_s" Force       Real  "°/s"     ForceControl 35 "fastest servo command in force mode";
+    ForceShapeMs   "force_shape_ms"   Force       Whole "ms"      ForceControl 36 "a jump of the target is shaped over this time constant (0: none)";
+    ModelMu        "model_mu"         Force       Real  ""        ForceControl 37 "fitted law: mu at the rig's diameter and drive (0: no model)";
+    ModelHeatPerN  "model_heat_per_n" Force       Real  "1/N"     ForceControl 38 "fitted law: mu falls by exp(-this x (T2 - T1)) (contact heating, settled)";
+    ModelT2OffsetN "model_t2_offset_n" Force      Real  "N"       ForceControl 39 "fitted law: what the T2 sensor adds while the capstan turns";
+    ModelExponent  "model_exponent"   Force       Real  ""        ForceControl 40 "fitted law: tension exponent n (1: Euler-Eytelwein)";
 }
 
 impl Setting {
@@ -177,6 +202,34 @@ impl Setting {
     /// The setting of a name.
     pub fn from_name(name: &str) -> Option<Setting> {
         Setting::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// The name of a code of a [`Value::Code`] setting (the step order, the control mode, the
+    /// force profile), as `set KEY NAME` takes it; `None` for another setting or an unknown code.
+    pub const fn code_name(self, code: u8) -> Option<&'static str> {
+        match self {
+            Setting::Order => match crate::StepOrder::from_code(code) {
+                Some(o) => Some(o.name()),
+                None => None,
+            },
+            Setting::Mode => match crate::ControlMode::from_code(code) {
+                Some(m) => Some(m.name()),
+                None => None,
+            },
+            Setting::ForceProfile => match crate::ForceProfile::from_code(code) {
+                Some(p) => Some(p.name()),
+                None => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// The code of a name of a [`Value::Code`] setting (as bytes: the board's parser has no
+    /// `str`).
+    pub fn code_of_name(self, name: &[u8]) -> Option<u8> {
+        (0..=u8::MAX)
+            .take_while(|&c| self.code_name(c).is_some())
+            .find(|&c| self.code_name(c).is_some_and(|n| n.as_bytes() == name))
     }
 }
 
@@ -275,17 +328,46 @@ mod tests {
     }
 
     #[test]
-    fn fifteen_settings_of_the_protocol_then_ten_of_the_calibration() {
+    fn fifteen_settings_of_the_protocol_then_ten_of_the_calibration_then_force_control() {
         for s in Setting::ALL {
-            let protocol = s.index() < 15;
-            assert_eq!(s.group() == Group::Protocol, protocol, "{}", s.name());
+            let group = match s.index() {
+                0..15 => Group::Protocol,
+                15..25 => Group::Calibration,
+                _ => Group::Force,
+            };
+            assert_eq!(s.group(), group, "{}", s.name());
+            // Force control came later: an older run_start lacks it.
+            assert_eq!(s.since() == Since::ForceControl, group == Group::Force);
         }
     }
 
     #[test]
-    fn every_setting_but_the_order_has_a_unit() {
+    fn every_setting_has_a_unit_but_codes_counts_and_pure_numbers() {
+        let unitless = [
+            Setting::Order,
+            Setting::Mode,
+            Setting::ForceProfile,
+            Setting::ForceSineSteps,
+            Setting::ModelMu,
+            Setting::ModelExponent,
+        ];
         for s in Setting::ALL {
-            assert_eq!(s.unit().is_empty(), s == Setting::Order, "{}", s.name());
+            assert_eq!(s.unit().is_empty(), unitless.contains(&s), "{}", s.name());
         }
+    }
+
+    #[test]
+    fn codes_have_names_both_ways() {
+        for s in Setting::ALL {
+            let named = (0..=u8::MAX).filter(|&c| s.code_name(c).is_some()).count();
+            assert_eq!(named > 0, s.value() == Value::Code, "{}", s.name());
+            for c in 0..named as u8 {
+                let name = s.code_name(c).unwrap();
+                assert_eq!(s.code_of_name(name.as_bytes()), Some(c));
+            }
+        }
+        assert_eq!(Setting::Mode.code_of_name(b"force"), Some(1));
+        assert_eq!(Setting::ForceProfile.code_of_name(b"sine"), Some(2));
+        assert_eq!(Setting::Mode.code_of_name(b"sine"), None);
     }
 }

@@ -4,6 +4,7 @@
 use super::steps::Steps;
 use super::{on_grid, Inputs, Outputs, Phase, Rig, TARE_MAX_N};
 use crate::calib::ChannelCal;
+use crate::force::ForceRun;
 use crate::hal::Channel;
 use crate::record::{Fault, FaultKind, LogSink, RawSample, Record, RunEnd, RunStart};
 use crate::safety::{SafetyInput, Supervisor};
@@ -52,6 +53,8 @@ impl Rig {
             }
         }
         let phase = Phase::Run(Steps::new(&self.protocol));
+        // (Force mode: the controller starts at rest, nothing learned.)
+        self.force = ForceRun::new(&self.protocol, &self.limits);
         let fault = fault.map(|(kind, ch, value)| Fault {
             kind,
             channel: Some(ch),
@@ -119,8 +122,7 @@ impl Rig {
             out.led = true;
             return out;
         }
-        self.log_raw(inp, force_n, t_us, sink);
-        self.step_sample(elapsed_us, counts_ok, t_us, sink)
+        self.step_sample(inp, force_n, elapsed_us, counts_ok, t_us, sink)
     }
 
     /// The run's clock on this sample: µs from the press, on the sample grid.
@@ -174,12 +176,20 @@ impl Rig {
 
     /// Decimated raw samples for the log, from the run start on.
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    fn log_raw(&mut self, inp: &Inputs, force_n: [f32; 2], t_us: i64, sink: &mut impl LogSink) {
+    fn log_raw(
+        &mut self,
+        inp: &Inputs,
+        force_n: [f32; 2],
+        t2_target_n: f32,
+        t_us: i64,
+        sink: &mut impl LogSink,
+    ) {
         if self.raw_in == 0 {
             let raw = RawSample {
                 t_us,
                 counts: [inp.counts[0].unwrap_or(0), inp.counts[1].unwrap_or(0)],
                 force_n,
+                t2_target_n,
             };
             sink.emit(self.seq.next_seq(), &Record::Raw(raw));
             self.raw_in = self.protocol.sample_hz / self.protocol.raw_log_hz;
@@ -187,11 +197,14 @@ impl Rig {
         self.raw_in -= 1;
     }
 
-    /// One sample of the steps (after the tare): the step held, its window, its pair when
+    /// One sample of the steps (after the tare): the step held (in force mode, the servo
+    /// command of the controller holding its T2 target), the raw log, its window, its pair when
     /// due, the run's end after the last.
     #[cfg_attr(not(target_os = "none"), inline(always))]
     fn step_sample(
         &mut self,
+        inp: &Inputs,
+        force_n: [f32; 2],
         elapsed_us: u64,
         counts: Option<[u16; 2]>,
         t_us: i64,
@@ -202,6 +215,18 @@ impl Rig {
             return self.safe_outputs();
         };
         steps.sample(p, elapsed_us, counts);
+        let mut t2_target_n = 0.0;
+        if p.force.is_on() {
+            let k = steps.step();
+            let in_ms = ((elapsed_us / 1000) as u32).saturating_sub(p.step_start_ms(k));
+            steps.set_servo_deg(self.force.sample(p, k, in_ms, force_n));
+            t2_target_n = self.force.target_n();
+        }
+        self.log_raw(inp, force_n, t2_target_n, t_us, sink);
+        let p = &self.protocol;
+        let Phase::Run(steps) = &mut self.phase else {
+            return self.safe_outputs();
+        };
         let pair = steps.pair_due(p, &self.cal, elapsed_us, self.period_us as u64);
         let (ended, servo_deg) = (steps.ended(), steps.servo_deg());
         if let Some(pair) = pair {

@@ -97,6 +97,7 @@ impl Steps {
         self.pair_due_us = u64::MAX;
         let (a, b) = p.window_ms(self.step);
         let [t1, t2] = self.window.stats(cal);
+        let mid_in_ms = (a + b) / 2 - p.step_start_ms(self.step);
         Some(StepPair {
             step: self.step,
             level: p.level(self.step),
@@ -104,6 +105,7 @@ impl Steps {
             t_mid_ms: (a + b) / 2 - p.trigger_at_ms(),
             t1,
             t2,
+            t2_target_n: p.force.nominal_n(self.step, mid_in_ms, p.dwell_ms),
         })
     }
 
@@ -115,6 +117,16 @@ impl Steps {
     /// The servo angle of the step, deg.
     pub(super) fn servo_deg(&self) -> f32 {
         self.servo_deg
+    }
+
+    /// The step being held (0: rest before the first).
+    pub(super) fn step(&self) -> u32 {
+        self.step
+    }
+
+    /// Force control's servo command now (the pair's angle is the command at its end).
+    pub(super) fn set_servo_deg(&mut self, deg: f32) {
+        self.servo_deg = deg;
     }
 
     /// The step's tension level has been held for [`CORD_CHECK_SETTLE_MS`] at `elapsed_ms`.

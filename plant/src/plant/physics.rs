@@ -89,12 +89,11 @@ impl Plant {
     /// frame something to do, ends the settled spell and first moves `next_frame_us` on past
     /// the present (so the new pulse still waits for the next frame on the grid).
     fn next_event_us(&self) -> u64 {
-        let characteristic = self.cfg.servo.characteristic;
+        let servo = self.cfg.servo;
         let mut next = u64::MAX;
         // (A frame that takes a servo's power away, or gives it back, changes it too.)
         if self.cords.iter().any(|c| {
-            frame_target_deg(characteristic, c) != c.target_deg
-                || c.powered != (c.pending_pulse_us > 0.0)
+            frame_target_deg(&servo, c) != c.target_deg || c.powered != (c.pending_pulse_us > 0.0)
         }) {
             next = self.next_frame_us;
         }
@@ -127,9 +126,9 @@ impl Plant {
         if t_end < self.next_frame_us {
             return;
         }
-        let characteristic = self.cfg.servo.characteristic;
+        let servo = self.cfg.servo;
         for c in self.cords.iter_mut() {
-            let target = frame_target_deg(characteristic, c);
+            let target = frame_target_deg(&servo, c);
             // Releasing (angle rising) lets the tension fall; pulling raises it.
             if target != c.target_deg {
                 c.falling = target > c.target_deg;
@@ -426,11 +425,12 @@ fn backdrive_deg_per_s(s: &crate::ServoConfig, c: &super::CordState) -> f64 {
     (excess_nm * s.backdrive_deg_per_s_per_nm).min(s.no_load_deg_per_s)
 }
 
-/// The target a frame gives cord `c`'s servo: its pulse's angle (no pulse: it stops where it
-/// is, unless the cord back-drives it).
-fn frame_target_deg(characteristic: crate::ServoCharacteristic, c: &super::CordState) -> f64 {
+/// The target a frame gives cord `c`'s servo: its pulse's angle, or short of it by the dead
+/// band (`crate::servo`); no pulse: it stops where it is, unless the cord back-drives it.
+fn frame_target_deg(s: &crate::ServoConfig, c: &super::CordState) -> f64 {
     if c.pending_pulse_us > 0.0 {
-        characteristic.angle_deg(c.pending_pulse_us)
+        s.dynamics
+            .target_deg(&s.characteristic, c.pending_pulse_us, c.angle_deg)
     } else {
         c.angle_deg
     }

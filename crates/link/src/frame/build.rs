@@ -60,7 +60,8 @@ pub(super) fn parse(name: &str, prim: Prim, v: &str) -> Result<Scalar, String> {
 
 /// The typed record of a kind from its fields: each of the schema's, in its order, from the
 /// frame; one the firmware's record does not carry (a field the schema does not require,
-/// which an older firmware lacks) as the firmware's default. Not NaN: records compare equal.
+/// which an older firmware lacks) as the firmware's default (a setting's built-in value; a run
+/// record's `t2_target_n`, 0: no target). Not NaN: records compare equal.
 pub(super) fn build(kind: RecordKind, f: &Fields) -> Result<Record, String> {
     let defaults = Settings {
         protocol: Protocol::default(),
@@ -70,6 +71,7 @@ pub(super) fn build(kind: RecordKind, f: &Fields) -> Result<Record, String> {
     for field in kind.fields().filter(|field| field.name != "crc") {
         let value = match f.layout.position(field.name) {
             Some(_) => parse(field.name, field.prim, f.raw(field.name)?)?,
+            None if !field.required && field.name == "t2_target_n" => Scalar::F32(0.0),
             None => Setting::from_name(field.name)
                 .filter(|_| !field.required)
                 .map(|s| defaults.scalar(s))
