@@ -1,5 +1,8 @@
 //! `capstan analyze [DATA.csv] --out DIR`: fit the models, test the mechanisms, write the
-//! report (`report.html`), `metrics.json` and `predictions.csv`.
+//! report (`report.html`), `metrics.json` and `predictions.csv`. On a force-control session
+//! (pairs with a T2 target): the tracking report instead (`analyze/force.rs`).
+
+mod force;
 
 use anyhow::Context;
 use capstan_data::{load_pairs, thesis_dataset};
@@ -67,6 +70,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
+    if let (Some(path), true) = (&args.data, force::is_force_session(&ds)) {
+        // Force control: how the rig tracked its target, not the law (issue 43).
+        return force::run(&args, path, &ctx);
+    }
     capstan_data::check_capstan_data(&ds)?;
     capstan_engine::analysis::enough_rows(&ds)?;
     let names = ["report.html", "metrics.json", "predictions.csv"];

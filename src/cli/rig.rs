@@ -9,6 +9,7 @@
 //! probe. Here: `say` what is printed, `live` the live view, and the command itself.
 
 mod live;
+pub mod model;
 mod say;
 
 pub use live::{watch as watch_live, NotInSetup};
@@ -39,6 +40,12 @@ SETTING UP THE RIG AT THE BENCH
     $R leave                    leave setup mode: the servo homes to rest
     $R run                      start a run, as the button does: NOTHING RECORDS IT. To record
                                 it: capstan log ... --no-flash --start (starts it and logs)
+
+  FORCE CONTROL (the servo holds T2 at a target; docs/README-force.md):
+    $R load-model --from report/metrics.json   the fitted law at the rig's wrap, diameter and
+                                drive (set them first); refused outside the fitted data
+    $R set mode force           runs hold T2: steps of force_level1_n .. force_level4_n (set
+                                force_profile ramp|sine, force_sine_hz ... for the others)
 
   Every command is checked here first, with the firmware's own parser and settings rules: a
   typo never reaches the board. Then it waits for the board's reply (3 s; store 5 s) and
@@ -97,10 +104,16 @@ pub struct Args {
     #[arg(long, value_name = "KHZ")]
     pub speed: Option<u32>,
 
+    /// load-model: the `metrics.json` of the fitted model (`capstan analyze`) whose law force
+    /// control's feedforward goes through.
+    #[arg(long, value_name = "METRICS_JSON")]
+    pub from: Option<PathBuf>,
+
     /// The command: setup | leave | jog DEG | servo DEG | zero | weigh t1|t2 NEWTONS |
     /// set KEY VALUE | show | store | defaults | run | abort | ack; or on the host:
-    /// live [SECONDS] | keys; or at a simulated board (--sim): bench load t1|t2 NEWTONS |
-    /// bench unload | bench press [MS] | bench wait SECONDS | bench power-cycle.
+    /// live [SECONDS] | keys | load-model --from METRICS_JSON; or at a simulated board
+    /// (--sim): bench load t1|t2 NEWTONS | bench unload | bench press [MS] | bench wait
+    /// SECONDS | bench power-cycle.
     #[arg(value_name = "COMMAND", required = true, num_args = 1.., allow_negative_numbers = true)]
     pub words: Vec<String>,
 }
@@ -125,7 +138,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 fn rig(args: &Args) -> anyhow::Result<()> {
     let (verb, rest) = args.words.split_first().ok_or(CheckError::Empty)?;
+    if args.from.is_some() != (verb == "load-model") {
+        bail!(CheckError::Usage(
+            "--from goes with load-model, and load-model needs it: capstan rig ... load-model \
+             --from report/metrics.json"
+                .into()
+        ));
+    }
     match verb.as_str() {
+        "load-model" => {
+            if !rest.is_empty() {
+                bail!(CheckError::Usage(
+                    "load-model takes no words, only --from METRICS_JSON".into()
+                ));
+            }
+            let path = args.from.clone().unwrap_or_default();
+            with_link(args, |link| load_model(link, &path, &mut out, &mut note))
+        }
         "keys" => {
             if !rest.is_empty() {
                 bail!(CheckError::Usage("keys takes no words".into()));
@@ -216,6 +245,55 @@ fn note_event(e: capstan_link::frame::Event) {
 
 fn note(line: String) {
     crate::errln!("{line}");
+}
+
+/// `load-model`: the fitted model's law at the rig's wrap, diameter and drive voltage (from the
+/// settings the board reports), refused outside the fitted data, sent as four `set`s.
+pub fn load_model(
+    link: &mut dyn RigLink,
+    path: &Path,
+    out: &mut dyn FnMut(String),
+    note: &mut dyn FnMut(String),
+) -> anyhow::Result<()> {
+    let shown = exchange(link, "show", &Command::Show, note)?;
+    let Some(report) = shown.settings else {
+        bail!("the board did not report its settings (no answer to show)");
+    };
+    let (p, c) = (&report.settings.protocol, &report.settings.calibration);
+    let f = &p.force;
+    let max_target_n = match f.profile {
+        firmware::ForceProfile::Sine => f.levels_n[0] + f.levels_n[1],
+        _ => f.levels_n.iter().copied().fold(0.0, f32::max),
+    };
+    // An f32 setting as the decimal it was set as (2.5 V × 4 is 10 V, not 10.000000149).
+    let decimal = |v: f32| v.to_string().parse::<f64>().unwrap_or(f64::NAN);
+    let point = model::RigPoint {
+        wrap_deg: decimal(p.wrap_deg),
+        diameter_mm: decimal(p.capstan_diameter_mm),
+        drive_v: decimal(c.amp.drive_v(p.amp_control_v)),
+        max_target_n: decimal(max_target_n),
+    };
+    let loaded = model::load(path, &point)?;
+    for line in loaded.set_lines() {
+        let words: Vec<String> = line.split(' ').map(String::from).collect();
+        let (line, cmd) = command_line(&words)?;
+        send(link, &line, &cmd, &mut |_| {}, note)?;
+    }
+    let l = &loaded.law;
+    out(format!(
+        "loaded {}: mu {} (at {} mm, {} V), heating {} /N, T2 offset {} N, exponent {}; the \
+         largest target, {} N, needs T1 = {:.2} N (within the fitted data); store to keep it",
+        path.display(),
+        l.mu,
+        point.diameter_mm,
+        point.drive_v,
+        l.heat_per_n,
+        l.t2_offset_n,
+        l.exponent,
+        point.max_target_n,
+        loaded.t1_max_n
+    ));
+    Ok(())
 }
 
 /// Send one checked command (`line`, from [`command_line`]) and say its answer to `out`;

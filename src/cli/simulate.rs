@@ -6,6 +6,7 @@
 //! * `two`: the two-control rig (`--two-control`) and its files.
 
 mod checks;
+mod force;
 mod output;
 mod two;
 
@@ -34,6 +35,37 @@ impl From<Order> for StepOrder {
             Order::Monotone => StepOrder::Monotone,
             Order::Updown => StepOrder::UpDown,
             Order::Pulse => StepOrder::Pulse,
+        }
+    }
+}
+
+/// What the simulated runs do.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// The test protocol: the servo steps through its angles (a campaign).
+    Protocol,
+    /// Force control: the servo holds T2 at a target (one rig; docs/README-force.md).
+    Force,
+}
+
+/// Force mode's target profiles on the command line.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Profile {
+    /// One level a segment (--levels-n, up to four).
+    Steps,
+    /// Hold the first level, ramp to the second over a dwell, hold it.
+    Ramp,
+    /// Hold the mean (first level), then a sine of the second's amplitude at each frequency of
+    /// --sine-hz.
+    Sine,
+}
+
+impl From<Profile> for firmware::ForceProfile {
+    fn from(p: Profile) -> firmware::ForceProfile {
+        match p {
+            Profile::Steps => firmware::ForceProfile::Steps,
+            Profile::Ramp => firmware::ForceProfile::Ramp,
+            Profile::Sine => firmware::ForceProfile::Sine,
         }
     }
 }
@@ -153,6 +185,65 @@ pub struct Args {
     /// Drive motor winding resistance, Ω [default: 4.65; the thesis m-file says 46.5].
     #[arg(long, value_name = "OHM", allow_negative_numbers = true)]
     pub motor_ohm: Option<f64>,
+    /// What the runs do: protocol (a campaign of servo steps) or force (the servo holds T2 at
+    /// a target: one rig, default 720° on the 12.7 mm capstan at 10 V).
+    #[arg(long, value_enum, default_value = "protocol")]
+    pub mode: Mode,
+    /// Force mode: the target profile, or a list of them for consecutive runs (steps,sine: run
+    /// 1 steps, run 2 a sine sweep) [default: steps].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub profile: Option<Vec<Profile>>,
+    /// Force mode: T2 targets, N [default: steps 5,10,20,30; ramp 5,25 (from, to); sine 15,5
+    /// (mean, amplitude)].
+    #[arg(
+        long = "levels-n",
+        value_delimiter = ',',
+        value_name = "N",
+        allow_negative_numbers = true
+    )]
+    pub levels_n: Option<Vec<f64>>,
+    /// Force mode, sine: F, F0:F1 or F0:F1:STEPS, Hz, log-spaced, one frequency a dwell
+    /// [default: 0.3:20:10].
+    #[arg(long = "sine-hz", value_name = "F0:F1:STEPS")]
+    pub sine_hz: Option<String>,
+    /// Force mode: the fitted model (`capstan analyze`'s metrics.json) whose law the board's
+    /// feedforward goes through, and the cord's [default: the thesis fit, built in].
+    #[arg(long = "model-from", value_name = "METRICS_JSON")]
+    pub model_from: Option<PathBuf>,
+    /// Force mode: the cord's mu over the model's (1.2: a new cord with 20 % more friction).
+    #[arg(
+        long = "cord-mu-factor",
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
+    pub cord_mu_factor: Option<f64>,
+    /// Force mode: the cord without the model's contact heating.
+    #[arg(long)]
+    pub no_heating: bool,
+    /// Force mode: no feedback on T2 (the feedforward through the law alone).
+    #[arg(long)]
+    pub open_loop: bool,
+    /// Force mode: give the board Euler-Eytelwein with this one mu instead of the fitted law.
+    #[arg(long = "ee-mu", value_name = "MU", allow_negative_numbers = true)]
+    pub ee_mu: Option<f64>,
+    /// Force mode: proportional gain on the T2 error [default: the firmware's, 1].
+    #[arg(long, allow_negative_numbers = true)]
+    pub kp: Option<f64>,
+    /// Force mode: integral gain, 1/s [default: the firmware's, 5].
+    #[arg(long, allow_negative_numbers = true)]
+    pub ki: Option<f64>,
+    /// Force mode: open loop with Euler-Eytelwein and one mu, open loop with the fitted law,
+    /// and the law with feedback, side by side on the model's cord, cords whose mu is off by
+    /// ±--compare-mu-pct and the model's cord without heating: compare.csv.
+    #[arg(long)]
+    pub compare: bool,
+    /// Force mode, --compare: how far the new cords' mu is off the model's, %.
+    #[arg(
+        long = "compare-mu-pct",
+        default_value_t = 20.0,
+        allow_negative_numbers = true
+    )]
+    pub compare_mu_pct: f64,
 }
 
 fn model(args: &Args) -> anyhow::Result<(Model, Vec<Effect>)> {
@@ -287,6 +378,26 @@ fn plant(args: &Args) -> anyhow::Result<host_sim::plant::PlantConfig> {
 /// Run `capstan simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     checks::check_ranges(&args)?;
+    if args.mode == Mode::Force {
+        return force::run_force(&args);
+    }
+    for (flag, given) in [
+        ("--profile", args.profile.is_some()),
+        ("--levels-n", args.levels_n.is_some()),
+        ("--sine-hz", args.sine_hz.is_some()),
+        ("--model-from", args.model_from.is_some()),
+        ("--cord-mu-factor", args.cord_mu_factor.is_some()),
+        ("--no-heating", args.no_heating),
+        ("--open-loop", args.open_loop),
+        ("--ee-mu", args.ee_mu.is_some()),
+        ("--kp", args.kp.is_some()),
+        ("--ki", args.ki.is_some()),
+        ("--compare", args.compare),
+    ] {
+        if given {
+            bail!("{flag} is for --mode force");
+        }
+    }
     if args.two_control {
         return two::run_two(&args);
     }

@@ -44,12 +44,13 @@ fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<
     Ok(w)
 }
 
-/// A pairs CSV of the session: the schema's columns and `boot`, the board's start each run
-/// belongs to (a reset starts the run numbers again; `boot` keeps those runs apart for the
-/// reader).
+/// A pairs CSV of the session: the schema's columns, `t2_target_n` (force control's target,
+/// 0 where there is none) and `boot`, the board's start each run belongs to (a reset starts the
+/// run numbers again; `boot` keeps those runs apart for the reader).
 fn create_pairs(set: &mut Staged, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
     let w = create(set, name, None)?;
-    PairsWriter::with_labels(w, &["boot"]).with_context(|| format!("cannot write {name}"))
+    PairsWriter::with_extra(w, &["t2_target_n"], &["boot"])
+        .with_context(|| format!("cannot write {name}"))
 }
 
 /// f32 as written: the shortest decimal that reads back to the same f32.
@@ -130,12 +131,13 @@ impl Files {
     pub fn raw(&mut self, run: &str, seq: u32, r: &RawSample) -> anyhow::Result<()> {
         writeln!(
             self.raw,
-            "{run},{seq},{},{},{},{},{}",
+            "{run},{seq},{},{},{},{},{},{}",
             r.t_us as f64 / 1e6,
             r.counts[0],
             r.counts[1],
             f(r.force_n[0]),
-            f(r.force_n[1])
+            f(r.force_n[1]),
+            f(r.t2_target_n)
         )
         .with_context(|| self.at("raw.csv"))
     }

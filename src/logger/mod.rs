@@ -3,8 +3,8 @@
 //!
 //! | file | what |
 //! |---|---|
-//! | `raw.csv` | `run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n`: the decimated raw samples |
-//! | `pairs.csv` | the conditioned pairs, in the schema of `data` (`analyze` reads it), and `boot`: 1, then one more at every restart of the board (its run numbers start again) |
+//! | `raw.csv` | `run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n,t2_target_n`: the decimated raw samples (`t2_target_n`: force control's T2 target, 0 where none) |
+//! | `pairs.csv` | the conditioned pairs, in the schema of `data` (`analyze` reads it), `t2_target_n` (force control's target, 0 where none) and `boot`: 1, then one more at every restart of the board (its run numbers start again) |
 //! | `pairs-incomplete.csv` | only if needed: pairs whose set-up (wrap, diameter, drive voltage) or run number is unknown, same schema with those cells empty |
 //! | `faults.csv` | `run,seq,time_s,kind,channel,value` |
 //! | `messages.txt` | the firmware's other log lines (`LEVEL text`), and each command reply as `REPLY seq=N sentence` |
@@ -59,7 +59,7 @@ pub const LIVE_CSV: &str = "live.csv";
 pub const SUMMARY_JSON: &str = "summary.json";
 
 /// Header of `raw.csv`.
-pub const RAW_HEADER: &str = "run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n";
+pub const RAW_HEADER: &str = "run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n,t2_target_n";
 /// Header of `faults.csv`.
 pub const FAULTS_HEADER: &str = "run,seq,time_s,kind,channel,value";
 /// Header of `live.csv`.

@@ -319,7 +319,8 @@ impl<'f> Logger<'f> {
             time_s: Some(p.t_mid_ms as f64 / 1000.0),
             t1_n: decimal(p.t1.mean_n),
             t2_n: decimal(p.t2.mean_n),
-            extra: Vec::new(),
+            // Force control's target (0: none).
+            extra: vec![decimal(p.t2_target_n)],
             labels: vec![self.boot.to_string()],
         };
         let complete =

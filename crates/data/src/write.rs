@@ -41,7 +41,7 @@ pub(super) fn columns_of(pairs: &[Pair]) -> Vec<usize> {
 /// that the pairs do not all carry (so what is written reads back as it was).
 pub fn write_pairs_to(w: &mut impl Write, pairs: &[Pair]) -> std::io::Result<()> {
     let columns = columns_of(pairs);
-    let mut out = PairsWriter::with_columns(w, columns, &[])?;
+    let mut out = PairsWriter::with_columns(w, columns, &[], &[])?;
     pairs.iter().try_for_each(|p| out.write(p))
 }
 
@@ -55,31 +55,47 @@ pub struct PairsWriter<W: Write> {
     inner: W,
     /// Indices into [`PAIRS_HEADER`], in order.
     columns: Vec<usize>,
-    /// Text (label) columns after them: each pair's [`Pair::labels`], in order.
+    /// Further numeric columns after them: each pair's [`Pair::extra`], in order.
+    extra: usize,
+    /// Text (label) columns after those: each pair's [`Pair::labels`], in order.
     labels: usize,
 }
 
 impl<W: Write> PairsWriter<W> {
     /// Start the CSV with every column: write the header.
     pub fn new(inner: W) -> std::io::Result<Self> {
-        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect(), &[])
+        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect(), &[], &[])
     }
 
     /// Start the CSV with every column and the text columns `labels` after them (e.g.
     /// `boot`, a run label of [`super::read::RUN_LABELS`]); each pair written carries their
     /// values in [`Pair::labels`].
     pub fn with_labels(inner: W, labels: &[&str]) -> std::io::Result<Self> {
-        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect(), labels)
+        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect(), &[], labels)
+    }
+
+    /// Start the CSV with every column, the numeric columns `extra` after them (e.g.
+    /// `t2_target_n`, force control's target) and then the text columns `labels`; each pair
+    /// written carries their values in [`Pair::extra`] and [`Pair::labels`].
+    pub fn with_extra(inner: W, extra: &[&str], labels: &[&str]) -> std::io::Result<Self> {
+        Self::with_columns(inner, (0..PAIRS_HEADER.len()).collect(), extra, labels)
     }
 
     /// Start the CSV with these columns of [`PAIRS_HEADER`] (indices, in order).
-    fn with_columns(mut inner: W, columns: Vec<usize>, labels: &[&str]) -> std::io::Result<Self> {
+    fn with_columns(
+        mut inner: W,
+        columns: Vec<usize>,
+        extra: &[&str],
+        labels: &[&str],
+    ) -> std::io::Result<Self> {
         let mut names: Vec<&str> = columns.iter().map(|&i| PAIRS_HEADER[i]).collect();
+        names.extend_from_slice(extra);
         names.extend_from_slice(labels);
         writeln!(inner, "{}", names.join(","))?;
         Ok(PairsWriter {
             inner,
             columns,
+            extra: extra.len(),
             labels: labels.len(),
         })
     }
@@ -91,6 +107,12 @@ impl<W: Write> PairsWriter<W> {
             .iter()
             .map(|&i| column_value(p, i).map_or(String::new(), |v| v.to_string()))
             .collect();
+        cells.extend((0..self.extra).map(|k| {
+            p.extra
+                .get(k)
+                .filter(|v| v.is_finite())
+                .map_or(String::new(), |v| v.to_string())
+        }));
         cells.extend((0..self.labels).map(|k| text_cell(p.labels.get(k).map_or("", |l| l))));
         writeln!(self.inner, "{}", cells.join(","))
     }

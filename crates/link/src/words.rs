@@ -43,8 +43,9 @@ pub fn setting_values(s: &Settings) -> Vec<SettingValue> {
         .map(|&setting| {
             let bits = s.get(setting);
             let value = match setting.value() {
-                Value::Code => StepOrder::from_code(bits as u8)
-                    .map_or_else(|| bits.to_string(), |o| o.name().to_string()),
+                Value::Code => setting
+                    .code_name(bits as u8)
+                    .map_or_else(|| bits.to_string(), str::to_string),
                 Value::Whole => bits.to_string(),
                 Value::Real => f32::from_bits(bits).to_string(),
             };
@@ -80,9 +81,11 @@ fn significant(v: f32, digits: i32) -> String {
 /// The value of `set KEY` as the firmware took it: an order by name, ms whole.
 fn set_value(key: Key, value: f32) -> String {
     match key {
-        Key::Order => StepOrder::from_code(value as u8)
-            .filter(|o| o.code() as f32 == value)
-            .map_or_else(|| value.to_string(), |o| order_name(o).to_string()),
+        k if k.setting().value() == Value::Code => k
+            .setting()
+            .code_name(value as u8)
+            .filter(|_| (value as u8) as f32 == value)
+            .map_or_else(|| value.to_string(), str::to_string),
         _ => {
             let unit = unit(key.name());
             format!("{value} {unit}").trim_end().to_string()
@@ -257,7 +260,7 @@ mod tests {
             settings: s,
         });
         assert_eq!(lines[0], "settings: stored in flash");
-        assert_eq!(lines.len(), 26);
+        assert_eq!(lines.len(), 1 + capstan_wire::settings::SETTINGS);
         assert!(
             lines.contains(&format!("  {:<18} 8000 ms", "dwell_ms")),
             "{lines:#?}"
@@ -272,7 +275,9 @@ mod tests {
                 .iter()
                 .find(|v| v.name == k.name())
                 .unwrap_or_else(|| panic!("{}", k.name()));
-            assert_eq!(v.unit.is_empty(), k == Key::Order, "{}", k.name());
+            let unitless = k.setting().value() == Value::Code
+                || matches!(k, Key::ForceSineSteps | Key::ModelMu | Key::ModelExponent);
+            assert_eq!(v.unit.is_empty(), unitless, "{}", k.name());
         }
     }
 

@@ -9,11 +9,11 @@ use capstan_engine::analysis::closed_loop::SimCurve;
 use capstan_engine::analysis::Analysis;
 use std::fmt::Write as _;
 
-const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}tr.worse td{background:#fbeaea}.unexplained{color:#a50}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
+pub(crate) const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}tr.worse td{background:#fbeaea}.unexplained{color:#a50}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
 
 /// A figure: the same standalone SVG as its file (legend inside; `data-series`: the number of
 /// data layers that `scripts/check-report` expects drawn), numbered, and its caption.
-fn figure_html(h: &mut String, figs: &[Figure], id: &str) {
+pub(crate) fn figure_html(h: &mut String, figs: &[Figure], id: &str) {
     if let Some((k, f)) = figs.iter().enumerate().find(|(_, f)| f.id == id) {
         let _ = write!(
             h,

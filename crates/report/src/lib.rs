@@ -7,6 +7,7 @@
 //!   (numbers or a dash, escaped text).
 //! * [`headline`]: the plain headline; [`parameters`]: the one parameter table;
 //! * [`next`]: the "Next experiment" section (from `capstan plan`);
+//! * [`tracking`]: the report of a force-control session (how the rig held its T2 target);
 //! * [`context`]: provenance and the thesis comparison; [`export`]: the figure files;
 //! * [`figures`]: the figures; [`plot`]: their charts (panels and bar charts, drawn by
 //!   `plotters`).
@@ -23,6 +24,7 @@ pub mod next;
 pub mod parameters;
 pub mod plot;
 pub mod tables;
+pub mod tracking;
 
 pub use capstan_engine::analysis::closed_loop::SimCurve;
 pub use context::{apply_thesis_choice, Context, ThesisComparison};

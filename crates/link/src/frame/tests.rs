@@ -108,7 +108,16 @@ fn settings_field(name: &str, s: &Settings) -> String {
         "servo_max_us" => f(c.servo.pulse_at_max_us),
         "servo_max_deg" => f(c.servo.max_deg),
         "amp_full_scale_v" => f(c.amp.full_scale_v),
-        _ => panic!("no settings field {name}"),
+        name => match capstan_wire::Setting::from_name(name) {
+            // Force control's (issue 43), as the settings hold them.
+            Some(setting) => match firmware::settings::scalar(setting, s.get(setting)) {
+                capstan_wire::Scalar::F32(v) => f(v),
+                capstan_wire::Scalar::U8(v) => v.to_string(),
+                capstan_wire::Scalar::U32(v) => v.to_string(),
+                other => panic!("{name}: {other:?}"),
+            },
+            None => panic!("no settings field {name}"),
+        },
     }
 }
 

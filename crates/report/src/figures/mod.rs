@@ -6,9 +6,11 @@
 //!
 //! * [`curves`]: T2 and amplification against T1 with the three models, and the closed loop.
 //! * [`evidence`]: residuals, the mechanism evidence, and the gain (RMSE by model).
+//! * [`tracking`]: force control's target against the measured T2, and its Bode plot.
 
 pub mod curves;
 pub mod evidence;
+pub mod tracking;
 
 use super::plot::{Chart, Dash, Entry, Key, Layout, LineStyle, Marker};
 use capstan_engine::analysis::closed_loop::SimCurve;
