@@ -191,3 +191,39 @@ pub fn trace_of(log: &RunLog) -> capstan_tracking::Trace {
     }
     tr
 }
+
+/// `n` force-controlled channels on one drive (the two-control rig generalised): 720° cords
+/// of the thesis fit on the 12.7 mm capstan at 10 V, the board given the fitted law; odd
+/// channels (1, 3) step through 5, 10, 20 and 30 N, even ones (2, 4) hold 15 N, starting 5 s
+/// later so that they hold while the others step. Thesis noise, the servos' dead band on.
+pub fn channels(n: usize) -> crate::two_control::TwoControlConfig {
+    use crate::two_control::{ChannelSpec, TwoControlConfig};
+    let rig = ForceRig::default();
+    let mut plant = rig.plant;
+    plant.disturbances = NoiseProfile::Thesis.disturbances();
+    let (steps, hold) = (
+        ForceConfig {
+            levels_n: [5.0, 10.0, 20.0, 30.0],
+            ..rig.force
+        },
+        ForceConfig {
+            levels_n: [15.0; 4],
+            ..rig.force
+        },
+    );
+    TwoControlConfig {
+        channels: (0..n)
+            .map(|i| ChannelSpec {
+                wrap_deg: 720.0,
+                order: StepOrder::Monotone,
+                delay_ms: if i % 2 == 0 { 0 } else { 5_000 },
+            })
+            .collect(),
+        model: rig.cord,
+        plant,
+        force: (0..n)
+            .map(|i| if i % 2 == 0 { steps } else { hold })
+            .collect(),
+        ..TwoControlConfig::default()
+    }
+}

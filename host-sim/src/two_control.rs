@@ -13,8 +13,12 @@
 //! T2 and of the capstan speed.
 
 mod crosstalk;
+mod force;
+mod peaks;
 
 pub use crosstalk::CrossTalk;
+pub use force::{ForceCrossTalk, TRACKING_WINDOW};
+pub use peaks::DrivePeaks;
 
 use crate::run::{self, time_limit_us, RunFailure, RunLog, SetupError, VecSink};
 use crate::setup;
@@ -66,6 +70,9 @@ pub struct TwoControlConfig {
     pub sample_every_ms: u32,
     /// Sensor noise on.
     pub sensor_noise: bool,
+    /// Force control (issue 43): one setting per channel, each run in force mode (its T2
+    /// target, gains and law); empty: every channel runs the protocol.
+    pub force: Vec<firmware::ForceConfig>,
 }
 
 impl Default for TwoControlConfig {
@@ -93,6 +100,7 @@ impl Default for TwoControlConfig {
             seed: 1,
             sample_every_ms: 10,
             sensor_noise: true,
+            force: Vec::new(),
         }
     }
 }
@@ -146,8 +154,14 @@ pub struct ChannelResult {
 pub struct TwoControlResult {
     /// The drive and the channels every `sample_every_ms`.
     pub series: Vec<SeriesRow>,
-    /// Every (step of one channel, holding other channel) pair.
+    /// The drive's peaks, from the plant every 1 ms whatever `sample_every_ms` is: the
+    /// spin-up's inrush, and the peaks while running.
+    pub drive: DrivePeaks,
+    /// Every (step of one channel, holding other channel) pair (protocol runs: from the servo
+    /// steps).
     pub crosstalk: Vec<CrossTalk>,
+    /// Force runs: every (target step of one channel, other channel) pair.
+    pub force_crosstalk: Vec<ForceCrossTalk>,
     /// Every channel.
     pub channels: Vec<ChannelResult>,
     /// Virtual time simulated, s.
@@ -157,12 +171,13 @@ pub struct TwoControlResult {
 }
 
 impl TwoControlResult {
-    /// Highest drive current, A.
+    /// Highest drive current in the series (its `sample_every_ms` grid), A. The spin-up's
+    /// inrush peaks between the samples: [`TwoControlResult::drive`] has it at 1 ms.
     pub fn peak_current_a(&self) -> f64 {
         self.series.iter().map(|r| r.current_a).fold(0.0, f64::max)
     }
 
-    /// Highest drive power, W.
+    /// Highest drive power in the series, W (see [`TwoControlResult::peak_current_a`]).
     pub fn peak_power_w(&self) -> f64 {
         self.series.iter().map(|r| r.power_w).fold(0.0, f64::max)
     }
@@ -197,7 +212,7 @@ impl TwoControlConfig {
     /// same ranges as a campaign's).
     pub fn validate(&self) -> Result<(), SetupError> {
         let n = self.channels.len();
-        if n == 0 || n > MAX_CORDS {
+        if n == 0 || n > MAX_CORDS || !(self.force.is_empty() || self.force.len() == n) {
             return Err(SetupError::Plant(capstan_plant::PlantError::CordCount));
         }
         setup::check_diameter(self.diameter_mm).map_err(SetupError::Range)?;
@@ -221,6 +236,7 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
     let mut ios: Vec<_> = (0..n).map(|i| rig_io(&plant, i)).collect();
     let mut sinks: Vec<VecSink> = (0..n).map(|_| VecSink::new(true)).collect();
     let series = RefCell::new(Vec::new());
+    let peaks = RefCell::new(DrivePeaks::default());
     let every = Duration::from_millis(cfg.sample_every_ms.max(1) as u64);
     let outcome = {
         let runners: Vec<_> = ios
@@ -232,14 +248,18 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
         let probe = run::sample_plant(&plant, every, |p| {
             series.borrow_mut().push(series_row(p, n));
         });
-        time::block_on_until(select(time::join_all(runners), probe), limit)
+        let peak_probe = run::sample_plant(&plant, Duration::from_millis(1), |p| {
+            peaks.borrow_mut().add(p.now_us() as f64 * 1e-6, &p.drive());
+        });
+        let probes = select(probe, peak_probe);
+        time::block_on_until(select(time::join_all(runners), probes), limit)
     };
     let ends: Vec<Result<RunEnd, RunFailure>> = match outcome {
         Ok(Either::First(v)) => v
             .into_iter()
             .map(|r| r.map_err(RunFailure::Hardware))
             .collect(),
-        Ok(Either::Second(())) => unreachable!("the probe never ends"),
+        Ok(Either::Second(_)) => unreachable!("the probes never end"),
         Err(_) => (0..n).map(|_| Err(RunFailure::Timeout)).collect(),
     };
     let mut p = plant.into_inner();
@@ -256,10 +276,17 @@ pub fn run_two_control(cfg: &TwoControlConfig) -> Result<TwoControlResult, Setup
             trigger_rise_us: p.trigger_rise_us(i),
         })
         .collect();
-    let crosstalk = crosstalk::crosstalk(&series, &channels, &cfg.calibration.servo);
+    let (crosstalk, force_crosstalk) = if cfg.force.is_empty() {
+        let c = crosstalk::crosstalk(&series, &channels, &cfg.calibration.servo);
+        (c, Vec::new())
+    } else {
+        (Vec::new(), force::crosstalk(&series, &channels))
+    };
     Ok(TwoControlResult {
         series,
+        drive: peaks.into_inner(),
         crosstalk,
+        force_crosstalk,
         channels,
         simulated_s: (p.now_us() - p.origin_us()) as f64 * 1e-6,
         wall_s: wall.elapsed().as_secs_f64(),
@@ -272,8 +299,8 @@ fn channel_rigs(cfg: &TwoControlConfig) -> Result<(Vec<Rig>, Vec<CordSetup>, u64
     let mut rigs = Vec::with_capacity(cfg.channels.len());
     let mut cords = Vec::with_capacity(cfg.channels.len());
     let mut limit = 0;
-    for ch in &cfg.channels {
-        let protocol = Protocol {
+    for (i, ch) in cfg.channels.iter().enumerate() {
+        let mut protocol = Protocol {
             pre_trigger_ms: cfg.protocol.pre_trigger_ms + ch.delay_ms,
             ..setup::cord_protocol(
                 &cfg.protocol,
@@ -284,6 +311,12 @@ fn channel_rigs(cfg: &TwoControlConfig) -> Result<(Vec<Rig>, Vec<CordSetup>, u64
                 cfg.drive_v,
             )
         };
+        if let Some(f) = cfg.force.get(i) {
+            protocol.force = firmware::ForceConfig {
+                mode: firmware::ControlMode::Force,
+                ..*f
+            };
+        }
         rigs.push(Rig::new(protocol, cfg.calibration, cfg.limits).map_err(SetupError::Protocol)?);
         let cord = CordSetup::new(ch.wrap_deg, cfg.model);
         limit = limit.max(time_limit_us(&protocol, &cord));

@@ -9,6 +9,7 @@ mod checks;
 mod force;
 mod output;
 mod two;
+mod two_force;
 
 use anyhow::{bail, Context};
 use capstan_friction::{Effect, Model};
@@ -378,8 +379,11 @@ fn plant(args: &Args) -> anyhow::Result<host_sim::plant::PlantConfig> {
 /// Run `capstan simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     checks::check_ranges(&args)?;
-    if args.mode == Mode::Force {
+    if args.mode == Mode::Force && !args.two_control {
         return force::run_force(&args);
+    }
+    if args.two_control {
+        return two::run_two(&args);
     }
     for (flag, given) in [
         ("--profile", args.profile.is_some()),

@@ -2,7 +2,7 @@
 //!
 //! The sweep's segments are found from the target alone: its crossings of the mean it swings
 //! about (the level held before the sweep), grouped into runs of equal half-periods (within
-//! 10 %); each run is one frequency, f = 1/(2 × the median half-period). In each, the first
+//! 10 %); each run is one frequency, f = 1/(2 × its mean half-period). In each, the first
 //! second is left out as the transient, and over the whole cycles (at least one)
 //! after it the target and the measured T2 are each fitted by least squares with
 //! a + b·sin(2πft) + c·cos(2πft): the gain is the ratio of their amplitudes, the phase the
@@ -243,9 +243,9 @@ fn sine_fit(trace: &Trace, y: &[f64], t0: f64, t1: f64, w: f64) -> Option<(f64, 
 
 /// The closed loop at the frequency of the crossings `c` (one run).
 fn fit(trace: &Trace, c: &[f64]) -> Option<BodePoint> {
-    let mut half: Vec<f64> = c.windows(2).map(|w| w[1] - w[0]).collect();
-    half.sort_by(f64::total_cmp);
-    let period = 2.0 * half[half.len() / 2];
+    // The mean half-period over the run (the crossings' interpolation errors average out; a
+    // sweep's frequency is a whole number of cycles per dwell).
+    let period = 2.0 * (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64;
     let f = 1.0 / period;
     // Whole cycles from the first crossing after the transient to the last crossing.
     let start = c.iter().position(|&x| x >= c[0] + SETTLE_S)?;

@@ -7,8 +7,10 @@
 //!   firmware's conditioning window, from 2 s after the jump to 1 s before the next change; the
 //!   last half of a shorter hold), its error from the target in N and in % of the target;
 //! * **overshoot**: how far the measured T2, smoothed over 50 ms, goes beyond the steady mean
-//!   in the step's direction within 3 s of the jump, in % of the step (steady − initial, the
-//!   initial the mean over the 0.5 s before the jump); 0 if it never does;
+//!   in the step's direction within 3 s of the jump, in % of the step commanded (target −
+//!   initial, the initial the mean over the 0.5 s before the jump: with a small steady-state
+//!   error the same as the step made, and defined when the rig does not follow, e.g. a stalled
+//!   drive); 0 if it never does;
 //! * **rise time**: from the first time the smoothed T2 passes 10 % of the step to the first
 //!   time it passes 90 %;
 //! * **settling time**: from the jump to the last time the smoothed T2 is outside the band
@@ -67,7 +69,7 @@ pub struct StepResponse {
     pub ss_error_n: f64,
     /// The same in % of the target.
     pub ss_error_pct: f64,
-    /// Overshoot beyond the steady mean, % of the step.
+    /// Overshoot beyond the steady mean, % of the step commanded (target − initial).
     pub overshoot_pct: f64,
     /// 10-90 % rise time, s (None: never reached 90 %).
     pub rise_s: Option<f64>,
@@ -131,14 +133,15 @@ fn response(
     }
     let target_n = trace.target_n[i];
     let step = steady_n - initial_n;
-    let dir = if step >= 0.0 { 1.0 } else { -1.0 };
+    let commanded = target_n - initial_n;
+    let dir = if commanded >= 0.0 { 1.0 } else { -1.0 };
     let transient: Vec<usize> = (i..end).filter(|&j| t[j] <= t0 + TRANSIENT_S).collect();
     let peak = transient
         .iter()
         .map(|&j| dir * (smooth[j] - steady_n))
         .fold(0.0f64, f64::max);
-    let overshoot_pct = if step.abs() > 0.0 {
-        100.0 * peak / step.abs()
+    let overshoot_pct = if commanded.abs() > 0.0 {
+        100.0 * peak / commanded.abs()
     } else {
         0.0
     };

@@ -16,6 +16,9 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     let cfg = two_config(args)?;
     let n = cfg.channels.len();
     let mut names = vec!["two_control.csv".to_string(), "crosstalk.csv".to_string()];
+    if !cfg.force.is_empty() {
+        names.push("tracking.csv".to_string());
+    }
     names.extend((1..=n).map(|k| format!("pairs_ch{k}.csv")));
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
     let mut set = crate::outputs::open_out(&args.out, "two-control", &names)?.stage()?;
@@ -26,15 +29,41 @@ pub(super) fn run_two(args: &Args) -> anyhow::Result<()> {
     if args.json {
         let mut v = two_json(&r, n);
         v["provenance"] = two_provenance(&cfg);
+        if !cfg.force.is_empty() {
+            super::two_force::add_json(&mut v, &r);
+        }
         crate::outln!("{v}");
     } else {
         say_two(args, &cfg, &r);
+        if !cfg.force.is_empty() {
+            super::two_force::say(&r);
+        }
     }
     Ok(())
 }
 
 /// The two-control rig's configuration from the options, refusing the campaign-only ones.
 fn two_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
+    if args.mode == super::Mode::Force {
+        return force_config(args);
+    }
+    for (flag, given) in [
+        ("--profile", args.profile.is_some()),
+        ("--levels-n", args.levels_n.is_some()),
+        ("--sine-hz", args.sine_hz.is_some()),
+        ("--model-from", args.model_from.is_some()),
+        ("--cord-mu-factor", args.cord_mu_factor.is_some()),
+        ("--no-heating", args.no_heating),
+        ("--open-loop", args.open_loop),
+        ("--ee-mu", args.ee_mu.is_some()),
+        ("--kp", args.kp.is_some()),
+        ("--ki", args.ki.is_some()),
+        ("--compare", args.compare),
+    ] {
+        if given {
+            bail!("{flag} is for --mode force");
+        }
+    }
     let (model, effects) = model(args)?;
     if args.order.is_some() {
         bail!(
@@ -79,6 +108,99 @@ fn two_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
         ..TwoControlConfig::default()
     };
     // The same ranges as a campaign's (diameter, wraps, drive voltage).
+    cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(cfg)
+}
+
+/// `--two-control --mode force`: one force-controlled channel per `--wraps` value (default
+/// two 720° cords) on one drive, as `host_sim::force::channels` makes them (odd channels step
+/// through 5, 10, 20 and 30 N, even ones hold 15 N from 5 s later; `--delays-ms` overrides),
+/// the thesis fit's cords with `--noise` (default quiet; thesis for the rig's scatter).
+fn force_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
+    for (flag, given) in [
+        ("--order", args.order.is_some()),
+        ("--orders", args.orders.is_some()),
+        ("--effect", !args.effects.is_empty()),
+        ("--fault", !args.faults.is_empty()),
+        ("--scatter", args.scatter.is_some()),
+        ("--run-scatter", args.run_scatter.is_some()),
+        ("--unmodelled", !args.unmodelled.is_empty()),
+        ("--runs", args.runs.is_some()),
+        ("--profile", args.profile.is_some()),
+        ("--levels-n", args.levels_n.is_some()),
+        ("--sine-hz", args.sine_hz.is_some()),
+        ("--model-from", args.model_from.is_some()),
+        ("--compare", args.compare),
+        ("--ee-mu", args.ee_mu.is_some()),
+    ] {
+        if given {
+            bail!("{flag} is not for --two-control --mode force (its channels: odd ones step through 5, 10, 20 and 30 N, even ones hold 15 N)");
+        }
+    }
+    if args.mu != 0.115 {
+        bail!("--mu is not for --mode force: its cords are the thesis fit's (--cord-mu-factor scales their mu)");
+    }
+    let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
+    let n = wraps.len();
+    if !(1..=host_sim::plant::MAX_CORDS).contains(&n) {
+        bail!(
+            "--two-control: give 1 to {} wraps (one per channel), not {n}",
+            host_sim::plant::MAX_CORDS
+        );
+    }
+    let mut cfg = host_sim::force::channels(n);
+    for (ch, w) in cfg.channels.iter_mut().zip(&wraps) {
+        ch.wrap_deg = *w;
+    }
+    if let Some(d) = &args.delays_ms {
+        if d.len() != n {
+            bail!(
+                "--two-control: {n} channels (--wraps) but {} --delays-ms",
+                d.len()
+            );
+        }
+        for (ch, d) in cfg.channels.iter_mut().zip(d) {
+            ch.delay_ms = *d;
+        }
+    }
+    let noise: host_sim::noise::NoiseProfile = args
+        .noise
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--noise {e}"))?;
+    cfg.plant.disturbances = noise.disturbances();
+    if let Some(r) = args.motor_ohm {
+        cfg.plant.motor.resistance_ohm = r;
+    }
+    if let Some(f) = args.cord_mu_factor {
+        if !(0.5..=2.0).contains(&f) {
+            bail!("--cord-mu-factor {f}: must be 0.5 to 2 (a cord's mu over the model's)");
+        }
+        cfg.model.law.mu *= f;
+    }
+    if args.no_heating {
+        cfg.model.law.heat_per_ns = 0.0;
+    }
+    for f in cfg.force.iter_mut() {
+        if let Some(kp) = args.kp {
+            f.kp = kp as f32;
+        }
+        if let Some(ki) = args.ki {
+            f.ki = ki as f32;
+        }
+        *f = host_sim::force::feedback(*f, !args.open_loop);
+    }
+    match args.diameters.as_deref() {
+        None => {}
+        Some([d]) => cfg.diameter_mm = *d,
+        Some(_) => bail!("--two-control: one capstan, one --diameters value"),
+    }
+    match args.drive_v.as_slice() {
+        [v] => cfg.drive_v = *v,
+        _ => bail!("--two-control: one drive motor, one --drive-v value"),
+    }
+    cfg.protocol = protocol(args);
+    cfg.seed = args.seed;
+    cfg.sensor_noise = !args.no_noise;
     cfg.validate().map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(cfg)
 }
@@ -135,15 +257,20 @@ fn two_json(r: &TwoControlResult, n: usize) -> serde_json::Value {
             }))
         })
         .collect();
+    let d = &r.drive;
     json!({
         "channels": n,
         "pairs": pairs,
         "simulated_s": r.simulated_s,
         "wall_s": r.wall_s,
         "realtime_factor": r.simulated_s / r.wall_s.max(1e-9),
-        "peak_current_a": r.peak_current_a(),
-        "peak_power_w": r.peak_power_w(),
-        "mean_power_w": r.mean_power_w(),
+        // The drive from the plant every 1 ms: the peak is a spin-up's inrush; the running
+        // peak leaves out the first 0.3 s after the drive came on.
+        "peak_current_a": d.peak_current_a,
+        "peak_power_w": d.peak_power_w,
+        "running_peak_current_a": d.running_current_a,
+        "running_peak_power_w": d.running_power_w,
+        "mean_power_w": d.mean_power_w,
         "crosstalk_events": r.crosstalk.len(),
         "worst_t2_crosstalk_rel": t2_rel,
         "worst_speed_crosstalk_rel": rpm_rel,
@@ -190,19 +317,25 @@ fn say_two(args: &Args, cfg: &TwoControlConfig, r: &TwoControlResult) {
         r.simulated_s,
         r.wall_s
     );
+    let d = &r.drive;
     crate::outln!(
-        "drive: peak {:.2} A / {:.1} W (spin-up), mean {:.2} W while on",
-        r.peak_current_a(),
-        r.peak_power_w(),
-        r.mean_power_w()
+        "drive (1 ms): peak {:.2} A / {:.1} W (the spin-up's inrush), running at most {:.2} A / \
+         {:.2} W, mean {:.2} W while on",
+        d.peak_current_a,
+        d.peak_power_w,
+        d.running_current_a,
+        d.running_power_w,
+        d.mean_power_w
     );
-    crate::outln!(
-        "cross-talk over {} steps: holding channel's T2 moved at most {:.3} %, capstan \
-         speed at most {:.1} %",
-        r.crosstalk.len(),
-        t2_rel * 100.0,
-        rpm_rel * 100.0
-    );
+    if cfg.force.is_empty() {
+        crate::outln!(
+            "cross-talk over {} steps: holding channel's T2 moved at most {:.3} %, capstan \
+             speed at most {:.1} %",
+            r.crosstalk.len(),
+            t2_rel * 100.0,
+            rpm_rel * 100.0
+        );
+    }
     crate::outln!(
         "-> {}, {}, pairs_ch1..{n}.csv",
         args.out.join("two_control.csv").display(),
@@ -236,6 +369,9 @@ fn write_two(set: &mut Staged, cfg: &TwoControlConfig, r: &TwoControlResult) -> 
         writeln!(w)?;
     }
     w.flush()?;
+    if !cfg.force.is_empty() {
+        return super::two_force::write(set, cfg, r);
+    }
     let mut w = set.create("crosstalk.csv")?;
     writeln!(
         w,
