@@ -16,7 +16,9 @@
 //! * `setup_mode...` (`setup_mode.rs`): host command lines over RTT's down channel, setup mode
 //!   at the pins and in the log, against host-sim's session with the same lines;
 //! * `guard.rs` (issue 24): a loaded tare, a button held from power-up, a stack overflow, a
-//!   host that stops reading the log: each safe at the pins.
+//!   host that stops reading the log: each safe at the pins;
+//! * `force.rs` (issue 43): force control set up and started from the host, holding T2 at
+//!   5 then 10 N, against host-sim's session.
 //!
 //! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort, the hang, the panic, the
 //! setup session, the loaded tare, the held button and the stack overflow, ~40 s);
@@ -25,6 +27,7 @@
 //! `wasm32-unknown-unknown` targets; where one is missing the test says why and passes, except
 //! with `CI=true`, where it fails.
 
+mod force;
 mod guard;
 mod pins;
 mod setup;

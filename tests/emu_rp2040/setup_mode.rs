@@ -9,7 +9,7 @@
 //! in host-sim only (`setup_flow.rs`, on its RAM flash). Reading works (XIP): the board boots
 //! on an erased flash and says so, as host-sim's empty flash does.
 
-mod board;
+pub(crate) mod board;
 
 use super::{case, common, f, is_rest, pulse_us, ready, selected, AMP_SLICE, MS};
 use crate::pins::{segments, widths_after};
@@ -185,10 +185,10 @@ fn burst_flow(board: &Board) -> (usize, f64) {
         .collect();
     assert_eq!(burst.len(), SHOW_BURST);
     let t0 = burst[0].written_ns;
-    assert_eq!(
-        t0,
-        board.burst_ns(),
-        "the first burst line is written when due"
+    // (At the host's first poll once due: it polls every 1 ms.)
+    assert!(
+        t0 >= board.burst_ns() && t0 < board.burst_ns() + MS,
+        "the first burst line is written when due: {t0} ns"
     );
     let first = burst.iter().filter(|l| l.written_ns == t0).count();
     // 127 of the 128 bytes may be filled: 25 lines of 5 bytes, then the rest as the board

@@ -156,6 +156,15 @@ pub struct HostLine {
 }
 
 impl HostLine {
+    /// `line`, due 0.5 ms after `ms` after power-up (between two samples whatever the boot's
+    /// offset of the sample grid).
+    pub const fn between(ms: u64, line: &'static str) -> HostLine {
+        HostLine {
+            at_us: ms * 1_000 + 500,
+            line,
+        }
+    }
+
     /// `line`, due `ms` after power-up.
     pub const fn at_ms(ms: u64, line: &'static str) -> HostLine {
         HostLine {
@@ -297,6 +306,61 @@ pub const RTT_STALL_US: (u64, u64) = (
     PRESS_AT_US + 1_010_000 + FAULT_AFTER_TRIGGER_US + 1_000_000,
 );
 
+/// The force-control case's host (issue 43): the rig's wrap and diameter, the thesis fit's law
+/// as `capstan rig load-model` sends it (its values at the 12.7 mm capstan and 10 V), a short
+/// protocol (4 s dwells, targets 5 and 10 N), force mode, and a run, from the host. Each line
+/// ≤ 64 bytes, 100 ms apart (one is taken per sample; the board answers each), each written
+/// half a millisecond past the ms, between two samples (the test maps lines to samples).
+pub const FORCE_COMMANDS: [HostLine; 12] = [
+    HostLine::between(300, "set wrap_deg 720"),
+    HostLine::between(400, "set diameter_mm 12.7"),
+    HostLine::between(500, "set model_mu 0.14527485"),
+    HostLine::between(600, "set model_heat_per_n 0.008294685"),
+    HostLine::between(700, "set model_t2_offset_n -0.8234439"),
+    HostLine::between(800, "set dwell_ms 4000"),
+    HostLine::between(900, "set window_before_ms 500"),
+    HostLine::between(1_000, "set force_level3_n 0"),
+    HostLine::between(1_100, "set force_level4_n 0"),
+    HostLine::between(1_200, "set mode force"),
+    HostLine::between(1_300, "show"),
+    HostLine::between(1_400, "run"),
+];
+
+/// When the force run ends, plant µs: `run` is taken ~1.4 s after power-up; the press (here the
+/// host's) to the end is pre-trigger 1 s + trigger 0.5 s + 3 dwells of 4 s.
+pub const FORCE_END_US: u64 = 1_400_000 + 1_000_000 + 500_000 + 3 * 4_000_000;
+
+/// The thesis fit (`capstan analyze` on the bundled data; host-sim's `force::thesis_fit`, which
+/// the test checks it against): the cord of the force case.
+pub fn thesis_fit() -> Model {
+    let mut m = Model::euler_eytelwein(0.145_274_841);
+    m.law.heat_per_ns = 0.033_178_741;
+    m.law.heat_tau_s = 0.25;
+    m.sensors.t2_offset_n = -0.823_443_891;
+    m
+}
+
+fn force_case() -> Case {
+    let mut plant = PlantConfig::default();
+    plant.servo.dynamics = capstan_plant::ServoDynamics::HS_322HD;
+    Case {
+        plant,
+        cord: CordSetup {
+            press_at_us: None,
+            ..CordSetup::new(720.0, thesis_fit())
+        },
+        quick: true,
+        commands: FORCE_COMMANDS.to_vec(),
+        keep_samples: true,
+        ..Case::base(
+            "force",
+            "force control from the host (issue 43): the fitted law loaded by set lines, force              mode, a run holding T2 at 5 then 10 N on a 720° cord with the servo's dead band;              compared with host-sim's session",
+            22,
+            Stop::At(FORCE_END_US + 300_000),
+        )
+    }
+}
+
 /// The cases of issue 24's negative tests (where the pins matter).
 fn guard_cases() -> Vec<Case> {
     vec![
@@ -426,6 +490,7 @@ pub fn all() -> Vec<Case> {
         setup_case(),
     ]);
     all.extend(guard_cases());
+    all.push(force_case());
     all
 }
 
