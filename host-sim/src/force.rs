@@ -11,7 +11,7 @@
 mod compare;
 mod law;
 
-pub use compare::{compare, Comparison, ComparisonRow, Controller, CordCase};
+pub use compare::{compare, standard, Comparison, ComparisonRow, Controller, CordCase};
 pub use law::{board_law, settled_t2_n, LawError, TOLERANCE_N, TOLERANCE_REL};
 
 use crate::noise::NoiseProfile;
@@ -33,6 +33,10 @@ pub const THESIS_FIT_HEAT_PER_NS: f64 = 0.033_178_741;
 pub const THESIS_FIT_HEAT_TAU_S: f64 = 0.25;
 /// See [`THESIS_FIT_MU`].
 pub const THESIS_FIT_T2_OFFSET_N: f64 = -0.823_443_891;
+
+/// The one-mu Euler-Eytelwein fit of the same analysis (`metrics.json`: `models`, baseline):
+/// the open-loop Euler-Eytelwein row's mu.
+pub const THESIS_EE_MU: f64 = 0.116_200_3;
 
 /// The thesis fit as a model.
 pub fn thesis_fit() -> Model {

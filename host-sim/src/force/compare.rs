@@ -132,3 +132,28 @@ pub fn compare(
     }
     Ok(Comparison { rows })
 }
+
+/// The side-by-side comparison `capstan simulate --mode force --compare` runs (and the docs
+/// give): on `base` (its rig, profile, noise and seed), open loop with Euler-Eytelwein and
+/// `ee_mu`, open loop with the fitted law and the fitted law with feedback, each on the model's
+/// cord, cords whose mu is `pct` % above and below it (heating as fitted) and the model's cord
+/// without heating.
+pub fn standard(base: &ForceRig, ee_mu: f32, pct: f64) -> Result<Comparison, SetupError> {
+    let controllers = [
+        Controller::OpenLoopEulerEytelwein(ee_mu),
+        Controller::OpenLoopFitted,
+        Controller::Feedback,
+    ];
+    let cords: Vec<CordCase> = [1.0, 1.0 + pct / 100.0, 1.0 - pct / 100.0]
+        .iter()
+        .map(|&mu_factor| CordCase {
+            mu_factor,
+            heating: true,
+        })
+        .chain([CordCase {
+            mu_factor: 1.0,
+            heating: false,
+        }])
+        .collect();
+    compare(base, &controllers, &cords)
+}

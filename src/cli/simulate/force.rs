@@ -12,7 +12,7 @@ use anyhow::{bail, Context};
 use capstan_outdir::{OutputDir, Staged};
 use capstan_tracking::{bandwidth, bode, steps, Bandwidth, SteadyWindow, StepResponse};
 use firmware::{BoardLaw, ForceConfig, ForceProfile};
-use host_sim::force::{self as hf, Controller, CordCase, ForceRig};
+use host_sim::force::{self as hf, ForceRig};
 use host_sim::noise::NoiseProfile;
 use host_sim::plant::{rng::derive_seed, Injection};
 use serde_json::json;
@@ -20,7 +20,7 @@ use std::io::Write;
 
 /// The one-mu Euler-Eytelwein fit of the bundled thesis data (`capstan analyze`'s baseline
 /// model), for the open-loop row when no `--model-from` gives one.
-pub const THESIS_EE_MU: f64 = 0.116_200_3;
+const THESIS_EE_MU: f64 = hf::THESIS_EE_MU;
 
 /// Force mode as the options describe it.
 struct ForceRun {
@@ -456,23 +456,7 @@ fn compare(args: &Args, f: &ForceRun) -> anyhow::Result<()> {
     let mut out =
         crate::outputs::open_out(&args.out, "simulate", &["compare.csv", "summary.json"])?
             .stage()?;
-    let controllers = [
-        Controller::OpenLoopEulerEytelwein(f.ee_mu as f32),
-        Controller::OpenLoopFitted,
-        Controller::Feedback,
-    ];
     let factor = f.rig.cord.law.mu / hf::THESIS_FIT_MU;
-    let cords: Vec<CordCase> = [1.0, 1.0 + pct / 100.0, 1.0 - pct / 100.0]
-        .iter()
-        .map(|&m| CordCase {
-            mu_factor: m,
-            heating: true,
-        })
-        .chain([CordCase {
-            mu_factor: 1.0,
-            heating: false,
-        }])
-        .collect();
     if args.model_from.is_some() || (factor - 1.0).abs() > 1e-12 {
         bail!(
             "--compare runs the thesis fit's cords (the model's, mu ±{pct} %, no heating): \
@@ -484,7 +468,7 @@ fn compare(args: &Args, f: &ForceRun) -> anyhow::Result<()> {
         force: hf::feedback(f.rig.force, true),
         ..f.rig.clone()
     };
-    let c = hf::compare(&base, &controllers, &cords).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let c = hf::standard(&base, f.ee_mu as f32, pct).map_err(|e| anyhow::anyhow!("{e}"))?;
     let mut w = out.create("compare.csv")?;
     writeln!(
         w,
@@ -496,8 +480,8 @@ fn compare(args: &Args, f: &ForceRun) -> anyhow::Result<()> {
             writeln!(
                 w,
                 "{},{},{},{},{},{},{},{},{},{},{}",
-                r.controller.name(),
-                r.cord.name(),
+                capstan_data::text_cell(r.controller.name()),
+                capstan_data::text_cell(&r.cord.name()),
                 r.cord.mu_factor,
                 r.cord.heating,
                 s.from_target_n,
