@@ -453,9 +453,6 @@ fn compare(args: &Args, f: &ForceRun) -> anyhow::Result<()> {
     if !(pct > 0.0 && pct <= 50.0) {
         bail!("--compare-mu-pct {pct}: must be above 0 and at most 50");
     }
-    let mut out =
-        crate::outputs::open_out(&args.out, "simulate", &["compare.csv", "summary.json"])?
-            .stage()?;
     let factor = f.rig.cord.law.mu / hf::THESIS_FIT_MU;
     if args.model_from.is_some() || (factor - 1.0).abs() > 1e-12 {
         bail!(
@@ -463,6 +460,9 @@ fn compare(args: &Args, f: &ForceRun) -> anyhow::Result<()> {
              leave out --model-from and --cord-mu-factor"
         );
     }
+    let mut out =
+        crate::outputs::open_out(&args.out, "simulate", &["compare.csv", "summary.json"])?
+            .stage()?;
     let base = ForceRig {
         seed: derive_seed(args.seed, &[1]),
         force: hf::feedback(f.rig.force, true),
