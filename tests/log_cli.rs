@@ -99,7 +99,7 @@ fn a_saved_stream_is_decoded_into_the_run_files() {
     let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
     assert_eq!(
         pairs.header.join(","),
-        capstan_data::PAIRS_HEADER.join(",") + ",boot"
+        capstan_data::PAIRS_HEADER.join(",") + ",t2_target_n,boot"
     );
     assert_eq!(pairs.pairs.len(), 4);
     // Running again into the same directory is refused unless --overwrite.

@@ -81,7 +81,13 @@ fn settings_value(name: &str, s: &Settings) -> V {
         "servo_max_us" => V::F(c.servo.pulse_at_max_us),
         "servo_max_deg" => V::F(c.servo.max_deg),
         "amp_full_scale_v" => V::F(c.amp.full_scale_v),
-        _ => panic!("no setting {name}"),
+        // Force control's (issue 43), as the settings hold them.
+        name => match capstan_wire::Setting::from_name(name).map(|x| s.scalar(x)) {
+            Some(capstan_wire::Scalar::F32(v)) => V::F(v),
+            Some(capstan_wire::Scalar::U8(v)) => V::U(v.into()),
+            Some(capstan_wire::Scalar::U32(v)) => V::U(v.into()),
+            _ => panic!("no setting {name}"),
+        },
     }
 }
 
@@ -106,6 +112,8 @@ fn value(name: &str, r: &Record) -> V {
         (Record::Live(l), "t_ms") => V::U(l.t_ms as u64),
         (Record::Live(l), "servo_deg") => V::F(l.servo_deg),
         (Record::Raw(r), "t_us") => V::I(r.t_us),
+        (Record::Raw(r), "t2_target_n") => V::F(r.t2_target_n),
+        (Record::Pair(p), "t2_target_n") => V::F(p.t2_target_n),
         (Record::Live(Live { counts, .. }) | Record::Raw(RawSample { counts, .. }), c)
             if c.starts_with('c') =>
         {

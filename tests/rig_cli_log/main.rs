@@ -226,7 +226,8 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
         lines[0]
     );
     assert!(
-        lines[0].ends_with(",servo_max_deg,amp_full_scale_v"),
+        lines[0].contains(",servo_max_deg,amp_full_scale_v,mode,")
+            && lines[0].ends_with(",model_exponent"),
         "{}",
         lines[0]
     );
