@@ -170,7 +170,7 @@ impl ForceConfig {
         if self.law.mu <= 0.0 {
             return Err(ForceError::NoModel);
         }
-        if !(wrap_deg > 0.0) {
+        if wrap_deg.is_nan() || wrap_deg <= 0.0 {
             return Err(ForceError::NoWrap);
         }
         profile::validate(self)

@@ -259,7 +259,7 @@ fn fit(trace: &Trace, c: &[f64]) -> Option<BodePoint> {
     let (bt, ct, _) = sine_fit(trace, &trace.target_n, t0, t1, w)?;
     let (bm, cm, rms) = sine_fit(trace, &trace.measured_n, t0, t1, w)?;
     let (at, am) = (bt.hypot(ct), bm.hypot(cm));
-    if !(at > 0.0) {
+    if at.is_nan() || at <= 0.0 {
         return None;
     }
     let phase = |b: f64, c: f64| c.atan2(b).to_degrees();

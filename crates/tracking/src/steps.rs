@@ -156,8 +156,8 @@ fn response(
     };
     let band_n = (SETTLE_FRACTION * target_n.abs()).max(3.0 * sd(&steady_smooth));
     let last_out = (i..end)
-        .filter(|&j| t[j] <= b && (smooth[j] - steady_n).abs() > band_n)
-        .last();
+        .rev()
+        .find(|&j| t[j] <= b && (smooth[j] - steady_n).abs() > band_n);
     let settling_s = match last_out {
         None => Some(0.0),
         Some(j) if t[j] < b => Some(t[j] - t0),

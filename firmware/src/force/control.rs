@@ -119,7 +119,7 @@ fn clamp(v: f32, lo: f32, hi: f32) -> f32 {
 /// One control period.
 pub fn step(s: &State, p: &Params, inp: &Input) -> (State, Output) {
     let mut next = *s;
-    if !(inp.target_n > 0.0) {
+    if inp.target_n.is_nan() || inp.target_n <= 0.0 {
         // No target: back to rest at the servo's speed; what was learned is kept.
         let to_rest = clamp(p.rest_deg - s.servo_deg, 0.0, p.rate_deg_s * p.dt_s);
         next.servo_deg = s.servo_deg + to_rest;

@@ -87,7 +87,7 @@ impl BoardLaw {
 
     /// The T2 reading for a T1 reading (settled heating), N.
     pub fn t2_n(&self, t1_n: f32, beta_rad: f32) -> f32 {
-        if !(t1_n > 0.0) {
+        if t1_n.is_nan() || t1_n <= 0.0 {
             return t1_n.max(0.0) + self.t2_offset_n;
         }
         let mut t2 = self.transmit(t1_n, self.mu, beta_rad);
@@ -102,7 +102,7 @@ impl BoardLaw {
     /// feedforward. At most `t2_n` less the offset (a capstan never loses tension), never below 0.
     pub fn t1_for(&self, t2_n: f32, beta_rad: f32) -> f32 {
         let t2 = t2_n - self.t2_offset_n;
-        if !(t2 > 0.0) {
+        if t2.is_nan() || t2 <= 0.0 {
             return 0.0;
         }
         let mut t1 = self.receive(t2, self.mu, beta_rad);

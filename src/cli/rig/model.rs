@@ -94,10 +94,10 @@ pub fn load(path: &Path, rig: &RigPoint) -> anyhow::Result<Loaded> {
 /// The board's law for `pm` at `rig`, refused where the rig is outside the fitted data.
 pub fn reduce(pm: &PredictionModel, rig: &RigPoint) -> anyhow::Result<Loaded> {
     let r = &pm.fitted_range;
-    if !(rig.wrap_deg > 0.0) {
+    if rig.wrap_deg.is_nan() || rig.wrap_deg <= 0.0 {
         bail!("the rig's wrap is not set: set wrap_deg first (the law's wrap)");
     }
-    if !(rig.diameter_mm > 0.0) {
+    if rig.diameter_mm.is_nan() || rig.diameter_mm <= 0.0 {
         bail!("the rig's capstan diameter is not set: set diameter_mm first");
     }
     for (what, v, span, unit) in [
