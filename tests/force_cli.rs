@@ -246,6 +246,33 @@ fn load_model_sets_the_fitted_law_and_refuses_a_rig_out_of_its_range() {
     ] {
         assert!(shown.contains(want), "{want}: {shown}");
     }
+    // A logged force run: the target in every pair and raw row. (The simulated board's cord is
+    // Euler-Eytelwein at mu 0.115, 21 % below the fitted law's 0.145: the feedback holds it.)
+    let session = tmp("session");
+    ok(&[
+        "log",
+        "--sim",
+        b,
+        "--start",
+        "--runs",
+        "1",
+        "--out",
+        session.to_str().unwrap(),
+    ]);
+    let pairs = capstan_data::load_pairs(&session.join("pairs.csv")).unwrap();
+    let k = pairs
+        .extra_columns
+        .iter()
+        .position(|c| c == "t2_target_n")
+        .unwrap();
+    let targets: Vec<f64> = pairs.pairs.iter().map(|p| p.extra[k]).collect();
+    assert_eq!(targets, [5.0, 10.0, 20.0, 30.0]);
+    for p in &pairs.pairs {
+        assert!((p.t2_n / p.extra[k] - 1.0).abs() < 0.03, "{p:?}");
+    }
+    let raw = std::fs::read_to_string(session.join("raw.csv")).unwrap();
+    assert!(raw.starts_with("run,seq,time_s,t1_counts,t2_counts,t1_n,t2_n,t2_target_n\n"));
+    let _ = std::fs::remove_dir_all(&session);
     let _ = std::fs::remove_dir_all(&rep);
     let _ = std::fs::remove_dir_all(&board);
 }
