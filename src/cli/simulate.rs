@@ -83,7 +83,13 @@ DIR/raw/<cord>_run<k>.csv (the firmware's 100 Hz raw log) and DIR/faults.csv.
 --two-control runs one firmware per wrap given (default 720,720) on one capstan and one \
 drive motor (orders from --orders, default monotone,pulse; --delays-ms 0,5000) and writes \
 DIR/two_control.csv (drive and tensions over time), DIR/crosstalk.csv and \
-DIR/pairs_ch<k>.csv.")]
+DIR/pairs_ch<k>.csv.
+
+--mode force: the servo holds T2 at a target (steps 5,10,20,30 N by default; --profile \
+steps,ramp,sine) on the thesis rig (720°, 12.7 mm, 10 V), the board's feedforward through the \
+thesis fit (or --model-from metrics.json); pairs.csv and raw/ carry t2_target_n, and capstan \
+analyze DIR/pairs.csv reports the tracking. --compare: open loop against feedback on cords whose \
+mu is off. With --two-control: every channel in force mode. See docs/README-force.md.")]
 pub struct Args {
     /// Output directory (created if needed).
     #[arg(long, value_name = "DIR")]
