@@ -461,11 +461,42 @@ pub fn table(out: &[Outcome]) -> String {
         );
     }
     s += &format!(
-        "\nexpressible, all: {}\nexpressible, distinguishable at this design: {}\nexpressible, near-twins (indistinguishable at this design): {}\n{}\n",
+        "\nexpressible, all: {}\nexpressible, distinguishable at this design: {}\nexpressible, near-twins (indistinguishable at this design): {}\n{}\n{}\n",
         expr(None),
         expr(Some(false)),
         expr(Some(true)),
-        headline(out)
+        headline(out),
+        timing(out)
     );
     s
+}
+
+/// The search's time per 1,000 rows over the sets (this build's; `elapsed_s` of each answer,
+/// the engine's catalogue selection included, one thread a set).
+fn timing(out: &[Outcome]) -> String {
+    let mut per: Vec<f64> = out
+        .iter()
+        .filter(|o| o.rows > 0)
+        .map(|o| 1000.0 * o.elapsed_s / o.rows as f64)
+        .collect();
+    per.sort_by(f64::total_cmp);
+    match per.len() {
+        0 => String::new(),
+        n => {
+            let worst = out
+                .iter()
+                .filter(|o| o.rows > 0)
+                .max_by(|a, b| {
+                    (a.elapsed_s / a.rows as f64).total_cmp(&(b.elapsed_s / b.rows as f64))
+                })
+                .map_or(String::new(), |o| {
+                    format!(" ({}, {} rows, {:.2} s)", o.label, o.rows, o.elapsed_s)
+                });
+            format!(
+                "discover per 1,000 rows: median {:.2} s, worst {:.2} s over {n} sets{worst}",
+                per[n / 2],
+                per[n - 1]
+            )
+        }
+    }
 }
