@@ -434,29 +434,7 @@ impl Ctx<'_> {
         // The catalogue the engine selects with the term taken out of the data.
         let reselected = self.reselected(step, st, best, tst);
         if let Some(r) = &reselected {
-            let names: Vec<&str> = r.selected.iter().map(|k| k.name()).collect();
-            let names = if names.is_empty() {
-                "no effect".to_string()
-            } else {
-                names.join(" + ")
-            };
-            match &r.screen {
-                Some(s) if s.delta_bic < -self.bar.threshold => {
-                    let ratio_of = |l: &Option<LackOfFit>| l.as_ref().map_or(f64::INFINITY, |l| l.systematic_ratio);
-                    // The lack of fit the term leaves beside the catalogue that fits the rest
-                    // better: the one re-selected around it, or the one as selected.
-                    if ratio_of(&r.lof_after) < ratio_of(&lof_after) {
-                        lof_after = r.lof_after.clone();
-                    }
-                }
-                s => {
-                    return Err(no(format!(
-                        "absorbed by the catalogue: with it taken out of the data the engine selects {names}, and beside those its ΔBIC is {} (the engine's bar −{:.0})",
-                        s.as_ref().map_or("not computable".to_string(), |s| format!("{:.1}", s.delta_bic)),
-                        self.bar.threshold
-                    )))
-                }
-            }
+            lof_after = self.beside_reselected(r, lof_after).map_err(no)?;
         }
         // The share it removes is judged when the lack of fit stays open with it, and (with
         // `share_always`) whenever the catalogue left one.
@@ -564,8 +542,40 @@ impl Ctx<'_> {
         Ok((before, after, share))
     }
 
-    /// Why a later term (step > 1, no catalogue effect displaced) only repairs the engine's
-    /// catalogue selection, if it does.
+    /// The lack of fit a term leaves beside the catalogue that fits the rest better (the one
+    /// re-selected around it, `r`, or the one as selected, `lof_after`); or why the term is
+    /// declined: the re-selected catalogue absorbs it (it is not past the engine's bar there).
+    fn beside_reselected(
+        &self,
+        r: &crate::reselect::Reselected,
+        lof_after: Option<LackOfFit>,
+    ) -> Result<Option<LackOfFit>, String> {
+        let ratio_of =
+            |l: &Option<LackOfFit>| l.as_ref().map_or(f64::INFINITY, |l| l.systematic_ratio);
+        match &r.screen {
+            Some(s) if s.delta_bic < -self.bar.threshold => {
+                Ok(match ratio_of(&r.lof_after) < ratio_of(&lof_after) {
+                    true => r.lof_after.clone(),
+                    false => lof_after,
+                })
+            }
+            s => {
+                let names: Vec<&str> = r.selected.iter().map(|k| k.name()).collect();
+                let names = match names.is_empty() {
+                    true => "no effect".to_string(),
+                    false => names.join(" + "),
+                };
+                Err(format!(
+                    "absorbed by the catalogue: with it taken out of the data the engine selects {names}, and beside those its ΔBIC is {} (the engine's bar −{:.0})",
+                    s.as_ref().map_or("not computable".to_string(), |s| format!("{:.1}", s.delta_bic)),
+                    self.bar.threshold
+                ))
+            }
+        }
+    }
+
+    /// The catalogue re-selected with the terms so far and this one (`best`) taken out of the
+    /// data, when the engine then selects another set (within-run terms only).
     fn reselected(
         &self,
         step: usize,
@@ -592,6 +602,8 @@ impl Ctx<'_> {
         crate::reselect::reselect(self.data, on, &self.opts.engine, &taken, gate)
     }
 
+    /// Why a later term (step > 1, no catalogue effect displaced) only repairs the engine's
+    /// catalogue selection, if it does.
     fn repair(&self, step: usize, st: &State, best: &screen::Screen) -> Option<String> {
         if step <= 1 || self.swap.is_some() {
             return None;
