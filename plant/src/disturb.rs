@@ -37,6 +37,13 @@
 //! * `settling`: the contact settles after the trigger: mu·(1 − c·e^{−t/10 s}).
 //! * `t2_range_step` (not expressible): the T2 amplifier switches range at
 //!   [`RANGE_STEP_T2_N`]: T2 reads q more above it (a logistic step 0.3 N wide), N.
+//!
+//! Three more (issue 41), which its library can express:
+//! * `t2_quadratic`, `t1_quadratic`: a load cell's calibration is bowed: it reads
+//!   T + q·(T/[`QUADRATIC_REF_N`])², q the error at that force, N (T2's, or T1's).
+//! * `mu_bump`: mu is larger (or smaller) by this fraction over a band of true T1 around
+//!   [`BUMP_T1_N`]: a Gaussian in ln T1 of SD [`BUMP_WIDTH_LN`] (a contact regime between the
+//!   cord's conforming at low tension and its softening at high tension).
 
 use crate::rng::Rng;
 
@@ -52,6 +59,12 @@ pub const TARE_REF_DIAMETER_MM: f64 = 19.05;
 pub const SETTLING_TAU_S: f64 = 10.0;
 /// Where the T2 amplifier of `t2_range_step` switches range, N.
 pub const RANGE_STEP_T2_N: f64 = 15.0;
+/// Force at which `t2_quadratic`'s error is its size, N.
+pub const QUADRATIC_REF_N: f64 = 20.0;
+/// Centre of `mu_bump`, true T1 in N.
+pub const BUMP_T1_N: f64 = 6.0;
+/// Width of `mu_bump`: SD in ln T1.
+pub const BUMP_WIDTH_LN: f64 = 0.5;
 /// How often the wander of mu is advanced, µs.
 pub const WANDER_STEP_US: u64 = 50_000;
 
@@ -105,6 +118,12 @@ pub struct Unmodelled {
     pub settling: f64,
     /// T2 amplifier range switch at [`RANGE_STEP_T2_N`]: the step, N.
     pub t2_range_step: f64,
+    /// Bowed T2 calibration: its error at [`QUADRATIC_REF_N`], N.
+    pub t2_quadratic: f64,
+    /// Bowed T1 calibration: its error at [`QUADRATIC_REF_N`], N.
+    pub t1_quadratic: f64,
+    /// Bump of mu around [`BUMP_T1_N`]: its fraction at the centre.
+    pub mu_bump: f64,
 }
 
 impl Unmodelled {
@@ -113,7 +132,7 @@ impl Unmodelled {
     pub const NAMES: [&'static str; 3] = ["hysteresis", "t2_nonlinearity", "regime_change"];
     /// Every kind, for command lines (`capstan simulate --unmodelled`) and `capstan discover`'s
     /// validation.
-    pub const ALL_NAMES: [&'static str; 8] = [
+    pub const ALL_NAMES: [&'static str; 11] = [
         "hysteresis",
         "t2_nonlinearity",
         "regime_change",
@@ -122,6 +141,9 @@ impl Unmodelled {
         "t2_offset_wrap",
         "settling",
         "t2_range_step",
+        "t2_quadratic",
+        "mu_bump",
+        "t1_quadratic",
     ];
 
     /// Set the one called `name` to `value`; `false` if there is no such name.
@@ -135,6 +157,9 @@ impl Unmodelled {
             "t2_offset_wrap" => self.t2_offset_wrap = value,
             "settling" => self.settling = value,
             "t2_range_step" => self.t2_range_step = value,
+            "t2_quadratic" => self.t2_quadratic = value,
+            "mu_bump" => self.mu_bump = value,
+            "t1_quadratic" => self.t1_quadratic = value,
             _ => return false,
         }
         true
@@ -146,7 +171,7 @@ impl Unmodelled {
     }
 
     /// Every value, in [`Unmodelled::ALL_NAMES`] order.
-    pub fn values(&self) -> [f64; 8] {
+    pub fn values(&self) -> [f64; 11] {
         [
             self.hysteresis,
             self.t2_nonlinearity,
@@ -156,6 +181,9 @@ impl Unmodelled {
             self.t2_offset_wrap,
             self.settling,
             self.t2_range_step,
+            self.t2_quadratic,
+            self.mu_bump,
+            self.t1_quadratic,
         ]
     }
 
@@ -188,7 +216,20 @@ impl Unmodelled {
             let s = 1.0 / (1.0 + libm::exp(-(t1_n - REGIME_T1_N) / REGIME_WIDTH_N));
             f *= 1.0 + self.regime_change * s;
         }
+        if self.mu_bump != 0.0 && t1_n > 0.0 {
+            let z = libm::log(t1_n / BUMP_T1_N) / BUMP_WIDTH_LN;
+            f *= 1.0 + self.mu_bump * libm::exp(-0.5 * z * z);
+        }
         f
+    }
+
+    /// The T1 sensor's reading of a tension (its calibration curve), N.
+    pub fn t1_reading_n(&self, t1_n: f64) -> f64 {
+        if self.t1_quadratic == 0.0 {
+            return t1_n;
+        }
+        let r = t1_n / QUADRATIC_REF_N;
+        t1_n + self.t1_quadratic * r * r
     }
 
     /// The T2 sensor's reading of a tension, N.
@@ -199,6 +240,10 @@ impl Unmodelled {
         }
         if self.t2_range_step != 0.0 {
             extra += self.t2_range_step / (1.0 + libm::exp(-(t2_n - RANGE_STEP_T2_N) / 0.3));
+        }
+        if self.t2_quadratic != 0.0 {
+            let r = t2_n / QUADRATIC_REF_N;
+            extra += self.t2_quadratic * r * r;
         }
         extra + self.t2_nonlinear_reading_n(t2_n)
     }
@@ -325,5 +370,24 @@ mod tests {
         let three_turns = 3.0 * core::f64::consts::PI;
         assert!(u.t2_offset_n(three_turns).abs() < 1e-12);
         assert!((u.t2_offset_n(three_turns + 2.0 * core::f64::consts::PI) + 0.4).abs() < 1e-12);
+        // The bowed T2 cell: q at the reference force, a quarter of it at half.
+        let q = Unmodelled {
+            t2_quadratic: 0.4,
+            mu_bump: 0.2,
+            ..Unmodelled::default()
+        };
+        assert!((q.t2_reading_n(QUADRATIC_REF_N) - QUADRATIC_REF_N - 0.4).abs() < 1e-12);
+        assert!((q.t2_reading_n(10.0) - 10.0 - 0.1).abs() < 1e-12);
+        let q1 = Unmodelled {
+            t1_quadratic: -0.4,
+            ..Unmodelled::default()
+        };
+        assert!((q1.t1_reading_n(10.0) - 10.0 + 0.1).abs() < 1e-12);
+        assert_eq!(q1.t2_reading_n(10.0), 10.0);
+        // The bump: its full size at the centre, e^{-1/2} of it one width away, none far off.
+        assert!((q.mu_factor(BUMP_T1_N, false) - 1.2).abs() < 1e-12);
+        let one_sd = BUMP_T1_N * libm::exp(BUMP_WIDTH_LN);
+        assert!((q.mu_factor(one_sd, false) - 1.0 - 0.2 * libm::exp(-0.5)).abs() < 1e-12);
+        assert!((q.mu_factor(0.3, false) - 1.0).abs() < 1e-3);
     }
 }

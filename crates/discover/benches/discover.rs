@@ -31,7 +31,7 @@ fn main() {
         .find(|k| k.name == "t2_lowforce")
         .expect("kind");
     for (runs, target) in [(15u32, 2.0), (143, 20.0)] {
-        let mut c = discover_cases::draw(99, kind, 0);
+        let mut c = discover_cases::draw(99, kind, 0, discover_cases::Variety::Thesis);
         c.case.config.runs = runs;
         c.case.config.threads = 2;
         let (data, _) = c.case.generate().expect("simulate");

@@ -1,5 +1,6 @@
 //! `cargo run --release -p capstan-discover --example one_case -- SEED KIND INDEX [OUT.csv]`:
-//! one planted set, simulated, searched, printed as JSON (and its pairs written, if asked).
+//! one planted set, simulated, searched, printed as JSON (and its pairs written, if asked);
+//! the varied designs unless `CAPSTAN_DISCOVER_DESIGN=thesis` (or `updown`).
 fn main() {
     let a: Vec<String> = std::env::args().collect();
     let seed: u64 = a[1].parse().expect("seed");
@@ -8,7 +9,20 @@ fn main() {
         .find(|k| k.name == a[2])
         .expect("kind");
     let index: u64 = a[3].parse().expect("index");
-    let mut c = capstan_truth::discover_cases::draw(seed, kind, index);
+    use capstan_truth::discover_cases::Variety;
+    let variety = match std::env::var("CAPSTAN_DISCOVER_DESIGN").as_deref() {
+        Ok("thesis") => Variety::Thesis,
+        Ok("updown") => Variety::ThesisUpDown,
+        _ => Variety::Varied,
+    };
+    let mut c = capstan_truth::discover_cases::draw(seed, kind, index, variety);
+    if let Some(x) = std::env::var("CAPSTAN_DISCOVER_SCALE")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        c.scale(x);
+    }
+    eprintln!("{} {:+.3}", c.label(), c.size);
     if std::env::var("CAPSTAN_NO_WANDER").is_ok() {
         c.case.config.plant.disturbances.mu_wander_sd = 0.0;
     }

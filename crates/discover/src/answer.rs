@@ -74,6 +74,12 @@ pub struct Proposed {
     pub rivals: Vec<Rival>,
     /// The catalogue effect it takes the place of (the joint search), if any.
     pub displaced: Option<joint::Displaced>,
+    /// The catalogue effect the engine did not select that it comes with (the joint search's
+    /// restores), if any.
+    pub restored: Option<joint::Displaced>,
+    /// The catalogue the engine selects with it (and the terms before it) taken out of the
+    /// data, when that differs from the catalogue as selected (None: the same).
+    pub catalogue_given: Option<Vec<&'static str>>,
     /// How to word it.
     pub words: String,
 }
@@ -132,6 +138,9 @@ pub struct Search {
     pub models_per_step: f64,
     /// The within-run catalogue effects a term may take the place of (the joint search).
     pub displaceable: Vec<&'static str>,
+    /// The within-run catalogue effects the engine tested and did not select, each of which a
+    /// term may come with (the joint search's restores).
+    pub restorable: Vec<&'static str>,
     /// Cord resamples of the stability (None: too few cords to resample, see `cord_checks`).
     pub resamples: Option<usize>,
     /// Cords in the data set.
@@ -172,6 +181,9 @@ pub struct Discovery {
     pub data: DataInfo,
     /// The catalogue effects the engine selected.
     pub catalogue_effects: Vec<&'static str>,
+    /// The catalogue the engine selects with the proposed terms taken out of the data, when
+    /// that differs from `catalogue_effects` (None: the same, or nothing proposed).
+    pub catalogue_given_terms: Option<Vec<&'static str>>,
     /// The terms proposed (empty: nothing in the library explains what is left).
     pub terms: Vec<Proposed>,
     /// Structure is still left after the proposed terms: the lack of fit against the replicate
@@ -259,7 +271,7 @@ pub(crate) fn proposed(
     (stab, ratio): (f64, Ratio),
     lof: Option<LackOfFit>,
     rivals: Vec<Rival>,
-    (displaced, given): (Option<joint::Displaced>, &str),
+    (displaced, given): (Option<(joint::Displaced, joint::Change)>, &str),
 ) -> Proposed {
     let shown = ratio.ci95.hi < 1.0;
     let rival_words = if rivals.is_empty() {
@@ -271,10 +283,20 @@ pub(crate) fn proposed(
             names.join(", ")
         )
     };
+    let (displaced, restored) = match displaced {
+        Some((x, joint::Change::Restored)) => (None, Some(x)),
+        Some((x, joint::Change::Dropped)) => (Some(x), None),
+        None => (None, None),
+    };
     let displace_words = displaced.as_ref().map_or(String::new(), |x| {
         format!(
             " It takes the place of the catalogue's {} (ΔBIC of the swap {:.1} against the catalogue as selected).",
             x.effect, x.delta_bic_swap
+        )
+    }) + &restored.as_ref().map_or(String::new(), |x| {
+        format!(
+            " It comes with the catalogue's {}, which the engine alone did not select (ΔBIC {:+.1} given its selection; of the catalogue with both {:.1} against the catalogue as selected).",
+            x.effect, x.effect_delta_bic, x.delta_bic_swap
         )
     });
     let no_gate = (s.level == Level::WithinRun && s.replicate.is_none()).then_some(NO_GATE);
@@ -319,6 +341,8 @@ pub(crate) fn proposed(
         replicate_gate_not_applied: no_gate,
         rivals,
         displaced,
+        restored,
+        catalogue_given: None,
         words,
     }
 }

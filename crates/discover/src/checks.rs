@@ -181,10 +181,13 @@ pub(crate) fn catalogue_repair(
     alts: &[crate::joint::Alternative<'_>],
     st: &State,
     best: &screen::Screen,
-    threshold: f64,
+    (threshold, gate): (f64, crate::replicate::Gate),
 ) -> Option<Repair> {
     use crate::model::{classify, runs_of, screen_all};
-    for alt in alts {
+    for alt in alts
+        .iter()
+        .filter(|x| x.change == crate::joint::Change::Dropped)
+    {
         let (testable, _) = classify(&alt.base);
         let col = |term: usize| testable.iter().find(|c| c.term == term);
         let mut shared = alt.base.b.clone();
@@ -199,6 +202,7 @@ pub(crate) fn catalogue_repair(
             covs: st.covs.clone(),
             e,
             used: st.used.clone(),
+            theta_used: st.theta_used.clone(),
         };
         let Some(c) = col(best.term) else { continue };
         let proj = Projector::new(&alt.base, &st_alt.shared);
@@ -208,6 +212,7 @@ pub(crate) fn catalogue_repair(
             &proj,
             &st_alt,
             &runs_of(a, &alt.fit),
+            gate,
         );
         let Some(s) = sc.first().filter(|s| s.delta_bic.is_finite()) else {
             continue;
@@ -216,7 +221,7 @@ pub(crate) fn catalogue_repair(
         if s.delta_bic >= -threshold {
             return Some(Repair::LeansOn(k, s.delta_bic));
         }
-        let swap = s.delta_bic - alt.dropped_delta_bic;
+        let swap = s.delta_bic + alt.cost();
         if swap <= best.delta_bic.max(0.0) {
             return Some(Repair::StandsIn(k, swap));
         }

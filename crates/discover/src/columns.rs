@@ -233,6 +233,15 @@ fn row_quantities(d: &Design, t1_true: &[f64], t2_true: &[f64]) -> Vec<Row> {
     let wrap_mean = d.cords.iter().map(|c| c.wrap_deg.to_radians()).sum::<f64>() / nc;
     let diameter_mean = d.cords.iter().map(|c| c.diameter_mm).sum::<f64>() / nc;
     let drive_v_mean = d.cords.iter().map(|c| c.drive_v).sum::<f64>() / nc;
+    let (ln_sum, ln_n) =
+        d.t1.iter()
+            .filter(|t| t.is_finite() && **t > 0.0)
+            .fold((0.0, 0.0), |(s, n), t| (s + t.ln(), n + 1.0));
+    let t1_ref = if ln_n > 0.0 {
+        (ln_sum / ln_n).exp()
+    } else {
+        1.0
+    };
     let mut rows = vec![Row::default(); n];
     for (u, idx) in d.units.iter().enumerate() {
         let t_first = idx.first().map_or(0.0, |&i| d.timing[i].centre_s);
@@ -265,6 +274,7 @@ fn row_quantities(d: &Design, t1_true: &[f64], t2_true: &[f64]) -> Vec<Row> {
                 drive_v_mean,
                 work_before_kns: work,
                 load_prev: prev_load,
+                t1_ref,
             };
             work += load * dt / 1000.0;
             prev_load = load;

@@ -17,17 +17,39 @@
 //! best addition and passes that bar; the term must then pass everything an added term must
 //! (its physical sign, separability, the replicate runs, stability, held-out cords, lack of
 //! fit), on the model without k, and its held-out gain is against the engine's catalogue.
+//!
+//! **Restores** (since s41, `Options::restore`): the outside physics can also hide a catalogue
+//! effect from the engine (a T2 cell bowed upwards cancels the curvature of contact heating,
+//! and the engine leaves heating out). So for every within-run catalogue effect k′ the engine
+//! tested and did not select, the catalogue is refitted with it too, and every within-run term
+//! screened on "catalogue + k′": ΔBIC = ΔBIC(term | catalogue + k′) + ΔBIC(k′ | catalogue), the
+//! second the engine's own evidence for k′ given its selection (positive: not wanted alone).
+//! They are models tried like the others: the bar counts p·(1 + K + K′).
 
 use crate::columns::Base;
+use capstan_engine::evidence::candidates::ThetaMap;
 use capstan_engine::evidence::within::{self, WithinFit};
 use capstan_engine::evidence::{Assessment, Level};
 use capstan_friction::EffectKind;
 
-/// The catalogue without one of its within-run effects, refitted and linearised.
+/// How an alternative changes the catalogue.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Change {
+    /// One of its within-run effects taken out.
+    Dropped,
+    /// A within-run effect the engine did not select put in.
+    Restored,
+}
+
+/// The catalogue without one of its within-run effects (or with one it did not select),
+/// refitted and linearised.
 pub struct Alternative<'a> {
-    /// The effect dropped.
+    /// The effect dropped or restored.
     pub dropped: EffectKind,
-    /// The engine's evidence for it given the other selected effects (ΔBIC, negative: wanted).
+    /// Dropped or restored.
+    pub change: Change,
+    /// The engine's evidence for it: given the other selected effects when dropped (ΔBIC,
+    /// negative: wanted), given the catalogue when restored (positive: not wanted alone).
     pub dropped_delta_bic: f64,
     /// The refit without it.
     pub fit: WithinFit,
@@ -35,8 +57,58 @@ pub struct Alternative<'a> {
     pub base: Base<'a>,
 }
 
-/// One alternative per within-run effect the engine selected (with finite evidence).
-pub fn alternatives(a: &Assessment) -> Vec<Alternative<'_>> {
+impl Alternative<'_> {
+    /// ΔBIC of the changed catalogue against the catalogue as selected (before any term).
+    pub fn cost(&self) -> f64 {
+        match self.change {
+            Change::Dropped => -self.dropped_delta_bic,
+            Change::Restored => self.dropped_delta_bic,
+        }
+    }
+}
+
+/// One alternative per within-run effect the engine selected (with finite evidence), and with
+/// `restore` one per within-run effect it tested and did not select.
+pub fn alternatives(a: &Assessment, restore: bool) -> Vec<Alternative<'_>> {
+    let mut out = dropped(a);
+    if restore {
+        out.extend(restored(a));
+    }
+    out
+}
+
+/// The catalogue with each within-run effect the engine tested and left out.
+fn restored(a: &Assessment) -> Vec<Alternative<'_>> {
+    let d = &a.design;
+    let fit = &a.fit;
+    a.evidence
+        .iter()
+        .filter(|ev| !ev.selected && ev.level == Level::WithinRun && ev.delta_bic.is_finite())
+        .filter(|ev| !fit.maps.iter().any(|m| m.kind == ev.kind))
+        .filter_map(|ev| {
+            let mut maps = fit.maps.clone();
+            maps.push(ThetaMap::for_kind(ev.kind, d));
+            let mut theta = fit.theta.clone();
+            theta.push(maps.last()?.theta(ev.value));
+            let refit = within::fit(d, &maps, &theta, &fit.mu, &a.weights);
+            let ok = refit.wrss.is_finite() && refit.mu.iter().all(|m| m.is_finite() && *m > 0.0);
+            ok.then_some((ev.kind, ev.delta_bic, refit))
+        })
+        .map(|(kind, delta_bic, fit)| {
+            let base = Base::new(d, &fit, &a.weights.w);
+            Alternative {
+                dropped: kind,
+                change: Change::Restored,
+                dropped_delta_bic: delta_bic,
+                fit,
+                base,
+            }
+        })
+        .collect()
+}
+
+/// The catalogue without each of its within-run effects.
+fn dropped(a: &Assessment) -> Vec<Alternative<'_>> {
     let d = &a.design;
     let fit = &a.fit;
     (0..fit.k())
@@ -60,6 +132,7 @@ pub fn alternatives(a: &Assessment) -> Vec<Alternative<'_>> {
             let base = Base::new(d, &fit, &a.weights.w);
             Alternative {
                 dropped,
+                change: Change::Dropped,
                 dropped_delta_bic,
                 fit,
                 base,
@@ -96,19 +169,20 @@ pub struct Displaced {
 pub fn best_swap(
     alts: &[Alternative<'_>],
     screens: &[Vec<crate::screen::Screen>],
-    bar: f64,
+    gate: crate::replicate::Gate,
     max_r2_model: f64,
     best_addition: f64,
 ) -> Option<Swap> {
+    let bar = gate.bar;
     let mut best: Option<Swap> = None;
     for (i, (alt, sc)) in alts.iter().zip(screens).enumerate() {
         for s in sc.iter().filter(|s| {
             s.level == crate::screen::Level::WithinRun
                 && s.sign_ok
                 && s.r2_model <= max_r2_model
-                && s.replicate.as_ref().is_none_or(|r| r.delta_bic < bar)
+                && gate.lets_through(s.replicate.as_ref())
         }) {
-            let swap = s.delta_bic - alt.dropped_delta_bic;
+            let swap = s.delta_bic + alt.cost();
             if swap < bar && swap < best_addition && best.is_none_or(|b| swap < b.delta_bic) {
                 best = Some(Swap {
                     alt: i,

@@ -117,6 +117,8 @@ pub struct Row {
     pub work_before_kns: f64,
     /// The model's load at the previous step of the run (0 at the first), N.
     pub load_prev: f64,
+    /// The design's geometric-mean measured T1 (over rows with T1 > 0), N.
+    pub t1_ref: f64,
 }
 
 /// How θ enters the model (first order in θ is what the search uses).
@@ -267,6 +269,21 @@ pub const LIBRARY: &[Term] = &[
         reading: "the cord conforms to the capstan as tension grows (the thesis's fast rise)",
         source: "the thesis's own reading of its low-tension data",
         form: Form::Mu(|r| -1.0 / mean_tension(r).max(0.05)),
+    },
+    Term {
+        name: "mu_tension_bump",
+        formula: "mu·(1 + c·exp(−(ln(T1/T̃1))²/(2·0.5²))), T̃1 the design's geometric-mean T1",
+        parameter: "c",
+        units: "1",
+        acts_on: ActsOn::Mu,
+        depends_on: &[Var::T1],
+        sign: Sign::Free,
+        reading: "friction is higher (c > 0) or lower over the middle of the tensions tried (a factor of about 1.6 either side): a contact regime between the cord's conforming at low tension and its softening at high tension",
+        source: "the thesis's fast rise at low tension (conformity) meeting polymer friction falling with pressure (Howell 1954): a maximum between them",
+        form: Form::Mu(|r| {
+            let z = (r.t1.max(0.05) / r.t1_ref).ln() / 0.5;
+            (-0.5 * z * z).exp()
+        }),
     },
     Term {
         name: "load_memory_cum",
@@ -550,6 +567,7 @@ mod tests {
             drive_v_mean: 10.0,
             work_before_kns: 0.3,
             load_prev: 12.0,
+            t1_ref: 4.6,
         };
         for t in LIBRARY {
             let g = match t.form {

@@ -6,6 +6,7 @@ use crate::answer::NotTestable;
 use crate::columns::Base;
 use crate::joint;
 use crate::library::{Row, Var, LIBRARY};
+use crate::replicate::{replicate_evidence, Gate};
 use crate::screen::{self, between_evidence, sign_ok, within_evidence, Level, Projector, Runs};
 use capstan_engine::evidence::within::WithinFit;
 use capstan_engine::evidence::Assessment;
@@ -45,6 +46,8 @@ pub(crate) struct State {
     pub(crate) e: Vec<f64>,
     /// The library terms added.
     pub(crate) used: Vec<usize>,
+    /// Their θ̂, in the same order.
+    pub(crate) theta_used: Vec<f64>,
 }
 
 /// One testable term's column or run-level g.
@@ -196,6 +199,7 @@ impl State {
             _ => self.covs.push(c.g_run.clone().unwrap_or_default()),
         }
         self.used.push(c.term);
+        self.theta_used.push(theta);
     }
 }
 
@@ -208,6 +212,7 @@ pub(crate) fn state_of(base: &Base, covs: &[Vec<f64>]) -> State {
         covs: covs.to_vec(),
         e,
         used: Vec::new(),
+        theta_used: Vec::new(),
     }
 }
 
@@ -216,21 +221,19 @@ pub(crate) fn state_of(base: &Base, covs: &[Vec<f64>]) -> State {
 pub(crate) fn choose_swap(
     (base0, testable0, covs0): (&Base, &[Testable], &[Vec<f64>]),
     (alts, a): (&[joint::Alternative<'_>], &Assessment),
-    bar: f64,
+    gate: Gate,
     max_r2_model: f64,
 ) -> (Option<joint::Swap>, Vec<screen::Screen>) {
     let st0 = state_of(base0, covs0);
     let proj0 = Projector::new(base0, &st0.shared);
-    let sc0 = screen_all(base0, testable0, &proj0, &st0, &runs_of(a, &a.fit));
+    let sc0 = screen_all(base0, testable0, &proj0, &st0, &runs_of(a, &a.fit), gate);
     if alts.is_empty() {
         return (None, sc0);
     }
     let best_addition = sc0
         .iter()
         .find(|s| {
-            s.sign_ok
-                && s.r2_model <= max_r2_model
-                && s.replicate.as_ref().is_none_or(|r| r.delta_bic < bar)
+            s.sign_ok && s.r2_model <= max_r2_model && gate.lets_through(s.replicate.as_ref())
         })
         .map_or(f64::INFINITY, |s| s.delta_bic);
     let screens: Vec<Vec<screen::Screen>> = alts
@@ -239,10 +242,10 @@ pub(crate) fn choose_swap(
             let (t, _) = classify(&alt.base);
             let st = state_of(&alt.base, covs0);
             let proj = Projector::new(&alt.base, &st.shared);
-            screen_all(&alt.base, &t, &proj, &st, &runs_of(a, &alt.fit))
+            screen_all(&alt.base, &t, &proj, &st, &runs_of(a, &alt.fit), gate)
         })
         .collect();
-    let swap = joint::best_swap(alts, &screens, bar, max_r2_model, best_addition);
+    let swap = joint::best_swap(alts, &screens, gate, max_r2_model, best_addition);
     (swap, sc0)
 }
 
@@ -253,6 +256,7 @@ pub(crate) fn screen_all(
     proj: &Projector,
     st: &State,
     runs: &Runs,
+    gate: Gate,
 ) -> Vec<screen::Screen> {
     let mut out: Vec<screen::Screen> = testable
         .iter()
@@ -268,11 +272,9 @@ pub(crate) fn screen_all(
                     let norm =
                         |v: &[f64]| v.iter().zip(&base.w).map(|(v, w)| w * v * v).sum::<f64>();
                     r2 = 1.0 - norm(&xt) / norm(&xa).max(1e-300);
-                    replicate = crate::replicate::replicate_evidence(base, &xt, &st.e);
-                    (
-                        Level::WithinRun,
-                        within_evidence(base, &xt, &st.e, st.shared.len())?,
-                    )
+                    let ev = within_evidence(base, &xt, &st.e, st.shared.len())?;
+                    replicate = replicate_evidence(base, &xt, &st.e, ev.0, gate);
+                    (Level::WithinRun, ev)
                 }
                 (None, Some(g)) => {
                     let (th, se, db) = between_evidence(runs, g, &st.covs)?;

@@ -6,6 +6,7 @@
 //! resampled runs. (The spike found this within binomial noise of full refits: mean
 //! |difference| 0.04 over 15 sets.)
 
+use crate::library::LIBRARY;
 use crate::screen::{between_evidence, off_run_mu, Runs};
 use capstan_engine::fit::stats::chi2_of_f;
 use capstan_plant::rng::Rng;
@@ -43,8 +44,26 @@ pub struct Problem<'a> {
     pub bar: f64,
 }
 
-/// Share of `b` cord resamples in which `target` (a library index) is the pick and passes.
-pub fn stability(p: &Problem, target: usize, b: usize, seed: u64) -> f64 {
+/// What a resample's pick must be to count for the target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Hit {
+    /// The target itself.
+    Term,
+    /// A term that depends on the same variables (the claim the answer makes: the dependence,
+    /// with the terms of that dependence the data cannot tell apart named as its rivals).
+    Dependence,
+}
+
+/// Do the library terms `a` and `b` depend on the same variables?
+pub fn same_dependence(a: usize, b: usize) -> bool {
+    let (x, y) = (LIBRARY[a].depends_on, LIBRARY[b].depends_on);
+    x.len() == y.len() && x.iter().all(|v| y.contains(v))
+}
+
+/// Share of `b` cord resamples in which `target` (a library index) is the pick and passes
+/// (or, with [`Hit::Dependence`], a term of its dependence).
+pub fn stability(p: &Problem, target: usize, b: usize, seed: u64, hit: Hit) -> f64 {
     let within: Vec<&Candidate> = p.candidates.iter().filter(|c| c.column.is_some()).collect();
     let cords = PerCord::new(p, &within);
     let mut rng = Rng::new(seed);
@@ -55,7 +74,8 @@ pub fn stability(p: &Problem, target: usize, b: usize, seed: u64) -> f64 {
         cords.screen_within(&mult, &within, &mut best);
         screen_between(p, &cords.runs_of, &mult, &mut best);
         if let Some((term, dbic)) = best.0 {
-            if term == target && dbic < p.bar {
+            let same = term == target || (hit == Hit::Dependence && same_dependence(term, target));
+            if same && dbic < p.bar {
                 hits += 1;
             }
         }

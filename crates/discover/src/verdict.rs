@@ -14,6 +14,7 @@ use crate::library::LIBRARY;
 use crate::model::{
     catalogue_covariate, choose_swap, classify, runs_of, screen_all, state_of, State, Testable,
 };
+use crate::replicate::{Gate, ReplicateRule};
 use crate::screen::{self, Projector, Runs};
 use crate::stability;
 use capstan_data::Dataset;
@@ -40,6 +41,9 @@ pub const MIN_SHARE_RESOLVED: f64 = 0.8;
 
 /// The default [`Options::max_r2_model`]: VIF 100.
 pub const MAX_R2_MODEL: f64 = 0.99;
+
+/// The default [`Options::replicate_alpha`]: the replicate gate's one-sided level.
+pub const REPLICATE_ALPHA: f64 = 0.01;
 
 /// How to search.
 #[derive(Clone, Copy, Debug)]
@@ -69,6 +73,19 @@ pub struct Options {
     /// variance (1 − (after/before)² of the lack of fit's systematic ratio); otherwise it is
     /// declined as a partial mimic. Above 1: every such term is declined.
     pub min_share_resolved: f64,
+    /// How the replicate gate decides ([`crate::replicate`]).
+    pub replicate_rule: ReplicateRule,
+    /// The replicate gate's level: the one-sided p of the runs' shared scores must be below it.
+    pub replicate_alpha: f64,
+    /// The joint search also tries every term with each within-run catalogue effect the
+    /// engine tested and did not select ([`joint`]'s restores).
+    pub restore: bool,
+    /// What a cord resample's pick must be to count for the stability.
+    pub stability_hit: stability::Hit,
+    /// The share of the lack of fit's systematic variance a term must remove is required even
+    /// when the lack of fit is no longer significant with it in (the test's power falls with
+    /// fewer replicate runs; the share does not).
+    pub share_always: bool,
 }
 
 impl Default for Options {
@@ -83,6 +100,11 @@ impl Default for Options {
             max_r2_model: MAX_R2_MODEL,
             max_tries: MAX_TRIES,
             min_share_resolved: MIN_SHARE_RESOLVED,
+            replicate_rule: ReplicateRule::Share,
+            replicate_alpha: REPLICATE_ALPHA,
+            restore: false,
+            stability_hit: stability::Hit::Term,
+            share_always: true,
         }
     }
 }
@@ -98,14 +120,25 @@ pub fn discover(data: &Dataset, opts: &Options, progress: &mut dyn FnMut(&str, f
 /// The search's bar for step k: ΔBIC + 2γ·ln((models − k + 1)/k) < −threshold (extended BIC
 /// over every model tried at each step).
 #[derive(Clone, Copy)]
-struct Bar {
-    threshold: f64,
-    gamma: f64,
-    models: f64,
+pub(crate) struct Bar {
+    pub(crate) threshold: f64,
+    pub(crate) gamma: f64,
+    pub(crate) models: f64,
+}
+
+impl Options {
+    /// The replicate gate at the search's bar `bar`.
+    pub fn gate(&self, bar: f64) -> Gate {
+        Gate {
+            rule: self.replicate_rule,
+            alpha: self.replicate_alpha,
+            bar,
+        }
+    }
 }
 
 impl Bar {
-    fn at(&self, step: usize) -> f64 {
+    pub(crate) fn at(&self, step: usize) -> f64 {
         let k = step as f64;
         -self.threshold - 2.0 * self.gamma * ((self.models - k + 1.0) / k).max(1.0).ln()
     }
@@ -113,6 +146,8 @@ impl Bar {
 
 /// What every step of the search works on.
 struct Ctx<'a> {
+    /// The data as measured (the catalogue is re-selected on them with a term taken out).
+    data: &'a Dataset,
     a: &'a Assessment,
     opts: &'a Options,
     bar: Bar,
@@ -155,7 +190,7 @@ pub fn discover_assessed(
     let base0 = Base::new(d, &a.fit, &a.weights.w);
     let (testable0, not_testable) = classify(&base0);
     let alts = if opts.joint {
-        joint::alternatives(a)
+        joint::alternatives(a, opts.restore)
     } else {
         Vec::new()
     };
@@ -175,7 +210,7 @@ pub fn discover_assessed(
     let (swap, screen0) = choose_swap(
         (&base0, &testable0, &covs0),
         (&alts, a),
-        bar.at(1),
+        opts.gate(bar.at(1)),
         opts.max_r2_model,
     );
     let ctx_of = |swap: Option<joint::Swap>, first_try: usize| {
@@ -187,6 +222,7 @@ pub fn discover_assessed(
             None => (&base0, testable0.clone(), &a.fit),
         };
         Ctx {
+            data,
             a,
             opts,
             bar,
@@ -307,7 +343,8 @@ impl Ctx<'_> {
     ) -> bool {
         progress("screen", 0.3 + 0.2 * (step - 1) as f64);
         let proj = Projector::new(self.base, &st.shared);
-        let screens = screen_all(self.base, &self.testable, &proj, st, &self.runs);
+        let gate = self.opts.gate(self.bar.at(step));
+        let screens = screen_all(self.base, &self.testable, &proj, st, &self.runs, gate);
         // The first step of a swap takes the swap's term (it beat every addition).
         let forced = self.swap.filter(|_| step == 1).map(|s| s.term);
         let mut failed: Vec<usize> = Vec::new();
@@ -316,8 +353,14 @@ impl Ctx<'_> {
         let first = if step == 1 { self.first_try } else { 1 };
         for j in first..=self.opts.max_tries.max(1) {
             let bar = self.bar.at(step) - 2.0 * self.bar.gamma * (j as f64).ln();
-            let Some(best) = pick(&screens, bar, forced, self.opts, &failed, &mut out.declined)
-            else {
+            let Some(best) = pick(
+                &screens,
+                gate.at(bar),
+                forced,
+                self.opts,
+                &failed,
+                &mut out.declined,
+            ) else {
                 return false;
             };
             let t = &LIBRARY[best.term];
@@ -386,12 +429,21 @@ impl Ctx<'_> {
             None => &self.a.adequacy.lack_of_fit,
         };
         let on = (&self.a.design, self.base);
-        let lof_after = lack_of_fit_with(on, st, best.theta, proj_x.as_deref(), lof_before);
+        let mut lof_after = lack_of_fit_with(on, st, best.theta, proj_x.as_deref(), lof_before);
         let no = |why: String| Box::new(decline(t, best, Some(stab), Some(ratio.clone()), why));
-        let partial = match proj_x.is_some() && lof_open(&lof_after) {
+        // The catalogue the engine selects with the term taken out of the data.
+        let reselected = self.reselected(step, st, best, tst);
+        if let Some(r) = &reselected {
+            lof_after = self.beside_reselected(r, lof_after).map_err(no)?;
+        }
+        // The share it removes is judged when the lack of fit stays open with it, and (with
+        // `share_always`) whenever the catalogue left one.
+        let judged = lof_open(&lof_after) || (self.opts.share_always && lof_open(lof_before));
+        let partial = match proj_x.is_some() && judged {
             true => Some(self.partial_share(lof_before, &lof_after).map_err(no)?),
             false => None,
-        };
+        }
+        .filter(|_| lof_open(&lof_after));
         // A later term that only stands in for a catalogue effect the engine mis-selected.
         if let Some(why) = self.repair(step, st, best) {
             return Err(no(format!(
@@ -413,10 +465,32 @@ impl Ctx<'_> {
             )));
         }
         let forced = self.swap.filter(|_| step == 1);
-        let displaced = forced.map(|s| displaced(&self.alts[s.alt], s));
+        let displaced = forced.map(|s| (displaced(&self.alts[s.alt], s), self.alts[s.alt].change));
         let checks = (stab, ratio);
         let given = given_words(&out.terms);
         let mut term = proposed(t, best, checks, lof_after, rivals, (displaced, &given));
+        if let Some(r) = reselected {
+            let names: Vec<&'static str> = r.selected.iter().map(|k| k.name()).collect();
+            term.words += &format!(
+                " With it taken out of the data the engine selects {} (as measured: {}).",
+                if names.is_empty() {
+                    "no catalogue effect".to_string()
+                } else {
+                    names.join(" + ")
+                },
+                if self.a.selected.is_empty() {
+                    "none".to_string()
+                } else {
+                    self.a
+                        .selected
+                        .iter()
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(" + ")
+                }
+            );
+            term.catalogue_given = Some(names);
+        }
         if !failed.is_empty() {
             let names: Vec<&str> = failed.iter().map(name_of).collect();
             term.words += &format!(
@@ -453,15 +527,79 @@ impl Ctx<'_> {
         let share = 1.0 - (after / before).powi(2);
         // No lack of fit before (NaN): declined.
         if share.is_nan() || share < self.opts.min_share_resolved {
+            let how = match (lof_open(lof_before), lof_open(lof_after)) {
+                (true, true) => "stays",
+                (true, false) => "is no longer significant, but what it removes is too little",
+                _ => "appears (it was not significant before it)",
+            };
             return Err(format!(
-                "a partial mimic: with it the lack of fit against the replicate runs {} (p {}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
-                if lof_open(lof_before) { "stays" } else { "appears (it was not significant before it)" },
+                "a partial mimic: with it the lack of fit against the replicate runs {how} (p {}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
                 lof_after.as_ref().map_or("not computed".to_string(), |l| lof_p_equals(l.p)),
                 100.0 * share.max(0.0),
                 100.0 * self.opts.min_share_resolved.min(1.0)
             ));
         }
         Ok((before, after, share))
+    }
+
+    /// The lack of fit a term leaves beside the catalogue that fits the rest better (the one
+    /// re-selected around it, `r`, or the one as selected, `lof_after`); or why the term is
+    /// declined: the re-selected catalogue absorbs it (it is not past the engine's bar there).
+    fn beside_reselected(
+        &self,
+        r: &crate::reselect::Reselected,
+        lof_after: Option<LackOfFit>,
+    ) -> Result<Option<LackOfFit>, String> {
+        let ratio_of =
+            |l: &Option<LackOfFit>| l.as_ref().map_or(f64::INFINITY, |l| l.systematic_ratio);
+        match &r.screen {
+            Some(s) if s.delta_bic < -self.bar.threshold => {
+                Ok(match ratio_of(&r.lof_after) < ratio_of(&lof_after) {
+                    true => r.lof_after.clone(),
+                    false => lof_after,
+                })
+            }
+            s => {
+                let names: Vec<&str> = r.selected.iter().map(|k| k.name()).collect();
+                let names = match names.is_empty() {
+                    true => "no effect".to_string(),
+                    false => names.join(" + "),
+                };
+                Err(format!(
+                    "absorbed by the catalogue: with it taken out of the data the engine selects {names}, and beside those its ΔBIC is {} (the engine's bar −{:.0})",
+                    s.as_ref().map_or("not computable".to_string(), |s| format!("{:.1}", s.delta_bic)),
+                    self.bar.threshold
+                ))
+            }
+        }
+    }
+
+    /// The catalogue re-selected with the terms so far and this one (`best`) taken out of the
+    /// data, when the engine then selects another set (within-run terms only).
+    fn reselected(
+        &self,
+        step: usize,
+        st: &State,
+        best: &screen::Screen,
+        tst: &Testable,
+    ) -> Option<crate::reselect::Reselected> {
+        let x = tst.column.as_deref()?;
+        let col = |u: usize| {
+            self.testable
+                .iter()
+                .find(|c| c.term == u)
+                .and_then(|c| c.column.as_deref())
+        };
+        let mut taken: Vec<crate::reselect::Taken> = st
+            .used
+            .iter()
+            .zip(&st.theta_used)
+            .filter_map(|(&u, &th)| col(u).map(|c| (u, th, c)))
+            .collect();
+        taken.push((best.term, best.theta, x));
+        let gate = self.opts.gate(self.bar.at(step));
+        let on = (self.a, self.base, &st.shared[..]);
+        crate::reselect::reselect(self.data, on, &self.opts.engine, &taken, gate)
     }
 
     /// Why a later term (step > 1, no catalogue effect displaced) only repairs the engine's
@@ -471,7 +609,8 @@ impl Ctx<'_> {
             return None;
         }
         let threshold = self.bar.threshold;
-        Some(match catalogue_repair(self.a, self.alts, st, best, threshold)? {
+        let gate = self.opts.gate(self.bar.at(step));
+        Some(match catalogue_repair(self.a, self.alts, st, best, (threshold, gate))? {
             Repair::LeansOn(k, dbic) => format!(
                 "its evidence exists only beside the catalogue's {k}: without {k} its ΔBIC is {dbic:.1} (the engine's bar −{threshold:.0}), so it corrects what {k} does rather than adding to the catalogue; a catalogue effect the engine did not select (another sensor's offset, say) may be what the data want"
             ),
@@ -508,7 +647,13 @@ impl Ctx<'_> {
             bar,
         };
         let seed = 0x26_57ab + step as u64;
-        let stab = stability::stability(&problem, best.term, self.opts.resamples, seed);
+        let stab = stability::stability(
+            &problem,
+            best.term,
+            self.opts.resamples,
+            seed,
+            self.opts.stability_hit,
+        );
         progress("held-out cords", 0.5 + 0.2 * (step - 1) as f64);
         let forced = self.swap.filter(|_| step == 1);
         let without = forced.map(|_| heldout::shape_sse(self.base0, &self.base0.b));
@@ -545,8 +690,12 @@ impl Ctx<'_> {
             .iter_mut()
             .find(|x| x.name == LIBRARY[sw.term].name)
         {
+            let (how, what) = match x.change {
+                joint::Change::Dropped => ("in place of the catalogue's", "alone"),
+                joint::Change::Restored => ("with the catalogue's", "given the selection"),
+            };
             dec.reason = format!(
-                "tried in place of the catalogue's {} (ΔBIC of the swap {:.1}; {} alone {:.1}): {}",
+                "tried {how} {} (ΔBIC of the swap {:.1}; {} {what} {:.1}): {}",
                 x.dropped.name(),
                 sw.delta_bic,
                 x.dropped.name(),
@@ -612,6 +761,11 @@ impl Ctx<'_> {
                 structure: d.structure.clone(),
             },
             catalogue_effects: a.selected.iter().map(|k| k.name()).collect(),
+            catalogue_given_terms: out
+                .terms
+                .iter()
+                .rev()
+                .find_map(|t| t.catalogue_given.clone()),
             terms: out.terms,
             unexplained_after,
             residual_pattern,
@@ -626,7 +780,18 @@ impl Ctx<'_> {
                 gamma: opts.gamma,
                 first_bar: self.bar.at(1),
                 models_per_step: self.bar.models,
-                displaceable: self.alts.iter().map(|x| x.dropped.name()).collect(),
+                displaceable: self
+                    .alts
+                    .iter()
+                    .filter(|x| x.change == joint::Change::Dropped)
+                    .map(|x| x.dropped.name())
+                    .collect(),
+                restorable: self
+                    .alts
+                    .iter()
+                    .filter(|x| x.change == joint::Change::Restored)
+                    .map(|x| x.dropped.name())
+                    .collect(),
                 resamples: self.cord_checks.is_none().then_some(opts.resamples),
                 cords: d.cords.len(),
                 cord_checks: self.cord_checks.clone(),
@@ -643,13 +808,14 @@ impl Ctx<'_> {
 /// is declined and the search goes on to the next. `forced`: only that term may be picked.
 fn pick(
     screens: &[screen::Screen],
-    bar: f64,
+    gate: Gate,
     forced: Option<usize>,
     opts: &Options,
     failed: &[usize],
     declined: &mut Vec<Declined>,
 ) -> Option<screen::Screen> {
-    let shared_ok = |s: &screen::Screen| s.replicate.as_ref().is_none_or(|r| r.delta_bic < bar);
+    let bar = gate.bar;
+    let shared_ok = |s: &screen::Screen| gate.lets_through(s.replicate.as_ref());
     for s in screens
         .iter()
         .filter(|s| s.sign_ok && s.r2_model <= opts.max_r2_model)
@@ -660,13 +826,43 @@ fn pick(
             if declined.iter().any(|d| d.name == LIBRARY[s.term].name) {
                 continue;
             }
-            declined.push(decline(&LIBRARY[s.term], s, None, None, format!(
-                "the replicate runs do not share it enough: on the replicate cells' means its ΔBIC is {:.1} (bar {bar:.1}); the rest of what it fits is run-to-run wander",
-                s.replicate.as_ref().map_or(f64::NAN, |r| r.delta_bic)
-            )));
+            let why = s
+                .replicate
+                .as_ref()
+                .map_or(String::new(), |r| replicate_words(r, gate));
+            declined.push(decline(&LIBRARY[s.term], s, None, None, why));
             continue;
         }
         return Some(s.clone());
     }
     None
+}
+
+/// Why a term past the bar was stopped by the replicate gate.
+fn replicate_words(r: &crate::replicate::Replicate, gate: Gate) -> String {
+    match gate.rule {
+        ReplicateRule::Share => format!(
+            "the replicate runs do not share it: scored on the other runs' means of its cells, its runs give t = {:.2} ({:.0} df), one-sided p {} (the gate's level {}); θ on what they share is {:.0} % of the screen's, the rest is run-to-run wander",
+            r.t,
+            r.df,
+            p_words(r.p),
+            gate.alpha,
+            100.0 * r.share
+        ),
+        ReplicateRule::SearchBar => format!(
+            "the replicate runs do not share it enough: on the replicate cells' means its ΔBIC is {:.1} (bar {:.1}); the rest of what it fits is run-to-run wander",
+            r.delta_bic, gate.bar
+        ),
+    }
+}
+
+/// A p-value in words: "= 0.034", "< 10⁻⁴".
+fn p_words(p: f64) -> String {
+    if p < 1e-4 {
+        "< 10⁻⁴".into()
+    } else if p < 0.01 {
+        format!("= {p:.4}")
+    } else {
+        format!("= {p:.3}")
+    }
 }

@@ -1,8 +1,8 @@
 //! `capstan discover` on the thesis data: the JSON contract, and what it finds (the spike's
 //! answer, reproduced by this implementation: nothing in the library explains what the
-//! catalogue leaves: the strongest added term, a T2 reading error at low force, is not shared
-//! by the replicate runs enough to pass the search's bar, and the strongest swap, a heating law
-//! with one step of memory in the place of contact heating, does not help held-out cords).
+//! catalogue leaves: the strongest added term, a T2 reading error at low force, is shared by the
+//! replicate runs but short of the search's bar, and the strongest swap, a heating law with one
+//! step of memory in the place of contact heating, does not help held-out cords).
 
 use capstan_discover::{discover, Options};
 
@@ -30,10 +30,10 @@ fn thesis_nothing_in_the_library_explains_it() {
     assert_eq!(v["unexplained_after"], serde_json::json!(true));
     assert_eq!(v["residual_pattern"], serde_json::json!("diameter"));
     // The strongest added term (ΔBIC −13.1) passed note-26's bar for additions alone (−12.5),
-    // not the joint search's (−14.7, which pays for the swaps tried too), and not on what the
-    // replicate runs share (the replicate cells' means, judged against sign flips of whole
-    // runs). (Note-26 also measured it unstable over cords, 29 %, with a held-out ratio of
-    // 0.986 [0.95, 1.02]; the spike: 19-22 %.)
+    // not the joint search's (−14.8 with 27 terms, which pays for the swaps tried too). The
+    // replicate runs do share it (s41's gate: the runs' scores on the other runs' cell means,
+    // one-sided t, p < 0.01): the pattern is there, too weak for the search's bar. (Note-26
+    // measured it unstable over cords, 29 %, held-out ratio 0.986 [0.95, 1.02].)
     let top = &d.search.screen[0];
     assert_eq!(top.name, "t2_lowforce");
     assert!(
@@ -42,9 +42,15 @@ fn thesis_nothing_in_the_library_explains_it() {
         top.delta_bic
     );
     let rep = top.replicate.as_ref().expect("replicate cells");
-    assert!(rep.delta_bic > d.search.first_bar, "{rep:?}");
-    // The same sign and size on the cells' means: a shared pattern, too weak to pass the bar.
-    assert!(rep.theta_shared < 0.0 && (rep.theta_shared / top.theta - 1.0).abs() < 0.3);
+    assert!(rep.p < 0.01 && rep.passed, "{rep:?}");
+    // The same sign and size on what the runs share.
+    assert!(
+        rep.theta_shared < 0.0 && (rep.share - 1.0).abs() < 0.3,
+        "{rep:?}"
+    );
+    // s32's statistic on the cell means (the run's own row in, the search's whole bar): far
+    // short of it, as s32-s35 reported (−2.2).
+    assert!(rep.delta_bic > -5.0, "{rep:?}");
     // The joint search's strongest move is a swap: a heating law with one step of memory
     // (`load_memory_prev`) in the place of the catalogue's contact heating. It is stable over
     // cords but does not help held-out cords, so it is declined too.

@@ -304,7 +304,7 @@ fn span(span: Span, cfg: &CampaignConfig) -> f64 {
 
 /// A value of `kind` at a size that matters (`small`: below it), for the design `cfg`: drawn
 /// as its entry says.
-fn value(rng: &mut Rng, kind: EffectKind, small: bool, cfg: &CampaignConfig) -> f64 {
+pub(crate) fn value(rng: &mut Rng, kind: EffectKind, small: bool, cfg: &CampaignConfig) -> f64 {
     if kind == EffectKind::None {
         return 0.0;
     }

@@ -334,11 +334,17 @@ fn check_cord(cs: &CordSetup) -> Result<(), PlantError> {
         u.settling.is_finite() && u.settling > -0.9 && u.settling < 0.9,
         "cord unmodelled.settling",
     )?;
+    check(
+        u.mu_bump.is_finite() && u.mu_bump > -0.9 && u.mu_bump < 2.0,
+        "cord unmodelled.mu_bump",
+    )?;
     for (v, what) in [
         (u.t2_lowforce, "cord unmodelled.t2_lowforce"),
         (u.t1_tare_diameter, "cord unmodelled.t1_tare_diameter"),
         (u.t2_offset_wrap, "cord unmodelled.t2_offset_wrap"),
         (u.t2_range_step, "cord unmodelled.t2_range_step"),
+        (u.t2_quadratic, "cord unmodelled.t2_quadratic"),
+        (u.t1_quadratic, "cord unmodelled.t1_quadratic"),
     ] {
         check(v.is_finite() && v.abs() < 10.0, what)?;
     }

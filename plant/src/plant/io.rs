@@ -198,9 +198,11 @@ impl Plant {
         // curve, a function of T2 alone, only for T2.)
         let mut reading = match ch {
             Channel::T1 if drive_on => {
-                c.t1 + art.t1_offset_n + c.setup.unmodelled.t1_offset_n(c.op.diameter_mm)
+                c.setup.unmodelled.t1_reading_n(c.t1)
+                    + art.t1_offset_n
+                    + c.setup.unmodelled.t1_offset_n(c.op.diameter_mm)
             }
-            Channel::T1 => c.t1,
+            Channel::T1 => c.setup.unmodelled.t1_reading_n(c.t1),
             Channel::T2 => {
                 let t2 = c.setup.unmodelled.t2_reading_n(c.t2);
                 if drive_on {
