@@ -67,7 +67,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    capstan_data::check_capstan_data(&ds)?;
+    let data_warnings = super::check_data(&ds)?;
     capstan_engine::analysis::enough_rows(&ds)?;
     let names = ["report.html", "metrics.json", "predictions.csv"];
     let ours = |rel: &str| rel.starts_with("figures/figure-");
@@ -111,6 +111,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
     metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
     metrics["next_experiment"] = next;
+    metrics["data"]["warnings"] = serde_json::json!(data_warnings);
     set.write("report.html", html.as_bytes())?;
     set.write(
         "metrics.json",

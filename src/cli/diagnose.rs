@@ -42,7 +42,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    capstan_data::check_capstan_data(&data)?;
+    let data_warnings = super::check_data(&data)?;
     let opts = Options {
         within_threshold: args.within_threshold,
         between_threshold: args.between_threshold,
@@ -53,6 +53,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.json {
         let mut v: serde_json::Value = serde_json::from_str(&d.to_json())?;
         v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
+        v["data"]["warnings"] = serde_json::json!(data_warnings);
         crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         crate::out!("{}", summary(&d, &data.source));

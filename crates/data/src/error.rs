@@ -102,6 +102,21 @@ pub enum DataError {
         value: f64,
         run: String,
     },
+    /// A column in a unit no capstan rig's data are in (tensions in grams, wraps in radians).
+    UnitMistake {
+        path: String,
+        line: u64,
+        column: usize,
+        why: String,
+    },
+    /// More rows than [`crate::plausible::MAX_SUSPECT_SHARE`] cannot be capstan data
+    /// (swapped, negated, time going back, a run copied): each kind named with its lines.
+    SuspectRows {
+        path: String,
+        rows: usize,
+        suspect: usize,
+        kinds: Vec<String>,
+    },
     /// Most rows have a tension at or below zero: not tensions as a rig reads them.
     NotPositive {
         path: String,
@@ -298,6 +313,25 @@ impl fmt::Display for DataError {
                  reversed (or its zero is far off: a rig's negative-force check stops at \
                  {below} N); fix the run's sign or leave the run out",
                 below = -crate::REVERSED_BELOW_N
+            ),
+            UnitMistake {
+                path,
+                line,
+                column,
+                why,
+            } => write!(f, "{path}:{line}:{column}: {why}"),
+            SuspectRows {
+                path,
+                rows,
+                suspect,
+                kinds,
+            } => write!(
+                f,
+                "{path}: {suspect} of {rows} rows ({:.1} %) cannot be capstan data, more than \
+                 the {:.0} % a data set may hold with a warning: {}; fix or remove them",
+                100.0 * *suspect as f64 / (*rows).max(1) as f64,
+                100.0 * crate::plausible::MAX_SUSPECT_SHARE,
+                kinds.join("; ")
             ),
             NotPositive {
                 path,

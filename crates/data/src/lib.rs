@@ -22,6 +22,7 @@
 //! line and column; so are data that cannot be capstan pairs ([`check_capstan_data`]).
 
 mod error;
+pub mod plausible;
 pub mod provenance;
 pub mod ranges;
 pub mod read;
@@ -192,9 +193,13 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
 
 /// Data that cannot be capstan pairs: most rows without both tensions above zero (negated
 /// readings), no row with T2 above T1 (no friction), or T2 below T1 in most rows (the columns
-/// swapped). A few rows at or below zero, or with T2 below T1, are data (a zero offset, a
-/// slack cord).
-pub fn check_capstan_data(ds: &Dataset) -> Result<(), DataError> {
+/// swapped); a run whose sensor reads reversed; a column in a unit no rig's data are in
+/// (tensions in grams, wraps in radians: [`plausible::unit_mistake`]); more than
+/// [`plausible::MAX_SUSPECT_SHARE`] of rows that no rig produces ([`plausible`]). A few rows at
+/// or below zero, or with T2 below T1, are data (a zero offset, a slack cord). What passes
+/// comes back with the suspect rows it holds (at most that share) and the columns that look
+/// unusual: the caller warns about them ([`plausible::Plausibility::warnings`]).
+pub fn check_capstan_data(ds: &Dataset) -> Result<plausible::Plausibility, DataError> {
     let path = ds.source.clone();
     let rows = ds.pairs.len();
     let positive = ds
@@ -222,7 +227,38 @@ pub fn check_capstan_data(ds: &Dataset) -> Result<(), DataError> {
     if 2 * below > rows {
         return Err(DataError::Swapped { path, rows, below });
     }
-    reversed_run(ds)
+    reversed_run(ds)?;
+    if let Some((line, column, why)) = plausible::unit_mistake(ds) {
+        return Err(DataError::UnitMistake {
+            path,
+            line,
+            column,
+            why,
+        });
+    }
+    let found = plausible::plausibility(ds);
+    let suspect = found.suspect_rows();
+    if suspect as f64 > plausible::MAX_SUSPECT_SHARE * rows as f64 {
+        let kinds = found
+            .suspects
+            .iter()
+            .map(|s| {
+                format!(
+                    "{} row(s): {} ({})",
+                    s.lines.len(),
+                    s.kind.describe(),
+                    plausible::lines_text(&s.lines)
+                )
+            })
+            .collect();
+        return Err(DataError::SuspectRows {
+            path,
+            rows,
+            suspect,
+            kinds,
+        });
+    }
+    Ok(found)
 }
 
 /// A reading below minus this, N, in a run whose readings of that channel are all at or below
