@@ -4,47 +4,10 @@
 //! noise, for monotone and up-down orders; a level that cannot be found is reported, never
 //! dropped; a bad cell is named by file, line and column.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod condition_support;
 
-fn capstan(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_capstan"))
-        .args(args)
-        .output()
-        .expect("capstan runs")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("capstan-cond-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// A seeded normal deviate stream (xorshift + Box-Muller), for the logger's noise.
-struct Noise(u64);
-
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-    }
-}
-
-fn csv_rows(path: &Path) -> Vec<Vec<String>> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(String::from).collect())
-        .collect()
-}
+use condition_support::{capstan, csv_rows, simulate_runs, tmp, Noise};
+use std::path::Path;
 
 /// The thesis logger: 30 Hz.
 const LOGGER_HZ: f64 = 30.0;
@@ -64,46 +27,7 @@ fn simulate(dir: &Path, order: &str) -> Simulated {
 
 /// As [`simulate`], with more `simulate` options (`--noise thesis`).
 fn simulate_with(dir: &Path, order: &str, more: &[&str]) -> Simulated {
-    let out = dir.join("sim");
-    let mut args = vec![
-        "simulate",
-        "--out",
-        out.to_str().unwrap(),
-        "--runs",
-        "1",
-        "--wraps",
-        "360",
-        "--diameters",
-        "12.7",
-        "--order",
-        order,
-        "--seed",
-        "7",
-    ];
-    args.extend(more);
-    let o = capstan(&args);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let pairs = csv_rows(&out.join("pairs.csv"))
-        .iter()
-        .map(|r| {
-            (
-                r[4].parse().unwrap(),
-                r[6].parse().unwrap(),
-                r[7].parse().unwrap(),
-            )
-        })
-        .collect();
-    let raw = csv_rows(&out.join("raw/d12.7_w360_v10_run1.csv"))
-        .iter()
-        .map(|r| {
-            (
-                r[0].parse().unwrap(),
-                r[3].parse().unwrap(),
-                r[4].parse().unwrap(),
-            )
-        })
-        .collect();
-    (pairs, raw)
+    simulate_runs(dir, order, 1, more).remove(0)
 }
 
 /// The raw samples as a LabPro would log them: from the trigger, every 1/30 s, the sample

@@ -199,20 +199,61 @@ pub fn pairs(runs: &[RunResult], set: &Settings) -> Vec<Pair> {
         .collect()
 }
 
-/// The run numbers: a number in the file's run column, else counting from `first`.
+/// The run numbers: the number a run's label ends with (a `run` column's `3`, Logger Pro's
+/// `Run 3`), else counting up from `first`; a number two runs would share goes to the later
+/// one's next free number (two files' `Run 1` concatenated stay two runs).
 pub fn run_numbers(series: &[Series], first: u32) -> Vec<u32> {
-    let mut next = first;
-    series
+    let trailing = |l: &str| -> Option<u32> {
+        let digits: String = l
+            .chars()
+            .rev()
+            .take_while(char::is_ascii_digit)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect();
+        digits.parse().ok()
+    };
+    let wanted: Vec<Option<u32>> = series
         .iter()
-        .map(
-            |s| match s.label.as_deref().and_then(|l| l.parse::<u32>().ok()) {
-                Some(r) => r,
-                None => {
-                    let r = next;
-                    next += 1;
-                    r
-                }
-            },
-        )
-        .collect()
+        .map(|s| s.label.as_deref().map(str::trim).and_then(trailing))
+        .collect();
+    let mut taken: std::collections::HashSet<u32> = std::collections::HashSet::new();
+    let mut out: Vec<Option<u32>> = wanted
+        .iter()
+        .map(|w| w.filter(|&r| taken.insert(r)))
+        .collect();
+    let mut next = first;
+    for r in out.iter_mut().filter(|r| r.is_none()) {
+        while taken.contains(&next) {
+            next += 1;
+        }
+        taken.insert(next);
+        *r = Some(next);
+    }
+    out.into_iter().map(|r| r.expect("numbered")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn runs_are_numbered_from_their_labels_and_never_twice() {
+        let s = |l: Option<&str>| Series {
+            label: l.map(String::from),
+            ..Series::default()
+        };
+        let got = run_numbers(
+            &[
+                s(Some("Run 2")),
+                s(Some("Latest")),
+                s(Some("Run 2")),
+                s(None),
+                s(Some("7")),
+            ],
+            1,
+        );
+        assert_eq!(got, [2, 1, 3, 4, 7]);
+    }
 }
