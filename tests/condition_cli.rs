@@ -389,3 +389,88 @@ fn zero_levels_are_refused_at_the_command_line() {
     assert!(!o.status.success() && text.contains("--levels"), "{text}");
     assert!(!out.exists(), "refused, yet {} was made", out.display());
 }
+
+/// A wrong `--first-change-s` puts a change inside every window: each level is reported as
+/// mixing two, none gives a pair, and the command fails (it said "ok" to all twelve before).
+#[test]
+fn a_wrong_first_change_is_caught_in_every_window() {
+    let dir = tmp("wrong-first");
+    let (_, raw) = simulate(&dir, "monotone");
+    let export = dir.join("run1.txt");
+    std::fs::write(&export, logger_pro_export(&raw, 5)).unwrap();
+    let out = dir.join("late");
+    let o = capstan(&[
+        "condition",
+        export.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+        "--first-change-s",
+        "15.5",
+        "--dwell-s",
+        "10",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    let lv = levels(&out);
+    assert_eq!(lv.len(), 12);
+    assert!(
+        lv.iter()
+            .all(|l| l.6.contains("mixed: the tensions change inside")),
+        "{lv:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two runs logged at once, the rows sorted by time so that the `run` column alternates: two
+/// runs of twelve levels (it made one run of every row before: 26,202 runs).
+#[test]
+fn interleaved_runs_in_time_order_stay_two_runs() {
+    let dir = tmp("interleaved");
+    let runs = simulate_runs(&dir, "monotone", 2, &[]);
+    let mut rows: Vec<(f64, u32, f64, f64)> = Vec::new();
+    for (k, (_, raw)) in runs.iter().enumerate() {
+        // The second run's samples half a sample later on the shared clock.
+        rows.extend(
+            raw.iter()
+                .map(|r| (r.0 + 0.005 * k as f64, k as u32 + 1, r.1, r.2)),
+        );
+    }
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut text = String::from("time_s,run,t1_n,t2_n\n");
+    for r in &rows {
+        text += &format!("{:.3},{},{},{}\n", r.0, r.1, r.2, r.3);
+    }
+    let file = dir.join("both.csv");
+    std::fs::write(&file, text).unwrap();
+    let out = dir.join("pairs");
+    let o = capstan(&[
+        "condition",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let lv = levels(&out);
+    assert_eq!(lv.len(), 24, "{stderr}");
+    for (k, (fw, _)) in runs.iter().enumerate() {
+        let mine: Vec<_> = csv_rows(&out.join("levels.csv"))
+            .into_iter()
+            .filter(|r| r[0] == (k + 1).to_string())
+            .collect();
+        assert_eq!(mine.len(), 12);
+        for (r, (step, t1, _)) in mine.iter().zip(fw) {
+            let got: f64 = r[7].parse().unwrap();
+            assert!(
+                (got - t1).abs() < 0.01,
+                "run {} step {step}: {got} against {t1}",
+                k + 1
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -122,6 +122,14 @@ pub fn condition_run(s: &Series, run: u32, set: &Settings) -> RunResult {
         (_, n) if n >= 2 => &segs[1..n - 1],
         _ => &[][..],
     };
+    // A protocol placed by the user: the changes the tensions show, to catch a window that
+    // holds one (a wrong --first-change-s or --dwell-s mixes two levels in every window).
+    let shown = match &set.placement {
+        Placement::Protocol { dwell_s, .. } | Placement::Trigger { dwell_s, .. } => {
+            levels::detect(s, dwell_s / 3.0)
+        }
+        Placement::Detect { .. } => Vec::new(),
+    };
     let mut levels = Vec::new();
     for (k, &(from, to)) in inner.iter().enumerate() {
         let (a, b) = (from + set.window_after_s, to - set.window_before_s);
@@ -135,6 +143,12 @@ pub fn condition_run(s: &Series, run: u32, set: &Settings) -> RunResult {
             )
         } else if n < MIN_SAMPLES {
             format!("not found: {n} sample(s) in its window (need {MIN_SAMPLES})")
+        } else if let Some(c) = shown.iter().find(|&&c| c > a && c < b) {
+            format!(
+                "mixed: the tensions change inside its window, at {c:.2} s: two levels in one \
+                 mean; are --first-change-s and --dwell-s the run's? (without them the changes \
+                 are found from the tensions)"
+            )
         } else {
             "ok".into()
         };
