@@ -133,7 +133,7 @@ fn reduced(s: &Series) -> Option<Series> {
     let n = s.t_s.len();
     let span = s.t_s.last()? - s.t_s.first()?;
     let rate = (n.saturating_sub(1)) as f64 / span;
-    if !(rate > DETECT_MAX_HZ) {
+    if rate.is_nan() || rate <= DETECT_MAX_HZ {
         return None;
     }
     let k = (rate / DETECT_MAX_HZ).ceil() as usize;
