@@ -417,3 +417,43 @@ fn time_going_back_in_a_run_and_a_copied_run_are_named() {
         "{w:?}"
     );
 }
+
+#[test]
+fn a_raw_time_series_is_pointed_to_condition() {
+    for raw in [
+        "t_s,t1_counts,t2_counts,t1_n,t2_n\n0.01,400,391,0.1,0.2\n",
+        "Time (s),Force (N),Force 2 (N)\n0,0.1,0.2\n",
+        "Vernier Format 2\nx.cmbl 11/27/2026 .\nLatest\nTime\tForce\tForce 2\n",
+        "Time\tForce\tForce 2\n0\t0.1\t0.2\n",
+    ] {
+        let e = err(raw);
+        assert!(
+            e.contains("raw time series") && e.contains("capstan condition x.csv --out DIR"),
+            "{raw:?}: {e}"
+        );
+        assert!(!e.contains("tr '"), "{e}");
+    }
+    // A pairs CSV without a column is still told which.
+    assert!(err("wrap_deg,t1_n\n270,1\n").contains("missing required column `t2_n`"));
+}
+
+#[test]
+fn a_trailing_comma_or_a_stray_carriage_return_is_named() {
+    let e = err("wrap_deg,t1_n,t2_n\n270,1,2,\n");
+    assert_eq!(
+        e,
+        "x.csv:2: 4 cells where the header has 3: a trailing comma at the end of the line (an \
+         empty last cell): remove it"
+    );
+    let e = err("wrap_deg,t1_n,t2_n\n270,1,2\n270,1\r,2\n270,1,2\n");
+    assert!(
+        e.starts_with(
+            "x.csv:3: 2 cells where the header has 3: the line is cut by a carriage \
+                       return (\\r)"
+        ),
+        "{e}"
+    );
+    // CRLF and CR-only files are not strays.
+    assert!(read_pairs("wrap_deg,t1_n,t2_n\r\n270,1,2\r\n".as_bytes(), "x").is_ok());
+    assert!(read_pairs("wrap_deg,t1_n,t2_n\r270,1,2\r".as_bytes(), "x").is_ok());
+}
