@@ -220,6 +220,16 @@ fn check(dir: &Path, e: &Export) {
     assert!(o.status.success(), "{}: {stderr}", e.name);
     let got = levels(&out);
     assert_eq!(got.len(), 12 * e.runs.len(), "{}: {stderr}", e.name);
+    // condition.json says where the pairs came from.
+    let cj: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("condition.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        cj["provenance"]["input_sha256"].as_str().map(str::len),
+        Some(64),
+        "{}",
+        e.name
+    );
     for (run, l) in &e.runs {
         let want = window_means(l);
         let mine: Vec<_> = got.iter().filter(|g| g.0 == *run).collect();

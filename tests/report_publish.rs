@@ -14,6 +14,7 @@ fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_
             data,
             out: dir.to_path_buf(),
             json: false,
+            protocol_times: false,
             threads: None,
             validate: false,
             seed: 0,

@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 /// Arguments of `capstan diagnose`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
     /// Pairs CSV (`wrap_deg,t1_n,t2_n` required; `capstan_diameter_mm,drive_v,run,step,time_s`
     /// optional). Without it, the bundled thesis data.

@@ -13,6 +13,7 @@ use std::time::{Duration, Instant};
 
 /// Arguments of `capstan discover`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
     /// Pairs CSV (the schema of `capstan analyze`/`diagnose`). Without it, the bundled thesis
     /// data.

@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 /// Arguments of `capstan plan`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
     /// Pairs CSV, read as `diagnose` reads it. Without it, the bundled thesis data.
     pub data: Option<PathBuf>,

@@ -49,6 +49,18 @@ pub const MAX_DIAMETER_MM: f64 = ranges::DIAMETER_MM.max;
 /// The longest line a pairs CSV may have.
 pub const MAX_LINE_BYTES: usize = MAX_RECORD_BYTES;
 
+/// The columns a pairs CSV has, for the help of every command that reads one.
+pub const COLUMNS_HELP: &str = "\
+INPUT: a pairs CSV, one row per level (as capstan log, simulate and condition write it)
+  required  wrap_deg (deg), t1_n (N, the servo side), t2_n (N, the fixed side)
+  optional  capstan_diameter_mm (mm), drive_v (V): with wrap_deg they tell the cords apart;
+            run, step, time_s (s from the trigger to the window's centre): the runs and the
+            order within them (without run, a new run where step, or else time_s, restarts)
+  labels    cord, material (tell cords apart); session, date, boot (tell runs apart);
+            note, comment (kept, not used); any other column must be numeric (kept)
+  A raw time series (a logger's or Logger Pro's export, our raw.csv) is not pairs:
+  capstan condition RAW --out DIR --wrap-deg DEG makes them.";
+
 /// The columns `simulate` and `log` write, in order.
 pub const PAIRS_HEADER: [&str; 8] = [
     "capstan_diameter_mm",
