@@ -112,8 +112,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !files.is_empty() && !capstan_report::export::have_fonts() {
         crate::errln!("warning: no system fonts found: the PNG and PDF figures have no text (the SVG files do)");
     }
-    for f in &files {
-        set.write(&f.name, &f.bytes)?;
+    for f in files.iter() {
+        // Each figure file says where it came from, as metrics.json does.
+        let stamped = crate::provenance::stamp_figure(&f.name, f.bytes.clone(), &ctx.provenance);
+        set.write(&f.name, &stamped)?;
     }
     a.elapsed.figure_files_s = t_files.elapsed().as_secs_f64();
     write_predictions(&mut set, &args, &ds, &a)?;
