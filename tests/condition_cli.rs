@@ -474,3 +474,34 @@ fn interleaved_runs_in_time_order_stay_two_runs() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Times in milliseconds under a header that says seconds: named, with the unit to give.
+#[test]
+fn a_time_in_milliseconds_read_as_seconds_is_named() {
+    let dir = tmp("ms-as-s");
+    let f = dir.join("daq.csv");
+    let mut s = String::from("Time (s),T1 (N),T2 (N)\n");
+    for i in 0..4200 {
+        let t_ms = i as f64 * 1000.0 / 30.0;
+        let k = ((t_ms / 1000.0 - 0.5) / 10.0).floor();
+        let level = if (1.0..=12.0).contains(&k) { k } else { 0.0 };
+        s += &format!("{t_ms:.1},{:.4},{:.4}\n", 0.5 * level, 1.0 * level);
+    }
+    std::fs::write(&f, s).unwrap();
+    let out = dir.join("out");
+    let o = capstan(&[
+        "condition",
+        f.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("33.3") && err.contains("s apart") && err.contains("`Time (ms)`"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

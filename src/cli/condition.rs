@@ -196,6 +196,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let t_read = Instant::now();
     let (series, layout) = table::read(&a.raw, &text, &opts)?;
     let read_s = t_read.elapsed().as_secs_f64();
+    if let Some((s, why)) = series
+        .iter()
+        .find_map(|s| crate::condition::sampling_problem(s).map(|w| (s, w)))
+    {
+        bail!(
+            "{}:{}: {}{why}",
+            a.raw.display(),
+            s.line.first().copied().unwrap_or(0),
+            s.label
+                .as_deref()
+                .map_or(String::new(), |l| format!("run `{l}`: "))
+        );
+    }
     let t_cond = Instant::now();
     let numbers = run_numbers(&series, set.first_run);
     let runs: Vec<RunResult> = series

@@ -193,6 +193,29 @@ pub fn condition_run(s: &Series, run: u32, set: &Settings) -> RunResult {
     }
 }
 
+/// Samples further apart than this (median), s, cannot place the firmware's windows (7 s of a
+/// 10 s dwell): a logger samples at hertz or faster.
+pub const MAX_SAMPLE_INTERVAL_S: f64 = 0.5;
+
+/// A series sampled too sparsely for the windows: its time in another unit than its header
+/// says (milliseconds read as seconds)? The sentence, or `None`.
+pub fn sampling_problem(s: &Series) -> Option<String> {
+    let mut dt: Vec<f64> = s.t_s.windows(2).map(|w| w[1] - w[0]).collect();
+    if dt.is_empty() {
+        return None;
+    }
+    let n = dt.len();
+    let (_, &mut median, _) = dt.select_nth_unstable_by(n / 2, f64::total_cmp);
+    (median > MAX_SAMPLE_INTERVAL_S).then(|| {
+        format!(
+            "its samples are {median:.3} s apart (median) and it lasts {:.1} h, which no \
+             logger of a capstan rig does: is the time in milliseconds? Give its unit in the \
+             header (`Time (ms)`) and condition again",
+            (s.t_s[n] - s.t_s[0]) / 3600.0
+        )
+    })
+}
+
 /// The pairs of the levels found.
 pub fn pairs(runs: &[RunResult], set: &Settings) -> Vec<Pair> {
     runs.iter()
