@@ -10,12 +10,12 @@
 //! * `columns`: a header cell's run, name and unit, and which column plays which role.
 
 mod columns;
+mod logger_pro;
+mod rows;
 mod text;
 
 use anyhow::bail;
-use capstan_data::ranges::TENSION_N;
 use columns::{Ask, Col, Role, Unit};
-use std::collections::HashMap;
 use std::path::Path;
 use text::{Grid, Sep};
 
@@ -108,7 +108,7 @@ pub fn read(path: &Path, text: &str, opts: &ReadOptions) -> anyhow::Result<(Vec<
         bail!("{}: the file is empty", path.display());
     };
     if lines[first].starts_with("Vernier Format") {
-        return logger_pro(path, &lines, &opts.columns);
+        return logger_pro::read(path, &lines, &opts.columns);
     }
     let g = text::grid(path, &lines, opts.skip_rows, opts.header_row)?;
     let mut cols = header(&lines, &g);
@@ -143,7 +143,7 @@ pub fn read(path: &Path, text: &str, opts: &ReadOptions) -> anyhow::Result<(Vec<
     layout.notes.extend(unit_notes(&cols, &picks[0]));
     let mut all = Vec::new();
     for (b, p) in blocks.iter().zip(&picks) {
-        let mut runs = rows(path, (&lines, &g), &cols, p)?;
+        let mut runs = rows::rows(path, (&lines, &g), &cols, p)?;
         if runs.is_empty() {
             bail!(
                 "{}: no rows{} after the header",
@@ -188,9 +188,9 @@ fn header(lines: &[&str], g: &Grid) -> Vec<Col> {
 }
 
 /// One run block: the columns of one `Run N:` prefix (or all of them).
-struct Block {
-    label: Option<String>,
-    idx: Vec<usize>,
+pub(super) struct Block {
+    pub(super) label: Option<String>,
+    pub(super) idx: Vec<usize>,
 }
 
 /// The run blocks of the header: one per `Run N:` prefix, in order, or the whole header.
@@ -256,12 +256,12 @@ fn blocks(cols: &[Col], want: &Columns, layout: &mut Layout) -> anyhow::Result<V
 }
 
 /// The columns a block is read from (indices into the header).
-struct Picked {
-    time: usize,
-    t1: usize,
-    t2: usize,
-    trigger: Option<usize>,
-    run: Option<usize>,
+pub(super) struct Picked {
+    pub(super) time: usize,
+    pub(super) t1: usize,
+    pub(super) t2: usize,
+    pub(super) trigger: Option<usize>,
+    pub(super) run: Option<usize>,
 }
 
 const TIME: Role = Role {
@@ -289,7 +289,12 @@ fn any_unit(_: &Unit) -> Option<String> {
 
 impl Picked {
     /// The block's columns, as the options say or found by their names and units.
-    fn of(cols: &[Col], b: &Block, want: &Columns, has_header: bool) -> anyhow::Result<Picked> {
+    pub(super) fn of(
+        cols: &[Col],
+        b: &Block,
+        want: &Columns,
+        has_header: bool,
+    ) -> anyhow::Result<Picked> {
         let ask = |g: &Option<String>, flag: &str| Ask::of(g.as_deref(), cols, flag);
         let pick = |g: &Option<String>, role: &Role| -> anyhow::Result<usize> {
             let a = ask(g, role.flag)?;
@@ -343,7 +348,7 @@ impl Picked {
         })
     }
 
-    fn used(&self, cols: &[Col]) -> Vec<Used> {
+    pub(super) fn used(&self, cols: &[Col]) -> Vec<Used> {
         let one = |role: &str, i: usize, scale: f64| Used {
             role: role.to_string(),
             header: cols[i].text.clone(),
@@ -386,7 +391,7 @@ fn unit_words(u: &Unit, role: &str) -> String {
 
 /// What a user should know about the units: a force or time without one, a mass read as its
 /// weight.
-fn unit_notes(cols: &[Col], p: &Picked) -> Vec<String> {
+pub(super) fn unit_notes(cols: &[Col], p: &Picked) -> Vec<String> {
     let mut out = Vec::new();
     for (role, i) in [("time", p.time), ("T1", p.t1), ("T2", p.t2)] {
         let c = &cols[i];
@@ -404,201 +409,4 @@ fn unit_notes(cols: &[Col], p: &Picked) -> Vec<String> {
         }
     }
     out
-}
-
-/// The series of the rows (a new one for every value of the run column, which need not be
-/// contiguous: a time-sorted file of interleaved runs keeps each run whole); times must rise
-/// within a series. Blank lines are skipped; a row where the block's cells are all empty (its
-/// run ended before a longer one beside it) gives no sample.
-fn rows(
-    path: &Path,
-    (lines, g): (&[&str], &Grid),
-    cols: &[Col],
-    p: &Picked,
-) -> anyhow::Result<Vec<Series>> {
-    let mut runs: Vec<Series> = Vec::new();
-    let mut by_label: HashMap<Option<String>, usize> = HashMap::new();
-    let used = p.used(cols);
-    let mine: Vec<usize> = [Some(p.time), Some(p.t1), Some(p.t2), p.trigger, p.run]
-        .into_iter()
-        .flatten()
-        .collect();
-    for (i, line) in lines.iter().enumerate().skip(g.first_row) {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let row = text::cells(line, g.sep);
-        let lineno = i as u64 + 1;
-        if row.len() > cols.len() && row[cols.len()..].iter().any(|c| !c.is_empty()) {
-            bail!(
-                "{}:{lineno}: {} cells where the header has {}",
-                path.display(),
-                row.len(),
-                cols.len()
-            );
-        }
-        if mine
-            .iter()
-            .all(|&c| row.get(c).is_none_or(|v| v.is_empty()))
-        {
-            continue;
-        }
-        let num = |c: usize, scale: f64, tension: bool| {
-            cell_value(
-                path,
-                lineno,
-                c,
-                &cols[c].text,
-                row.get(c),
-                (scale, g.comma),
-                tension,
-            )
-        };
-        let label = p.run.map(|c| row.get(c).cloned().unwrap_or_default());
-        let next = runs.len();
-        let k = *by_label.entry(label.clone()).or_insert(next);
-        if k == next {
-            runs.push(Series {
-                label,
-                ..Series::default()
-            });
-        }
-        let s = &mut runs[k];
-        let t = num(p.time, used[0].scale, false)?;
-        if let Some(&prev) = s.t_s.last().filter(|&&prev| t <= prev) {
-            bail!(
-                "{}:{lineno}:{}: time {t} s does not follow the row before ({prev} s, line {}){}: \
-                 rows must be in time order within a run",
-                path.display(),
-                p.time + 1,
-                s.line.last().expect("a row before"),
-                s.label
-                    .as_deref()
-                    .map_or(String::new(), |l| format!(" of run `{l}`"))
-            );
-        }
-        let v1 = num(p.t1, used[1].scale, true)?;
-        let v2 = num(p.t2, used[2].scale, true)?;
-        s.t_s.push(t);
-        s.t1_n.push(v1);
-        s.t2_n.push(v2);
-        if let Some(c) = p.trigger {
-            s.trigger.push(num(c, 1.0, false)?);
-        }
-        s.line.push(lineno);
-    }
-    Ok(runs)
-}
-
-/// One cell as a number times `scale`, a tension checked against the physical range every
-/// pairs CSV is read with; an error names file, line and column, and a stray carriage return.
-fn cell_value(
-    path: &Path,
-    line: u64,
-    c: usize,
-    name: &str,
-    cell: Option<&String>,
-    (scale, comma): (f64, bool),
-    tension: bool,
-) -> anyhow::Result<f64> {
-    let cell = cell.map_or("", String::as_str);
-    let at = format!("{}:{line}:{}", path.display(), c + 1);
-    let Some(v) = text::number(cell, comma) else {
-        let why = if cell.is_empty() {
-            "is empty".to_string()
-        } else if cell.contains('\r') {
-            format!(
-                "`{}` holds a stray carriage return (\\r) inside the line: save the file with one \
-                 kind of line ending",
-                capstan_data::quote(cell)
-            )
-        } else {
-            format!("`{}` is not a number", capstan_data::quote(cell))
-        };
-        bail!("{at}: column `{name}`: {why}");
-    };
-    let v = v * scale;
-    if tension {
-        TENSION_N
-            .check(v)
-            .map_err(|why| anyhow::anyhow!("{at}: column `{name}`: {why}"))
-    } else {
-        Ok(v)
-    }
-}
-
-/// Logger Pro's text export: one "Vernier Format" block per data set (run).
-fn logger_pro(
-    path: &Path,
-    lines: &[&str],
-    want: &Columns,
-) -> anyhow::Result<(Vec<Series>, Layout)> {
-    let starts: Vec<usize> = (0..lines.len())
-        .filter(|&i| lines[i].starts_with("Vernier Format"))
-        .collect();
-    let mut all = Vec::new();
-    let mut layout = None;
-    for (k, &s) in starts.iter().enumerate() {
-        let end = starts.get(k + 1).copied().unwrap_or(lines.len());
-        if end < s + 7 {
-            bail!(
-                "{}:{}:1: a Logger Pro block needs 6 header lines (format, source, data set, \
-                 names, short names, units) and a blank line",
-                path.display(),
-                s + 1
-            );
-        }
-        let sep = Sep::Char('\t');
-        let names = text::cells(lines[s + 3], sep);
-        let units = text::cells(lines[s + 5], sep);
-        let cols: Vec<Col> = names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| Col::parse(n, units.get(i).map(String::as_str)))
-            .collect();
-        let comma = lines[s + 7..end].iter().any(|l| {
-            text::cells(l, sep)
-                .iter()
-                .any(|c| c.contains(',') && text::number(c, true).is_some())
-        });
-        let g = Grid {
-            sep,
-            comma,
-            header: Some(s + 3),
-            units: Some(s + 5),
-            first_row: s + 7,
-            width: cols.len(),
-        };
-        let block = Block {
-            label: None,
-            idx: (0..cols.len()).collect(),
-        };
-        let p = Picked::of(&cols, &block, want, true)?;
-        let mut series = rows(path, (&lines[..end], &g), &cols, &p)?;
-        if series.is_empty() {
-            bail!(
-                "{}:{}: a Logger Pro block without rows",
-                path.display(),
-                s + 1
-            );
-        }
-        let name = lines[s + 2].trim().to_string();
-        for x in series.iter_mut() {
-            x.label = Some(match &x.label {
-                Some(run) => format!("{name}, run {run}"),
-                None => name.clone(),
-            });
-        }
-        all.extend(series);
-        layout.get_or_insert_with(|| Layout {
-            format: "logger-pro".into(),
-            separator: "tab".into(),
-            decimal_comma: comma,
-            header_line: Some(s + 4),
-            used: p.used(&cols),
-            notes: unit_notes(&cols, &p),
-            ..Layout::default()
-        });
-    }
-    Ok((all, layout.expect("a block")))
 }
