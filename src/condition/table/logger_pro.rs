@@ -35,7 +35,7 @@ pub(super) fn read(
         let cols: Vec<Col> = names
             .iter()
             .enumerate()
-            .map(|(i, n)| Col::parse(n, units.get(i).map(String::as_str)))
+            .map(|(i, n)| Col::parse(n, units.get(i).map(|u| &**u)))
             .collect();
         let comma = lines[s + 7..end].iter().any(|l| {
             text::cells(l, sep)

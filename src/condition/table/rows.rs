@@ -21,6 +21,7 @@ pub(super) fn rows(
 ) -> anyhow::Result<Vec<Series>> {
     let mut runs: Vec<Series> = Vec::new();
     let mut by_label: HashMap<Option<String>, usize> = HashMap::new();
+    let mut last = 0;
     let used = p.used(cols);
     let mine: Vec<usize> = [Some(p.time), Some(p.t1), Some(p.t2), p.trigger, p.run]
         .into_iter()
@@ -52,20 +53,29 @@ pub(super) fn rows(
                 lineno,
                 c,
                 &cols[c].text,
-                row.get(c),
+                row.get(c).map(|v| &**v),
                 (scale, g.comma),
                 tension,
             )
         };
-        let label = p.run.map(|c| row.get(c).cloned().unwrap_or_default());
-        let next = runs.len();
-        let k = *by_label.entry(label.clone()).or_insert(next);
-        if k == next {
-            runs.push(Series {
-                label,
-                ..Series::default()
-            });
-        }
+        let label = p.run.map(|c| row.get(c).map_or("", |v| &**v));
+        // The run of the row before, most often; else looked up (or a new one).
+        let k = match runs.get(last) {
+            Some(r) if r.label.as_deref() == label => last,
+            _ => {
+                let next = runs.len();
+                let owned = label.map(String::from);
+                let k = *by_label.entry(owned.clone()).or_insert(next);
+                if k == next {
+                    runs.push(Series {
+                        label: owned,
+                        ..Series::default()
+                    });
+                }
+                k
+            }
+        };
+        last = k;
         let s = &mut runs[k];
         let t = num(p.time, used[0].scale, false)?;
         if let Some(&prev) = s.t_s.last().filter(|&&prev| t <= prev) {
@@ -100,11 +110,11 @@ fn cell_value(
     line: u64,
     c: usize,
     name: &str,
-    cell: Option<&String>,
+    cell: Option<&str>,
     (scale, comma): (f64, bool),
     tension: bool,
 ) -> anyhow::Result<f64> {
-    let cell = cell.map_or("", String::as_str);
+    let cell = cell.unwrap_or("");
     let at = format!("{}:{line}:{}", path.display(), c + 1);
     let Some(v) = text::number(cell, comma) else {
         let why = if cell.is_empty() {

@@ -5,6 +5,7 @@
 //! by `--skip-rows` / `--header-row`.
 
 use anyhow::bail;
+use std::borrow::Cow;
 use std::path::Path;
 
 /// How the cells of a line are separated.
@@ -46,10 +47,14 @@ pub fn lines(text: &str) -> Vec<&str> {
     v
 }
 
-/// The cells of `line`: split at `sep` outside quotes, each trimmed and unquoted.
-pub fn cells(line: &str, sep: Sep) -> Vec<String> {
+/// The cells of `line`: split at `sep` outside quotes, each trimmed and unquoted (borrowed
+/// from the line when it has no quote: a million-row export is read without a string a cell).
+pub fn cells(line: &str, sep: Sep) -> Vec<Cow<'_, str>> {
     match sep {
-        Sep::Blanks => line.split_whitespace().map(String::from).collect(),
+        Sep::Blanks => line.split_whitespace().map(Cow::Borrowed).collect(),
+        Sep::Char(d) if !line.contains('"') => {
+            line.split(d).map(|c| Cow::Borrowed(c.trim())).collect()
+        }
         Sep::Char(d) => {
             let (mut out, mut cur, mut quoted) = (Vec::new(), String::new(), false);
             let mut chars = line.chars().peekable();
@@ -60,11 +65,13 @@ pub fn cells(line: &str, sep: Sep) -> Vec<String> {
                         chars.next();
                     }
                     '"' => quoted = !quoted,
-                    c if c == d && !quoted => out.push(std::mem::take(&mut cur).trim().to_string()),
+                    c if c == d && !quoted => {
+                        out.push(Cow::Owned(std::mem::take(&mut cur).trim().to_string()))
+                    }
                     c => cur.push(c),
                 }
             }
-            out.push(cur.trim().to_string());
+            out.push(Cow::Owned(cur.trim().to_string()));
             out
         }
     }
@@ -85,7 +92,7 @@ pub fn number(cell: &str, comma: bool) -> Option<f64> {
 
 /// A row of numbers: at least two, and every cell a number or empty (a run that ended
 /// earlier, side by side with a longer one).
-fn numeric(cells: &[String], comma: bool) -> bool {
+fn numeric(cells: &[Cow<str>], comma: bool) -> bool {
     cells.iter().filter(|c| !c.is_empty()).count() >= 2
         && cells
             .iter()
@@ -159,10 +166,16 @@ pub fn grid(
     })
 }
 
+/// Lines searched for the header and the first rows of numbers.
+const SCAN_LINES: usize = 10_000;
+
 fn try_grid(lines: &[&str], from: usize, given: bool, sep: Sep, comma: bool) -> Option<Grid> {
     let width = |i: usize| cells(lines[i], sep).len();
+    // The header and the first rows are near the top: a metadata block of thousands of
+    // lines is no logger's.
     let rows: Vec<usize> = (from..lines.len())
         .filter(|&i| !lines[i].trim().is_empty())
+        .take(SCAN_LINES)
         .collect();
     let is_numeric = |i: usize| numeric(&cells(lines[i], sep), comma);
     // The first row of numbers followed by another as wide; else the first row of numbers.
