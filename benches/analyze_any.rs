@@ -103,7 +103,10 @@ fn simulated(seed: u64, k: u64, wraps: usize, runs: u32) -> Dataset {
 /// Analyse `d` end to end as `capstan analyze` does; the wall time and a description.
 fn analyse(d: &Dataset, dir: &std::path::Path, what: &str) -> Option<(f64, usize, String)> {
     let t0 = Instant::now();
-    let opts = capstan_engine::analysis::Options { threads: 2 };
+    let opts = capstan_engine::analysis::Options {
+        threads: 2,
+        ..Default::default()
+    };
     let a = capstan_engine::analysis::run(d, opts).ok()?;
     let cl = capstan_truth::closed_loop::run(&a, 2).ok();
     let html = capstan_report::report_html(

@@ -12,6 +12,7 @@ fn analyze_csv(name: &str, body: &str) -> String {
             data: Some(path),
             out: dir.join("out"),
             json: false,
+            protocol_times: false,
             threads: Some(1),
             validate: false,
             seed: 0,

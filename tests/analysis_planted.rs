@@ -60,6 +60,7 @@ fn the_report_on_planted_data_says_what_its_verdicts_say() {
                 data: Some(csv),
                 out: dir.clone(),
                 json: false,
+                protocol_times: false,
                 threads: Some(2),
                 validate: false,
                 seed: 0,

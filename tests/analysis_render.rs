@@ -66,6 +66,7 @@ fn report_renders_in_headless_chromium() {
             data: None,
             out: dir.clone(),
             json: false,
+            protocol_times: false,
             threads: None,
             validate: false,
             seed: 0,

@@ -22,6 +22,7 @@ fn outputs() -> &'static PathBuf {
                 data: None,
                 out: dir.clone(),
                 json: false,
+                protocol_times: false,
                 threads: None,
                 validate: false,
                 seed: 0,

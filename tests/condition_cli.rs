@@ -4,47 +4,10 @@
 //! noise, for monotone and up-down orders; a level that cannot be found is reported, never
 //! dropped; a bad cell is named by file, line and column.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod condition_support;
 
-fn capstan(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_capstan"))
-        .args(args)
-        .output()
-        .expect("capstan runs")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("capstan-cond-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// A seeded normal deviate stream (xorshift + Box-Muller), for the logger's noise.
-struct Noise(u64);
-
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-    }
-}
-
-fn csv_rows(path: &Path) -> Vec<Vec<String>> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(String::from).collect())
-        .collect()
-}
+use condition_support::{capstan, csv_rows, simulate_runs, tmp, Noise};
+use std::path::Path;
 
 /// The thesis logger: 30 Hz.
 const LOGGER_HZ: f64 = 30.0;
@@ -64,46 +27,7 @@ fn simulate(dir: &Path, order: &str) -> Simulated {
 
 /// As [`simulate`], with more `simulate` options (`--noise thesis`).
 fn simulate_with(dir: &Path, order: &str, more: &[&str]) -> Simulated {
-    let out = dir.join("sim");
-    let mut args = vec![
-        "simulate",
-        "--out",
-        out.to_str().unwrap(),
-        "--runs",
-        "1",
-        "--wraps",
-        "360",
-        "--diameters",
-        "12.7",
-        "--order",
-        order,
-        "--seed",
-        "7",
-    ];
-    args.extend(more);
-    let o = capstan(&args);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let pairs = csv_rows(&out.join("pairs.csv"))
-        .iter()
-        .map(|r| {
-            (
-                r[4].parse().unwrap(),
-                r[6].parse().unwrap(),
-                r[7].parse().unwrap(),
-            )
-        })
-        .collect();
-    let raw = csv_rows(&out.join("raw/d12.7_w360_v10_run1.csv"))
-        .iter()
-        .map(|r| {
-            (
-                r[0].parse().unwrap(),
-                r[3].parse().unwrap(),
-                r[4].parse().unwrap(),
-            )
-        })
-        .collect();
-    (pairs, raw)
+    simulate_runs(dir, order, 1, more).remove(0)
 }
 
 /// The raw samples as a LabPro would log them: from the trigger, every 1/30 s, the sample
@@ -464,4 +388,120 @@ fn zero_levels_are_refused_at_the_command_line() {
     let text = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && text.contains("--levels"), "{text}");
     assert!(!out.exists(), "refused, yet {} was made", out.display());
+}
+
+/// A wrong `--first-change-s` puts a change inside every window: each level is reported as
+/// mixing two, none gives a pair, and the command fails (it said "ok" to all twelve before).
+#[test]
+fn a_wrong_first_change_is_caught_in_every_window() {
+    let dir = tmp("wrong-first");
+    let (_, raw) = simulate(&dir, "monotone");
+    let export = dir.join("run1.txt");
+    std::fs::write(&export, logger_pro_export(&raw, 5)).unwrap();
+    let out = dir.join("late");
+    let o = capstan(&[
+        "condition",
+        export.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+        "--first-change-s",
+        "15.5",
+        "--dwell-s",
+        "10",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    let lv = levels(&out);
+    assert_eq!(lv.len(), 12);
+    assert!(
+        lv.iter()
+            .all(|l| l.6.contains("mixed: the tensions change inside")),
+        "{lv:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two runs logged at once, the rows sorted by time so that the `run` column alternates: two
+/// runs of twelve levels (it made one run of every row before: 26,202 runs).
+#[test]
+fn interleaved_runs_in_time_order_stay_two_runs() {
+    let dir = tmp("interleaved");
+    let runs = simulate_runs(&dir, "monotone", 2, &[]);
+    let mut rows: Vec<(f64, u32, f64, f64)> = Vec::new();
+    for (k, (_, raw)) in runs.iter().enumerate() {
+        // The second run's samples half a sample later on the shared clock.
+        rows.extend(
+            raw.iter()
+                .map(|r| (r.0 + 0.005 * k as f64, k as u32 + 1, r.1, r.2)),
+        );
+    }
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut text = String::from("time_s,run,t1_n,t2_n\n");
+    for r in &rows {
+        text += &format!("{:.3},{},{},{}\n", r.0, r.1, r.2, r.3);
+    }
+    let file = dir.join("both.csv");
+    std::fs::write(&file, text).unwrap();
+    let out = dir.join("pairs");
+    let o = capstan(&[
+        "condition",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let lv = levels(&out);
+    assert_eq!(lv.len(), 24, "{stderr}");
+    for (k, (fw, _)) in runs.iter().enumerate() {
+        let mine: Vec<_> = csv_rows(&out.join("levels.csv"))
+            .into_iter()
+            .filter(|r| r[0] == (k + 1).to_string())
+            .collect();
+        assert_eq!(mine.len(), 12);
+        for (r, (step, t1, _)) in mine.iter().zip(fw) {
+            let got: f64 = r[7].parse().unwrap();
+            assert!(
+                (got - t1).abs() < 0.01,
+                "run {} step {step}: {got} against {t1}",
+                k + 1
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Times in milliseconds under a header that says seconds: named, with the unit to give.
+#[test]
+fn a_time_in_milliseconds_read_as_seconds_is_named() {
+    let dir = tmp("ms-as-s");
+    let f = dir.join("daq.csv");
+    let mut s = String::from("Time (s),T1 (N),T2 (N)\n");
+    for i in 0..4200 {
+        let t_ms = i as f64 * 1000.0 / 30.0;
+        let k = ((t_ms / 1000.0 - 0.5) / 10.0).floor();
+        let level = if (1.0..=12.0).contains(&k) { k } else { 0.0 };
+        s += &format!("{t_ms:.1},{:.4},{:.4}\n", 0.5 * level, 1.0 * level);
+    }
+    std::fs::write(&f, s).unwrap();
+    let out = dir.join("out");
+    let o = capstan(&[
+        "condition",
+        f.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("33.3") && err.contains("s apart") && err.contains("`Time (ms)`"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -186,7 +186,7 @@ proptest! {
     ) {
         let text = csv(&rows, cols);
         if let Some(d) = accepted(&text) {
-            let opts = capstan_engine::analysis::Options { threads: 1 };
+            let opts = capstan_engine::analysis::Options { threads: 1, ..Default::default() };
             // Too few rows is a clear refusal; anything else must come back analysed.
             match capstan_engine::analysis::run(&d, opts) {
                 Ok(a) => {

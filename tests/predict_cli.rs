@@ -198,3 +198,42 @@ fn predict_says_when_the_run_scatter_was_not_estimable() {
     assert_eq!(v["run_scatter_estimated"], true);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--from DIR` reads DIR/metrics.json (it said "Is a directory"); as measured, a T2
+/// reading below zero at a small T1 gives no amplification (it printed −4.3): a dash, null in
+/// JSON, and a warning that says why; the JSON carries the provenance.
+#[test]
+fn from_a_directory_and_no_amplification_from_readings_below_zero() {
+    let dir = std::env::temp_dir().join(format!("capstan-predict-dir-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    metrics(&dir);
+    let d = dir.to_str().unwrap();
+    let o = predict_at(d, "360", "0.1,5", &["--as-measured", "--json"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let p = v["predictions"].as_array().unwrap();
+    assert!(p[0]["t2_n"].as_f64().unwrap() < 0.0, "{v}");
+    assert!(p[0]["amplification"].is_null(), "{v}");
+    assert!(p[1]["amplification"].as_f64().unwrap() > 1.0, "{v}");
+    assert_eq!(
+        v["provenance"]["program"],
+        format!("capstan {}", env!("CARGO_PKG_VERSION"))
+    );
+    assert_eq!(v["provenance"]["input_sha256"].as_str().unwrap().len(), 64);
+    let o = predict_at(d, "360", "0.1", &["--as-measured"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(out.contains(" — ") && !out.contains("-4."), "{out}");
+    assert!(err.contains("no amplification"), "{err}");
+    // A directory without metrics.json: said what to give.
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let o = predict_at(empty.to_str().unwrap(), "360", "1", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("a directory without metrics.json"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -14,6 +14,7 @@ fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_
             data,
             out: dir.to_path_buf(),
             json: false,
+            protocol_times: false,
             threads: None,
             validate: false,
             seed: 0,
@@ -223,4 +224,37 @@ fn the_next_experiment_section_is_rendered_from_its_metrics_object() {
         "{open:?}"
     );
     assert!(section.contains("<code>capstan plan</code>"));
+}
+
+/// Every figure file says where it came from (program, commit, input's SHA-256, command
+/// line), as metrics.json does: SVG in a metadata element, PNG in an iTXt chunk; both still
+/// parse.
+#[test]
+fn figure_files_carry_the_provenance() {
+    let dir = thesis_out().join("figures");
+    let commit = capstan::provenance::COMMIT;
+    let (mut svgs, mut pngs) = (0, 0);
+    for e in std::fs::read_dir(&dir).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let bytes = std::fs::read(e.path()).unwrap();
+        if name.ends_with(".svg") {
+            let text = String::from_utf8(bytes).unwrap();
+            assert!(
+                text.contains("<metadata id=\"capstan-provenance\">capstan ")
+                    && text.contains(commit),
+                "{name}"
+            );
+            capstan_report::export::svg_parses(&text).unwrap();
+            svgs += 1;
+        } else if name.ends_with(".png") {
+            let text = String::from_utf8_lossy(&bytes).to_string();
+            assert!(
+                text.contains("iTXtComment") && text.contains(commit),
+                "{name}"
+            );
+            capstan_report::export::png_decodes(&bytes).unwrap();
+            pngs += 1;
+        }
+    }
+    assert!(svgs > 0 && svgs == pngs, "{svgs} SVG, {pngs} PNG");
 }

@@ -129,6 +129,9 @@ pub struct SessionOutput {
     pub resets: Vec<(u64, ResetCause, u32)>,
     /// The plant's true state every `trace_every_ms`, through resets too.
     pub trace: Vec<TraceSample>,
+    /// Steps done: all of them, or those up to where the observer stopped the session
+    /// ([`run_session_observed`]).
+    pub steps_done: usize,
 }
 
 impl SessionOutput {
@@ -187,6 +190,21 @@ pub fn run_session(
     flash: RamFlash,
     steps: &[Step],
 ) -> Result<SessionOutput, SetupError> {
+    run_session_observed(spec, flash, steps, &mut |_, _| true)
+}
+
+/// What the host has after each step: how many steps are done, and every record so far;
+/// `false` ends the session there (a host that streams the records as they come, and stops
+/// between steps on a signal).
+pub type Observer<'a> = &'a mut dyn FnMut(usize, &[Event]) -> bool;
+
+/// [`run_session`], calling `observe` after every step that is not a reset or a freeze.
+pub fn run_session_observed(
+    spec: &SessionSpec,
+    flash: RamFlash,
+    steps: &[Step],
+    observe: Observer<'_>,
+) -> Result<SessionOutput, SetupError> {
     time::reset(0);
     let cord = CordSetup {
         press_at_us: None,
@@ -210,20 +228,32 @@ pub fn run_session(
     let mut cause = ResetCause::PowerUp;
     let mut resets = Vec::new();
     let mut rest = steps;
+    let mut done_total = 0;
+    let observe = RefCell::new(observe);
     loop {
         shared.boot.set(shared.boot.get() + 1);
         shared.console.borrow_mut().clear();
         let mut rig =
             Rig::new(spec.protocol, spec.calibration, spec.limits).map_err(SetupError::Protocol)?;
         let board = board(&plant, &shared, &mut store, &mut rig, cause, &scratch);
-        let host = host(&shared, &plant, rest, &mut unanswered, run_limit_us);
+        let host = host(
+            &shared,
+            &plant,
+            rest,
+            (&mut unanswered, run_limit_us),
+            (done_total, &observe),
+        );
         let probe = probe(&plant, spec.trace_every_ms, &trace);
         let limit = time::now_us() + steps_limit_us(rest, run_limit_us);
-        let done = match time::block_on_until(select3(board, host, probe), limit) {
+        let (done, stopped) = match time::block_on_until(select3(board, host, probe), limit) {
             Ok(Either3::Second(done)) => done,
-            _ => rest.len(),
+            _ => (rest.len(), false),
         };
         rest = &rest[done..];
+        done_total += done;
+        if stopped {
+            break;
+        }
         cause = match rest.first() {
             Some(Step::Reset) => {
                 release_pins(&plant);
@@ -240,6 +270,7 @@ pub fn run_session(
         };
         resets.push((time::now_us(), cause, scratch.get()));
         rest = &rest[1..];
+        done_total += 1;
     }
     let mut plant = plant.into_inner();
     plant.advance_to(time::now_us());
@@ -250,6 +281,7 @@ pub fn run_session(
         plant,
         resets,
         trace: trace.into_inner(),
+        steps_done: done_total,
     })
 }
 
@@ -336,14 +368,15 @@ fn steps_limit_us(steps: &[Step], run_limit_us: u64) -> u64 {
     steps.iter().map(each).sum::<u64>() + 1_000_000
 }
 
-/// The person and the host at the bench: do the steps up to a reset; how many were done.
+/// The person and the host at the bench: do the steps up to a reset; how many were done, and
+/// whether the observer stopped the session (`before`: steps done before these).
 async fn host(
     shared: &Shared,
     plant: &RefCell<Plant>,
     steps: &[Step],
-    unanswered: &mut Vec<String>,
-    run_limit_us: u64,
-) -> usize {
+    (unanswered, run_limit_us): (&mut Vec<String>, u64),
+    (before, observe): (usize, &RefCell<Observer<'_>>),
+) -> (usize, bool) {
     // Let the board boot and settle (and a homing servo reach rest) first.
     Timer::after(Duration::from_millis(50)).await;
     for (i, step) in steps.iter().enumerate() {
@@ -388,10 +421,14 @@ async fn host(
                 })
                 .await;
             }
-            Step::Reset | Step::Freeze => return i,
+            Step::Reset | Step::Freeze => return (i, false),
+        }
+        let go_on = (observe.borrow_mut())(before + i + 1, &shared.events.borrow());
+        if !go_on {
+            return (i + 1, true);
         }
     }
-    steps.len()
+    (steps.len(), false)
 }
 
 /// Wait until a record after the first `seen` matches, checking every ms; false at the timeout.

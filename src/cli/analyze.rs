@@ -12,15 +12,24 @@ use std::time::Instant;
 
 /// Arguments of `capstan analyze`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
     /// Pairs CSV (default: the bundled thesis data, 720 pairs).
     pub data: Option<PathBuf>,
-    /// Output directory (created if needed).
+    /// Output directory (created if needed). Analyze always writes its report, so it has a
+    /// place by default (the README's main job); the commands whose files are optional
+    /// (discover, plan) write only with --out, and those that record (simulate, log,
+    /// condition) need it.
     #[arg(long, default_value = "report")]
     pub out: PathBuf,
     /// Print the metrics (including timings) as JSON on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Without a `time_s` column, take the times from `step` with the thesis protocol (10 s
+    /// steps), so that a drift in time (`thermal_drift`) can be tested, as diagnose and
+    /// discover do with the same option.
+    #[arg(long)]
+    pub protocol_times: bool,
     /// Threads for independent fits (default: up to 4).
     #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
@@ -29,7 +38,9 @@ pub struct Args {
     /// and every miss, writes DIR/validation.json, and fails if a target is missed.
     #[arg(long)]
     pub validate: bool,
-    /// Master seed of the validation's data sets.
+    /// Master seed of the validation's data sets: by default the held-out seed the README's
+    /// validation figures come from (the rules were set on seed 99), not the 1 that simulate,
+    /// plan and a new simulated board start from.
     #[arg(long, default_value_t = 31_415_926)]
     pub seed: u64,
     /// Also write every figure as a standalone file under DIR/figures/ (figure-N-ID.EXT, N as
@@ -74,7 +85,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // Force control: how the rig tracked its target, not the law (issue 43).
         return force::run(&args, path, &ctx);
     }
-    capstan_data::check_capstan_data(&ds)?;
+    let data_warnings = super::check_data(&ds)?;
     capstan_engine::analysis::enough_rows(&ds)?;
     let names = ["report.html", "metrics.json", "predictions.csv"];
     let ours = |rel: &str| rel.starts_with("figures/figure-");
@@ -86,6 +97,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
+    opts.protocol_times = args.protocol_times;
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     crate::errln!("{}", ds.structure.describe());
     let mut a = capstan_engine::analysis::run(&ds, opts)?;
@@ -97,7 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t_report = Instant::now();
     let closed = closed_loop(&mut a, opts.threads);
-    let (disc, disc_s) = discovery(&ds)?;
+    let (disc, disc_s) = discovery(&ds, args.protocol_times)?;
     let next = next_experiment(&args, &ds)?;
     let (html, figs) =
         capstan_report::report_html(&a, closed.curves.as_deref(), &closed.note, &ctx)?;
@@ -107,8 +119,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !files.is_empty() && !capstan_report::export::have_fonts() {
         crate::errln!("warning: no system fonts found: the PNG and PDF figures have no text (the SVG files do)");
     }
-    for f in &files {
-        set.write(&f.name, &f.bytes)?;
+    for f in files.iter() {
+        // Each figure file says where it came from, as metrics.json does.
+        let stamped = crate::provenance::stamp_figure(&f.name, f.bytes.clone(), &ctx.provenance);
+        set.write(&f.name, &stamped)?;
     }
     a.elapsed.figure_files_s = t_files.elapsed().as_secs_f64();
     write_predictions(&mut set, &args, &ds, &a)?;
@@ -118,6 +132,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
     metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
     metrics["next_experiment"] = next;
+    metrics["data"]["warnings"] = serde_json::json!(data_warnings);
     set.write("report.html", html.as_bytes())?;
     set.write(
         "metrics.json",
@@ -184,9 +199,14 @@ fn closed_loop(a: &mut capstan_engine::analysis::Analysis, threads: usize) -> Cl
 
 /// Beyond the catalogue (`capstan discover`), kept apart from the catalogue's causes: the
 /// search as JSON and its time, s.
-fn discovery(ds: &capstan_data::Dataset) -> anyhow::Result<(serde_json::Value, f64)> {
+fn discovery(
+    ds: &capstan_data::Dataset,
+    protocol_times: bool,
+) -> anyhow::Result<(serde_json::Value, f64)> {
     let t = Instant::now();
-    let disc = capstan_discover::discover(ds, &Default::default(), &mut |_, _| {});
+    let mut opts = capstan_discover::Options::default();
+    opts.engine.protocol_times = protocol_times;
+    let disc = capstan_discover::discover(ds, &opts, &mut |_, _| {});
     Ok((serde_json::to_value(&disc)?, t.elapsed().as_secs_f64()))
 }
 

@@ -2,20 +2,28 @@
 //! conditioning rules (`crate::condition`).
 
 use crate::condition::levels::Placement;
-use crate::condition::table::{self, Columns};
+use crate::condition::table::{self, Columns, ReadOptions};
 use crate::condition::{condition_run, pairs, run_numbers, RunResult, Settings};
 use anyhow::{bail, Context};
 use std::path::PathBuf;
 use std::time::Instant;
 
 const AFTER_HELP: &str = "\
-INPUTS
-  Our raw.csv (capstan log, capstan simulate's raw/), a logger's CSV or tab-separated export
-  with a header, or Logger Pro's text export (File > Export As > Text: \"Vernier Format\"
-  blocks, one per run). The columns are found by name (time / t; t1, force 1 or force;
-  t2, force 2), units from the header: `Force (N)`, `T1 [kgf]`, `t1_n`, `Time (ms)`, or
-  Logger Pro's units line (s, ms, min; N, mN, kN, kgf, gf, lbf). Name them when the header
-  is not clear: --time-column, --t1-column, --t2-column.
+INPUTS (the columns it reads: a time and two tensions, T1 the servo side, T2 the fixed side)
+  Our raw.csv (capstan log, capstan simulate's raw/: time_s, t1_n, t2_n, run), a logger's
+  export, or Logger Pro's text export (File > Export As > Text: \"Vernier Format\" blocks,
+  one per run). A logger's export may be separated by commas, semicolons, tabs or blanks,
+  with decimal points or commas (1,5), a byte-order mark, any line ending, and a block of
+  metadata above the header (a DAQ's `Logger,...` lines, LabVIEW's ***End_of_Header***):
+  the header is the line above the first rows of numbers, or give it (--header-row N, or
+  --skip-rows N lines before it). Logger Pro's \"Export as CSV\" puts runs side by side
+  (`Run 1: Time (s)`, `Run 2: Time (s)`, ...): each block is its own run.
+  The columns are found by name (time, t, X_Value; t1, force 1, force; t2, force 2), or
+  named: --time-column, --t1-column, --t2-column take a header name (`Force 2`, with or
+  without its unit; `Run 2: Time` for one run's column only) or a column number (1 = the
+  first). Units from the header, `Force (N)`, `T1 [kgf]`, `t1_n`, `Time (ms)`, or a units
+  line: s, ms, us, min, h; N, mN, kN, daN, gf, g, kgf, kg (a mass read as its weight),
+  lbf, lb, ozf. Volts, counts and unknown units are refused by name: convert them first.
 
 LEVELS
   By default the level changes are found from the tensions themselves (robust to noise,
@@ -41,21 +49,30 @@ pub struct Args {
     /// Output directory.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// The time column (by its header name, without the unit).
-    #[arg(long, value_name = "NAME")]
+    /// The time column: its header name (with or without the unit; `Run 2: Time` for one
+    /// run's) or its number (1 = the first column).
+    #[arg(long, value_name = "NAME|N")]
     pub time_column: Option<String>,
-    /// The T1 column.
-    #[arg(long, value_name = "NAME")]
+    /// The T1 column (the servo side), by name or number.
+    #[arg(long, value_name = "NAME|N")]
     pub t1_column: Option<String>,
-    /// The T2 column.
-    #[arg(long, value_name = "NAME")]
+    /// The T2 column (the fixed side), by name or number.
+    #[arg(long, value_name = "NAME|N")]
     pub t2_column: Option<String>,
     /// A logger trigger column: its first rising edge is the run's time zero.
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME|N")]
     pub trigger_column: Option<String>,
-    /// The run-number column [default: a column named `run`, if any].
-    #[arg(long, value_name = "NAME")]
+    /// The run-number column [default: a column named `run`, if any]; its rows need not be
+    /// together (each run's rows are gathered).
+    #[arg(long, value_name = "NAME|N")]
     pub run_column: Option<String>,
+    /// Lines to pass before the header (a logger's metadata block) [default: found].
+    #[arg(long, value_name = "N", conflicts_with = "header_row")]
+    pub skip_rows: Option<usize>,
+    /// The header's line number (1 = the first line) [default: found: the line above the
+    /// first rows of numbers].
+    #[arg(long, value_name = "LINE")]
+    pub header_row: Option<usize>,
     /// Protocol: the first level change (rest to level 1), s of the file's time (or after the
     /// trigger's edge; default there the firmware's 10.5). With --dwell-s: the levels from the
     /// protocol, not found.
@@ -165,16 +182,33 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             e.utf8_error().valid_up_to()
         )
     })?;
-    let cols = Columns {
-        time: a.time_column.clone(),
-        t1: a.t1_column.clone(),
-        t2: a.t2_column.clone(),
-        trigger: a.trigger_column.clone(),
-        run: a.run_column.clone(),
+    let opts = ReadOptions {
+        columns: Columns {
+            time: a.time_column.clone(),
+            t1: a.t1_column.clone(),
+            t2: a.t2_column.clone(),
+            trigger: a.trigger_column.clone(),
+            run: a.run_column.clone(),
+        },
+        skip_rows: a.skip_rows,
+        header_row: a.header_row,
     };
     let t_read = Instant::now();
-    let (series, layout) = table::read(&a.raw, &text, &cols)?;
+    let (series, layout) = table::read(&a.raw, &text, &opts)?;
     let read_s = t_read.elapsed().as_secs_f64();
+    if let Some((s, why)) = series
+        .iter()
+        .find_map(|s| crate::condition::sampling_problem(s).map(|w| (s, w)))
+    {
+        bail!(
+            "{}:{}: {}{why}",
+            a.raw.display(),
+            s.line.first().copied().unwrap_or(0),
+            s.label
+                .as_deref()
+                .map_or(String::new(), |l| format!("run `{l}`: "))
+        );
+    }
     let t_cond = Instant::now();
     let numbers = run_numbers(&series, set.first_run);
     let runs: Vec<RunResult> = series
@@ -194,8 +228,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .sum();
     let json = serde_json::json!({
         "source": a.raw.display().to_string(),
+        "provenance": crate::provenance::of_input(Some(&a.raw))?,
         "format": layout.format,
-        "columns": layout.used.iter().map(|(role, text, scale)| serde_json::json!({"role": role, "header": text, "scale": scale})).collect::<Vec<_>>(),
+        "read": &layout,
+        "columns": &layout.used,
         "placement": format!("{:?}", set.placement),
         "window_after_s": set.window_after_s,
         "window_before_s": set.window_before_s,
@@ -260,7 +296,12 @@ fn say(runs: &[RunResult], layout: &table::Layout, a: &Args, pairs: usize) {
     let cols: Vec<String> = layout
         .used
         .iter()
-        .map(|(role, text, scale)| format!("{role} = `{text}` (x{scale})"))
+        .map(|u| {
+            format!(
+                "{} = column {} `{}` (x{})",
+                u.role, u.column, u.header, u.scale
+            )
+        })
         .collect();
     crate::errln!(
         "read {} as {}: {}",
@@ -268,6 +309,24 @@ fn say(runs: &[RunResult], layout: &table::Layout, a: &Args, pairs: usize) {
         layout.format,
         cols.join(", ")
     );
+    if let Some((from, to)) = layout.skipped_lines {
+        crate::errln!("  lines {from}-{to} passed: a header block above the column names");
+    }
+    if layout.decimal_comma {
+        crate::errln!(
+            "  decimal commas (1,5 read as 1.5), {}-separated",
+            layout.separator
+        );
+    }
+    if !layout.run_blocks.is_empty() {
+        crate::errln!(
+            "  runs side by side: {} (each its own run)",
+            layout.run_blocks.join(", ")
+        );
+    }
+    for n in &layout.notes {
+        crate::errln!("  note: {n}");
+    }
     for r in runs {
         crate::errln!(
             "run {}{}: {} samples, {} level(s)",

@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 /// Arguments of `capstan diagnose`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
     /// Pairs CSV (`wrap_deg,t1_n,t2_n` required; `capstan_diameter_mm,drive_v,run,step,time_s`
     /// optional). Without it, the bundled thesis data.
@@ -42,7 +43,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    capstan_data::check_capstan_data(&data)?;
+    let data_warnings = super::check_data(&data)?;
     let opts = Options {
         within_threshold: args.within_threshold,
         between_threshold: args.between_threshold,
@@ -53,6 +54,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.json {
         let mut v: serde_json::Value = serde_json::from_str(&d.to_json())?;
         v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
+        v["data"]["warnings"] = serde_json::json!(data_warnings);
         crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         crate::out!("{}", summary(&d, &data.source));

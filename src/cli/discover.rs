@@ -13,6 +13,7 @@ use std::time::{Duration, Instant};
 
 /// Arguments of `capstan discover`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
     /// Pairs CSV (the schema of `capstan analyze`/`diagnose`). Without it, the bundled thesis
     /// data.
@@ -34,7 +35,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    capstan_data::check_capstan_data(&data)?;
+    let data_warnings = super::check_data(&data)?;
     // What analyze refuses, discover refuses too (a search needs the analysis's data).
     capstan_engine::analysis::enough_rows(&data)?;
     // Lock the output directory before the work, not after it.
@@ -47,15 +48,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let bar = Progress::new(!args.json && std::io::stderr().is_terminal());
     let d = discover(&data, &opts, &mut |stage, f| bar.tick(stage, f));
     bar.finish();
+    // Where the answer came from (program, commit, the input's SHA-256, the command line), as
+    // every output carries it, and what the data checks warned about.
+    let mut v = serde_json::to_value(&d)?;
+    v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
+    v["data"]["warnings"] = serde_json::json!(data_warnings);
+    let json = serde_json::to_string_pretty(&v)?;
     if let Some(set) = set.as_mut() {
         set.keep_on_failure(crate::outputs::say_kept);
-        set.write("discover.json", d.to_json().as_bytes())?;
+        set.write("discover.json", json.as_bytes())?;
     }
     if let Some(set) = set {
         set.commit()?;
     }
     if args.json {
-        crate::outln!("{}", d.to_json());
+        crate::outln!("{json}");
     } else {
         crate::out!("{}", summary(&d));
     }

@@ -133,7 +133,9 @@ pub struct Args {
     #[arg(long, value_name = "N")]
     pub runs: Option<usize>,
 
-    /// Stop after this many seconds (wall clock, whether or not anything arrives).
+    /// Stop after this many seconds, whether or not anything arrives: of the wall clock from a
+    /// board or a stream; with --sim, of the simulated board's own clock (which runs faster
+    /// than the wall clock: a day of it passes in seconds).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub duration: Option<f64>,
 
@@ -204,6 +206,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     crate::errln!("{}", summary.human(&at));
     if outcome != Outcome::Committed {
         return not_committed(&summary, &stop, &outcome, &args);
+    }
+    if let (Some(_), Stop::Interrupted(why)) = (&args.sim.sim, &stop) {
+        // The simulated board's session plans its runs: a signal stopped it short.
+        let complete = summary.runs.iter().filter(|r| r.complete).count();
+        return Err(super::signal::Interrupted(format!(
+            "interrupted ({why}) after {complete} complete run(s), kept in {}",
+            args.out.display()
+        ))
+        .into());
     }
     verdict(&summary, &stop, &args)
 }

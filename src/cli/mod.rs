@@ -13,9 +13,18 @@ pub mod rig;
 pub mod signal;
 pub mod simulate;
 
+/// `capstan --version`: the version and the git commit this binary was built from (as every
+/// output's provenance gives them).
+pub const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (commit ",
+    env!("CAPSTAN_GIT_COMMIT"),
+    ")"
+);
+
 /// Capstan-friction rig: simulate, analyse, diagnose and log.
 #[derive(Parser, Debug)]
-#[command(name = "capstan", version, about, long_about = None)]
+#[command(name = "capstan", version = VERSION, about, long_about = None)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -48,6 +57,19 @@ pub enum Command {
     Rig(rig::Args),
     /// Condition a raw time series (raw.csv, a logger's CSV or Logger Pro export) into pairs.
     Condition(condition::Args),
+}
+
+/// The checks every command that reads pairs runs before its work
+/// ([`capstan_data::check_capstan_data`]): refused data are an error; what passes with a few
+/// suspect rows or an unusual column is said on stderr, one `warning:` line each, and the
+/// same sentences come back for the command's JSON (`data.warnings`).
+pub fn check_data(ds: &capstan_data::Dataset) -> anyhow::Result<Vec<String>> {
+    let found = capstan_data::check_capstan_data(ds)?;
+    let warnings = found.warnings(&ds.source);
+    for w in &warnings {
+        crate::errln!("warning: {w}");
+    }
+    Ok(warnings)
 }
 
 /// Run a parsed command line.

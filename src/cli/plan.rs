@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 /// Arguments of `capstan plan`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
     /// Pairs CSV, read as `diagnose` reads it. Without it, the bundled thesis data.
     pub data: Option<PathBuf>,
@@ -41,7 +42,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
     };
-    capstan_data::check_capstan_data(&data)?;
+    let data_warnings = super::check_data(&data)?;
     // A plan is built on the analysis of these data: what analyze refuses, plan refuses too.
     capstan_engine::analysis::enough_rows(&data)?;
     // The output directory is locked and checked before the planning (minutes), not after it.
@@ -66,7 +67,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // How the data were read and where they came from, as diagnose and analyze say it.
     let structure = data.structure.summary();
     let mut v = serde_json::to_value(&p)?;
-    v["data"] = serde_json::json!({"source": data.source, "structure": structure});
+    v["data"] = serde_json::json!({"source": data.source, "structure": structure, "warnings": data_warnings});
+    // The simulated campaigns' master seed and size: the same seed, data and program give the
+    // same plan.
+    v["seed"] = serde_json::json!(args.seed);
+    v["reps"] = serde_json::json!(args.reps);
     v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
     let json = serde_json::to_string_pretty(&v)?;
     let text = words(&p, &data.source, &structure.statement);

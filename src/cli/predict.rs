@@ -12,8 +12,8 @@ use std::path::PathBuf;
 /// Arguments of `capstan predict`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The `metrics.json` that `capstan analyze` wrote.
-    #[arg(long)]
+    /// The `metrics.json` that `capstan analyze` wrote (or the directory holding it).
+    #[arg(long, value_name = "METRICS_JSON|DIR")]
     pub from: PathBuf,
     /// Wrap angle, degrees (a negative number is taken as a value and refused by range).
     #[arg(long, allow_negative_numbers = true)]
@@ -318,7 +318,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let t1 = parse_t1_list(&args.t1_n)?;
-    let pm = load_model(&args.from)?;
+    let from = metrics_file(&args.from)?;
+    let pm = load_model(&from)?;
     let q = |t1_n: f64| Query {
         wrap_deg: args.wrap_deg,
         diameter_mm: args.diameter_mm,
@@ -345,6 +346,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         print_table(&args, drive_v, &pm, &preds, &warnings);
     }
     Ok(())
+}
+
+/// `--from`: the file, or `DIR/metrics.json` for an analysis's directory.
+fn metrics_file(from: &std::path::Path) -> anyhow::Result<PathBuf> {
+    if !from.is_dir() {
+        return Ok(from.to_path_buf());
+    }
+    let inside = from.join("metrics.json");
+    if inside.is_file() {
+        return Ok(inside);
+    }
+    bail!(
+        "--from {}: a directory without metrics.json; give the metrics.json capstan analyze \
+         wrote (analyze --out DIR writes DIR/metrics.json)",
+        from.display()
+    )
+}
+
+/// T2/T1 as the amplification, or `None` where it is none: as measured, a reading of T2 at
+/// or below zero (the fitted T2 zero offset beyond the tension) over a T1 reading.
+fn amplification(p: &prediction::Prediction) -> Option<f64> {
+    (p.t1_n > 0.0 && p.t2_n > 0.0 && p.amplification.is_finite()).then_some(p.amplification)
 }
 
 /// Why a prediction cannot be printed, if it cannot: a T2 or an interval end that is not a
@@ -388,8 +411,15 @@ fn print_json(
     preds: &[prediction::Prediction],
     warnings: &[String],
 ) -> anyhow::Result<()> {
+    // As measured, a T2 reading at or below zero over a T1 reading is no amplification: null.
+    let mut rows = serde_json::to_value(preds)?;
+    for (r, p) in rows.as_array_mut().into_iter().flatten().zip(preds) {
+        if amplification(p).is_none() {
+            r["amplification"] = Value::Null;
+        }
+    }
     let out = json!({
-        "predictions": preds,
+        "predictions": rows,
         "extrapolating": !warnings.is_empty(),
         "warnings": warnings,
         "physical": !args.as_measured,
@@ -402,6 +432,7 @@ fn print_json(
         "wrap_extrapolation_measured": pm.wrap_extrapolation_error.rows > 0,
         "from": args.from.display().to_string(),
         "note": pm.note,
+        "provenance": crate::provenance::of_input(Some(&metrics_file(&args.from)?))?,
     });
     crate::outln!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
@@ -417,6 +448,15 @@ fn print_table(
 ) {
     for w in warnings {
         crate::errln!("warning: extrapolating: {w}");
+    }
+    if let Some(p) = preds.iter().find(|p| amplification(p).is_none()) {
+        crate::errln!(
+            "warning: as measured, T2 reads {:.3} N at T1 = {} N (the fitted T2 zero offset is \
+             larger than the tension there): a ratio of such readings is no amplification, \
+             shown as —",
+            p.t2_n,
+            capstan_data::ranges::shown(p.t1_n)
+        );
     }
     crate::outln!(
         "{} T2 at {}° wrap, D = {} mm, {} V (95 % CI: mean curve; 95 % PI: a new measurement on a new cord)",
@@ -453,10 +493,10 @@ fn print_table(
     );
     for p in preds {
         crate::outln!(
-            "{:>9.3} {:>10.3} {:>8.3} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
+            "{:>9.3} {:>10.3} {:>8} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
             p.t1_n,
             p.t2_n,
-            p.amplification,
+            amplification(p).map_or("—".to_string(), |a| format!("{a:.3}")),
             p.t2_ci95.lo,
             p.t2_ci95.hi,
             p.t2_pi95.lo,

@@ -3,12 +3,19 @@
 //! and dwell, or found from the tensions themselves.
 //!
 //! Finding them: at every sample, the median of the next `h` samples minus the median of the
-//! `h` before, for each channel, in units of that channel's noise (the median absolute first
-//! difference, and never less than one count of a quantised reading); a change is a local peak of the larger of the two above a threshold, and peaks
+//! `h` before, for each channel, in units of that statistic's own spread where nothing changes
+//! (its median absolute value over the series: the changes are a few samples in thousands; never
+//! below what the median absolute first difference says for white noise, nor one count of a
+//! quantised reading); a change is a local peak of the larger of the two above a threshold, and peaks
 //! closer than `min_dwell` keep only the largest (a transient after a change, an overshoot,
 //! is not a change of its own), and a change under [`RELATIVE_FLOOR`] of the median change
 //! is a drift inside a level, not a level. Medians make it robust to spikes and to the servo's transient;
 //! the sign does not matter, so up-down and pulse orders are found as monotone ones are.
+//! (Noise that is smooth from sample to sample — a logger's anti-alias filter at 20-50 Hz on a
+//! 1 kHz series — has small first differences but medians that wander: its spread is measured
+//! on the statistic itself, or every wander would be a level.) Above [`DETECT_MAX_HZ`] the
+//! changes are found on block medians of the series (5 ms is finer than any window needs;
+//! the medians of `h` samples at every sample cost `n·h`).
 
 use super::table::Series;
 
@@ -117,8 +124,43 @@ pub const THRESHOLD_SIGMAS: f64 = 8.0;
 /// A change must also be at least this fraction of the median change found.
 pub const RELATIVE_FLOOR: f64 = 0.15;
 
-/// The change times found in `s`.
-fn detect(s: &Series, min_dwell_s: f64) -> Vec<f64> {
+/// Above this sampling rate, Hz, the changes are found on block medians at about this rate.
+pub const DETECT_MAX_HZ: f64 = 200.0;
+
+/// `s` as medians of blocks of `k` samples (each at its block's first time), or `None` when
+/// it is sampled at [`DETECT_MAX_HZ`] or less.
+fn reduced(s: &Series) -> Option<Series> {
+    let n = s.t_s.len();
+    let span = s.t_s.last()? - s.t_s.first()?;
+    let rate = (n.saturating_sub(1)) as f64 / span;
+    if rate.is_nan() || rate <= DETECT_MAX_HZ {
+        return None;
+    }
+    let k = (rate / DETECT_MAX_HZ).ceil() as usize;
+    let mut r = Series::default();
+    let mut buf = Vec::with_capacity(k);
+    for b in (0..n).step_by(k) {
+        let e = (b + k).min(n);
+        r.t_s.push(s.t_s[b]);
+        for (x, out) in [(&s.t1_n, &mut r.t1_n), (&s.t2_n, &mut r.t2_n)] {
+            buf.clear();
+            buf.extend_from_slice(&x[b..e]);
+            out.push(median(&mut buf));
+        }
+        r.line.push(s.line[b]);
+    }
+    Some(r)
+}
+
+/// The change times found in `s` (changes at least `min_dwell_s` apart).
+pub fn detect(s: &Series, min_dwell_s: f64) -> Vec<f64> {
+    match reduced(s) {
+        Some(r) => detect_at_rate(&r, min_dwell_s),
+        None => detect_at_rate(s, min_dwell_s),
+    }
+}
+
+fn detect_at_rate(s: &Series, min_dwell_s: f64) -> Vec<f64> {
     let n = s.t_s.len();
     if n < 8 {
         return Vec::new();
@@ -187,29 +229,41 @@ fn quantum(x: &[f64]) -> f64 {
     moves.into_iter().fold(f64::INFINITY, f64::min)
 }
 
-/// At each sample i: |median(x[i..i+h]) - median(x[i-h..i])| / (noise·√(π/2h)·√2), the
-/// larger of the two channels (a median of h samples has sd ≈ σ·√(π/2h)). The unit is never
-/// below the channel's quantum: the median of a quantised reading moves by whole counts, and
-/// with the noise under a count it flips by one whenever the level sits near a count's edge —
-/// a one-count change is not a change of level (the thesis-noise series split every dwell in
-/// two without this).
+/// At each sample i: |median(x[i..i+h]) - median(x[i-h..i])| in units of its spread where
+/// nothing changes, the larger of the two channels. The spread is the median absolute value
+/// of the difference over the series / 0.6745 (a normal's MAD), never below white noise's
+/// (noise·√(π/2h)·√2: a median of h samples has sd ≈ σ·√(π/2h)), nor below the channel's
+/// quantum: the median of a quantised reading moves by whole counts, and with the noise under
+/// a count it flips by one whenever the level sits near a count's edge — a one-count change
+/// is not a change of level (the thesis-noise series split every dwell in two without this).
 fn change_score(s: &Series, h: usize) -> Vec<f64> {
     let n = s.t_s.len();
     let mut score = vec![0.0; n];
     let unit = (std::f64::consts::PI / (2.0 * h as f64)).sqrt() * std::f64::consts::SQRT_2;
     let mut buf = Vec::with_capacity(h);
+    let mut diff = vec![0.0; n];
     for x in [&s.t1_n, &s.t2_n] {
         let q = quantum(x);
-        let sd = noise(x).max(1e-6);
-        let unit_n = (sd * unit).max(q);
-        for i in h..=n.saturating_sub(h) {
+        let white = noise(x).max(1e-6) * unit;
+        let range = h..=n.saturating_sub(h);
+        for i in range.clone() {
             buf.clear();
             buf.extend_from_slice(&x[i - h..i]);
             let before = median(&mut buf);
             buf.clear();
             buf.extend_from_slice(&x[i..i + h]);
             let after = median(&mut buf);
-            let z = (after - before).abs() / unit_n;
+            diff[i] = (after - before).abs();
+        }
+        let mut null: Vec<f64> = range.clone().map(|i| diff[i]).collect();
+        let spread = if null.is_empty() {
+            0.0
+        } else {
+            median(&mut null) / 0.6745
+        };
+        let unit_n = spread.max(white).max(q);
+        for i in range {
+            let z = diff[i] / unit_n;
             if i < n && z > score[i] {
                 score[i] = z;
             }
@@ -259,6 +313,70 @@ mod tests {
             s.line.push(i as u64 + 2);
         }
         s
+    }
+
+    /// The thesis protocol's levels (1.5 N and 3 N a level) at `hz`, with noise of sd `sd`
+    /// low-pass filtered (first order) at `corner_hz`, as a logger's anti-alias filter does.
+    fn filtered(hz: f64, sd: f64, corner_hz: f64, seed: u64) -> Series {
+        let mut x = seed;
+        let mut gauss = || {
+            let mut u = || {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+            };
+            let (a, b) = (u(), u());
+            (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+        };
+        let alpha = 1.0 - (-2.0 * std::f64::consts::PI * corner_hz / hz).exp();
+        // The input sd that gives `sd` after the filter.
+        let sd_in = sd / (alpha / (2.0 - alpha)).sqrt();
+        let (mut e1, mut e2) = (0.0, 0.0);
+        let mut s = Series::default();
+        for i in 0..(140.0 * hz) as usize {
+            let t = i as f64 / hz;
+            let k = ((t - 0.5) / 10.0).floor();
+            let level = if (1.0..=12.0).contains(&k) { k } else { 0.0 };
+            e1 += alpha * (sd_in * gauss() - e1);
+            e2 += alpha * (sd_in * gauss() - e2);
+            s.t_s.push(t);
+            s.t1_n.push(1.5 * level + 0.3 + e1);
+            s.t2_n.push(3.0 * level + 0.3 + e2);
+            s.line.push(i as u64 + 2);
+        }
+        s
+    }
+
+    /// A 1 kHz series whose noise is filtered at 20-50 Hz wanders between samples: its first
+    /// differences understate it, and every wander was a level (32-35 found instead of 12).
+    #[test]
+    fn smooth_noise_at_1_khz_gives_the_twelve_levels() {
+        for (corner, seed) in [(20.0, 3), (35.0, 4), (50.0, 5)] {
+            let s = filtered(1000.0, 0.05, corner, seed);
+            let found = starts(&segments(&s, &Placement::Detect { min_dwell_s: 3.0 }).unwrap());
+            assert_eq!(found.len(), 13, "{corner} Hz: {found:?}");
+            for (k, t) in found.iter().enumerate() {
+                let want = 10.5 + 10.0 * k as f64;
+                assert!((t - want).abs() <= 0.02, "{corner} Hz: change {k} at {t}");
+            }
+        }
+    }
+
+    /// At 10 kHz the changes are found on 200 Hz block medians: the same changes, within a
+    /// block (5 ms), from a fiftieth of the samples.
+    #[test]
+    fn a_10_khz_series_is_searched_at_200_hz() {
+        let s = filtered(10_000.0, 0.05, 1000.0, 6);
+        let r = reduced(&s).expect("reduced");
+        assert_eq!(r.t_s.len(), s.t_s.len().div_ceil(50));
+        assert!(reduced(&filtered(200.0, 0.05, 50.0, 7)).is_none());
+        let found = starts(&segments(&s, &Placement::Detect { min_dwell_s: 3.0 }).unwrap());
+        assert_eq!(found.len(), 13, "{found:?}");
+        for (k, t) in found.iter().enumerate() {
+            let want = 10.5 + 10.0 * k as f64;
+            assert!((t - want).abs() <= 0.006, "change {k} at {t}");
+        }
     }
 
     fn starts(segs: &[(f64, f64)]) -> Vec<f64> {

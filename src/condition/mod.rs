@@ -122,6 +122,14 @@ pub fn condition_run(s: &Series, run: u32, set: &Settings) -> RunResult {
         (_, n) if n >= 2 => &segs[1..n - 1],
         _ => &[][..],
     };
+    // A protocol placed by the user: the changes the tensions show, to catch a window that
+    // holds one (a wrong --first-change-s or --dwell-s mixes two levels in every window).
+    let shown = match &set.placement {
+        Placement::Protocol { dwell_s, .. } | Placement::Trigger { dwell_s, .. } => {
+            levels::detect(s, dwell_s / 3.0)
+        }
+        Placement::Detect { .. } => Vec::new(),
+    };
     let mut levels = Vec::new();
     for (k, &(from, to)) in inner.iter().enumerate() {
         let (a, b) = (from + set.window_after_s, to - set.window_before_s);
@@ -135,6 +143,12 @@ pub fn condition_run(s: &Series, run: u32, set: &Settings) -> RunResult {
             )
         } else if n < MIN_SAMPLES {
             format!("not found: {n} sample(s) in its window (need {MIN_SAMPLES})")
+        } else if let Some(c) = shown.iter().find(|&&c| c > a && c < b) {
+            format!(
+                "mixed: the tensions change inside its window, at {c:.2} s: two levels in one \
+                 mean; are --first-change-s and --dwell-s the run's? (without them the changes \
+                 are found from the tensions)"
+            )
         } else {
             "ok".into()
         };
@@ -179,6 +193,29 @@ pub fn condition_run(s: &Series, run: u32, set: &Settings) -> RunResult {
     }
 }
 
+/// Samples further apart than this (median), s, cannot place the firmware's windows (7 s of a
+/// 10 s dwell): a logger samples at hertz or faster.
+pub const MAX_SAMPLE_INTERVAL_S: f64 = 0.5;
+
+/// A series sampled too sparsely for the windows: its time in another unit than its header
+/// says (milliseconds read as seconds)? The sentence, or `None`.
+pub fn sampling_problem(s: &Series) -> Option<String> {
+    let mut dt: Vec<f64> = s.t_s.windows(2).map(|w| w[1] - w[0]).collect();
+    if dt.is_empty() {
+        return None;
+    }
+    let n = dt.len();
+    let (_, &mut median, _) = dt.select_nth_unstable_by(n / 2, f64::total_cmp);
+    (median > MAX_SAMPLE_INTERVAL_S).then(|| {
+        format!(
+            "its samples are {median:.3} s apart (median) and it lasts {:.1} h, which no \
+             logger of a capstan rig does: is the time in milliseconds? Give its unit in the \
+             header (`Time (ms)`) and condition again",
+            (s.t_s[n] - s.t_s[0]) / 3600.0
+        )
+    })
+}
+
 /// The pairs of the levels found.
 pub fn pairs(runs: &[RunResult], set: &Settings) -> Vec<Pair> {
     runs.iter()
@@ -199,20 +236,61 @@ pub fn pairs(runs: &[RunResult], set: &Settings) -> Vec<Pair> {
         .collect()
 }
 
-/// The run numbers: a number in the file's run column, else counting from `first`.
+/// The run numbers: the number a run's label ends with (a `run` column's `3`, Logger Pro's
+/// `Run 3`), else counting up from `first`; a number two runs would share goes to the later
+/// one's next free number (two files' `Run 1` concatenated stay two runs).
 pub fn run_numbers(series: &[Series], first: u32) -> Vec<u32> {
-    let mut next = first;
-    series
+    let trailing = |l: &str| -> Option<u32> {
+        let digits: String = l
+            .chars()
+            .rev()
+            .take_while(char::is_ascii_digit)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect();
+        digits.parse().ok()
+    };
+    let wanted: Vec<Option<u32>> = series
         .iter()
-        .map(
-            |s| match s.label.as_deref().and_then(|l| l.parse::<u32>().ok()) {
-                Some(r) => r,
-                None => {
-                    let r = next;
-                    next += 1;
-                    r
-                }
-            },
-        )
-        .collect()
+        .map(|s| s.label.as_deref().map(str::trim).and_then(trailing))
+        .collect();
+    let mut taken: std::collections::HashSet<u32> = std::collections::HashSet::new();
+    let mut out: Vec<Option<u32>> = wanted
+        .iter()
+        .map(|w| w.filter(|&r| taken.insert(r)))
+        .collect();
+    let mut next = first;
+    for r in out.iter_mut().filter(|r| r.is_none()) {
+        while taken.contains(&next) {
+            next += 1;
+        }
+        taken.insert(next);
+        *r = Some(next);
+    }
+    out.into_iter().map(|r| r.expect("numbered")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn runs_are_numbered_from_their_labels_and_never_twice() {
+        let s = |l: Option<&str>| Series {
+            label: l.map(String::from),
+            ..Series::default()
+        };
+        let got = run_numbers(
+            &[
+                s(Some("Run 2")),
+                s(Some("Latest")),
+                s(Some("Run 2")),
+                s(None),
+                s(Some("7")),
+            ],
+            1,
+        );
+        assert_eq!(got, [2, 1, 3, 4, 7]);
+    }
 }

@@ -1,16 +1,29 @@
-//! A raw time series as a logger exports it: CSV or tab-separated text, a header naming the
-//! columns (units in it honoured), or Logger Pro's text export ("Vernier Format" blocks: long
-//! names, short names, units, a blank line, then the rows; one block per run). Every bad cell
-//! is an error with its file, line and column.
+//! A raw time series as labs export it: a logger's CSV or tab-separated text (a metadata block
+//! above the header found or skipped, decimal commas and semicolons, a byte-order mark, any
+//! line ending), Logger Pro's "Export as CSV" with runs side by side (`Run 1: Time (s)`, `Run
+//! 2: Time (s)`, …: each block its own run), or Logger Pro's text export ("Vernier Format"
+//! blocks: long names, short names, units, a blank line, the rows; one block per run). Units
+//! in the header are converted (s, ms, min; N, mN, kN, g, kg, lbf, …) or refused by name
+//! (volts, counts). Every bad cell is an error with its file, line and column.
+//!
+//! * `text`: lines, separator, decimal mark, where the header and the rows are;
+//! * `columns`: a header cell's run, name and unit, and which column plays which role.
+
+mod columns;
+mod logger_pro;
+mod rows;
+mod text;
 
 use anyhow::bail;
-use capstan_data::ranges::{Range, TENSION_N};
+use columns::{Ask, Col, Role, Unit};
 use std::path::Path;
+use text::{Grid, Sep};
 
 /// One run's series: time (s) and both tensions (N), with each sample's line in the file.
 #[derive(Clone, Debug, Default)]
 pub struct Series {
-    /// The run's label in the file (a Logger Pro data set, a `run` column value), if any.
+    /// The run's label in the file (a Logger Pro data set, a `Run N:` block, a `run` column
+    /// value), if any.
     pub label: Option<String>,
     /// Seconds.
     pub t_s: Vec<f64>,
@@ -24,7 +37,8 @@ pub struct Series {
     pub line: Vec<u64>,
 }
 
-/// Which columns to use (names as in the header, without units; `None`: detect).
+/// Which columns to use (`None`: found by name): a name as in the header (with or without its
+/// unit; with `Run N:` for one run's column), or a 1-based column number.
 #[derive(Clone, Debug, Default)]
 pub struct Columns {
     /// Time.
@@ -39,292 +53,291 @@ pub struct Columns {
     pub run: Option<String>,
 }
 
-/// What was read, and how.
+/// How to read the file.
+#[derive(Clone, Debug, Default)]
+pub struct ReadOptions {
+    /// The columns.
+    pub columns: Columns,
+    /// Lines to pass before the header.
+    pub skip_rows: Option<usize>,
+    /// The header's line (1-based).
+    pub header_row: Option<usize>,
+}
+
+/// One column used: its role, header text, number (1-based) and the factor to s or N.
 #[derive(Clone, Debug, serde::Serialize)]
+pub struct Used {
+    /// `time`, `t1`, `t2`, `trigger`, `run`.
+    pub role: String,
+    /// As in the header.
+    pub header: String,
+    /// 1-based.
+    pub column: usize,
+    /// To s (time) or N (forces).
+    pub scale: f64,
+    /// How the unit was read, in words.
+    pub unit: String,
+}
+
+/// What was read, and how.
+#[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Layout {
-    /// `logger-pro` or `csv`/`tsv`.
+    /// `logger-pro`, `csv`, `tsv`, `ssv` (semicolons) or `text` (blanks).
     pub format: String,
-    /// The columns used: (role, header text, scale to s or N).
-    pub used: Vec<(String, String, f64)>,
-}
-
-/// A column's name and the factor its unit needs (to s for time, to N for force; `None`:
-/// a unit that is not a time or a force, e.g. counts).
-#[derive(Clone, Debug)]
-struct Col {
-    text: String,
-    base: String,
-    time_scale: Option<f64>,
-    force_scale: Option<f64>,
-    unit_given: bool,
-}
-
-fn unit_scales(unit: &str) -> (Option<f64>, Option<f64>) {
-    let u = unit.trim().to_ascii_lowercase();
-    let time = match u.as_str() {
-        "s" | "sec" | "secs" | "second" | "seconds" => Some(1.0),
-        "ms" => Some(1e-3),
-        "us" | "µs" => Some(1e-6),
-        "min" => Some(60.0),
-        _ => None,
-    };
-    let force = match u.as_str() {
-        "n" | "newton" | "newtons" => Some(1.0),
-        "mn" => Some(1e-3),
-        "kn" => Some(1e3),
-        "kgf" | "kg" => Some(9.80665),
-        "gf" | "g" => Some(9.80665e-3),
-        "lbf" | "lb" => Some(4.448_221_615_260_5),
-        _ => None,
-    };
-    (time, force)
-}
-
-fn normalise(s: &str) -> String {
-    s.chars()
-        .filter(|c| c.is_alphanumeric())
-        .flat_map(char::to_lowercase)
-        .collect()
-}
-
-/// A header cell: `Name (unit)`, `Name [unit]`, `name_unit` (t1_n, time_s), or a name with
-/// the unit on its own line (Logger Pro).
-fn column(text: &str, unit_line: Option<&str>) -> Col {
-    let t = text.trim();
-    let (name, unit) = if let Some(u) = unit_line.filter(|u| !u.trim().is_empty()) {
-        (t.to_string(), Some(u.trim().to_string()))
-    } else if let Some(open) = t.rfind(['(', '[']).filter(|_| t.ends_with([')', ']'])) {
-        (
-            t[..open].trim().to_string(),
-            Some(t[open + 1..t.len() - 1].to_string()),
-        )
-    } else if let Some((n, u)) = t.rsplit_once('_').filter(|(_, u)| {
-        let (a, b) = unit_scales(u);
-        a.is_some() || b.is_some() || *u == "counts"
-    }) {
-        (n.to_string(), Some(u.to_string()))
-    } else {
-        (t.to_string(), None)
-    };
-    // Logger Pro prefixes a data set's name: "Run 1: Force".
-    let name = name
-        .rsplit_once(':')
-        .map_or(name.clone(), |(_, n)| n.trim().to_string());
-    let (time_scale, force_scale) = match &unit {
-        Some(u) => unit_scales(u),
-        None => (Some(1.0), Some(1.0)),
-    };
-    Col {
-        text: t.to_string(),
-        base: normalise(&name),
-        time_scale,
-        force_scale,
-        unit_given: unit.is_some(),
-    }
-}
-
-const TIME_NAMES: [&str; 4] = ["time", "t", "times", "timestamp"];
-const T1_NAMES: [&str; 5] = ["t1", "tension1", "force1", "f1", "force"];
-const T2_NAMES: [&str; 4] = ["t2", "tension2", "force2", "f2"];
-
-/// The index of the column `role` uses: the one named, or the one header name that fits.
-fn pick(
-    cols: &[Col],
-    named: &Option<String>,
-    names: &[&str],
-    role: &str,
-    flag: &str,
-    ok: impl Fn(&Col) -> bool,
-) -> anyhow::Result<usize> {
-    let list = || {
-        cols.iter()
-            .map(|c| format!("`{}`", c.text))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    if let Some(n) = named {
-        let want = normalise(column(n, None).base.as_str());
-        let hits: Vec<usize> = (0..cols.len())
-            .filter(|&i| cols[i].base == want || normalise(&cols[i].text) == normalise(n))
-            .collect();
-        return match hits.as_slice() {
-            [i] if ok(&cols[*i]) => Ok(*i),
-            [i] => bail!(
-                "{flag} {n}: the column `{}` is not in a {role} unit",
-                cols[*i].text
-            ),
-            [] => bail!("{flag} {n}: no such column (the header has {})", list()),
-            _ => bail!("{flag} {n}: more than one column has that name"),
-        };
-    }
-    let hits: Vec<usize> = (0..cols.len())
-        .filter(|&i| names.contains(&cols[i].base.as_str()) && ok(&cols[i]))
-        .collect();
-    match hits.as_slice() {
-        [i] => Ok(*i),
-        [] => bail!(
-            "which column is {role}? none is named so: give {flag} NAME (the header has {})",
-            list()
-        ),
-        _ => bail!(
-            "which column is {role}? several could be: give {flag} NAME (the header has {})",
-            list()
-        ),
-    }
-}
-
-fn delimiter(line: &str) -> char {
-    if line.contains('\t') {
-        '\t'
-    } else if line.contains(',') {
-        ','
-    } else if line.contains(';') {
-        ';'
-    } else {
-        '\t'
-    }
-}
-
-fn cells(line: &str, d: char) -> Vec<&str> {
-    line.split(d)
-        .map(|c| c.trim().trim_matches('"').trim())
-        .collect()
+    /// The separator, in words.
+    pub separator: String,
+    /// Decimal commas.
+    pub decimal_comma: bool,
+    /// Lines passed above the header (a metadata block), 1-based, inclusive.
+    pub skipped_lines: Option<(usize, usize)>,
+    /// The header's line (1-based), if there is one.
+    pub header_line: Option<usize>,
+    /// The run blocks side by side (`Run 1`, `Run 2`), if any.
+    pub run_blocks: Vec<String>,
+    /// The columns used (the first block's, when there are several).
+    pub used: Vec<Used>,
+    /// What a user should know (a unit assumed, a mass read as its weight, blocks left out).
+    pub notes: Vec<String>,
 }
 
 /// Read `text` (the file `path`) into one series per run.
-pub fn read(path: &Path, text: &str, want: &Columns) -> anyhow::Result<(Vec<Series>, Layout)> {
-    let lines: Vec<&str> = text.lines().collect();
-    if lines.first().is_some_and(|l| {
-        l.trim_start_matches('\u{feff}')
-            .starts_with("Vernier Format")
-    }) {
-        return logger_pro(path, &lines, want);
+pub fn read(path: &Path, text: &str, opts: &ReadOptions) -> anyhow::Result<(Vec<Series>, Layout)> {
+    let lines = text::lines(text);
+    let first = lines.iter().position(|l| !l.trim().is_empty());
+    let Some(first) = first else {
+        bail!("{}: the file is empty", path.display());
+    };
+    if lines[first].starts_with("Vernier Format") {
+        return logger_pro::read(path, &lines, &opts.columns);
     }
-    let first = lines
+    let g = text::grid(path, &lines, opts.skip_rows, opts.header_row)?;
+    let mut cols = header(&lines, &g);
+    // Rows ending in a separator: the header has a cell fewer.
+    while cols.len() < g.width {
+        cols.push(Col::parse(&format!("column {}", cols.len() + 1), None));
+    }
+    let mut layout = Layout {
+        format: match g.sep {
+            Sep::Char('\t') => "tsv",
+            Sep::Char(';') => "ssv",
+            Sep::Char(_) => "csv",
+            Sep::Blanks => "text",
+        }
+        .to_string(),
+        separator: g.sep.name().to_string(),
+        decimal_comma: g.comma,
+        header_line: g.header.map(|h| h + 1),
+        skipped_lines: g
+            .header
+            .or(Some(g.first_row))
+            .filter(|&h| h > first)
+            .map(|h| (first + 1, h)),
+        ..Layout::default()
+    };
+    let blocks = blocks(&cols, &opts.columns, &mut layout)?;
+    let picks = blocks
         .iter()
-        .position(|l| !l.trim().is_empty())
-        .ok_or_else(|| anyhow::anyhow!("{}: the file is empty", path.display()))?;
-    let d = delimiter(lines[first]);
-    let cols: Vec<Col> = cells(lines[first], d)
-        .iter()
-        .map(|c| column(c, None))
-        .collect();
-    let format = if d == '\t' { "tsv" } else { "csv" };
-    block(path, &lines, first + 1, d, cols, want, format)
-}
-
-/// Logger Pro's text export: one "Vernier Format" block per data set (run).
-fn logger_pro(
-    path: &Path,
-    lines: &[&str],
-    want: &Columns,
-) -> anyhow::Result<(Vec<Series>, Layout)> {
-    let starts: Vec<usize> = (0..lines.len())
-        .filter(|&i| {
-            lines[i]
-                .trim_start_matches('\u{feff}')
-                .starts_with("Vernier Format")
-        })
-        .collect();
+        .map(|b| Picked::of(&cols, b, &opts.columns, g.header.is_some()))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    layout.used = picks[0].used(&cols);
+    layout.notes.extend(unit_notes(&cols, &picks[0]));
     let mut all = Vec::new();
-    let mut layout = None;
-    for (k, &s) in starts.iter().enumerate() {
-        let end = starts.get(k + 1).copied().unwrap_or(lines.len());
-        if end < s + 7 {
+    for (b, p) in blocks.iter().zip(&picks) {
+        let mut runs = rows::rows(path, (&lines, &g), &cols, p)?;
+        if runs.is_empty() {
             bail!(
-                "{}:{}:1: a Logger Pro block needs 6 header lines (format, source, data set, \
-                 names, short names, units) and a blank line",
+                "{}: no rows{} after the header",
                 path.display(),
-                s + 1
+                b.label
+                    .as_deref()
+                    .map_or(String::new(), |l| format!(" of {l}"))
             );
         }
-        let d = '\t';
-        let names = cells(lines[s + 3], d);
-        let units = cells(lines[s + 5], d);
-        let cols: Vec<Col> = names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| column(n, units.get(i).copied()))
-            .collect();
-        let (mut series, l) = block(path, &lines[..end], s + 7, d, cols, want, "logger-pro")?;
-        for x in series.iter_mut() {
-            x.label = Some(lines[s + 2].trim().to_string());
+        for r in runs.iter_mut() {
+            r.label = match (&b.label, &r.label) {
+                (Some(block), Some(run)) => Some(format!("{block}, run {run}")),
+                (Some(block), None) => Some(block.clone()),
+                (None, run) => run.clone(),
+            };
         }
-        all.extend(series);
-        layout = Some(l);
+        all.extend(runs);
     }
-    Ok((all, layout.expect("a block")))
+    Ok((all, layout))
 }
 
-/// The rows from line index `from` on, with the header `cols`.
-fn block(
-    path: &Path,
-    lines: &[&str],
-    from: usize,
-    d: char,
-    cols: Vec<Col>,
-    want: &Columns,
-    format: &str,
-) -> anyhow::Result<(Vec<Series>, Layout)> {
-    let picked = Picked::of(&cols, want)?;
-    let used = picked.used(&cols);
-    let runs = rows(path, (lines, from, d), &cols, &picked, &used)?;
-    if runs.is_empty() {
-        bail!("{}: no rows after the header", path.display());
-    }
-    Ok((
-        runs,
-        Layout {
-            format: format.to_string(),
-            used,
-        },
-    ))
+/// The header's cells (with the units line's units, if any), or `column N` without one.
+fn header(lines: &[&str], g: &Grid) -> Vec<Col> {
+    let Some(h) = g.header else {
+        return (1..=g.width)
+            .map(|i| Col::parse(&format!("column {i}"), None))
+            .collect();
+    };
+    let names = text::cells(lines[h], g.sep);
+    let units = g.units.map(|u| text::cells(lines[u], g.sep));
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let unit = units.as_ref().and_then(|u| u.get(i)).map(|u| {
+                u.trim_matches(|c| c == '(' || c == ')' || c == '[' || c == ']')
+                    .to_string()
+            });
+            Col::parse(n, unit.as_deref())
+        })
+        .collect()
 }
 
-/// The columns a block is read from (indices into its header).
-struct Picked {
-    time: usize,
-    t1: usize,
-    t2: usize,
-    trigger: Option<usize>,
-    run: Option<usize>,
+/// One run block: the columns of one `Run N:` prefix (or all of them).
+pub(super) struct Block {
+    pub(super) label: Option<String>,
+    pub(super) idx: Vec<usize>,
+}
+
+/// The run blocks of the header: one per `Run N:` prefix, in order, or the whole header.
+/// With a column asked for exactly (a number, or `Run 2: Time`), only its block.
+fn blocks(cols: &[Col], want: &Columns, layout: &mut Layout) -> anyhow::Result<Vec<Block>> {
+    let mut labels: Vec<String> = Vec::new();
+    for c in cols {
+        if let Some(r) = c.run.as_ref().filter(|r| !labels.contains(r)) {
+            labels.push(r.clone());
+        }
+    }
+    let mut out: Vec<Block> = if labels.is_empty() {
+        vec![Block {
+            label: None,
+            idx: (0..cols.len()).collect(),
+        }]
+    } else {
+        labels
+            .iter()
+            .map(|l| Block {
+                label: Some(l.clone()),
+                idx: (0..cols.len())
+                    .filter(|&i| cols[i].run.as_ref() == Some(l))
+                    .collect(),
+            })
+            .collect()
+    };
+    layout.run_blocks = labels.clone();
+    let exact: Vec<(String, usize)> = [
+        ("--time-column", &want.time),
+        ("--t1-column", &want.t1),
+        ("--t2-column", &want.t2),
+    ]
+    .into_iter()
+    .filter_map(|(flag, g)| match Ask::of(g.as_deref(), cols, flag) {
+        Ok(Ask::Exact(i)) => Some(Ok((flag.to_string(), i))),
+        Ok(_) => None,
+        Err(e) => Some(Err(e)),
+    })
+    .collect::<anyhow::Result<_>>()?;
+    if let Some((flag, i)) = exact.first() {
+        let home = |i: usize| out.iter().position(|b| b.idx.contains(&i));
+        if let Some((other, j)) = exact.iter().find(|(_, j)| home(*j) != home(*i)) {
+            bail!(
+                "{flag} and {other} name columns of different runs (`{}` and `{}`): one run's \
+                 columns, or names without the run to convert every run",
+                cols[*i].text,
+                cols[*j].text
+            );
+        }
+        if out.len() > 1 {
+            let keep = home(*i).expect("every column is in a block");
+            let b = out.swap_remove(keep);
+            layout.notes.push(format!(
+                "only {} converted ({flag} names one of its columns); the file has {}",
+                b.label.as_deref().unwrap_or("one run"),
+                labels.join(", ")
+            ));
+            out = vec![b];
+        }
+    }
+    Ok(out)
+}
+
+/// The columns a block is read from (indices into the header).
+pub(super) struct Picked {
+    pub(super) time: usize,
+    pub(super) t1: usize,
+    pub(super) t2: usize,
+    pub(super) trigger: Option<usize>,
+    pub(super) run: Option<usize>,
+}
+
+const TIME: Role = Role {
+    name: "time",
+    flag: "--time-column",
+    names: &columns::TIME_NAMES,
+    refuse: Unit::not_a_time,
+};
+const T1: Role = Role {
+    name: "T1",
+    flag: "--t1-column",
+    names: &columns::T1_NAMES,
+    refuse: Unit::not_a_force,
+};
+const T2: Role = Role {
+    name: "T2",
+    flag: "--t2-column",
+    names: &columns::T2_NAMES,
+    refuse: Unit::not_a_force,
+};
+
+fn any_unit(_: &Unit) -> Option<String> {
+    None
 }
 
 impl Picked {
-    /// The columns named by the options, or found by their names and units.
-    fn of(cols: &[Col], want: &Columns) -> anyhow::Result<Picked> {
-        let time = pick(
-            cols,
-            &want.time,
-            &TIME_NAMES,
-            "time",
-            "--time-column",
-            |c| c.time_scale.is_some(),
-        )?;
-        let force = |c: &Col| c.force_scale.is_some();
-        let t1 = pick(cols, &want.t1, &T1_NAMES, "T1", "--t1-column", force)?;
-        let t2 = pick(cols, &want.t2, &T2_NAMES, "T2", "--t2-column", force)?;
-        let trigger = match &want.trigger {
-            Some(_) => Some(pick(
-                cols,
-                &want.trigger,
-                &[],
-                "the trigger",
-                "--trigger-column",
-                |_| true,
-            )?),
-            None => None,
+    /// The block's columns, as the options say or found by their names and units.
+    pub(super) fn of(
+        cols: &[Col],
+        b: &Block,
+        want: &Columns,
+        has_header: bool,
+    ) -> anyhow::Result<Picked> {
+        let ask = |g: &Option<String>, flag: &str| Ask::of(g.as_deref(), cols, flag);
+        let pick = |g: &Option<String>, role: &Role| -> anyhow::Result<usize> {
+            let a = ask(g, role.flag)?;
+            if a == Ask::Auto && !has_header {
+                bail!(
+                    "the file has no header line: give the columns by number ({} N; columns 1 \
+                     to {}), or the header's line (--header-row N)",
+                    role.flag,
+                    cols.len()
+                );
+            }
+            columns::pick(cols, &b.idx, &a, role)
         };
-        let run = match &want.run {
-            Some(_) => Some(pick(
-                cols,
-                &want.run,
-                &[],
-                "the run",
-                "--run-column",
-                |_| true,
-            )?),
-            None => cols.iter().position(|c| c.base == "run" && !c.unit_given),
+        let time = pick(&want.time, &TIME)?;
+        let t1 = pick(&want.t1, &T1)?;
+        let t2 = pick(&want.t2, &T2)?;
+        if t1 == t2 {
+            bail!(
+                "T1 and T2 would both be column {} `{}`: give --t1-column and --t2-column",
+                t1 + 1,
+                cols[t1].text
+            );
+        }
+        let other = |g: &Option<String>, name, flag| -> anyhow::Result<Option<usize>> {
+            if g.is_none() {
+                return Ok(None);
+            }
+            let role = Role {
+                name,
+                flag,
+                names: &[],
+                refuse: any_unit,
+            };
+            columns::pick(cols, &b.idx, &ask(g, flag)?, &role).map(Some)
+        };
+        let trigger = other(&want.trigger, "the trigger", "--trigger-column")?;
+        let run = match other(&want.run, "the run", "--run-column")? {
+            Some(r) => Some(r),
+            None => b
+                .idx
+                .iter()
+                .copied()
+                .find(|&i| cols[i].base == "run" && cols[i].unit == Unit::None),
         };
         Ok(Picked {
             time,
@@ -335,117 +348,65 @@ impl Picked {
         })
     }
 
-    /// (role, header text, scale to s or N) of each column used, time, T1, T2 first.
-    fn used(&self, cols: &[Col]) -> Vec<(String, String, f64)> {
-        let (time, t1, t2) = (self.time, self.t1, self.t2);
-        let mut used = vec![
-            (
-                "time".to_string(),
-                cols[time].text.clone(),
-                cols[time].time_scale.unwrap_or(1.0),
+    pub(super) fn used(&self, cols: &[Col]) -> Vec<Used> {
+        let one = |role: &str, i: usize, scale: f64| Used {
+            role: role.to_string(),
+            header: cols[i].text.clone(),
+            column: i + 1,
+            scale,
+            unit: unit_words(&cols[i].unit, role),
+        };
+        let mut v = vec![
+            one(
+                "time",
+                self.time,
+                cols[self.time].unit.to_s().unwrap_or(1.0),
             ),
-            (
-                "t1".to_string(),
-                cols[t1].text.clone(),
-                cols[t1].force_scale.unwrap_or(1.0),
-            ),
-            (
-                "t2".to_string(),
-                cols[t2].text.clone(),
-                cols[t2].force_scale.unwrap_or(1.0),
-            ),
+            one("t1", self.t1, cols[self.t1].unit.to_n().unwrap_or(1.0)),
+            one("t2", self.t2, cols[self.t2].unit.to_n().unwrap_or(1.0)),
         ];
         if let Some(i) = self.trigger {
-            used.push(("trigger".into(), cols[i].text.clone(), 1.0));
+            v.push(one("trigger", i, 1.0));
         }
         if let Some(i) = self.run {
-            used.push(("run".into(), cols[i].text.clone(), 1.0));
+            v.push(one("run", i, 1.0));
         }
-        used
+        v
     }
 }
 
-/// The series of the lines from `from` on (delimiter `d`), a new one whenever the run column
-/// changes; times must rise within a series. Blank lines are skipped.
-fn rows(
-    path: &Path,
-    (lines, from, d): (&[&str], usize, char),
-    cols: &[Col],
-    p: &Picked,
-    used: &[(String, String, f64)],
-) -> anyhow::Result<Vec<Series>> {
-    let mut runs: Vec<Series> = Vec::new();
-    for (i, line) in lines.iter().enumerate().skip(from) {
-        if line.trim().is_empty() {
-            continue;
-        }
-        let row = cells(line, d);
-        let lineno = i as u64 + 1;
-        let num = |c: usize, scale: f64, range: Option<&Range>| {
-            cell_value(
-                path,
-                lineno,
-                c,
-                &cols[c].text,
-                row.get(c).copied(),
-                scale,
-                range,
-            )
-        };
-        let label = p.run.map(|c| row.get(c).copied().unwrap_or("").to_string());
-        if runs.last().is_none_or(|r| r.label != label) {
-            runs.push(Series {
-                label: label.clone(),
-                ..Series::default()
-            });
-        }
-        let s = runs.last_mut().expect("pushed");
-        let t = num(p.time, used[0].2, None)?;
-        if s.t_s.last().is_some_and(|&prev| t <= prev) {
-            bail!(
-                "{}:{lineno}:{}: time {t} s does not follow the row before ({} s): rows must be in \
-                 time order",
-                path.display(),
-                p.time + 1,
-                s.t_s.last().expect("checked")
-            );
-        }
-        let v1 = num(p.t1, used[1].2, Some(&TENSION_N))?;
-        let v2 = num(p.t2, used[2].2, Some(&TENSION_N))?;
-        s.t_s.push(t);
-        s.t1_n.push(v1);
-        s.t2_n.push(v2);
-        if let Some(c) = p.trigger {
-            s.trigger.push(num(c, 1.0, None)?);
-        }
-        s.line.push(lineno);
+fn unit_words(u: &Unit, role: &str) -> String {
+    match (u, role) {
+        (Unit::None, "time") => "none given: read as s".into(),
+        (Unit::None, "t1" | "t2") => "none given: read as N".into(),
+        (Unit::None, _) => "none".into(),
+        (Unit::Time(k), _) => format!("time, ×{k} to s"),
+        (Unit::Force(k), _) => format!("force, ×{k} to N"),
+        (Unit::Mass(k), _) => format!("mass read as its weight, ×{k} to N"),
+        (Unit::Voltage, _) => "volts".into(),
+        (Unit::Counts, _) => "counts".into(),
+        (Unit::Other(o), _) => o.clone(),
     }
-    Ok(runs)
 }
 
-/// One cell as a number in the column's unit times `scale`, checked against `range` (the
-/// physical ranges every pairs CSV is read with); an error names file, line and column.
-fn cell_value(
-    path: &Path,
-    line: u64,
-    c: usize,
-    name: &str,
-    cell: Option<&str>,
-    scale: f64,
-    range: Option<&Range>,
-) -> anyhow::Result<f64> {
-    let cell = cell.unwrap_or("");
-    let at = format!("{}:{line}:{}", path.display(), c + 1);
-    let v = cell
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| anyhow::anyhow!("{at}: `{cell}` in column `{name}` is not a number"))?
-        * scale;
-    match range {
-        Some(r) => r
-            .check(v)
-            .map_err(|why| anyhow::anyhow!("{at}: column `{name}`: {why}")),
-        None => Ok(v),
+/// What a user should know about the units: a force or time without one, a mass read as its
+/// weight.
+pub(super) fn unit_notes(cols: &[Col], p: &Picked) -> Vec<String> {
+    let mut out = Vec::new();
+    for (role, i) in [("time", p.time), ("T1", p.t1), ("T2", p.t2)] {
+        let c = &cols[i];
+        match &c.unit {
+            Unit::None => out.push(format!(
+                "{role} column `{}` has no unit in its header: read as {}",
+                c.text,
+                if role == "time" { "seconds" } else { "newtons" }
+            )),
+            Unit::Mass(k) => out.push(format!(
+                "{role} column `{}` is a mass: read as its weight (×{k} N)",
+                c.text
+            )),
+            _ => {}
+        }
     }
+    out
 }

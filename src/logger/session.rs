@@ -47,6 +47,8 @@ pub struct Logger<'f> {
     boot: u32,
     /// What `summary.json` says made the session ([`Logger::set_provenance`]).
     provenance: Option<serde_json::Value>,
+    /// A session a signal stopped replaces an earlier one ([`Logger::keep_interrupted_apart`]).
+    interrupted_replaces: bool,
 }
 
 /// Does this run-end record close a complete run? Only if no fault ended it: a run the
@@ -94,7 +96,17 @@ impl<'f> Logger<'f> {
             bad: Vec::new(),
             boot: 1,
             provenance: None,
+            interrupted_replaces: true,
         })
+    }
+
+    /// A session a signal stops replaces no earlier session in the directory: it is kept
+    /// beside it as `incomplete-<id>` (and becomes the directory's only where there was
+    /// none). For a session that plans its runs (the simulated board's `--runs`), where a
+    /// signal means "not all of them"; a board's session ends by a signal as a matter of
+    /// course.
+    pub fn keep_interrupted_apart(&mut self) {
+        self.interrupted_replaces = false;
     }
 
     /// What made the session (program, commit, command line, the input's and the ELF's
@@ -444,7 +456,12 @@ impl<'f> Logger<'f> {
             provenance: self.provenance.clone(),
         };
         let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-        let commit = self.opts.allow_empty || summary.runs.iter().any(|r| r.complete);
+        let had_session = (self.opts.out_dir)
+            .join(capstan_outdir::manifest_name("log"))
+            .exists();
+        let apart =
+            matches!(stop, Stop::Interrupted(_)) && !self.interrupted_replaces && had_session;
+        let commit = !apart && (self.opts.allow_empty || summary.runs.iter().any(|r| r.complete));
         let outcome = self.files.close(
             &(json + "\n"),
             commit,

@@ -26,7 +26,7 @@ pub use link::SimLink;
 use anyhow::{bail, Context};
 use capstan_link::frame::Event;
 use host_sim::flash::RamFlash;
-use host_sim::session::{run_session, SessionOutput, Step, FLASH_PAGES};
+use host_sim::session::{run_session_observed, SessionOutput, Step, FLASH_PAGES};
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
@@ -150,46 +150,57 @@ impl SimBoard {
     /// Replay the bench so far, then do `steps`; the records they produced. The steps join the
     /// journal (the board's state now includes them).
     pub fn advance(&mut self, steps: &[Step]) -> anyhow::Result<Advance> {
+        let mut events = Vec::new();
+        let mut a = self.advance_streamed(steps, &mut |_, mut new| {
+            events.append(&mut new);
+            true
+        })?;
+        a.events = events;
+        Ok(a)
+    }
+
+    /// As [`SimBoard::advance`], handing the records each of `steps` produced to `take` as
+    /// soon as the step is done, with how many of `steps` are done (the replay's records are
+    /// not handed), and stopping after the step at which `take` returns false: only the steps
+    /// done join the journal. The returned `events` are empty (they went to `take`).
+    pub fn advance_streamed(
+        &mut self,
+        steps: &[Step],
+        take: &mut dyn FnMut(usize, Vec<Event>) -> bool,
+    ) -> anyhow::Result<Advance> {
         let mut all = self.config.sensor_steps();
         all.extend(self.journal.iter().cloned());
+        let mine_from = all.len();
         all.extend(steps.iter().cloned());
-        let out = run_session(
+        let (mut seen, last) = (self.state.events, self.state.last);
+        let mut diverged = false;
+        let mut observe = |done: usize, events: &[host_sim::session::Event]| {
+            if done <= mine_from {
+                return true;
+            }
+            // The replay must reproduce the records the board made before.
+            if seen == self.state.events && !replays(events, seen, last) {
+                diverged = true;
+                return false;
+            }
+            let new = events[seen..]
+                .iter()
+                .map(|e| Event::Record {
+                    seq: e.seq,
+                    record: e.record,
+                })
+                .collect();
+            seen = events.len();
+            take(done - mine_from, new)
+        };
+        let out = run_session_observed(
             &self.config.session_spec()?,
             RamFlash::new(FLASH_PAGES),
             &all,
+            &mut observe,
         )
         .map_err(|e| anyhow::anyhow!("the simulated rig cannot be set up: {e:?}"))?;
-        self.check_replay(&out)?;
-        let events: Vec<Event> = out.events[self.state.events..]
-            .iter()
-            .map(|e| Event::Record {
-                seq: e.seq,
-                record: e.record,
-            })
-            .collect();
-        let earlier = self.state.unanswered.min(out.unanswered.len());
-        let unanswered = out.unanswered[earlier..].to_vec();
-        self.journal.extend(steps.iter().cloned());
-        self.state = State {
-            events: out.events.len(),
-            last: out.events.last().map(|e| (e.seq, e.boot)),
-            unanswered: out.unanswered.len(),
-        };
-        self.save(&out)?;
-        Ok(Advance { events, unanswered })
-    }
-
-    /// The replay must reproduce the records the board made before (a changed simulator, or a
-    /// journal edited by hand, would make a different board).
-    fn check_replay(&self, out: &SessionOutput) -> anyhow::Result<()> {
-        let n = self.state.events;
-        let same = n <= out.events.len()
-            && match (self.state.last, n.checked_sub(1)) {
-                (Some(last), Some(i)) => (out.events[i].seq, out.events[i].boot) == last,
-                (None, None) => true,
-                _ => false,
-            };
-        if !same {
+        if diverged || !replays(&out.events, self.state.events, self.state.last) {
             bail!(
                 "the simulated board in {} no longer replays as it ran (its journal was edited, \
                  or this capstan's simulator differs from the one that made it): start a new \
@@ -197,7 +208,20 @@ impl SimBoard {
                 self.dir.display()
             );
         }
-        Ok(())
+        let earlier = self.state.unanswered.min(out.unanswered.len());
+        let unanswered = out.unanswered[earlier..].to_vec();
+        let done = out.steps_done.saturating_sub(mine_from).min(steps.len());
+        self.journal.extend(steps[..done].iter().cloned());
+        self.state = State {
+            events: out.events.len(),
+            last: out.events.last().map(|e| (e.seq, e.boot)),
+            unanswered: out.unanswered.len(),
+        };
+        self.save(&out)?;
+        Ok(Advance {
+            events: Vec::new(),
+            unanswered,
+        })
     }
 
     fn save(&self, out: &SessionOutput) -> anyhow::Result<()> {
@@ -206,6 +230,17 @@ impl SimBoard {
         write_json(&self.dir.join(STATE_JSON), &self.state)?;
         write_atomic(&self.dir.join(FLASH_BIN), out.flash.bytes())
     }
+}
+
+/// The records of a replay reproduce the first `n` the board made before: the `n`-th is the
+/// one it made last (sequence number and boot).
+fn replays(events: &[host_sim::session::Event], n: usize, last: Option<(u32, u32)>) -> bool {
+    n <= events.len()
+        && match (last, n.checked_sub(1)) {
+            (Some(last), Some(i)) => (events[i].seq, events[i].boot) == last,
+            (None, None) => true,
+            _ => false,
+        }
 }
 
 fn lock(dir: &Path) -> anyhow::Result<File> {

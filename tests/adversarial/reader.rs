@@ -330,7 +330,13 @@ fn the_structure_is_read_inferred_or_assumed_and_said() {
     let mut labelled =
         String::from("capstan_diameter_mm,wrap_deg,drive_v,run,step,t1_n,t2_n,session\n");
     for (k, l) in body.lines().chain(body.lines()).enumerate() {
-        labelled += &format!("{l},{}\n", if k < 24 { "\"2026-06-01, a\"" } else { "b" });
+        // (The second session's T2 a little different: a run equal to another to the last
+        // digit is a copy, which the checks name.)
+        labelled += &if k < 24 {
+            format!("{l},\"2026-06-01, a\"\n")
+        } else {
+            format!("{l}1,b\n")
+        };
     }
     let d = accepted(&labelled, 48, 1, 4);
     assert_eq!(d.structure.run_level.columns, ["run", "session"]);
@@ -344,7 +350,11 @@ fn the_structure_is_read_inferred_or_assumed_and_said() {
     ] {
         let mut t = format!("capstan_diameter_mm,wrap_deg,drive_v,run,step,t1_n,t2_n,{name}\n");
         for (k, l) in body.lines().chain(body.lines()).enumerate() {
-            t += &format!("{l},{}\n", if k < 24 { "nylon" } else { "PE" });
+            t += &if k < 24 {
+                format!("{l},nylon\n")
+            } else {
+                format!("{l}1,PE\n")
+            };
         }
         if name == "note" || name == "comment" {
             refused(&t, "x.csv:26: cord D12.7/270deg run 1 step 1 again", &[]);

@@ -75,10 +75,16 @@ fn one_row_is_not_identified_rather_than_explained() {
     );
     checked();
     // analyze refuses it plainly.
-    let e = capstan_engine::analysis::run(&d, capstan_engine::analysis::Options { threads: 1 })
-        .err()
-        .unwrap()
-        .to_string();
+    let e = capstan_engine::analysis::run(
+        &d,
+        capstan_engine::analysis::Options {
+            threads: 1,
+            ..Default::default()
+        },
+    )
+    .err()
+    .unwrap()
+    .to_string();
     assert!(e.contains("too few to analyse"), "{e}");
     checked();
 }
@@ -94,8 +100,14 @@ fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
         })
         .collect();
     let d = data(&three);
-    let a = capstan_engine::analysis::run(&d, capstan_engine::analysis::Options { threads: 2 })
-        .unwrap();
+    let a = capstan_engine::analysis::run(
+        &d,
+        capstan_engine::analysis::Options {
+            threads: 2,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!((a.obs.groups.len(), a.obs.runs.len()), (5, 5));
     assert_eq!((a.evidence.design.cords, a.evidence.design.runs), (5, 5));
     assert!(

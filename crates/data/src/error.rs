@@ -17,7 +17,13 @@ pub enum DataError {
         source: std::io::Error,
     },
     /// A required column is missing from the header.
-    MissingColumn { path: String, column: &'static str },
+    MissingColumn {
+        path: String,
+        column: &'static str,
+        /// The header looks like a raw time series (a time and forces): `capstan condition`
+        /// makes pairs of it.
+        raw: bool,
+    },
     /// A header names a column twice.
     DuplicateColumn {
         path: String,
@@ -42,6 +48,8 @@ pub enum DataError {
         line: u64,
         found: usize,
         expected: usize,
+        /// Why, when it shows: a trailing comma, a stray carriage return.
+        why: Option<&'static str>,
     },
     /// The file has a header but no rows.
     Empty { path: String },
@@ -56,6 +64,8 @@ pub enum DataError {
         separator: char,
         /// The rows write decimals with a comma (`1,5`).
         decimal_comma: bool,
+        /// The header looks like a raw time series (Logger Pro's, a logger's).
+        raw: bool,
     },
     /// A record is longer than any pairs CSV line can be (a binary file, or a quote never
     /// closed).
@@ -101,6 +111,21 @@ pub enum DataError {
         name: &'static str,
         value: f64,
         run: String,
+    },
+    /// A column in a unit no capstan rig's data are in (tensions in grams, wraps in radians).
+    UnitMistake {
+        path: String,
+        line: u64,
+        column: usize,
+        why: String,
+    },
+    /// More rows than [`crate::plausible::MAX_SUSPECT_SHARE`] cannot be capstan data
+    /// (swapped, negated, time going back, a run copied): each kind named with its lines.
+    SuspectRows {
+        path: String,
+        rows: usize,
+        suspect: usize,
+        kinds: Vec<String>,
     },
     /// Most rows have a tension at or below zero: not tensions as a rig reads them.
     NotPositive {
@@ -155,6 +180,15 @@ fn separator_fix(path: &str, separator: char, decimal_comma: bool) -> String {
     }
 }
 
+/// What to do with a raw time series: `capstan condition`.
+fn to_condition(path: &str) -> String {
+    format!(
+        "turn it into pairs by the firmware's windows with `capstan condition {path} --out DIR \
+         --wrap-deg DEG` (it reads loggers' CSV and Logger Pro's exports, decimal commas \
+         included), then give DIR/pairs.csv"
+    )
+}
+
 impl fmt::Display for DataError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use DataError::*;
@@ -165,10 +199,22 @@ impl fmt::Display for DataError {
                 source,
             } => write!(f, "{path}:{l}: cannot read: {source}"),
             Io { path, source, .. } => write!(f, "{path}: {source}"),
-            MissingColumn { path, column } => write!(
+            MissingColumn {
+                path,
+                column,
+                raw: false,
+            } => write!(
                 f,
                 "{path}:1: missing required column `{column}` (a pairs CSV needs wrap_deg, \
                  t1_n and t2_n)"
+            ),
+            MissingColumn {
+                path, raw: true, ..
+            } => write!(
+                f,
+                "{path}:1: a raw time series, not pairs (a pairs CSV has one row per level: \
+                 wrap_deg, t1_n, t2_n); {}",
+                to_condition(path)
             ),
             DuplicateColumn {
                 path,
@@ -202,9 +248,11 @@ impl fmt::Display for DataError {
                 line,
                 found,
                 expected,
+                why,
             } => write!(
                 f,
-                "{path}:{line}: {found} cells where the header has {expected}"
+                "{path}:{line}: {found} cells where the header has {expected}{}",
+                why.map_or(String::new(), |w| format!(": {w}"))
             ),
             Empty { path } => write!(f, "{path}: no data rows (a header and nothing else)"),
             NoHeader { path } => {
@@ -222,7 +270,22 @@ impl fmt::Display for DataError {
                 path,
                 header,
                 separator,
+                raw: true,
+                ..
+            } => write!(
+                f,
+                "{path}:1: the header `{}` is that of a raw time series, separated by {} (a \
+                 logger's or Logger Pro's export), not pairs; {}",
+                quote(header),
+                separator_name(*separator),
+                to_condition(path)
+            ),
+            Separator {
+                path,
+                header,
+                separator,
                 decimal_comma,
+                raw: false,
             } => write!(
                 f,
                 "{path}:1: the header `{}` is one column: the file looks separated by {}; \
@@ -298,6 +361,25 @@ impl fmt::Display for DataError {
                  reversed (or its zero is far off: a rig's negative-force check stops at \
                  {below} N); fix the run's sign or leave the run out",
                 below = -crate::REVERSED_BELOW_N
+            ),
+            UnitMistake {
+                path,
+                line,
+                column,
+                why,
+            } => write!(f, "{path}:{line}:{column}: {why}"),
+            SuspectRows {
+                path,
+                rows,
+                suspect,
+                kinds,
+            } => write!(
+                f,
+                "{path}: {suspect} of {rows} rows ({:.1} %) cannot be capstan data, more than \
+                 the {:.0} % a data set may hold with a warning: {}; fix or remove them",
+                100.0 * *suspect as f64 / (*rows).max(1) as f64,
+                100.0 * crate::plausible::MAX_SUSPECT_SHARE,
+                kinds.join("; ")
             ),
             NotPositive {
                 path,

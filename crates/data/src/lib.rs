@@ -22,6 +22,7 @@
 //! line and column; so are data that cannot be capstan pairs ([`check_capstan_data`]).
 
 mod error;
+pub mod plausible;
 pub mod provenance;
 pub mod ranges;
 pub mod read;
@@ -47,6 +48,18 @@ pub const MAX_WRAP_DEG: f64 = ranges::WRAP_DEG.max;
 pub const MAX_DIAMETER_MM: f64 = ranges::DIAMETER_MM.max;
 /// The longest line a pairs CSV may have.
 pub const MAX_LINE_BYTES: usize = MAX_RECORD_BYTES;
+
+/// The columns a pairs CSV has, for the help of every command that reads one.
+pub const COLUMNS_HELP: &str = "\
+INPUT: a pairs CSV, one row per level (as capstan log, simulate and condition write it)
+  required  wrap_deg (deg), t1_n (N, the servo side), t2_n (N, the fixed side)
+  optional  capstan_diameter_mm (mm), drive_v (V): with wrap_deg they tell the cords apart;
+            run, step, time_s (s from the trigger to the window's centre): the runs and the
+            order within them (without run, a new run where step, or else time_s, restarts)
+  labels    cord, material (tell cords apart); session, date, boot (tell runs apart);
+            note, comment (kept, not used); any other column must be numeric (kept)
+  A raw time series (a logger's or Logger Pro's export, our raw.csv) is not pairs:
+  capstan condition RAW --out DIR --wrap-deg DEG makes them.";
 
 /// The columns `simulate` and `log` write, in order.
 pub const PAIRS_HEADER: [&str; 8] = [
@@ -192,9 +205,13 @@ pub fn read_pairs(reader: impl Read, source: &str) -> Result<Dataset, DataError>
 
 /// Data that cannot be capstan pairs: most rows without both tensions above zero (negated
 /// readings), no row with T2 above T1 (no friction), or T2 below T1 in most rows (the columns
-/// swapped). A few rows at or below zero, or with T2 below T1, are data (a zero offset, a
-/// slack cord).
-pub fn check_capstan_data(ds: &Dataset) -> Result<(), DataError> {
+/// swapped); a run whose sensor reads reversed; a column in a unit no rig's data are in
+/// (tensions in grams, wraps in radians: [`plausible::unit_mistake`]); more than
+/// [`plausible::MAX_SUSPECT_SHARE`] of rows that no rig produces ([`plausible`]). A few rows at
+/// or below zero, or with T2 below T1, are data (a zero offset, a slack cord). What passes
+/// comes back with the suspect rows it holds (at most that share) and the columns that look
+/// unusual: the caller warns about them ([`plausible::Plausibility::warnings`]).
+pub fn check_capstan_data(ds: &Dataset) -> Result<plausible::Plausibility, DataError> {
     let path = ds.source.clone();
     let rows = ds.pairs.len();
     let positive = ds
@@ -222,7 +239,38 @@ pub fn check_capstan_data(ds: &Dataset) -> Result<(), DataError> {
     if 2 * below > rows {
         return Err(DataError::Swapped { path, rows, below });
     }
-    reversed_run(ds)
+    reversed_run(ds)?;
+    if let Some((line, column, why)) = plausible::unit_mistake(ds) {
+        return Err(DataError::UnitMistake {
+            path,
+            line,
+            column,
+            why,
+        });
+    }
+    let found = plausible::plausibility(ds);
+    let suspect = found.suspect_rows();
+    if suspect as f64 > plausible::MAX_SUSPECT_SHARE * rows as f64 {
+        let kinds = found
+            .suspects
+            .iter()
+            .map(|s| {
+                format!(
+                    "{} row(s): {} ({})",
+                    s.lines.len(),
+                    s.kind.describe(),
+                    plausible::lines_text(&s.lines)
+                )
+            })
+            .collect();
+        return Err(DataError::SuspectRows {
+            path,
+            rows,
+            suspect,
+            kinds,
+        });
+    }
+    Ok(found)
 }
 
 /// A reading below minus this, N, in a run whose readings of that channel are all at or below

@@ -137,6 +137,8 @@ fn header<R: Read>(
                 header: only.clone(),
                 separator: sep,
                 decimal_comma,
+                raw: looks_raw(&only.split(sep).map(String::from).collect::<Vec<_>>())
+                    || looks_raw(std::slice::from_ref(only)),
             });
         }
     }
@@ -174,7 +176,11 @@ fn header<R: Read>(
     }
     for (k, column) in [(1, "wrap_deg"), (6, "t1_n"), (7, "t2_n")] {
         if known[k].is_none() {
-            return Err(DataError::MissingColumn { path: p(), column });
+            return Err(DataError::MissingColumn {
+                path: p(),
+                column,
+                raw: looks_raw(&names),
+            });
         }
     }
     Ok(Header {
@@ -184,6 +190,31 @@ fn header<R: Read>(
         extras,
         known,
     })
+}
+
+/// A header of a raw time series, not of pairs: Logger Pro's text export, or a time column
+/// beside force columns (`t_s`, `time_s`, `Time (s)`; `t1_n`, `Force (N)`, `t1_counts`) and no
+/// wrap.
+fn looks_raw(names: &[String]) -> bool {
+    let norm: Vec<String> = names
+        .iter()
+        .map(|n| {
+            n.chars()
+                .filter(|c| c.is_alphanumeric())
+                .flat_map(char::to_lowercase)
+                .collect()
+        })
+        .collect();
+    if norm.iter().any(|n| n.starts_with("vernierformat")) {
+        return true;
+    }
+    let time = norm.iter().any(|n| {
+        ["ts", "times", "time", "t", "xvalue"].contains(&n.as_str()) || n.starts_with("time")
+    });
+    let force = norm
+        .iter()
+        .any(|n| n.starts_with("force") || n.ends_with("counts") || n == "t1n" || n == "t2n");
+    time && force && !norm.iter().any(|n| n == "wrapdeg")
 }
 
 /// The range of column `k` of [`PAIRS_HEADER`].
@@ -225,11 +256,23 @@ fn number(raw: &str, range: &Range) -> Result<f64, String> {
 /// One row's pair.
 fn row(rec: &Record, h: &Header, path: &str) -> Result<Pair, DataError> {
     if rec.cells.len() != h.cols.len() {
+        let n = rec.cells.len();
+        let why = if rec.cut_by_cr {
+            Some(
+                "the line is cut by a carriage return (\\r) inside it, in a file whose lines end \
+                 in line feeds: a stray \\r (save the file with one kind of line ending)",
+            )
+        } else if n == h.cols.len() + 1 && rec.cells[n - 1].text.is_empty() {
+            Some("a trailing comma at the end of the line (an empty last cell): remove it")
+        } else {
+            None
+        };
         return Err(DataError::CellCount {
             path: path.to_string(),
             line: rec.line,
-            found: rec.cells.len(),
+            found: n,
             expected: h.cols.len(),
+            why,
         });
     }
     let mut pair = Pair {

@@ -36,6 +36,9 @@ pub struct Record {
     pub line: u64,
     /// Its cells, in order.
     pub cells: Vec<Cell>,
+    /// It ended at a carriage return that no line feed follows, in a file with line feeds: a
+    /// stray `\r` cut the line.
+    pub cut_by_cr: bool,
 }
 
 /// Why a record could not be read. Lines and columns (cells) are 1-based.
@@ -76,6 +79,8 @@ pub struct Records<R> {
     /// The previous byte was a CR ending a line: an LF right after it belongs to it.
     after_cr: bool,
     started: bool,
+    /// A line feed has been read.
+    lf_seen: bool,
 }
 
 /// A record being assembled.
@@ -123,6 +128,7 @@ impl<R: Read> Records<R> {
             line: 1,
             after_cr: false,
             started: false,
+            lf_seen: false,
         }
     }
 
@@ -132,14 +138,24 @@ impl<R: Read> Records<R> {
             match self.next_any()? {
                 Some(p) if p.is_blank() => continue,
                 Some(p) => {
+                    let cut_by_cr = self.after_cr && self.lf_seen && self.next_is_not_lf();
                     return Ok(Some(Record {
                         line: p.line,
                         cells: p.cells,
-                    }))
+                        cut_by_cr,
+                    }));
                 }
                 None => return Ok(None),
             }
         }
+    }
+
+    /// The next byte is there and is not a line feed (a read error counts as a line feed:
+    /// it is reported by the next record).
+    fn next_is_not_lf(&mut self) -> bool {
+        self.inner
+            .fill_buf()
+            .is_ok_and(|b| b.first().is_some_and(|&c| c != b'\n'))
     }
 
     fn skip_bom(&mut self) -> Result<(), RecordError> {
@@ -178,6 +194,7 @@ impl<R: Read> Records<R> {
             if buf.is_empty() {
                 return self.at_end(p);
             }
+            self.lf_seen |= buf.contains(&b'\n');
             let (used, done) = scan(&mut self.line, &mut self.after_cr, &mut p, buf)?;
             self.inner.consume(used);
             if done {

@@ -1,6 +1,7 @@
 //! The reader: positions, refusals, labels, the structure, round trips.
 
 use super::*;
+use crate::plausible;
 
 fn pair(wrap_deg: f64, run: Option<f64>) -> Pair {
     Pair {
@@ -302,4 +303,157 @@ fn data_that_cannot_be_capstan_pairs_are_refused_with_the_likely_cause() {
         "{e}"
     );
     assert!(check_capstan_data(&t).is_ok());
+}
+
+/// The thesis data with `f` applied to every `every`-th row (from row `from`).
+fn thesis_with(every: usize, from: usize, f: impl Fn(&mut Pair)) -> Dataset {
+    let mut pairs = thesis_dataset().pairs;
+    for p in pairs.iter_mut().skip(from).step_by(every) {
+        f(p);
+    }
+    Dataset::from_pairs("edited.csv", pairs).unwrap()
+}
+
+#[test]
+fn swapped_or_negated_rows_are_named_warned_about_and_refused_above_a_small_share() {
+    assert_eq!(plausible::swap_margin_n(), plausible::SWAP_MARGIN_N);
+    // The thesis data hold none (15 rows with T2 a little below T1 at the lowest level are a
+    // zero offset's doing).
+    let t = check_capstan_data(&thesis_dataset()).unwrap();
+    assert_eq!((t.suspect_rows(), t.column_warnings.len()), (0, 0), "{t:?}");
+    let swap = |p: &mut Pair| std::mem::swap(&mut p.t1_n, &mut p.t2_n);
+    // 10 % of the rows swapped: refused, naming the kind.
+    let e = check_capstan_data(&thesis_with(10, 0, swap))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cannot be capstan data") && e.contains("T1 and T2 swapped?"),
+        "{e}"
+    );
+    // 5 % too (every 20th row, a level from 1 to 12 in turn).
+    assert!(check_capstan_data(&thesis_with(20, 3, swap)).is_err());
+    // One swapped row at the top level of run 1 (line 13): a warning that names it.
+    let one = thesis_with(10_000, 11, swap);
+    let found = check_capstan_data(&one).unwrap();
+    let w = found.warnings("edited.csv");
+    assert_eq!(found.suspect_rows(), 1, "{w:?}");
+    assert!(
+        w[0].contains("swapped?") && w[0].contains("line 13"),
+        "{w:?}"
+    );
+    // Some T1 negated (every 10th row): refused; the rows below -3 N are named.
+    let e = check_capstan_data(&thesis_with(10, 5, |p| p.t1_n = -p.t1_n))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("negated?") && e.contains("lines "), "{e}");
+}
+
+#[test]
+fn tensions_in_grams_or_kn_and_wraps_in_radians_name_the_unit() {
+    let grams = thesis_with(1, 0, |p| {
+        p.t1_n *= 101.971_621;
+        p.t2_n *= 101.971_621;
+    });
+    let e = check_capstan_data(&grams).unwrap_err().to_string();
+    assert!(
+        e.contains("grams") && e.contains("no bench capstan rig"),
+        "{e}"
+    );
+    let kn = thesis_with(1, 0, |p| {
+        p.t1_n /= 1000.0;
+        p.t2_n /= 1000.0;
+    });
+    let w = check_capstan_data(&kn).unwrap().warnings("kn.csv");
+    assert!(w.iter().any(|w| w.contains("in kN")), "{w:?}");
+    let radians = thesis_with(1, 0, |p| p.wrap_deg = p.wrap_deg.to_radians());
+    let e = check_capstan_data(&radians).unwrap_err().to_string();
+    assert!(
+        e.contains("radians?") && e.contains("mu = ") && e.starts_with("edited.csv:290:2:"),
+        "{e}"
+    );
+}
+
+#[test]
+fn time_going_back_in_a_run_and_a_copied_run_are_named() {
+    // Times from the steps (10 s apart): the thesis protocol.
+    let timed = |f: &dyn Fn(usize, &mut Pair)| {
+        let mut pairs = thesis_dataset().pairs;
+        for (i, p) in pairs.iter_mut().enumerate() {
+            p.time_s = Some(10.0 * p.step.unwrap());
+            f(i, p);
+        }
+        Dataset::from_pairs("timed.csv", pairs).unwrap()
+    };
+    let ok = check_capstan_data(&timed(&|_, _| {})).unwrap();
+    assert_eq!(ok.suspect_rows(), 0);
+    // Run 1's step 5 logged at 1 s: its time goes back (and step 6's does not follow it).
+    let back = check_capstan_data(&timed(&|i, p| {
+        if i == 4 {
+            p.time_s = Some(1.0)
+        }
+    }))
+    .unwrap();
+    let w = back.warnings("timed.csv");
+    assert!(
+        w.len() == 1 && w[0].contains("time_s not after") && w[0].contains("line 6"),
+        "{w:?}"
+    );
+    // Run 2 of the first cord pasted as a seventh run.
+    let mut pairs = thesis_dataset().pairs;
+    let copy: Vec<Pair> = pairs[12..24]
+        .iter()
+        .map(|p| Pair {
+            run: Some(7.0),
+            ..p.clone()
+        })
+        .collect();
+    pairs.extend(copy);
+    let copied = Dataset::from_pairs("copied.csv", pairs).unwrap();
+    let found = check_capstan_data(&copied).unwrap();
+    let w = found.warnings("copied.csv");
+    assert_eq!(found.suspect_rows(), 12, "{w:?}");
+    assert!(
+        w[0].contains("run 7 (from line 722) repeats") && w[0].contains("run 2 (from line 14)"),
+        "{w:?}"
+    );
+}
+
+#[test]
+fn a_raw_time_series_is_pointed_to_condition() {
+    for raw in [
+        "t_s,t1_counts,t2_counts,t1_n,t2_n\n0.01,400,391,0.1,0.2\n",
+        "Time (s),Force (N),Force 2 (N)\n0,0.1,0.2\n",
+        "Vernier Format 2\nx.cmbl 11/27/2026 .\nLatest\nTime\tForce\tForce 2\n",
+        "Time\tForce\tForce 2\n0\t0.1\t0.2\n",
+    ] {
+        let e = err(raw);
+        assert!(
+            e.contains("raw time series") && e.contains("capstan condition x.csv --out DIR"),
+            "{raw:?}: {e}"
+        );
+        assert!(!e.contains("tr '"), "{e}");
+    }
+    // A pairs CSV without a column is still told which.
+    assert!(err("wrap_deg,t1_n\n270,1\n").contains("missing required column `t2_n`"));
+}
+
+#[test]
+fn a_trailing_comma_or_a_stray_carriage_return_is_named() {
+    let e = err("wrap_deg,t1_n,t2_n\n270,1,2,\n");
+    assert_eq!(
+        e,
+        "x.csv:2: 4 cells where the header has 3: a trailing comma at the end of the line (an \
+         empty last cell): remove it"
+    );
+    let e = err("wrap_deg,t1_n,t2_n\n270,1,2\n270,1\r,2\n270,1,2\n");
+    assert!(
+        e.starts_with(
+            "x.csv:3: 2 cells where the header has 3: the line is cut by a carriage \
+                       return (\\r)"
+        ),
+        "{e}"
+    );
+    // CRLF and CR-only files are not strays.
+    assert!(read_pairs("wrap_deg,t1_n,t2_n\r\n270,1,2\r\n".as_bytes(), "x").is_ok());
+    assert!(read_pairs("wrap_deg,t1_n,t2_n\r270,1,2\r".as_bytes(), "x").is_ok());
 }

@@ -98,6 +98,14 @@ impl OutputDir {
         subdirs: &[Subdir<'_>],
     ) -> anyhow::Result<OutputDir> {
         let existed = dir.exists();
+        if existed && !dir.is_dir() {
+            anyhow::bail!(
+                "--out {}: that is a file; the output is a directory (created if missing) that \
+                 will hold {}: give a directory's name",
+                dir.display(),
+                names.join(", ")
+            );
+        }
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
         let lock = take_lock(dir)?;

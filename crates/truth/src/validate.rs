@@ -122,7 +122,10 @@ pub fn validate(seed: u64, every: usize, threads: usize) -> anyhow::Result<Valid
         .filter(|(i, _)| i % every.max(1) == 0)
         .map(|x| x.1)
         .collect();
-    let opts = Options { threads: 1 };
+    let opts = Options {
+        threads: 1,
+        ..Options::default()
+    };
     let results = capstan_engine::fit::par::par_map(&cs, threads, |c| analyse(c, opts));
     let outcomes: Vec<Outcome> = results.into_iter().collect::<anyhow::Result<_>>()?;
     let count = |f: &dyn Fn(&Outcome) -> bool, keep: &dyn Fn(&Outcome) -> bool| {

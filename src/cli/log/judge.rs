@@ -36,6 +36,9 @@ pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
     if args.runs == Some(0) {
         bail!("--runs 0: must be 1 or more (the number of complete runs to log)");
     }
+    if args.sim.sim.is_some() {
+        super::sim::check(args)?;
+    }
     let Some(from) = args.from.as_deref().filter(|f| *f != "-") else {
         return Ok(());
     };
@@ -72,6 +75,17 @@ pub(super) fn not_committed(
     args: &Args,
 ) -> anyhow::Result<()> {
     let dir = args.out.display();
+    let complete = summary.runs.iter().filter(|r| r.complete).count();
+    if let (Stop::Interrupted(why), Outcome::Kept(p), true) = (stop, outcome, complete > 0) {
+        // A planned session (the simulated board's --runs) stopped short: it replaces no
+        // earlier session.
+        return Err(crate::cli::signal::Interrupted(format!(
+            "interrupted ({why}) after {complete} complete run(s): they are kept in {}; {dir} \
+             is as it was (a session stopped short does not replace the one there)",
+            p.display()
+        ))
+        .into());
+    }
     let why = if summary.bytes == 0 && summary.records.total() == 0 {
         "nothing was received".to_string()
     } else if summary.records.total() == 0 {

@@ -3,18 +3,58 @@
 //! the first by the `run` command (as `capstan log --start` sends it), every other by a press
 //! of the rig's button; the firmware's own rules apply (a run after a fault needs `ack`, and a
 //! press acknowledges a fault instead of starting a run).
+//!
+//! The records are written as each bench step ends (a run, a stretch of waiting), so a signal
+//! is honoured between steps: the run in flight finishes, every finished run is kept, and the
+//! session replaces no earlier one in `--out` (it is kept beside it, exit status 130). What
+//! cannot finish is refused before anything runs: more than [`MAX_SIM_RUNS`] runs, a
+//! `--duration` beyond the board's 32-bit millisecond clock.
 
 use super::Args;
 use crate::logger::{LogOptions, Logger, Outcome, Stop, Summary};
 use crate::simboard::steps::PRESS_MS;
 use crate::simboard::{SimBoard, IDLE_MS};
+use anyhow::bail;
 use capstan_link::frame::Event;
 use firmware::record::Record;
 use host_sim::session::Step;
+use std::sync::atomic::Ordering;
 
 /// Runs recorded when neither --runs nor --duration is given (a simulated session must end
-/// on its own: there is no Ctrl-C in virtual time).
+/// on its own).
 pub const DEFAULT_RUNS: usize = 1;
+
+/// Most runs one `log --sim` records: each takes about a second of this machine's time, and
+/// every later command on the board replays it (the board is its journal). A campaign of
+/// many runs is `capstan simulate`'s.
+pub const MAX_SIM_RUNS: usize = 100;
+
+/// `--duration` is waited in steps of at most this, ms of the board's time: a signal is
+/// honoured between them.
+const WAIT_STEP_MS: u32 = 600_000;
+
+/// The command line's limits for a simulated board, before anything is opened.
+pub(super) fn check(args: &Args) -> anyhow::Result<()> {
+    if let Some(n) = args.runs.filter(|&n| n > MAX_SIM_RUNS) {
+        bail!(
+            "--runs {n} with --sim: at most {MAX_SIM_RUNS} runs per command (each takes about a \
+             second here, and every later command on this board replays it); log them in \
+             several commands, or simulate a campaign with `capstan simulate --runs N`"
+        );
+    }
+    if let Some(d) = args.duration {
+        let max_s = u32::MAX as f64 / 1e3;
+        if d * 1e3 > u32::MAX as f64 {
+            bail!(
+                "--duration {} with --sim: the simulated board's clock counts milliseconds in 32 \
+                 bits, so at most {max_s} s ({:.1} days) of its time per command",
+                capstan_data::ranges::shown(d),
+                max_s / 86_400.0
+            );
+        }
+    }
+    Ok(())
+}
 
 /// Record from the simulated board the arguments name.
 pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary, Stop, Outcome)> {
@@ -23,18 +63,49 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
     let (steps, runs) = plan(args);
     let mut logger = Logger::create_for_records(opts, &source)?;
     logger.set_provenance(super::provenance(args, None)?);
+    logger.keep_interrupted_apart();
     if args.start {
         crate::errln!("capstan log: run started (--start); its reply and records follow");
     }
-    let done = board.advance(&steps)?;
-    let (events, stop) = cut(done.events, runs, args);
-    logger.take_records(events)?;
+    let signal = super::super::signal::stop_flag("log");
+    let mut cut = Cut {
+        wanted: runs,
+        complete: 0,
+    };
+    let (mut stop, mut failed) = (None, None);
+    board.advance_streamed(&steps, &mut |done, events| {
+        if let Err(e) = logger.take_records(cut.keep(events)) {
+            failed = Some(e);
+            return false;
+        }
+        // A signal stops the bench after a wait: a run in flight, and the pause after it that
+        // lets the rig come to rest, are finished (a press right after a run ends would start
+        // the next at a load, and the board's next command goes on from here).
+        let at_rest = matches!(steps.get(done.wrapping_sub(1)), Some(Step::Wait(_)));
+        if at_rest && signal.load(Ordering::SeqCst) {
+            let why = super::super::signal::stop_reason().unwrap_or("Ctrl-C");
+            stop = Some(Stop::Interrupted(why));
+            return false;
+        }
+        true
+    })?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let stop = stop.unwrap_or_else(|| match runs {
+        Some(n) if cut.complete >= n => Stop::Limit(format!("{n} run(s) logged (--runs)")),
+        Some(_) => Stop::EndOfStream,
+        None => Stop::Limit(format!(
+            "{} s of the board's time (--duration)",
+            args.duration.unwrap_or(0.0)
+        )),
+    });
     let (summary, outcome) = logger.finish_with(&stop)?;
     Ok((summary, stop, outcome))
 }
 
 /// The bench's steps: each run started in turn and waited for, or --duration of the board's
-/// time; and how many runs to keep (`None`: all in the time).
+/// time (in steps of [`WAIT_STEP_MS`]); and how many runs to keep (`None`: all in the time).
 fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
     let start = |i: usize| {
         if i == 0 && args.start {
@@ -48,7 +119,13 @@ fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
         if args.start {
             steps.push(start(0));
         }
-        steps.push(Step::Wait((d * 1e3).round() as u32));
+        // Checked to fit in u32 ms (`check`).
+        let mut left = (d * 1e3).round() as u32;
+        while left > 0 {
+            let w = left.min(WAIT_STEP_MS);
+            steps.push(Step::Wait(w));
+            left -= w;
+        }
         return (steps, None);
     }
     let runs = args.runs.unwrap_or_else(|| {
@@ -65,11 +142,21 @@ fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
     (steps, Some(runs))
 }
 
-/// The records up to the end of the `runs`-th complete run (a run a fault ended is not one:
-/// `logger::completes`), and why the session stopped.
-fn cut(mut events: Vec<Event>, runs: Option<usize>, args: &Args) -> (Vec<Event>, Stop) {
-    if let Some(n) = runs {
-        let mut seen = 0;
+/// The records up to the end of the `wanted`-th complete run (a run a fault ended is not one:
+/// `logger::completes`), taken batch by batch.
+struct Cut {
+    wanted: Option<usize>,
+    complete: usize,
+}
+
+impl Cut {
+    fn keep(&mut self, mut events: Vec<Event>) -> Vec<Event> {
+        let Some(n) = self.wanted else {
+            return events;
+        };
+        if self.complete >= n {
+            return Vec::new();
+        }
         let end = events.iter().position(|e| {
             let done = matches!(
                 e,
@@ -78,18 +165,12 @@ fn cut(mut events: Vec<Event>, runs: Option<usize>, args: &Args) -> (Vec<Event>,
                     ..
                 } if crate::logger::completes(end)
             );
-            seen += done as usize;
-            seen == n
+            self.complete += done as usize;
+            self.complete == n
         });
         if let Some(i) = end {
             events.truncate(i + 1);
-            return (events, Stop::Limit(format!("{n} run(s) logged (--runs)")));
         }
-        return (events, Stop::EndOfStream);
+        events
     }
-    let d = args.duration.unwrap_or(0.0);
-    (
-        events,
-        Stop::Limit(format!("{d} s of the board's time (--duration)")),
-    )
 }

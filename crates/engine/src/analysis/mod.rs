@@ -44,12 +44,16 @@ pub use metrics::{ln_amp, rmse_ln_amp, AngleR2, CordR2, ModelMetrics, ParamCount
 pub struct Options {
     /// Threads for the independent fits (LOCO folds, mechanism variants).
     pub threads: usize,
+    /// Without a `time_s` column, take the times from `step` with the thesis protocol, so
+    /// that a drift in time can be tested (as `diagnose --protocol-times`).
+    pub protocol_times: bool,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Options {
             threads: std::thread::available_parallelism().map_or(2, |n| n.get().min(4)),
+            protocol_times: false,
         }
     }
 }
@@ -153,6 +157,7 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let t0 = Instant::now();
     let eopts = evidence::Options {
         threads,
+        protocol_times: opts.protocol_times,
         ..evidence::Options::default()
     };
     let assessment = evidence::assess(ds, &eopts);

@@ -57,6 +57,15 @@ pub fn command_line(words: &[String]) -> Result<(String, Command), CheckError> {
         return Err(CheckError::Command(CommandError::TooLong));
     }
     let cmd = Command::parse(&line).map_err(CheckError::Command)?;
+    if let Command::Weigh(_, n) = cmd {
+        // The board would refuse it as "settings invalid": say what is wrong instead.
+        if !(n.is_finite() && n > 0.0) {
+            return Err(CheckError::Usage(format!(
+                "not sent: {line}: a weight must be above 0 N (the known mass hung on the \
+                 sensor, as its weight: 1 kg is 9.80665 N)"
+            )));
+        }
+    }
     Ok((line, cmd))
 }
 
@@ -136,6 +145,9 @@ mod tests {
         let long = format!("set dwell_ms {}", "0".repeat(60));
         assert_eq!(refused(&long), CheckError::Command(CommandError::TooLong));
         assert_eq!(command_line(&[]).unwrap_err(), CheckError::Empty);
+        let e = refused("weigh t1 -9.8").to_string();
+        assert!(e.contains("a weight must be above 0 N"), "{e}");
+        assert!(refused("weigh t2 0").to_string().contains("above 0 N"));
         let two_lines = vec!["zero\nrun".to_string()];
         assert!(command_line(&two_lines).is_err());
     }
