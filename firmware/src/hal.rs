@@ -12,6 +12,44 @@ pub const ADC_MAX_COUNTS: u16 = 4095;
 pub struct AdcError;
 
 /// A 12-bit ADC with the two force sensors on it (raw counts, 0..=4095).
+///
+/// The board implements it on the RP2040's ADC, the simulated plant on its sensor model. A
+/// test bench with fixed readings, turned into newtons by the default calibration:
+///
+/// ```
+/// use firmware::hal::{AdcError, Channel, ForceAdc};
+/// use firmware::Calibration;
+///
+/// /// Two sensors holding still, and the conversions asked of them.
+/// struct Still {
+///     counts: [u16; 2],
+///     asked: Vec<Channel>,
+/// }
+///
+/// impl ForceAdc for Still {
+///     fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError> {
+///         self.asked.push(channel);
+///         Ok(self.counts[channel as usize])
+///     }
+/// }
+///
+/// let mut adc = Still { counts: [1067, 2400], asked: Vec::new() };
+/// // Every sample reads both channels, T1 first.
+/// let [t1, t2] = adc.read_both();
+/// assert_eq!(adc.asked, [Channel::T1, Channel::T2]);
+///
+/// // Zero at 400 counts, 0.015 N per count: (1067 − 400) × 0.015 = 10.005 N.
+/// let cal = Calibration::default();
+/// assert!((cal.t1.newtons(t1.unwrap() as f32) - 10.005).abs() < 1e-3);
+/// assert!((cal.t2.newtons(t2.unwrap() as f32) - 30.0).abs() < 1e-3);
+///
+/// // A borrowed ADC is an ADC too (the runner borrows the board's).
+/// fn sample(mut adc: impl ForceAdc) -> [Result<u16, AdcError>; 2] {
+///     adc.read_both()
+/// }
+/// assert_eq!(sample(&mut adc), [Ok(1067), Ok(2400)]);
+/// assert_eq!(adc.asked.len(), 4);
+/// ```
 pub trait ForceAdc {
     /// Convert one channel now.
     fn read_counts(&mut self, channel: Channel) -> Result<u16, AdcError>;
@@ -26,6 +64,32 @@ pub trait ForceAdc {
 }
 
 /// Something that resets the chip unless fed in time (a no-op where there is none).
+///
+/// The runner feeds it once a sample. Before a flash write, which holds the loop, it asks for
+/// room with [`Watchdog::allow_ms`]; a watchdog that cannot widen its timeout just feeds:
+///
+/// ```
+/// use firmware::hal::Watchdog;
+///
+/// #[derive(Default)]
+/// struct Counting {
+///     feeds: u32,
+/// }
+///
+/// impl Watchdog for Counting {
+///     fn feed(&mut self) {
+///         self.feeds += 1;
+///     }
+/// }
+///
+/// let mut dog = Counting::default();
+/// dog.feed();
+/// dog.allow_ms(400); // the default: one ordinary feed
+/// assert_eq!(dog.feeds, 2);
+///
+/// // A rig without a watchdog (the host's tests) passes `()`.
+/// ().allow_ms(400);
+/// ```
 pub trait Watchdog {
     /// Called once per sample period by the runner.
     fn feed(&mut self);
@@ -45,6 +109,37 @@ impl Watchdog for () {
 
 /// Where host commands arrive: a byte stream, read without waiting (the RTT down channel on
 /// the board).
+///
+/// The runner drains it every sample into a [`crate::command::LineBuffer`], which gives a
+/// command at each newline:
+///
+/// ```
+/// use firmware::command::LineBuffer;
+/// use firmware::hal::{Channel, Console};
+/// use firmware::{Command, CommandError};
+///
+/// /// What `capstan rig` wrote, not yet read.
+/// struct Host<'a>(core::slice::Iter<'a, u8>);
+///
+/// impl Console for Host<'_> {
+///     fn read_byte(&mut self) -> Option<u8> {
+///         self.0.next().copied()
+///     }
+/// }
+///
+/// let mut host = Host(b"setup\nweigh t1 9.80665\n\nfly\nzero".iter());
+/// let mut line = LineBuffer::default();
+/// let commands: Vec<_> = core::iter::from_fn(|| host.read_byte())
+///     .filter_map(|byte| line.push(byte))
+///     .collect();
+/// assert_eq!(commands.len(), 3); // a blank line is no command; `zero` has no newline yet
+/// assert_eq!(commands[0], Ok(Command::Setup));
+/// assert_eq!(commands[1], Ok(Command::Weigh(Channel::T1, 9.80665)));
+/// assert!(matches!(commands[2], Err(CommandError::Unknown)));
+///
+/// // No host: nothing arrives.
+/// assert_eq!(().read_byte(), None);
+/// ```
 pub trait Console {
     /// The next byte the host sent, if one is there.
     fn read_byte(&mut self) -> Option<u8>;

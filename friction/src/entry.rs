@@ -196,6 +196,51 @@ pub struct Cases {
 }
 
 /// Everything the project knows about one effect of the catalogue.
+///
+/// The entry is the effect: its name on the command line, its unit, where in the data it
+/// shows, and the functions that switch it on in a model and read it back.
+///
+/// ```
+/// use capstan_friction::{Effect, EffectKind, Level, Model, Operating};
+///
+/// let entry = EffectKind::T2Offset.entry();
+/// assert_eq!((entry.name, entry.parameter, entry.unit), ("t2_offset", Some("offset_n"), "N"));
+/// assert_eq!(entry.level, Level::WithinRun);
+///
+/// // `capstan simulate --effect t2_offset=-0.5` parses the same words.
+/// let effect: Effect = "t2_offset=-0.5".parse().unwrap();
+/// let clean = Model::euler_eytelwein(0.12);
+/// let offset = clean.with_effect(effect);
+/// assert_eq!((entry.read)(&offset), -0.5);
+/// assert_eq!((entry.read)(&clean), entry.neutral);
+///
+/// // The T2 sensor now reads half a newton low at every tension: a zero offset.
+/// let op = Operating::from_wrap_deg(360.0);
+/// for t1_n in [0.5, 5.0, 20.0] {
+///     let shift_n = offset.predict_t2_n(t1_n, &op) - clean.predict_t2_n(t1_n, &op);
+///     assert!((shift_n + 0.5).abs() < 1e-12);
+/// }
+///
+/// // A size outside what a real rig can hold is refused, with the entry's range.
+/// let (lo, hi) = entry.physical;
+/// assert!(lo <= -0.5 && -0.5 <= hi && hi < 9.0);
+/// assert!("t2_offset=9".parse::<Effect>().is_err());
+/// ```
+///
+/// Whether a data set can show an effect is part of its entry too:
+///
+/// ```
+/// use capstan_friction::{EffectKind, Facts};
+///
+/// // The thesis design: 5 wraps × 2 diameters at one drive voltage, 6 runs per cord.
+/// let thesis = Facts { wraps: 5, diameters: 2, voltages: 1, cords: 10, runs: 60,
+///                      max_runs_per_cord: 6, ..Facts::default() };
+/// let speed = EffectKind::SpeedDependence.entry();
+/// assert_eq!(speed.column, Some("drive_v"));
+/// assert_eq!((speed.untestable)(&thesis), Some("a single drive voltage"));
+/// // A second voltage makes it testable.
+/// assert_eq!((speed.untestable)(&Facts { voltages: 2, ..thesis }), None);
+/// ```
 #[derive(Clone, Copy, Debug)]
 pub struct EffectEntry {
     /// Which effect.
@@ -243,6 +288,19 @@ pub struct EffectEntry {
 
 impl EffectEntry {
     /// The value of θ.
+    ///
+    /// ```
+    /// use capstan_friction::EffectKind;
+    ///
+    /// // Bending stiffness is fitted as θ = √b, smooth where a lift-off grows with √b.
+    /// let bending = EffectKind::BendingStiffness.entry();
+    /// let b_nm2 = bending.value_of_theta(2e-3);
+    /// assert!((b_nm2 - 4e-6).abs() < 1e-18);
+    /// assert!((bending.theta_of_value(b_nm2) - 2e-3).abs() < 1e-15);
+    /// assert!((bending.derivative_of_theta(2e-3) - 4e-3).abs() < 1e-15);
+    /// // An offset is fitted as itself.
+    /// assert_eq!(EffectKind::T1Offset.entry().value_of_theta(-0.3), -0.3);
+    /// ```
     pub fn value_of_theta(&self, theta: f64) -> f64 {
         match self.theta.scale {
             Scale::Identity => theta,
