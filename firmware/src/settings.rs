@@ -9,17 +9,19 @@
 //! Which values there are, in which order, how each is held, is the wire schema's
 //! ([`capstan_wire::Setting`]); this file says where each lives in [`Settings`].
 
-use crate::calib::{Calibration, CalibrationError};
+use crate::calib::{CalSource, Calibration, CalibrationError};
 use crate::protocol::{Protocol, ProtocolError, StepOrder};
 use capstan_wire::{Key, Scalar, Setting, Value};
 
-/// Version of the byte layout below. Change it whenever the layout changes.
-pub const SETTINGS_VERSION: u8 = 1;
+/// Version of the byte layout below. Change it whenever the layout changes. (2: the
+/// sensitivities' sources and the zeros they were measured at. A record of version 1 is of
+/// another version: the board uses its defaults, whose sensitivities are unmeasured.)
+pub const SETTINGS_VERSION: u8 = 2;
 
-/// Values in [`Settings::fields`]: 15 of the protocol, 10 of the calibration.
+/// Values in [`Settings::fields`]: 15 of the protocol, 14 of the calibration.
 pub const FIELDS: usize = capstan_wire::settings::SETTINGS;
 
-/// Encoded length, bytes: version, generation, the order's code, 24 values of 4 bytes.
+/// Encoded length, bytes: version, generation, the order's code, 28 values of 4 bytes.
 pub const SETTINGS_BYTES: usize = 1 + 4 + 1 + 4 * (FIELDS - 1);
 
 /// What the rig runs with: the protocol and the calibration.
@@ -158,17 +160,22 @@ impl Settings {
         Setting::ALL.map(|s| self.get(s))
     }
 
-    /// Inverse of [`Settings::fields`] (`None` for an unknown step order; not validated).
+    /// Inverse of [`Settings::fields`] (`None` for an unknown code; not validated).
     #[inline(never)]
     pub fn from_fields(v: &[u32; FIELDS]) -> Option<Settings> {
+        Settings::from_fields_or_bad(v).ok()
+    }
+
+    /// [`Settings::from_fields`], or the first setting whose code is unknown.
+    pub fn from_fields_or_bad(v: &[u32; FIELDS]) -> Result<Settings, Setting> {
         let mut s = Settings {
             protocol: Protocol::default(),
             calibration: Calibration::default(),
         };
         for (setting, &bits) in Setting::ALL.iter().zip(v) {
-            s.set(*setting, bits)?;
+            s.set(*setting, bits).ok_or(*setting)?;
         }
-        Some(s)
+        Ok(s)
     }
 
     /// One value as 32 bits (see [`Settings::fields`]): where each setting lives.
@@ -201,6 +208,10 @@ impl Settings {
             Setting::ServoMaxUs => f(c.servo.pulse_at_max_us),
             Setting::ServoMaxDeg => f(c.servo.max_deg),
             Setting::AmpFullScaleV => f(c.amp.full_scale_v),
+            Setting::T1Cal => c.t1.source.code() as u32,
+            Setting::T1CalZero => f(c.t1.cal_zero),
+            Setting::T2Cal => c.t2.source.code() as u32,
+            Setting::T2CalZero => f(c.t2.cal_zero),
         }
     }
 
@@ -240,6 +251,10 @@ impl Settings {
             Setting::ServoMaxUs => c.servo.pulse_at_max_us = f,
             Setting::ServoMaxDeg => c.servo.max_deg = f,
             Setting::AmpFullScaleV => c.amp.full_scale_v = f,
+            Setting::T1Cal => c.t1.source = CalSource::from_code(u8::try_from(bits).ok()?)?,
+            Setting::T1CalZero => c.t1.cal_zero = f,
+            Setting::T2Cal => c.t2.source = CalSource::from_code(u8::try_from(bits).ok()?)?,
+            Setting::T2CalZero => c.t2.cal_zero = f,
         }
         Some(())
     }
@@ -293,6 +308,9 @@ mod tests {
         s.protocol.wrap_deg = 360.0;
         s.protocol.order = StepOrder::UpDown;
         s.calibration.t1.n_per_count = 0.0123;
+        s.calibration.t1 = s.calibration.t1.measured(CalSource::Weighed);
+        s.calibration.t2 = s.calibration.t2.measured(CalSource::Typed);
+        s.calibration.t2.zero_counts = 420.0;
         s.calibration.servo.pulse_at_min_us = 500.0;
         s
     }
@@ -331,10 +349,15 @@ mod tests {
             s.with(Key::ServoMaxDeg, 100.0),
             Err(SettingsError::ServoRange)
         );
+        let s3 = s.with(Key::AmpControlV, 3.2).unwrap();
         assert_eq!(
-            s.with(Key::AmpFullScaleV, 2.0),
+            s3.with(Key::AmpFullScaleV, 3.1),
             Err(SettingsError::AmpRange)
         );
+        assert!(matches!(
+            s.with(Key::AmpFullScaleV, 2.5),
+            Err(SettingsError::Calibration(CalibrationError::AmpMap))
+        ));
     }
 
     #[test]
@@ -355,6 +378,7 @@ mod tests {
                 Key::TareMs => 900.0,
                 Key::AmpControlV => 3.0,
                 Key::T1NPerCount | Key::T2NPerCount => 0.016,
+                Key::AmpFullScaleV => 3.35,
                 _ => value,
             };
             let t = s
@@ -371,8 +395,8 @@ mod tests {
     fn another_version_a_short_record_or_invalid_values_are_refused() {
         let s = bench_settings();
         let mut b = s.encode(1);
-        b[0] = 2;
-        assert_eq!(Settings::decode(&b), Err(SettingsError::Version(2)));
+        b[0] = 1;
+        assert_eq!(Settings::decode(&b), Err(SettingsError::Version(1)));
         assert_eq!(
             Settings::decode(&s.encode(1)[..SETTINGS_BYTES - 1]),
             Err(SettingsError::Length)

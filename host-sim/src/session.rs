@@ -12,7 +12,8 @@
 use crate::flash::RamFlash;
 use crate::run::{sample_plant, time_limit_us, SetupError, TraceSample};
 use crate::time;
-use capstan_plant::{rig_io, CordSetup, Plant, PlantConfig, AMP_MAX_DUTY, SERVO_MAX_DUTY};
+use capstan_plant::hal::CordRef;
+use capstan_plant::{rig_io, CordSetup, ForcedOutputs, Plant, PlantConfig, SERVO_MAX_DUTY};
 use core::cell::{Cell, RefCell};
 use embassy_futures::select::{select3, Either3};
 use embassy_time::{Duration, Timer};
@@ -22,7 +23,7 @@ use firmware::reset::{latch_word, ResetCause};
 use firmware::runner::{serve, WATCHDOG_MS};
 use firmware::safety::SafetyLimits;
 use firmware::store::SettingsStore;
-use firmware::{Calibration, Protocol, Rig};
+use firmware::{Calibration, Protocol, Rig, SafeDuties};
 use std::collections::VecDeque;
 
 /// The settings range of the simulated board's flash: all of it (four 4 KiB pages).
@@ -61,6 +62,16 @@ pub enum Step {
     /// per newton; `capstan rig --sim` draws one per sensor, hidden from the firmware). Give
     /// it before any weight is hung.
     ScaleSensor(Channel, f64),
+    /// The RUN pin pulled low (a reset button, a supply supervisor): the whole chip resets,
+    /// every pin released, the scratch registers lost; it boots again [`BOOT_MS`] later.
+    RunPin,
+    /// The firmware panics now: the panic handler makes the outputs safe through the
+    /// registers (`firmware::force_safe`, as `board_safe.rs` does) and resets the chip through
+    /// the watchdog at once (forced; the scratch registers kept); it boots [`BOOT_MS`] later.
+    Panic,
+    /// A fault of the rig's parts, from now on (the plant's injections, e.g. a frozen sensor,
+    /// a cord that parts, a stalled servo).
+    Inject(capstan_plant::InjectionKind),
 }
 
 /// From a reset to the firmware's first sample on the simulated board, ms (the RP2040 boots
@@ -207,7 +218,7 @@ pub fn run_session(
     let trace = RefCell::new(Vec::new());
     // The watchdog's scratch register 1: the latch word, kept across a watchdog reset.
     let scratch = Cell::new(0u32);
-    let mut cause = ResetCause::PowerUp;
+    let mut cause = ResetCause::PowerOn;
     let mut resets = Vec::new();
     let mut rest = steps;
     loop {
@@ -228,13 +239,25 @@ pub fn run_session(
             Some(Step::Reset) => {
                 release_pins(&plant);
                 scratch.set(0);
-                ResetCause::PowerUp
+                ResetCause::PowerOn
+            }
+            Some(Step::RunPin) => {
+                release_pins(&plant);
+                scratch.set(0);
+                watch(&plant, BOOT_MS, spec.trace_every_ms, &trace);
+                ResetCause::RunPin
             }
             Some(Step::Freeze) => {
                 watch(&plant, WATCHDOG_MS as u64, spec.trace_every_ms, &trace);
                 release_pins(&plant);
                 watch(&plant, BOOT_MS, spec.trace_every_ms, &trace);
                 ResetCause::Watchdog
+            }
+            Some(Step::Panic) => {
+                panic_path(&plant, &rig);
+                release_pins(&plant);
+                watch(&plant, BOOT_MS, spec.trace_every_ms, &trace);
+                ResetCause::Forced
             }
             _ => break,
         };
@@ -315,13 +338,28 @@ fn watch(plant: &RefCell<Plant>, ms: u64, every_ms: u32, trace: &RefCell<Vec<Tra
 }
 
 /// A reset: every output pin an input. The servo gets no pulses; the pull-downs hold the
-/// amplifier's control input and the trigger low.
+/// amplifier's control input and the trigger low (the control input falls through the filter
+/// and the pull-down, `MotorConfig::amp_filter_released_tau_s`).
 fn release_pins(plant: &RefCell<Plant>) {
     let mut p = plant.borrow_mut();
     p.advance_to(time::now_us());
     p.set_servo_duty(0, 0, SERVO_MAX_DUTY);
-    p.set_amp_duty(0, 0, AMP_MAX_DUTY);
+    p.release_amp(0);
     p.set_trigger(0, false);
+}
+
+/// What the board's panic handler does first: `force_safe` on the pins, with the rest duty
+/// computed from the rig (`board_safe::arm`) and the servo kept where it is if that releases
+/// more (`SafeDuties::releasing`, with the duty last written).
+fn panic_path(plant: &RefCell<Plant>, rig: &Rig) {
+    let commanded = {
+        let mut p = plant.borrow_mut();
+        p.advance_to(time::now_us());
+        let pulse_us = p.truth(0).commanded_pulse_us;
+        (pulse_us / p.config().servo.frame_us as f64 * SERVO_MAX_DUTY as f64).round() as u16
+    };
+    let duties = SafeDuties::for_rig(rig, SERVO_MAX_DUTY).releasing(commanded);
+    firmware::force_safe(&mut ForcedOutputs(CordRef::new(plant, 0)), duties);
 }
 
 /// Virtual time the steps may take at most.
@@ -330,6 +368,7 @@ fn steps_limit_us(steps: &[Step], run_limit_us: u64) -> u64 {
         Step::Send(_) => REPLY_TIMEOUT_MS * 1000,
         Step::Wait(ms) | Step::Press(ms) => *ms as u64 * 1000,
         Step::Freeze => (WATCHDOG_MS as u64 + BOOT_MS) * 1000,
+        Step::RunPin | Step::Panic => BOOT_MS * 1000,
         Step::UntilRunEnd => run_limit_us,
         _ => 0,
     };
@@ -376,6 +415,7 @@ async fn host(
                 Timer::after(Duration::from_millis(*ms as u64)).await;
             }
             Step::ReverseSensor(ch) => plant.borrow_mut().reverse_sensor(0, *ch),
+            Step::Inject(kind) => inject_now(plant, *kind),
             Step::ScaleSensor(ch, factor) => plant.borrow_mut().scale_sensor(0, *ch, *factor),
             Step::HoldButton(ms) => {
                 let now = time::now_us();
@@ -388,10 +428,17 @@ async fn host(
                 })
                 .await;
             }
-            Step::Reset | Step::Freeze => return i,
+            Step::Reset | Step::Freeze | Step::RunPin | Step::Panic => return i,
         }
     }
     steps.len()
+}
+
+/// `kind` strikes the rig now, whatever the trigger did.
+fn inject_now(plant: &RefCell<Plant>, kind: capstan_plant::InjectionKind) {
+    let mut p = plant.borrow_mut();
+    p.advance_to(time::now_us());
+    p.strike(0, kind);
 }
 
 /// Wait until a record after the first `seen` matches, checking every ms; false at the timeout.

@@ -3,6 +3,7 @@
 
 use anyhow::bail;
 use firmware::hal::Channel;
+use host_sim::plant::InjectionKind;
 use host_sim::session::Step;
 use std::path::Path;
 
@@ -43,6 +44,18 @@ pub fn step_line(s: &Step) -> String {
         Step::HoldButton(ms) => format!("hold {ms}"),
         Step::ReverseSensor(c) => format!("reverse {}", ch_word(*c)),
         Step::ScaleSensor(c, f) => format!("scale {} {f:?}", ch_word(*c)),
+        Step::RunPin => "reset-pin".into(),
+        Step::Panic => "panic".into(),
+        Step::Inject(k) => format!("inject {}", injection_word(*k)),
+    }
+}
+
+/// An injection's name in the journal (the plant's, with the channel where it has one).
+fn injection_word(k: InjectionKind) -> &'static str {
+    match k {
+        InjectionKind::SensorUnplugged(Channel::T1) => "sensor_unplugged_t1",
+        InjectionKind::Frozen(Channel::T1) => "sensor_frozen_t1",
+        k => k.name(),
     }
 }
 
@@ -78,6 +91,9 @@ fn parse_line(line: &str) -> Option<Step> {
             let (c, f) = two()?;
             Step::ScaleSensor(c, f)
         }
+        "reset-pin" => Step::RunPin,
+        "panic" => Step::Panic,
+        "inject" => Step::Inject(InjectionKind::from_name(rest.trim())?),
         _ => return None,
     })
 }
@@ -177,6 +193,12 @@ mod tests {
             Step::UntilRunEnd,
             Step::Reset,
             Step::ScaleSensor(Channel::T1, 1.0375),
+            Step::RunPin,
+            Step::Panic,
+            Step::Inject(InjectionKind::Frozen(Channel::T1)),
+            Step::Inject(InjectionKind::Frozen(Channel::T2)),
+            Step::Inject(InjectionKind::SensorUnplugged(Channel::T1)),
+            Step::Inject(InjectionKind::CordBreak),
         ];
         let text = journal_text(&steps);
         assert_eq!(parse_journal(&text, Path::new("j")).unwrap(), steps);

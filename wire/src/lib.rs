@@ -22,7 +22,7 @@ mod prim;
 pub mod records;
 pub mod settings;
 
-pub use codes::{Channel, FaultKind, SettingsSource, StepOrder, NONE_CODE};
+pub use codes::{CalSource, Channel, FaultKind, SettingsSource, StepOrder, NONE_CODE};
 pub use commands::{CommandError, CommandKind, MAX_LINE};
 pub use prim::{Prim, Scalar};
 pub use records::{Field, Level, RecordKind};

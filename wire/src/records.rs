@@ -232,14 +232,19 @@ impl RecordKind {
         })
     }
 
-    /// A setting as a field of this record: required in `settings`, and in `run_start` unless
-    /// it came with setup mode.
+    /// A setting as a field of this record: required in `settings` unless it came with the
+    /// calibration's provenance, in `run_start` only if the first firmware had it.
     pub const fn setting_field(self, s: Setting) -> Field {
+        let required = match s.since() {
+            Since::First => true,
+            Since::SetupMode => matches!(self, RecordKind::Settings),
+            Since::Provenance => false,
+        };
         Field {
             name: s.name(),
             prim: s.value().prim(),
             unit: s.unit(),
-            required: matches!(self, RecordKind::Settings) || matches!(s.since(), Since::First),
+            required,
         }
     }
 
@@ -281,7 +286,9 @@ mod tests {
         assert!(settings.starts_with(
             "settings seq={=u32} source={=u8} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32}"
         ));
-        assert!(settings.ends_with("servo_max_deg={=f32} amp_full_scale_v={=f32} crc={=u32}"));
+        assert!(settings.ends_with(
+            "amp_full_scale_v={=f32} t1_cal={=u8} t1_cal_zero={=f32} t2_cal={=u8} t2_cal_zero={=f32} crc={=u32}"
+        ));
     }
 
     #[test]
@@ -295,7 +302,7 @@ mod tests {
             }
             assert_eq!(RecordKind::from_word(k.word()), Some(k));
         }
-        assert_eq!(RecordKind::RunStart.fields().count(), 2 + 25 + 1);
+        assert_eq!(RecordKind::RunStart.fields().count(), 2 + 29 + 1);
         let optional: std::vec::Vec<&str> = RecordKind::RunStart
             .fields()
             .filter(|f| !f.required)
@@ -309,6 +316,10 @@ mod tests {
                 "servo_max_us",
                 "servo_max_deg",
                 "amp_full_scale_v",
+                "t1_cal",
+                "t1_cal_zero",
+                "t2_cal",
+                "t2_cal_zero",
                 "crc"
             ]
         );

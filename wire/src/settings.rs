@@ -7,7 +7,8 @@
 /// How a setting is held (and sent: its wire type, [`Value::prim`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Value {
-    /// A code, one byte: the step order ([`crate::StepOrder::code`]).
+    /// A code, one byte: the step order ([`crate::StepOrder::code`]), a sensitivity's source
+    /// ([`crate::CalSource::code`]).
     Code,
     /// A whole number (ms, Hz), `u32`.
     Whole,
@@ -43,6 +44,9 @@ pub enum Since {
     /// Since setup mode (the tare reference, the servo map and the amplifier's full scale): a
     /// `run_start` of a firmware built before it lacks them, and the host reads it anyway.
     SetupMode,
+    /// Since the calibration says where its sensitivities came from (issue 38): neither
+    /// record of a firmware built before it has them, and the host reads both anyway.
+    Provenance,
 }
 
 /// The table: `Variant "name" group value "unit" since key "meaning";` one row per setting, in
@@ -133,8 +137,8 @@ macro_rules! keys {
     };
 }
 
-/// Values in the settings: 15 of the protocol, 10 of the calibration.
-pub const SETTINGS: usize = 25;
+/// Values in the settings: 15 of the protocol, 14 of the calibration.
+pub const SETTINGS: usize = 29;
 
 /// Settings the host may set by name (all but the two rates).
 pub const KEYS: usize = 23;
@@ -166,6 +170,10 @@ settings! {
     ServoMaxUs     "servo_max_us"     Calibration Real  "µs"      SetupMode 19 "servo pulse at servo_max_deg";
     ServoMaxDeg    "servo_max_deg"    Calibration Real  "°"       SetupMode 20 "servo angle reached at servo_max_us";
     AmpFullScaleV  "amp_full_scale_v" Calibration Real  "V"       SetupMode 21 "amplifier control voltage at full PWM duty";
+    T1Cal          "t1_cal"           Calibration Code  ""        Provenance fixed "how T1's sensitivity came to be: unmeasured (the placeholder), weighed or typed";
+    T1CalZero      "t1_cal_zero"      Calibration Real  "counts"  Provenance fixed "the T1 zero its sensitivity was weighed or typed at (a zero more than 1 N from it leaves it unmeasured)";
+    T2Cal          "t2_cal"           Calibration Code  ""        Provenance fixed "how T2's sensitivity came to be: unmeasured (the placeholder), weighed or typed";
+    T2CalZero      "t2_cal_zero"      Calibration Real  "counts"  Provenance fixed "the T2 zero its sensitivity was weighed or typed at (a zero more than 1 N from it leaves it unmeasured)";
 }
 
 impl Setting {
@@ -275,7 +283,7 @@ mod tests {
     }
 
     #[test]
-    fn fifteen_settings_of_the_protocol_then_ten_of_the_calibration() {
+    fn fifteen_settings_of_the_protocol_then_fourteen_of_the_calibration() {
         for s in Setting::ALL {
             let protocol = s.index() < 15;
             assert_eq!(s.group() == Group::Protocol, protocol, "{}", s.name());
@@ -283,9 +291,14 @@ mod tests {
     }
 
     #[test]
-    fn every_setting_but_the_order_has_a_unit() {
+    fn every_setting_but_the_codes_has_a_unit() {
         for s in Setting::ALL {
-            assert_eq!(s.unit().is_empty(), s == Setting::Order, "{}", s.name());
+            assert_eq!(
+                s.unit().is_empty(),
+                s.value() == Value::Code,
+                "{}",
+                s.name()
+            );
         }
     }
 }
