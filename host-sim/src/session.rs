@@ -13,7 +13,9 @@ use crate::flash::RamFlash;
 use crate::run::{sample_plant, time_limit_us, SetupError, TraceSample};
 use crate::time;
 use capstan_plant::hal::CordRef;
-use capstan_plant::{rig_io, CordSetup, ForcedOutputs, Plant, PlantConfig, SERVO_MAX_DUTY};
+use capstan_plant::{
+    rig_io, CordSetup, ForcedOutputs, Injection, Plant, PlantConfig, SERVO_MAX_DUTY,
+};
 use core::cell::{Cell, RefCell};
 use embassy_futures::select::{select3, Either3};
 use embassy_time::{Duration, Timer};
@@ -96,6 +98,8 @@ pub struct SessionSpec {
     /// Sample the plant's true state every this many ms into [`SessionOutput::trace`] (0 =
     /// never).
     pub trace_every_ms: u32,
+    /// Faults of the rig's parts, timed from the trigger's first rising edge (as a run's).
+    pub injections: Vec<Injection>,
 }
 
 impl Default for SessionSpec {
@@ -108,6 +112,7 @@ impl Default for SessionSpec {
             limits: SafetyLimits::default(),
             seed: 1,
             trace_every_ms: 0,
+            injections: Vec::new(),
         }
     }
 }
@@ -203,7 +208,10 @@ pub fn run_session(
         press_at_us: None,
         ..spec.cord
     };
-    let plant = Plant::new_at(spec.plant, &[cord], spec.seed, 0).map_err(SetupError::Plant)?;
+    let mut plant = Plant::new_at(spec.plant, &[cord], spec.seed, 0).map_err(SetupError::Plant)?;
+    for inj in &spec.injections {
+        plant.inject(*inj).map_err(SetupError::Plant)?;
+    }
     let plant = RefCell::new(plant);
     let shared = Shared {
         events: RefCell::new(Vec::new()),
