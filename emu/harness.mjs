@@ -51,8 +51,12 @@ for (const [name, gpio] of Object.entries({ SERVO, AMP, TRIGGER, BUTTON, LED }))
 }
 // The PWM slices of the servo and the amplifier (the RP2040's: GPIO / 2 mod 8).
 const SLICES = [SERVO, AMP].map((gpio) => (gpio >> 1) & 7);
-const FUNCSEL_PWM = 4, HIGH = 1, HARDFAULT = 3;
+const FUNCSEL_PWM = 4, LOW = 0, HIGH = 1, HARDFAULT = 3;
 const WATCHDOG_BASE = 0x40058000, RAM = 0x20000000;
+// VREG_AND_CHIP_RESET: rp2040js leaves it unimplemented (every read 0xffffffff: every reset
+// flag set). The harness answers its CHIP_RESET register as the chip does: HAD_POR (bit 8)
+// from the power-on, kept through the watchdog's resets, which are not chip-level.
+const VREG_BASE = 0x40064000, CHIP_RESET = 0x8, HAD_POR = 1 << 8;
 
 // rp2040js's own logger prints every SEV and throws on errors: keep them, quietly.
 const warnings = new Map();
@@ -215,6 +219,9 @@ function boot(carried) {
   // No boot ROM: start at boot2, with the stack the ROM would have set.
   core.PC = job.boot.pc;
   core.SP = job.boot.sp;
+  const vreg = mcu.findPeripheral(VREG_BASE);
+  const readVreg = vreg.readUint32.bind(vreg);
+  vreg.readUint32 = (offset) => (offset === CHIP_RESET ? HAD_POR : readVreg(offset));
   const dog = mcu.findPeripheral(WATCHDOG_BASE);
   if (carried) {
     dog.reason = carried.reason;
@@ -229,8 +236,10 @@ function boot(carried) {
   };
   // A UDF or BKPT: rp2040js only reports it; the core takes a HardFault (after this instruction).
   mcu.onBreak = (code) => (pendingBreak = code);
+  // The pin's level for the bench: 0 driven low, 1 high, 2 not driven (an input: the board's
+  // pull-downs hold it low, and the amplifier's filter discharges through its pull-down).
   for (const gpio of [SERVO, AMP, TRIGGER, LED]) {
-    mcu.gpio[gpio].addListener((state) => B.bench_pin(gpio, state === HIGH ? 1 : 0, now(), pwmTickNs(gpio)));
+    mcu.gpio[gpio].addListener((state) => B.bench_pin(gpio, state === HIGH ? 1 : state === LOW ? 0 : 2, now(), pwmTickNs(gpio)));
   }
   mcu.gpio[BUTTON].setInputValue(!B.bench_button());
   for (const slice of SLICES) {

@@ -45,6 +45,10 @@ pub enum Step {
     Hang(Channel, f64),
     /// The button is pressed for this long, ms.
     Press(u32),
+    /// The button is pressed for this long, ms, if the last command sent was answered without
+    /// a refusal (the person at the rig presses to start the run the host armed; not when the
+    /// board refused to arm it).
+    PressIfArmed(u32),
     /// Wait for the run in progress to end (or for the limit of its protocol).
     UntilRunEnd,
     /// The board is power cycled: every pin released, the flash and the plant stay, the
@@ -374,7 +378,7 @@ fn panic_path(plant: &RefCell<Plant>, rig: &Rig) {
 fn steps_limit_us(steps: &[Step], run_limit_us: u64) -> u64 {
     let each = |s: &Step| match s {
         Step::Send(_) => REPLY_TIMEOUT_MS * 1000,
-        Step::Wait(ms) | Step::Press(ms) => *ms as u64 * 1000,
+        Step::Wait(ms) | Step::Press(ms) | Step::PressIfArmed(ms) => *ms as u64 * 1000,
         Step::Freeze => (WATCHDOG_MS as u64 + BOOT_MS) * 1000,
         Step::RunPin | Step::Panic => BOOT_MS * 1000,
         Step::UntilRunEnd => run_limit_us,
@@ -393,6 +397,7 @@ async fn host(
 ) -> usize {
     // Let the board boot and settle (and a homing servo reach rest) first.
     Timer::after(Duration::from_millis(50)).await;
+    let mut last_refused = false;
     for (i, step) in steps.iter().enumerate() {
         match step {
             Step::Send(line) => {
@@ -408,7 +413,11 @@ async fn host(
                 if !replied {
                     unanswered.push(line.clone());
                 }
+                last_refused = shared.events.borrow()[seen..]
+                    .iter()
+                    .any(|e| matches!(e.record, Record::Reply(r) if r.error.is_some()));
             }
+            Step::PressIfArmed(_) if last_refused => {}
             Step::Wait(ms) => Timer::after(Duration::from_millis(*ms as u64)).await,
             Step::Hang(ch, n) => {
                 let k = *ch as usize;
@@ -417,7 +426,7 @@ async fn host(
                 hung[k] = *n;
                 shared.hung.set(hung);
             }
-            Step::Press(ms) => {
+            Step::Press(ms) | Step::PressIfArmed(ms) => {
                 let now = time::now_us();
                 plant.borrow_mut().press(0, now, *ms as u64 * 1000);
                 Timer::after(Duration::from_millis(*ms as u64)).await;

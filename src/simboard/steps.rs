@@ -38,6 +38,7 @@ pub fn step_line(s: &Step) -> String {
         Step::Wait(ms) => format!("wait {ms}"),
         Step::Hang(c, n) => format!("hang {} {n:?}", ch_word(*c)),
         Step::Press(ms) => format!("press {ms}"),
+        Step::PressIfArmed(ms) => format!("press-if-armed {ms}"),
         Step::UntilRunEnd => "until-run-end".into(),
         Step::Reset => "reset".into(),
         Step::Freeze => "freeze".into(),
@@ -82,6 +83,7 @@ fn parse_line(line: &str) -> Option<Step> {
             Step::Hang(c, n)
         }
         "press" => Step::Press(num(rest)?),
+        "press-if-armed" => Step::PressIfArmed(num(rest)?),
         "until-run-end" => Step::UntilRunEnd,
         "reset" => Step::Reset,
         "freeze" => Step::Freeze,
@@ -190,6 +192,7 @@ mod tests {
             Step::Wait(2000),
             Step::Hang(Channel::T2, 9.80665),
             Step::Press(200),
+            Step::PressIfArmed(200),
             Step::UntilRunEnd,
             Step::Reset,
             Step::ScaleSensor(Channel::T1, 1.0375),

@@ -291,13 +291,7 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
     // and a press late in the case leaves its run unfinished, which `--strict` would refuse on
     // its own (checked from summary.json below).
     // A run a fault ends (an injected fault, a load at the tare) is cut short, not complete.
-    let strict = (case.core_fault.is_none()
-        && case.injections.is_empty()
-        && case.hung_n == [0.0; 2]
-        && case.cord.press_at_us.is_some()
-        && case.rtt_stall_us.is_none()
-        && case.held_from_power_up_us == 0)
-        .then_some("--strict");
+    let strict = case.strict_log.then_some("--strict");
     // Those other cases may end with no complete run (a fault at boot, no press): their
     // session is kept all the same, which `log` does only when asked.
     let allow_empty = strict.is_none().then_some("--allow-empty");

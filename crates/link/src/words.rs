@@ -3,7 +3,7 @@
 //! sentence for each `reply`, a line for each fault, each setting with its unit, and a name
 //! for each settings source. Every number in a sentence is the record's.
 
-use capstan_wire::{Setting, Value};
+use capstan_wire::{CalSource, Setting, Value};
 use firmware::command::{Command, CommandKind, Key};
 use firmware::hal::Channel;
 use firmware::record::{Fault, Reply, SettingsReport, SettingsSource};
@@ -42,11 +42,13 @@ pub fn setting_values(s: &Settings) -> Vec<SettingValue> {
         .iter()
         .map(|&setting| {
             let bits = s.get(setting);
-            let value = match setting.value() {
-                Value::Code => StepOrder::from_code(bits as u8)
+            let value = match (setting, setting.value()) {
+                (Setting::T1Cal | Setting::T2Cal, _) => CalSource::from_code(bits as u8)
+                    .map_or_else(|| bits.to_string(), |c| c.name().to_string()),
+                (_, Value::Code) => StepOrder::from_code(bits as u8)
                     .map_or_else(|| bits.to_string(), |o| o.name().to_string()),
-                Value::Whole => bits.to_string(),
-                Value::Real => f32::from_bits(bits).to_string(),
+                (_, Value::Whole) => bits.to_string(),
+                (_, Value::Real) => f32::from_bits(bits).to_string(),
             };
             SettingValue {
                 name: setting.name(),
@@ -57,14 +59,35 @@ pub fn setting_values(s: &Settings) -> Vec<SettingValue> {
         .collect()
 }
 
-/// A settings report as lines: where the settings came from, then one setting a line.
+/// A settings report as lines: where the settings came from, then one setting a line, then
+/// a warning for each sensitivity nobody measured ([`unmeasured_lines`]).
 pub fn settings_lines(report: &SettingsReport) -> Vec<String> {
     let mut lines = vec![format!("settings: {}", report.source.message())];
     for v in setting_values(&report.settings) {
         let value = format!("{} {}", v.value, v.unit);
         lines.push(format!("  {:<18} {}", v.name, value.trim_end()));
     }
+    lines.extend(unmeasured_lines(&report.settings));
     lines
+}
+
+/// A line for each force channel whose sensitivity nobody measured or typed (the built-in
+/// placeholder): the board runs nothing until it is.
+pub fn unmeasured_lines(s: &Settings) -> Vec<String> {
+    let c = &s.calibration;
+    [(Channel::T1, &c.t1), (Channel::T2, &c.t2)]
+        .into_iter()
+        .filter(|(_, ch)| !ch.source.is_measured())
+        .map(|(ch, _)| {
+            let n = ch.name();
+            format!(
+                "UNMEASURED: {}'s sensitivity ({n}_n_per_count) is the built-in placeholder, \
+                 measured by nobody: the board runs nothing until it is weighed (weigh {n} \
+                 NEWTONS in setup mode) or typed (set {n}_n_per_count), and stored",
+                n.to_uppercase()
+            )
+        })
+        .collect()
 }
 
 /// `v` with `digits` significant digits (0.0163 → "0.01630" at 4).
@@ -123,7 +146,10 @@ pub fn reply_sentence(reply: &Reply, sent: Option<&Command>) -> String {
         CommandKind::Defaults => {
             "defaults: built-in defaults in force (send store to keep them)".into()
         }
-        CommandKind::Run => format!("run: run {v1:.0} started (taring first)"),
+        CommandKind::Run => format!(
+            "run: run {v1:.0} armed: press the rig's button within {v2:.0} s to start it (the host \
+             never starts the drive)"
+        ),
         // The firmware answers a run's abort with 1 (the run stops, fault `abort`), setup
         // mode's with 0.
         CommandKind::Abort if v1 == 1.0 => {
@@ -157,9 +183,13 @@ pub fn fault_line(f: &Fault) -> String {
     } else {
         format!(" (value {})", f.value)
     };
+    let go_on = if f.kind.needs_press() {
+        "press the rig's button to go on (a reset latched it: the host's `ack` is refused)"
+    } else {
+        "press the button or send `ack` to go on"
+    };
     format!(
-        "FAULT {}{channel}{value}: the rig's outputs are safe; press the button or send `ack` to \
-         go on",
+        "FAULT {}{channel}{value}: the rig's outputs are safe; {go_on}",
         f.kind.name(),
     )
 }
@@ -220,8 +250,8 @@ mod tests {
             "set: key code 99 = 1"
         );
         assert_eq!(
-            say(ok(CommandKind::Run, [3.0, 0.0])),
-            "run: run 3 started (taring first)"
+            say(ok(CommandKind::Run, [3.0, 30.0])),
+            "run: run 3 armed: press the rig's button within 30 s to start it (the host never starts the drive)"
         );
         assert_eq!(
             say(ok(CommandKind::Setup, [125.0, 0.0])),
@@ -257,7 +287,10 @@ mod tests {
             settings: s,
         });
         assert_eq!(lines[0], "settings: stored in flash");
-        assert_eq!(lines.len(), 26);
+        // 29 settings, and the placeholder sensitivities said twice.
+        assert_eq!(lines.len(), 32);
+        assert!(lines[31].starts_with("UNMEASURED: T2's sensitivity"));
+        assert!(lines.contains(&format!("  {:<18} unmeasured", "t1_cal")));
         assert!(
             lines.contains(&format!("  {:<18} 8000 ms", "dwell_ms")),
             "{lines:#?}"

@@ -72,6 +72,13 @@ pub fn pin_map_json() -> serde_json::Value {
     serde_json::Value::Object(pins.into_iter().collect())
 }
 
+/// [`Bench::pin`]: the pin is driven low.
+pub const LEVEL_LOW: u32 = 0;
+/// [`Bench::pin`]: the pin is driven high.
+pub const LEVEL_HIGH: u32 = 1;
+/// [`Bench::pin`]: the pin is not driven (an input: the board's pull-downs hold it low).
+pub const LEVEL_INPUT: u32 = 2;
+
 /// [`Bench::wake`]: the button's level changed (read it with [`Bench::button_pressed`]).
 pub const WAKE_BUTTON: u32 = 1;
 /// [`Bench::wake`]: divert the core into the firmware's panic path now.
@@ -93,6 +100,8 @@ pub struct Bench {
     amp: PwmMeter,
     amp_tick_ns: f64,
     amp_sent: Option<(u16, u16)>,
+    /// The amplifier's pin is not driven (a reset released it): its filter discharges slowly.
+    amp_released: bool,
     pwm_off_grid: u64,
     releasing: bool,
     trigger_high: bool,
@@ -139,6 +148,7 @@ impl Bench {
             amp: PwmMeter::new(100e3),
             amp_tick_ns: 0.0,
             amp_sent: None,
+            amp_released: false,
             pwm_off_grid: 0,
             releasing: false,
             trigger_high: false,
@@ -330,9 +340,35 @@ impl Bench {
         }
     }
 
-    /// Output pin `gpio` is now `high` (an input counts as low: the board's pull-downs) at
-    /// `t_ns`; `tick_ns` is its PWM counter's period (0 for a software-driven pin).
-    pub fn pin(&mut self, gpio: u32, high: bool, t_ns: f64, tick_ns: f64) {
+    /// Output pin `gpio` is now at `level` ([`LEVEL_LOW`], [`LEVEL_HIGH`] or [`LEVEL_INPUT`]:
+    /// not driven, which reads low through the board's pull-downs) at `t_ns`; `tick_ns` is its
+    /// PWM counter's period (0 for a software-driven pin). The amplifier's pin released lets
+    /// its filter discharge through the pull-down until it is driven again.
+    pub fn pin(&mut self, gpio: u32, level: u32, t_ns: f64, tick_ns: f64) {
+        let high = level == LEVEL_HIGH;
+        if gpio == AMP_GPIO {
+            self.amp_driven(t_ns, level != LEVEL_INPUT);
+        }
+        self.pin_level(gpio, high, t_ns, tick_ns);
+    }
+
+    /// The amplifier's pin driven (`true`) or released, from `t_ns`.
+    fn amp_driven(&mut self, t_ns: f64, driven: bool) {
+        if driven == !self.amp_released {
+            return;
+        }
+        self.amp_released = !driven;
+        if let Some(p) = self.plant_at(t_ns) {
+            if driven {
+                // Driven low (a high level comes with the meter's period).
+                p.set_amp_duty(0, 0, 1);
+            } else {
+                p.release_amp(0);
+            }
+        }
+    }
+
+    fn pin_level(&mut self, gpio: u32, high: bool, t_ns: f64, tick_ns: f64) {
         self.settle(t_ns);
         match gpio {
             SERVO_GPIO => {
@@ -401,7 +437,9 @@ impl Bench {
         let pressed = self.button_pressed;
         let fe = self.front_end;
         let after_reset = !self.resets.is_empty();
-        let own_presses = !after_reset && t_ns >= self.case.held_from_power_up_us as f64 * 1e3;
+        let own_presses = !after_reset
+            && t_ns >= self.case.held_from_power_up_us as f64 * 1e3
+            && self.case.held_us.is_none();
         let p = self.plant_at(t_ns).expect("made above");
         let plant_pressed = p.button_pressed(0);
         let counts = p.read_analog(0, ch);
@@ -464,10 +502,11 @@ impl Bench {
         for e in self.amp.release(t_ns) {
             self.amp_event(e);
         }
+        self.amp_driven(t_ns, false);
         self.releasing = false;
         self.run_since_ns = None;
         self.first_run_over = true;
-        self.pin(TRIGGER_GPIO, false, t_ns, 0.0);
-        self.pin(LED_GPIO, false, t_ns, 0.0);
+        self.pin_level(TRIGGER_GPIO, false, t_ns, 0.0);
+        self.pin_level(LED_GPIO, false, t_ns, 0.0);
     }
 }

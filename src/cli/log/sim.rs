@@ -1,8 +1,8 @@
 //! `capstan log --sim DIR`: record runs from the simulated board in DIR, as from a board
-//! through a probe. The person at the simulated bench starts each run in turn: with --start
-//! the first by the `run` command (as `capstan log --start` sends it), every other by a press
-//! of the rig's button; the firmware's own rules apply (a run after a fault needs `ack`, and a
-//! press acknowledges a fault instead of starting a run).
+//! through a probe. The person at the simulated bench starts each run in turn by a press of
+//! the rig's button; with --start the first is armed by the `run` command first (as `capstan
+//! log --start` sends it: the host never starts the drive). The firmware's own rules apply (a
+//! run after a fault needs `ack`, and a press acknowledges a fault instead of starting a run).
 
 use super::Args;
 use crate::logger::{LogOptions, Logger, Outcome, Stop, Summary};
@@ -24,7 +24,10 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
     let mut logger = Logger::create_for_records(opts, &source)?;
     logger.set_provenance(super::provenance(args, None)?);
     if args.start {
-        crate::errln!("capstan log: run started (--start); its reply and records follow");
+        crate::errln!(
+            "capstan log: run armed (--start); the person at the simulated rig presses its \
+             button; the reply and the records follow"
+        );
     }
     let done = board.advance(&steps)?;
     let (events, stop) = cut(done.events, runs, args);
@@ -38,15 +41,15 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
 fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
     let start = |i: usize| {
         if i == 0 && args.start {
-            Step::Send("run".into())
+            vec![Step::Send("run".into()), Step::PressIfArmed(PRESS_MS)]
         } else {
-            Step::Press(PRESS_MS)
+            vec![Step::Press(PRESS_MS)]
         }
     };
     if let (None, Some(d)) = (args.runs, args.duration) {
         let mut steps = Vec::new();
         if args.start {
-            steps.push(start(0));
+            steps.extend(start(0));
         }
         steps.push(Step::Wait((d * 1e3).round() as u32));
         return (steps, None);
@@ -60,7 +63,8 @@ fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
     });
     let mut steps = Vec::new();
     for i in 0..runs {
-        steps.extend([start(i), Step::UntilRunEnd, Step::Wait(IDLE_MS)]);
+        steps.extend(start(i));
+        steps.extend([Step::UntilRunEnd, Step::Wait(IDLE_MS)]);
     }
     (steps, Some(runs))
 }

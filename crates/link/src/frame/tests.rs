@@ -108,6 +108,10 @@ fn settings_field(name: &str, s: &Settings) -> String {
         "servo_max_us" => f(c.servo.pulse_at_max_us),
         "servo_max_deg" => f(c.servo.max_deg),
         "amp_full_scale_v" => f(c.amp.full_scale_v),
+        "t1_cal" => c.t1.source.code().to_string(),
+        "t1_cal_zero" => f(c.t1.cal_zero),
+        "t2_cal" => c.t2.source.code().to_string(),
+        "t2_cal_zero" => f(c.t2.cal_zero),
         _ => panic!("no settings field {name}"),
     }
 }

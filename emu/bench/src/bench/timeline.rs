@@ -19,6 +19,9 @@ impl Bench {
         if held > 0 {
             w.push((0.0, held as f64 * 1e3));
         }
+        if let Some((from, len)) = self.case.held_us {
+            w.push((from as f64 * 1e3, (from + len) as f64 * 1e3));
+        }
         if let (Some(after), Some(r)) = (self.case.press_after_reset_us, self.resets.first()) {
             let at = r.t_ns + after as f64 * 1e3;
             w.push((at, at + crate::case::PRESS_US as f64 * 1e3));
@@ -94,7 +97,9 @@ impl Bench {
         if pressed != self.button_pressed {
             self.button_pressed = pressed;
             self.button.push((t_ns, pressed));
-            let start_press = self.case.held_from_power_up_us == 0 && self.button.len() == 1;
+            let start_press = self.case.held_from_power_up_us == 0
+                && self.case.held_us.is_none()
+                && self.button.len() == 1;
             if pressed && self.run_since_ns.is_none() && start_press {
                 // The start press: the run begins once it is debounced (10 samples).
                 self.run_since_ns = Some(t_ns + 10e6);
