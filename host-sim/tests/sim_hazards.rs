@@ -301,7 +301,9 @@ fn a_button_held_for_100_s_never_drives_and_is_reported() {
 fn an_unplugged_sensor_on_a_low_zero_stops_the_drive_within_2_s() {
     // 0-5 V sensors at 0 V with no load: through the ADC's 15-count offset both read ~15
     // counts, where an unplugged one reads too. The person types their zeros and
-    // sensitivities and presses; T1 is unplugged at level 1.
+    // sensitivities, presses (acknowledging what the boot latched) and presses again; T1 is
+    // unplugged at level 1. (Before issue 38 the zeros were taken, the run ran, and the unplug
+    // read as 0 N on T1: no fault.)
     let mut spec = bench(vec![at(
         InjectionKind::SensorUnplugged(Channel::T1),
         step_us(1) + 500 * MS,
@@ -314,6 +316,8 @@ fn an_unplugged_sensor_on_a_low_zero_stops_the_drive_within_2_s() {
         send("set t2_zero 15"),
         send("set t1_n_per_count 0.015"),
         send("set t2_n_per_count 0.015"),
+        Step::Press(200),
+        Step::Wait(500),
         Step::Press(200),
         Step::Wait(25_000),
     ];

@@ -145,7 +145,17 @@ fn sensors_at_the_adcs_floor_never_drive_the_emulated_board() {
     let e = emulate(setup, c);
     common(&e);
     let b = e.bench();
-    assert!(never_driven(&segments(&b["amp"])));
+    // Not driven 2 s after the unplug (here: never, the zeros refused, the floor latched).
+    let amp = segments(&b["amp"]);
+    let unplugged = b["injections"][0]["at_ns"].as_f64();
+    let late = amp
+        .iter()
+        .filter(|s| s.switching())
+        .any(|s| unplugged.is_none_or(|u| s.t_ns >= u + 2e9));
+    assert!(
+        !late && never_driven(&amp),
+        "{amp:?}, unplugged at {unplugged:?}"
+    );
     assert!(
         e.faults.iter().any(|x| x.2 == "sensor_unplugged"),
         "{:?}",

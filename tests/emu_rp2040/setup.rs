@@ -76,18 +76,23 @@ fn make_setup() -> Result<Setup, String> {
             rp2040js.display()
         ));
     }
-    let elf = cargo_build(
-        &[
-            "build",
-            "--release",
-            "-p",
-            "firmware",
-            "--target",
+    // `CAPSTAN_EMU_ELF`: another build of the board image instead (e.g. an earlier
+    // firmware's, to see the cases fail on it); otherwise this tree's, built here.
+    let elf = match std::env::var_os("CAPSTAN_EMU_ELF") {
+        Some(path) => PathBuf::from(path),
+        None => cargo_build(
+            &[
+                "build",
+                "--release",
+                "-p",
+                "firmware",
+                "--target",
+                "thumbv6m-none-eabi",
+            ],
             "thumbv6m-none-eabi",
-        ],
-        "thumbv6m-none-eabi",
-    )?
-    .join("thumbv6m-none-eabi/release/firmware");
+        )?
+        .join("thumbv6m-none-eabi/release/firmware"),
+    };
     // The bench as a WebAssembly module, without its debug info (4 MiB of it).
     let wasm = cargo_build(
         &[

@@ -14,6 +14,9 @@ pub const SNAG_AT_US: u64 = 20_000_000;
 /// When the cord parts, µs after the trigger: 2 s into level 1, with a preload of 0.02 N
 /// (the tare reads it as the reference, 0.1 N).
 pub const PARTED_AT_US: u64 = 12_500_000;
+/// When T1 is unplugged in `unplugged_low_zero`, µs after the trigger (a run started by its
+/// second press would have triggered at ~2.5 s).
+pub const UNPLUGGED_AT_US: u64 = 1_000_000;
 /// The held button: from 1 s after power-up, for 100 s.
 pub const HELD_US: (u64, u64) = (1_000_000, 100_000_000);
 
@@ -91,6 +94,9 @@ pub fn cases() -> Vec<Case> {
             Stop::At(HELD_US.0 + HELD_US.1 + 1_000_000),
         )
     };
+    // Two presses: the first acknowledges what the boot latched (the readings at the floor),
+    // the second would start a run. (Before issue 38: a zero of 15 was taken, the run ran, and
+    // the unplug read as 0 N: no fault.)
     let mut low_zero = Case {
         commands: TYPED
             .into_iter()
@@ -99,15 +105,19 @@ pub fn cases() -> Vec<Case> {
                 HostLine::at_ms(250, "set t2_zero 15"),
             ])
             .collect(),
-        injections: vec![at(InjectionKind::SensorUnplugged(Channel::T1), 11_000_000)],
+        held_us: Some((1_500_000, 200_000)),
+        injections: vec![at(
+            InjectionKind::SensorUnplugged(Channel::T1),
+            UNPLUGGED_AT_US,
+        )],
         quick: true,
         ..Case::base(
             "unplugged_low_zero",
             "0-5 V sensors at 0 V with no load read the ADC's floor (15 counts), where an \
              unplugged one reads: their zeros refused, the channels at the floor latched, no \
-             drive (issue 38)",
+             drive; T1 unplugged 1 s after a trigger that never comes (issue 38)",
             36,
-            Stop::At(4_000_000),
+            Stop::At(6_000_000),
         )
     };
     low_zero.plant.adc = AdcConfig::RP2040;
