@@ -160,7 +160,7 @@ fn the_simulated_board_keeps_the_safety_rules_between_commands() {
     assert!(!ok("show").contains("UNMEASURED"));
     ok("setup");
     ok("bench load t1 30");
-    refused("zero", "over-force limit would read above the rail");
+    refused("zero", "over-force limit would read above the high rail");
     assert!(ok("bench load t1 47").contains("FAULT over_force on T1"));
     refused("run", "a fault is latched");
     ok("bench unload");

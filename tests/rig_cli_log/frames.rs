@@ -81,6 +81,10 @@ fn settings_value(name: &str, s: &Settings) -> V {
         "servo_max_us" => V::F(c.servo.pulse_at_max_us),
         "servo_max_deg" => V::F(c.servo.max_deg),
         "amp_full_scale_v" => V::F(c.amp.full_scale_v),
+        "t1_cal" => V::U(c.t1.source.code() as u64),
+        "t1_cal_zero" => V::F(c.t1.cal_zero),
+        "t2_cal" => V::U(c.t2.source.code() as u64),
+        "t2_cal_zero" => V::F(c.t2.cal_zero),
         _ => panic!("no setting {name}"),
     }
 }
