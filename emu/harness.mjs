@@ -40,7 +40,7 @@ function text(ptr, len) {
 // With a debug probe attached, probe-rs halts the core on HardFault entry (vector catch); the
 // clock, the peripherals and the watchdog go on.
 const probeAttached = B.bench_probe_attached() !== 0;
-const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4, WAKE_STACK_OVERFLOW = 8;
+const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4, WAKE_STACK_OVERFLOW = 8, WAKE_DEBUGGER = 16;
 // Below SRAM nothing is mapped: an access there is a bus fault, and one made by a stack that
 // ran off the bottom of SRAM leaves the HardFault no room to stack its frame: lockup.
 const BELOW_RAM = 0x1fff0000;
@@ -132,6 +132,7 @@ function wake() {
   if (flags & WAKE_BUTTON) mcu.gpio[BUTTON].setInputValue(!B.bench_button()); // pull-up; pressed = low
   if (flags & WAKE_PANIC) pendingPanic = true;
   if (flags & WAKE_STACK_OVERFLOW) pendingStack = true;
+  if (flags & WAKE_DEBUGGER) debuggerWritesWatchdog();
   if (flags & WAKE_STOP) stop = true;
   syncBench();
 }
@@ -310,6 +311,16 @@ function injectPanic() {
   B.bench_panicked(now());
 }
 
+// A debugger (probe-rs, an IDE) writes the watchdog's control, now: disabled, and paused while
+// the core is halted (CTRL bits 24-26), as a probe may leave it after a session.
+let debuggerWrote = null;
+function debuggerWritesWatchdog() {
+  const dog = mcu.findPeripheral(WATCHDOG_BASE);
+  const before = dog.readUint32(0);
+  dog.writeUint32(0, (before & ~(1 << 30)) | (7 << 24));
+  debuggerWrote = { t_ns: now(), ctrl_before: before >>> 0, ctrl_after: dog.readUint32(0) >>> 0 };
+}
+
 // The stack run off the bottom of SRAM, now: SP 16 bytes above it, where memory.x ends the
 // image's stack. The core's next pushes (the timer interrupt's frame, a call) fall below it.
 function injectStackOverflow() {
@@ -383,6 +394,7 @@ const summary = {
   pwm_writes: pwmWrites,
   panic: panicInjected,
   stack_overflow: stackInjected,
+  debugger_watchdog: debuggerWrote,
   min_sp: minSp,
   lockup,
   rtt_stall: stall,

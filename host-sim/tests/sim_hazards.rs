@@ -77,9 +77,9 @@ fn replies(out: &SessionOutput) -> Vec<Reply> {
 fn last_driven_us(out: &SessionOutput) -> Option<u64> {
     out.trace
         .iter()
-        .filter(|s| s.drive_v > 0.1)
+        .rev()
+        .find(|s| s.drive_v > 0.1)
         .map(|s| s.t_us)
-        .last()
 }
 
 /// When injection `k` struck, plant µs.

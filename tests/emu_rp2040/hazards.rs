@@ -3,7 +3,7 @@
 //! why in the log. The drive's voltage follows the pin through the RC filter: below 1 % 22 ms
 //! later (`MotorConfig::amp_filter_tau_s`, 4.7 ms), which the times below leave room for.
 
-use super::{case, common, f, ready, selected, MS};
+use super::{case, common, f, ready, selected, MS, REASON_TIMER};
 use crate::pins::{segments, Segment};
 use crate::setup::emulate;
 use emu_bench::hazards::{HELD_US, PARTED_AT_US};
@@ -165,5 +165,35 @@ fn sensors_at_the_adcs_floor_never_drive_the_emulated_board() {
         e.messages.matches("-3 N limit below the low one").count() >= 2,
         "both zeros refused: {}",
         e.messages
+    );
+}
+
+#[test]
+fn the_watchdog_a_debugger_disabled_is_enabled_again_and_resets_a_hung_loop() {
+    let Some(setup) = ready() else { return };
+    let c = case("debugger_watchdog");
+    if !selected(&c) {
+        return;
+    }
+    let e = emulate(setup, c);
+    common(&e);
+    let em = &e.emulation;
+    let wrote = &em["debugger_watchdog"];
+    // The debugger's write took: disabled (bit 30 clear), paused on halt (bits 24-26).
+    let after = wrote["ctrl_after"].as_u64().unwrap();
+    assert_eq!((after >> 30) & 1, 0, "{wrote}");
+    let resets = em["resets"].as_array().unwrap();
+    assert_eq!(resets.len(), 1, "the hung loop was reset: {resets:?}");
+    assert_eq!(resets[0]["reason"], REASON_TIMER);
+    let hung = f(&e.bench()["core_fault"]["struck_ns"]);
+    let bite_ms = (f(&resets[0]["t_ns"]) - hung) / MS;
+    assert!(
+        (9.0..=10.0).contains(&bite_ms),
+        "reset {bite_ms} ms after the hang"
+    );
+    eprintln!(
+        "emulated board, debugger_watchdog: the watchdog disabled at {:.4} s, the loop hung \
+         5 ms later, the chip reset {bite_ms:.3} ms after the hang",
+        f(&wrote["t_ns"]) / 1e9
     );
 }

@@ -87,6 +87,8 @@ pub const WAKE_PANIC: u32 = 2;
 pub const WAKE_STOP: u32 = 4;
 /// [`Bench::wake`]: put the core's stack pointer at the bottom of SRAM now.
 pub const WAKE_STACK_OVERFLOW: u32 = 8;
+/// [`Bench::wake`]: a debugger writes the watchdog's control now (disabled, paused on halt).
+pub const WAKE_DEBUGGER: u32 = 16;
 
 /// The rig around the emulated chip. See the module documentation.
 pub struct Bench {
@@ -120,6 +122,8 @@ pub struct Bench {
     core_fault_done: bool,
     core_fault_struck_ns: Option<f64>,
     hang: bool,
+    /// The loop hangs from this instant on (the debugger case), ns.
+    hang_from_ns: Option<f64>,
     resets: Vec<Reset>,
     run_since_ns: Option<f64>,
     first_run_over: bool,
@@ -167,6 +171,7 @@ impl Bench {
             core_fault_done: false,
             core_fault_struck_ns: None,
             hang: false,
+            hang_from_ns: None,
             resets: Vec::new(),
             run_since_ns: None,
             first_run_over: false,
@@ -354,7 +359,7 @@ impl Bench {
 
     /// The amplifier's pin driven (`true`) or released, from `t_ns`.
     fn amp_driven(&mut self, t_ns: f64, driven: bool) {
-        if driven == !self.amp_released {
+        if driven != self.amp_released {
             return;
         }
         self.amp_released = !driven;
@@ -413,6 +418,9 @@ impl Bench {
             if let Err(e) = self.make_plant(t_ns) {
                 panic!("the case's plant cannot be made: {e}");
             }
+        }
+        if self.hang_from_ns.is_some_and(|h| t_ns >= h) {
+            self.hang = true;
         }
         if self.hang {
             self.core_fault_struck_ns.get_or_insert(t_ns);
@@ -495,6 +503,7 @@ impl Bench {
         }
         self.resets.push(Reset { t_ns, reason });
         self.hang = false;
+        self.hang_from_ns = None;
         self.releasing = true;
         for e in self.servo.release(t_ns) {
             self.servo_event(e);

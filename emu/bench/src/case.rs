@@ -85,7 +85,19 @@ pub enum CoreFault {
         /// When, µs after the trigger's rising edge.
         after_trigger_us: u64,
     },
+    /// At this instant a debugger writes the watchdog's control: disabled, paused while the
+    /// core is halted (as a probe may leave it); 5 ms later the loop hangs as in
+    /// [`CoreFault::Hang`]. The firmware writes the control back at every feed, so the
+    /// watchdog still resets the chip.
+    DebuggerThenHang {
+        /// When, µs after the trigger's rising edge.
+        after_trigger_us: u64,
+    },
 }
+
+/// How long after a debugger's write to the watchdog [`CoreFault::DebuggerThenHang`] hangs the
+/// loop, µs.
+pub const DEBUGGER_TO_HANG_US: u64 = 5_000;
 
 impl CoreFault {
     /// When it strikes, µs after the trigger's rising edge.
@@ -93,7 +105,8 @@ impl CoreFault {
         match self {
             CoreFault::Hang { after_trigger_us }
             | CoreFault::Panic { after_trigger_us }
-            | CoreFault::StackOverflow { after_trigger_us } => after_trigger_us,
+            | CoreFault::StackOverflow { after_trigger_us }
+            | CoreFault::DebuggerThenHang { after_trigger_us } => after_trigger_us,
         }
     }
 
@@ -103,6 +116,7 @@ impl CoreFault {
             CoreFault::Hang { .. } => "hang",
             CoreFault::Panic { .. } => "panic",
             CoreFault::StackOverflow { .. } => "stack_overflow",
+            CoreFault::DebuggerThenHang { .. } => "debugger_then_hang",
         }
     }
 }
@@ -248,7 +262,7 @@ fn fault_case(name: &'static str, about: &'static str, kind: InjectionKind, quic
     }
 }
 
-fn core_case(
+pub(crate) fn core_case(
     name: &'static str,
     about: &'static str,
     fault: CoreFault,

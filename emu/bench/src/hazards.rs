@@ -2,7 +2,7 @@
 //! way real parts do, on the release image. Kept short (a few seconds of protocol where they
 //! can be); the quick ones are in the fixed slice.
 
-use crate::case::{cord, Case, HostLine, Stop, TYPED};
+use crate::case::{cord, core_case, Case, CoreFault, HostLine, Stop, TYPED};
 use capstan_plant::{AdcConfig, CordSetup, Injection, InjectionKind};
 use firmware::hal::Channel;
 
@@ -123,5 +123,24 @@ pub fn cases() -> Vec<Case> {
     low_zero.plant.adc = AdcConfig::RP2040;
     low_zero.plant.sensor.zero_counts = 0.0;
     low_zero.plant.sensor.zero_spread_counts = 0.0;
-    vec![frozen, parted, placeholder, host_run, held, low_zero]
+    let debugger = core_case(
+        "debugger_watchdog",
+        "a debugger disables the watchdog (and sets it to pause on halt) 2 s after the \
+         trigger, and 5 ms later the loop hangs: the firmware had written its control back at \
+         the next feed, and the watchdog resets the chip 10 ms after the last one (issue 38)",
+        CoreFault::DebuggerThenHang {
+            after_trigger_us: 2_000_000,
+        },
+        false,
+        true,
+    );
+    vec![
+        frozen,
+        parted,
+        placeholder,
+        host_run,
+        held,
+        low_zero,
+        debugger,
+    ]
 }

@@ -71,9 +71,9 @@ struct Stats {
 impl Block {
     fn add(&mut self, c: [u16; 2]) {
         self.n += 1;
-        for k in 0..2 {
-            self.sum[k] += c[k] as u32;
-            self.sq[k] += c[k] as u64 * c[k] as u64;
+        for (k, &x) in c.iter().enumerate() {
+            self.sum[k] += x as u32;
+            self.sq[k] += x as u64 * x as u64;
         }
     }
 

@@ -27,8 +27,10 @@ fn stats(p: &mut Plant, ch: Channel, n: u64) -> (f64, f64) {
 
 #[test]
 fn an_unplugged_sensor_reads_the_adcs_floor_its_offset_and_noise() {
-    let mut cfg = PlantConfig::default();
-    cfg.adc = AdcConfig::RP2040;
+    let cfg = PlantConfig {
+        adc: AdcConfig::RP2040,
+        ..PlantConfig::default()
+    };
     let mut p = plant_with(cfg, 21);
     p.inject(Injection {
         kind: InjectionKind::SensorUnplugged(Channel::T1),
@@ -64,8 +66,10 @@ fn an_unplugged_sensor_reads_the_adcs_floor_its_offset_and_noise() {
 #[test]
 fn a_frozen_channel_holds_its_last_value_under_the_adcs_noise_only() {
     for adc in [AdcConfig::IDEAL, AdcConfig::RP2040] {
-        let mut cfg = PlantConfig::default();
-        cfg.adc = adc;
+        let cfg = PlantConfig {
+            adc,
+            ..PlantConfig::default()
+        };
         let mut p = plant_with(cfg, 23);
         hold(&mut p, 100.0, 10.0);
         let t2_before = p.truth(0).t2_n;

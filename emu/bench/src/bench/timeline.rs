@@ -1,7 +1,7 @@
 //! The bench's timeline: the operator's button, the case's chip fault and the end, and when
 //! the harness must wake the bench for them.
 
-use super::{Bench, WAKE_BUTTON, WAKE_PANIC, WAKE_STACK_OVERFLOW, WAKE_STOP};
+use super::{Bench, WAKE_BUTTON, WAKE_DEBUGGER, WAKE_PANIC, WAKE_STACK_OVERFLOW, WAKE_STOP};
 use crate::case::{CoreFault, Stop};
 use capstan_plant::InjectionKind;
 
@@ -115,6 +115,11 @@ impl Bench {
                 Some(CoreFault::Panic { .. }) => out |= WAKE_PANIC,
                 // Struck when the harness has moved the stack pointer (`panicked` too).
                 Some(CoreFault::StackOverflow { .. }) => out |= WAKE_STACK_OVERFLOW,
+                // The debugger's write now; the hang at the first conversion 5 ms later.
+                Some(CoreFault::DebuggerThenHang { .. }) => {
+                    out |= WAKE_DEBUGGER;
+                    self.hang_from_ns = Some(t_ns + crate::case::DEBUGGER_TO_HANG_US as f64 * 1e3);
+                }
                 None => {}
             }
         }
