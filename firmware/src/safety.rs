@@ -155,16 +155,25 @@ impl Supervisor {
                 t_us: input.t_us,
             })
         };
-        let slack = ctx.tare_reference_n + l.cord_slack_margin_n;
+        // A parted cord reads what it did at rest with the drive on, less what the cord carried
+        // there (≥ 0): whatever the preload and the offsets the drive brings. (Before a block
+        // at rest, what the tare made the preload read.)
+        let [r1, r2] = self
+            .plausible
+            .rest_level_n()
+            .unwrap_or([ctx.tare_reference_n; 2]);
+        let m = l.cord_slack_margin_n;
         let collapsed = d.level_held
             && ((t1 >= l.cord_break_min_t1_n && t2 < l.cord_break_ratio * t1)
-                || (t1 < slack && t2 < slack));
+                || (t1 < r1 + m && t2 < r2 + m));
         self.cord = if collapsed { self.cord + 1 } else { 0 };
         if self.cord >= l.cord_break_samples {
             return fault(FaultKind::CordBreak, t2);
         }
-        let beyond =
-            d.level_held && t2 > t1.max(0.0) * ctx.max_amplification + l.implausible_margin_n;
+        // Each reading may be off by the sensors' offsets (the tare's bound) before the
+        // capstan's amplification bounds T2 by T1.
+        let m = l.implausible_margin_n;
+        let beyond = d.level_held && t2 > (t1 + m).max(0.0) * ctx.max_amplification + m;
         self.bound = if beyond { self.bound + 1 } else { 0 };
         if self.bound >= l.cord_break_samples {
             return fault(FaultKind::Implausible, t2);

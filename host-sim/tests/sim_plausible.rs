@@ -24,15 +24,55 @@ fn send(line: &str) -> Step {
 
 /// Healthy campaigns: the thesis's noise (its scatter of mu, the wander inside a run, the
 /// zero errors), the RP2040's ADC, every order, preloads of 0.02, 0.1 and 0.5 N, wraps of
-/// 270-720° on both capstans (0.5 N of preload up to 360°: at 720° it takes T2 past the 45 N
-/// limit, a real over-force), under `limits`: the faults raised.
+/// 270-720° on both capstans (0.5 N of preload, +1.2 N on T2 or its gain 1.3 at the lower
+/// wraps: at 720° they take T2 past the 45 N limit, a real over-force), and the catalogue's sensor artefacts and friction laws at the
+/// far end of the sizes the planted cases draw (offsets of ±1.0 N on T1 and ±1.2 N on T2
+/// together, a T2 gain of 0.7 and 1.15, Howell's n 0.8, bending stiffness): under `limits`,
+/// the faults raised.
 fn healthy(limits: SafetyLimits) -> (Vec<FaultKind>, Vec<CampaignResult>) {
+    use capstan_friction::{Effect, EffectKind as K};
+    let e = |kind, value| Effect { kind, value };
     let mut faults = Vec::new();
     let mut results = Vec::new();
-    for (order, preload, wraps, seed) in [
-        (StepOrder::Monotone, 0.1, &[270.0, 360.0, 720.0][..], 1),
-        (StepOrder::UpDown, 0.02, &[270.0, 360.0, 720.0], 2),
-        (StepOrder::Pulse, 0.5, &[270.0, 360.0], 3),
+    for (order, preload, wraps, effects, seed) in [
+        (
+            StepOrder::Monotone,
+            0.1,
+            &[270.0, 360.0, 720.0][..],
+            vec![],
+            1,
+        ),
+        (StepOrder::UpDown, 0.02, &[270.0, 360.0, 720.0], vec![], 2),
+        (StepOrder::Pulse, 0.5, &[270.0, 360.0], vec![], 3),
+        (
+            StepOrder::Monotone,
+            0.1,
+            &[270.0, 720.0],
+            vec![
+                e(K::T1Offset, -1.0),
+                e(K::T2Offset, -1.2),
+                e(K::SensorGain, 0.7),
+            ],
+            4,
+        ),
+        (
+            StepOrder::UpDown,
+            0.1,
+            &[270.0, 450.0],
+            vec![e(K::T1Offset, 1.0), e(K::T2Offset, 1.2)],
+            5,
+        ),
+        (
+            StepOrder::Monotone,
+            0.1,
+            &[270.0, 360.0],
+            vec![
+                e(K::PressureFriction, 0.8),
+                e(K::BendingStiffness, 1.5e-4),
+                e(K::SensorGain, 1.15),
+            ],
+            6,
+        ),
     ] {
         let mut cfg = CampaignConfig {
             wraps_deg: wraps.to_vec(),
@@ -40,6 +80,7 @@ fn healthy(limits: SafetyLimits) -> (Vec<FaultKind>, Vec<CampaignResult>) {
             order,
             seed,
             limits,
+            effects,
             keep_raw: false,
             ..CampaignConfig::default()
         };
@@ -76,7 +117,7 @@ fn healthy_runs_with_adc_noise_trip_nothing_and_their_margins() {
     let (faults, results) = healthy(d);
     assert!(faults.is_empty(), "{faults:?}");
     let pairs: usize = results.iter().map(|r| r.rows.len()).sum();
-    assert_eq!(pairs, 16 * 12);
+    assert_eq!(pairs, 28 * 12);
     // How far each threshold could be pushed before a healthy run trips.
     let stuck = furthest(&[500u16, 100, 30, 10, 6, 4, 3, 2], |n| SafetyLimits {
         stuck_samples: n,
@@ -108,7 +149,7 @@ fn healthy_runs_with_adc_noise_trip_nothing_and_their_margins() {
         "healthy runs with the RP2040's ADC noise: no fault in {} runs, {pairs} pairs. Margins \
          (the furthest each threshold could go without a false trip): no noise at all for \
          {stuck} samples (default 500), answer z {z} (default 6), answer floor {min_counts} \
-         counts (default 1), slack {slack} N above the tare (default 0.1), drop at rest {drop} \
+         counts (default 1), slack {slack} N above the rest level (default 0.1), drop at rest {drop} \
          N (default 0.05), μ_max {mu} (default 0.5)",
         results.iter().map(|r| r.runs.len()).sum::<usize>()
     );

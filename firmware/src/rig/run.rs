@@ -48,6 +48,7 @@ impl Rig {
         DriveContext {
             tare_reference_n: self.cal.tare_reference_n,
             n_per_count: [self.cal.t1.n_per_count, self.cal.t2.n_per_count],
+            zero_counts: [self.cal.t1.zero_counts, self.cal.t2.zero_counts],
             capstan_radius_m: diameter_mm * 0.5e-3,
             max_amplification,
             drive_v: self.cal.amp.drive_v(p.amp_control_v),

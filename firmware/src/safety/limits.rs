@@ -73,11 +73,12 @@ pub struct SafetyLimits {
     /// block's sum has 0.006 N sd of noise; nothing else moves it that fast at rest).
     pub rest_drop_n: f32,
     /// The capstan cannot amplify more than e^(μ·wrap) with μ up to this (the thesis's cords
-    /// 0.115; cord on metal rarely above 0.3): T2 above T1 × e^(μ_max · wrap) +
-    /// [`SafetyLimits::implausible_margin_n`] while a level is held is a channel that reads
-    /// wrong. Only with the wrap given (`wrap_deg` > 0); 0: off (default 0.5).
+    /// 0.115; cord on metal rarely above 0.3): T2 above (T1 + m) × e^(μ_max · wrap) + m (m:
+    /// [`SafetyLimits::implausible_margin_n`], each reading's offset allowance) while a level
+    /// is held is a channel that reads wrong. Only with the wrap given (`wrap_deg` > 0); 0: off
+    /// (default 0.5).
     pub max_mu: f32,
-    /// Allowance for the sensors' offsets in that bound, N (the tare's bound; default 1).
+    /// Allowance for each sensor's offset in that bound, N (the tare's bound; default 1).
     pub implausible_margin_n: f32,
     /// The drive motor's stall torque per volt at the capstan, N m/V: gear ratio × kt / R
     /// (the Pittman GM14904S016: 19.7 × 0.0612 N m/A / 4.65 Ω; default 0.2593).

@@ -44,6 +44,8 @@ pub struct DriveContext {
     pub tare_reference_n: f32,
     /// Sensitivities of T1 and T2, N per count.
     pub n_per_count: [f32; 2],
+    /// Zeros of T1 and T2 (the run's, after its tare), counts.
+    pub zero_counts: [f32; 2],
     /// The capstan's radius, m.
     pub capstan_radius_m: f32,
     /// The most T2/T1 the capstan can make: e^(μ_max · wrap) (infinite: the wrap is not given).
@@ -114,6 +116,9 @@ pub struct Plausibility {
     /// blocks in a row fell short of the first.
     rest: Option<(f32, f32)>,
     low_blocks: u16,
+    /// What both channels read at rest with the drive on (the first block there), N: the
+    /// level a parted cord falls to, whatever the preload and the sensors' offsets.
+    rest_level_n: Option<[f32; 2]>,
     stalled: u16,
 }
 
@@ -140,6 +145,7 @@ impl Plausibility {
             pending: None,
             rest: None,
             low_blocks: 0,
+            rest_level_n: None,
             stalled: 0,
         }
     }
@@ -194,10 +200,19 @@ impl Plausibility {
                 return fault(kind, ch, value);
             }
         }
+        if d.at_rest && self.rest_level_n.is_none() {
+            self.rest_level_n =
+                Some([0, 1].map(|k| (stats.mean[k] - ctx.zero_counts[k]) * ctx.n_per_count[k]));
+        }
         if d.at_rest && self.rest_dropped(l, ctx, &stats) {
             return fault(FaultKind::CordBreak, None, force_n[0] + force_n[1]);
         }
         None
+    }
+
+    /// What both channels read at rest with the drive on, N (`None` before a block there).
+    pub fn rest_level_n(&self) -> Option<[f32; 2]> {
+        self.rest_level_n
     }
 
     /// The servo was commanded elsewhere: a step to check if the last command had a complete
