@@ -170,8 +170,8 @@ impl Supervisor {
         if self.cord >= l.cord_break_samples {
             return fault(FaultKind::CordBreak, t2);
         }
-        // Each reading may be off by the sensors' offsets (the tare's bound) before the
-        // capstan's amplification bounds T2 by T1.
+        // Each reading may be off by the sensors' offsets (what the drive adds after the tare)
+        // before the capstan's amplification bounds T2 by T1.
         let m = l.implausible_margin_n;
         let beyond = d.level_held && t2 > (t1 + m).max(0.0) * ctx.max_amplification + m;
         self.bound = if beyond { self.bound + 1 } else { 0 };

@@ -27,7 +27,9 @@ fn send(line: &str) -> Step {
 /// 270-720° on both capstans (0.5 N of preload, +1.2 N on T2 or its gain 1.3 at the lower
 /// wraps: at 720° they take T2 past the 45 N limit, a real over-force), and the catalogue's sensor artefacts and friction laws at the
 /// far end of the sizes the planted cases draw (offsets of ±1.0 N on T1 and ±1.2 N on T2
-/// together, a T2 gain of 0.7 and 1.15, Howell's n 0.8, bending stiffness): under `limits`,
+/// together, a T2 gain of 0.7 and 1.15, Howell's n 0.8, bending stiffness), and near the
+/// catalogue's physical limit (T1 2.5 N low with T2 3 N high, at 90° and 270°: closer to -3 N
+/// the preload's reading trips the negative-force check, as before issue 38): under `limits`,
 /// the faults raised.
 fn healthy(limits: SafetyLimits) -> (Vec<FaultKind>, Vec<CampaignResult>) {
     use capstan_friction::{Effect, EffectKind as K};
@@ -61,6 +63,13 @@ fn healthy(limits: SafetyLimits) -> (Vec<FaultKind>, Vec<CampaignResult>) {
             &[270.0, 450.0],
             vec![e(K::T1Offset, 1.0), e(K::T2Offset, 1.2)],
             5,
+        ),
+        (
+            StepOrder::Monotone,
+            0.1,
+            &[90.0, 270.0],
+            vec![e(K::T1Offset, -2.5), e(K::T2Offset, 3.0)],
+            7,
         ),
         (
             StepOrder::Monotone,
@@ -117,7 +126,7 @@ fn healthy_runs_with_adc_noise_trip_nothing_and_their_margins() {
     let (faults, results) = healthy(d);
     assert!(faults.is_empty(), "{faults:?}");
     let pairs: usize = results.iter().map(|r| r.rows.len()).sum();
-    assert_eq!(pairs, 28 * 12);
+    assert_eq!(pairs, 32 * 12);
     // How far each threshold could be pushed before a healthy run trips.
     let stuck = furthest(&[500u16, 100, 30, 10, 6, 4, 3, 2], |n| SafetyLimits {
         stuck_samples: n,
@@ -141,9 +150,8 @@ fn healthy_runs_with_adc_noise_trip_nothing_and_their_margins() {
         rest_drop_n: n,
         ..d
     });
-    let mu = furthest(&[0.5f32, 0.3, 0.2, 0.15, 0.12], |m| SafetyLimits {
-        max_mu: m,
-        ..d
+    let mu = furthest(&[0.5f32, 0.3, 0.2, 0.15, 0.12, 0.1, 0.05, 0.0], |m| {
+        SafetyLimits { max_mu: m, ..d }
     });
     eprintln!(
         "healthy runs with the RP2040's ADC noise: no fault in {} runs, {pairs} pairs. Margins \

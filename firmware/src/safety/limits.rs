@@ -78,7 +78,10 @@ pub struct SafetyLimits {
     /// is held is a channel that reads wrong. Only with the wrap given (`wrap_deg` > 0); 0: off
     /// (default 0.5).
     pub max_mu: f32,
-    /// Allowance for each sensor's offset in that bound, N (the tare's bound; default 1).
+    /// Allowance for each sensor's offset in that bound, N: what the drive may add to a
+    /// reading after the tare (the amplifier's current shifts the sensors' ground), as much as
+    /// the negative-force check allows (the catalogue's `t1_offset`/`t2_offset` reach ±3 N;
+    /// default 3).
     pub implausible_margin_n: f32,
     /// The drive motor's stall torque per volt at the capstan, N m/V: gear ratio × kt / R
     /// (the Pittman GM14904S016: 19.7 × 0.0612 N m/A / 4.65 Ω; default 0.2593).
@@ -135,7 +138,7 @@ impl Default for SafetyLimits {
             answer_min_counts: 1.0,
             rest_drop_n: 0.05,
             max_mu: 0.5,
-            implausible_margin_n: 1.0,
+            implausible_margin_n: 3.0,
             motor_nm_per_v: 19.7 * 0.0612 / 4.65,
             motor_friction_nm: 19.7 * 0.004,
             motor_stall_fraction: 0.9,

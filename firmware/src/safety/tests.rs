@@ -368,11 +368,11 @@ fn a_load_at_the_motors_stall_torque_is_a_stalled_motor() {
 
 #[test]
 fn t2_beyond_what_the_capstan_can_make_of_t1_is_implausible() {
-    // 90° at μ up to 0.5: T2 ≤ 2.19 × (T1 + 1 N) + 1 N, each reading 1 N off at most.
+    // 90° at μ up to 0.5: T2 ≤ 2.19 × (T1 + 3 N) + 3 N, each reading 3 N off at most.
     let mut s = driving(SafetyLimits::default(), 90.0);
     let mut noise = Noise(13);
     let got = (0..100).find_map(|t| {
-        let i = driven_sample(t, [2.0, 8.0], &mut noise, [None; 2], at(120.0, true));
+        let i = driven_sample(t, [2.0, 14.5], &mut noise, [None; 2], at(120.0, true));
         s.check(&i).map(|x| (t, x))
     });
     assert_eq!(got.map(|g| g.1.kind), Some(FaultKind::Implausible));
@@ -380,18 +380,19 @@ fn t2_beyond_what_the_capstan_can_make_of_t1_is_implausible() {
     assert!((0..100).all(|t| s
         .check(&driven_sample(
             t,
-            [2.0, 7.4],
+            [2.0, 13.4],
             &mut noise,
             [None; 2],
             at(120.0, true)
         ))
         .is_none()));
-    // A T1 that reads 0.4 N low at the first level (T1 0.35 N, T2 1.5 N at 720°) is not.
-    let mut s = driving(SafetyLimits::default(), 720.0);
+    // A T1 that reads 3 N low at the first level (the catalogue's `t1_offset` at its limit:
+    // T1 1.5 N reads -1.5 N, T2 2.6 N at 270°) is not.
+    let mut s = driving(SafetyLimits::default(), 270.0);
     assert!((0..100).all(|t| s
         .check(&driven_sample(
             t,
-            [-0.05, 1.5],
+            [-1.5, 2.6],
             &mut noise,
             [None; 2],
             at(120.0, true)
