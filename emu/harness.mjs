@@ -40,7 +40,7 @@ function text(ptr, len) {
 // With a debug probe attached, probe-rs halts the core on HardFault entry (vector catch); the
 // clock, the peripherals and the watchdog go on.
 const probeAttached = B.bench_probe_attached() !== 0;
-const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4, WAKE_STACK_OVERFLOW = 8;
+const WAKE_BUTTON = 1, WAKE_PANIC = 2, WAKE_STOP = 4, WAKE_STACK_OVERFLOW = 8, WAKE_DEBUGGER = 16;
 // Below SRAM nothing is mapped: an access there is a bus fault, and one made by a stack that
 // ran off the bottom of SRAM leaves the HardFault no room to stack its frame: lockup.
 const BELOW_RAM = 0x1fff0000;
@@ -51,8 +51,12 @@ for (const [name, gpio] of Object.entries({ SERVO, AMP, TRIGGER, BUTTON, LED }))
 }
 // The PWM slices of the servo and the amplifier (the RP2040's: GPIO / 2 mod 8).
 const SLICES = [SERVO, AMP].map((gpio) => (gpio >> 1) & 7);
-const FUNCSEL_PWM = 4, HIGH = 1, HARDFAULT = 3;
+const FUNCSEL_PWM = 4, LOW = 0, HIGH = 1, HARDFAULT = 3;
 const WATCHDOG_BASE = 0x40058000, RAM = 0x20000000;
+// VREG_AND_CHIP_RESET: rp2040js leaves it unimplemented (every read 0xffffffff: every reset
+// flag set). The harness answers its CHIP_RESET register as the chip does: HAD_POR (bit 8)
+// from the power-on, kept through the watchdog's resets, which are not chip-level.
+const VREG_BASE = 0x40064000, CHIP_RESET = 0x8, HAD_POR = 1 << 8;
 
 // rp2040js's own logger prints every SEV and throws on errors: keep them, quietly.
 const warnings = new Map();
@@ -128,6 +132,7 @@ function wake() {
   if (flags & WAKE_BUTTON) mcu.gpio[BUTTON].setInputValue(!B.bench_button()); // pull-up; pressed = low
   if (flags & WAKE_PANIC) pendingPanic = true;
   if (flags & WAKE_STACK_OVERFLOW) pendingStack = true;
+  if (flags & WAKE_DEBUGGER) debuggerWritesWatchdog();
   if (flags & WAKE_STOP) stop = true;
   syncBench();
 }
@@ -215,6 +220,9 @@ function boot(carried) {
   // No boot ROM: start at boot2, with the stack the ROM would have set.
   core.PC = job.boot.pc;
   core.SP = job.boot.sp;
+  const vreg = mcu.findPeripheral(VREG_BASE);
+  const readVreg = vreg.readUint32.bind(vreg);
+  vreg.readUint32 = (offset) => (offset === CHIP_RESET ? HAD_POR : readVreg(offset));
   const dog = mcu.findPeripheral(WATCHDOG_BASE);
   if (carried) {
     dog.reason = carried.reason;
@@ -229,8 +237,10 @@ function boot(carried) {
   };
   // A UDF or BKPT: rp2040js only reports it; the core takes a HardFault (after this instruction).
   mcu.onBreak = (code) => (pendingBreak = code);
+  // The pin's level for the bench: 0 driven low, 1 high, 2 not driven (an input: the board's
+  // pull-downs hold it low, and the amplifier's filter discharges through its pull-down).
   for (const gpio of [SERVO, AMP, TRIGGER, LED]) {
-    mcu.gpio[gpio].addListener((state) => B.bench_pin(gpio, state === HIGH ? 1 : 0, now(), pwmTickNs(gpio)));
+    mcu.gpio[gpio].addListener((state) => B.bench_pin(gpio, state === HIGH ? 1 : state === LOW ? 0 : 2, now(), pwmTickNs(gpio)));
   }
   mcu.gpio[BUTTON].setInputValue(!B.bench_button());
   for (const slice of SLICES) {
@@ -303,6 +313,16 @@ function injectPanic() {
   core.PC = p.fn & ~1;
   core.waiting = false;
   B.bench_panicked(now());
+}
+
+// A debugger (probe-rs, an IDE) writes the watchdog's control, now: disabled, and paused while
+// the core is halted (CTRL bits 24-26), as a probe may leave it after a session.
+let debuggerWrote = null;
+function debuggerWritesWatchdog() {
+  const dog = mcu.findPeripheral(WATCHDOG_BASE);
+  const before = dog.readUint32(0);
+  dog.writeUint32(0, (before & ~(1 << 30)) | (7 << 24));
+  debuggerWrote = { t_ns: now(), ctrl_before: before >>> 0, ctrl_after: dog.readUint32(0) >>> 0 };
 }
 
 // The stack run off the bottom of SRAM, now: SP 16 bytes above it, where memory.x ends the
@@ -378,6 +398,7 @@ const summary = {
   pwm_writes: pwmWrites,
   panic: panicInjected,
   stack_overflow: stackInjected,
+  debugger_watchdog: debuggerWrote,
   min_sp: minSp,
   lockup,
   rtt_stall: stall,

@@ -151,9 +151,16 @@ fn the_simulated_board_keeps_the_safety_rules_between_commands() {
         let (ok, text) = rig(&dir, "b", words);
         assert!(!ok && text.contains(why), "`rig {words}`: {text}");
     };
+    // A fresh board's sensitivities are a placeholder nobody measured: no run on them.
+    assert!(ok("show").contains("UNMEASURED: T1's sensitivity"));
+    refused("run", "sensitivity was never measured");
+    // Typed by the person (their sensors' data sheets), they run.
+    ok("set t1_n_per_count 0.015");
+    ok("set t2_n_per_count 0.015");
+    assert!(!ok("show").contains("UNMEASURED"));
     ok("setup");
     ok("bench load t1 30");
-    refused("zero", "over-force limit would read above the rail");
+    refused("zero", "over-force limit would read above the high rail");
     assert!(ok("bench load t1 47").contains("FAULT over_force on T1"));
     refused("run", "a fault is latched");
     ok("bench unload");
@@ -237,6 +244,8 @@ fn a_run_refused_at_its_tare_does_not_overwrite_a_recorded_session() {
     };
     ok("set wrap_deg 360");
     ok("set diameter_mm 12.7");
+    ok("set t1_n_per_count 0.015");
+    ok("set t2_n_per_count 0.015");
     ok("store");
     let log = |extra: &[&str]| {
         let mut args = vec![

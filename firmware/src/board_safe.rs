@@ -44,6 +44,9 @@ const FUNCSEL_PWM: u8 = 4;
 
 /// The servo's rest duty for the handlers: 0 (no pulses) until [`arm`].
 static SAFE_SERVO_DUTY: AtomicU16 = AtomicU16::new(0);
+/// The servo duty last written: the handlers keep it if it releases more than rest
+/// ([`SafeDuties::releasing`]).
+static COMMANDED_SERVO_DUTY: AtomicU16 = AtomicU16::new(0);
 /// Set by the first panic: a panic while logging the first one skips the log.
 static PANICKED: AtomicBool = AtomicBool::new(false);
 
@@ -52,10 +55,13 @@ pub fn arm(duties: SafeDuties) {
     SAFE_SERVO_DUTY.store(duties.servo_rest, Ordering::Relaxed);
 }
 
+/// What the handlers command now: rest, or where the servo is if that releases more (jogged
+/// past rest in setup mode), or no pulses.
 fn armed() -> SafeDuties {
     SafeDuties {
         servo_rest: SAFE_SERVO_DUTY.load(Ordering::Relaxed),
     }
+    .releasing(COMMANDED_SERVO_DUTY.load(Ordering::Relaxed))
 }
 
 /// The rig's outputs as raw RP2040 registers, whatever the drivers' state. A block still held
@@ -208,6 +214,7 @@ impl SetDutyCycle for RememberingServo {
 
     fn set_duty_cycle(&mut self, duty: u16) -> Result<(), PwmError> {
         self.0.set_duty_cycle(duty)?;
+        COMMANDED_SERVO_DUTY.store(duty, Ordering::Relaxed);
         remember_servo_duty(duty);
         Ok(())
     }

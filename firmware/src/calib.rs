@@ -1,4 +1,8 @@
-//! Calibrations: servo angle -> pulse, amplifier volts -> duty, ADC counts -> newtons.
+//! Calibrations: servo angle -> pulse, amplifier volts -> duty, ADC counts -> newtons, and
+//! where each force channel's sensitivity came from ([`CalSource`]: a run needs both measured
+//! or typed by a person).
+
+pub use capstan_wire::CalSource;
 
 /// Period of the servo's 50 Hz PWM frame, µs.
 pub const SERVO_FRAME_US: f32 = 20_000.0;
@@ -130,9 +134,56 @@ pub struct ChannelCal {
     pub zero_counts: f32,
     /// Sensitivity, N per count.
     pub n_per_count: f32,
+    /// How the sensitivity came to be: a run needs it weighed or typed, never the placeholder.
+    pub source: CalSource,
+    /// The zero (counts) the sensitivity was weighed or typed at. The zero in force may move
+    /// at most [`ZERO_WALK_MAX_N`] from it (zeros, `set tN_zero`) before the sensitivity counts
+    /// as unmeasured again: a zero walked further could be hiding a standing load.
+    pub cal_zero: f32,
 }
 
+/// How far the zero in force may move from the zero a channel's sensitivity was measured at,
+/// N, before that sensitivity is unmeasured (the tare's bound, [`crate::rig::TARE_MAX_N`]):
+/// repeated zeros of up to 1 N each, or a typed zero, cannot walk it further without a weigh.
+pub const ZERO_WALK_MAX_N: f32 = crate::rig::TARE_MAX_N;
+
 impl ChannelCal {
+    /// A channel nobody has measured: the built-in placeholder.
+    pub const fn placeholder(zero_counts: f32, n_per_count: f32) -> Self {
+        ChannelCal {
+            zero_counts,
+            n_per_count,
+            source: CalSource::Placeholder,
+            cal_zero: zero_counts,
+        }
+    }
+
+    /// This sensitivity, measured (or typed) now at the zero in force.
+    pub fn measured(self, source: CalSource) -> Self {
+        ChannelCal {
+            source,
+            cal_zero: self.zero_counts,
+            ..self
+        }
+    }
+
+    /// The zero in force set to `zero_counts` (a zero measured or typed): the sensitivity is
+    /// unmeasured from then on if the zero is more than [`ZERO_WALK_MAX_N`] from the one it was
+    /// measured at.
+    pub fn rezeroed(self, zero_counts: f32) -> Self {
+        let walked = (zero_counts - self.cal_zero).abs() * self.n_per_count;
+        let source = if walked > ZERO_WALK_MAX_N || walked.is_nan() {
+            CalSource::Placeholder
+        } else {
+            self.source
+        };
+        ChannelCal {
+            zero_counts,
+            source,
+            ..self
+        }
+    }
+
     /// Force for a (possibly averaged) count value, N.
     pub fn newtons(&self, counts: f32) -> f32 {
         (counts - self.zero_counts) * self.n_per_count
@@ -168,11 +219,10 @@ pub struct Calibration {
 
 impl Default for Calibration {
     /// A 50 N sensor on a 12-bit ADC: zero at 400 counts, 0.015 N per count (−6 N .. +55 N).
+    /// A placeholder: nobody measured these sensitivities, and no run uses them
+    /// ([`Calibration::unmeasured`]) until they are weighed or typed.
     fn default() -> Self {
-        let ch = ChannelCal {
-            zero_counts: 400.0,
-            n_per_count: 0.015,
-        };
+        let ch = ChannelCal::placeholder(400.0, 0.015);
         Calibration {
             t1: ch,
             t2: ch,
@@ -197,8 +247,12 @@ pub enum CalibrationError {
     /// The servo map needs a longer pulse at `max_deg` than at 0° (not reversed), both within
     /// 400..=2600 µs, and 0 < max ≤ 360°.
     ServoMap,
-    /// The amplifier needs a full scale of 0..=5 V and a gain of 0..=100.
+    /// The amplifier needs a full scale within [`AMP_FULL_SCALE_V_RANGE`] and a gain of
+    /// 0..=100.
     AmpMap,
+    /// A sensitivity's source code is not one of [`CalSource`]'s, or the zero it was measured
+    /// at is outside the ADC's range.
+    Source,
 }
 
 impl CalibrationError {
@@ -214,7 +268,10 @@ impl CalibrationError {
                 "the servo pulse at servo_max_deg must be longer than at 0° (no reversed map), both in 400..=2600 µs, max_deg in (0, 360]"
             }
             CalibrationError::AmpMap => {
-                "the amplifier full scale must be in (0, 5] V and its gain in (0, 100]"
+                "the amplifier full scale (the filtered 3V3 at 100 % duty, measured) must be 3.0 to 3.5 V and its gain in (0, 100]: a full scale typed low pins the duty at 100 %, the rail, while the log says less"
+            }
+            CalibrationError::Source => {
+                "a sensitivity's source must be unmeasured, weighed or typed, and its zero within 0..=4095 counts"
             }
         }
     }
@@ -223,6 +280,12 @@ impl CalibrationError {
 /// Plausible sensitivities of a force channel, N per count: a 12-bit reading spans 8 N to
 /// 400 N. Outside, a value is a typo (a factor of ten, a sign) that would misread every force.
 pub const N_PER_COUNT_RANGE: (f32, f32) = (0.002, 0.1);
+
+/// Plausible amplifier full scales, V: the filtered output at 100 % duty is the Pico's 3V3 rail
+/// (3.3 V ± 5 %) less the pin's drop into the pull-down. A value typed below the real one pins
+/// the run's duty at or near 100 %, and the drive is then the rail × gain (13.2 V) while
+/// the log says the control voltage × gain.
+pub const AMP_FULL_SCALE_V_RANGE: (f32, f32) = (3.0, 3.5);
 
 fn within(v: f32, lo: f32, hi: f32) -> bool {
     v.is_finite() && v >= lo && v <= hi
@@ -234,6 +297,26 @@ impl Calibration {
         [self.t1.zero_counts, self.t2.zero_counts]
     }
 
+    /// Both channels' sensitivities weighed or typed by a person: `None`; else the first
+    /// channel whose sensitivity nobody measured (the placeholder).
+    pub fn unmeasured(&self) -> Option<crate::hal::Channel> {
+        use crate::hal::Channel;
+        [(Channel::T1, &self.t1), (Channel::T2, &self.t2)]
+            .into_iter()
+            .find(|(_, c)| !c.source.is_measured())
+            .map(|(ch, _)| ch)
+    }
+
+    /// These values, typed by a person: both sensitivities count as measured at the zeros in
+    /// force (a simulated bench whose person knows its sensors, a board set up by `set`).
+    pub fn typed(self) -> Calibration {
+        Calibration {
+            t1: self.t1.measured(CalSource::Typed),
+            t2: self.t2.measured(CalSource::Typed),
+            ..self
+        }
+    }
+
     /// Refuse a calibration the rig cannot work with, with the reason.
     pub fn validate(&self) -> Result<(), CalibrationError> {
         for ch in [&self.t1, &self.t2] {
@@ -243,6 +326,9 @@ impl Calibration {
             }
             if !within(ch.zero_counts, 0.0, 4095.0) {
                 return Err(CalibrationError::Zero);
+            }
+            if !within(ch.cal_zero, 0.0, 4095.0) {
+                return Err(CalibrationError::Source);
             }
         }
         if !within(self.tare_reference_n, 0.0, 10.0) {
@@ -257,7 +343,8 @@ impl Calibration {
         }
         let a = &self.amp;
         let positive_within = |v: f32, hi: f32| within(v, 0.0, hi) && v > 0.0;
-        if !(positive_within(a.full_scale_v, 5.0) && positive_within(a.amp_gain, 100.0)) {
+        let (lo, hi) = AMP_FULL_SCALE_V_RANGE;
+        if !(within(a.full_scale_v, lo, hi) && positive_within(a.amp_gain, 100.0)) {
             return Err(CalibrationError::AmpMap);
         }
         Ok(())
@@ -311,10 +398,7 @@ mod tests {
 
     #[test]
     fn channel_calibration_and_tare() {
-        let mut ch = ChannelCal {
-            zero_counts: 400.0,
-            n_per_count: 0.015,
-        };
+        let mut ch = ChannelCal::placeholder(400.0, 0.015);
         assert!((ch.newtons(1066.667) - 10.0).abs() < 1e-3);
         assert!((ch.newtons(ch.counts(7.3)) - 7.3).abs() < 1e-4);
         // The sensor drifted by +20 counts; a tare with the 0.1 N preload on the cord restores it.
@@ -340,5 +424,34 @@ mod tests {
             max_deg: 180.0,
         };
         assert_eq!(c.validate(), Err(CalibrationError::ServoMap));
+        // A full scale typed at the control voltage (2.5 V) would pin the duty at 100 %.
+        for v in [2.5, 2.99, 3.51, 5.0] {
+            let mut c = ok;
+            c.amp.full_scale_v = v;
+            assert_eq!(c.validate(), Err(CalibrationError::AmpMap), "{v}");
+        }
+    }
+
+    #[test]
+    fn a_zero_walked_more_than_1_n_from_the_weighed_one_leaves_the_sensitivity_unmeasured() {
+        let placeholder = Calibration::default();
+        assert_eq!(placeholder.unmeasured(), Some(crate::hal::Channel::T1));
+        let typed = placeholder.typed();
+        assert_eq!(typed.unmeasured(), None);
+        assert_eq!(typed.t2.cal_zero, 400.0);
+        // 0.015 N/count: 66 counts is 0.99 N, 67 counts 1.005 N from the weighed zero.
+        let ch = typed.t1;
+        let once = ch.rezeroed(466.0);
+        assert_eq!(once.source, CalSource::Typed);
+        // A second zero 60 counts further (each within 1 N of the last): 126 counts walked.
+        let twice = once.rezeroed(526.0);
+        assert_eq!(twice.source, CalSource::Placeholder);
+        assert_eq!(ch.rezeroed(333.0).source, CalSource::Placeholder);
+        // A weigh at the new zero measures it again from there.
+        let weighed = twice.measured(CalSource::Weighed);
+        assert_eq!(
+            (weighed.source, weighed.cal_zero),
+            (CalSource::Weighed, 526.0)
+        );
     }
 }

@@ -67,18 +67,35 @@ mod pico {
         }
     }
 
-    /// The RP2040's hardware watchdog, reloaded with the same timeout at every feed.
+    /// The RP2040's hardware watchdog, reloaded with the same timeout at every feed, and its
+    /// control put back at every feed: enabled, and paused by a debugger's halt only as
+    /// `board::WATCHDOG_PAUSES_WHILE_HALTED` says. A debugger (or a stray write) that disabled
+    /// it, or set it to pause, is undone within a sample.
     struct HardwareWatchdog {
         dog: Watchdog,
         timeout: Duration,
     }
 
+    impl HardwareWatchdog {
+        fn reassert(&mut self) {
+            let pause = board::WATCHDOG_PAUSES_WHILE_HALTED;
+            embassy_rp::pac::WATCHDOG.ctrl().modify(|w| {
+                w.set_enable(true);
+                w.set_pause_dbg0(pause);
+                w.set_pause_dbg1(pause);
+                w.set_pause_jtag(pause);
+            });
+        }
+    }
+
     impl firmware::hal::Watchdog for HardwareWatchdog {
         fn feed(&mut self) {
             self.dog.feed(self.timeout);
+            self.reassert();
         }
         fn allow_ms(&mut self, ms: u32) {
             self.dog.feed(Duration::from_millis(ms as u64));
+            self.reassert();
         }
     }
 
@@ -193,23 +210,37 @@ mod pico {
         serve(&mut io, &mut rig, &mut sink, &mut console, &mut store).await
     }
 
-    /// Why the chip last reset, as its watchdog tells it (and the log says).
+    /// Why the chip last reset (and the log says): the watchdog's REASON, whether the latch
+    /// word survived (the core alone reset), the chip's CHIP_RESET flags
+    /// (`firmware::reset::ResetCause::from_registers`).
     fn reset_cause(dog: &Watchdog) -> ResetCause {
-        match dog.reset_reason() {
-            Some(ResetReason::TimedOut) => {
-                defmt::warn!(
-                    "the hardware watchdog reset the chip: the loop stopped (a hang, a lockup, a stack overflow), or a debugger held the core halted"
-                );
-                ResetCause::Watchdog
+        let timer = dog
+            .reset_reason()
+            .map(|r| matches!(r, ResetReason::TimedOut));
+        let chip = embassy_rp::pac::VREG_AND_CHIP_RESET.chip_reset().read();
+        let cause = ResetCause::from_registers(
+            timer,
+            board_safe::latch_word_before_reset(),
+            chip.had_run(),
+            chip.had_psm_restart(),
+        );
+        match cause {
+            ResetCause::Watchdog => defmt::warn!(
+                "the hardware watchdog reset the chip: the loop stopped (a hang, a lockup, a stack overflow), or a debugger held the core halted"
+            ),
+            ResetCause::Forced => defmt::warn!(
+                "reset by the panic/HardFault handler, after it had made the outputs safe"
+            ),
+            ResetCause::RunPin => {
+                defmt::warn!("reset by the RUN pin: what the rig was doing is not kept")
             }
-            Some(ResetReason::Forced) => {
-                defmt::warn!(
-                    "reset by the panic/HardFault handler, after it had made the outputs safe"
-                );
-                ResetCause::Forced
+            ResetCause::DebugPort => {
+                defmt::warn!("restarted by the debug port: what the rig was doing is not kept")
             }
-            None => ResetCause::PowerUp,
+            ResetCause::Core => defmt::warn!("the core was reset (a debugger)"),
+            ResetCause::PowerOn => {}
         }
+        cause
     }
 
     /// Before the servo's first pulse: the stored settings (or the built-in ones, logged either

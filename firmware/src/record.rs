@@ -498,9 +498,9 @@ impl FieldReader<'_> {
                 Value::Real => self.f32()?.to_bits(),
             };
         }
-        Settings::from_fields(&bits).ok_or(FieldsError::Code {
-            field: Setting::Order.name(),
-            code: bits[Setting::Order.index()] as u8,
+        Settings::from_fields_or_bad(&bits).map_err(|bad| FieldsError::Code {
+            field: bad.name(),
+            code: bits[bad.index()] as u8,
         })
     }
 }

@@ -10,9 +10,12 @@
 //!
 //! The safety supervisor runs in every phase. Outside a run the servo never moves toward
 //! tension without a person: a latched fault freezes homing, and a fault moves the servo only
-//! toward release (rest is the end of a run's travel that releases the cord).
+//! toward release (rest is the end of a run's travel that releases the cord). A run starts
+//! only from a press at the rig (the host may arm one, [`ARM_MS`]), on sensitivities a person
+//! measured or typed; its tare begins at the press and its drive comes on only after the
+//! release (`button.rs`).
 
-use crate::button::Debouncer;
+use crate::button::{Debouncer, Edge, LONG_PRESS_MS};
 use crate::calib::Calibration;
 use crate::command::Command;
 use crate::force::ForceRun;
@@ -42,6 +45,11 @@ pub const CORD_CHECK_SETTLE_MS: u32 = 200;
 /// where the HS-322HD alone would swing there in 0.2 s. Homing is supervised like a run and
 /// stops (latched) at a fault.
 pub const HOMING_DEG_PER_S: f32 = 10.0;
+
+/// How long a run the host armed (`run`) waits for the press at the rig that starts it, ms.
+/// The host never starts the drive: a person at the rig does, within this time, or the arm
+/// lapses (and is said so in the log).
+pub const ARM_MS: u32 = 30_000;
 
 /// Largest load a tare may take as zero, N: the mean reading during the tare may differ from
 /// the stored zero by at most this (beyond the cord's `tare_reference_n`). More is a weight or a
@@ -103,8 +111,14 @@ enum Phase {
     /// Waiting for the button (LED blinks slowly). After a fault, `latched` holds it (LED
     /// blinks fast) until a press acknowledges it; only the press after that starts a run.
     Idle { latched: Option<FaultKind> },
-    /// Sampling the preloaded cord with the capstan stopped.
-    Tare { sum: [u64; 2], n: u32 },
+    /// Sampling the preloaded cord with the capstan stopped. `waiting`: the tare is done, but
+    /// the press that started the run has not been released: the drive waits for it (the
+    /// run's clock held), until [`LONG_PRESS_MS`], when the run is cancelled.
+    Tare {
+        sum: [u64; 2],
+        n: u32,
+        waiting: bool,
+    },
     /// Setup mode: the servo where the host jogged it, amplifier at 0 V, live values.
     Setup {
         /// Servo angle commanded now, deg: on its way to `target_deg` at
@@ -159,6 +173,10 @@ pub struct Rig {
     settings_source: crate::record::SettingsSource,
     /// A flash write held the loop: setup mode re-anchors its sample grid on the next sample.
     reanchor: bool,
+    /// The run in progress began at a press that has not been released yet.
+    awaiting_release: bool,
+    /// The host armed a run (`run`): until then (µs) the LED says so, and a press starts it.
+    armed_until_us: Option<u64>,
     /// [`Rig::use_settings`] ran since the last sample's outputs.
     settings_changed: bool,
     /// Force control's controller (used in force mode; made anew at every run's start).
@@ -175,6 +193,7 @@ impl Rig {
     ) -> Result<Self, ProtocolError> {
         protocol.validate()?;
         let debounce = (DEBOUNCE_MS * protocol.sample_hz / 1000) as u16;
+        let long = LONG_PRESS_MS * (protocol.sample_hz / 1000);
         Ok(Rig {
             defaults: Settings {
                 protocol,
@@ -185,7 +204,7 @@ impl Rig {
             zeros: cal.zeros(),
             limits,
             phase: Phase::Idle { latched: None },
-            button: Debouncer::new(debounce),
+            button: Debouncer::new(debounce, long),
             seq: Sequencer::default(),
             supervisor: Supervisor::new(limits),
             runs: 0,
@@ -198,6 +217,8 @@ impl Rig {
             limp: false,
             settings_source: crate::record::SettingsSource::DefaultsNoRecord,
             reanchor: false,
+            awaiting_release: false,
+            armed_until_us: None,
             settings_changed: false,
             force: ForceRun::new(&protocol, &limits),
         })
@@ -302,14 +323,17 @@ impl Rig {
         }
     }
 
+    /// True while a run the host armed waits for its press.
+    pub fn is_armed(&self) -> bool {
+        self.armed_until_us.is_some()
+    }
+
     /// One sample period.
-    // Inlined on the host, with `step_phase` and `step_running`, into the simulator's sample
-    // loop (its one hot call site there): the call returned the outputs through memory and
-    // saved and restored six registers every sample. The board's image is unchanged.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     pub fn step(&mut self, inp: &Inputs, sink: &mut impl LogSink) -> Outputs {
-        let mut pressed = self.button.step(inp.button_pressed);
-        let mut abort = pressed;
+        let mut edge = self.button.step(inp.button_pressed);
+        // A run stops at the press's edge (a button that sticks stops it too).
+        let mut abort = edge == Edge::Pressed;
         let mut store = None;
         // Only a command changes the mode outside the run's own course.
         let before = core::mem::discriminant(&self.phase);
@@ -324,12 +348,13 @@ impl Rig {
             None => {}
         }
         let changed_phase = core::mem::discriminant(&self.phase) != before;
-        if (changed_phase || store.is_some()) && !self.is_running() {
+        if (changed_phase || store.is_some()) && !self.is_running() && edge == Edge::Pressed {
             // A press in the very sample a command changed the mode, or asked for a flash
             // write, must not start a run on top of it: the person presses again.
-            pressed = false;
+            self.button.consume();
+            edge = Edge::None;
         }
-        let mut out = self.step_phase(inp, pressed, abort, sink);
+        let mut out = self.step_phase(inp, edge, abort, sink);
         // (`step_phase` never asks for a write: the settings are copied only when there are some.)
         if store.is_some() {
             out.store = store;
@@ -338,37 +363,26 @@ impl Rig {
         out
     }
 
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     fn step_phase(
         &mut self,
         inp: &Inputs,
-        pressed: bool,
+        edge: Edge,
         abort: bool,
         sink: &mut impl LogSink,
     ) -> Outputs {
         // One call of `step_running` (the sample path of a run), for the run's samples and the
-        // press that starts one alike: inlined here, and only once on the board.
-        let abort = match self.phase {
-            Phase::Idle { latched } => match self.step_idle(inp, latched, pressed, sink) {
+        // press that starts one alike.
+        let (edge, abort) = match self.phase {
+            Phase::Idle { latched } => match self.step_idle(inp, latched, edge, sink) {
                 Some(out) => return out,
                 // The press that started the run does not abort it.
-                None => false,
+                None => (Edge::None, false),
             },
-            // (On the host, a copy for the out-of-line setup step: the sample loop's inputs are
-            // then only read, and stay in registers.)
-            #[cfg(not(target_os = "none"))]
-            Phase::Setup { .. } => return self.step_setup(&{ *inp }, pressed, sink),
-            #[cfg(target_os = "none")]
-            Phase::Setup { .. } => return self.step_setup(inp, pressed, sink),
-            _ => abort,
+            Phase::Setup { .. } => return self.step_setup(inp, edge, sink),
+            _ => (edge, abort),
         };
-        self.step_running(inp, abort, sink)
-    }
-
-    /// A tension level (≥ 1) has been held for `CORD_CHECK_SETTLE_MS`: the cord is loaded.
-    /// (The step is the one of the previous sample: at most one sample late at a change.)
-    fn level_held(&self, elapsed_ms: u32) -> bool {
-        matches!(&self.phase, Phase::Run(steps) if steps.level_held(elapsed_ms))
+        self.step_running(inp, edge, abort, sink)
     }
 
     /// Both channels in newtons (NaN where a conversion failed).

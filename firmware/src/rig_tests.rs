@@ -101,11 +101,21 @@ fn plant_counts(out: &Outputs, cal: &Calibration, zero_shift: f32) -> [Result<u1
     ]
 }
 
+/// The default limits but the stuck check: the scripted plant has no noise, which no real
+/// channel lacks.
+fn limits() -> SafetyLimits {
+    SafetyLimits {
+        stuck_samples: 0,
+        ..SafetyLimits::default()
+    }
+}
+
+/// The thesis's protocol on sensitivities a person typed.
 fn thesis_rig() -> Rig {
     Rig::new(
         Protocol::default(),
-        Calibration::default(),
-        SafetyLimits::default(),
+        Calibration::default().typed(),
+        limits(),
     )
     .unwrap()
 }
@@ -213,8 +223,8 @@ fn tare_removes_a_zero_drift_of_both_channels() {
             tare_ms: 0,
             ..Protocol::default()
         },
-        cal,
-        SafetyLimits::default(),
+        cal.typed(),
+        limits(),
     )
     .unwrap();
     let tr = drive(
@@ -236,7 +246,7 @@ fn updown_order_holds_each_level_once() {
         order: StepOrder::UpDown,
         ..Protocol::default()
     };
-    let mut rig = Rig::new(p, Calibration::default(), SafetyLimits::default()).unwrap();
+    let mut rig = Rig::new(p, Calibration::default().typed(), limits()).unwrap();
     let cal = Calibration::default();
     let tr = drive(
         &mut rig,

@@ -98,15 +98,8 @@ where
         Ok(Inputs {
             command: None,
             now_us,
-            // (The board converts one channel after the other, as it always did: the same
-            // calls `read_both`'s default makes, and its image stays as it was.)
-            #[cfg(not(target_os = "none"))]
+            // (T1 then T2: on the board one conversion after the other, `read_both`'s default.)
             counts: self.adc.read_both(),
-            #[cfg(target_os = "none")]
-            counts: [
-                self.adc.read_counts(crate::hal::Channel::T1),
-                self.adc.read_counts(crate::hal::Channel::T2),
-            ],
             button_pressed: self.button.is_low().map_err(|_| RunError::Pin)?,
         })
     }

@@ -53,6 +53,21 @@ impl SafeDuties {
             servo_rest: cal.servo.duty(rig.protocol().rest_deg, servo_max_duty),
         }
     }
+
+    /// What the handlers command with the servo last commanded to `commanded_duty`: rest, or
+    /// where it is if that releases more (setup mode jogged it past rest, to the release side:
+    /// the rest pulse would swing it back toward tension at the servo's full speed). A longer
+    /// pulse releases: the calibration's map is never reversed and rest is a run's longest
+    /// pulse. No pulses stays no pulses.
+    pub const fn releasing(self, commanded_duty: u16) -> SafeDuties {
+        if self.servo_rest == 0 || commanded_duty <= self.servo_rest {
+            self
+        } else {
+            SafeDuties {
+                servo_rest: commanded_duty,
+            }
+        }
+    }
 }
 
 /// Drive every output to the safe state: the amplifier off first (the drive is the hazard),
@@ -108,5 +123,11 @@ mod tests {
         let mut pins = Pins::default();
         force_safe(&mut pins, SafeDuties::NO_SERVO_PULSES);
         assert_eq!(pins.1, [0]);
+        // Jogged past rest (135°, a longer pulse): it stays; at a level (65°): rest.
+        let past = rig.calibration().servo.duty(135.0, 62_500);
+        let level = rig.calibration().servo.duty(65.0, 62_500);
+        assert_eq!(duties.releasing(past).servo_rest, past);
+        assert_eq!(duties.releasing(level).servo_rest, 5_728);
+        assert_eq!(SafeDuties::NO_SERVO_PULSES.releasing(past).servo_rest, 0);
     }
 }

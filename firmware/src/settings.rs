@@ -9,17 +9,20 @@
 //! Which values there are, in which order, how each is held, is the wire schema's
 //! ([`capstan_wire::Setting`]); this file says where each lives in [`Settings`].
 
-use crate::calib::{Calibration, CalibrationError};
+use crate::calib::{CalSource, Calibration, CalibrationError};
 use crate::force::{ControlMode, ForceProfile};
 use crate::protocol::{Protocol, ProtocolError, StepOrder};
 use capstan_wire::{Key, Scalar, Setting, Value};
 
 /// Version of the byte layout below. Change it whenever the layout changes. (2: force control's
-/// values appended; a version-1 record is read with force control's defaults.)
+/// values, then the sensitivities' sources and the zeros they were measured at, appended. A
+/// version-1 record is read with force control's defaults and its sensitivities unmeasured:
+/// the board keeps its protocol and calibration but runs nothing until a person weighs or
+/// types each sensitivity.)
 pub const SETTINGS_VERSION: u8 = 2;
 
 /// Values in [`Settings::fields`]: 15 of the protocol, 10 of the calibration, 18 of force
-/// control.
+/// control, 4 of the calibration's provenance.
 pub const FIELDS: usize = capstan_wire::settings::SETTINGS;
 
 /// Encoded length, bytes: version, generation, the order's code, the other values of 4 bytes.
@@ -225,17 +228,22 @@ impl Settings {
         Setting::ALL.map(|s| self.get(s))
     }
 
-    /// Inverse of [`Settings::fields`] (`None` for an unknown step order; not validated).
+    /// Inverse of [`Settings::fields`] (`None` for an unknown code; not validated).
     #[inline(never)]
     pub fn from_fields(v: &[u32; FIELDS]) -> Option<Settings> {
+        Settings::from_fields_or_bad(v).ok()
+    }
+
+    /// [`Settings::from_fields`], or the first setting whose code is unknown.
+    pub fn from_fields_or_bad(v: &[u32; FIELDS]) -> Result<Settings, Setting> {
         let mut s = Settings {
             protocol: Protocol::default(),
             calibration: Calibration::default(),
         };
         for (setting, &bits) in Setting::ALL.iter().zip(v) {
-            s.set(*setting, bits)?;
+            s.set(*setting, bits).ok_or(*setting)?;
         }
-        Some(s)
+        Ok(s)
     }
 
     /// One value as 32 bits (see [`Settings::fields`]): where each setting lives.
@@ -268,6 +276,10 @@ impl Settings {
             Setting::ServoMaxUs => f(c.servo.pulse_at_max_us),
             Setting::ServoMaxDeg => f(c.servo.max_deg),
             Setting::AmpFullScaleV => f(c.amp.full_scale_v),
+            Setting::T1Cal => c.t1.source.code() as u32,
+            Setting::T1CalZero => f(c.t1.cal_zero),
+            Setting::T2Cal => c.t2.source.code() as u32,
+            Setting::T2CalZero => f(c.t2.cal_zero),
             force => force_bits(p, force),
         }
     }
@@ -308,6 +320,10 @@ impl Settings {
             Setting::ServoMaxUs => c.servo.pulse_at_max_us = f,
             Setting::ServoMaxDeg => c.servo.max_deg = f,
             Setting::AmpFullScaleV => c.amp.full_scale_v = f,
+            Setting::T1Cal => c.t1.source = CalSource::from_code(u8::try_from(bits).ok()?)?,
+            Setting::T1CalZero => c.t1.cal_zero = f,
+            Setting::T2Cal => c.t2.source = CalSource::from_code(u8::try_from(bits).ok()?)?,
+            Setting::T2CalZero => c.t2.cal_zero = f,
             force => set_force(p, force, bits)?,
         }
         Some(())
@@ -328,7 +344,7 @@ impl Settings {
     }
 
     /// Settings and generation from stored bytes; refused unless of this version (or version
-    /// 1, read with force control's defaults) and valid.
+    /// 1, read with force control's defaults and its sensitivities unmeasured) and valid.
     pub fn decode(bytes: &[u8]) -> Result<(Settings, u32), SettingsError> {
         let version = *bytes.first().ok_or(SettingsError::Length)?;
         let length = match version {
@@ -370,6 +386,9 @@ mod tests {
         s.protocol.wrap_deg = 360.0;
         s.protocol.order = StepOrder::UpDown;
         s.calibration.t1.n_per_count = 0.0123;
+        s.calibration.t1 = s.calibration.t1.measured(CalSource::Weighed);
+        s.calibration.t2 = s.calibration.t2.measured(CalSource::Typed);
+        s.calibration.t2.zero_counts = 420.0;
         s.calibration.servo.pulse_at_min_us = 500.0;
         s.protocol.force.law.mu = 0.145;
         s
@@ -409,10 +428,15 @@ mod tests {
             s.with(Key::ServoMaxDeg, 100.0),
             Err(SettingsError::ServoRange)
         );
+        let s3 = s.with(Key::AmpControlV, 3.2).unwrap();
         assert_eq!(
-            s.with(Key::AmpFullScaleV, 2.0),
+            s3.with(Key::AmpFullScaleV, 3.1),
             Err(SettingsError::AmpRange)
         );
+        assert!(matches!(
+            s.with(Key::AmpFullScaleV, 2.5),
+            Err(SettingsError::Calibration(CalibrationError::AmpMap))
+        ));
     }
 
     #[test]
@@ -436,6 +460,7 @@ mod tests {
                 Key::Mode => 1.0,
                 Key::ForceSineSteps => 9.0,
                 Key::ModelExponent => 0.8,
+                Key::AmpFullScaleV => 3.35,
                 _ => value,
             };
             let t = s
@@ -449,14 +474,28 @@ mod tests {
     }
 
     #[test]
-    fn a_version_1_record_is_read_with_force_controls_defaults() {
+    fn a_version_1_record_is_read_with_force_controls_defaults_and_unmeasured_sensitivities() {
         let mut s = bench_settings();
         s.protocol.force = crate::force::ForceConfig::default();
         let v2 = s.encode(4);
         // Version 1: the same first 25 values, nothing after them.
         let mut v1 = v2[..V1_BYTES].to_vec();
         v1[0] = 1;
-        assert_eq!(Settings::decode(&v1), Ok((s, 4)));
+        // Nobody can say the older record's sensitivities were measured: the board keeps them
+        // but runs nothing until a person weighs or types each (issue 38).
+        let mut expected = s;
+        let placeholder = Calibration::default();
+        for (ch, default) in [
+            (&mut expected.calibration.t1, placeholder.t1),
+            (&mut expected.calibration.t2, placeholder.t2),
+        ] {
+            ch.source = CalSource::Placeholder;
+            ch.cal_zero = default.cal_zero;
+        }
+        let (read, generation) = Settings::decode(&v1).unwrap();
+        assert_eq!((read, generation), (expected, 4));
+        assert!(!read.calibration.t1.source.is_measured());
+        assert!(!read.calibration.t2.source.is_measured());
         assert_eq!(
             Settings::decode(&v2[..V1_BYTES]),
             Err(SettingsError::Length)

@@ -143,7 +143,7 @@ impl Default for CampaignConfig {
             seed: 1,
             faults: Vec::new(),
             protocol: Protocol::default(),
-            calibration: Calibration::default(),
+            calibration: crate::setup::typed_calibration(),
             limits: SafetyLimits::default(),
             plant: PlantConfig::default(),
             threads: 0,

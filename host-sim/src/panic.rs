@@ -135,7 +135,9 @@ pub fn run_with_panic(
     plant.borrow_mut().advance_to(panic_at_us);
     let before = plant.borrow().truth(0);
     let drive_v_at_panic = plant.borrow().drive().drive_v;
-    force_safe(&mut ForcedOutputs(c), duties);
+    // The servo kept where it is if that releases more than rest (the duty last written).
+    let commanded = (before.commanded_pulse_us / 20_000.0 * SERVO_MAX_DUTY as f64).round() as u16;
+    force_safe(&mut ForcedOutputs(c), duties.releasing(commanded));
     let after = plant.borrow().truth(0);
     // Nothing drives the plant any more; watch it, 1 ms at a time.
     let rest_deg = {

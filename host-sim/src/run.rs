@@ -44,7 +44,7 @@ impl Default for RunSpec {
             plant: PlantConfig::default(),
             cord: CordSetup::default(),
             protocol: Protocol::default(),
-            calibration: Calibration::default(),
+            calibration: crate::setup::typed_calibration(),
             limits: SafetyLimits::default(),
             seed: 1,
             injections: Vec::new(),

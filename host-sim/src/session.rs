@@ -12,7 +12,10 @@
 use crate::flash::RamFlash;
 use crate::run::{sample_plant, time_limit_us, SetupError, TraceSample};
 use crate::time;
-use capstan_plant::{rig_io, CordSetup, Plant, PlantConfig, AMP_MAX_DUTY, SERVO_MAX_DUTY};
+use capstan_plant::hal::CordRef;
+use capstan_plant::{
+    rig_io, CordSetup, ForcedOutputs, Injection, Plant, PlantConfig, SERVO_MAX_DUTY,
+};
 use core::cell::{Cell, RefCell};
 use embassy_futures::select::{select3, Either3};
 use embassy_time::{Duration, Timer};
@@ -22,7 +25,7 @@ use firmware::reset::{latch_word, ResetCause};
 use firmware::runner::{serve, WATCHDOG_MS};
 use firmware::safety::SafetyLimits;
 use firmware::store::SettingsStore;
-use firmware::{Calibration, Protocol, Rig};
+use firmware::{Calibration, Protocol, Rig, SafeDuties};
 use std::collections::VecDeque;
 
 /// The settings range of the simulated board's flash: all of it (four 4 KiB pages).
@@ -42,6 +45,10 @@ pub enum Step {
     Hang(Channel, f64),
     /// The button is pressed for this long, ms.
     Press(u32),
+    /// The button is pressed for this long, ms, if the last command sent was answered without
+    /// a refusal (the person at the rig presses to start the run the host armed; not when the
+    /// board refused to arm it).
+    PressIfArmed(u32),
     /// Wait for the run in progress to end (or for the limit of its protocol).
     UntilRunEnd,
     /// The board is power cycled: every pin released, the flash and the plant stay, the
@@ -61,6 +68,16 @@ pub enum Step {
     /// per newton; `capstan rig --sim` draws one per sensor, hidden from the firmware). Give
     /// it before any weight is hung.
     ScaleSensor(Channel, f64),
+    /// The RUN pin pulled low (a reset button, a supply supervisor): the whole chip resets,
+    /// every pin released, the scratch registers lost; it boots again [`BOOT_MS`] later.
+    RunPin,
+    /// The firmware panics now: the panic handler makes the outputs safe through the
+    /// registers (`firmware::force_safe`, as `board_safe.rs` does) and resets the chip through
+    /// the watchdog at once (forced; the scratch registers kept); it boots [`BOOT_MS`] later.
+    Panic,
+    /// A fault of the rig's parts, from now on (the plant's injections, e.g. a frozen sensor,
+    /// a cord that parts, a stalled servo).
+    Inject(capstan_plant::InjectionKind),
 }
 
 /// From a reset to the firmware's first sample on the simulated board, ms (the RP2040 boots
@@ -85,6 +102,8 @@ pub struct SessionSpec {
     /// Sample the plant's true state every this many ms into [`SessionOutput::trace`] (0 =
     /// never).
     pub trace_every_ms: u32,
+    /// Faults of the rig's parts, timed from the trigger's first rising edge (as a run's).
+    pub injections: Vec<Injection>,
 }
 
 impl Default for SessionSpec {
@@ -97,6 +116,7 @@ impl Default for SessionSpec {
             limits: SafetyLimits::default(),
             seed: 1,
             trace_every_ms: 0,
+            injections: Vec::new(),
         }
     }
 }
@@ -210,7 +230,10 @@ pub fn run_session_observed(
         press_at_us: None,
         ..spec.cord
     };
-    let plant = Plant::new_at(spec.plant, &[cord], spec.seed, 0).map_err(SetupError::Plant)?;
+    let mut plant = Plant::new_at(spec.plant, &[cord], spec.seed, 0).map_err(SetupError::Plant)?;
+    for inj in &spec.injections {
+        plant.inject(*inj).map_err(SetupError::Plant)?;
+    }
     let plant = RefCell::new(plant);
     let shared = Shared {
         events: RefCell::new(Vec::new()),
@@ -225,7 +248,7 @@ pub fn run_session_observed(
     let trace = RefCell::new(Vec::new());
     // The watchdog's scratch register 1: the latch word, kept across a watchdog reset.
     let scratch = Cell::new(0u32);
-    let mut cause = ResetCause::PowerUp;
+    let mut cause = ResetCause::PowerOn;
     let mut resets = Vec::new();
     let mut rest = steps;
     let mut done_total = 0;
@@ -258,13 +281,25 @@ pub fn run_session_observed(
             Some(Step::Reset) => {
                 release_pins(&plant);
                 scratch.set(0);
-                ResetCause::PowerUp
+                ResetCause::PowerOn
+            }
+            Some(Step::RunPin) => {
+                release_pins(&plant);
+                scratch.set(0);
+                watch(&plant, BOOT_MS, spec.trace_every_ms, &trace);
+                ResetCause::RunPin
             }
             Some(Step::Freeze) => {
                 watch(&plant, WATCHDOG_MS as u64, spec.trace_every_ms, &trace);
                 release_pins(&plant);
                 watch(&plant, BOOT_MS, spec.trace_every_ms, &trace);
                 ResetCause::Watchdog
+            }
+            Some(Step::Panic) => {
+                panic_path(&plant, &rig);
+                release_pins(&plant);
+                watch(&plant, BOOT_MS, spec.trace_every_ms, &trace);
+                ResetCause::Forced
             }
             _ => break,
         };
@@ -347,21 +382,37 @@ fn watch(plant: &RefCell<Plant>, ms: u64, every_ms: u32, trace: &RefCell<Vec<Tra
 }
 
 /// A reset: every output pin an input. The servo gets no pulses; the pull-downs hold the
-/// amplifier's control input and the trigger low.
+/// amplifier's control input and the trigger low (the control input falls through the filter
+/// and the pull-down, `MotorConfig::amp_filter_released_tau_s`).
 fn release_pins(plant: &RefCell<Plant>) {
     let mut p = plant.borrow_mut();
     p.advance_to(time::now_us());
     p.set_servo_duty(0, 0, SERVO_MAX_DUTY);
-    p.set_amp_duty(0, 0, AMP_MAX_DUTY);
+    p.release_amp(0);
     p.set_trigger(0, false);
+}
+
+/// What the board's panic handler does first: `force_safe` on the pins, with the rest duty
+/// computed from the rig (`board_safe::arm`) and the servo kept where it is if that releases
+/// more (`SafeDuties::releasing`, with the duty last written).
+fn panic_path(plant: &RefCell<Plant>, rig: &Rig) {
+    let commanded = {
+        let mut p = plant.borrow_mut();
+        p.advance_to(time::now_us());
+        let pulse_us = p.truth(0).commanded_pulse_us;
+        (pulse_us / p.config().servo.frame_us as f64 * SERVO_MAX_DUTY as f64).round() as u16
+    };
+    let duties = SafeDuties::for_rig(rig, SERVO_MAX_DUTY).releasing(commanded);
+    firmware::force_safe(&mut ForcedOutputs(CordRef::new(plant, 0)), duties);
 }
 
 /// Virtual time the steps may take at most.
 fn steps_limit_us(steps: &[Step], run_limit_us: u64) -> u64 {
     let each = |s: &Step| match s {
         Step::Send(_) => REPLY_TIMEOUT_MS * 1000,
-        Step::Wait(ms) | Step::Press(ms) => *ms as u64 * 1000,
+        Step::Wait(ms) | Step::Press(ms) | Step::PressIfArmed(ms) => *ms as u64 * 1000,
         Step::Freeze => (WATCHDOG_MS as u64 + BOOT_MS) * 1000,
+        Step::RunPin | Step::Panic => BOOT_MS * 1000,
         Step::UntilRunEnd => run_limit_us,
         _ => 0,
     };
@@ -379,6 +430,7 @@ async fn host(
 ) -> (usize, bool) {
     // Let the board boot and settle (and a homing servo reach rest) first.
     Timer::after(Duration::from_millis(50)).await;
+    let mut last_refused = false;
     for (i, step) in steps.iter().enumerate() {
         match step {
             Step::Send(line) => {
@@ -394,7 +446,11 @@ async fn host(
                 if !replied {
                     unanswered.push(line.clone());
                 }
+                last_refused = shared.events.borrow()[seen..]
+                    .iter()
+                    .any(|e| matches!(e.record, Record::Reply(r) if r.error.is_some()));
             }
+            Step::PressIfArmed(_) if last_refused => {}
             Step::Wait(ms) => Timer::after(Duration::from_millis(*ms as u64)).await,
             Step::Hang(ch, n) => {
                 let k = *ch as usize;
@@ -403,12 +459,13 @@ async fn host(
                 hung[k] = *n;
                 shared.hung.set(hung);
             }
-            Step::Press(ms) => {
+            Step::Press(ms) | Step::PressIfArmed(ms) => {
                 let now = time::now_us();
                 plant.borrow_mut().press(0, now, *ms as u64 * 1000);
                 Timer::after(Duration::from_millis(*ms as u64)).await;
             }
             Step::ReverseSensor(ch) => plant.borrow_mut().reverse_sensor(0, *ch),
+            Step::Inject(kind) => inject_now(plant, *kind),
             Step::ScaleSensor(ch, factor) => plant.borrow_mut().scale_sensor(0, *ch, *factor),
             Step::HoldButton(ms) => {
                 let now = time::now_us();
@@ -421,7 +478,7 @@ async fn host(
                 })
                 .await;
             }
-            Step::Reset | Step::Freeze => return (i, false),
+            Step::Reset | Step::Freeze | Step::RunPin | Step::Panic => return (i, false),
         }
         let go_on = (observe.borrow_mut())(before + i + 1, &shared.events.borrow());
         if !go_on {
@@ -429,6 +486,13 @@ async fn host(
         }
     }
     (steps.len(), false)
+}
+
+/// `kind` strikes the rig now, whatever the trigger did.
+fn inject_now(plant: &RefCell<Plant>, kind: capstan_plant::InjectionKind) {
+    let mut p = plant.borrow_mut();
+    p.advance_to(time::now_us());
+    p.strike(0, kind);
 }
 
 /// Wait until a record after the first `seen` matches, checking every ms; false at the timeout.

@@ -2,6 +2,7 @@
 //! capstan diameter, a wrap and a drive voltage, the cord's protocol and the plant's constants.
 
 use capstan_plant::PlantConfig;
+use firmware::safety::SafetyLimits;
 use firmware::{Calibration, Protocol, StepOrder};
 use std::fmt;
 
@@ -77,6 +78,25 @@ pub fn cord_protocol(
         wrap_deg: wrap_deg as f32,
         ..*base
     }
+}
+
+/// The firmware's limits for a plant with or without sensor noise: a noiseless plant (an
+/// idealisation no real channel is) is not a frozen sensor, so the firmware's check for a
+/// channel without any noise is off for it (`SafetyLimits::stuck_samples`). Every other check
+/// is as the board's.
+pub fn cord_limits(base: &SafetyLimits, plant: &PlantConfig) -> SafetyLimits {
+    let noiseless = plant.sensor.noise_sd_n == 0.0 && plant.adc.noise_sd_counts == 0.0;
+    SafetyLimits {
+        stuck_samples: if noiseless { 0 } else { base.stuck_samples },
+        ..*base
+    }
+}
+
+/// The sensitivities the simulated person types into the firmware: the calibration as given,
+/// counted as typed (the simulation knows its sensors; a board's built-in placeholder never
+/// runs).
+pub fn typed_calibration() -> Calibration {
+    Calibration::default().typed()
 }
 
 /// The rig's constants on a capstan of `diameter_mm`, with or without sensor noise.

@@ -94,7 +94,7 @@ impl Default for TwoControlConfig {
             ],
             model: Model::euler_eytelwein(capstan_plant::THESIS_MU),
             protocol: Protocol::default(),
-            calibration: Calibration::default(),
+            calibration: crate::setup::typed_calibration(),
             limits: SafetyLimits::default(),
             plant: PlantConfig::default(),
             seed: 1,
@@ -317,7 +317,9 @@ fn channel_rigs(cfg: &TwoControlConfig) -> Result<(Vec<Rig>, Vec<CordSetup>, u64
                 ..*f
             };
         }
-        rigs.push(Rig::new(protocol, cfg.calibration, cfg.limits).map_err(SetupError::Protocol)?);
+        let plant = setup::cord_plant(&cfg.plant, cfg.diameter_mm, cfg.sensor_noise);
+        let limits = setup::cord_limits(&cfg.limits, &plant);
+        rigs.push(Rig::new(protocol, cfg.calibration, limits).map_err(SetupError::Protocol)?);
         let cord = CordSetup::new(ch.wrap_deg, cfg.model);
         limit = limit.max(time_limit_us(&protocol, &cord));
         cords.push(cord);

@@ -264,9 +264,11 @@ fn abort_press_is_caught_and_made_safe() {
 }
 
 #[test]
-fn a_break_at_rest_is_caught_once_the_first_level_has_settled() {
-    // During step 0 no tension level is held, so a slack cord is not yet a fault; the first
-    // level makes it one (200 ms settling + 5 samples).
+fn a_break_at_rest_is_caught_from_the_drop_of_both_channels() {
+    // During step 0 no tension level is held; the cord at its preload (0.1 N) carries ~0.18 N
+    // on both sensors with the drive on, and both fall at once when it parts: caught within
+    // three of the supervisor's 0.1 s blocks. (Before issue 38: only at the first level, 10 s
+    // later.)
     let mut s = spec(360.0);
     s.injections = vec![Injection {
         kind: InjectionKind::CordBreak,
@@ -276,6 +278,6 @@ fn a_break_at_rest_is_caught_once_the_first_level_has_settled() {
     let out = run(&s).unwrap();
     let f = out.log.faults[0];
     assert_eq!(f.kind, FaultKind::CordBreak);
-    assert!((10_700_000..=10_710_000).contains(&f.t_us), "{f:?}");
+    assert!((700_000..=1_000_000).contains(&f.t_us), "{f:?}");
     assert_eq!(out.end.unwrap().pairs, 0);
 }

@@ -195,10 +195,15 @@ pub struct MotorConfig {
     pub amp_full_scale_v: f64,
     /// Amplifier supply: the drive voltage saturates here, V.
     pub amp_supply_v: f64,
-    /// Time constant of the RC filter between the PWM pin and the amplifier's control input, s
-    /// (the README's 4.7 kΩ and 1 µF: 4.7 ms; a step settles to 1 % in 22 ms, so after a fault
-    /// the drive needs that long to fall below 1 %). 0 = no filter.
+    /// Time constant of the RC filter between the PWM pin and the amplifier's control input
+    /// while the pin is driven, s (the README's 4.7 kΩ and 1 µF: 4.7 ms; a step settles to 1 %
+    /// in 22 ms, so after a fault the drive needs that long to fall below 1 %). 0 = no filter.
     pub amp_filter_tau_s: f64,
+    /// ... and while the pin is not driven (a reset, the chip unpowered, booting): the
+    /// capacitor discharges through the series resistor and the pull-down on the pin's side,
+    /// s (the README's 4.7 kΩ + 2.2 kΩ, 1 µF: 6.9 ms. With the 100 kΩ pull-down the README
+    /// gave before issue 38 it was 104.7 ms: ~0.5 s to 1 %, 22 × slower than documented).
+    pub amp_filter_released_tau_s: f64,
 }
 
 impl Default for MotorConfig {
@@ -214,6 +219,7 @@ impl Default for MotorConfig {
             amp_full_scale_v: 3.3,
             amp_supply_v: 24.0,
             amp_filter_tau_s: 0.0047,
+            amp_filter_released_tau_s: 0.0069,
         }
     }
 }
@@ -259,6 +265,40 @@ impl Default for SensorConfig {
     }
 }
 
+/// The ADC the sensors are read through (the RP2040's): what it adds to every conversion,
+/// in counts. The sensors' own noise ([`SensorConfig::noise_sd_n`]) comes before it; an
+/// unplugged sensor's input, pulled to AGND by the divider, reads only this.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdcConfig {
+    /// Offset of every conversion, counts: what the ADC reads with its input at 0 V.
+    pub offset_counts: f64,
+    /// Gaussian noise of every conversion, counts (standard deviation; 0 = none).
+    pub noise_sd_counts: f64,
+}
+
+impl AdcConfig {
+    /// An ideal ADC: no offset, no noise of its own (the default: the campaigns' sensors'
+    /// 0.02 N is all the noise their data have, as it always was).
+    pub const IDEAL: AdcConfig = AdcConfig {
+        offset_counts: 0.0,
+        noise_sd_counts: 0.0,
+    };
+
+    /// A Raspberry Pi Pico's: 10-20 counts with the input grounded (15: its offset) and about a
+    /// count of noise of its own (assumed from the RP2040 data sheet's ENOB of ~9 bits at the
+    /// pin and measurements posted of Picos, not measured here).
+    pub const RP2040: AdcConfig = AdcConfig {
+        offset_counts: 15.0,
+        noise_sd_counts: 1.0,
+    };
+}
+
+impl Default for AdcConfig {
+    fn default() -> Self {
+        AdcConfig::IDEAL
+    }
+}
+
 /// What a fault injection does to the plant (beyond its kind).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FaultConfig {
@@ -291,6 +331,8 @@ pub struct PlantConfig {
     pub motor: MotorConfig,
     /// Both force sensors of every cord.
     pub sensor: SensorConfig,
+    /// The ADC they are read through.
+    pub adc: AdcConfig,
     /// Fault injection details.
     pub faults: FaultConfig,
     /// Longest integration step, µs (the plant advances lazily to each read in such steps).
@@ -310,6 +352,7 @@ impl Default for PlantConfig {
             cord: CordConfig::default(),
             motor: MotorConfig::default(),
             sensor: SensorConfig::default(),
+            adc: AdcConfig::IDEAL,
             faults: FaultConfig::default(),
             max_step_us: 1_000,
             refresh_us: 10_000,

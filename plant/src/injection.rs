@@ -16,27 +16,44 @@ pub enum InjectionKind {
     OverForce,
     /// The operator presses the start/abort button during the run.
     Abort,
+    /// A sensor's reading freezes at a plausible value: the divider's lead comes off the pin
+    /// and its 100 nF holds the last voltage (or the sensor's amplifier freezes). The ADC
+    /// still adds its own offset and noise ([`crate::AdcConfig`]).
+    Frozen(Channel),
+    /// The servo stops following its pulses where it is (a stripped gear, a dead motor).
+    ServoStall,
 }
 
 impl InjectionKind {
-    /// The fault the firmware should raise for it.
-    pub const fn fault(self) -> FaultKind {
+    /// The fault the firmware should raise for it (by its name, so that this plant also
+    /// drives a firmware that lacks the kind).
+    pub const fn fault_name(self) -> &'static str {
         match self {
-            InjectionKind::CordBreak => FaultKind::CordBreak,
-            InjectionKind::SensorUnplugged(_) => FaultKind::SensorRail,
-            InjectionKind::OverForce => FaultKind::OverForce,
-            InjectionKind::Abort => FaultKind::Abort,
+            InjectionKind::CordBreak => "cord_break",
+            InjectionKind::SensorUnplugged(_) => "sensor_unplugged",
+            InjectionKind::OverForce => "over_force",
+            InjectionKind::Abort => "abort",
+            InjectionKind::Frozen(_) => "sensor_frozen",
+            InjectionKind::ServoStall => "servo_stall",
         }
     }
 
-    /// The firmware's name of that fault (`cord_break`, `sensor_unplugged`, `over_force`,
-    /// `abort`).
-    pub const fn name(self) -> &'static str {
-        self.fault().name()
+    /// The fault the firmware should raise for it.
+    pub fn fault(self) -> FaultKind {
+        FaultKind::ALL
+            .into_iter()
+            .find(|k| k.name() == self.fault_name())
+            .expect("every injection's fault is the firmware's")
     }
 
-    /// Parse a fault name; `sensor_unplugged` unplugs T2 (the fixed sensor), and
-    /// `sensor_unplugged_t1` / `sensor_unplugged_t2` choose.
+    /// The firmware's name of that fault (`cord_break`, `sensor_unplugged`, `over_force`,
+    /// `abort`, `sensor_frozen`, `servo_stall`).
+    pub const fn name(self) -> &'static str {
+        self.fault_name()
+    }
+
+    /// Parse a fault name; `sensor_unplugged` unplugs (`sensor_frozen` freezes) T2 (the fixed
+    /// sensor), and `_t1` / `_t2` choose.
     pub fn from_name(name: &str) -> Option<InjectionKind> {
         match name {
             "cord_break" => Some(InjectionKind::CordBreak),
@@ -46,12 +63,22 @@ impl InjectionKind {
             "sensor_unplugged_t1" => Some(InjectionKind::SensorUnplugged(Channel::T1)),
             "over_force" => Some(InjectionKind::OverForce),
             "abort" => Some(InjectionKind::Abort),
+            "sensor_frozen" | "sensor_frozen_t2" => Some(InjectionKind::Frozen(Channel::T2)),
+            "sensor_frozen_t1" => Some(InjectionKind::Frozen(Channel::T1)),
+            "servo_stall" => Some(InjectionKind::ServoStall),
             _ => None,
         }
     }
 
     /// The names [`InjectionKind::from_name`] knows.
-    pub const NAMES: [&'static str; 4] = ["cord_break", "sensor_unplugged", "over_force", "abort"];
+    pub const NAMES: [&'static str; 6] = [
+        "cord_break",
+        "sensor_unplugged",
+        "over_force",
+        "abort",
+        "sensor_frozen",
+        "servo_stall",
+    ];
 }
 
 /// A fault to inject: what, on which cord, and when (µs after that cord's trigger rose; the

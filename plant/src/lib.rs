@@ -5,11 +5,12 @@
 //!              torque-limited; without pulses, back-driven by the cord) ─► 6.35 mm lever
 //!          ─► cord (hardening spring, 0.1 N preload at the rest pulse) ─► T1 sensor
 //!          ─► capstan friction (capstan_friction::Model, the shared law) ─► T2 sensor
-//! amp PWM ─► RC filter (10 ms) ─► power amplifier (×4) ─► Pittman gearmotor (19.7:1)
+//! amp PWM ─► RC filter (4.7 ms; 6.9 ms with the pin released) ─► power amplifier (×4)
+//!             ─► Pittman gearmotor (19.7:1)
 //!             ─► capstan speed, current
 //!             ▲ friction torque Σ(T2 − T1)·r of every cord, through the gearbox
-//! sensors: zero, gain, Gaussian noise, saturation at the divider's 5 V, 12-bit ADC (nominal =
-//!          firmware's default calibration)
+//! sensors: zero, gain, Gaussian noise, saturation at the divider's 5 V, 12-bit ADC with its
+//!          own offset and noise (nominal = firmware's default calibration)
 //! ```
 //!
 //! [`Plant`] holds the physics; [`hal`] has the adapters that implement the board's traits
@@ -47,7 +48,7 @@ pub mod rng;
 pub mod servo;
 
 pub use config::{
-    CordConfig, CordSetup, FaultConfig, MotorConfig, PlantConfig, SensorConfig,
+    AdcConfig, CordConfig, CordSetup, FaultConfig, MotorConfig, PlantConfig, SensorConfig,
     ServoCharacteristic, ServoConfig, DIVIDER_SATURATION_COUNTS, THESIS_REST_PULSE_US,
 };
 pub use disturb::{Disturbances, Unmodelled};

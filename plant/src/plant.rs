@@ -68,6 +68,13 @@ struct CordState {
     broken: bool,
     snag: bool,
     unplugged: [bool; 2],
+    /// A channel's reading held (the pin's voltage on its 100 nF), counts at the ADC.
+    frozen: [Option<f64>; 2],
+    /// The servo no longer follows its pulses.
+    servo_stalled: bool,
+    /// The amplifier's PWM pin is not driven (a reset released it): its filter discharges
+    /// through the pull-down ([`crate::MotorConfig::amp_filter_released_tau_s`]).
+    amp_released: bool,
     // sensors
     zero: [f64; 2],
     counts_per_n: [f64; 2],

@@ -7,6 +7,8 @@ use firmware::hal::Channel;
 
 const MS: u64 = 1_000;
 
+/// Parts that fail as real parts do (issue 38).
+mod failures;
 /// A servo without pulses, the cord back-driving it; a sensor pinned at its saturation.
 mod unpowered;
 

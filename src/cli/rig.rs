@@ -38,8 +38,9 @@ SETTING UP THE RIG AT THE BENCH
     $R show                     every setting with its unit, and where it came from
     $R store                    keep the settings in flash (they survive a power-off)
     $R leave                    leave setup mode: the servo homes to rest
-    $R run                      start a run, as the button does: NOTHING RECORDS IT. To record
-                                it: capstan log ... --no-flash --start (starts it and logs)
+    $R run                      arm a run: a press of the rig's button within 30 s starts it
+                                (the host never starts the drive). NOTHING RECORDS IT. To
+                                record it: capstan log ... --no-flash --start (arms and logs)
 
   FORCE CONTROL (the servo holds T2 at a target; docs/README-force.md):
     $R load-model --from report/metrics.json   the fitted law at the rig's wrap, diameter and
@@ -64,7 +65,8 @@ REHEARSING WITHOUT HARDWARE
   by hand at a real rig is a command here:
     $R bench load t1 9.80665    hang 9.80665 N on T1 (then: weigh t1 9.80665)
     $R bench unload             take every weight off
-    $R bench press              press the rig's button (200 ms; bench press MS)
+    $R bench press              press the rig's button (200 ms; bench press MS): starts a run
+                                (an armed one too), acknowledges a fault, leaves setup mode
     $R bench wait 3             let 3 s pass (a servo reaching rest)
     $R bench power-cycle        unplug the board and plug it back
   After each command 2 s pass at the bench. `live SECONDS` prints that much of the board's
@@ -200,15 +202,15 @@ fn rig(args: &Args) -> anyhow::Result<()> {
             let (line, cmd) = command_line(&args.words)?;
             if cmd == Command::Run {
                 // The probe serves one program at a time and the board's log buffer holds
-                // ~0.3 s: a run started here is not recorded unless capstan log starts it.
-                let board = if args.sim.sim.is_some() {
-                    "--sim DIR"
+                // ~0.3 s: a run started here is not recorded unless capstan log arms it.
+                let (board, press) = if args.sim.sim.is_some() {
+                    ("--sim DIR", "`capstan rig --sim DIR bench press`")
                 } else {
-                    "--chip ... --elf ... --no-flash"
+                    ("--chip ... --elf ... --no-flash", "the rig's button")
                 };
                 note(format!(
-                    "note: nothing records this run; to record it, start it with `capstan log \
-                     {board} --start --out SESSION` instead"
+                    "note: `run` only arms a run: {press} starts it. Nothing records it; to \
+                     record it, arm it with `capstan log {board} --start --out SESSION` instead"
                 ));
             }
             with_link(args, |link| send(link, &line, &cmd, &mut out, &mut note))

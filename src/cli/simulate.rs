@@ -151,7 +151,8 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Inject a fault, NAME@SECONDS after the trigger in every run, or NAME@SECONDS#RUN in
-    /// one run (1.. over the campaign); NAME: cord_break, sensor_unplugged, over_force, abort.
+    /// one run (1.. over the campaign); NAME: cord_break, sensor_unplugged[_t1|_t2], over_force,
+    /// abort, sensor_frozen[_t1|_t2], servo_stall.
     #[arg(long = "fault", value_name = "NAME@SECONDS[#RUN]")]
     pub faults: Vec<String>,
     /// Noiseless sensors.

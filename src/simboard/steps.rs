@@ -3,6 +3,7 @@
 
 use anyhow::bail;
 use firmware::hal::Channel;
+use host_sim::plant::InjectionKind;
 use host_sim::session::Step;
 use std::path::Path;
 
@@ -37,12 +38,25 @@ pub fn step_line(s: &Step) -> String {
         Step::Wait(ms) => format!("wait {ms}"),
         Step::Hang(c, n) => format!("hang {} {n:?}", ch_word(*c)),
         Step::Press(ms) => format!("press {ms}"),
+        Step::PressIfArmed(ms) => format!("press-if-armed {ms}"),
         Step::UntilRunEnd => "until-run-end".into(),
         Step::Reset => "reset".into(),
         Step::Freeze => "freeze".into(),
         Step::HoldButton(ms) => format!("hold {ms}"),
         Step::ReverseSensor(c) => format!("reverse {}", ch_word(*c)),
         Step::ScaleSensor(c, f) => format!("scale {} {f:?}", ch_word(*c)),
+        Step::RunPin => "reset-pin".into(),
+        Step::Panic => "panic".into(),
+        Step::Inject(k) => format!("inject {}", injection_word(*k)),
+    }
+}
+
+/// An injection's name in the journal (the plant's, with the channel where it has one).
+fn injection_word(k: InjectionKind) -> &'static str {
+    match k {
+        InjectionKind::SensorUnplugged(Channel::T1) => "sensor_unplugged_t1",
+        InjectionKind::Frozen(Channel::T1) => "sensor_frozen_t1",
+        k => k.name(),
     }
 }
 
@@ -69,6 +83,7 @@ fn parse_line(line: &str) -> Option<Step> {
             Step::Hang(c, n)
         }
         "press" => Step::Press(num(rest)?),
+        "press-if-armed" => Step::PressIfArmed(num(rest)?),
         "until-run-end" => Step::UntilRunEnd,
         "reset" => Step::Reset,
         "freeze" => Step::Freeze,
@@ -78,6 +93,9 @@ fn parse_line(line: &str) -> Option<Step> {
             let (c, f) = two()?;
             Step::ScaleSensor(c, f)
         }
+        "reset-pin" => Step::RunPin,
+        "panic" => Step::Panic,
+        "inject" => Step::Inject(InjectionKind::from_name(rest.trim())?),
         _ => return None,
     })
 }
@@ -174,9 +192,16 @@ mod tests {
             Step::Wait(2000),
             Step::Hang(Channel::T2, 9.80665),
             Step::Press(200),
+            Step::PressIfArmed(200),
             Step::UntilRunEnd,
             Step::Reset,
             Step::ScaleSensor(Channel::T1, 1.0375),
+            Step::RunPin,
+            Step::Panic,
+            Step::Inject(InjectionKind::Frozen(Channel::T1)),
+            Step::Inject(InjectionKind::Frozen(Channel::T2)),
+            Step::Inject(InjectionKind::SensorUnplugged(Channel::T1)),
+            Step::Inject(InjectionKind::CordBreak),
         ];
         let text = journal_text(&steps);
         assert_eq!(parse_journal(&text, Path::new("j")).unwrap(), steps);

@@ -76,18 +76,23 @@ fn make_setup() -> Result<Setup, String> {
             rp2040js.display()
         ));
     }
-    let elf = cargo_build(
-        &[
-            "build",
-            "--release",
-            "-p",
-            "firmware",
-            "--target",
+    // `CAPSTAN_EMU_ELF`: another build of the board image instead (e.g. an earlier
+    // firmware's, to see the cases fail on it); otherwise this tree's, built here.
+    let elf = match std::env::var_os("CAPSTAN_EMU_ELF") {
+        Some(path) => PathBuf::from(path),
+        None => cargo_build(
+            &[
+                "build",
+                "--release",
+                "-p",
+                "firmware",
+                "--target",
+                "thumbv6m-none-eabi",
+            ],
             "thumbv6m-none-eabi",
-        ],
-        "thumbv6m-none-eabi",
-    )?
-    .join("thumbv6m-none-eabi/release/firmware");
+        )?
+        .join("thumbv6m-none-eabi/release/firmware"),
+    };
     // The bench as a WebAssembly module, without its debug info (4 MiB of it).
     let wasm = cargo_build(
         &[
@@ -291,13 +296,7 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
     // and a press late in the case leaves its run unfinished, which `--strict` would refuse on
     // its own (checked from summary.json below).
     // A run a fault ends (an injected fault, a load at the tare) is cut short, not complete.
-    let strict = (case.core_fault.is_none()
-        && case.injections.is_empty()
-        && case.hung_n == [0.0; 2]
-        && case.cord.press_at_us.is_some()
-        && case.rtt_stall_us.is_none()
-        && case.held_from_power_up_us == 0)
-        .then_some("--strict");
+    let strict = case.strict_log.then_some("--strict");
     // Those other cases may end with no complete run (a fault at boot, no press): their
     // session is kept all the same, which `log` does only when asked.
     let allow_empty = strict.is_none().then_some("--allow-empty");

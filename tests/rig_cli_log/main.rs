@@ -114,7 +114,7 @@ fn session() -> Vec<(u32, Record)> {
         reply(CommandKind::Jog, Some(CommandError::NotInSetup), [0.0; 2]),
         report(SettingsSource::Stored),
         reply(CommandKind::Store, None, [0.0; 2]),
-        reply(CommandKind::Run, None, [1.0, 0.0]),
+        reply(CommandKind::Run, None, [1.0, 30.0]),
         start,
         raw,
         pair(1),
@@ -227,7 +227,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
     );
     assert!(
         lines[0].contains(",servo_max_deg,amp_full_scale_v,mode,")
-            && lines[0].ends_with(",model_exponent"),
+            && lines[0].ends_with(",model_exponent,t1_cal,t1_cal_zero,t2_cal,t2_cal_zero"),
         "{}",
         lines[0]
     );
@@ -251,7 +251,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
         "INFO setup mode: amplifier at 0 V",
         "REPLY seq=8 jog: refused: this works in setup mode only",
         "REPLY seq=10 store: the settings are stored in flash",
-        "REPLY seq=11 run: run 1 started",
+        "REPLY seq=11 run: run 1 armed: press the rig's button within 30 s",
     ] {
         assert!(messages.contains(needle), "{needle:?} not in:\n{messages}");
     }

@@ -124,13 +124,30 @@ pub enum FaultKind {
     /// Latched at boot: the panic or HardFault handler reset the chip.
     Panic = 8,
     /// Latched at boot: the chip was reset (a debugger, the RUN pin) while the rig was not at
-    /// rest.
+    /// rest, or by a reset that keeps nothing (the RUN pin, the debug port) whatever it was
+    /// doing.
     Reset = 9,
+    /// A force channel's reading is not a sensor's while the capstan is driven: it held one
+    /// count (no noise at all), or it did not answer a servo step the other channel answered
+    /// (a lead off the pin, its 100 nF holding the last voltage; a frozen amplifier).
+    SensorFrozen = 10,
+    /// Neither channel answered a servo step, or T1 moved against it: the servo does not
+    /// follow its command (stalled, unpowered, its horn slipping).
+    ServoStall = 11,
+    /// The friction load on the capstan, (T2 − T1)·r (the drive motor's current), reached the
+    /// motor's stall torque at the commanded drive: the motor is stalled.
+    MotorStall = 12,
+    /// T2 above what the capstan can make of T1 (e^(μ_max·wrap) beyond the sensors' errors):
+    /// one of the channels reads wrong.
+    Implausible = 13,
+    /// The button was held down longer than a press (a lead or switch shorted, or stuck):
+    /// nothing started.
+    ButtonHeld = 14,
 }
 
 impl FaultKind {
     /// Every fault, by code.
-    pub const ALL: [FaultKind; 10] = [
+    pub const ALL: [FaultKind; 15] = [
         FaultKind::OverForce,
         FaultKind::CordBreak,
         FaultKind::SensorRail,
@@ -141,6 +158,11 @@ impl FaultKind {
         FaultKind::NegativeForce,
         FaultKind::Panic,
         FaultKind::Reset,
+        FaultKind::SensorFrozen,
+        FaultKind::ServoStall,
+        FaultKind::MotorStall,
+        FaultKind::Implausible,
+        FaultKind::ButtonHeld,
     ];
 
     /// Stable name, as used by the CLI (`--fault NAME@SECONDS`) and in CSV/JSON.
@@ -156,6 +178,11 @@ impl FaultKind {
             FaultKind::NegativeForce => "negative_force",
             FaultKind::Panic => "panic",
             FaultKind::Reset => "reset",
+            FaultKind::SensorFrozen => "sensor_frozen",
+            FaultKind::ServoStall => "servo_stall",
+            FaultKind::MotorStall => "motor_stall",
+            FaultKind::Implausible => "implausible",
+            FaultKind::ButtonHeld => "button_held",
         }
     }
 
@@ -167,6 +194,69 @@ impl FaultKind {
     /// Inverse of [`FaultKind::code`].
     pub fn from_code(code: u8) -> Option<FaultKind> {
         FaultKind::ALL.get(code as usize).copied()
+    }
+
+    /// The fault of a name (as [`FaultKind::name`] gives it).
+    pub fn from_name(name: &str) -> Option<FaultKind> {
+        FaultKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// Only a press at the rig clears it: a fault latched by a reset (watchdog, panic, reset),
+    /// after which the servo has no pulses until a person is there. The host's `ack` is refused.
+    pub const fn needs_press(self) -> bool {
+        matches!(
+            self,
+            FaultKind::Watchdog | FaultKind::Panic | FaultKind::Reset
+        )
+    }
+}
+
+/// How a force channel's sensitivity came to be (the `t1_cal`/`t2_cal` settings): a run needs
+/// both measured or typed, never the built-in placeholder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CalSource {
+    /// Nobody measured or typed it: the firmware's built-in placeholder (a fresh board,
+    /// `defaults`, a stored record that was damaged or of an older layout), or its zero moved
+    /// more than a tare's bound from the zero it was measured at.
+    Placeholder = 0,
+    /// Measured with a known weight (`weigh`).
+    Weighed = 1,
+    /// Typed by a person (`set tN_n_per_count`).
+    Typed = 2,
+}
+
+impl CalSource {
+    /// Every source, by code.
+    pub const ALL: [CalSource; 3] = [CalSource::Placeholder, CalSource::Weighed, CalSource::Typed];
+
+    /// Wire code.
+    pub const fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// Inverse of [`CalSource::code`].
+    pub const fn from_code(code: u8) -> Option<CalSource> {
+        match code {
+            0 => Some(CalSource::Placeholder),
+            1 => Some(CalSource::Weighed),
+            2 => Some(CalSource::Typed),
+            _ => None,
+        }
+    }
+
+    /// A stable name, for CSV, JSON and `rig show`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            CalSource::Placeholder => "unmeasured",
+            CalSource::Weighed => "weighed",
+            CalSource::Typed => "typed",
+        }
+    }
+
+    /// Measured or typed by a person: a run may use it.
+    pub const fn is_measured(self) -> bool {
+        !matches!(self, CalSource::Placeholder)
     }
 }
 
@@ -276,7 +366,14 @@ mod tests {
                 .iter()
                 .all(|j| j.name() != s.name()));
         }
+        for c in CalSource::ALL {
+            assert_eq!(CalSource::from_code(c.code()), Some(c));
+        }
         assert_eq!(FaultKind::from_code(NONE_CODE), None);
+        assert_eq!(
+            FaultKind::from_name("button_held"),
+            Some(FaultKind::ButtonHeld)
+        );
         assert_eq!(Channel::from_code(NONE_CODE), None);
     }
 }

@@ -35,11 +35,13 @@ pub enum CommandKind {
     Store,
     /// Go back to the firmware's built-in settings.
     Defaults,
-    /// Start a run, as the button does.
+    /// Arm a run: the next press of the rig's button (within the firmware's arm window) starts
+    /// it. The host never starts the drive by itself.
     Run,
     /// Stop the run, as the button does (or leave setup mode).
     Abort,
-    /// Acknowledge a latched fault, as the button does.
+    /// Acknowledge a latched fault, as the button does (not one a reset latched: those only a
+    /// press at the rig clears).
     Ack,
 }
 
@@ -138,11 +140,17 @@ pub enum CommandError {
     /// A zero that would move the zero in force by more than a tare may (1 N): something hangs
     /// on a hook, or the cord pulls.
     ZeroMoved = 20,
+    /// A force channel's sensitivity is the built-in placeholder (nobody weighed or typed it):
+    /// no run until it is.
+    Uncalibrated = 21,
+    /// The latched fault came from a reset (watchdog, panic, reset): only a press at the rig
+    /// clears it, where a person can see the rig.
+    NeedsPress = 22,
 }
 
 impl CommandError {
     /// Every error, by code.
-    pub const ALL: [CommandError; 20] = [
+    pub const ALL: [CommandError; 22] = [
         CommandError::Unknown,
         CommandError::Argument,
         CommandError::UnknownKey,
@@ -163,6 +171,8 @@ impl CommandError {
         CommandError::NotAtRest,
         CommandError::NotZeroed,
         CommandError::ZeroMoved,
+        CommandError::Uncalibrated,
+        CommandError::NeedsPress,
     ];
 
     /// Wire code (never 0).
@@ -194,10 +204,12 @@ impl CommandError {
             CommandError::Unsteady => "the reading was not steady (something moved): let the servo and the weight settle, then repeat",
             CommandError::Interrupted => "setup mode ended (a fault, the button or leave) before the measurement was done",
             CommandError::Reversed => "the reading fell under the weight: the sensor is reversed or wired to the other input (a tension must raise the counts); nothing changed",
-            CommandError::Blind => "with that calibration the over-force limit would read above the rail check, so it could never trip (the sensor's range, or the value, is wrong); nothing changed",
+            CommandError::Blind => "with that calibration the over-force limit would read above the high rail check, or the -3 N limit below the low one (a zero too near the ADC's floor, where an unplugged sensor reads), so a check could never trip (the sensor's range or offset, or the value, is wrong); nothing changed",
             CommandError::NotAtRest => "store only with the servo at rest: the flash write holds the safety loop (send servo <rest> and wait, or leave setup mode and let it home)",
             CommandError::NotZeroed => "weigh measures from the zero taken in this setup session, with the servo where it was then, and this is not that (no zero yet, a set or defaults replaced it, or the servo moved since): take the weight off, send zero, then hang the weight and weigh without moving the servo; nothing changed",
-            CommandError::ZeroMoved => "the readings are more than 1 N from the zero in force: take off anything hanging on either hook, slacken the cord, and zero again (a new or re-wired sensor whose zero really moved: set t1_zero or t2_zero to the counts rig live shows, then zero); nothing changed",
+            CommandError::ZeroMoved => "the readings are more than 1 N from the zero in force: take off anything hanging on either hook, slacken the cord, and zero again (a new or re-wired sensor whose zero really moved: set t1_zero or t2_zero to the counts rig live shows, then zero, then weigh it again: a zero that moved more than 1 N from the one its sensitivity was measured at leaves that sensitivity unmeasured); nothing changed",
+            CommandError::Uncalibrated => "a force sensor's sensitivity was never measured (the built-in placeholder: a fresh board, defaults, a damaged or older stored record, or a zero moved more than 1 N since the weigh): weigh it in setup mode (weigh t1|t2 NEWTONS) or type it (set t1_n_per_count / t2_n_per_count), then store; nothing runs until then",
+            CommandError::NeedsPress => "this fault was latched by a reset (watchdog, panic or reset): only a press of the rig's button clears it, by a person who can see the rig",
         }
     }
 }

@@ -24,7 +24,7 @@ mod prim;
 pub mod records;
 pub mod settings;
 
-pub use codes::{Channel, FaultKind, SettingsSource, StepOrder, NONE_CODE};
+pub use codes::{CalSource, Channel, FaultKind, SettingsSource, StepOrder, NONE_CODE};
 pub use commands::{CommandError, CommandKind, MAX_LINE};
 pub use force::{ControlMode, ForceProfile};
 pub use prim::{Prim, Scalar};

@@ -242,13 +242,14 @@ impl RecordKind {
         })
     }
 
-    /// A setting as a field of this record: required in `settings` (but force control's, which
-    /// an older firmware lacks), and in `run_start` unless it came with setup mode or later.
+    /// A setting as a field of this record: required in `settings` unless it came with force
+    /// control or the calibration's provenance (an older firmware lacks them), in `run_start`
+    /// only if the first firmware had it.
     pub const fn setting_field(self, s: Setting) -> Field {
         let required = match s.since() {
             Since::First => true,
             Since::SetupMode => matches!(self, RecordKind::Settings),
-            Since::ForceControl => false,
+            Since::ForceControl | Since::Provenance => false,
         };
         Field {
             name: s.name(),
@@ -297,7 +298,9 @@ mod tests {
             "settings seq={=u32} source={=u8} order={=u8} rest_deg={=f32} step_deg={=f32} final_deg={=f32} dwell_ms={=u32}"
         ));
         assert!(settings.contains("servo_max_deg={=f32} amp_full_scale_v={=f32} mode={=u8}"));
-        assert!(settings.ends_with("model_exponent={=f32} crc={=u32}"));
+        assert!(settings.ends_with(
+            "model_exponent={=f32} t1_cal={=u8} t1_cal_zero={=f32} t2_cal={=u8} t2_cal_zero={=f32} crc={=u32}"
+        ));
     }
 
     #[test]
@@ -311,7 +314,7 @@ mod tests {
             }
             assert_eq!(RecordKind::from_word(k.word()), Some(k));
         }
-        assert_eq!(RecordKind::RunStart.fields().count(), 2 + 43 + 1);
+        assert_eq!(RecordKind::RunStart.fields().count(), 2 + 47 + 1);
         let optional: std::vec::Vec<&str> = RecordKind::RunStart
             .fields()
             .filter(|f| !f.required)
@@ -343,6 +346,10 @@ mod tests {
                 "model_heat_per_n",
                 "model_t2_offset_n",
                 "model_exponent",
+                "t1_cal",
+                "t1_cal_zero",
+                "t2_cal",
+                "t2_cal_zero",
                 "crc"
             ]
         );

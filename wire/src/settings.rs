@@ -8,7 +8,8 @@
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Value {
     /// A code, one byte: the step order ([`crate::StepOrder::code`]), the control mode, the
-    /// force profile ([`Setting::code_name`]).
+    /// force profile, a sensitivity's source ([`crate::CalSource::code`]); each named by
+    /// [`Setting::code_name`].
     Code,
     /// A whole number (ms, Hz), `u32`.
     Whole,
@@ -50,6 +51,9 @@ pub enum Since {
     /// Since force control (issue 43): a `run_start` of an older firmware lacks them (the host
     /// takes the defaults: protocol mode).
     ForceControl,
+    /// Since the calibration says where its sensitivities came from (issue 38): neither
+    /// record of a firmware built before it has them, and the host reads both anyway.
+    Provenance,
 }
 
 /// The table: `Variant "name" group value "unit" since key "meaning";` one row per setting, in
@@ -140,8 +144,9 @@ macro_rules! keys {
     };
 }
 
-/// Values in the settings: 15 of the protocol, 10 of the calibration, 18 of force control.
-pub const SETTINGS: usize = 43;
+/// Values in the settings: 15 of the protocol, 10 of the calibration, 18 of force control, then
+/// 4 of the calibration's provenance (appended after force control: the wire order only grows).
+pub const SETTINGS: usize = 47;
 
 /// Settings the host may set by name (all but the two rates).
 pub const KEYS: usize = 41;
@@ -191,6 +196,10 @@ settings! {
     ModelHeatPerN  "model_heat_per_n" Force       Real  "1/N"     ForceControl 38 "fitted law: mu falls by exp(-this x (T2 - T1)) (contact heating, settled)";
     ModelT2OffsetN "model_t2_offset_n" Force      Real  "N"       ForceControl 39 "fitted law: what the T2 sensor adds while the capstan turns";
     ModelExponent  "model_exponent"   Force       Real  ""        ForceControl 40 "fitted law: tension exponent n (1: Euler-Eytelwein)";
+    T1Cal          "t1_cal"           Calibration Code  ""        Provenance fixed "how T1's sensitivity came to be: unmeasured (the placeholder), weighed or typed";
+    T1CalZero      "t1_cal_zero"      Calibration Real  "counts"  Provenance fixed "the T1 zero its sensitivity was weighed or typed at (a zero more than 1 N from it leaves it unmeasured)";
+    T2Cal          "t2_cal"           Calibration Code  ""        Provenance fixed "how T2's sensitivity came to be: unmeasured (the placeholder), weighed or typed";
+    T2CalZero      "t2_cal_zero"      Calibration Real  "counts"  Provenance fixed "the T2 zero its sensitivity was weighed or typed at (a zero more than 1 N from it leaves it unmeasured)";
 }
 
 impl Setting {
@@ -218,6 +227,10 @@ impl Setting {
             },
             Setting::ForceProfile => match crate::ForceProfile::from_code(code) {
                 Some(p) => Some(p.name()),
+                None => None,
+            },
+            Setting::T1Cal | Setting::T2Cal => match crate::CalSource::from_code(code) {
+                Some(c) => Some(c.name()),
                 None => None,
             },
             _ => None,
@@ -328,16 +341,17 @@ mod tests {
     }
 
     #[test]
-    fn fifteen_settings_of_the_protocol_then_ten_of_the_calibration_then_force_control() {
+    fn protocol_calibration_force_control_then_the_calibrations_provenance() {
         for s in Setting::ALL {
             let group = match s.index() {
                 0..15 => Group::Protocol,
-                15..25 => Group::Calibration,
+                15..25 | 43.. => Group::Calibration,
                 _ => Group::Force,
             };
             assert_eq!(s.group(), group, "{}", s.name());
-            // Force control came later: an older run_start lacks it.
+            // Force control and the provenance came later: an older run_start lacks them.
             assert_eq!(s.since() == Since::ForceControl, group == Group::Force);
+            assert_eq!(s.since() == Since::Provenance, s.index() >= 43, "{}", s.name());
         }
     }
 
@@ -350,6 +364,8 @@ mod tests {
             Setting::ForceSineSteps,
             Setting::ModelMu,
             Setting::ModelExponent,
+            Setting::T1Cal,
+            Setting::T2Cal,
         ];
         for s in Setting::ALL {
             assert_eq!(s.unit().is_empty(), unitless.contains(&s), "{}", s.name());

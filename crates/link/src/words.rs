@@ -58,14 +58,35 @@ pub fn setting_values(s: &Settings) -> Vec<SettingValue> {
         .collect()
 }
 
-/// A settings report as lines: where the settings came from, then one setting a line.
+/// A settings report as lines: where the settings came from, then one setting a line, then
+/// a warning for each sensitivity nobody measured ([`unmeasured_lines`]).
 pub fn settings_lines(report: &SettingsReport) -> Vec<String> {
     let mut lines = vec![format!("settings: {}", report.source.message())];
     for v in setting_values(&report.settings) {
         let value = format!("{} {}", v.value, v.unit);
         lines.push(format!("  {:<18} {}", v.name, value.trim_end()));
     }
+    lines.extend(unmeasured_lines(&report.settings));
     lines
+}
+
+/// A line for each force channel whose sensitivity nobody measured or typed (the built-in
+/// placeholder): the board runs nothing until it is.
+pub fn unmeasured_lines(s: &Settings) -> Vec<String> {
+    let c = &s.calibration;
+    [(Channel::T1, &c.t1), (Channel::T2, &c.t2)]
+        .into_iter()
+        .filter(|(_, ch)| !ch.source.is_measured())
+        .map(|(ch, _)| {
+            let n = ch.name();
+            format!(
+                "UNMEASURED: {}'s sensitivity ({n}_n_per_count) is the built-in placeholder, \
+                 measured by nobody: the board runs nothing until it is weighed (weigh {n} \
+                 NEWTONS in setup mode) or typed (set {n}_n_per_count), and stored",
+                n.to_uppercase()
+            )
+        })
+        .collect()
 }
 
 /// `v` with `digits` significant digits (0.0163 → "0.01630" at 4).
@@ -126,7 +147,10 @@ pub fn reply_sentence(reply: &Reply, sent: Option<&Command>) -> String {
         CommandKind::Defaults => {
             "defaults: built-in defaults in force (send store to keep them)".into()
         }
-        CommandKind::Run => format!("run: run {v1:.0} started (taring first)"),
+        CommandKind::Run => format!(
+            "run: run {v1:.0} armed: press the rig's button within {v2:.0} s to start it (the host \
+             never starts the drive)"
+        ),
         // The firmware answers a run's abort with 1 (the run stops, fault `abort`), setup
         // mode's with 0.
         CommandKind::Abort if v1 == 1.0 => {
@@ -160,9 +184,13 @@ pub fn fault_line(f: &Fault) -> String {
     } else {
         format!(" (value {})", f.value)
     };
+    let go_on = if f.kind.needs_press() {
+        "press the rig's button to go on (a reset latched it: the host's `ack` is refused)"
+    } else {
+        "press the button or send `ack` to go on"
+    };
     format!(
-        "FAULT {}{channel}{value}: the rig's outputs are safe; press the button or send `ack` to \
-         go on",
+        "FAULT {}{channel}{value}: the rig's outputs are safe; {go_on}",
         f.kind.name(),
     )
 }
@@ -223,8 +251,8 @@ mod tests {
             "set: key code 99 = 1"
         );
         assert_eq!(
-            say(ok(CommandKind::Run, [3.0, 0.0])),
-            "run: run 3 started (taring first)"
+            say(ok(CommandKind::Run, [3.0, 30.0])),
+            "run: run 3 armed: press the rig's button within 30 s to start it (the host never starts the drive)"
         );
         assert_eq!(
             say(ok(CommandKind::Setup, [125.0, 0.0])),
@@ -260,7 +288,11 @@ mod tests {
             settings: s,
         });
         assert_eq!(lines[0], "settings: stored in flash");
-        assert_eq!(lines.len(), 1 + capstan_wire::settings::SETTINGS);
+        // Every setting, and the placeholder sensitivities said twice.
+        assert_eq!(lines.len(), 1 + capstan_wire::settings::SETTINGS + 2);
+        let last = lines.len() - 1;
+        assert!(lines[last].starts_with("UNMEASURED: T2's sensitivity"));
+        assert!(lines.contains(&format!("  {:<18} unmeasured", "t1_cal")));
         assert!(
             lines.contains(&format!("  {:<18} 8000 ms", "dwell_ms")),
             "{lines:#?}"

@@ -72,6 +72,13 @@ pub fn pin_map_json() -> serde_json::Value {
     serde_json::Value::Object(pins.into_iter().collect())
 }
 
+/// [`Bench::pin`]: the pin is driven low.
+pub const LEVEL_LOW: u32 = 0;
+/// [`Bench::pin`]: the pin is driven high.
+pub const LEVEL_HIGH: u32 = 1;
+/// [`Bench::pin`]: the pin is not driven (an input: the board's pull-downs hold it low).
+pub const LEVEL_INPUT: u32 = 2;
+
 /// [`Bench::wake`]: the button's level changed (read it with [`Bench::button_pressed`]).
 pub const WAKE_BUTTON: u32 = 1;
 /// [`Bench::wake`]: divert the core into the firmware's panic path now.
@@ -80,6 +87,8 @@ pub const WAKE_PANIC: u32 = 2;
 pub const WAKE_STOP: u32 = 4;
 /// [`Bench::wake`]: put the core's stack pointer at the bottom of SRAM now.
 pub const WAKE_STACK_OVERFLOW: u32 = 8;
+/// [`Bench::wake`]: a debugger writes the watchdog's control now (disabled, paused on halt).
+pub const WAKE_DEBUGGER: u32 = 16;
 
 /// The rig around the emulated chip. See the module documentation.
 pub struct Bench {
@@ -93,6 +102,8 @@ pub struct Bench {
     amp: PwmMeter,
     amp_tick_ns: f64,
     amp_sent: Option<(u16, u16)>,
+    /// The amplifier's pin is not driven (a reset released it): its filter discharges slowly.
+    amp_released: bool,
     pwm_off_grid: u64,
     releasing: bool,
     trigger_high: bool,
@@ -111,6 +122,8 @@ pub struct Bench {
     core_fault_done: bool,
     core_fault_struck_ns: Option<f64>,
     hang: bool,
+    /// The loop hangs from this instant on (the debugger case), ns.
+    hang_from_ns: Option<f64>,
     resets: Vec<Reset>,
     run_since_ns: Option<f64>,
     first_run_over: bool,
@@ -139,6 +152,7 @@ impl Bench {
             amp: PwmMeter::new(100e3),
             amp_tick_ns: 0.0,
             amp_sent: None,
+            amp_released: false,
             pwm_off_grid: 0,
             releasing: false,
             trigger_high: false,
@@ -157,6 +171,7 @@ impl Bench {
             core_fault_done: false,
             core_fault_struck_ns: None,
             hang: false,
+            hang_from_ns: None,
             resets: Vec::new(),
             run_since_ns: None,
             first_run_over: false,
@@ -330,9 +345,35 @@ impl Bench {
         }
     }
 
-    /// Output pin `gpio` is now `high` (an input counts as low: the board's pull-downs) at
-    /// `t_ns`; `tick_ns` is its PWM counter's period (0 for a software-driven pin).
-    pub fn pin(&mut self, gpio: u32, high: bool, t_ns: f64, tick_ns: f64) {
+    /// Output pin `gpio` is now at `level` ([`LEVEL_LOW`], [`LEVEL_HIGH`] or [`LEVEL_INPUT`]:
+    /// not driven, which reads low through the board's pull-downs) at `t_ns`; `tick_ns` is its
+    /// PWM counter's period (0 for a software-driven pin). The amplifier's pin released lets
+    /// its filter discharge through the pull-down until it is driven again.
+    pub fn pin(&mut self, gpio: u32, level: u32, t_ns: f64, tick_ns: f64) {
+        let high = level == LEVEL_HIGH;
+        if gpio == AMP_GPIO {
+            self.amp_driven(t_ns, level != LEVEL_INPUT);
+        }
+        self.pin_level(gpio, high, t_ns, tick_ns);
+    }
+
+    /// The amplifier's pin driven (`true`) or released, from `t_ns`.
+    fn amp_driven(&mut self, t_ns: f64, driven: bool) {
+        if driven != self.amp_released {
+            return;
+        }
+        self.amp_released = !driven;
+        if let Some(p) = self.plant_at(t_ns) {
+            if driven {
+                // Driven low (a high level comes with the meter's period).
+                p.set_amp_duty(0, 0, 1);
+            } else {
+                p.release_amp(0);
+            }
+        }
+    }
+
+    fn pin_level(&mut self, gpio: u32, high: bool, t_ns: f64, tick_ns: f64) {
         self.settle(t_ns);
         match gpio {
             SERVO_GPIO => {
@@ -378,6 +419,9 @@ impl Bench {
                 panic!("the case's plant cannot be made: {e}");
             }
         }
+        if self.hang_from_ns.is_some_and(|h| t_ns >= h) {
+            self.hang = true;
+        }
         if self.hang {
             self.core_fault_struck_ns.get_or_insert(t_ns);
             return None;
@@ -401,7 +445,9 @@ impl Bench {
         let pressed = self.button_pressed;
         let fe = self.front_end;
         let after_reset = !self.resets.is_empty();
-        let own_presses = !after_reset && t_ns >= self.case.held_from_power_up_us as f64 * 1e3;
+        let own_presses = !after_reset
+            && t_ns >= self.case.held_from_power_up_us as f64 * 1e3
+            && self.case.held_us.is_none();
         let p = self.plant_at(t_ns).expect("made above");
         let plant_pressed = p.button_pressed(0);
         let counts = p.read_analog(0, ch);
@@ -457,6 +503,7 @@ impl Bench {
         }
         self.resets.push(Reset { t_ns, reason });
         self.hang = false;
+        self.hang_from_ns = None;
         self.releasing = true;
         for e in self.servo.release(t_ns) {
             self.servo_event(e);
@@ -464,10 +511,11 @@ impl Bench {
         for e in self.amp.release(t_ns) {
             self.amp_event(e);
         }
+        self.amp_driven(t_ns, false);
         self.releasing = false;
         self.run_since_ns = None;
         self.first_run_over = true;
-        self.pin(TRIGGER_GPIO, false, t_ns, 0.0);
-        self.pin(LED_GPIO, false, t_ns, 0.0);
+        self.pin_level(TRIGGER_GPIO, false, t_ns, 0.0);
+        self.pin_level(LED_GPIO, false, t_ns, 0.0);
     }
 }

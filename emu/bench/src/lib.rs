@@ -13,6 +13,7 @@
 pub mod bench;
 pub mod case;
 pub mod front_end;
+pub mod hazards;
 pub mod meter;
 pub mod report;
 #[cfg(target_arch = "wasm32")]

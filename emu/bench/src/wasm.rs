@@ -63,10 +63,11 @@ pub extern "C" fn bench_new() -> u32 {
     }
 }
 
-/// Output pin `gpio` is `high` (1) or not at `t_ns`; `tick_ns`: its PWM counter's period.
+/// Output pin `gpio` is driven low (0), high (1) or not driven (2: an input) at `t_ns`;
+/// `tick_ns`: its PWM counter's period.
 #[no_mangle]
-pub extern "C" fn bench_pin(gpio: u32, high: u32, t_ns: f64, tick_ns: f64) {
-    with(|b| b.pin(gpio, high != 0, t_ns, tick_ns))
+pub extern "C" fn bench_pin(gpio: u32, level: u32, t_ns: f64, tick_ns: f64) {
+    with(|b| b.pin(gpio, level, t_ns, tick_ns))
 }
 
 /// A conversion of `channel` starts: its code, or -1 if it never completes.

@@ -1,13 +1,16 @@
 //! The rig's answers to host commands, and setup mode's sample period: what each command may
 //! do in each phase, its `reply` record, and the settings it changes. Pure, like `rig.rs`.
 
-use super::{on_grid, Inputs, Outputs, Phase, Rig, TARE_MAX_N};
-use crate::calib::ChannelCal;
+use super::{on_grid, Inputs, Outputs, Phase, Rig, ARM_MS, TARE_MAX_N};
+use crate::button::Edge;
+use crate::calib::{CalSource, ChannelCal};
 use crate::command::{Command, CommandError, CommandKind};
+use crate::hal::Channel;
 use crate::record::{Fault, Live, LogSink, Record, Reply, SettingsReport, SettingsSource};
 use crate::safety::{SafetyInput, Supervisor};
 use crate::settings::{Settings, SettingsError, END_STOP_MARGIN_DEG};
 use crate::setup::{self, Measure, Measuring, LIVE_EVERY_MS, SETUP_DEG_PER_S};
+use capstan_wire::Key;
 
 /// An angle within the servo map's travel, [`END_STOP_MARGIN_DEG`] clear of its ends (a jog
 /// or a typo never drives the servo into its end stops). Not `f32::clamp`: its assertion links
@@ -22,6 +25,21 @@ fn servo_range(a: f32, max_deg: f32) -> f32 {
     } else {
         a
     }
+}
+
+/// `s` after `set KEY`: a typed sensitivity counts as measured (by the person who typed it),
+/// at the zero in force; a typed zero that moves more than 1 N from the one its sensitivity
+/// was measured at leaves that sensitivity unmeasured.
+fn typed(mut s: Settings, key: Key) -> Settings {
+    let c = &mut s.calibration;
+    match key {
+        Key::T1NPerCount => c.t1 = c.t1.measured(CalSource::Typed),
+        Key::T2NPerCount => c.t2 = c.t2.measured(CalSource::Typed),
+        Key::T1Zero => c.t1 = c.t1.rezeroed(c.t1.zero_counts),
+        Key::T2Zero => c.t2 = c.t2.rezeroed(c.t2.zero_counts),
+        _ => {}
+    }
+    s
 }
 
 /// One sample's move from `at` toward `target` at [`SETUP_DEG_PER_S`].
@@ -230,7 +248,7 @@ impl Rig {
             }
             Command::Set(key, value) => {
                 self.ensure_not_measuring()?;
-                let s = self.settings().with(key, value);
+                let s = self.settings().with(key, value).map(|s| typed(s, key));
                 self.use_settings(s.map_err(|_| CommandError::Invalid)?)
                     .map_err(|e| match e {
                         SettingsError::Blind => CommandError::Blind,
@@ -271,10 +289,17 @@ impl Rig {
             Command::Weigh(_, n) if n.is_nan() || n <= 0.0 => Err(CommandError::Invalid),
             Command::Weigh(ch, n) => self.start_measure(Measuring::Weigh(ch, n), now_us),
             Command::Run if latched => Err(CommandError::FaultLatched),
+            Command::Run if self.is_in_setup() => Err(CommandError::NotApplicable),
             Command::Run if self.is_homing() => Err(CommandError::Homing),
-            Command::Run if !self.is_in_setup() => {
-                self.start(now_us);
-                Ok([self.runs as f32, 0.0])
+            Command::Run if self.cal.unmeasured().is_some() => Err(CommandError::Uncalibrated),
+            Command::Run => {
+                // Armed only: the drive starts on a press at the rig.
+                self.armed_until_us = Some(now_us + ARM_MS as u64 * 1000);
+                info!("run armed: press the rig's button to start it");
+                Ok([(self.runs + 1) as f32, (ARM_MS / 1000) as f32])
+            }
+            Command::Ack if self.limp || self.latched_fault().is_some_and(|k| k.needs_press()) => {
+                Err(CommandError::NeedsPress)
             }
             Command::Ack if latched => {
                 self.acknowledge();
@@ -367,7 +392,7 @@ impl Rig {
     pub(super) fn step_setup(
         &mut self,
         inp: &Inputs,
-        pressed: bool,
+        edge: Edge,
         sink: &mut impl LogSink,
     ) -> Outputs {
         let Phase::Setup {
@@ -385,7 +410,10 @@ impl Rig {
             (origin_us, next_live_us) = (inp.now_us, inp.now_us);
         }
         let now_us = on_grid(inp.now_us, origin_us, self.period_us);
-        if pressed {
+        if edge == Edge::Held {
+            return self.setup_fault(Self::held_fault(inp), servo_deg, sink);
+        }
+        if edge == (Edge::Released { consumed: false }) {
             self.leave_setup(sink);
             // Logged as a `leave`, so the log shows where setup mode ended.
             self.reply(sink, CommandKind::Leave, Ok([0.0; 2]));
@@ -400,7 +428,7 @@ impl Rig {
             t_us: inp.now_us as i64,
             counts: inp.counts,
             force_n,
-            cord_check_armed: false,
+            driven: None,
         };
         if let Some(f) = self.supervisor.check(&safety) {
             return self.setup_fault(f, servo_deg, sink);
@@ -459,8 +487,10 @@ impl Rig {
         zero_taken
     }
 
-    /// A zero or weigh put into the calibration, if the over-force limit stays visible under
-    /// the result (else nothing changes). A zero moves the zeros a run's tare is held to.
+    /// A zero or weigh put into the calibration, if the force limits stay visible under the
+    /// result (else nothing changes). A zero moves the zeros a run's tare is held to (and a
+    /// sensitivity whose zero it moves more than 1 N from the one it was measured at is
+    /// unmeasured from then on); a weigh measures the sensitivity at the zero in force.
     fn apply_measure(
         &mut self,
         what: Measuring,
@@ -468,6 +498,14 @@ impl Rig {
     ) -> Result<[f32; 2], CommandError> {
         let mut cal = self.cal;
         let values = setup::apply(what, m, &mut cal)?;
+        match what {
+            Measuring::Zero => {
+                cal.t1 = self.cal.t1.rezeroed(cal.t1.zero_counts);
+                cal.t2 = self.cal.t2.rezeroed(cal.t2.zero_counts);
+            }
+            Measuring::Weigh(Channel::T1, _) => cal.t1 = cal.t1.measured(CalSource::Weighed),
+            Measuring::Weigh(Channel::T2, _) => cal.t2 = cal.t2.measured(CalSource::Weighed),
+        }
         self.limits.visible(&cal).map_err(|_| CommandError::Blind)?;
         // A zero taken under a load hides that load from every force, the over-force check's
         // included: one that moves the zero in force by more than a tare may is refused.

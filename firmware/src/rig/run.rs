@@ -3,13 +3,16 @@
 
 use super::steps::Steps;
 use super::{on_grid, Inputs, Outputs, Phase, Rig, TARE_MAX_N};
+use crate::button::Edge;
 use crate::calib::ChannelCal;
 use crate::force::ForceRun;
 use crate::hal::Channel;
 use crate::record::{Fault, FaultKind, LogSink, RawSample, Record, RunEnd, RunStart};
-use crate::safety::{SafetyInput, Supervisor};
+use crate::safety::{DriveContext, Driven, SafetyInput, Supervisor};
 
 impl Rig {
+    /// A press at the rig starts a run: its tare now (nothing moves), its drive once the press
+    /// is released.
     pub(super) fn start(&mut self, now_us: u64) {
         self.press_us = now_us;
         self.runs += 1;
@@ -17,8 +20,40 @@ impl Rig {
         self.raw_in = 0;
         self.elapsed_us = 0;
         self.supervisor = Supervisor::new(self.limits);
-        self.phase = Phase::Tare { sum: [0; 2], n: 0 };
+        self.phase = Phase::Tare {
+            sum: [0; 2],
+            n: 0,
+            waiting: false,
+        };
+        self.awaiting_release = true;
+        self.armed_until_us = None;
+        self.button.consume();
         info!("run {=u32}: button pressed, taring", self.runs);
+    }
+
+    /// What stays fixed while this run drives the capstan, for the supervisor.
+    fn drive_context(&self) -> DriveContext {
+        let p = &self.protocol;
+        let given = p.capstan_diameter_mm > 0.0;
+        let diameter_mm = if given {
+            p.capstan_diameter_mm
+        } else {
+            self.limits.default_capstan_diameter_mm
+        };
+        let wrap_rad = p.wrap_deg * (core::f32::consts::PI / 180.0);
+        let max_amplification = if p.wrap_deg > 0.0 && self.limits.max_mu > 0.0 {
+            libm::expf(self.limits.max_mu * wrap_rad)
+        } else {
+            f32::INFINITY
+        };
+        DriveContext {
+            tare_reference_n: self.cal.tare_reference_n,
+            n_per_count: [self.cal.t1.n_per_count, self.cal.t2.n_per_count],
+            zero_counts: [self.cal.t1.zero_counts, self.cal.t2.zero_counts],
+            capstan_radius_m: diameter_mm * 0.5e-3,
+            max_amplification,
+            drive_v: self.cal.amp.drive_v(p.amp_control_v),
+        }
     }
 
     /// The tare is over: check the load it saw against the stored zeros ([`TARE_MAX_N`]),
@@ -55,6 +90,7 @@ impl Rig {
         let phase = Phase::Run(Steps::new(&self.protocol));
         // (Force mode: the controller starts at rest, nothing learned.)
         self.force = ForceRun::new(&self.protocol, &self.limits);
+        self.supervisor.drive(self.drive_context());
         let fault = fault.map(|(kind, ch, value)| Fault {
             kind,
             channel: Some(ch),
@@ -71,14 +107,28 @@ impl Rig {
         }
     }
 
-    /// One sample of a run (its tare included): a fault ends it in this very sample.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    /// One sample of a run (its tare included): a fault ends it in this very sample. `edge`:
+    /// the button's; `abort`: the run is stopped (its press's edge, or the host's `abort`).
+    #[inline]
     pub(super) fn step_running(
         &mut self,
         inp: &Inputs,
-        pressed: bool,
+        edge: Edge,
+        abort: bool,
         sink: &mut impl LogSink,
     ) -> Outputs {
+        if abort {
+            self.button.consume();
+        }
+        if let Edge::Released { .. } = edge {
+            self.awaiting_release = false;
+        }
+        // Held from the start of the run, never released: cancelled before the drive is on.
+        let held = edge == Edge::Held && self.awaiting_release;
+        if let Phase::Tare { waiting: true, .. } = self.phase {
+            // The run's clock stands still while the drive waits for the release.
+            self.press_us += self.period_us as u64;
+        }
         let elapsed_us = self.run_clock(inp.now_us);
         let t_us = self.since_trigger_us(elapsed_us);
         let counts_ok = match inp.counts {
@@ -94,9 +144,13 @@ impl Rig {
 
         // Safety first: a fault ends the run in this very sample (a tare that is refused,
         // before the amplifier is ever on).
-        let fault = if pressed {
+        let fault = if abort || held {
             Some(Fault {
-                kind: FaultKind::Abort,
+                kind: if held {
+                    FaultKind::ButtonHeld
+                } else {
+                    FaultKind::Abort
+                },
                 channel: None,
                 value: 0.0,
                 t_us,
@@ -104,11 +158,12 @@ impl Rig {
         } else if tare_fault.is_some() {
             tare_fault
         } else {
+            let driven = self.driven((elapsed_us / 1000) as u32);
             self.supervisor.check(&SafetyInput {
                 t_us,
                 counts: inp.counts,
                 force_n,
-                cord_check_armed: self.level_held((elapsed_us / 1000) as u32),
+                driven,
             })
         };
         if let Some(f) = fault {
@@ -126,7 +181,7 @@ impl Rig {
     }
 
     /// The run's clock on this sample: µs from the press, on the sample grid.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     fn run_clock(&mut self, now_us: u64) -> u64 {
         let period_us = self.period_us as u64;
         // A sample comes one period after the last, give or take the clock's latency: then it
@@ -141,9 +196,25 @@ impl Rig {
         self.elapsed_us
     }
 
-    /// While taring: add the sample to the tare; on its last sample, announce the run with
-    /// the calibration it will use. Returns the fault that refuses the run, if any.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    /// The capstan as the supervisor sees it on this sample: driven once the tare is over,
+    /// with the servo's command and whether a level is held.
+    #[inline]
+    fn driven(&self, elapsed_ms: u32) -> Option<Driven> {
+        let Phase::Run(steps) = &self.phase else {
+            return None;
+        };
+        let servo_deg = steps.servo_deg();
+        Some(Driven {
+            servo_deg,
+            at_rest: servo_deg == self.protocol.rest_deg,
+            level_held: steps.level_held(elapsed_ms),
+        })
+    }
+
+    /// While taring: add the sample to the tare; on its last sample (once the press that
+    /// started the run is released), announce the run with the calibration it will use.
+    /// Returns the fault that refuses the run, if any.
+    #[inline]
     fn tare_sample(
         &mut self,
         counts: Option<[u16; 2]>,
@@ -151,15 +222,27 @@ impl Rig {
         t_us: i64,
         sink: &mut impl LogSink,
     ) -> Option<Fault> {
-        let Phase::Tare { sum, n } = &mut self.phase else {
+        let period_us = self.period_us as u64;
+        let tare_end_us = self.protocol.tare_ms as u64 * 1000;
+        let awaiting = self.awaiting_release;
+        let Phase::Tare { sum, n, waiting } = &mut self.phase else {
             return None;
         };
-        if let Some(c) = counts {
-            sum[0] += c[0] as u64;
-            sum[1] += c[1] as u64;
-            *n += 1;
+        if !*waiting {
+            if let Some(c) = counts {
+                sum[0] += c[0] as u64;
+                sum[1] += c[1] as u64;
+                *n += 1;
+            }
+            if elapsed_us + period_us < tare_end_us {
+                return None;
+            }
         }
-        if elapsed_us + (self.period_us as u64) < self.protocol.tare_ms as u64 * 1000 {
+        if awaiting {
+            if !*waiting {
+                info!("the tare is done: the drive waits for the button's release");
+            }
+            *waiting = true;
             return None;
         }
         let (sum, n) = (*sum, *n);
@@ -175,7 +258,7 @@ impl Rig {
     }
 
     /// Decimated raw samples for the log, from the run start on.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     fn log_raw(
         &mut self,
         inp: &Inputs,
@@ -200,7 +283,7 @@ impl Rig {
     /// One sample of the steps (after the tare): the step held (in force mode, the servo
     /// command of the controller holding its T2 target), the raw log, its window, its pair when
     /// due, the run's end after the last.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     fn step_sample(
         &mut self,
         inp: &Inputs,
@@ -260,6 +343,7 @@ impl Rig {
         self.emit(sink, Record::RunEnd(end));
         info!("run {=u32} ended: {=u32} pairs", self.runs, self.pairs);
         self.phase = Phase::Idle { latched: fault };
+        self.awaiting_release = false;
         self.idle_servo_deg = self.protocol.rest_deg;
         // The tare's zeros were for this run only; the idle checks start afresh.
         [self.cal.t1.zero_counts, self.cal.t2.zero_counts] = self.zeros;

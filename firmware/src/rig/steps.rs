@@ -41,7 +41,7 @@ impl Steps {
 
     /// The sample at `elapsed_us` (its counts, if both converted): moves to the step being
     /// held then, and offers the counts to its window.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     pub(super) fn sample(&mut self, p: &Protocol, elapsed_us: u64, counts: Option<[u16; 2]>) {
         let elapsed_ms = (elapsed_us / 1000) as u32;
         if elapsed_ms >= self.next_ms {
@@ -54,7 +54,7 @@ impl Steps {
 
     /// Which step is being held at `elapsed_ms` (steps start at `step_start_ms(k)`), and when
     /// the next one starts.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     fn advance(&mut self, p: &Protocol, elapsed_ms: u32) {
         let n = p.levels();
         let k = ((elapsed_ms - p.step_start_ms(0)) / p.dwell_ms).min(n + 1);
@@ -83,7 +83,7 @@ impl Steps {
 
     /// The step's pair, on the last sample of its window (the sample at `elapsed_us`, the next
     /// `period_us` later); once.
-    #[cfg_attr(not(target_os = "none"), inline(always))]
+    #[inline]
     pub(super) fn pair_due(
         &mut self,
         p: &Protocol,

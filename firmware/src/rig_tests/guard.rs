@@ -169,7 +169,7 @@ fn a_sensitivity_that_would_blind_the_check_is_refused_wherever_it_comes_in() {
     let got: Vec<_> = replies(&sink).iter().map(|r| r.error).collect();
     let want: Vec<_> = lines.iter().map(|(_, e)| Some(*e)).collect();
     assert_eq!(got, want);
-    assert_eq!(*rig.calibration(), Calibration::default());
+    assert_eq!(*rig.calibration(), Calibration::default().typed());
     // From flash (or anywhere else) the same rule: use_settings refuses it.
     let mut s = rig.settings();
     s.calibration.t2.n_per_count = 0.01253;
@@ -187,13 +187,11 @@ fn a_sensitivity_that_would_blind_the_check_is_refused_wherever_it_comes_in() {
 fn a_built_in_calibration_that_is_blind_never_runs() {
     // No check on the way in (the firmware's own defaults): the run's tare refuses it.
     let cal = Calibration {
-        t2: crate::calib::ChannelCal {
-            zero_counts: 400.0,
-            n_per_count: 0.01253,
-        },
+        t2: crate::calib::ChannelCal::placeholder(400.0, 0.01253),
         ..Calibration::default()
-    };
-    let mut rig = Rig::new(Protocol::default(), cal, SafetyLimits::default()).unwrap();
+    }
+    .typed();
+    let mut rig = Rig::new(Protocol::default(), cal, super::limits()).unwrap();
     let tr = drive(
         &mut rig,
         &move |_, o| (plant_counts(o, &cal, 0.0), false),
@@ -323,7 +321,7 @@ fn a_zero_under_a_load_is_refused() {
             (CommandKind::Zero, None),
         ]
     );
-    assert_eq!(after_refusal, Calibration::default());
+    assert_eq!(after_refusal, Calibration::default().typed());
     assert_eq!(
         b.rig.calibration().zeros(),
         [rest[0] as f32, rest[1] as f32]
@@ -380,8 +378,8 @@ fn a_fault_while_idle_is_latched_and_recorded_once() {
         (f[0].kind, f[0].channel),
         (FaultKind::OverForce, Some(Channel::T2))
     );
-    // A press acknowledges it; still there, it latches again.
-    for k in 0..40 {
+    // A press (and its release) acknowledges it; still there, it latches again.
+    for k in 0..60 {
         one(&mut rig, &mut sink, t, over, (10..30).contains(&k), None);
         t += 1000;
     }
@@ -485,19 +483,25 @@ fn after_a_reset_the_servo_gets_no_pulse_until_a_person_acknowledges() {
         SafeDuties::for_rig(&rig, 62_500),
         SafeDuties::NO_SERVO_PULSES
     );
-    // The host's `ack` works the same; then `run` starts a run.
+    // The host's `ack` cannot clear a latch a reset left: only a press at the rig.
     let mut rig = thesis_rig();
+    let mut sink = VecSink::default();
     rig.boot_latched(FaultKind::Panic, &mut sink);
     one(&mut rig, &mut sink, t, rest, false, Some(Command::Ack));
+    assert_eq!(replies(&sink)[0].error, Some(CommandError::NeedsPress));
+    assert!(!rig.idle_outputs().servo_pulses);
+    for k in 0..60 {
+        one(&mut rig, &mut sink, t, rest, (10..40).contains(&k), None);
+        t += 1000;
+    }
     assert!(rig.idle_outputs().servo_pulses);
-    one(
-        &mut rig,
-        &mut sink,
-        t + 1000,
-        rest,
-        false,
-        Some(Command::Run),
-    );
+    // Then `run` arms a run, which only a press starts.
+    one(&mut rig, &mut sink, t, rest, false, Some(Command::Run));
+    assert!(!rig.is_running() && rig.is_armed());
+    assert_eq!(replies(&sink)[1].error, None);
+    for k in 0..20 {
+        one(&mut rig, &mut sink, t + 1000 * (k + 1), rest, k >= 5, None);
+    }
     assert!(rig.is_running());
 }
 

@@ -139,7 +139,7 @@ impl CampaignConfig {
             cord: cs,
             protocol,
             calibration: self.calibration,
-            limits: self.limits,
+            limits: setup::cord_limits(&self.limits, &plant),
             seed: derive_seed(run_seed, &[0x0070_6c61_6e74]),
             injections,
             keep_raw: self.keep_raw,

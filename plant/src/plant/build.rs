@@ -175,6 +175,9 @@ impl CordState {
             broken: false,
             snag: false,
             unplugged: [false; 2],
+            frozen: [None; 2],
+            servo_stalled: false,
+            amp_released: false,
             zero,
             counts_per_n: [cpn, cpn],
             trigger: false,
@@ -200,6 +203,15 @@ fn check_constants(cfg: &PlantConfig) -> Result<(), PlantError> {
     check_servo(&cfg.servo)?;
     check_cord_and_motor(&cfg.cord, &cfg.motor)?;
     check_sensor(&cfg.sensor)?;
+    let a = cfg.adc;
+    check(
+        a.offset_counts.is_finite() && (0.0..=100.0).contains(&a.offset_counts),
+        "adc.offset_counts",
+    )?;
+    check(
+        a.noise_sd_counts.is_finite() && (0.0..=50.0).contains(&a.noise_sd_counts),
+        "adc.noise_sd_counts",
+    )?;
     check(cfg.max_step_us > 0, "max_step_us")?;
     check(cfg.refresh_us > 0, "refresh_us")?;
     check_disturbances(&cfg.disturbances)
@@ -277,6 +289,10 @@ fn check_cord_and_motor(c: &CordConfig, m: &MotorConfig) -> Result<(), PlantErro
     check(
         m.amp_filter_tau_s.is_finite() && m.amp_filter_tau_s >= 0.0,
         "motor.amp_filter_tau_s",
+    )?;
+    check(
+        m.amp_filter_released_tau_s.is_finite() && m.amp_filter_released_tau_s >= 0.0,
+        "motor.amp_filter_released_tau_s",
     )?;
     Ok(())
 }

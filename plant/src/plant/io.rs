@@ -55,10 +55,25 @@ impl Plant {
         } else {
             duty as f64 / max_duty as f64 * m.amp_full_scale_v
         };
+        self.cords[i].amp_released = false;
         self.cords[i].amp_control_v = v;
         self.settled_until_us = 0;
         if m.amp_filter_tau_s <= 0.0 {
             self.cords[i].amp_filtered_v = v;
+            self.update_drive();
+        }
+        self.note_safe(i);
+    }
+
+    /// Cord `i`'s amplifier PWM pin is released (a reset: every pin an input): the control
+    /// input falls through the filter's resistor and the pull-down
+    /// (`motor.amp_filter_released_tau_s`) until the pin is driven again.
+    pub fn release_amp(&mut self, i: usize) {
+        self.cords[i].amp_control_v = 0.0;
+        self.cords[i].amp_released = true;
+        self.settled_until_us = 0;
+        if self.cfg.motor.amp_filter_released_tau_s <= 0.0 {
+            self.cords[i].amp_filtered_v = 0.0;
             self.update_drive();
         }
         self.note_safe(i);
@@ -126,12 +141,16 @@ impl Plant {
     // of both channels come first (they do not depend on the generator), and the generator's
     // state is copied into locals for the two draws (kept in registers between them, written
     // back once). The draws are the same, in the same order (T1's, then T2's), and an unplugged
-    // channel still draws nothing. (Inlined into host-sim's sample loop, where it is called
-    // every simulated sample: 4 instructions per sample fewer than the call.)
+    // channel still draws nothing. With an ADC of its own noise, or a frozen channel, the two
+    // conversions are made one after the other (each draws its sensor's noise, then the ADC's).
     #[inline]
     pub fn read_both(&mut self, i: usize) -> [Result<u16, AdcError>; 2] {
-        let drive_on = self.drive_v > 0.0;
+        let adc = self.cfg.adc;
         let c = &self.cords[i];
+        if adc.noise_sd_counts > 0.0 || c.frozen[0].is_some() || c.frozen[1].is_some() {
+            return [self.convert(i, Channel::T1), self.convert(i, Channel::T2)];
+        }
+        let drive_on = self.drive_v > 0.0;
         let plugged = [!c.unplugged[0], !c.unplugged[1]];
         let mut counts = [0.0; 2];
         if plugged[0] {
@@ -151,9 +170,16 @@ impl Plant {
             self.rng = Rng::from_state(state);
         }
         let sat = self.cfg.sensor.saturation_counts;
+        let sensor = |k: usize| {
+            if plugged[k] {
+                saturate(counts[k], sat)
+            } else {
+                0.0
+            }
+        };
         [
-            Ok(quantise(saturate(counts[0], sat))),
-            Ok(quantise(saturate(counts[1], sat))),
+            Ok(quantise(sensor(0) + adc.offset_counts)),
+            Ok(quantise(sensor(1) + adc.offset_counts)),
         ]
     }
 
@@ -164,10 +190,11 @@ impl Plant {
     }
 
     /// The analog value one conversion of cord `i`'s force channel sees now, in ADC counts
-    /// before quantisation (the sensor's output through its divider, noise included: one
-    /// noise draw per call, as [`Plant::read_counts`], which rounds and clamps this). An
-    /// unplugged sensor reads 0. For a harness with an ADC of its own (the emulated RP2040's):
-    /// `volts at the pin = counts × V_ref / 4096`.
+    /// before quantisation (the sensor's output through its divider, its noise, then the
+    /// ADC's offset and noise: one draw of each per call, as [`Plant::read_counts`], which
+    /// rounds and clamps this). An unplugged sensor reads the ADC's offset and noise only, a
+    /// frozen one the value it froze at and the ADC's. For a harness with an ADC of its own
+    /// (the emulated RP2040's, which has neither): `volts at the pin = counts × V_ref / 4096`.
     #[inline]
     pub fn read_analog(&mut self, i: usize, ch: Channel) -> f64 {
         self.analog(i, ch)
@@ -178,14 +205,32 @@ impl Plant {
     fn analog(&mut self, i: usize, ch: Channel) -> f64 {
         let drive_on = self.drive_v > 0.0;
         let c = &self.cords[i];
-        if c.unplugged[ch as usize] {
-            return 0.0;
+        let k = ch as usize;
+        let sensor = if c.unplugged[k] {
+            0.0
+        } else if let Some(held) = c.frozen[k] {
+            held
+        } else {
+            let mut counts = Self::noiseless_counts(c, ch, drive_on);
+            if self.noise_sd_counts > 0.0 {
+                counts += self.noise_sd_counts * self.rng.normal();
+            }
+            saturate(counts, self.cfg.sensor.saturation_counts)
+        };
+        let adc = self.cfg.adc;
+        let mut v = sensor + adc.offset_counts;
+        if adc.noise_sd_counts > 0.0 {
+            v += adc.noise_sd_counts * self.rng.normal();
         }
-        let mut counts = Self::noiseless_counts(c, ch, drive_on);
-        if self.noise_sd_counts > 0.0 {
-            counts += self.noise_sd_counts * self.rng.normal();
-        }
-        saturate(counts, self.cfg.sensor.saturation_counts)
+        v
+    }
+
+    /// What cord `i`'s channel `ch` puts out now without noise, saturated, counts (what a
+    /// frozen channel holds).
+    pub(super) fn held_counts(&self, i: usize, ch: Channel) -> f64 {
+        let c = &self.cords[i];
+        let v = Self::noiseless_counts(c, ch, self.drive_v > 0.0);
+        saturate(v, self.cfg.sensor.saturation_counts)
     }
 
     /// What a plugged channel of cord `c` reads before the noise, in ADC counts.

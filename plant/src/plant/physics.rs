@@ -93,7 +93,9 @@ impl Plant {
         let mut next = u64::MAX;
         // (A frame that takes a servo's power away, or gives it back, changes it too.)
         if self.cords.iter().any(|c| {
-            frame_target_deg(&servo, c) != c.target_deg || c.powered != (c.pending_pulse_us > 0.0)
+            !c.servo_stalled
+                && (frame_target_deg(&servo, c) != c.target_deg
+                    || c.powered != (c.pending_pulse_us > 0.0))
         }) {
             next = self.next_frame_us;
         }
@@ -128,6 +130,9 @@ impl Plant {
         }
         let servo = self.cfg.servo;
         for c in self.cords.iter_mut() {
+            if c.servo_stalled {
+                continue;
+            }
             let target = frame_target_deg(&servo, c);
             // Releasing (angle rising) lets the tension fall; pulling raises it.
             if target != c.target_deg {
@@ -184,15 +189,7 @@ impl Plant {
                 continue;
             }
             self.injections[k].at_us = Some(at);
-            let press_ms = self.cfg.faults.abort_press_ms as u64;
-            let c = &mut self.cords[i];
-            match rep.injection.kind {
-                InjectionKind::CordBreak => c.broken = true,
-                InjectionKind::SensorUnplugged(ch) => c.unplugged[ch as usize] = true,
-                InjectionKind::OverForce => c.snag = true,
-                InjectionKind::Abort => c.abort = Some((at, at + press_ms * 1000)),
-            }
-            c.dirty = true;
+            self.apply_injection(i, rep.injection.kind, at);
             // Already safe (e.g. injected while idle)?
             if self.is_safe(i) {
                 self.injections[k].safe_at_us = Some(at);
@@ -200,10 +197,45 @@ impl Plant {
         }
     }
 
+    /// What `kind` does to cord `i`, from `at_us`.
+    fn apply_injection(&mut self, i: usize, kind: InjectionKind, at_us: u64) {
+        let press_ms = self.cfg.faults.abort_press_ms as u64;
+        let held = match kind {
+            InjectionKind::Frozen(ch) => Some((ch, self.held_counts(i, ch))),
+            _ => None,
+        };
+        let c = &mut self.cords[i];
+        match kind {
+            InjectionKind::CordBreak => c.broken = true,
+            InjectionKind::SensorUnplugged(ch) => c.unplugged[ch as usize] = true,
+            InjectionKind::OverForce => c.snag = true,
+            InjectionKind::Abort => c.abort = Some((at_us, at_us + press_ms * 1000)),
+            InjectionKind::Frozen(_) => {
+                if let Some((ch, v)) = held {
+                    c.frozen[ch as usize] = Some(v);
+                }
+            }
+            InjectionKind::ServoStall => {
+                c.servo_stalled = true;
+                c.target_deg = c.angle_deg;
+            }
+        }
+        c.dirty = true;
+    }
+
+    /// `kind` strikes cord `i` now, whatever its trigger did (a bench's person, a test): the
+    /// same as an injection that comes due now, but not in [`Plant::injections`].
+    pub fn strike(&mut self, i: usize, kind: InjectionKind) {
+        self.settled_until_us = 0;
+        let now = self.t_us;
+        self.apply_injection(i, kind, now);
+    }
+
     /// The RC filter in front of each rig's amplifier input follows its PWM's mean, exactly
-    /// for a duty held over the step; within 1 µV it is there.
+    /// for a duty held over the step; within 1 µV it is there. A released pin (a reset) lets
+    /// it fall with the slower time constant of the resistor and the pull-down.
     fn filter_amp(&mut self, dt_us: u32) {
-        let tau_s = self.cfg.motor.amp_filter_tau_s;
+        let m = self.cfg.motor;
         if self
             .cords
             .iter()
@@ -211,14 +243,26 @@ impl Plant {
         {
             return;
         }
+        let tau_s = m.amp_filter_tau_s;
         if tau_s > 0.0 && self.rc_decay_dt_us != dt_us {
             self.rc_decay_dt_us = dt_us;
             self.rc_decay = libm::exp(-(dt_us as f64) * 1e-6 / tau_s);
         }
+        let released_tau_s = m.amp_filter_released_tau_s;
+        let released_decay = if released_tau_s > 0.0 {
+            libm::exp(-(dt_us as f64) * 1e-6 / released_tau_s)
+        } else {
+            0.0
+        };
         for c in self.cords.iter_mut() {
             let target = c.amp_control_v;
-            let v = target + (c.amp_filtered_v - target) * self.rc_decay;
-            c.amp_filtered_v = if tau_s <= 0.0 || (v - target).abs() < 1e-6 {
+            let (tau, decay) = if c.amp_released {
+                (released_tau_s, released_decay)
+            } else {
+                (tau_s, self.rc_decay)
+            };
+            let v = target + (c.amp_filtered_v - target) * decay;
+            c.amp_filtered_v = if tau <= 0.0 || (v - target).abs() < 1e-6 {
                 target
             } else {
                 v

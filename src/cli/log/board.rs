@@ -117,7 +117,10 @@ fn start_run(board: &mut capstan_link::probe::Connection) -> anyhow::Result<()> 
             "--start: the firmware's command buffer is full; press the rig's button instead"
         );
     }
-    crate::errln!("capstan log: run started (--start); its reply and records follow");
+    crate::errln!(
+        "capstan log: run armed (--start): press the rig's button within 30 s to start it (the \
+         host never starts the drive); its reply and records follow"
+    );
     Ok(())
 }
 

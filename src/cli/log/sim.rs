@@ -1,8 +1,8 @@
 //! `capstan log --sim DIR`: record runs from the simulated board in DIR, as from a board
-//! through a probe. The person at the simulated bench starts each run in turn: with --start
-//! the first by the `run` command (as `capstan log --start` sends it), every other by a press
-//! of the rig's button; the firmware's own rules apply (a run after a fault needs `ack`, and a
-//! press acknowledges a fault instead of starting a run).
+//! through a probe. The person at the simulated bench starts each run in turn by a press of
+//! the rig's button; with --start the first is armed by the `run` command first (as `capstan
+//! log --start` sends it: the host never starts the drive). The firmware's own rules apply (a
+//! run after a fault needs `ack`, and a press acknowledges a fault instead of starting a run).
 //!
 //! The records are written as each bench step ends (a run, a stretch of waiting), so a signal
 //! is honoured between steps: the run in flight finishes, every finished run is kept, and the
@@ -65,7 +65,10 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
     logger.set_provenance(super::provenance(args, None)?);
     logger.keep_interrupted_apart();
     if args.start {
-        crate::errln!("capstan log: run started (--start); its reply and records follow");
+        crate::errln!(
+            "capstan log: run armed (--start); the person at the simulated rig presses its \
+             button; the reply and the records follow"
+        );
     }
     let signal = super::super::signal::stop_flag("log");
     let mut cut = Cut {
@@ -109,15 +112,15 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
 fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
     let start = |i: usize| {
         if i == 0 && args.start {
-            Step::Send("run".into())
+            vec![Step::Send("run".into()), Step::PressIfArmed(PRESS_MS)]
         } else {
-            Step::Press(PRESS_MS)
+            vec![Step::Press(PRESS_MS)]
         }
     };
     if let (None, Some(d)) = (args.runs, args.duration) {
         let mut steps = Vec::new();
         if args.start {
-            steps.push(start(0));
+            steps.extend(start(0));
         }
         // Checked to fit in u32 ms (`check`).
         let mut left = (d * 1e3).round() as u32;
@@ -137,7 +140,8 @@ fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
     });
     let mut steps = Vec::new();
     for i in 0..runs {
-        steps.extend([start(i), Step::UntilRunEnd, Step::Wait(IDLE_MS)]);
+        steps.extend(start(i));
+        steps.extend([Step::UntilRunEnd, Step::Wait(IDLE_MS)]);
     }
     (steps, Some(runs))
 }

@@ -3,9 +3,9 @@
 //! with no run. None of them opens, closes or counts towards a run.
 
 use super::Logger;
-use capstan_link::words::{reply_sentence, source_name};
+use capstan_link::words::{reply_sentence, source_name, unmeasured_lines};
 use firmware::command::CommandKind;
-use firmware::record::{Fault, Live, Record, Reply, SettingsReport};
+use firmware::record::{Fault, Live, Record, Reply, SettingsReport, SettingsSource};
 
 /// Whether the rig is (still) in setup mode once `record` has arrived, `before` whether it
 /// was: after a live reading or an accepted setup-mode command; no longer after `leave`, an
@@ -36,6 +36,14 @@ impl Logger<'_> {
     pub(super) fn settings(&mut self, seq: u32, r: &SettingsReport) -> anyhow::Result<()> {
         self.counts.settings += 1;
         self.files.settings(seq, r)?;
+        // A sensitivity nobody measured: the board runs nothing (said at the session's first
+        // report, and after `defaults`).
+        if self.counts.settings == 1 || r.source == SettingsSource::DefaultsAsked {
+            for line in unmeasured_lines(&r.settings) {
+                crate::errln!("capstan log: {line}");
+                self.files.message("WARN", &format!("seq={seq} {line}"))?;
+            }
+        }
         if self.opts.progress {
             crate::errln!(
                 "capstan log: settings (seq {seq}, {}): {}",

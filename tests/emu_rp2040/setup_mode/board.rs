@@ -149,6 +149,7 @@ pub fn host_sim(c: &Case, board: &Board, end_ms: u64) -> SessionOutput {
         limits: board_limits(),
         seed: c.seed,
         trace_every_ms: 0,
+        injections: Vec::new(),
     };
     let out = run_session(&spec, RamFlash::new(FLASH_PAGES), &steps).expect("host-sim session");
     assert!(out.unanswered.is_empty(), "host-sim: {:?}", out.unanswered);

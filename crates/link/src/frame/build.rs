@@ -94,6 +94,7 @@ fn code_of(field: &str) -> &str {
         "kind" | "fault" => "fault kind",
         "source" => "settings source",
         "order" => "step order",
+        "t1_cal" | "t2_cal" => "sensitivity source",
         f => f,
     }
 }

@@ -1,7 +1,7 @@
 //! The bench's timeline: the operator's button, the case's chip fault and the end, and when
 //! the harness must wake the bench for them.
 
-use super::{Bench, WAKE_BUTTON, WAKE_PANIC, WAKE_STACK_OVERFLOW, WAKE_STOP};
+use super::{Bench, WAKE_BUTTON, WAKE_DEBUGGER, WAKE_PANIC, WAKE_STACK_OVERFLOW, WAKE_STOP};
 use crate::case::{CoreFault, Stop};
 use capstan_plant::InjectionKind;
 
@@ -18,6 +18,9 @@ impl Bench {
         let held = self.case.held_from_power_up_us;
         if held > 0 {
             w.push((0.0, held as f64 * 1e3));
+        }
+        if let Some((from, len)) = self.case.held_us {
+            w.push((from as f64 * 1e3, (from + len) as f64 * 1e3));
         }
         if let (Some(after), Some(r)) = (self.case.press_after_reset_us, self.resets.first()) {
             let at = r.t_ns + after as f64 * 1e3;
@@ -94,7 +97,9 @@ impl Bench {
         if pressed != self.button_pressed {
             self.button_pressed = pressed;
             self.button.push((t_ns, pressed));
-            let start_press = self.case.held_from_power_up_us == 0 && self.button.len() == 1;
+            let start_press = self.case.held_from_power_up_us == 0
+                && self.case.held_us.is_none()
+                && self.button.len() == 1;
             if pressed && self.run_since_ns.is_none() && start_press {
                 // The start press: the run begins once it is debounced (10 samples).
                 self.run_since_ns = Some(t_ns + 10e6);
@@ -110,6 +115,11 @@ impl Bench {
                 Some(CoreFault::Panic { .. }) => out |= WAKE_PANIC,
                 // Struck when the harness has moved the stack pointer (`panicked` too).
                 Some(CoreFault::StackOverflow { .. }) => out |= WAKE_STACK_OVERFLOW,
+                // The debugger's write now; the hang at the first conversion 5 ms later.
+                Some(CoreFault::DebuggerThenHang { .. }) => {
+                    out |= WAKE_DEBUGGER;
+                    self.hang_from_ns = Some(t_ns + crate::case::DEBUGGER_TO_HANG_US as f64 * 1e3);
+                }
                 None => {}
             }
         }
