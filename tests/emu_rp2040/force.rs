@@ -1,6 +1,6 @@
 //! Force control on the release image (issue 43, case `force`): the host loads the thesis fit's
 //! law by `set` lines over RTT (as `capstan rig load-model` sends them), sets force mode and
-//! starts a run; the board holds T2 at 5 then 10 N on a 720° cord, the servo's dead band in the
+//! arms a run that a press at the rig starts; the board holds T2 at 5 then 10 N on a 720° cord, the servo's dead band in the
 //! plant. Against host-sim's session with the same lines at the same samples: the same replies,
 //! and pairs that agree (not to the bit: the emulated servo takes a pulse a frame later than
 //! host-sim's, and in force mode the pulse moves every 10 ms).
@@ -80,11 +80,11 @@ fn force_control_on_the_emulated_board_holds_its_targets_as_host_sim() {
         })
         .collect();
     assert!(targets.contains(&0.0) && targets.contains(&5.0) && targets.contains(&10.0));
-    let busy = &e.bench()["budget"]["idle"];
+    let busy = &e.bench()["budget"]["run"];
     eprintln!(
         "emulated board, force: T2 {:.3} N for 5 N, {:.3} N for 10 N (host-sim {:.3}, {:.3}); \
-         servo at {:.1}° and {:.1}°; cycles per sample (all counted as idle: the run was \
-         started by the host): mean {:.0}, p99.9 {}, max {}",
+         servo at {:.1}° and {:.1}°; cycles per sample during the run: mean {:.0}, p99.9 {}, \
+         max {}",
         ours[0].t2.mean_n,
         ours[1].t2.mean_n,
         theirs[0].t2.mean_n,

@@ -4,7 +4,7 @@
 //! `capstan_truth::discover_cases`).
 //!
 //! The gates (docs/README-discover.md, "The gates as tests") were chosen on master seed 26
-//! (`cargo run --release -p capstan-discover --example calibrate -- 26 12` for each gate as a
+//! (`cargo run --release -p capstan-discover --example calibrate_gates -- 26 12` for each gate as a
 //! test, `--example validate -- 26 12` for the whole search); this test asserts on another seed.
 //!
 //! * `cargo test` runs a fixed slice: one set of every kind (14 sets);

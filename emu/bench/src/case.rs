@@ -361,9 +361,13 @@ pub const FORCE_COMMANDS: [HostLine; 12] = [
     HostLine::between(1_400, "run"),
 ];
 
-/// When the force run ends, plant µs: `run` is taken ~1.4 s after power-up; the press (here the
-/// host's) to the end is pre-trigger 1 s + trigger 0.5 s + 3 dwells of 4 s.
-pub const FORCE_END_US: u64 = 1_400_000 + 1_000_000 + 500_000 + 3 * 4_000_000;
+/// When the operator presses in the force case, plant µs: after the host's `run` armed the
+/// board (~1.4 s after power-up; the host never starts the drive, issue 38).
+pub const FORCE_PRESS_AT_US: u64 = 1_600_000;
+
+/// When the force run ends, plant µs: from the press, pre-trigger 1 s + trigger 0.5 s + 3
+/// dwells of 4 s.
+pub const FORCE_END_US: u64 = FORCE_PRESS_AT_US + 1_000_000 + 500_000 + 3 * 4_000_000;
 
 /// The thesis fit (`capstan analyze` on the bundled data; host-sim's `force::thesis_fit`, which
 /// the test checks it against): the cord of the force case.
@@ -381,15 +385,19 @@ fn force_case() -> Case {
     Case {
         plant,
         cord: CordSetup {
-            press_at_us: None,
+            press_at_us: Some(FORCE_PRESS_AT_US),
+            press_us: PRESS_US,
             ..CordSetup::new(720.0, thesis_fit())
         },
         quick: true,
-        commands: FORCE_COMMANDS.to_vec(),
+        commands: TYPED.into_iter().chain(FORCE_COMMANDS).collect(),
         keep_samples: true,
         ..Case::base(
             "force",
-            "force control from the host (issue 43): the fitted law loaded by set lines, force              mode, a run holding T2 at 5 then 10 N on a 720° cord with the servo's dead band;              compared with host-sim's session",
+            "force control from the host (issue 43): both sensitivities typed, the fitted law \
+             loaded by set lines, force mode, `run` (armed) and a press at the rig, a run holding \
+             T2 at 5 then 10 N on a 720° cord with the servo's dead band; compared with \
+             host-sim's session",
             22,
             Stop::At(FORCE_END_US + 300_000),
         )

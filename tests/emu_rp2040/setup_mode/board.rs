@@ -135,10 +135,26 @@ pub const ZERO_MS: u64 = firmware::setup::MEASURE_MS as u64;
 pub fn host_sim(c: &Case, board: &Board, end_ms: u64) -> SessionOutput {
     let mut steps = Vec::new();
     let mut host_ms = 50; // run_session's host lets the board boot first
+    // The operator's press, if the case has one (a session's presses are steps).
+    let mut press = c
+        .cord
+        .press_at_us
+        .map(|at_us| (at_us / 1000, (c.cord.press_us / 1000) as u32));
     for l in &board.lines {
+        if let Some((at_ms, hold_ms)) = press.filter(|&(at_ms, _)| at_ms < l.sample) {
+            steps.push(Step::Wait((at_ms - host_ms) as u32));
+            steps.push(Step::Press(hold_ms));
+            host_ms = at_ms + hold_ms as u64;
+            press = None;
+        }
         steps.push(Step::Wait((l.sample - 1 - host_ms) as u32));
         steps.push(Step::Send(l.text.clone()));
         host_ms = l.sample + if l.text == "zero" { ZERO_MS } else { 0 };
+    }
+    if let Some((at_ms, hold_ms)) = press {
+        steps.push(Step::Wait((at_ms - host_ms) as u32));
+        steps.push(Step::Press(hold_ms));
+        host_ms = at_ms + hold_ms as u64;
     }
     steps.push(Step::Wait((end_ms - host_ms) as u32));
     let spec = SessionSpec {

@@ -1,4 +1,4 @@
-//! `cargo run --release -p capstan-discover --example calibrate -- SEED PER_KIND [THREADS] [OUT.jsonl]`:
+//! `cargo run --release -p capstan-discover --example calibrate_gates -- SEED PER_KIND [THREADS] [OUT.jsonl]`:
 //! every gate of `capstan discover` as a test (docs/README-discover.md, "The gates as tests"):
 //! on the planted sets of SEED (the varied designs; `CAPSTAN_DISCOVER_CACHE=DIR` keeps them),
 //! each gate's statistic for every testable term at the first step ([`capstan_discover::profile`]),
