@@ -238,6 +238,9 @@ fn load_model_sets_the_fitted_law_and_refuses_a_rig_out_of_its_range() {
     assert!(o.status.success(), "{}", said(&o));
     assert!(said(&o).contains("loaded"), "{}", said(&o));
     assert!(rig(&["set", "mode", "force"]).status.success());
+    // The sensitivities typed by the person (a board runs nothing on its placeholder).
+    assert!(rig(&["set", "t1_n_per_count", "0.015"]).status.success());
+    assert!(rig(&["set", "t2_n_per_count", "0.015"]).status.success());
     let shown = said(&rig(&["show"]));
     for want in [
         "mode               force",

@@ -75,6 +75,15 @@ fn ctrl_c_keeps_the_finished_runs_apart_and_replaces_no_earlier_session() {
     let dir = fresh("ctrl-c");
     let (board, out) = (dir.join("board"), dir.join("session"));
     let (b, o) = (board.to_str().unwrap(), out.to_str().unwrap());
+    // The person types both sensitivities first (a board runs nothing on its placeholder).
+    for ch in ["t1", "t2"] {
+        let key = format!("{ch}_n_per_count");
+        let typed = capstan()
+            .args(["rig", "--sim", b, "set", &key, "0.015"])
+            .output()
+            .unwrap();
+        assert!(typed.status.success(), "{}", String::from_utf8_lossy(&typed.stderr));
+    }
     let first = capstan()
         .args(["log", "--sim", b, "--start", "--runs", "1", "--out", o])
         .output()
