@@ -72,6 +72,7 @@ fn report_renders_in_headless_chromium() {
             figures: None,
             width_mm: 170.0,
             font_pt: 8.0,
+            figure_numbers: false,
             thesis_comparison: false,
             plan: false,
         }),

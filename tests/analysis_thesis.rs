@@ -28,6 +28,7 @@ fn outputs() -> &'static PathBuf {
                 figures: None,
                 width_mm: 170.0,
                 font_pt: 8.0,
+                figure_numbers: false,
                 thesis_comparison: false,
                 plan: false,
             }),

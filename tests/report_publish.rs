@@ -20,6 +20,7 @@ fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_
             figures: figures.map(String::from),
             width_mm,
             font_pt: 8.0,
+            figure_numbers: false,
             thesis_comparison: false,
             plan: false,
         }),

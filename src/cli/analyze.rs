@@ -33,7 +33,8 @@ pub struct Args {
     #[arg(long, default_value_t = 31_415_926)]
     pub seed: u64,
     /// Also write every figure as a standalone file under DIR/figures/ (figure-N-ID.EXT, N as
-    /// in the report): a comma list of svg, png (300 dpi), pdf.
+    /// in the report): a comma list of svg, png (300 dpi, its resolution in the file), pdf. Each
+    /// file is exactly --width-mm wide and at most 225 mm high.
     #[arg(long, value_name = "FORMATS")]
     pub figures: Option<String>,
     /// Width of the figures, mm (85: one journal column; 170: the page). The report's figures
@@ -43,6 +44,10 @@ pub struct Args {
     /// Size of the figures' tick labels, pt (titles and axis labels are a little larger).
     #[arg(long, default_value_t = 8.0)]
     pub font_pt: f64,
+    /// Put "Figure N" into each figure file, above its legend (by default the files carry no
+    /// number: the journal's caption numbers the figure).
+    #[arg(long)]
+    pub figure_numbers: bool,
     /// Compare with the thesis's Table 3 even when the data are not the thesis's (by default
     /// only the thesis data, recognised by their SHA-256, are compared with it).
     #[arg(long)]
@@ -141,6 +146,7 @@ fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
         },
         width_mm: args.width_mm,
         font_pt: args.font_pt,
+        numbers: args.figure_numbers,
     };
     figures.check()?;
     let provenance = crate::provenance::of_input(args.data.as_deref())?;

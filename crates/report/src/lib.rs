@@ -13,6 +13,7 @@
 //!   `plotters`).
 
 pub mod cells;
+pub mod check;
 pub mod context;
 pub mod discovered;
 pub mod export;

@@ -41,11 +41,40 @@ fn measured_style(k: usize) -> LineStyle {
     }
 }
 
-/// Target (dashed) and measured T2 (solid) against time, one panel per run.
+/// Target (dashed) and measured T2 (solid) against time, one panel per run (as many as fit a
+/// page).
 pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> {
-    let panels: Vec<Panel> = runs
+    const X: &str = "time since the trigger (s)";
+    let mut legend = vec![Entry {
+        key: Key::Line(target_style()),
+        label: "T2 target".into(),
+    }];
+    legend.extend(
+        runs.iter()
+            .enumerate()
+            .take(OKABE_ITO.len())
+            .map(|(k, r)| Entry {
+                key: Key::Line(measured_style(k)),
+                label: format!("T2 measured, {}", r.label),
+            }),
+    );
+    if runs.len() > OKABE_ITO.len() {
+        legend.truncate(1);
+        legend.push(Entry {
+            key: Key::Line(measured_style(0)),
+            label: format!(
+                "T2 measured (one colour per run, repeating after {})",
+                OKABE_ITO.len()
+            ),
+        });
+    }
+    let grid = layout.grid(1, 1100, 300);
+    let titles: Vec<&str> = runs.iter().map(|r| r.label).collect();
+    let fit = super::panels_that_fit(layout, grid, &titles, X, &legend);
+    let shown = capstan_engine::analysis::closed_loop::evenly(runs.len(), fit);
+    let panels: Vec<Panel> = shown
         .iter()
-        .enumerate()
+        .map(|&k| (k, &runs[k]))
         .map(|(k, r)| {
             let t = &r.trace;
             let target: Vec<(f64, f64)> = (0..t.len()).map(|i| (t.t_s[i], t.target_n[i])).collect();
@@ -53,7 +82,7 @@ pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> 
                 (0..t.len()).map(|i| (t.t_s[i], t.measured_n[i])).collect();
             Panel {
                 title: r.label.to_string(),
-                x_label: "time since the trigger (s)".into(),
+                x_label: X.into(),
                 y_label: "T2 (N)".into(),
                 series: vec![
                     Series::Line(thin(measured), measured_style(k)),
@@ -63,21 +92,12 @@ pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> 
             }
         })
         .collect();
-    let (cols, w, h) = layout.grid(1, 1100, 300);
-    let chart = figure(&panels, cols, w, h)?;
-    let mut legend = vec![Entry {
-        key: Key::Line(target_style()),
-        label: "T2 target".into(),
-    }];
-    legend.extend(runs.iter().enumerate().map(|(k, r)| Entry {
-        key: Key::Line(measured_style(k)),
-        label: format!("T2 measured, {}", r.label),
-    }));
+    let chart = figure(&panels, grid.0, grid.1, grid.2)?;
     Ok(Figure {
         id: "tracking",
         legend,
         chart,
-        caption: "The T2 target (dashed) and the T2 the rig measured (solid, the firmware's raw log at 100 Hz), over each run. Between the segments the target jumps (steps), moves linearly (a ramp) or swings about its mean (a sine sweep, one frequency per segment).".into(),
+        caption: format!("The T2 target (dashed) and the T2 the rig measured (solid, the firmware's raw log at 100 Hz), over each run. Between the segments the target jumps (steps), moves linearly (a ramp) or swings about its mean (a sine sweep, one frequency per segment).{}", super::selection_note(shown.len(), runs.len(), "runs")),
     })
 }
 
