@@ -83,8 +83,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     capstan_engine::analysis::enough_rows(&ds)?;
     let names = ["report.html", "metrics.json", "predictions.csv"];
     let ours = |rel: &str| rel.starts_with("figures/figure-");
-    let out =
-        capstan_outdir::OutputDir::open_with(&args.out, "analyze", &names, &[("figures", &ours)])?;
+    let tables = |rel: &str| {
+        ["parameters", "models"]
+            .iter()
+            .any(|t| rel == format!("tables/{t}.csv") || rel == format!("tables/{t}.tex"))
+    };
+    let out = capstan_outdir::OutputDir::open_with(
+        &args.out,
+        "analyze",
+        &names,
+        &[("figures", &ours), ("tables", &tables)],
+    )?;
     crate::outputs::say_recovered(&out);
     let mut set = out.stage()?;
     let mut opts = capstan_engine::analysis::Options::default();
@@ -116,6 +125,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         set.write(&f.name, &f.bytes)?;
     }
     a.elapsed.figure_files_s = t_files.elapsed().as_secs_f64();
+    for (name, text) in capstan_report::table_files::table_files(&a, &ctx.provenance.line()) {
+        set.write(&name, text.as_bytes())?;
+    }
     write_predictions(&mut set, &args, &ds, &a)?;
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
@@ -224,7 +236,7 @@ fn write_predictions(
 /// The closing line: what was written where, and how long it took.
 fn say_written(args: &Args, figure_files: usize, t0: Instant) {
     crate::errln!(
-        "wrote {}/report.html, metrics.json, predictions.csv{} in {:.2} s",
+        "wrote {}/report.html, metrics.json, predictions.csv, tables/{{parameters,models}}.{{csv,tex}}{} in {:.2} s",
         args.out.display(),
         if figure_files == 0 {
             String::new()

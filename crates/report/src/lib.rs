@@ -14,6 +14,7 @@
 
 pub mod cells;
 pub mod check;
+pub mod components;
 pub mod context;
 pub mod discovered;
 pub mod export;
@@ -24,6 +25,7 @@ pub mod html;
 pub mod next;
 pub mod parameters;
 pub mod plot;
+pub mod table_files;
 pub mod tables;
 pub mod tracking;
 

@@ -122,7 +122,7 @@ fn legend(a: &Analysis, pal: &Palette) -> Vec<Entry> {
 pub fn t2_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> {
     const X: &str = "T1, servo-side tension (N)";
     let diameters = a.obs.diameters();
-    let title = |d: f64| format!("capstan diameter {d} mm");
+    let title = |d: f64| format!("capstan diameter {d}\u{a0}mm");
     let grid = layout.grid(2, 650, 470);
     let legend = legend(a, pal);
     let titles: Vec<String> = diameters.iter().map(|d| title(*d)).collect();
@@ -202,7 +202,7 @@ pub const MAX_CORD_PANELS: usize = 24;
 /// The title of cord `g`'s panel.
 fn cord_title(a: &Analysis, g: usize) -> String {
     let grp = &a.obs.groups[g];
-    format!("{:.0}°, D = {} mm", grp.wrap_deg, grp.diameter_mm)
+    format!("{:.0}°, D = {}\u{a0}mm", grp.wrap_deg, grp.diameter_mm)
 }
 
 /// The cords drawn one panel each: all, or as many as fit a page (and

@@ -30,7 +30,7 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
             (a.min(r.op.run), b.max(r.op.run))
         });
     let run_span = (run_hi - run_lo).max(1.0);
-    let cord_label = "cord, by capstan diameter".to_string();
+    let cord_label = "cord, by capstan diameter (mm)".to_string();
     // The cord axis names the diameters, at the middle of each one's cords (the colours name
     // the wraps); the layout keeps every k-th where the names would collide.
     let cord_ticks: Vec<(f64, String)> = obs
@@ -41,7 +41,7 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
                 .filter(|(_, grp)| grp.diameter_mm == *d)
                 .map(|(g, _)| g as f64 + 0.5)
                 .collect();
-            (!at.is_empty()).then(|| (at.iter().sum::<f64>() / at.len() as f64, format!("{d} mm")))
+            (!at.is_empty()).then(|| (at.iter().sum::<f64>() / at.len() as f64, format!("{d}")))
         })
         .collect();
     let mut panels = Vec::new();

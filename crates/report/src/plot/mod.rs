@@ -296,7 +296,11 @@ impl Layout {
     pub fn rows_that_fit(&self, cell_h: u32, above_px: f64) -> usize {
         match self.max_height_px {
             None => usize::MAX,
-            Some(m) => (((m - above_px) / f64::from(cell_h.max(1))).floor() as usize).max(1),
+            // Whole pixels: the figure file's height is rounded up.
+            Some(m) => {
+                let room = m.floor() - above_px.ceil() - 1.0;
+                ((room / f64::from(cell_h.max(1))).floor() as usize).max(1)
+            }
         }
     }
 }

@@ -161,22 +161,27 @@ impl Grid {
                 PAD + if label > 0.0 { label + GAP } else { 0.0 } + widest + GAP + TICK_LEN
             })
             .fold(0.0, f64::max);
-        // The right margin holds half the last x tick label: fit the ticks, widen, fit again.
+        // The right margin holds what the last x tick label reaches past the plot area: fit
+        // the ticks, widen, fit again.
         let mut right = PAD + 6.0;
-        for _ in 0..2 {
+        for _ in 0..3 {
             let plot_w = wf - left - right;
+            let mut reach = 0.0f64;
             for (f, p) in frames.iter_mut().zip(panels) {
                 let most = ((plot_w / 36.0) as usize).clamp(2, 8);
                 f.x_ticks = fitted_ticks(p.x_ticks.as_ref(), f.x, plot_w, most, TICK_GAP, |s| {
                     TICK.width(s)
                 });
+                for (v, s) in &f.x_ticks {
+                    reach =
+                        reach.max(super::axis::px(*v, f.x, plot_w) + TICK.width(s) / 2.0 - plot_w);
+                }
             }
-            let half = frames
-                .iter()
-                .flat_map(|f| f.x_ticks.iter())
-                .map(|t| TICK.width(&t.1) / 2.0)
-                .fold(0.0, f64::max);
-            right = right.max(PAD + half.max(6.0));
+            let need = PAD + reach.max(6.0);
+            if need <= right {
+                break;
+            }
+            right = need;
         }
         Grid {
             cols,

@@ -40,7 +40,8 @@ const BOLD_ASCII: [u16; 95] = [
     343, 1042, 712, 688, 716, 716, 494, 596, 479, 712, 652, 924, 646, 652, 583, 712, 366, 712, 838,
 ];
 /// Other characters the figures use: (char, regular, bold), 1/1000 em.
-const OTHER: [(char, u16, u16); 36] = [
+const OTHER: [(char, u16, u16); 37] = [
+    ('\u{a0}', 318, 349),
     ('°', 500, 500),
     ('²', 401, 438),
     ('³', 401, 438),
@@ -143,7 +144,8 @@ impl Font {
 }
 
 /// `s` broken at spaces into lines no wider than `max_px` (a word wider than that is a line of
-/// its own, and [`fit`] shrinks it).
+/// its own, and [`fit`] shrinks it). A no-break space (U+00A0, as between a number and its
+/// unit) does not break.
 pub fn wrap(s: &str, font: Font, max_px: f64) -> Vec<String> {
     let mut lines: Vec<String> = Vec::new();
     let mut line = String::new();
