@@ -17,6 +17,22 @@ pub struct RunTrace<'a> {
     pub bode: &'a [BodePoint],
 }
 
+/// A run's name in words: the raw logs' `d12.7_w720_v10_run2` (capstan diameter, wrap, drive
+/// voltage, run) as "run 2: D = 12.7 mm, 720°, 10 V"; any other name as it is.
+pub fn run_words(label: &str) -> String {
+    let parse = || -> Option<String> {
+        let rest = label.strip_prefix('d')?;
+        let (d, rest) = rest.split_once("_w")?;
+        let (w, rest) = rest.split_once("_v")?;
+        let (v, run) = rest.split_once("_run")?;
+        for x in [d, w, v, run] {
+            x.parse::<f64>().ok()?;
+        }
+        Some(format!("run {run}: D = {d}\u{a0}mm, {w}°, {v}\u{a0}V"))
+    };
+    parse().unwrap_or_else(|| label.to_string())
+}
+
 /// The most points drawn per line: every k-th sample beyond it.
 const MAX_POINTS: usize = 4_000;
 
@@ -55,7 +71,7 @@ pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> 
             .take(OKABE_ITO.len())
             .map(|(k, r)| Entry {
                 key: Key::Line(measured_style(k)),
-                label: format!("T2 measured, {}", r.label),
+                label: format!("T2 measured, {}", run_words(r.label)),
             }),
     );
     if runs.len() > OKABE_ITO.len() {
@@ -69,8 +85,9 @@ pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> 
         });
     }
     let grid = layout.grid(1, 1100, 300);
-    let titles: Vec<&str> = runs.iter().map(|r| r.label).collect();
-    let fit = super::panels_that_fit(layout, grid, &titles, X, &legend);
+    let titles: Vec<String> = runs.iter().map(|r| run_words(r.label)).collect();
+    let refs: Vec<&str> = titles.iter().map(String::as_str).collect();
+    let fit = super::panels_that_fit(layout, grid, &refs, X, &legend);
     let shown = capstan_engine::analysis::closed_loop::evenly(runs.len(), fit);
     let panels: Vec<Panel> = shown
         .iter()
@@ -81,7 +98,7 @@ pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> 
             let measured: Vec<(f64, f64)> =
                 (0..t.len()).map(|i| (t.t_s[i], t.measured_n[i])).collect();
             Panel {
-                title: r.label.to_string(),
+                title: run_words(r.label),
                 x_label: X.into(),
                 y_label: "T2 (N)".into(),
                 series: vec![
@@ -173,18 +190,18 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
     gain.push(Series::Line(vec![(lo, -3.0103), (hi, -3.0103)], three_db));
     let panels = vec![
         Panel {
-            title: "gain of the closed loop (measured T2 / target)".into(),
+            title: "closed-loop gain".into(),
             x_label: "frequency (Hz)".into(),
-            y_label: "gain (dB)".into(),
+            y_label: "gain, measured T2 / target (dB)".into(),
             series: gain,
             x_ticks: Some(ticks.clone()),
             zero_line: true,
             ..Panel::default()
         },
         Panel {
-            title: "phase (measured − target)".into(),
+            title: "closed-loop phase".into(),
             x_label: "frequency (Hz)".into(),
-            y_label: "phase (°)".into(),
+            y_label: "phase, measured − target (°)".into(),
             series: phase,
             x_ticks: Some(ticks),
             zero_line: true,
@@ -197,7 +214,7 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
         .iter()
         .map(|(k, r)| Entry {
             key: Key::Marker(point_marker(*k)),
-            label: r.label.to_string(),
+            label: run_words(r.label),
         })
         .collect();
     legend.push(Entry {
@@ -210,4 +227,17 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
         chart,
         caption: "The closed loop from the T2 target to the measured T2, at each frequency of the stepped sine sweep: the gain and the phase of the measured T2's sine against the target's, fitted by least squares over whole cycles after the first second of each frequency. Where the gain crosses the dashed line is the −3 dB bandwidth.".into(),
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn raw_log_names_read_as_words() {
+        assert_eq!(
+            super::run_words("d12.7_w720_v10_run2"),
+            "run 2: D = 12.7\u{a0}mm, 720°, 10\u{a0}V"
+        );
+        assert_eq!(super::run_words("bench log 3"), "bench log 3");
+        assert_eq!(super::run_words("d12_wx_v10_run2"), "d12_wx_v10_run2");
+    }
 }
