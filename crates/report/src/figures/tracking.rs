@@ -192,7 +192,7 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
         Panel {
             title: "closed-loop gain".into(),
             x_label: "frequency (Hz)".into(),
-            y_label: "gain, measured T2 / target (dB)".into(),
+            y_label: "gain (dB)".into(),
             series: gain,
             x_ticks: Some(ticks.clone()),
             zero_line: true,
@@ -201,7 +201,7 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
         Panel {
             title: "closed-loop phase".into(),
             x_label: "frequency (Hz)".into(),
-            y_label: "phase, measured − target (°)".into(),
+            y_label: "phase (°)".into(),
             series: phase,
             x_ticks: Some(ticks),
             zero_line: true,
@@ -225,7 +225,7 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
         id: "bode",
         legend,
         chart,
-        caption: "The closed loop from the T2 target to the measured T2, at each frequency of the stepped sine sweep: the gain and the phase of the measured T2's sine against the target's, fitted by least squares over whole cycles after the first second of each frequency. Where the gain crosses the dashed line is the −3 dB bandwidth.".into(),
+        caption: "The closed loop from the T2 target to the measured T2, at each frequency of the stepped sine sweep: the gain (the measured T2's amplitude over the target's, in dB) and the phase (the measured sine's minus the target's), fitted by least squares over whole cycles after the first second of each frequency. Where the gain crosses the dashed line is the −3 dB bandwidth.".into(),
     }))
 }
 
