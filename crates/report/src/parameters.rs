@@ -151,6 +151,18 @@ fn component(
     }
 }
 
+/// The cords at the smallest and the largest wrap: the units of the wrap-extrapolation error.
+fn edge_cords(a: &Analysis) -> usize {
+    let obs = &a.obs;
+    let wraps = capstan_engine::fit::stats::distinct(obs.groups.iter().map(|g| g.wrap_deg));
+    match (wraps.first(), wraps.last()) {
+        (Some(lo), Some(hi)) => (obs.groups.iter())
+            .filter(|g| g.wrap_deg == *lo || g.wrap_deg == *hi)
+            .count(),
+        _ => 0,
+    }
+}
+
 /// The variance components of a new measurement, each with its 95 % interval
 /// ([`crate::components`] says how).
 fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
@@ -206,15 +218,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         "fewer than two folds",
     ));
     let we = &pm.wrap_extrapolation_error;
-    let wraps = capstan_engine::fit::stats::distinct(obs.groups.iter().map(|g| g.wrap_deg));
-    let edge_cords = match (wraps.first(), wraps.last()) {
-        (Some(lo), Some(hi)) if we.rows > 0 => obs
-            .groups
-            .iter()
-            .filter(|g| g.wrap_deg == *lo || g.wrap_deg == *hi)
-            .count(),
-        _ => 0,
-    };
+    let edge_cords = if we.rows > 0 { edge_cords(a) } else { 0 };
     out.push(component(
         ("wrap_extrapolation_error.sd_n", "error of extrapolating in wrap (SD)", "N"),
         we.sd_n,

@@ -83,8 +83,19 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
         }
     }
     let (cols, w, h) = layout.grid(3, 430, 300);
-    // Panels come model by model; with two columns, a column per model.
-    let (panels, first, second) = match cols {
+    let (panels, first, second) = arranged(panels, cols);
+    Ok(Figure {
+        id: "residuals",
+        legend: pal.legend(),
+        chart: figure(&panels, cols, w, h)?,
+        caption: format!("Residuals of T2 (measured − model) against T1, step and cord, for Euler-Eytelwein ({}) and the extended model ({}), one colour per wrap, on a common scale. Residual = measured T2 − the model's T2. On the cord axis the cords come diameter by diameter (the smallest capstan's first; the ticks name the diameters), coloured by wrap, and each cord holds its runs from left (first) to right (last). From predictions.csv (t2_n − t2_baseline_n, t2_n − t2_extended_n).{}", first, second, super::drawn_note(a)),
+    })
+}
+
+/// The six residual panels (model by model) for `cols` columns: a row per model with three, a
+/// column per model with two, one under the other with one; and where each model's panels are.
+fn arranged(panels: Vec<Panel>, cols: usize) -> (Vec<Panel>, &'static str, &'static str) {
+    match cols {
         3 => (panels, "top row", "bottom row"),
         2 => {
             let mut by: Vec<Option<Panel>> = panels.into_iter().map(Some).collect();
@@ -93,13 +104,7 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
             (p, "left column", "right column")
         }
         _ => (panels, "first three panels", "last three"),
-    };
-    Ok(Figure {
-        id: "residuals",
-        legend: pal.legend(),
-        chart: figure(&panels, cols, w, h)?,
-        caption: format!("Residuals of T2 (measured − model) against T1, step and cord, for Euler-Eytelwein ({}) and the extended model ({}), one colour per wrap, on a common scale. Residual = measured T2 − the model's T2. On the cord axis the cords come diameter by diameter (the smallest capstan's first; the ticks name the diameters), coloured by wrap, and each cord holds its runs from left (first) to right (last). From predictions.csv (t2_n − t2_baseline_n, t2_n − t2_extended_n).{}", first, second, super::drawn_note(a)),
-    })
+    }
 }
 
 /// The mechanism evidence: every testable mechanism's evidence on the χ²₁ scale, alone and

@@ -3,11 +3,12 @@
 //! reference lines (a threshold) dashed across, named in the legend. Horizontal bars keep the
 //! names readable in a journal column, where ten names under vertical bars would collide.
 
-use super::axis::fitted_ticks;
+use super::axis::{fitted_ticks, Coord};
 use super::panel::{lines, Margins, GAP, LABEL, PAD, TICK, TICK_LEN, TITLE};
-use super::text::{Anchor, Label, ASCENT, DESCENT};
+use super::text::{Anchor, Font, Label, ASCENT, DESCENT};
 use super::{compose, render, Chart, Dash, Entry, Key, Layer, LineStyle, AXIS, GRID, TEXT};
 use anyhow::Result;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 /// A grouped bar chart: for every category one bar per group.
@@ -77,154 +78,115 @@ struct End {
     text: String,
 }
 
+/// A bar chart laid out: its margins, value axis, bands and what every bar end says.
+struct Laid {
+    width: f64,
+    size: (u32, u32),
+    m: Margins,
+    x: (f64, f64),
+    y: (f64, f64),
+    ticks: Vec<(f64, String)>,
+    title: (Vec<String>, Font),
+    value_label: (Vec<String>, Font),
+    names: Vec<(Vec<String>, Font)>,
+    /// Each category's band height and its offset from the top of the plot area, px.
+    bands: Vec<(f64, f64)>,
+    groups: f64,
+    ends: Vec<Vec<End>>,
+}
+
+impl Laid {
+    /// `c` laid out `w` px wide: category names up to 40 % of the width, each band as tall as
+    /// its name's lines or its bars.
+    fn new(c: &Bars, w: u32) -> Laid {
+        let wf = f64::from(w);
+        let title = lines(&c.title, TITLE, wf - 2.0 * PAD);
+        let top = PAD + title.1.block(title.0.len()) + 2.0 * GAP;
+        let value_label = lines(&c.value_label, LABEL, wf - 2.0 * PAD);
+        let bottom =
+            TICK_LEN + GAP + TICK.height() + GAP + value_label.1.block(value_label.0.len()) + PAD;
+        let names: Vec<(Vec<String>, Font)> = c
+            .categories
+            .iter()
+            .map(|s| lines(s, TICK, 0.4 * wf))
+            .collect();
+        let groups = c.groups.len().max(1) as f64;
+        let mut bands = Vec::new();
+        let mut acc = 0.0;
+        for (l, f) in &names {
+            let band = (groups * BAR_H).max(f.block(l.len())) + CAT_GAP;
+            bands.push((band, acc));
+            acc += band;
+        }
+        let name_w = names
+            .iter()
+            .flat_map(|(l, f)| l.iter().map(move |s| f.width(s)))
+            .fold(0.0, f64::max);
+        let m = Margins {
+            left: PAD + name_w + GAP + TICK_LEN,
+            right: PAD + 4.0,
+            top,
+            bottom,
+        };
+        let h = (top + acc.max(BAR_H) + bottom).ceil();
+        let plot_h = h - top - bottom;
+        let plot_w = wf - m.left - m.right;
+        let ends = bar_ends(c);
+        let x = value_range(c, &ends, plot_w);
+        let most = ((plot_w / 36.0) as usize).clamp(2, 8);
+        let ticks = fitted_ticks(None, x, plot_w, most, 8.0, |s| TICK.width(s));
+        Laid {
+            width: wf,
+            size: (w, h as u32),
+            m,
+            x,
+            y: (0.0, plot_h),
+            ticks,
+            title,
+            value_label,
+            names,
+            bands,
+            groups,
+            ends,
+        }
+    }
+
+    /// The data y span of bar `j` of category `k` (data y runs upwards from the plot's foot).
+    fn bar_y(&self, k: usize, j: usize) -> (f64, f64) {
+        let (band, offset) = self.bands[k];
+        let slack = band - CAT_GAP - self.groups * BAR_H;
+        let y0 = offset + CAT_GAP / 2.0 + slack / 2.0 + j as f64 * BAR_H;
+        (self.y.1 - y0 - 1.0, self.y.1 - (y0 + BAR_H - 1.0))
+    }
+
+    fn chart<'a, 'b>(
+        &self,
+        root: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    ) -> Result<ChartContext<'a, SVGBackend<'b>, Coord>> {
+        self.m.build(root, self.x, self.y, &self.ticks, &[])
+    }
+}
+
 /// A horizontal grouped bar chart `w` px wide, as high as its categories need: every bar a
 /// layer of class `mark bar`, every missing value one of class `missing`.
 pub fn bar_chart(c: &Bars, w: u32) -> Result<Chart> {
-    let wf = f64::from(w);
-    let title = lines(&c.title, TITLE, wf - 2.0 * PAD);
-    let top = PAD + title.1.block(title.0.len()) + 2.0 * GAP;
-    let xl = lines(&c.value_label, LABEL, wf - 2.0 * PAD);
-    let bottom = TICK_LEN + GAP + TICK.height() + GAP + xl.1.block(xl.0.len()) + PAD;
-    // Category names at most 40 % of the width, each band tall enough for its lines and bars.
-    let names: Vec<(Vec<String>, _)> = c
-        .categories
-        .iter()
-        .map(|s| lines(s, TICK, 0.4 * wf))
-        .collect();
-    let groups = c.groups.len().max(1) as f64;
-    let bands: Vec<f64> = names
-        .iter()
-        .map(|(l, f)| (groups * BAR_H).max(f.block(l.len())) + CAT_GAP)
-        .collect();
-    let name_w = names
-        .iter()
-        .flat_map(|(l, f)| l.iter().map(move |s| f.width(s)))
-        .fold(0.0, f64::max);
-    let left = PAD + name_w + GAP + TICK_LEN;
-    let right = PAD + 4.0;
-    let plot_h: f64 = bands.iter().sum::<f64>().max(BAR_H);
-    let h = (top + plot_h + bottom).ceil();
-    let plot_h = h - top - bottom;
-    let plot_w = wf - left - right;
-    let ends = bar_ends(c);
-    let x = value_range(c, &ends, plot_w);
-    let ticks = fitted_ticks(
-        None,
-        x,
-        plot_w,
-        ((plot_w / 36.0) as usize).clamp(2, 8),
-        8.0,
-        |s| TICK.width(s),
-    );
-    let m = Margins {
-        left,
-        right,
-        top,
-        bottom,
-    };
-    let size = (w, h.ceil() as u32);
-    let y = (0.0, plot_h);
-    // Band k spans [y_k, y_k + band] from the top: data y runs upwards, so y = plot_h − offset.
-    let mut offsets = Vec::new();
-    let mut acc = 0.0;
-    for b in &bands {
-        offsets.push(acc);
-        acc += b;
-    }
-    let bar_y = |k: usize, j: usize| {
-        let slack = bands[k] - CAT_GAP - groups * BAR_H;
-        let y0 = offsets[k] + CAT_GAP / 2.0 + slack / 2.0 + j as f64 * BAR_H;
-        (plot_h - y0 - 1.0, plot_h - (y0 + BAR_H - 1.0))
-    };
+    let l = Laid::new(c, w);
     let mut labels = Vec::new();
-    let axes = render(size, |root| {
+    let axes = render(l.size, |root| {
         root.fill(&WHITE)?;
-        let mut chart = m.build(root, x, y, &ticks, &[])?;
-        for (t, _) in &ticks {
-            chart.draw_series(LineSeries::new([(*t, y.0), (*t, y.1)], GRID))?;
-        }
-        let lift = (ASCENT - DESCENT) / 2.0;
-        let corner = chart.backend_coord(&(x.0, y.0));
-        for (t, s) in &ticks {
-            let (px, py) = chart.backend_coord(&(*t, y.0));
-            root.draw(&PathElement::new(
-                vec![(px, py), (px, py + TICK_LEN as i32)],
-                AXIS,
-            ))?;
-            let base = f64::from(py) + TICK_LEN + GAP + ASCENT * TICK.px;
-            labels.push(Label::new(
-                s.clone(),
-                (f64::from(px), base),
-                TICK,
-                Anchor::Middle,
-            ));
-        }
-        root.draw(&PathElement::new(
-            vec![corner, chart.backend_coord(&(x.1, y.0))],
-            AXIS,
-        ))?;
-        if x.0 < 0.0 {
-            chart.draw_series(LineSeries::new([(0.0, y.0), (0.0, y.1)], AXIS))?;
-        }
-        for (v, _) in &c.lines {
-            let style = LINE_RED.stroke_width(2);
-            chart.draw_series(DashedLineSeries::new(
-                [(*v, y.0), (*v, y.1)],
-                super::DASH.0,
-                super::DASH.1,
-                style,
-            ))?;
-        }
-        // Category names, right-aligned left of the plot, centred on their band.
-        for (k, (l, f)) in names.iter().enumerate() {
-            let centre = f64::from(
-                chart
-                    .backend_coord(&(x.0, plot_h - offsets[k] - bands[k] / 2.0))
-                    .1,
-            );
-            let first = centre - f.block(l.len()) / 2.0 + ASCENT * f.px;
-            for (i, line) in l.iter().enumerate() {
-                labels.push(Label::new(
-                    line.clone(),
-                    (
-                        f64::from(corner.0) - GAP - TICK_LEN,
-                        first + i as f64 * f.line(),
-                    ),
-                    *f,
-                    Anchor::End,
-                ));
-            }
-        }
-        // Each bar's value (or the missing note) at its end.
-        for (k, row) in ends.iter().enumerate() {
-            for (j, e) in row.iter().enumerate() {
-                let (y0, y1) = bar_y(k, j);
-                let (px, py) = chart.backend_coord(&(e.at, (y0 + y1) / 2.0));
-                let (dx, anchor) = if e.at < 0.0 {
-                    (-GAP, Anchor::End)
-                } else {
-                    (GAP, Anchor::Start)
-                };
-                labels.push(Label {
-                    halo: true,
-                    ..Label::new(
-                        e.text.clone(),
-                        (f64::from(px) + dx, f64::from(py) + lift * TICK.px),
-                        TICK,
-                        anchor,
-                    )
-                });
-            }
-        }
+        let mut chart = l.chart(root)?;
+        value_axis(root, &mut chart, &l, &c.lines, &mut labels)?;
+        category_names(&chart, &l, &mut labels);
+        bar_end_labels(&chart, &l, &mut labels);
         Ok(())
     })?;
     let mut layers = Vec::new();
     for (k, vals) in c.values.iter().enumerate() {
         for (j, (v, (_, color))) in vals.iter().zip(&c.groups).enumerate() {
-            let (y0, y1) = bar_y(k, j);
+            let (y0, y1) = l.bar_y(k, j);
             let v = v.filter(|x| x.is_finite());
-            let svg = render(size, |root| {
-                let mut chart = m.build(root, x, y, &ticks, &[])?;
+            let svg = render(l.size, |root| {
+                let mut chart = l.chart(root)?;
                 match v {
                     Some(v) => chart.draw_series([
                         Rectangle::new([(0.0, y0), (v, y1)], color.filled()),
@@ -241,31 +203,120 @@ pub fn bar_chart(c: &Bars, w: u32) -> Result<Chart> {
             layers.push(Layer { class, svg });
         }
     }
-    // The axis label under the tick labels.
-    let base = top + plot_h + TICK_LEN + GAP + TICK.height() + GAP;
-    let mid = left + plot_w / 2.0;
-    for (i, line) in xl.0.iter().enumerate() {
-        let half = xl.1.width(line) / 2.0;
-        let x = mid.clamp(PAD + half, wf - PAD - half);
+    title_and_value_label(&l, &mut labels);
+    Ok(compose(l.size, axes, &labels, layers))
+}
+
+/// Grid, ticks and their labels, the axis line, the zero line and the reference lines.
+fn value_axis(
+    root: &DrawingArea<SVGBackend, Shift>,
+    chart: &mut ChartContext<SVGBackend, Coord>,
+    l: &Laid,
+    lines: &[(f64, String)],
+    labels: &mut Vec<Label>,
+) -> Result<()> {
+    let (x, y) = (l.x, l.y);
+    for (t, _) in &l.ticks {
+        chart.draw_series(LineSeries::new([(*t, y.0), (*t, y.1)], GRID))?;
+    }
+    for (t, s) in &l.ticks {
+        let (px, py) = chart.backend_coord(&(*t, y.0));
+        root.draw(&PathElement::new(
+            vec![(px, py), (px, py + TICK_LEN as i32)],
+            AXIS,
+        ))?;
+        let base = f64::from(py) + TICK_LEN + GAP + ASCENT * TICK.px;
         labels.push(Label::new(
-            line.clone(),
-            (x, base + ASCENT * xl.1.px + i as f64 * xl.1.line()),
-            xl.1,
+            s.clone(),
+            (f64::from(px), base),
+            TICK,
             Anchor::Middle,
         ));
     }
-    for (i, line) in title.0.iter().enumerate() {
+    root.draw(&PathElement::new(
+        vec![
+            chart.backend_coord(&(x.0, y.0)),
+            chart.backend_coord(&(x.1, y.0)),
+        ],
+        AXIS,
+    ))?;
+    if x.0 < 0.0 {
+        chart.draw_series(LineSeries::new([(0.0, y.0), (0.0, y.1)], AXIS))?;
+    }
+    for (v, _) in lines {
+        chart.draw_series(DashedLineSeries::new(
+            [(*v, y.0), (*v, y.1)],
+            super::DASH.0,
+            super::DASH.1,
+            LINE_RED.stroke_width(2),
+        ))?;
+    }
+    Ok(())
+}
+
+/// Category names, right-aligned left of the plot, centred on their band.
+fn category_names(chart: &ChartContext<SVGBackend, Coord>, l: &Laid, labels: &mut Vec<Label>) {
+    let left = f64::from(chart.backend_coord(&(l.x.0, l.y.0)).0) - GAP - TICK_LEN;
+    for ((lines, f), (band, offset)) in l.names.iter().zip(&l.bands) {
+        let centre = f64::from(chart.backend_coord(&(l.x.0, l.y.1 - offset - band / 2.0)).1);
+        let first = centre - f.block(lines.len()) / 2.0 + ASCENT * f.px;
+        for (i, line) in lines.iter().enumerate() {
+            labels.push(Label::new(
+                line.clone(),
+                (left, first + i as f64 * f.line()),
+                *f,
+                Anchor::End,
+            ));
+        }
+    }
+}
+
+/// Each bar's value (or the missing note) at its end, haloed over the lines it may cross.
+fn bar_end_labels(chart: &ChartContext<SVGBackend, Coord>, l: &Laid, labels: &mut Vec<Label>) {
+    let lift = (ASCENT - DESCENT) / 2.0 * TICK.px;
+    for (k, row) in l.ends.iter().enumerate() {
+        for (j, e) in row.iter().enumerate() {
+            let (y0, y1) = l.bar_y(k, j);
+            let (px, py) = chart.backend_coord(&(e.at, (y0 + y1) / 2.0));
+            let (dx, anchor) = if e.at < 0.0 {
+                (-GAP, Anchor::End)
+            } else {
+                (GAP, Anchor::Start)
+            };
+            labels.push(Label {
+                halo: true,
+                ..Label::new(
+                    e.text.clone(),
+                    (f64::from(px) + dx, f64::from(py) + lift),
+                    TICK,
+                    anchor,
+                )
+            });
+        }
+    }
+}
+
+/// The title above the chart and the value axis's label under its tick labels.
+fn title_and_value_label(l: &Laid, labels: &mut Vec<Label>) {
+    let (title, tf) = &l.title;
+    for (i, line) in title.iter().enumerate() {
+        let y = PAD + ASCENT * tf.px + i as f64 * tf.line();
         labels.push(Label::new(
             line.clone(),
-            (
-                wf / 2.0,
-                PAD + ASCENT * title.1.px + i as f64 * title.1.line(),
-            ),
-            title.1,
+            (l.width / 2.0, y),
+            *tf,
             Anchor::Middle,
         ));
     }
-    Ok(compose(size, axes, &labels, layers))
+    let (vl, vf) = &l.value_label;
+    let base = l.m.top + l.y.1 + TICK_LEN + GAP + TICK.height() + GAP;
+    let mid = l.m.left + (l.width - l.m.left - l.m.right) / 2.0;
+    for (i, line) in vl.iter().enumerate() {
+        let half = vf.width(line) / 2.0;
+        let x = mid.clamp(PAD + half, l.width - PAD - half);
+        let y = base + ASCENT * vf.px + i as f64 * vf.line();
+        labels.push(Label::new(line.clone(), (x, y), *vf, Anchor::Middle));
+    }
 }
 
 /// The length of an empty bar: a fifth of the largest value (1 without any).

@@ -5,7 +5,7 @@
 //! plot area [`MIN_PLOT_H`] high.
 
 use super::axis::{fitted_ticks, ranges, Axis, Coord};
-use super::text::{fit, wrap, Anchor, Font, Label};
+use super::text::{fit, wrap, Anchor, Font, Label, ASCENT, DESCENT};
 use super::{Panel, AXIS, GRID, ZERO};
 use anyhow::Result;
 use plotters::coord::Shift;
@@ -122,6 +122,60 @@ pub(super) struct Grid {
     pub(super) frames: Vec<Frame>,
 }
 
+impl Frame {
+    /// Panel `p`'s ranges, y ticks and wrapped text in a cell `w` px wide whose plot area is
+    /// `plot_h` px high (its x ticks come with the plot's width, [`fit_x_ticks`]).
+    fn new(p: &Panel, w: f64, plot_h: f64) -> Frame {
+        let (x, y) = ranges(p);
+        let most = ((plot_h / (TICK.height() + 8.0)) as usize).clamp(2, 6);
+        Frame {
+            x,
+            y,
+            x_ticks: Vec::new(),
+            y_ticks: fitted_ticks(None, y, plot_h, most, 4.0, |_| TICK.height()),
+            title: lines(&p.title, TITLE, w - 2.0 * PAD),
+            x_label: lines(&p.x_label, LABEL, w - 2.0 * PAD),
+            y_label: lines(&p.y_label, LABEL, plot_h),
+        }
+    }
+
+    /// The space left of the plot area: the turned y label and the y tick labels.
+    fn left(&self) -> f64 {
+        let widest = (self.y_ticks.iter())
+            .map(|t| TICK.width(&t.1))
+            .fold(0.0, f64::max);
+        let label = self.y_label.1.block(self.y_label.0.len());
+        PAD + if label > 0.0 { label + GAP } else { 0.0 } + widest + GAP + TICK_LEN
+    }
+}
+
+/// The x ticks of every frame for a plot area between `left` and the right margin, and that
+/// margin: what the last x tick label reaches past the plot area (fit the ticks, widen, fit
+/// again).
+fn fit_x_ticks(frames: &mut [Frame], panels: &[Panel], w: f64, left: f64) -> f64 {
+    let mut right = PAD + 6.0;
+    for _ in 0..3 {
+        let plot_w = w - left - right;
+        let mut reach = 0.0f64;
+        for (f, p) in frames.iter_mut().zip(panels) {
+            let most = ((plot_w / 36.0) as usize).clamp(2, 8);
+            f.x_ticks = fitted_ticks(p.x_ticks.as_ref(), f.x, plot_w, most, TICK_GAP, |s| {
+                TICK.width(s)
+            });
+            for (v, s) in &f.x_ticks {
+                let at = super::axis::px(*v, f.x, plot_w);
+                reach = reach.max(at + TICK.width(s) / 2.0 - plot_w);
+            }
+        }
+        let need = PAD + reach.max(6.0);
+        if need <= right {
+            break;
+        }
+        right = need;
+    }
+    right
+}
+
 impl Grid {
     /// `panels` on `cols` columns of cells `w` px wide and at least `h` high.
     pub(super) fn new(panels: &[Panel], cols: usize, w: u32, h: u32) -> Grid {
@@ -132,57 +186,9 @@ impl Grid {
         let wf = f64::from(w);
         let (t, b) = (top(&titles, wf), bottom(&xl, wf));
         let plot_h = f64::from(h) - t - b;
-        let mut frames: Vec<Frame> = panels
-            .iter()
-            .map(|p| {
-                let (x, y) = ranges(p);
-                let most = ((plot_h / (TICK.height() + 8.0)) as usize).clamp(2, 6);
-                let y_ticks = fitted_ticks(None, y, plot_h, most, 4.0, |_| TICK.height());
-                Frame {
-                    x,
-                    y,
-                    x_ticks: Vec::new(),
-                    y_ticks,
-                    title: lines(&p.title, TITLE, wf - 2.0 * PAD),
-                    x_label: lines(&p.x_label, LABEL, wf - 2.0 * PAD),
-                    y_label: lines(&p.y_label, LABEL, plot_h),
-                }
-            })
-            .collect();
-        let left = frames
-            .iter()
-            .map(|f| {
-                let widest = f
-                    .y_ticks
-                    .iter()
-                    .map(|t| TICK.width(&t.1))
-                    .fold(0.0, f64::max);
-                let label = f.y_label.1.block(f.y_label.0.len());
-                PAD + if label > 0.0 { label + GAP } else { 0.0 } + widest + GAP + TICK_LEN
-            })
-            .fold(0.0, f64::max);
-        // The right margin holds what the last x tick label reaches past the plot area: fit
-        // the ticks, widen, fit again.
-        let mut right = PAD + 6.0;
-        for _ in 0..3 {
-            let plot_w = wf - left - right;
-            let mut reach = 0.0f64;
-            for (f, p) in frames.iter_mut().zip(panels) {
-                let most = ((plot_w / 36.0) as usize).clamp(2, 8);
-                f.x_ticks = fitted_ticks(p.x_ticks.as_ref(), f.x, plot_w, most, TICK_GAP, |s| {
-                    TICK.width(s)
-                });
-                for (v, s) in &f.x_ticks {
-                    reach =
-                        reach.max(super::axis::px(*v, f.x, plot_w) + TICK.width(s) / 2.0 - plot_w);
-                }
-            }
-            let need = PAD + reach.max(6.0);
-            if need <= right {
-                break;
-            }
-            right = need;
-        }
+        let mut frames: Vec<Frame> = panels.iter().map(|p| Frame::new(p, wf, plot_h)).collect();
+        let left = frames.iter().map(Frame::left).fold(0.0, f64::max);
+        let right = fit_x_ticks(&mut frames, panels, wf, left);
         Grid {
             cols,
             rows: panels.len().div_ceil(cols).max(1),
@@ -249,35 +255,40 @@ pub(super) fn draw_axes(
         vec![(corner.0, far.1), corner, (far.0, corner.1)],
         AXIS,
     ))?;
-    let (tick, gap) = (TICK_LEN as i32, GAP);
-    let mut below = f64::from(corner.1) + TICK_LEN + gap;
+    let tick = TICK_LEN as i32;
+    let below = f64::from(corner.1) + TICK_LEN + GAP;
     for (t, s) in &f.x_ticks {
         let (x, y) = chart.backend_coord(&(*t, f.y.0));
         root.draw(&PathElement::new(vec![(x, y), (x, y + tick)], AXIS))?;
-        labels.push(Label::new(
-            s.clone(),
-            (f64::from(x), below + super::text::ASCENT * TICK.px),
-            TICK,
-            Anchor::Middle,
-        ));
+        let at = (f64::from(x), below + ASCENT * TICK.px);
+        labels.push(Label::new(s.clone(), at, TICK, Anchor::Middle));
     }
-    let lift = (super::text::ASCENT - super::text::DESCENT) / 2.0 * TICK.px;
+    let lift = (ASCENT - DESCENT) / 2.0 * TICK.px;
     for (t, s) in &f.y_ticks {
         let (x, y) = chart.backend_coord(&(f.x.0, *t));
         root.draw(&PathElement::new(vec![(x - tick, y), (x, y)], AXIS))?;
-        labels.push(Label::new(
-            s.clone(),
-            (f64::from(x) - TICK_LEN - gap, f64::from(y) + lift),
-            TICK,
-            Anchor::End,
-        ));
+        let at = (f64::from(x) - TICK_LEN - GAP, f64::from(y) + lift);
+        labels.push(Label::new(s.clone(), at, TICK, Anchor::End));
     }
+    let plot = (
+        (f64::from(corner.0), f64::from(far.1)),
+        (f64::from(far.0), f64::from(corner.1)),
+    );
+    panel_text(g, k, plot, labels);
+    Ok(())
+}
+
+/// Panel `k`'s title (centred on its cell), x label (under the tick labels, centred on the
+/// plot area but inside the cell) and y label (turned, at the cell's left, centred on the plot
+/// area); `plot` is the plot area's top-left and bottom-right corner, px.
+fn panel_text(g: &Grid, k: usize, plot: ((f64, f64), (f64, f64)), labels: &mut Vec<Label>) {
+    let f = &g.frames[k];
     let (ox, oy) = g.origin(k);
     let w = f64::from(g.cell.0);
-    // The title, centred on the cell.
+    let ((x0, y0), (x1, y1)) = plot;
     let (tl, tf) = &f.title;
     for (i, line) in tl.iter().enumerate() {
-        let y = oy + PAD + super::text::ASCENT * tf.px + i as f64 * tf.line();
+        let y = oy + PAD + ASCENT * tf.px + i as f64 * tf.line();
         labels.push(Label::new(
             line.clone(),
             (ox + w / 2.0, y),
@@ -285,25 +296,20 @@ pub(super) fn draw_axes(
             Anchor::Middle,
         ));
     }
-    // The x label under the tick labels, centred on the plot area but inside the cell.
-    below += TICK.height() + gap;
+    let below = y1 + TICK_LEN + GAP + TICK.height() + GAP;
     let (xl, xf) = &f.x_label;
-    let mid = (f64::from(corner.0) + f64::from(far.0)) / 2.0;
     for (i, line) in xl.iter().enumerate() {
         let half = xf.width(line) / 2.0;
-        let x = mid.clamp(ox + PAD + half, ox + w - PAD - half);
-        let y = below + super::text::ASCENT * xf.px + i as f64 * xf.line();
+        let x = ((x0 + x1) / 2.0).clamp(ox + PAD + half, ox + w - PAD - half);
+        let y = below + ASCENT * xf.px + i as f64 * xf.line();
         labels.push(Label::new(line.clone(), (x, y), *xf, Anchor::Middle));
     }
-    // The y label at the cell's left, turned, centred on the plot area.
     let (yl, yf) = &f.y_label;
-    let ymid = (f64::from(corner.1) + f64::from(far.1)) / 2.0;
     for (i, line) in yl.iter().enumerate() {
-        let x = ox + PAD + super::text::ASCENT * yf.px + i as f64 * yf.line();
+        let x = ox + PAD + ASCENT * yf.px + i as f64 * yf.line();
         labels.push(Label {
             turned: true,
-            ..Label::new(line.clone(), (x, ymid), *yf, Anchor::Middle)
+            ..Label::new(line.clone(), (x, (y0 + y1) / 2.0), *yf, Anchor::Middle)
         });
     }
-    Ok(())
 }
