@@ -19,6 +19,7 @@ fn analyze_csv(name: &str, body: &str) -> String {
             figures: None,
             width_mm: 170.0,
             font_pt: 8.0,
+            figure_numbers: false,
             thesis_comparison: false,
             plan: false,
         }),

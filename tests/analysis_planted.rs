@@ -67,6 +67,7 @@ fn the_report_on_planted_data_says_what_its_verdicts_say() {
                 figures: None,
                 width_mm: 170.0,
                 font_pt: 8.0,
+                figure_numbers: false,
                 thesis_comparison: false,
                 plan: false,
             }),

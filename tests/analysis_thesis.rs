@@ -29,6 +29,7 @@ fn outputs() -> &'static PathBuf {
                 figures: None,
                 width_mm: 170.0,
                 font_pt: 8.0,
+                figure_numbers: false,
                 thesis_comparison: false,
                 plan: false,
             }),
@@ -260,22 +261,33 @@ fn figures_have_one_colour_per_wrap_and_a_style_per_model() {
             );
         }
     }
-    // The gain is a grouped bar chart by model name; Table 3 has no LOCO bar.
+    // The gain is a grouped bar chart by model, named in words; Table 3 has no LOCO bar.
     let gain = figure_body(&html, "gain");
     assert_eq!(
         gain.matches("class=\"mark bar\"").count(),
         7,
         "4 in-sample + 3 LOCO bars"
     );
+    // (A name may wrap onto two lines at a narrow width; at 170 mm each is one line.)
     for name in [
-        "baseline",
-        "baseline_per_cord",
-        "thesis",
-        "extended",
+        "Euler-Eytelwein, one mu",
+        "Euler-Eytelwein, a mu per cord",
+        "thesis Table 3",
+        "extended model",
         "not refittable",
     ] {
         assert!(gain.contains(&format!(">{name}<")), "gain: {name}");
     }
+    // No identifier on a figure: the mechanisms by the catalogue's words.
+    let evidence = figure_body(&html, "mechanism_evidence");
+    for (id, words) in [
+        ("t2_offset", "T2 sensor offset"),
+        ("contact_heating", "contact heating"),
+    ] {
+        assert!(!evidence.contains(&format!(">{id}<")), "{id} on the figure");
+        assert!(evidence.contains(&format!(">{words}<")), "{words}");
+    }
+    assert!(!gain.contains(">baseline_per_cord<"));
 }
 
 #[test]

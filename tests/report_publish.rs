@@ -1,5 +1,6 @@
 //! The report as a researcher publishes from it: every figure file opens (SVG parses, PNG
-//! decodes, PDF has its page), every number of the headline is the value `metrics.json` holds,
+//! decodes, PDF has its page) at its physical size without a burned-in "Figure N", the tables
+//! are written as CSV and LaTeX, every number of the headline is the value `metrics.json` holds,
 //! the provenance names the input by its SHA-256, and the thesis's Table 3 is compared only on
 //! the thesis data.
 
@@ -21,6 +22,7 @@ fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_
             figures: figures.map(String::from),
             width_mm,
             font_pt: 8.0,
+            figure_numbers: false,
             thesis_comparison: false,
             plan: false,
         }),
@@ -61,22 +63,26 @@ fn every_figure_file_opens_and_is_numbered_as_in_the_report() {
         let stem = dir.join("figures").join(format!("figure-{n}-{id}"));
         let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
         capstan_report::export::svg_parses(&svg).unwrap();
-        // Legend inside the file, sized for a journal column.
+        // Legend inside the file, sized for a journal column; no number unless asked for
+        // (--figure-numbers): the journal's caption numbers it.
         assert!(
             svg.contains("class=\"legend\"") && svg.contains("width=\"85mm\""),
             "{id}"
         );
-        assert!(svg.contains(&format!(">Figure {n}</text>")), "{id}");
-        let (w, h) = capstan_report::export::png_decodes(
-            &std::fs::read(stem.with_extension("png")).unwrap(),
-        )
-        .unwrap();
-        // 85 mm at 300 dpi.
+        assert!(!svg.contains(">Figure "), "{id}");
+        let png = std::fs::read(stem.with_extension("png")).unwrap();
+        let (w, h) = capstan_report::export::png_decodes(&png).unwrap();
+        // 85 mm at 300 dpi, and the file says so (11811 px/m).
         assert_eq!(w, 1004, "{id}");
         assert!(h > 100, "{id}: {h}");
-        let (pages, framed) =
-            capstan_report::export::pdf_pages(&std::fs::read(stem.with_extension("pdf")).unwrap());
+        let info = capstan_report::check::png_info(&png).unwrap();
+        assert_eq!(info.per_metre, Some((11811, 11811)), "{id}");
+        let pdf = std::fs::read(stem.with_extension("pdf")).unwrap();
+        let (pages, framed) = capstan_report::export::pdf_pages(&pdf);
         assert_eq!((pages, framed), (1, true), "{id}");
+        // The page is 85 mm (240.9 pt) wide.
+        let (pw, _) = capstan_report::check::pdf_page_pt(&pdf).unwrap();
+        assert!((pw - 240.945).abs() < 0.01, "{id}: {pw} pt");
     }
 }
 
@@ -105,6 +111,36 @@ fn numbers_in(s: &str) -> Vec<String> {
         i = j;
     }
     out
+}
+
+#[test]
+fn the_tables_are_written_as_csv_and_latex() {
+    let dir = thesis_out();
+    let m = metrics(dir);
+    let csv = std::fs::read_to_string(dir.join("tables/parameters.csv")).unwrap();
+    let rows = m["parameters"].as_array().unwrap();
+    assert_eq!(csv.lines().count(), rows.len() + 1);
+    // The same rows as metrics.json, in order, with the same values.
+    for (line, r) in csv.lines().skip(1).zip(rows) {
+        let key = r["key"].as_str().unwrap();
+        assert!(line.starts_with(&format!("{key},")), "{line}");
+        assert!(
+            line.contains(&format!(",{},", r["value"].as_f64().unwrap())),
+            "{line}"
+        );
+    }
+    for f in [
+        "tables/parameters.tex",
+        "tables/models.tex",
+        "tables/models.csv",
+    ] {
+        let text = std::fs::read_to_string(dir.join(f)).unwrap();
+        assert!(text.is_ascii() || f.ends_with(".csv"), "{f}");
+        assert!(
+            text.contains(&capstan_data::provenance::thesis_sha256()) || f.ends_with(".csv"),
+            "{f}"
+        );
+    }
 }
 
 #[test]

@@ -260,6 +260,8 @@ pub struct EffectEntry {
     pub level: Level,
     /// What it is, physically (the report's and the verdicts' words).
     pub title: &'static str,
+    /// Its name in a few words, for a figure's axis or a table's row (not an identifier).
+    pub label: &'static str,
     /// A note the report adds when the effect is named (what the design cannot resolve of it).
     pub named_note: Option<&'static str>,
     /// The data column it needs beyond wrap, T1 and T2.

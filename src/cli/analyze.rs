@@ -44,7 +44,8 @@ pub struct Args {
     #[arg(long, default_value_t = 31_415_926)]
     pub seed: u64,
     /// Also write every figure as a standalone file under DIR/figures/ (figure-N-ID.EXT, N as
-    /// in the report): a comma list of svg, png (300 dpi), pdf.
+    /// in the report): a comma list of svg, png (300 dpi, its resolution in the file), pdf. Each
+    /// file is exactly --width-mm wide and at most 225 mm high.
     #[arg(long, value_name = "FORMATS")]
     pub figures: Option<String>,
     /// Width of the figures, mm (85: one journal column; 170: the page). The report's figures
@@ -54,6 +55,10 @@ pub struct Args {
     /// Size of the figures' tick labels, pt (titles and axis labels are a little larger).
     #[arg(long, default_value_t = 8.0)]
     pub font_pt: f64,
+    /// Put "Figure N" into each figure file, above its legend (by default the files carry no
+    /// number: the journal's caption numbers the figure).
+    #[arg(long)]
+    pub figure_numbers: bool,
     /// Compare with the thesis's Table 3 even when the data are not the thesis's (by default
     /// only the thesis data, recognised by their SHA-256, are compared with it).
     #[arg(long)]
@@ -89,8 +94,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     capstan_engine::analysis::enough_rows(&ds)?;
     let names = ["report.html", "metrics.json", "predictions.csv"];
     let ours = |rel: &str| rel.starts_with("figures/figure-");
-    let out =
-        capstan_outdir::OutputDir::open_with(&args.out, "analyze", &names, &[("figures", &ours)])?;
+    let tables = |rel: &str| {
+        ["parameters", "models"]
+            .iter()
+            .any(|t| rel == format!("tables/{t}.csv") || rel == format!("tables/{t}.tex"))
+    };
+    let out = capstan_outdir::OutputDir::open_with(
+        &args.out,
+        "analyze",
+        &names,
+        &[("figures", &ours), ("tables", &tables)],
+    )?;
     crate::outputs::say_recovered(&out);
     let mut set = out.stage()?;
     let mut opts = capstan_engine::analysis::Options::default();
@@ -125,6 +139,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         set.write(&f.name, &stamped)?;
     }
     a.elapsed.figure_files_s = t_files.elapsed().as_secs_f64();
+    for (name, text) in capstan_report::table_files::table_files(&a, &ctx.provenance.line()) {
+        set.write(&name, text.as_bytes())?;
+    }
     write_predictions(&mut set, &args, &ds, &a)?;
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
@@ -156,6 +173,7 @@ fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
         },
         width_mm: args.width_mm,
         font_pt: args.font_pt,
+        numbers: args.figure_numbers,
     };
     figures.check()?;
     let provenance = crate::provenance::of_input(args.data.as_deref())?;
@@ -238,7 +256,7 @@ fn write_predictions(
 /// The closing line: what was written where, and how long it took.
 fn say_written(args: &Args, figure_files: usize, t0: Instant) {
     crate::errln!(
-        "wrote {}/report.html, metrics.json, predictions.csv{} in {:.2} s",
+        "wrote {}/report.html, metrics.json, predictions.csv, tables/{{parameters,models}}.{{csv,tex}}{} in {:.2} s",
         args.out.display(),
         if figure_files == 0 {
             String::new()

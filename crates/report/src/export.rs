@@ -4,13 +4,15 @@
 //! the report's figures and the files come from one code path. No external program runs.
 //!
 //! Sizes: the layout is `width_mm` wide, and its base text (the tick labels) comes out at
-//! `font_pt`; the panels reflow to that width ([`crate::plot::Layout`]).
+//! `font_pt`; the panels reflow to that width and no figure is taller than
+//! [`MAX_HEIGHT_MM`] ([`crate::plot::Layout`]). Every file has its physical size: the SVG's
+//! width and height in mm, the PDF's page in points (1 pt = 1/72 in), the PNG's resolution in
+//! its `pHYs` chunk, so that a word processor or LaTeX places each at `width_mm`.
 
-use crate::cells::esc;
 use crate::figures::Figure;
-use crate::plot::{hex, Dash, Entry, Key, Layout, DASH, DOT_PERIOD};
+use crate::plot::legend::legend;
+use crate::plot::Layout;
 use anyhow::{bail, Context as _, Result};
-use std::fmt::Write as _;
 use std::sync::Arc;
 
 /// A figure file format.
@@ -60,6 +62,11 @@ pub const PNG_DPI: f64 = 300.0;
 /// Tick-label size of the layout, px ([`crate::plot`]'s base text size).
 const BASE_TEXT_PX: f64 = 12.0;
 const MM_PER_PT: f64 = 25.4 / 72.0;
+/// The tallest a figure file is, mm: an A4 or US-letter page's text block (297 or 279 mm less
+/// 25 mm margins) with room for the caption.
+pub const MAX_HEIGHT_MM: f64 = 225.0;
+/// Height of the "Figure N" line above a figure's legend (with `--figure-numbers`), px.
+const NUMBER_H: f64 = 20.0;
 
 /// Which figure files to write, and their size.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,6 +77,8 @@ pub struct FigureOptions {
     pub width_mm: f64,
     /// Size of the base text (tick labels), pt.
     pub font_pt: f64,
+    /// "Figure N" in each file, above its legend (off: the caption numbers the figure).
+    pub numbers: bool,
 }
 
 impl Default for FigureOptions {
@@ -78,6 +87,7 @@ impl Default for FigureOptions {
             formats: Vec::new(),
             width_mm: 170.0,
             font_pt: 8.0,
+            numbers: false,
         }
     }
 }
@@ -98,14 +108,17 @@ impl FigureOptions {
     }
 
     /// Pixels of the layout per millimetre: the base text at `font_pt`.
-    fn px_per_mm(&self) -> f64 {
+    pub fn px_per_mm(&self) -> f64 {
         BASE_TEXT_PX / (self.font_pt * MM_PER_PT)
     }
 
-    /// The layout the figures are drawn to.
+    /// The layout the figures are drawn to: `width_mm` wide, at most [`MAX_HEIGHT_MM`] high
+    /// (the "Figure N" line, when asked for, included).
     pub fn layout(&self) -> Layout {
+        let number = if self.numbers { NUMBER_H } else { 0.0 };
         Layout {
             width_px: Some((self.width_mm * self.px_per_mm()).round() as u32),
+            max_height_px: Some(MAX_HEIGHT_MM * self.px_per_mm() - number),
         }
     }
 }
@@ -120,65 +133,6 @@ fn chart_size(svg: &str) -> (f64, f64) {
         attr("width").unwrap_or(800.0),
         attr("height").unwrap_or(400.0),
     )
-}
-
-const LEGEND_PX: f64 = 12.0;
-const ROW_H: f64 = 18.0;
-
-/// The legend as SVG, in rows across `width` px: its markup and its height.
-fn legend_svg(entries: &[Entry], width: f64) -> (String, f64) {
-    let mut s = String::from("<g class=\"legend\">");
-    let (mut x, mut y) = (6.0, 4.0);
-    for e in entries {
-        // Text width estimated at 0.55 em per character (Helvetica's mean).
-        let w = 32.0 + 0.55 * LEGEND_PX * e.label.chars().count() as f64 + 14.0;
-        if x > 6.0 && x + w > width {
-            x = 6.0;
-            y += ROW_H;
-        }
-        let cy = y + ROW_H / 2.0;
-        let key = match e.key {
-            Key::Marker(m) => {
-                let (c, r) = (hex(m.color), f64::from(m.radius).max(4.0));
-                let paint = if m.hollow {
-                    format!("fill=\"none\" stroke=\"{c}\" stroke-width=\"1.3\"")
-                } else {
-                    format!("fill=\"{c}\"")
-                };
-                format!(
-                    "<circle cx=\"{:.1}\" cy=\"{cy:.1}\" r=\"{r}\" {paint}/>",
-                    x + 13.0
-                )
-            }
-            Key::Line(l) => {
-                let dash = match l.dash {
-                    Dash::Solid => String::new(),
-                    Dash::Dashed => format!(" stroke-dasharray=\"{} {}\"", DASH.0, DASH.1),
-                    Dash::Dotted => format!(
-                        " stroke-dasharray=\"0.1 {}\" stroke-linecap=\"round\"",
-                        DOT_PERIOD - 0.1
-                    ),
-                };
-                format!(
-                    "<line x1=\"{:.1}\" y1=\"{cy:.1}\" x2=\"{:.1}\" y2=\"{cy:.1}\" stroke=\"{}\" stroke-width=\"{}\"{dash}/>",
-                    x + 1.0,
-                    x + 25.0,
-                    hex(l.color),
-                    l.width
-                )
-            }
-        };
-        let _ = write!(
-            s,
-            "{key}<text x=\"{:.1}\" y=\"{:.1}\" font-family=\"Helvetica, Arial, sans-serif\" font-size=\"{LEGEND_PX}\" fill=\"#222222\">{}</text>",
-            x + 30.0,
-            cy + 4.0,
-            esc(&e.label)
-        );
-        x += w;
-    }
-    s.push_str("</g>");
-    (s, y + ROW_H + 4.0)
 }
 
 /// The chart with its layers' own `<svg>` documents turned into groups: every layer has the
@@ -217,27 +171,45 @@ fn flatten_layers(chart: &str) -> String {
     out
 }
 
-/// A figure as a standalone SVG document: white background, "Figure N" and the legend above
-/// the chart, `width_mm` wide (None: in pixels, as the report shows it).
-pub fn standalone_svg(f: &Figure, number: usize, width_mm: Option<f64>) -> String {
+/// A figure as a standalone SVG document: white background, the legend above the chart
+/// ("Figure N" above it when `number` is given), `width_mm` wide (None: in pixels, as the
+/// report shows it).
+pub fn standalone_svg(f: &Figure, number: Option<usize>, width_mm: Option<f64>) -> String {
     let (w, h_chart) = chart_size(&f.chart.svg);
-    let (legend, legend_h) = legend_svg(&f.legend, w);
-    let title_h = 20.0;
-    let h = title_h + legend_h + h_chart;
+    let title_h = if number.is_some() { NUMBER_H } else { 0.0 };
+    let leg = legend(&f.legend, w);
+    let h = (title_h + leg.height + h_chart).ceil();
     let size = match width_mm {
-        Some(mm) => format!("width=\"{mm}mm\" height=\"{:.2}mm\"", mm * h / w),
+        Some(mm) => format!("width=\"{mm}mm\" height=\"{:.3}mm\"", mm * h / w),
         None => format!("width=\"{w}\" height=\"{h}\""),
     };
+    let title = match number {
+        Some(n) => crate::plot::text::Label::new(
+            format!("Figure {n}"),
+            (6.0, 15.0),
+            crate::plot::text::Font::bold(13.0),
+            crate::plot::text::Anchor::Start,
+        )
+        .svg(),
+        None => String::new(),
+    };
     format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"figure-file\" {size} viewBox=\"0 0 {w} {h}\"><rect width=\"{w}\" height=\"{h}\" fill=\"#FFFFFF\"/><text x=\"6\" y=\"15\" font-family=\"Helvetica, Arial, sans-serif\" font-size=\"13\" font-weight=\"bold\" fill=\"#222222\">Figure {number}</text><g transform=\"translate(0 {title_h})\">{legend}</g><g transform=\"translate(0 {:.1})\">{}</g></svg>",
-        title_h + legend_h,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"figure-file\" {size} viewBox=\"0 0 {w} {h}\"><rect width=\"{w}\" height=\"{h}\" fill=\"#FFFFFF\"/>{title}<g transform=\"translate(0 {title_h})\">{}</g><g transform=\"translate(0 {:.1})\">{}</g></svg>",
+        leg.svg,
+        title_h + leg.height,
         flatten_layers(&f.chart.svg)
     )
 }
 
+/// The height of a figure file's legend over a chart `width_px` wide, px (what a figure
+/// leaves for its panels under [`Layout::max_height_px`]).
+pub fn legend_height(entries: &[crate::plot::Entry], width_px: f64) -> f64 {
+    legend(entries, width_px).height
+}
+
 /// The system's fonts, with a sans-serif family that exists (Helvetica, Arial, Liberation
 /// Sans or DejaVu Sans, the first found).
-fn fonts() -> Arc<resvg::usvg::fontdb::Database> {
+pub(crate) fn fonts() -> Arc<resvg::usvg::fontdb::Database> {
     let mut db = resvg::usvg::fontdb::Database::new();
     db.load_system_fonts();
     let have = |name: &str| {
@@ -266,26 +238,61 @@ fn tree(svg: &str, db: &Arc<resvg::usvg::fontdb::Database>) -> Result<resvg::usv
     resvg::usvg::Tree::from_str(svg, &opt).context("the figure's SVG does not parse")
 }
 
+/// The PNG's size in pixels for a tree of `size` at `width_mm`: the width is exactly
+/// `width_mm` at [`PNG_DPI`], the height in proportion.
+pub fn png_size(size: (f32, f32), width_mm: f64) -> (u32, u32) {
+    let px_w = (width_mm / 25.4 * PNG_DPI).round().max(1.0);
+    let px_h = (f64::from(size.1) * px_w / f64::from(size.0))
+        .ceil()
+        .max(1.0);
+    (px_w as u32, px_h as u32)
+}
+
 fn png(t: &resvg::usvg::Tree, width_mm: f64) -> Result<Vec<u8>> {
     let size = t.size();
-    let px_w = (width_mm / 25.4 * PNG_DPI).round().max(1.0);
+    let (px_w, px_h) = png_size((size.width(), size.height()), width_mm);
     let scale = px_w as f32 / size.width();
-    let px_h = (size.height() * scale).ceil().max(1.0);
-    let mut pm = resvg::tiny_skia::Pixmap::new(px_w as u32, px_h as u32)
-        .context("the figure is too large for a PNG")?;
+    let mut pm =
+        resvg::tiny_skia::Pixmap::new(px_w, px_h).context("the figure is too large for a PNG")?;
+    // The background is white and opaque: the pixels are RGB.
+    pm.fill(resvg::tiny_skia::Color::WHITE);
     resvg::render(
         t,
         resvg::tiny_skia::Transform::from_scale(scale, scale),
         &mut pm.as_mut(),
     );
-    pm.encode_png().context("cannot encode the PNG")
+    let rgb: Vec<u8> = pm
+        .pixels()
+        .iter()
+        .flat_map(|p| {
+            let c = p.demultiply();
+            [c.red(), c.green(), c.blue()]
+        })
+        .collect();
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, px_w, px_h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        // pHYs: pixels per metre, so that the file is placed at `width_mm`.
+        let ppm = (PNG_DPI / 0.0254).round() as u32;
+        enc.set_pixel_dims(Some(png::PixelDimensions {
+            xppu: ppm,
+            yppu: ppm,
+            unit: png::Unit::Meter,
+        }));
+        let mut w = enc.write_header().context("cannot encode the PNG")?;
+        w.write_image_data(&rgb).context("cannot encode the PNG")?;
+    }
+    Ok(out)
 }
 
 fn pdf(t: &resvg::usvg::Tree) -> Result<Vec<u8>> {
+    // usvg's units are CSS pixels (96 per inch): at 96 dpi the page is the SVG's size in mm.
     svg2pdf::to_pdf(
         t,
         svg2pdf::ConversionOptions::default(),
-        svg2pdf::PageOptions::default(),
+        svg2pdf::PageOptions { dpi: 96.0 },
     )
     .map_err(|e| anyhow::anyhow!("cannot make the PDF: {e}"))
 }
@@ -336,7 +343,7 @@ fn one_figure(
     opts: &FigureOptions,
     db: &Arc<resvg::usvg::fontdb::Database>,
 ) -> Result<Vec<FigureFile>> {
-    let svg = standalone_svg(f, n, Some(opts.width_mm));
+    let svg = standalone_svg(f, opts.numbers.then_some(n), Some(opts.width_mm));
     let stem = format!("figures/figure-{n}-{}", f.id);
     let needs_tree = opts.formats.iter().any(|x| *x != Format::Svg);
     let t = if needs_tree {

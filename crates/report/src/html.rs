@@ -21,7 +21,7 @@ pub(crate) fn figure_html(h: &mut String, figs: &[Figure], id: &str) {
             k + 1,
             f.id,
             f.chart.marks,
-            export::standalone_svg(f, k + 1, None),
+            export::standalone_svg(f, None, None),
             k + 1,
             esc(&f.caption)
         );

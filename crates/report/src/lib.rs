@@ -13,6 +13,8 @@
 //!   `plotters`).
 
 pub mod cells;
+pub mod check;
+pub mod components;
 pub mod context;
 pub mod discovered;
 pub mod export;
@@ -23,6 +25,7 @@ pub mod html;
 pub mod next;
 pub mod parameters;
 pub mod plot;
+pub mod table_files;
 pub mod tables;
 pub mod tracking;
 

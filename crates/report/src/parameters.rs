@@ -18,6 +18,9 @@ pub struct Row {
     pub source: String,
     /// Value.
     pub value: f64,
+    /// Its standard error (None where none is computed; for a variance component the
+    /// large-sample SE of its χ² interval's method).
+    pub se: Option<f64>,
     /// Unit ("1" for a pure number).
     pub unit: &'static str,
     /// 95 % interval, lower end (NaN → null when none is computed).
@@ -91,6 +94,7 @@ fn extended_rows(a: &Analysis, out: &mut Vec<Row>) {
             quantity: words.into(),
             source: "extended model".into(),
             value: v.value,
+            se: fin(v.jackknife_se),
             unit,
             ci95_lo: fin(v.value - half),
             ci95_hi: fin(v.value + half),
@@ -113,6 +117,7 @@ fn baseline_row(a: &Analysis, out: &mut Vec<Row>) {
         quantity: "friction coefficient mu".into(),
         source: "Euler-Eytelwein, one mu".into(),
         value: b,
+        se: fin(bse),
         unit: "1",
         ci95_lo: fin(b - t_cords * bse),
         ci95_hi: fin(b + t_cords * bse),
@@ -120,77 +125,116 @@ fn baseline_row(a: &Analysis, out: &mut Vec<Row>) {
     });
 }
 
-/// The variance components of a new measurement (no intervals computed).
+/// A variance component's row: its value, and its interval by `method` (None: not computed,
+/// and `none` says why).
+fn component(
+    (key, quantity, unit): (&str, &str, &'static str),
+    value: f64,
+    interval: Option<crate::components::Interval>,
+    method: String,
+    none: &str,
+) -> Row {
+    let i = interval.filter(|_| value.is_finite());
+    Row {
+        key: key.into(),
+        quantity: quantity.into(),
+        source: "variance component".into(),
+        value,
+        se: i.and_then(|i| i.se),
+        unit,
+        ci95_lo: i.map(|i| i.lo),
+        ci95_hi: i.map(|i| i.hi),
+        note: match i {
+            Some(_) => method,
+            None => format!("{method}; no interval: {none}"),
+        },
+    }
+}
+
+/// The cords at the smallest and the largest wrap: the units of the wrap-extrapolation error.
+fn edge_cords(a: &Analysis) -> usize {
+    let obs = &a.obs;
+    let wraps = capstan_engine::fit::stats::distinct(obs.groups.iter().map(|g| g.wrap_deg));
+    match (wraps.first(), wraps.last()) {
+        (Some(lo), Some(hi)) => (obs.groups.iter())
+            .filter(|g| g.wrap_deg == *lo || g.wrap_deg == *hi)
+            .count(),
+        _ => 0,
+    }
+}
+
+/// The variance components of a new measurement, each with its 95 % interval
+/// ([`crate::components`] says how).
 fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
+    use crate::components::{cord_df, excess_sd, noise_df, sd};
     let pm = &a.prediction_model;
     let s = &a.evidence.scatter;
+    let obs = &a.obs;
+    let cords = obs.groups.len();
+    let runs_per_cord: Vec<usize> = (0..cords).map(|g| obs.runs_of_group(g).len()).collect();
+    let runs = obs.runs.len();
     // A spread the data cannot show (one cord; one run per cord) is not estimable, not 0.
     let shown = |v: f64, estimable: f64| if estimable.is_finite() { v } else { f64::NAN };
-    for (key, q, v, unit, note) in [
-        (
-            "scatter.cord_ln_mu_sd",
-            "cord-to-cord SD of ln mu",
-            shown(pm.sd_ln_mu_cord, s.cord_pct),
-            "1",
-            "the extended model's σ_u; no interval computed",
-        ),
-        (
-            "scatter.run_ln_mu_sd",
-            "run-to-run SD of ln mu on one cord",
-            shown(pm.sd_ln_mu_run, s.run_pct),
-            "1",
-            "evidence engine (every run its own mu); no interval computed",
-        ),
-        (
-            "noise.abs_n",
-            "within-run noise, absolute part",
-            s.noise_abs_n,
-            "N",
-            "noise SD² = a² + (r·T2)²; no interval computed",
-        ),
-        (
-            "noise.rel",
-            "within-run noise, proportional part",
-            s.noise_rel,
-            "1",
-            "fraction of T2; no interval computed",
-        ),
-        (
-            "model_error.sd_n",
-            "model error in T2 (SD)",
-            pm.model_error.sd_n,
-            "N",
-            "what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; no interval computed",
-        ),
-        (
-            "wrap_extrapolation_error.sd_n",
-            "error of extrapolating in wrap (SD)",
-            pm.wrap_extrapolation_error.sd_n,
-            "N",
-            "what fits without the smallest or the largest wrap miss there beyond all the above (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; no interval computed",
-        ),
-    ] {
-        out.push(Row {
-            key: key.into(),
-            quantity: q.into(),
-            source: "variance component".into(),
-            value: v,
-            unit,
-            ci95_lo: None,
-            ci95_hi: None,
-            note: note.into(),
-        });
-    }
-    out.push(Row {
-        key: "scatter.cord_pct".into(),
-        quantity: "cord-to-cord SD of mu, % of mu".into(),
-        source: "variance component".into(),
-        value: s.cord_pct,
-        unit: "%",
-        ci95_lo: None,
-        ci95_hi: None,
-        note: "evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, which explains part of the cord differences by the named causes and shrinks the rest; no interval computed".into(),
-    });
+    let sigma_u = shown(pm.sd_ln_mu_cord, s.cord_pct);
+    let df_u = cords.saturating_sub(1) as f64;
+    out.push(component(
+        ("scatter.cord_ln_mu_sd", "cord-to-cord SD of ln mu", "1"),
+        sigma_u,
+        sd(sigma_u, df_u),
+        format!("the extended model's σ_u; χ² interval on cords − 1 = {df_u:.0} degrees of freedom, as if the cord effects were seen without error (approximate: their shrinkage and noise are ignored)"),
+        "one cord, or σ_u at 0",
+    ));
+    let run_sd = shown(pm.sd_ln_mu_run, s.run_pct);
+    let df_e = runs.saturating_sub(cords) as f64;
+    out.push(component(
+        ("scatter.run_ln_mu_sd", "run-to-run SD of ln mu on one cord", "1"),
+        run_sd,
+        sd(run_sd, df_e),
+        format!("evidence engine (every run its own mu); χ² interval on runs − cords = {df_e:.0} degrees of freedom (exact for a balanced design under normality)"),
+        "no cord has two runs",
+    ));
+    let df_noise = noise_df(obs.len(), runs, s.lag1_autocorrelation);
+    let noise_method = format!("χ² interval on the within-run residuals' effective degrees of freedom, (rows − runs)·(1 − ρ)/(1 + ρ) = {df_noise:.0} with ρ = {:.2} their lag-1 autocorrelation; the absolute and proportional parts move together", s.lag1_autocorrelation);
+    out.push(component(
+        ("noise.abs_n", "within-run noise, absolute part", "N"),
+        s.noise_abs_n,
+        sd(s.noise_abs_n, df_noise),
+        format!("noise SD² = a² + (r·T2)²; {noise_method}"),
+        "the part is at 0",
+    ));
+    out.push(component(
+        ("noise.rel", "within-run noise, proportional part", "1"),
+        s.noise_rel,
+        sd(s.noise_rel, df_noise),
+        format!("fraction of T2; {noise_method}"),
+        "the part is at 0",
+    ));
+    let me = &pm.model_error;
+    out.push(component(
+        ("model_error.sd_n", "model error in T2 (SD)", "N"),
+        me.sd_n,
+        excess_sd(me.heldout_rms_n, me.accounted_rms_n, pm.folds),
+        format!("what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; interval: χ² on the held-out mean square with the {} left-out folds (cords) as its degrees of freedom, less the variance the other components account for, clamped at 0", pm.folds),
+        "fewer than two folds",
+    ));
+    let we = &pm.wrap_extrapolation_error;
+    let edge_cords = if we.rows > 0 { edge_cords(a) } else { 0 };
+    out.push(component(
+        ("wrap_extrapolation_error.sd_n", "error of extrapolating in wrap (SD)", "N"),
+        we.sd_n,
+        excess_sd(we.heldout_rms_n, we.accounted_rms_n, edge_cords),
+        format!("what fits without the smallest or the largest wrap miss there beyond all the above (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; interval: χ² on those misses' mean square with the {edge_cords} cords at the smallest and largest wrap as its degrees of freedom, less what the other components account for, clamped at 0"),
+        "not measured (fewer than three wraps)",
+    ));
+    let cord_pct = s.cord_pct;
+    let df_c = cord_df(s.cord_pct, s.run_pct, &runs_per_cord);
+    out.push(component(
+        ("scatter.cord_pct", "cord-to-cord SD of mu, % of mu", "%"),
+        cord_pct,
+        sd(cord_pct, df_c),
+        format!("evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, which explains part of the cord differences by the named causes and shrinks the rest; χ² interval on Satterthwaite's {df_c:.1} degrees of freedom for the cord component of the runs' mu (cords − 1 at most)"),
+        "one cord, or the component at 0",
+    ));
 }
 
 /// The evidence engine's estimate of each named cause, where the extended model has the same
@@ -226,6 +270,7 @@ fn evidence_rows(a: &Analysis, out: &mut Vec<Row>) {
             quantity: words.into(),
             source: "evidence engine".into(),
             value,
+            se: fin(se),
             unit,
             ci95_lo: fin(value - 1.96 * se),
             ci95_hi: fin(value + 1.96 * se),
@@ -267,6 +312,7 @@ fn cord_rows(a: &Analysis, out: &mut Vec<Row>) {
             ),
             source: "Euler-Eytelwein per cord".into(),
             value: m,
+            se: fin(sd / (k as f64).sqrt()),
             unit: "1",
             ci95_lo: fin(m - half),
             ci95_hi: fin(m + half),

@@ -178,7 +178,7 @@ pub fn thesis_r2(a: &Analysis) -> String {
 
 /// Table 1: every fitted quantity once ([`crate::parameters`]).
 pub fn parameters(a: &Analysis) -> String {
-    let mut h = String::from("<table class=\"parameters\"><tr><th>quantity</th><th>estimate of</th><th>value</th><th>unit</th><th>95 % interval</th><th>how / why it differs</th></tr>");
+    let mut h = String::from("<table class=\"parameters\"><tr><th>quantity</th><th>estimate of</th><th>value</th><th>SE</th><th>unit</th><th>95 % interval</th><th>how the interval is computed / why two estimates differ</th></tr>");
     for r in crate::parameters::rows(a) {
         let d = if r.value.abs() >= 1.0 { 3 } else { 4 };
         let ci = match (r.ci95_lo, r.ci95_hi) {
@@ -187,11 +187,12 @@ pub fn parameters(a: &Analysis) -> String {
         };
         let _ = write!(
             h,
-            "<tr data-key=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{ci}</td><td>{}</td></tr>",
+            "<tr data-key=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{ci}</td><td>{}</td></tr>",
             esc(&r.key),
             esc(&r.quantity),
             esc(&r.source),
             fs_plain(r.value, d),
+            r.se.map_or("–".into(), |se| crate::table_files::sig(se, 2)),
             esc(r.unit),
             esc(&r.note)
         );

@@ -1,11 +1,12 @@
 //! T2 and amplification against T1 with the three models, and the closed-loop overlay.
 
 use super::{
-    as_read_style, baseline_style, extended_style, measured, model_legend, thesis_style, Figure,
-    Palette, INK,
+    as_read_style, baseline_style, extended_style, measured, model_legend, panels_that_fit,
+    selection_note, thesis_style, Figure, Palette, INK,
 };
 use crate::plot::{figure, Entry, Key, Layout, Panel, Series};
 use anyhow::Result;
+use capstan_engine::analysis::closed_loop::evenly;
 use capstan_engine::analysis::closed_loop::SimCurve;
 use capstan_engine::analysis::Analysis;
 use plotters::style::RGBColor;
@@ -117,10 +118,20 @@ fn legend(a: &Analysis, pal: &Palette) -> Vec<Entry> {
     l
 }
 
-/// T2 against T1, one panel per capstan diameter.
+/// T2 against T1, one panel per capstan diameter (as many as fit a page).
 pub fn t2_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> {
+    const X: &str = "T1, servo-side tension (N)";
+    let diameters = a.obs.diameters();
+    let title = |d: f64| format!("capstan diameter {d}\u{a0}mm");
+    let grid = layout.grid(2, 650, 470);
+    let legend = legend(a, pal);
+    let titles: Vec<String> = diameters.iter().map(|d| title(*d)).collect();
+    let refs: Vec<&str> = titles.iter().map(String::as_str).collect();
+    let fit = panels_that_fit(layout, grid, &refs, X, &legend);
+    let shown = evenly(diameters.len(), fit);
     let mut panels = Vec::new();
-    for dia in a.obs.diameters() {
+    for &k in &shown {
+        let dia = diameters[k];
         let mut series = Vec::new();
         for (g, grp) in a.obs.groups.iter().enumerate() {
             if grp.diameter_mm != dia {
@@ -131,27 +142,35 @@ pub fn t2_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> 
             series.extend(model_series(a, g, c, false));
         }
         panels.push(Panel {
-            title: format!("capstan diameter {dia} mm"),
-            x_label: "T1, servo-side tension (N)".into(),
+            title: title(dia),
+            x_label: X.into(),
             y_label: "T2, load-side tension (N)".into(),
             series,
             ..Panel::default()
         });
     }
     share_y(&mut panels);
+    let shared = if panels.len() > 1 {
+        " The panels share the y-scale."
+    } else {
+        ""
+    };
     Ok(Figure {
         id: "t2_vs_t1",
-        legend: legend(a, pal),
-        chart: { let (c, w, h) = layout.grid(2, 650, 470); figure(&panels, c, w, h)? },
-        caption: format!("T2 against T1, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model's physical T2 (sensor terms removed, against the true T1); thin solid: what the sensors would read under it (mean over the cord's runs at each step, as in predictions.csv). Both panels share the y-scale.{}", super::drawn_note(a)),
+        legend,
+        chart: figure(&panels, grid.0, grid.1, grid.2)?,
+        caption: format!("T2 against T1, one panel per capstan diameter, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model's physical T2 (sensor terms removed, against the true T1); thin solid: what the sensors would read under it (mean over the cord's runs at each step, as in predictions.csv).{shared}{}{}", selection_note(shown.len(), diameters.len(), "capstan diameters"), super::drawn_note(a)),
     })
 }
 
-/// Amplification T2/T1 against T1, one panel per cord (rows: diameters, columns: wraps).
+/// Amplification T2/T1 against T1, one panel per cord (as many as fit a page).
 pub fn amp_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> {
-    let mut panels: Vec<Panel> = panel_cords(a)
-        .into_iter()
-        .map(|g| {
+    let grid = layout.grid(pal.len().clamp(1, 5), 260, 230);
+    let legend = legend(a, pal);
+    let cords = panel_cords(a, layout, grid, &legend);
+    let mut panels: Vec<Panel> = cords
+        .iter()
+        .map(|&g| {
             let c = pal.color(a.obs.groups[g].wrap_deg);
             amp_panel(a, g, c, model_series(a, g, c, true))
         })
@@ -159,9 +178,9 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
     share_y(&mut panels);
     Ok(Figure {
         id: "amp_vs_t1",
-        legend: legend(a, pal),
-        chart: { let (c, w, h) = layout.grid(pal.len().clamp(1, 5), 260, 230); figure(&panels, c, w, h)? },
-        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's physical amplification (the friction law alone with the cord's own mu, sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted sensor terms included; a sensor offset pulls it below 1 at low T1, which is the instrument, not the capstan). Step means over the cord's runs.{}{}", panels_note(a), super::drawn_note(a)),
+        legend,
+        chart: figure(&panels, grid.0, grid.1, grid.2)?,
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's physical amplification (the friction law alone with the cord's own mu, sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted sensor terms included; a sensor offset pulls it below 1 at low T1, which is the instrument, not the capstan). Step means over the cord's runs.{}{}", selection_note(cords.len(), a.obs.groups.len(), "cords"), super::drawn_note(a)),
     })
 }
 
@@ -177,21 +196,27 @@ fn share_y(panels: &mut [Panel]) {
     }
 }
 
-/// The most cords drawn one panel each: a data set with more shows this many, evenly spaced.
+/// The most cords drawn one panel each, whatever the page holds.
 pub const MAX_CORD_PANELS: usize = 24;
 
-/// The cords drawn one panel each.
-fn panel_cords(a: &Analysis) -> Vec<usize> {
-    capstan_engine::analysis::closed_loop::evenly(a.obs.groups.len(), MAX_CORD_PANELS)
+/// The title of cord `g`'s panel.
+fn cord_title(a: &Analysis, g: usize) -> String {
+    let grp = &a.obs.groups[g];
+    format!("{:.0}°, D = {}\u{a0}mm", grp.wrap_deg, grp.diameter_mm)
 }
 
-/// The caption's sentence when not every cord has its panel.
-fn panels_note(a: &Analysis) -> String {
-    let n = a.obs.groups.len();
-    if n <= MAX_CORD_PANELS {
-        return String::new();
-    }
-    format!(" {MAX_CORD_PANELS} of the {n} cords are drawn, evenly spaced in the cord order.")
+/// The cords drawn one panel each: all, or as many as fit a page (and
+/// [`MAX_CORD_PANELS`]), evenly spaced.
+fn panel_cords(
+    a: &Analysis,
+    layout: &Layout,
+    grid: (usize, u32, u32),
+    legend: &[Entry],
+) -> Vec<usize> {
+    let titles: Vec<String> = (0..a.obs.groups.len()).map(|g| cord_title(a, g)).collect();
+    let refs: Vec<&str> = titles.iter().map(String::as_str).collect();
+    let fit = panels_that_fit(layout, grid, &refs, "T1 (N)", legend).min(MAX_CORD_PANELS);
+    evenly(a.obs.groups.len(), fit)
 }
 
 /// One cord's amplification panel: its measured points, then `curves` over them.
@@ -201,11 +226,10 @@ fn amp_panel(
     c: RGBColor,
     curves: impl IntoIterator<Item = Series>,
 ) -> Panel {
-    let grp = &a.obs.groups[g];
     let mut series = vec![Series::Points(measured_points(a, g, true), measured(c))];
     series.extend(curves);
     Panel {
-        title: format!("{:.0}°, D = {} mm", grp.wrap_deg, grp.diameter_mm),
+        title: cord_title(a, g),
         x_label: "T1 (N)".into(),
         y_label: "amplification T2/T1".into(),
         series,
@@ -222,18 +246,32 @@ fn plant_causes(a: &Analysis) -> String {
         .collect()
 }
 
-/// The closed loop: simulated amplification over the measured points, per cord.
+/// The closed loop: simulated amplification over the measured points, per cord (as many as fit
+/// a page).
 pub fn closed_loop(
     a: &Analysis,
     pal: &Palette,
     curves: &[SimCurve],
     layout: &Layout,
 ) -> Result<Figure> {
-    let panels: Vec<Panel> = curves
+    let mut legend = pal.legend();
+    legend.push(Entry {
+        key: Key::Line(extended_style(INK)),
+        label: "closed-loop simulation (firmware + extended plant)".into(),
+    });
+    let grid = layout.grid(pal.len().clamp(1, 5), 260, 230);
+    let mut simulated: Vec<usize> = curves.iter().map(|(g, _)| *g).collect();
+    simulated.dedup();
+    let titles: Vec<String> = simulated.iter().map(|&g| cord_title(a, g)).collect();
+    let refs: Vec<&str> = titles.iter().map(String::as_str).collect();
+    let fit = panels_that_fit(layout, grid, &refs, "T1 (N)", &legend).min(MAX_CORD_PANELS);
+    let shown: Vec<usize> = evenly(simulated.len(), fit)
+        .into_iter()
+        .map(|k| simulated[k])
+        .collect();
+    let mut panels: Vec<Panel> = shown
         .iter()
-        .map(|(g, _)| *g)
-        .take(MAX_CORD_PANELS)
-        .map(|g| {
+        .map(|&g| {
             let c = pal.color(a.obs.groups[g].wrap_deg);
             let sims = curves.iter().filter(|(cg, _)| *cg == g);
             amp_panel(
@@ -244,17 +282,20 @@ pub fn closed_loop(
             )
         })
         .collect();
-    let mut panels = panels;
     share_y(&mut panels);
-    let mut legend = pal.legend();
-    legend.push(Entry {
-        key: Key::Line(extended_style(INK)),
-        label: "closed-loop simulation (firmware + extended plant)".into(),
-    });
+    let n = a.obs.groups.len();
+    let simulated_note = if simulated.len() < n {
+        format!(
+            " {} of the {n} cords are simulated, evenly spaced in the cord order.",
+            simulated.len()
+        )
+    } else {
+        String::new()
+    };
     Ok(Figure {
         id: "closed_loop",
         legend,
-        chart: { let (c, w, h) = layout.grid(pal.len().clamp(1, 5), 260, 230); figure(&panels, c, w, h)? },
-        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{}{}", plant_causes(a), if curves.len() < a.obs.groups.len() { format!(" {} of the {} cords are simulated, evenly spaced in the cord order.", curves.len(), a.obs.groups.len()) } else { String::new() }, super::drawn_note(a)),
+        chart: figure(&panels, grid.0, grid.1, grid.2)?,
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{simulated_note}{}{}", plant_causes(a), selection_note(shown.len(), simulated.len(), "simulated cords"), super::drawn_note(a)),
     })
 }

@@ -1,8 +1,11 @@
 //! The report's figures. One colour per wrap in every figure (Okabe-Ito, safe for the common
 //! colour-vision deficiencies), one line style per model (Euler-Eytelwein dashed, Table 3
-//! dotted, extended solid and thick), a legend above each figure (HTML). Every curve of a model is
+//! dotted, extended solid and thick), a legend above each figure. Every curve of a model is
 //! drawn through that model's predictions as written to `predictions.csv`; the evidence panels
-//! come from `metrics.json`.
+//! come from `metrics.json`. Every name on a figure is in words (the catalogue's labels, the
+//! models' names as the report writes them), and no figure is taller than the layout's page:
+//! where a data set has more cords, diameters or runs than fit, the figure draws an evenly
+//! spaced selection and its caption says so.
 //!
 //! * [`curves`]: T2 and amplification against T1 with the three models, and the closed loop.
 //! * [`evidence`]: residuals, the mechanism evidence, and the gain (RMSE by model).
@@ -147,18 +150,69 @@ impl Palette {
         self.wraps.is_empty()
     }
 
-    /// Legend entries: one coloured disc per wrap.
+    /// Legend entries: one coloured disc per wrap; with more wraps than colours, one per
+    /// colour naming its wraps (the first three and how many more).
     pub fn legend(&self) -> Vec<Entry> {
-        self.wraps
-            .iter()
-            .map(|w| Entry {
-                key: Key::Marker(Marker {
-                    opacity: 1.0,
-                    ..measured(self.color(*w))
-                }),
-                label: format!("{w:.0}° wrap"),
+        let n = OKABE_ITO.len().min(self.wraps.len());
+        (0..n)
+            .map(|k| {
+                let wraps: Vec<String> = self
+                    .wraps
+                    .iter()
+                    .skip(k)
+                    .step_by(OKABE_ITO.len())
+                    .map(|w| format!("{w:.0}°"))
+                    .collect();
+                let label = match wraps.len() {
+                    1 => format!("{} wrap", wraps[0]),
+                    m if m <= 3 => format!("{} wraps", wraps.join(", ")),
+                    m => format!("{} and {} more wraps", wraps[..3].join(", "), m - 3),
+                };
+                Entry {
+                    key: Key::Marker(Marker {
+                        opacity: 1.0,
+                        ..measured(OKABE_ITO[k])
+                    }),
+                    label,
+                }
             })
             .collect()
+    }
+}
+
+/// A model's name in words ([`capstan_engine::analysis::ModelMetrics::name`] is an identifier).
+pub fn model_label(name: &str) -> String {
+    match name {
+        "baseline" => "Euler-Eytelwein, one mu".into(),
+        "baseline_per_cord" => "Euler-Eytelwein, a mu per cord".into(),
+        "thesis" => "thesis Table 3".into(),
+        "extended" => "extended model".into(),
+        other => other.replace('_', " "),
+    }
+}
+
+/// How many panels of a grid fit the layout's page: the rows of cells (`cols` of `w` px, at
+/// least `h` high, with these titles and x label) under the legend, times the columns.
+pub fn panels_that_fit(
+    layout: &Layout,
+    (cols, w, h): (usize, u32, u32),
+    titles: &[&str],
+    x_label: &str,
+    legend: &[Entry],
+) -> usize {
+    let cell_h = crate::plot::cell_height(titles, &[x_label], w, h);
+    let above = crate::export::legend_height(legend, f64::from(w) * cols as f64);
+    layout.rows_that_fit(cell_h, above).saturating_mul(cols)
+}
+
+/// The caption's sentence when `shown` of `n` things (cords, diameters, runs) have a panel.
+pub fn selection_note(shown: usize, n: usize, what: &str) -> String {
+    if shown >= n {
+        String::new()
+    } else {
+        format!(
+            " {shown} of the {n} {what} are drawn (as many as fit a page), evenly spaced in their order; predictions.csv and the tables hold every one."
+        )
     }
 }
 

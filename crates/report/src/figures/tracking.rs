@@ -17,6 +17,22 @@ pub struct RunTrace<'a> {
     pub bode: &'a [BodePoint],
 }
 
+/// A run's name in words: the raw logs' `d12.7_w720_v10_run2` (capstan diameter, wrap, drive
+/// voltage, run) as "run 2: D = 12.7 mm, 720°, 10 V"; any other name as it is.
+pub fn run_words(label: &str) -> String {
+    let parse = || -> Option<String> {
+        let rest = label.strip_prefix('d')?;
+        let (d, rest) = rest.split_once("_w")?;
+        let (w, rest) = rest.split_once("_v")?;
+        let (v, run) = rest.split_once("_run")?;
+        for x in [d, w, v, run] {
+            x.parse::<f64>().ok()?;
+        }
+        Some(format!("run {run}: D = {d}\u{a0}mm, {w}°, {v}\u{a0}V"))
+    };
+    parse().unwrap_or_else(|| label.to_string())
+}
+
 /// The most points drawn per line: every k-th sample beyond it.
 const MAX_POINTS: usize = 4_000;
 
@@ -41,19 +57,49 @@ fn measured_style(k: usize) -> LineStyle {
     }
 }
 
-/// Target (dashed) and measured T2 (solid) against time, one panel per run.
+/// Target (dashed) and measured T2 (solid) against time, one panel per run (as many as fit a
+/// page).
 pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> {
-    let panels: Vec<Panel> = runs
+    const X: &str = "time since the trigger (s)";
+    let mut legend = vec![Entry {
+        key: Key::Line(target_style()),
+        label: "T2 target".into(),
+    }];
+    legend.extend(
+        runs.iter()
+            .enumerate()
+            .take(OKABE_ITO.len())
+            .map(|(k, r)| Entry {
+                key: Key::Line(measured_style(k)),
+                label: format!("T2 measured, {}", run_words(r.label)),
+            }),
+    );
+    if runs.len() > OKABE_ITO.len() {
+        legend.truncate(1);
+        legend.push(Entry {
+            key: Key::Line(measured_style(0)),
+            label: format!(
+                "T2 measured (one colour per run, repeating after {})",
+                OKABE_ITO.len()
+            ),
+        });
+    }
+    let grid = layout.grid(1, 1100, 300);
+    let titles: Vec<String> = runs.iter().map(|r| run_words(r.label)).collect();
+    let refs: Vec<&str> = titles.iter().map(String::as_str).collect();
+    let fit = super::panels_that_fit(layout, grid, &refs, X, &legend);
+    let shown = capstan_engine::analysis::closed_loop::evenly(runs.len(), fit);
+    let panels: Vec<Panel> = shown
         .iter()
-        .enumerate()
+        .map(|&k| (k, &runs[k]))
         .map(|(k, r)| {
             let t = &r.trace;
             let target: Vec<(f64, f64)> = (0..t.len()).map(|i| (t.t_s[i], t.target_n[i])).collect();
             let measured: Vec<(f64, f64)> =
                 (0..t.len()).map(|i| (t.t_s[i], t.measured_n[i])).collect();
             Panel {
-                title: r.label.to_string(),
-                x_label: "time since the trigger (s)".into(),
+                title: run_words(r.label),
+                x_label: X.into(),
                 y_label: "T2 (N)".into(),
                 series: vec![
                     Series::Line(thin(measured), measured_style(k)),
@@ -63,21 +109,12 @@ pub fn target_vs_measured(runs: &[RunTrace], layout: &Layout) -> Result<Figure> 
             }
         })
         .collect();
-    let (cols, w, h) = layout.grid(1, 1100, 300);
-    let chart = figure(&panels, cols, w, h)?;
-    let mut legend = vec![Entry {
-        key: Key::Line(target_style()),
-        label: "T2 target".into(),
-    }];
-    legend.extend(runs.iter().enumerate().map(|(k, r)| Entry {
-        key: Key::Line(measured_style(k)),
-        label: format!("T2 measured, {}", r.label),
-    }));
+    let chart = figure(&panels, grid.0, grid.1, grid.2)?;
     Ok(Figure {
         id: "tracking",
         legend,
         chart,
-        caption: "The T2 target (dashed) and the T2 the rig measured (solid, the firmware's raw log at 100 Hz), over each run. Between the segments the target jumps (steps), moves linearly (a ramp) or swings about its mean (a sine sweep, one frequency per segment).".into(),
+        caption: format!("The T2 target (dashed) and the T2 the rig measured (solid, the firmware's raw log at 100 Hz), over each run. Between the segments the target jumps (steps), moves linearly (a ramp) or swings about its mean (a sine sweep, one frequency per segment).{}", super::selection_note(shown.len(), runs.len(), "runs")),
     })
 }
 
@@ -153,7 +190,7 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
     gain.push(Series::Line(vec![(lo, -3.0103), (hi, -3.0103)], three_db));
     let panels = vec![
         Panel {
-            title: "gain of the closed loop (measured T2 / target)".into(),
+            title: "closed-loop gain".into(),
             x_label: "frequency (Hz)".into(),
             y_label: "gain (dB)".into(),
             series: gain,
@@ -162,7 +199,7 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
             ..Panel::default()
         },
         Panel {
-            title: "phase (measured − target)".into(),
+            title: "closed-loop phase".into(),
             x_label: "frequency (Hz)".into(),
             y_label: "phase (°)".into(),
             series: phase,
@@ -177,7 +214,7 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
         .iter()
         .map(|(k, r)| Entry {
             key: Key::Marker(point_marker(*k)),
-            label: r.label.to_string(),
+            label: run_words(r.label),
         })
         .collect();
     legend.push(Entry {
@@ -188,6 +225,19 @@ pub fn bode_plot(runs: &[RunTrace], layout: &Layout) -> Result<Option<Figure>> {
         id: "bode",
         legend,
         chart,
-        caption: "The closed loop from the T2 target to the measured T2, at each frequency of the stepped sine sweep: the gain and the phase of the measured T2's sine against the target's, fitted by least squares over whole cycles after the first second of each frequency. Where the gain crosses the dashed line is the −3 dB bandwidth.".into(),
+        caption: "The closed loop from the T2 target to the measured T2, at each frequency of the stepped sine sweep: the gain (the measured T2's amplitude over the target's, in dB) and the phase (the measured sine's minus the target's), fitted by least squares over whole cycles after the first second of each frequency. Where the gain crosses the dashed line is the −3 dB bandwidth.".into(),
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn raw_log_names_read_as_words() {
+        assert_eq!(
+            super::run_words("d12.7_w720_v10_run2"),
+            "run 2: D = 12.7\u{a0}mm, 720°, 10\u{a0}V"
+        );
+        assert_eq!(super::run_words("bench log 3"), "bench log 3");
+        assert_eq!(super::run_words("d12_wx_v10_run2"), "d12_wx_v10_run2");
+    }
 }

@@ -1,7 +1,7 @@
 //! Axes of the report's charts: labelled ticks, a panel's frame (ranges and ticks), and a
 //! linear plotters axis that puts its grid lines at our ticks.
 
-use super::{finite_range, points, Panel, LEFT, RIGHT};
+use super::{finite_range, points, Panel};
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
@@ -38,44 +38,82 @@ pub(super) fn auto_ticks(lo: f64, hi: f64, n: usize) -> Vec<(f64, String)> {
     keys.into_iter().map(|v| (v, tick_label(v, step))).collect()
 }
 
-/// The label of the tick nearest `v`.
-pub(super) fn label_at(ticks: &[(f64, String)], v: f64) -> String {
-    ticks
-        .iter()
-        .min_by(|a, b| (a.0 - v).abs().total_cmp(&(b.0 - v).abs()))
-        .map_or_else(String::new, |t| t.1.clone())
+/// A panel's data ranges.
+pub(super) fn ranges(p: &Panel) -> ((f64, f64), (f64, f64)) {
+    let pts = || p.series.iter().flat_map(|s| points(s).iter());
+    let x = finite_range(
+        pts()
+            .map(|v| v.0)
+            .chain(p.x_ticks.iter().flatten().map(|t| t.0)),
+    );
+    let y = p
+        .y_range
+        .unwrap_or_else(|| finite_range(pts().map(|v| v.1).chain(p.zero_line.then_some(0.0))));
+    (x, y)
 }
 
-/// A panel's coordinates: ranges and labelled ticks.
-pub(super) struct Frame {
-    pub(super) x: (f64, f64),
-    pub(super) y: (f64, f64),
-    pub(super) x_ticks: Vec<(f64, String)>,
-    pub(super) y_ticks: Vec<(f64, String)>,
-    /// x ticks name categories: no vertical grid lines, labels at the axis-label size.
-    pub(super) categorical: bool,
+/// The pixel position of `v` on an axis from `lo` to `hi` drawn over `len` px.
+pub(super) fn px(v: f64, (lo, hi): (f64, f64), len: f64) -> f64 {
+    (v - lo) / (hi - lo) * len
 }
 
-impl Frame {
-    pub(super) fn of(p: &Panel, w: u32) -> Frame {
-        let pts = || p.series.iter().flat_map(|s| points(s).iter());
-        let x = finite_range(
-            pts()
-                .map(|v| v.0)
-                .chain(p.x_ticks.iter().flatten().map(|t| t.0)),
-        );
-        let y = p
-            .y_range
-            .unwrap_or_else(|| finite_range(pts().map(|v| v.1).chain(p.zero_line.then_some(0.0))));
-        let n = (f64::from(w.saturating_sub(LEFT + RIGHT)) / 55.0).clamp(3.0, 8.0) as usize;
-        Frame {
-            x,
-            y,
-            x_ticks: p.x_ticks.clone().unwrap_or_else(|| auto_ticks(x.0, x.1, n)),
-            y_ticks: auto_ticks(y.0, y.1, 5),
-            categorical: false,
+/// True if neighbouring labels along an axis of `len` px keep `gap` px apart, each taking its
+/// `size` along the axis.
+fn spaced(
+    ticks: &[(f64, String)],
+    range: (f64, f64),
+    len: f64,
+    gap: f64,
+    size: impl Fn(&str) -> f64,
+) -> bool {
+    ticks.windows(2).all(|t| {
+        let d = (px(t[1].0, range, len) - px(t[0].0, range, len)).abs();
+        d >= (size(&t[0].1) + size(&t[1].1)) / 2.0 + gap
+    })
+}
+
+/// Every `k`-th of `ticks`, for the smallest `k` whose labels keep apart.
+fn thinned(
+    ticks: &[(f64, String)],
+    range: (f64, f64),
+    len: f64,
+    gap: f64,
+    size: impl Fn(&str) -> f64 + Copy,
+) -> Vec<(f64, String)> {
+    for k in 1..=ticks.len().max(1) {
+        let t: Vec<(f64, String)> = ticks.iter().step_by(k).cloned().collect();
+        if spaced(&t, range, len, gap, size) {
+            return t;
         }
     }
+    ticks.iter().take(1).cloned().collect()
+}
+
+/// Labelled ticks along an axis of `len` px: the panel's own (thinned to what fits) or the
+/// most automatic ones (at most `most`) whose labels keep `gap` px apart.
+pub(super) fn fitted_ticks(
+    given: Option<&Vec<(f64, String)>>,
+    range: (f64, f64),
+    len: f64,
+    most: usize,
+    gap: f64,
+    size: impl Fn(&str) -> f64 + Copy,
+) -> Vec<(f64, String)> {
+    if let Some(t) = given {
+        return thinned(t, range, len, gap, size);
+    }
+    // The most ticks that keep apart, two at least where two do.
+    let mut best: Option<Vec<(f64, String)>> = None;
+    for n in (2..=most.max(2)).rev() {
+        let t = auto_ticks(range.0, range.1, n);
+        if spaced(&t, range, len, gap, size) && t.len() > best.as_ref().map_or(0, Vec::len) {
+            best = Some(t);
+            if best.as_ref().is_some_and(|b| b.len() >= 2) {
+                break;
+            }
+        }
+    }
+    best.unwrap_or_else(|| thinned(&auto_ticks(range.0, range.1, 2), range, len, gap, size))
 }
 
 /// A linear axis with given ticks (plotters' `WithKeyPoints` over `f64` takes no label

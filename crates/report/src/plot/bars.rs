@@ -1,205 +1,388 @@
-//! Grouped bar charts (the gain figure).
+//! Grouped bar charts (the gain, the mechanisms' evidence), laid horizontally: one row of bars
+//! per category with its name at the left in words (wrapped), each bar's value at its end, and
+//! reference lines (a threshold) dashed across, named in the legend. Horizontal bars keep the
+//! names readable in a journal column, where ten names under vertical bars would collide.
 
-use super::axis::{auto_ticks, Coord, Frame};
-use super::{
-    build, compose, draw_axes, font, render, Chart, Dash, Entry, Key, Layer, LineStyle, Panel,
-    TEXT, TICK,
-};
+use super::axis::{fitted_ticks, Coord};
+use super::panel::{lines, Margins, GAP, LABEL, PAD, TICK, TICK_LEN, TITLE};
+use super::text::{Anchor, Font, Label, ASCENT, DESCENT};
+use super::{compose, render, Chart, Dash, Entry, Key, Layer, LineStyle, AXIS, GRID, TEXT};
 use anyhow::Result;
+use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// A grouped bar chart: for every category one bar per group.
 pub struct Bars {
     /// Title.
     pub title: String,
-    /// y-axis label.
-    pub y_label: String,
-    /// Category names (x axis).
+    /// Label of the value axis (with unit).
+    pub value_label: String,
+    /// Category names (in words).
     pub categories: Vec<String>,
     /// Group names and colours (the legend).
     pub groups: Vec<(String, RGBColor)>,
-    /// values[category][group]; None draws an empty outlined slot with `missing`.
+    /// values[category][group]; None draws an empty outlined bar with `missing` beside it.
     pub values: Vec<Vec<Option<f64>>>,
     /// Text for a missing value.
     pub missing: String,
-    /// Horizontal reference lines (a threshold): value and label.
+    /// Reference lines across the bars (a threshold): value and its legend text.
     pub lines: Vec<(f64, String)>,
     /// Decimals of the bars' value labels.
     pub decimals: usize,
 }
 
-impl Bars {
-    /// Legend entries: one swatch per group.
-    pub fn legend(&self) -> Vec<Entry> {
-        self.groups
-            .iter()
-            .map(|(label, color)| Entry {
-                key: Key::Line(LineStyle {
-                    color: *color,
-                    width: 10,
-                    dash: Dash::Solid,
-                }),
-                label: label.clone(),
-            })
-            .collect()
+/// Colour of the reference lines.
+pub const LINE_RED: RGBColor = RGBColor(0xC0, 0x20, 0x20);
+
+/// The reference lines' style.
+pub fn line_style() -> LineStyle {
+    LineStyle {
+        color: LINE_RED,
+        width: 2,
+        dash: Dash::Dashed,
     }
 }
 
-/// A grouped bar chart, `w`×`h` px, y from zero, each bar labelled with its value; every bar
-/// is a layer of class `mark bar`, every missing value one of class `missing`.
-pub fn bar_chart(c: &Bars, w: u32, h: u32) -> Result<Chart> {
-    let finite = || {
-        c.values
+impl Bars {
+    /// Legend entries: one swatch per group, then one dashed line per reference line.
+    pub fn legend(&self) -> Vec<Entry> {
+        let swatches = self.groups.iter().map(|(label, color)| Entry {
+            key: Key::Line(LineStyle {
+                color: *color,
+                width: 10,
+                dash: Dash::Solid,
+            }),
+            label: label.clone(),
+        });
+        let lines = self.lines.iter().map(|(_, label)| Entry {
+            key: Key::Line(line_style()),
+            label: label.clone(),
+        });
+        swatches.chain(lines).collect()
+    }
+
+    fn label(&self, v: f64) -> String {
+        let s = format!("{v:.*}", self.decimals);
+        s.replace('-', "−")
+    }
+}
+
+/// Height of one bar, px.
+const BAR_H: f64 = 15.0;
+/// Space between categories, px.
+const CAT_GAP: f64 = 9.0;
+
+/// What is drawn at the end of a bar: its value, or the missing note beside an empty bar.
+struct End {
+    at: f64,
+    text: String,
+}
+
+/// A bar chart laid out: its margins, value axis, bands and what every bar end says.
+struct Laid {
+    width: f64,
+    size: (u32, u32),
+    m: Margins,
+    x: (f64, f64),
+    y: (f64, f64),
+    ticks: Vec<(f64, String)>,
+    title: (Vec<String>, Font),
+    value_label: (Vec<String>, Font),
+    names: Vec<(Vec<String>, Font)>,
+    /// Each category's band height and its offset from the top of the plot area, px.
+    bands: Vec<(f64, f64)>,
+    groups: f64,
+    ends: Vec<Vec<End>>,
+}
+
+impl Laid {
+    /// `c` laid out `w` px wide: category names up to 40 % of the width, each band as tall as
+    /// its name's lines or its bars.
+    fn new(c: &Bars, w: u32) -> Laid {
+        let wf = f64::from(w);
+        let title = lines(&c.title, TITLE, wf - 2.0 * PAD);
+        let top = PAD + title.1.block(title.0.len()) + 2.0 * GAP;
+        let value_label = lines(&c.value_label, LABEL, wf - 2.0 * PAD);
+        let bottom =
+            TICK_LEN + GAP + TICK.height() + GAP + value_label.1.block(value_label.0.len()) + PAD;
+        let names: Vec<(Vec<String>, Font)> = c
+            .categories
             .iter()
-            .flatten()
-            .flatten()
-            .copied()
-            .chain(c.lines.iter().map(|l| l.0))
-            .filter(|v| v.is_finite())
-    };
-    let top = finite().fold(0.0f64, f64::max) * 1.12;
-    let top = if top > 0.0 { top } else { 1.0 };
-    let bottom = finite().fold(0.0f64, f64::min) * 1.12;
-    let n = c.categories.len().max(1) as f64;
-    let panel = Panel {
-        title: c.title.clone(),
-        y_label: c.y_label.clone(),
-        ..Panel::default()
-    };
-    let f = Frame {
-        x: (0.0, n),
-        y: (bottom, top),
-        // The category names are drawn below (staggered when they would collide).
-        x_ticks: (0..c.categories.len())
-            .map(|k| (k as f64 + 0.5, String::new()))
-            .collect(),
-        y_ticks: auto_ticks(bottom, top, 5),
-        categorical: true,
-    };
-    let size = (w, h);
-    let axes = render(size, |root| {
-        root.fill(&WHITE)?;
-        draw_axes(root, &panel, &f)?;
-        let mut chart = build(root, &f)?;
-        let slot_px = f64::from(w.saturating_sub(super::LEFT + super::RIGHT)) / n;
-        draw_categories(&mut chart, &c.categories, slot_px, bottom)?;
-        if bottom < 0.0 {
-            chart.draw_series(LineSeries::new([(0.0, 0.0), (n, 0.0)], super::ZERO))?;
+            .map(|s| lines(s, TICK, 0.4 * wf))
+            .collect();
+        let groups = c.groups.len().max(1) as f64;
+        let mut bands = Vec::new();
+        let mut acc = 0.0;
+        for (l, f) in &names {
+            let band = (groups * BAR_H).max(f.block(l.len())) + CAT_GAP;
+            bands.push((band, acc));
+            acc += band;
         }
-        draw_lines(&mut chart, &c.lines, n)
+        let name_w = names
+            .iter()
+            .flat_map(|(l, f)| l.iter().map(move |s| f.width(s)))
+            .fold(0.0, f64::max);
+        let m = Margins {
+            left: PAD + name_w + GAP + TICK_LEN,
+            right: PAD + 4.0,
+            top,
+            bottom,
+        };
+        let h = (top + acc.max(BAR_H) + bottom).ceil();
+        let plot_h = h - top - bottom;
+        let plot_w = wf - m.left - m.right;
+        let ends = bar_ends(c);
+        let x = value_range(c, &ends, plot_w);
+        let most = ((plot_w / 36.0) as usize).clamp(2, 8);
+        let ticks = fitted_ticks(None, x, plot_w, most, 8.0, |s| TICK.width(s));
+        Laid {
+            width: wf,
+            size: (w, h as u32),
+            m,
+            x,
+            y: (0.0, plot_h),
+            ticks,
+            title,
+            value_label,
+            names,
+            bands,
+            groups,
+            ends,
+        }
+    }
+
+    /// The data y span of bar `j` of category `k` (data y runs upwards from the plot's foot).
+    fn bar_y(&self, k: usize, j: usize) -> (f64, f64) {
+        let (band, offset) = self.bands[k];
+        let slack = band - CAT_GAP - self.groups * BAR_H;
+        let y0 = offset + CAT_GAP / 2.0 + slack / 2.0 + j as f64 * BAR_H;
+        (self.y.1 - y0 - 1.0, self.y.1 - (y0 + BAR_H - 1.0))
+    }
+
+    fn chart<'a, 'b>(
+        &self,
+        root: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    ) -> Result<ChartContext<'a, SVGBackend<'b>, Coord>> {
+        self.m.build(root, self.x, self.y, &self.ticks, &[])
+    }
+}
+
+/// A horizontal grouped bar chart `w` px wide, as high as its categories need: every bar a
+/// layer of class `mark bar`, every missing value one of class `missing`.
+pub fn bar_chart(c: &Bars, w: u32) -> Result<Chart> {
+    let l = Laid::new(c, w);
+    let mut labels = Vec::new();
+    let axes = render(l.size, |root| {
+        root.fill(&WHITE)?;
+        let mut chart = l.chart(root)?;
+        value_axis(root, &mut chart, &l, &c.lines, &mut labels)?;
+        category_names(&chart, &l, &mut labels);
+        bar_end_labels(&chart, &l, &mut labels);
+        Ok(())
     })?;
-    // Bars fill 70 % of each category's slot, with a small gap between neighbours.
-    let bw = 0.7 / c.groups.len().max(1) as f64;
     let mut layers = Vec::new();
     for (k, vals) in c.values.iter().enumerate() {
         for (j, (v, (_, color))) in vals.iter().zip(&c.groups).enumerate() {
-            let x0 = k as f64 + 0.15 + bw * j as f64 + 0.01;
-            let x1 = x0 + bw - 0.02;
-            let svg = render(size, |root| {
-                let mut chart = build(root, &f)?;
-                // A value that is not identified is drawn as missing, never as "NaN".
-                match v.filter(|x| x.is_finite()) {
-                    Some(v) => draw_bar(&mut chart, (x0, x1), v, *color, c.decimals),
-                    None => draw_missing(&mut chart, (x0, x1), top, &c.missing),
-                }
+            let (y0, y1) = l.bar_y(k, j);
+            let v = v.filter(|x| x.is_finite());
+            let svg = render(l.size, |root| {
+                let mut chart = l.chart(root)?;
+                match v {
+                    Some(v) => chart.draw_series([
+                        Rectangle::new([(0.0, y0), (v, y1)], color.filled()),
+                        Rectangle::new([(0.0, y0), (v, y1)], TEXT.stroke_width(1)),
+                    ])?,
+                    None => chart.draw_series([Rectangle::new(
+                        [(0.0, y0), (missing_len(c), y1)],
+                        RGBColor(0x99, 0x99, 0x99).stroke_width(1),
+                    )])?,
+                };
+                Ok(())
             })?;
-            let class = if v.is_some_and(|x| x.is_finite()) {
-                "mark bar"
-            } else {
-                "missing"
-            };
+            let class = if v.is_some() { "mark bar" } else { "missing" };
             layers.push(Layer { class, svg });
         }
     }
-    Ok(compose(size, axes, layers))
+    title_and_value_label(&l, &mut labels);
+    Ok(compose(l.size, axes, &labels, layers))
 }
 
-/// The category names below the axis, staggered in two rows when the widest would not fit
-/// its slot (`slot_px` wide).
-fn draw_categories(
+/// Grid, ticks and their labels, the axis line, the zero line and the reference lines.
+fn value_axis(
+    root: &DrawingArea<SVGBackend, Shift>,
     chart: &mut ChartContext<SVGBackend, Coord>,
-    categories: &[String],
-    slot_px: f64,
-    bottom: f64,
-) -> Result<()> {
-    let widest = categories
-        .iter()
-        .map(|s| s.chars().count())
-        .max()
-        .unwrap_or(0);
-    let stagger = 0.6 * super::LABEL * widest as f64 > 0.95 * slot_px;
-    for (k, name) in categories.iter().enumerate() {
-        let dy = if stagger && k % 2 == 1 { 22 } else { 6 };
-        let style = font(super::LABEL, false).pos(Pos::new(HPos::Center, VPos::Top));
-        chart.draw_series(std::iter::once(
-            EmptyElement::at((k as f64 + 0.5, bottom)) + Text::new(name.clone(), (0, dy), style),
-        ))?;
-    }
-    Ok(())
-}
-
-/// The horizontal reference lines (a threshold), dashed red, each labelled at the right end.
-fn draw_lines(
-    chart: &mut ChartContext<SVGBackend, Coord>,
+    l: &Laid,
     lines: &[(f64, String)],
-    n: f64,
+    labels: &mut Vec<Label>,
 ) -> Result<()> {
-    let red = RGBColor(0xC0, 0x20, 0x20);
-    for (y, label) in lines {
+    let (x, y) = (l.x, l.y);
+    for (t, _) in &l.ticks {
+        chart.draw_series(LineSeries::new([(*t, y.0), (*t, y.1)], GRID))?;
+    }
+    for (t, s) in &l.ticks {
+        let (px, py) = chart.backend_coord(&(*t, y.0));
+        root.draw(&PathElement::new(
+            vec![(px, py), (px, py + TICK_LEN as i32)],
+            AXIS,
+        ))?;
+        let base = f64::from(py) + TICK_LEN + GAP + ASCENT * TICK.px;
+        labels.push(Label::new(
+            s.clone(),
+            (f64::from(px), base),
+            TICK,
+            Anchor::Middle,
+        ));
+    }
+    root.draw(&PathElement::new(
+        vec![
+            chart.backend_coord(&(x.0, y.0)),
+            chart.backend_coord(&(x.1, y.0)),
+        ],
+        AXIS,
+    ))?;
+    if x.0 < 0.0 {
+        chart.draw_series(LineSeries::new([(0.0, y.0), (0.0, y.1)], AXIS))?;
+    }
+    for (v, _) in lines {
         chart.draw_series(DashedLineSeries::new(
-            [(0.0, *y), (n, *y)],
+            [(*v, y.0), (*v, y.1)],
             super::DASH.0,
             super::DASH.1,
-            red.stroke_width(2),
-        ))?;
-        let style = font(TICK, false)
-            .color(&red)
-            .pos(Pos::new(HPos::Right, VPos::Bottom));
-        chart.draw_series(std::iter::once(
-            EmptyElement::at((n, *y)) + Text::new(label.clone(), (-4, -3), style),
+            LINE_RED.stroke_width(2),
         ))?;
     }
     Ok(())
 }
 
-/// One bar from 0 to `v` between `x0` and `x1`, outlined, its value above it.
-fn draw_bar(
-    chart: &mut ChartContext<SVGBackend, Coord>,
-    (x0, x1): (f64, f64),
-    v: f64,
-    color: RGBColor,
-    decimals: usize,
-) -> Result<()> {
-    let label = font(TICK, false).pos(Pos::new(HPos::Center, VPos::Bottom));
-    chart.draw_series([
-        Rectangle::new([(x0, 0.0), (x1, v)], color.filled()),
-        Rectangle::new([(x0, 0.0), (x1, v)], TEXT.stroke_width(1)),
-    ])?;
-    chart.draw_series(std::iter::once(
-        EmptyElement::at(((x0 + x1) / 2.0, v))
-            + Text::new(format!("{v:.*}", decimals), (0, -4), label),
-    ))?;
-    Ok(())
+/// Category names, right-aligned left of the plot, centred on their band.
+fn category_names(chart: &ChartContext<SVGBackend, Coord>, l: &Laid, labels: &mut Vec<Label>) {
+    let left = f64::from(chart.backend_coord(&(l.x.0, l.y.0)).0) - GAP - TICK_LEN;
+    for ((lines, f), (band, offset)) in l.names.iter().zip(&l.bands) {
+        let centre = f64::from(chart.backend_coord(&(l.x.0, l.y.1 - offset - band / 2.0)).1);
+        let first = centre - f.block(lines.len()) / 2.0 + ASCENT * f.px;
+        for (i, line) in lines.iter().enumerate() {
+            labels.push(Label::new(
+                line.clone(),
+                (left, first + i as f64 * f.line()),
+                *f,
+                Anchor::End,
+            ));
+        }
+    }
 }
 
-/// An empty grey slot (30 % of the axis high) with `missing` written up it.
-fn draw_missing(
-    chart: &mut ChartContext<SVGBackend, Coord>,
-    (x0, x1): (f64, f64),
-    top: f64,
-    missing: &str,
-) -> Result<()> {
-    let label = font(TICK, false)
-        .transform(FontTransform::Rotate270)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    let grey = RGBColor(0x99, 0x99, 0x99);
-    chart.draw_series([Rectangle::new(
-        [(x0, 0.0), (x1, 0.3 * top)],
-        grey.stroke_width(1),
-    )])?;
-    chart.draw_series(std::iter::once(
-        EmptyElement::at(((x0 + x1) / 2.0, 0.0)) + Text::new(missing.to_string(), (0, -8), label),
-    ))?;
-    Ok(())
+/// Each bar's value (or the missing note) at its end, haloed over the lines it may cross.
+fn bar_end_labels(chart: &ChartContext<SVGBackend, Coord>, l: &Laid, labels: &mut Vec<Label>) {
+    let lift = (ASCENT - DESCENT) / 2.0 * TICK.px;
+    for (k, row) in l.ends.iter().enumerate() {
+        for (j, e) in row.iter().enumerate() {
+            let (y0, y1) = l.bar_y(k, j);
+            let (px, py) = chart.backend_coord(&(e.at, (y0 + y1) / 2.0));
+            let (dx, anchor) = if e.at < 0.0 {
+                (-GAP, Anchor::End)
+            } else {
+                (GAP, Anchor::Start)
+            };
+            labels.push(Label {
+                halo: true,
+                ..Label::new(
+                    e.text.clone(),
+                    (f64::from(px) + dx, f64::from(py) + lift),
+                    TICK,
+                    anchor,
+                )
+            });
+        }
+    }
+}
+
+/// The title above the chart and the value axis's label under its tick labels.
+fn title_and_value_label(l: &Laid, labels: &mut Vec<Label>) {
+    let (title, tf) = &l.title;
+    for (i, line) in title.iter().enumerate() {
+        let y = PAD + ASCENT * tf.px + i as f64 * tf.line();
+        labels.push(Label::new(
+            line.clone(),
+            (l.width / 2.0, y),
+            *tf,
+            Anchor::Middle,
+        ));
+    }
+    let (vl, vf) = &l.value_label;
+    let base = l.m.top + l.y.1 + TICK_LEN + GAP + TICK.height() + GAP;
+    let mid = l.m.left + (l.width - l.m.left - l.m.right) / 2.0;
+    for (i, line) in vl.iter().enumerate() {
+        let half = vf.width(line) / 2.0;
+        let x = mid.clamp(PAD + half, l.width - PAD - half);
+        let y = base + ASCENT * vf.px + i as f64 * vf.line();
+        labels.push(Label::new(line.clone(), (x, y), *vf, Anchor::Middle));
+    }
+}
+
+/// The length of an empty bar: a fifth of the largest value (1 without any).
+fn missing_len(c: &Bars) -> f64 {
+    let top = c
+        .values
+        .iter()
+        .flatten()
+        .flatten()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    if top > 0.0 {
+        0.2 * top
+    } else {
+        1.0
+    }
+}
+
+/// Where each bar ends and what is written there.
+fn bar_ends(c: &Bars) -> Vec<Vec<End>> {
+    c.values
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|v| match v.filter(|x| x.is_finite()) {
+                    Some(v) => End {
+                        at: v,
+                        text: c.label(v),
+                    },
+                    None => End {
+                        at: missing_len(c),
+                        text: c.missing.clone(),
+                    },
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The value axis's range: zero, every bar and line, and room for each end's text.
+fn value_range(c: &Bars, ends: &[Vec<End>], plot_w: f64) -> (f64, f64) {
+    let vals = ends
+        .iter()
+        .flatten()
+        .map(|e| e.at)
+        .chain(c.lines.iter().map(|l| l.0))
+        .filter(|v| v.is_finite());
+    let (mut lo, mut hi) = vals.fold((0.0f64, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+    if hi - lo < 1e-12 {
+        hi = lo + 1.0;
+    }
+    let room = |e: &End| GAP + TICK.width(&e.text) + 3.0;
+    for _ in 0..30 {
+        let scale = plot_w / (hi - lo);
+        let (mut lo2, mut hi2) = (lo, hi);
+        for e in ends.iter().flatten() {
+            if e.at < 0.0 {
+                lo2 = lo2.min(e.at - room(e) / scale);
+            } else {
+                hi2 = hi2.max(e.at + room(e) / scale);
+            }
+        }
+        if lo2 == lo && hi2 == hi {
+            break;
+        }
+        (lo, hi) = (lo2, hi2);
+    }
+    (lo, hi)
 }

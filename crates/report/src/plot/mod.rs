@@ -10,17 +10,19 @@
 
 use anyhow::Result;
 use plotters::coord::Shift;
-use plotters::element::DashedPathElement;
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 mod axis;
 mod bars;
+pub mod legend;
+pub mod panel;
+pub mod text;
 
+use axis::Coord;
 #[cfg(test)]
 use axis::{auto_ticks, tick_label};
-use axis::{label_at, Axis, Coord, Frame};
 pub use bars::{bar_chart, Bars};
+pub use panel::cell_height;
 
 /// A stroke pattern.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,8 +102,6 @@ pub struct Panel {
     pub y_label: String,
     /// Series, drawn in order.
     pub series: Vec<Series>,
-    /// Legend inside the panel (top left); empty for none.
-    pub legend: Vec<Entry>,
     /// Custom x ticks (position, label) instead of automatic ones.
     pub x_ticks: Option<Vec<(f64, String)>>,
     /// A horizontal reference line at y = 0.
@@ -118,35 +118,14 @@ pub struct Chart {
     pub marks: usize,
 }
 
-const FAMILY: &str = "Helvetica, Arial, sans-serif";
-const TITLE: f64 = 14.0;
-const LABEL: f64 = 13.0;
-const TICK: f64 = 12.0;
-const LEGEND: f64 = 12.5;
 const TEXT: RGBColor = RGBColor(0x22, 0x22, 0x22);
 const AXIS: RGBColor = RGBColor(0x44, 0x44, 0x44);
 const GRID: RGBColor = RGBColor(0xe6, 0xe6, 0xe6);
 const ZERO: RGBColor = RGBColor(0x88, 0x88, 0x88);
-/// Space above a panel's plot area for its title, beside it for the axes and below them, px.
-const TITLE_H: u32 = 26;
-const LEFT: u32 = 62;
-const BOTTOM: u32 = 40;
-const BELOW: u32 = 6;
-const RIGHT: u32 = 14;
 
 /// `#RRGGBB`, as plotters writes colours.
 pub fn hex(c: RGBColor) -> String {
     format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
-}
-
-/// Text of `px` pixels: plotters' SVG backend writes `font-size` as the style's size / 1.24.
-fn font(px: f64, bold: bool) -> TextStyle<'static> {
-    let style = if bold {
-        FontStyle::Bold
-    } else {
-        FontStyle::Normal
-    };
-    TextStyle::from(FontDesc::new(FontFamily::Name(FAMILY), px * 1.24, style)).color(&TEXT)
 }
 
 /// The range of the finite values, padded by 4 % (a unit range around a single value).
@@ -165,40 +144,6 @@ pub fn finite_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     let pad = 0.04 * (hi - lo);
     (lo - pad, hi + pad)
 }
-/// The chart of a panel's cell: the same plot area in every layer.
-fn build<'a, 'b>(
-    cell: &'a DrawingArea<SVGBackend<'b>, Shift>,
-    f: &Frame,
-) -> Result<ChartContext<'a, SVGBackend<'b>, Coord>> {
-    Ok(ChartBuilder::on(cell)
-        .margin_top(TITLE_H)
-        .margin_right(RIGHT)
-        .margin_bottom(BELOW)
-        .x_label_area_size(BOTTOM)
-        .y_label_area_size(LEFT)
-        .build_cartesian_2d(Axis::new(f.x, &f.x_ticks), Axis::new(f.y, &f.y_ticks))?)
-}
-
-/// An in-panel legend sample at `(x, y)` (its middle), 24 px wide (annotations are solid or
-/// dashed; dotted samples are only in the HTML legend).
-fn key_element<DB: DrawingBackend>(
-    key: Key,
-    (x, y): (i32, i32),
-) -> DynElement<'static, DB, (i32, i32)> {
-    match key {
-        Key::Marker(m) => Circle::new((x + 12, y), m.radius.max(4), marker_style(m)).into_dyn(),
-        Key::Line(l) => {
-            let line = vec![(x, y), (x + 24, y)];
-            match l.dash {
-                Dash::Dashed => {
-                    DashedPathElement::new(line, DASH.0, DASH.1, line_style(l)).into_dyn()
-                }
-                _ => PathElement::new(line, line_style(l)).into_dyn(),
-            }
-        }
-    }
-}
-
 fn line_style(l: LineStyle) -> ShapeStyle {
     l.color.stroke_width(l.width)
 }
@@ -210,56 +155,6 @@ fn marker_style(m: Marker) -> ShapeStyle {
     } else {
         c.filled()
     }
-}
-
-/// Title, grid, axes, tick and axis labels, the zero line and the in-panel legend of a panel.
-fn draw_axes(cell: &DrawingArea<SVGBackend, Shift>, p: &Panel, f: &Frame) -> Result<()> {
-    let w = cell.dim_in_pixel().0 as i32;
-    let title = font(TITLE, true).pos(Pos::new(HPos::Center, VPos::Center));
-    cell.draw(&Text::new(p.title.clone(), (w / 2, 12), title))?;
-    let mut chart = build(cell, f)?;
-    let (fx, fy) = (
-        |v: &f64| label_at(&f.x_ticks, *v),
-        |v: &f64| label_at(&f.y_ticks, *v),
-    );
-    let mut mesh = chart.configure_mesh();
-    mesh.bold_line_style(GRID)
-        .axis_style(AXIS)
-        // Labels sit twice the tick length from the axis.
-        .set_tick_mark_size(LabelAreaPosition::Left, 3)
-        .set_tick_mark_size(LabelAreaPosition::Bottom, 4)
-        .x_label_style(font(if f.categorical { LABEL } else { TICK }, false))
-        .y_label_style(font(TICK, false))
-        .axis_desc_style(font(LABEL, false))
-        .x_desc(p.x_label.as_str())
-        .y_desc(p.y_label.as_str())
-        .x_label_formatter(&fx)
-        .y_label_formatter(&fy);
-    if f.categorical {
-        mesh.disable_x_mesh();
-    }
-    mesh.draw()?;
-    if p.zero_line {
-        chart.draw_series(LineSeries::new([(f.x.0, 0.0), (f.x.1, 0.0)], ZERO))?;
-    }
-    if !p.legend.is_empty() {
-        for e in &p.legend {
-            let key = e.key;
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), u32>>())?
-                .label(e.label.as_str())
-                .legend(move |c| key_element(key, c));
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font(font(LEGEND, false))
-            .background_style(WHITE.mix(0.85))
-            .border_style(TRANSPARENT)
-            .legend_area_size(30)
-            .draw()?;
-    }
-    Ok(())
 }
 
 /// The data points of a series.
@@ -346,9 +241,9 @@ struct Layer {
     svg: String,
 }
 
-/// The chart: the axes under the layers.
-fn compose((w, h): (u32, u32), axes: String, layers: Vec<Layer>) -> Chart {
-    let mut svg = format!("<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\"><g class=\"axes\">{axes}</g>");
+/// The chart: the axes and their text under the layers.
+fn compose((w, h): (u32, u32), axes: String, labels: &[text::Label], layers: Vec<Layer>) -> Chart {
+    let mut svg = format!("<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\"><g class=\"axes\">{axes}{}</g>", text::svg(labels));
     for l in &layers {
         svg.push_str(&format!("<g class=\"{}\">{}</g>", l.class, l.svg));
     }
@@ -360,12 +255,15 @@ fn compose((w, h): (u32, u32), axes: String, layers: Vec<Layer>) -> Chart {
     Chart { svg, marks }
 }
 
-/// The width a figure is laid out to: the natural sizes of the report's figures, or a given
-/// width (a journal column), to which the panels reflow.
+/// The size a figure is laid out to: a width (a journal column or a page), to which the panels
+/// reflow, and the height of a page, which no figure exceeds (panels beyond it are left out,
+/// and the figure's caption says which are drawn).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Layout {
     /// Total width, px (None: every figure at its natural size).
     pub width_px: Option<u32>,
+    /// The tallest a figure may be, px, its legend included (None: no limit).
+    pub max_height_px: Option<f64>,
 }
 
 /// The narrowest panel a reflowed figure uses, px.
@@ -375,7 +273,7 @@ impl Layout {
     /// A grid of `cols` panels of `w`×`h` px reflowed to the layout's width.
     pub fn grid(&self, cols: usize, w: u32, h: u32) -> (usize, u32, u32) {
         let Some(total) = self.width_px else {
-            return (cols, w, h);
+            return (cols.max(1), w, h);
         };
         let cols = cols.min((total / MIN_PANEL_W).max(1) as usize).max(1);
         let w2 = total / cols as u32;
@@ -393,31 +291,47 @@ impl Layout {
             ),
         }
     }
+
+    /// How many rows of cells `cell_h` px high fit under `above_px` of legend (at least one).
+    pub fn rows_that_fit(&self, cell_h: u32, above_px: f64) -> usize {
+        match self.max_height_px {
+            None => usize::MAX,
+            // Whole pixels: the figure file's height is rounded up.
+            Some(m) => {
+                let room = m.floor() - above_px.ceil() - 1.0;
+                ((room / f64::from(cell_h.max(1))).floor() as usize).max(1)
+            }
+        }
+    }
 }
 
-/// Panels on a grid of `cols` columns, each `w`×`h` px.
+/// Panels on a grid of `cols` columns, each `w` px wide and at least `h` px high (taller where
+/// its text needs it, [`cell_height`]).
 pub fn figure(panels: &[Panel], cols: usize, w: u32, h: u32) -> Result<Chart> {
-    let cols = cols.max(1);
-    let grid = (panels.len().div_ceil(cols).max(1), cols);
-    let size = (w * grid.1 as u32, h * grid.0 as u32);
-    let frames: Vec<Frame> = panels.iter().map(|p| Frame::of(p, w)).collect();
+    let g = panel::Grid::new(panels, cols, w, h);
+    let size = g.size();
+    let mut labels = Vec::new();
     let axes = render(size, |root| {
         root.fill(&WHITE)?;
-        for ((cell, p), f) in root.split_evenly(grid).iter().zip(panels).zip(&frames) {
-            draw_axes(cell, p, f)?;
+        for (k, (cell, p)) in g.cells(root).iter().zip(panels).enumerate() {
+            panel::draw_axes(root, cell, &g, k, p, &mut labels)?;
         }
         Ok(())
     })?;
     let mut layers = Vec::new();
-    for (k, (p, f)) in panels.iter().zip(&frames).enumerate() {
+    for (k, (p, f)) in panels.iter().zip(&g.frames).enumerate() {
         for s in p.series.iter().filter(|s| drawable(s)) {
             let svg = render(size, |root| {
-                draw_data(&mut build(&root.split_evenly(grid)[k], f)?, s)
+                let cells = g.cells(root);
+                let mut chart = g
+                    .margins
+                    .build(&cells[k], f.x, f.y, &f.x_ticks, &f.y_ticks)?;
+                draw_data(&mut chart, s)
             })?;
             layers.push(Layer { class: "mark", svg });
         }
     }
-    Ok(compose(size, axes, layers))
+    Ok(compose(size, axes, &labels, layers))
 }
 
 #[cfg(test)]

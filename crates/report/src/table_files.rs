@@ -1,0 +1,363 @@
+//! The report's tables as files for a paper: `tables/parameters.{csv,tex}` (every fitted
+//! quantity: value ± SE, its 95 % interval, unit, what it is and how its interval is computed)
+//! and `tables/models.{csv,tex}` (the model comparison). The CSV carries every number at full
+//! precision; the LaTeX is a booktabs `tabular` (ASCII only, `\usepackage{booktabs}`) with the
+//! interval methods as lettered notes under it, ready for `\input` inside a `table` float.
+
+use crate::parameters::Row;
+use capstan_data::text_cell;
+use capstan_engine::analysis::Analysis;
+use std::fmt::Write as _;
+
+/// `v` with `digits` significant digits ("–" when not finite; scientific below 1e-3 and from
+/// 1e5).
+pub fn sig(v: f64, digits: usize) -> String {
+    if !v.is_finite() {
+        return "–".into();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let e = v.abs().log10().floor() as i32;
+    if !(-3..5).contains(&e) {
+        return format!("{v:.*e}", digits.saturating_sub(1));
+    }
+    let d = (digits as i32 - 1 - e).max(0) as usize;
+    format!("{v:.d$}")
+}
+
+/// A number for a CSV cell: full precision, empty when missing.
+fn num(v: Option<f64>) -> String {
+    v.filter(|v| v.is_finite())
+        .map_or(String::new(), |v| format!("{v}"))
+}
+
+/// `parameters.csv`.
+pub fn parameters_csv(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "key,quantity,estimate_of,value,se,ci95_lo,ci95_hi,unit,interval_method_or_note\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{}",
+            text_cell(&r.key),
+            text_cell(&r.quantity),
+            text_cell(&r.source),
+            num(Some(r.value)),
+            num(r.se),
+            num(r.ci95_lo),
+            num(r.ci95_hi),
+            text_cell(r.unit),
+            text_cell(&r.note)
+        );
+    }
+    s
+}
+
+/// Text for LaTeX: its special characters escaped, the non-ASCII ones the report uses as
+/// commands, anything else as `?` (the file stays ASCII for any engine).
+pub fn latex(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        let r: &str = match c {
+            '\\' => "\\textbackslash{}",
+            '&' => "\\&",
+            '%' => "\\%",
+            '$' => "\\$",
+            '#' => "\\#",
+            '_' => "\\_",
+            '{' => "\\{",
+            '}' => "\\}",
+            '~' => "\\textasciitilde{}",
+            '^' => "\\textasciicircum{}",
+            '<' => "$<$",
+            '>' => "$>$",
+            '|' => "$|$",
+            '−' => "$-$",
+            '–' => "--",
+            '—' => "---",
+            '·' | '⋅' => "$\\cdot$",
+            '×' => "$\\times$",
+            '±' => "$\\pm$",
+            '≤' => "$\\leq$",
+            '≥' => "$\\geq$",
+            '≈' => "$\\approx$",
+            '°' => "$^\\circ$",
+            '²' => "$^2$",
+            '³' => "$^3$",
+            'ⁿ' => "$^n$",
+            '₁' => "$_1$",
+            '₂' => "$_2$",
+            'μ' | 'µ' => "$\\mu$",
+            'σ' => "$\\sigma$",
+            'λ' => "$\\lambda$",
+            'β' => "$\\beta$",
+            'θ' => "$\\theta$",
+            'τ' => "$\\tau$",
+            'Δ' => "$\\Delta$",
+            'χ' => "$\\chi$",
+            'Σ' => "$\\Sigma$",
+            '√' => "$\\surd$",
+            '’' => "'",
+            '‘' => "`",
+            '“' => "``",
+            '”' => "''",
+            '…' => "\\ldots{}",
+            'é' => "\\'e",
+            c if c.is_ascii() => {
+                out.push(c);
+                continue;
+            }
+            _ => "?",
+        };
+        out.push_str(r);
+    }
+    out
+}
+
+/// A value ± SE and its interval in LaTeX, at the SE's precision (two significant digits), or
+/// four significant digits without an SE; a common power of ten for very small or large
+/// values.
+fn tex_value(v: f64, se: Option<f64>, ci: Option<(f64, f64)>) -> (String, String) {
+    if !v.is_finite() {
+        return ("--".into(), "--".into());
+    }
+    let e = if v != 0.0 {
+        v.abs().log10().floor() as i32
+    } else {
+        0
+    };
+    let (scale, power) = if (-3..5).contains(&e) {
+        (1.0, None)
+    } else {
+        (10f64.powi(-e), Some(e))
+    };
+    let se = se.filter(|s| s.is_finite() && *s > 0.0).map(|s| s * scale);
+    let d = match se {
+        Some(s) => (1 - s.log10().floor() as i32).clamp(0, 8) as usize,
+        None => {
+            let ev = if v != 0.0 {
+                (v * scale).abs().log10().floor() as i32
+            } else {
+                0
+            };
+            (3 - ev).clamp(0, 8) as usize
+        }
+    };
+    let f = |x: f64| format!("{:.d$}", x * scale);
+    let body = match se {
+        Some(s) => format!("{} \\pm {s:.d$}", f(v)),
+        None => f(v),
+    };
+    let value = match power {
+        Some(p) if se.is_some() => format!("$({body})\\times 10^{{{p}}}$"),
+        Some(p) => format!("${body}\\times 10^{{{p}}}$"),
+        None => format!("${body}$"),
+    };
+    let interval = match ci {
+        Some((lo, hi)) if lo.is_finite() && hi.is_finite() => match power {
+            Some(p) => format!("${}$ to ${}$ ($\\times 10^{{{p}}}$)", f(lo), f(hi)),
+            None => format!("${}$ to ${}$", f(lo), f(hi)),
+        },
+        _ => "--".into(),
+    };
+    (value, interval)
+}
+
+/// The letter of note `k` (a, b, ..., z, aa, ab, ...).
+fn letter(k: usize) -> String {
+    let a = |i: usize| char::from(b'a' + (i % 26) as u8);
+    if k < 26 {
+        a(k).to_string()
+    } else {
+        format!("{}{}", a(k / 26 - 1), a(k))
+    }
+}
+
+/// Notes under a table: each distinct text once, lettered in order of first use.
+#[derive(Default)]
+struct Notes(Vec<String>);
+
+impl Notes {
+    fn mark(&mut self, text: &str) -> String {
+        let k = match self.0.iter().position(|n| n == text) {
+            Some(k) => k,
+            None => {
+                self.0.push(text.to_string());
+                self.0.len() - 1
+            }
+        };
+        format!("\\textsuperscript{{{}}}", letter(k))
+    }
+
+    fn tex(&self) -> String {
+        let mut s = String::from("\n\\par\\smallskip\n{\\footnotesize\n");
+        for (k, n) in self.0.iter().enumerate() {
+            let _ = writeln!(s, "\\textsuperscript{{{}}}~{}\\par", letter(k), latex(n));
+        }
+        s.push_str("}\n");
+        s
+    }
+}
+
+/// The comment lines a table file opens with: what it is and where it came from.
+fn tex_header(what: &str, made_by: &str) -> String {
+    let ascii: String = made_by
+        .chars()
+        .map(|c| if c.is_ascii() { c } else { '?' })
+        .collect();
+    format!("% {what}\n% Made by {ascii}.\n% Needs \\usepackage{{booktabs}}; \\input it inside a table float.\n")
+}
+
+/// `parameters.tex`.
+pub fn parameters_tex(rows: &[Row], made_by: &str) -> String {
+    let mut s = tex_header(
+        "Every fitted quantity of capstan analyze: value +- standard error, 95 % interval, unit; the notes say how each interval is computed (or why two estimates of one quantity differ).",
+        made_by,
+    );
+    s.push_str("\\begin{tabular}{@{}p{0.32\\linewidth}p{0.17\\linewidth}lll@{}}\n\\toprule\nQuantity & Estimate of & Value $\\pm$ SE & 95\\,\\% interval & Unit \\\\\n\\midrule\n");
+    let mut notes = Notes::default();
+    for r in rows {
+        let ci = r.ci95_lo.zip(r.ci95_hi);
+        let (value, interval) = tex_value(r.value, r.se, ci);
+        let _ = writeln!(
+            s,
+            "{}{} & {} & {value} & {interval} & {} \\\\",
+            latex(&r.quantity),
+            notes.mark(&r.note),
+            latex(&r.source),
+            latex(r.unit)
+        );
+    }
+    s.push_str("\\bottomrule\n\\end{tabular}\n");
+    s.push_str(&notes.tex());
+    s
+}
+
+/// The interval method of the model table.
+const MODEL_NOTE: &str = "95 % intervals: percentiles of a bootstrap over cords (whole cords resampled); SE: cord jackknife. LOCO: each cord predicted by a fit to the other cords. Parameters: fixed values plus the effective degrees of freedom of the cord effects. AIC and BIC treat rows as independent and are for comparison with the thesis only.";
+
+/// `models.csv`.
+pub fn models_csv(a: &Analysis) -> String {
+    let mut s = String::from("model,name,description,parameters,fixed,edf_cord_effects,rmse_t2_n,rmse_t2_se,rmse_t2_ci95_lo,rmse_t2_ci95_hi,loco_rmse_t2_n,loco_rmse_t2_se,loco_rmse_t2_ci95_lo,loco_rmse_t2_ci95_hi,rmse_ln_amp,median_per_cord_r2_amp,aic,bic,interval_method\n");
+    for m in &a.models {
+        let u = &m.rmse_t2_uncertainty;
+        let l = m.loco_rmse_t2_uncertainty.as_ref();
+        let cells = [
+            text_cell(&crate::figures::model_label(&m.name)),
+            text_cell(&m.name),
+            text_cell(&m.description),
+            num(Some(m.n_params)),
+            m.n_params_detail.fixed.to_string(),
+            num(Some(m.n_params_detail.edf_random)),
+            num(Some(u.value)),
+            num(Some(u.jackknife_se)),
+            num(Some(u.ci95.lo)),
+            num(Some(u.ci95.hi)),
+            num(l.map(|l| l.value)),
+            num(l.map(|l| l.jackknife_se)),
+            num(l.map(|l| l.ci95.lo)),
+            num(l.map(|l| l.ci95.hi)),
+            num(Some(m.rmse_ln_amp)),
+            num(Some(m.per_cord_r2_amp_median)),
+            num(Some(m.aic)),
+            num(Some(m.bic)),
+            text_cell(MODEL_NOTE),
+        ];
+        let _ = writeln!(s, "{}", cells.join(","));
+    }
+    s
+}
+
+/// An RMSE with its interval: "$1.718$ [$1.43$, $2.02$]".
+fn tex_rmse(w: Option<&capstan_engine::analysis::uncertainty::WithInterval>) -> String {
+    match w {
+        Some(w) if w.value.is_finite() => {
+            format!("${:.3}$ [${:.3}$, ${:.3}$]", w.value, w.ci95.lo, w.ci95.hi)
+        }
+        _ => "not refittable".into(),
+    }
+}
+
+/// `models.tex`.
+pub fn models_tex(a: &Analysis, made_by: &str) -> String {
+    let mut s = tex_header(
+        "The models of capstan analyze compared: RMSE of T2 in-sample and leaving one cord out, with 95 % intervals over cords.",
+        made_by,
+    );
+    s.push_str("\\begin{tabular}{@{}lrllrr@{}}\n\\toprule\nModel & Parameters & RMSE $T_2$ (N) & LOCO RMSE $T_2$ (N) & AIC & BIC \\\\\n\\midrule\n");
+    for m in &a.models {
+        let params = if m.n_params_detail.edf_random > 0.0 {
+            format!(
+                "{} + {:.1}",
+                m.n_params_detail.fixed, m.n_params_detail.edf_random
+            )
+        } else {
+            format!("{}", m.n_params)
+        };
+        let _ = writeln!(
+            s,
+            "{} & {params} & {} & {} & ${:.1}$ & ${:.1}$ \\\\",
+            latex(&crate::figures::model_label(&m.name)),
+            tex_rmse(Some(&m.rmse_t2_uncertainty)),
+            tex_rmse(m.loco_rmse_t2_uncertainty.as_ref()),
+            m.aic,
+            m.bic
+        );
+    }
+    s.push_str("\\bottomrule\n\\end{tabular}\n");
+    let _ = write!(
+        s,
+        "\n\\par\\smallskip\n{{\\footnotesize {}\\par}}\n",
+        latex(MODEL_NOTE)
+    );
+    s
+}
+
+/// Every table file: its name under the output directory and its text.
+pub fn table_files(a: &Analysis, made_by: &str) -> Vec<(String, String)> {
+    let rows = crate::parameters::rows(a);
+    vec![
+        ("tables/parameters.csv".into(), parameters_csv(&rows)),
+        (
+            "tables/parameters.tex".into(),
+            parameters_tex(&rows, made_by),
+        ),
+        ("tables/models.csv".into(), models_csv(a)),
+        ("tables/models.tex".into(), models_tex(a, made_by)),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latex_escapes_and_stays_ascii() {
+        let t = latex("mu falls by exp(−h·H), σ_u = 5 % & {x} ~ 10°");
+        assert!(t.is_ascii(), "{t}");
+        assert_eq!(
+            t,
+            "mu falls by exp($-$h$\\cdot$H), $\\sigma$\\_u = 5 \\% \\& \\{x\\} \\textasciitilde{} 10$^\\circ$"
+        );
+    }
+
+    #[test]
+    fn values_take_their_se_precision() {
+        assert_eq!(
+            tex_value(0.145275, Some(0.00454), Some((0.135, 0.1555))),
+            ("$0.1453 \\pm 0.0045$".into(), "$0.1350$ to $0.1555$".into())
+        );
+        assert_eq!(
+            tex_value(-0.8234, Some(0.107), None),
+            ("$-0.82 \\pm 0.11$".into(), "--".into())
+        );
+        let (v, i) = tex_value(1.6e-5, Some(3.2e-6), Some((0.0, 2.2e-5)));
+        assert_eq!(v, "$(1.60 \\pm 0.32)\\times 10^{-5}$");
+        assert_eq!(i, "$0.00$ to $2.20$ ($\\times 10^{-5}$)");
+        assert_eq!(tex_value(4.9515, None, None).0, "$4.952$");
+        assert_eq!(sig(0.004539, 2), "0.0045");
+        assert_eq!(sig(1.6e-6, 2), "1.6e-6");
+    }
+}

@@ -1,0 +1,183 @@
+//! Every figure laid out for its size: at one journal column (85 mm, tick labels at 8 pt) and
+//! at a page's width (170 mm, 9 pt), every text of every figure file inside its canvas and clear
+//! of every other text, as resvg lays the text out (the boxes its PNG and PDF draw) with the
+//! fonts of a fresh Debian machine (DejaVu Sans) and with this machine's; and every file of
+//! its physical size (the SVG's width in mm, the PNG's pixels and pHYs, the PDF's page).
+
+use capstan_engine::analysis::{closed_loop::SimCurve, Analysis};
+use capstan_report::check::{
+    fresh_machine_fonts, pdf_page_pt, png_info, svg_size_mm, system_fonts, text_problems,
+};
+use capstan_report::export::{figure_files, standalone_svg, FigureOptions, Format, MAX_HEIGHT_MM};
+use capstan_report::figures::{self, tracking, Figure};
+use capstan_tracking::{BodePoint, Trace};
+use std::path::Path;
+use std::sync::OnceLock;
+
+fn thesis() -> &'static Analysis {
+    static A: OnceLock<Analysis> = OnceLock::new();
+    A.get_or_init(|| {
+        capstan_engine::analysis::run(&capstan_data::thesis_dataset(), Default::default()).unwrap()
+    })
+}
+
+/// A closed loop for the figure: each cord's measured amplification by T1 (the figure's layout
+/// is under test, not the simulation).
+fn closed_loop(a: &Analysis) -> Vec<SimCurve> {
+    (0..a.obs.groups.len())
+        .map(|g| {
+            let mut v: Vec<(f64, f64)> = a
+                .obs
+                .rows_of_group(g)
+                .into_iter()
+                .map(|i| (a.obs.rows[i].t1_n, a.obs.rows[i].t2_n / a.obs.rows[i].t1_n))
+                .collect();
+            v.sort_by(|p, q| p.0.total_cmp(&q.0));
+            (g, v)
+        })
+        .collect()
+}
+
+/// Two force-control runs: steps, then a sine sweep with its Bode points.
+fn force_runs() -> (Vec<Trace>, Vec<Vec<BodePoint>>) {
+    let mut traces = Vec::new();
+    let mut bodes = Vec::new();
+    for run in 0..2 {
+        let mut t = Trace::default();
+        for i in 0..6000 {
+            let ts = i as f64 * 0.01;
+            let target = 10.0 + 5.0 * ((ts / 10.0).floor() % 3.0);
+            let measured = target - 0.5 * (-(ts % 10.0) * 3.0).exp() + 0.05 * (ts * 7.0).sin();
+            t.push(ts, target, measured + run as f64 * 0.1);
+        }
+        traces.push(t);
+        bodes.push(
+            [0.1, 0.2, 0.5, 1.0, 2.0, 5.0]
+                .iter()
+                .map(|&f: &f64| {
+                    let gain = 1.0 / (1.0 + (f / 1.5).powi(2)).sqrt();
+                    BodePoint {
+                        freq_hz: f,
+                        t_s: 0.0,
+                        cycles: 4,
+                        target_amp_n: 2.0,
+                        measured_amp_n: 2.0 * gain,
+                        gain,
+                        gain_db: 20.0 * gain.log10(),
+                        phase_deg: -(f / 1.5).atan().to_degrees(),
+                        residual_pct: 1.0,
+                    }
+                })
+                .collect(),
+        );
+    }
+    (traces, bodes)
+}
+
+/// Every figure the report draws (the analysis's and force control's) at `opts`' layout.
+fn every_figure(opts: &FigureOptions) -> Vec<Figure> {
+    let a = thesis();
+    let layout = opts.layout();
+    let cl = closed_loop(a);
+    let mut figs = figures::all(a, Some(&cl), &layout).unwrap();
+    let (traces, bodes) = force_runs();
+    let labels = ["run 1", "run 2"];
+    let runs: Vec<tracking::RunTrace> = (0..2)
+        .map(|k| tracking::RunTrace {
+            label: labels[k],
+            trace: &traces[k],
+            bode: &bodes[k],
+        })
+        .collect();
+    figs.push(tracking::target_vs_measured(&runs, &layout).unwrap());
+    figs.push(tracking::bode_plot(&runs, &layout).unwrap().unwrap());
+    figs
+}
+
+/// The two sizes of the issue: a journal column at 8 pt and a page at 9 pt.
+fn sizes() -> [FigureOptions; 2] {
+    [(85.0, 8.0), (170.0, 9.0)].map(|(width_mm, font_pt)| FigureOptions {
+        formats: vec![Format::Svg, Format::Png, Format::Pdf],
+        width_mm,
+        font_pt,
+        numbers: false,
+    })
+}
+
+#[test]
+fn every_figure_keeps_its_text_inside_the_canvas_and_off_other_text() {
+    let fresh = fresh_machine_fonts(Path::new("/usr/share/fonts/truetype/dejavu"));
+    if fresh.is_none() {
+        assert!(
+            std::env::var("CI").is_err(),
+            "DejaVu Sans is not in /usr/share/fonts/truetype/dejavu (apt-get install fonts-dejavu-core)"
+        );
+        eprintln!(
+            "skipping the fresh-machine fonts: no DejaVu Sans in /usr/share/fonts/truetype/dejavu"
+        );
+    }
+    let system = system_fonts();
+    let fonts: Vec<(&str, _)> = fresh
+        .into_iter()
+        .map(|f| ("DejaVu Sans only", f))
+        .chain([("this machine's fonts", system)])
+        .collect();
+    let mut problems = Vec::new();
+    let mut checked = 0;
+    for opts in sizes() {
+        let figs = every_figure(&opts);
+        assert_eq!(figs.len(), 8, "every figure of both reports");
+        for (k, f) in figs.iter().enumerate() {
+            for number in [None, Some(k + 1)] {
+                let svg = standalone_svg(f, number, Some(opts.width_mm));
+                for (name, db) in &fonts {
+                    for p in text_problems(&svg, db, 0.5).unwrap() {
+                        problems.push(format!("{} at {} mm, {name}: {p}", f.id, opts.width_mm));
+                    }
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked >= 32);
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn every_figure_file_has_its_physical_size() {
+    for opts in sizes() {
+        let figs = every_figure(&opts);
+        let files = figure_files(&figs, &opts).unwrap();
+        assert_eq!(files.len(), 3 * figs.len());
+        let mm = opts.width_mm;
+        for f in &files {
+            let stem = f.name.rsplit_once('.').unwrap().0.to_string();
+            let svg = &files
+                .iter()
+                .find(|x| x.name == format!("{stem}.svg"))
+                .unwrap()
+                .bytes;
+            let (w_mm, h_mm) = svg_size_mm(std::str::from_utf8(svg).unwrap()).unwrap();
+            assert!(w_mm == mm && h_mm > 20.0, "{}: {w_mm}×{h_mm} mm", f.name);
+            assert!(h_mm <= MAX_HEIGHT_MM, "{}: {h_mm} mm tall", f.name);
+            match f.name.rsplit_once('.').unwrap().1 {
+                "png" => {
+                    let info = png_info(&f.bytes).unwrap();
+                    let ((w, h), ppm) = (info.px, info.per_metre);
+                    // 85 mm at 300 dpi: 1004 px; 170 mm: 2008 px; 300 dpi = 11811 px/m.
+                    assert_eq!(w, (mm / 25.4 * 300.0).round() as u32, "{}", f.name);
+                    assert_eq!(ppm, Some((11811, 11811)), "{}", f.name);
+                    let h_png_mm = f64::from(h) / 11811.0 * 1000.0;
+                    assert!((h_png_mm - h_mm).abs() < 0.2, "{}: {h_png_mm} mm", f.name);
+                }
+                "pdf" => {
+                    let (w, h) = pdf_page_pt(&f.bytes).unwrap();
+                    // 85 mm = 240.94 pt; 170 mm = 481.89 pt.
+                    assert!((w - mm / 25.4 * 72.0).abs() < 0.05, "{}: {w} pt", f.name);
+                    assert!((h - h_mm / 25.4 * 72.0).abs() < 0.1, "{}: {h} pt", f.name);
+                }
+                _ => {}
+            }
+        }
+    }
+}
