@@ -1,4 +1,5 @@
-//! The README's bench walk-through ("Setting up the rig at the bench"), run as written on the
+//! The user guide's bench walk-through (docs/book/src/bench.md, "Setting up the rig at the bench"
+//! and "Rehearsing the bench without hardware"), run as written on the
 //! simulated board: its shell blocks, in order, with `BOARD="--sim DIR"` for the board's
 //! options. Every command must succeed; the calibration it stores must be the simulated
 //! sensors' true one (the truth in DIR/sim-truth.json, hidden from the firmware), and the runs
@@ -7,15 +8,15 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const SECTION: &str = "### Setting up the rig at the bench";
-const SECTION_END: &str = "### Configuration";
+const SECTION: &str = "## Setting up the rig at the bench";
+const SECTION_END: &str = "## Logging a run to disk";
 
 /// The section's `sh` blocks, in order, joined.
 fn walkthrough_script() -> String {
-    let readme = include_str!("../README.md");
+    let readme = include_str!("../docs/book/src/bench.md");
     let start = readme
         .find(SECTION)
-        .expect("the README has the walk-through");
+        .expect("the bench chapter has the walk-through");
     let end = start + readme[start..].find(SECTION_END).expect("and its end");
     let mut script = String::new();
     let mut inside = false;

@@ -260,7 +260,13 @@ fn paths_named(text: &str) -> Vec<(String, Option<String>)> {
         }
         let spans: Vec<&str> = line.split('`').skip(1).step_by(2).collect();
         for (i, span) in spans.iter().enumerate() {
-            let placeholder = span.contains(['*', '~', '<', '…', ' ']);
+            // Placeholders, formulas, and the files the commands write (a `DIR`, `CASE` or
+            // output directory of the guide's examples) are not repository paths.
+            let written = ["target/", "runs/", "raw/", "report/"];
+            let placeholder = span.contains(['*', '~', '<', '…', ' '])
+                || span.split('/').any(|c| c == "DIR" || c == "CASE")
+                || span.starts_with(char::is_numeric)
+                || written.iter().any(|w| span.starts_with(w) || *span == &w[..w.len() - 1]);
             if !span.contains('/') || placeholder {
                 continue;
             }

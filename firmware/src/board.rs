@@ -3,7 +3,7 @@
 //! Compiled into the RP2040 binary only (`main.rs` declares it for `target_os = "none"`); the
 //! rig core (`lib.rs`) never sees it. Calibration and protocol are set at the bench without a
 //! rebuild (`capstan rig`, README "Setting up the rig"); what needs one is in this file. The wiring itself is in
-//! the README (section "Firmware on a Raspberry Pi Pico").
+//! the user guide (docs/book/src/hardware.md, "Firmware on a Raspberry Pi Pico").
 //!
 //! The pin map is the wire schema's (`capstan_wire::pins`, with its table of signals, GPIOs,
 //! peripherals and Pico header pins; every signal is 3.3 V logic), which the emulated board's
@@ -118,7 +118,7 @@ pub const TRIGGER_GPIO: usize = PINS.trigger as usize;
 
 impl Pins {
     /// True if these are the schema's pins (`capstan_wire::pins::PINS`), as the panic path, the
-    /// emulated board and the README take them.
+    /// emulated board and the hardware chapter take them.
     pub fn are_the_schemas(&self) -> bool {
         use embassy_rp::gpio::Pin;
         use embassy_rp::pwm::Slice;
@@ -157,7 +157,7 @@ pub const SERVO_FULL_SCALE: u16 = SERVO_PWM_TOP + 1;
 /// Amplifier PWM clock divider: the full 125 MHz.
 pub const AMP_PWM_DIVIDER: u8 = 1;
 /// Amplifier PWM top: 4096 counts per period → 125 MHz / 4096 = 30.5 kHz, 12-bit resolution
-/// (0.8 mV steps of the 3.3 V swing). The RC filter is sized for this frequency (see the README).
+/// (0.8 mV steps of the 3.3 V swing). The RC filter is sized for this frequency (see docs/book/src/hardware.md).
 /// The duty's full scale is the period, 4096 counts (as for the servo, [`SERVO_FULL_SCALE`]).
 pub const AMP_PWM_TOP: u16 = 4_095;
 
@@ -226,7 +226,7 @@ pub fn calibration() -> Calibration {
 
 /// The safety supervisor's thresholds (45 N over-force, rails, cord break, 10 ms sample gap,
 /// −3 N). `rail_high_counts` (3900) must stay below where a saturated sensor sits behind the
-/// divider (~3990 counts for a 0-5 V sensor on the README's 10k/18k): with other sensors or
+/// divider (~3990 counts for a 0-5 V sensor on the hardware chapter's 10k/18k): with other sensors or
 /// another divider, measure that reading and set it lower.
 pub fn safety_limits() -> SafetyLimits {
     SafetyLimits::default()

@@ -1,5 +1,5 @@
 //! The rig's safety where a real bench breaks it (issue 24), on the simulated board: each case
-//! must fail safe, and the time from the event to safe pins is measured (the README's table).
+//! must fail safe, and the time from the event to safe pins is measured (the hardware chapter's table, docs/book/src/hardware.md).
 //!
 //! A loaded tare, a mistyped sensitivity, a reversed sensor, a button held from power-up, a
 //! loop that hangs (the watchdog reset, the horn back-driven while the servo has no pulses),

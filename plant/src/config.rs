@@ -196,12 +196,12 @@ pub struct MotorConfig {
     /// Amplifier supply: the drive voltage saturates here, V.
     pub amp_supply_v: f64,
     /// Time constant of the RC filter between the PWM pin and the amplifier's control input
-    /// while the pin is driven, s (the README's 4.7 kΩ and 1 µF: 4.7 ms; a step settles to 1 %
+    /// while the pin is driven, s (the hardware chapter's 4.7 kΩ and 1 µF: 4.7 ms; a step settles to 1 %
     /// in 22 ms, so after a fault the drive needs that long to fall below 1 %). 0 = no filter.
     pub amp_filter_tau_s: f64,
     /// ... and while the pin is not driven (a reset, the chip unpowered, booting): the
     /// capacitor discharges through the series resistor and the pull-down on the pin's side,
-    /// s (the README's 4.7 kΩ + 2.2 kΩ, 1 µF: 6.9 ms. With the 100 kΩ pull-down the README
+    /// s (the hardware chapter's 4.7 kΩ + 2.2 kΩ, 1 µF: 6.9 ms. With the 100 kΩ pull-down the hardware chapter
     /// gave before issue 38 it was 104.7 ms: ~0.5 s to 1 %, 22 × slower than documented).
     pub amp_filter_released_tau_s: f64,
 }
@@ -249,7 +249,7 @@ pub struct SensorConfig {
     pub saturation_counts: f64,
 }
 
-/// Where a 0-5 V sensor saturates behind the README's 10 kΩ / 18 kΩ divider, ADC counts.
+/// Where a 0-5 V sensor saturates behind the hardware chapter's 10 kΩ / 18 kΩ divider, ADC counts.
 pub const DIVIDER_SATURATION_COUNTS: f64 = 5.0 * 18.0 / 28.0 / 3.3 * 4096.0;
 
 impl Default for SensorConfig {

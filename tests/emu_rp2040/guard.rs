@@ -1,6 +1,6 @@
 //! Issue 24's negative cases on the emulated board, where the pins matter: a tare under load,
 //! a button held from power-up, a stack overflow, a host that stops reading the log. Each must
-//! be safe at the pins; each prints its measured times (the README's table).
+//! be safe at the pins; each prints its measured times (the hardware chapter's table, docs/book/src/hardware.md).
 
 use super::{
     case, common, drive_times, f, is_rest, press_after, ready, selected, MS, REASON_TIMER,

@@ -1,4 +1,4 @@
-//! The board's analog front end for a force sensor, as the README wires it: the sensor's
+//! The board's analog front end for a force sensor, as the user guide's hardware chapter wires it: the sensor's
 //! 0-5 V output through a divider (10 kΩ from the sensor to the pin, 18 kΩ from the pin to
 //! AGND) into the RP2040's 12-bit ADC, whose reference is ADC_VREF (3.3 V).
 //!
@@ -23,7 +23,7 @@ pub struct FrontEnd {
 }
 
 impl FrontEnd {
-    /// The README's wiring: 10 kΩ / 18 kΩ, 3.3 V reference (5 V at the sensor → 3.21 V, about
+    /// The hardware chapter's wiring: 10 kΩ / 18 kΩ, 3.3 V reference (5 V at the sensor → 3.21 V, about
     /// 3990 counts).
     pub const BOARD: FrontEnd = FrontEnd {
         r_top_ohm: 10_000.0,

@@ -146,7 +146,7 @@ fn a_sensitivity_that_would_blind_the_check_is_refused_wherever_it_comes_in() {
             Command::Set(Key::T1NPerCount, 0.00125),
             CommandError::Invalid,
         ),
-        // The README's 0.01253 N/count with zero 400: 45 N reads at 3991 counts.
+        // The hardware chapter's 0.01253 N/count with zero 400: 45 N reads at 3991 counts.
         (Command::Set(Key::T2NPerCount, 0.01253), CommandError::Blind),
         // A zero far too high: 45 N would read at 4000 counts.
         (Command::Set(Key::T1Zero, 1000.0), CommandError::Blind),

@@ -421,7 +421,7 @@ fn a_calibration_is_visible_only_if_both_limits_read_inside_the_rail_checks() {
         t1,
         ..Calibration::default()
     };
-    // The README's 0.01253 N/count with a 0.5 V zero (400 counts): 45 N at 3991 counts,
+    // The hardware chapter's 0.01253 N/count with a 0.5 V zero (400 counts): 45 N at 3991 counts,
     // above where the divider saturates: blind.
     let b = l
         .visible(&with(ChannelCal::placeholder(400.0, 0.01253)))
