@@ -10,8 +10,8 @@
 //! K's CSV to `set-K.csv` (to run `capstan analyze` on it alone).
 
 use capstan_data::{check_capstan_data, read_pairs, Dataset};
-use capstan_truth::cases::{draw_case, Class};
-use host_sim::plant::rng::Rng;
+use capstan_sim::plant::rng::Rng;
+use capstan_validation::cases::{draw_case, Class};
 use std::time::Instant;
 
 fn arg(args: &[String], name: &str, default: u64) -> u64 {
@@ -108,7 +108,7 @@ fn analyse(d: &Dataset, dir: &std::path::Path, what: &str) -> Option<(f64, usize
         ..Default::default()
     };
     let a = capstan_engine::analysis::run(d, opts).ok()?;
-    let cl = capstan_truth::closed_loop::run(&a, 2).ok();
+    let cl = capstan_validation::closed_loop::run(&a, 2).ok();
     let html = capstan_report::report_html(
         &a,
         cl.as_ref().map(|c| c.curves.as_slice()),

@@ -8,7 +8,7 @@
 
 use capstan_data::{thesis_dataset, Dataset};
 use capstan_engine::diagnose::diagnose;
-use capstan_truth::cases::{self, Case, Class};
+use capstan_validation::cases::{self, Case, Class};
 use std::time::Instant;
 
 /// The name of a case: its effects (or the physics outside the catalogue), `none` if clean.

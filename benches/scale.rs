@@ -8,7 +8,7 @@
 //! 1,000,000); `-- --diagnose-only` skips the analysis.
 
 use capstan_data::{Dataset, Pair};
-use capstan_truth::cases::{self, Class};
+use capstan_validation::cases::{self, Class};
 use std::time::Instant;
 
 /// The data set repeated `k` times, each copy's runs numbered after the last copy's.

@@ -1,4 +1,4 @@
-//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan_truth::cases`).
+//! Calibrate and evaluate `capstan diagnose` on generated cases (`capstan_validation::cases`).
 //!
 //! ```text
 //! cargo run --release --example calibrate -- [SEED] [--every K] [--grid] [--verbose]
@@ -9,12 +9,12 @@
 //!   K-th case), with every miss;
 //! * `--grid`: the same figures for a grid of thresholds (within-run ΔBIC, between ΔBIC, the
 //!   adequacy test's α and size), on the same simulated data sets: how the thresholds in
-//!   `crates/engine/src/evidence/mod.rs` and `crates/engine/src/evidence/adequacy.rs` were
+//!   `science/engine/src/evidence/mod.rs` and `science/engine/src/evidence/adequacy.rs` were
 //!   chosen (on seed 99; the test asserts on another seed);
 //! * `--dump-seed S`: write the case with seed S to /tmp/case.csv.
 use capstan_engine::diagnose::{diagnose_with, Options};
 use capstan_engine::evidence::AdequacyRule;
-use capstan_truth::{cases, score};
+use capstan_validation::{cases, score};
 
 fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> Option<T> {
     args.iter()

@@ -16,8 +16,8 @@
 //! The figures are in docs/README-diagnose.md ("The cause: T1 answers to mu").
 use capstan_data::Dataset;
 use capstan_engine::evidence::{assess, candidates::ThetaMap, within, Options};
-use capstan_friction::{Effect, EffectKind};
-use capstan_truth::cases::{draw_case, Class};
+use capstan_physics::{Effect, EffectKind};
+use capstan_validation::cases::{draw_case, Class};
 use std::collections::HashMap;
 
 fn arg(args: &[String], name: &str, default: f64) -> f64 {
@@ -85,7 +85,7 @@ fn main() {
     cfg.drive_vs = vec![arg(&args, "--volt", 6.0)];
     cfg.diameters_mm.truncate(1);
     cfg.runs = arg(&args, "--runs", 120.0) as u32;
-    cfg.order = firmware::StepOrder::Monotone;
+    cfg.order = capstan_rig::StepOrder::Monotone;
     cfg.scatter_pct = 0.0;
     cfg.run_scatter_pct = Some(0.0);
     cfg.plant.disturbances.zero_error_sd_n = 0.0;

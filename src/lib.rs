@@ -1,5 +1,5 @@
 //! `capstan`: simulate the rig, analyse and diagnose its data, and log real runs — the command
-//! line over the project's crates (`capstan-data`, `capstan-engine`, `capstan-truth`,
+//! line over the project's crates (`capstan-data`, `capstan-engine`, `capstan-validation`,
 //! `capstan-report`, `capstan-link`, `capstan-outdir`, `host-sim`).
 //!
 //! * [`cli`]: one module per command, each with its `Args` and `run`;

@@ -7,8 +7,8 @@
 
 use capstan::cli::{analyze, run, Cli, Command};
 use capstan_data::write_pairs;
-use capstan_truth::cases::{draw_case, Class};
-use capstan_truth::validate;
+use capstan_validation::cases::{draw_case, Class};
+use capstan_validation::validate;
 
 mod analysis_support;
 

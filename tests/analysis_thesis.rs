@@ -123,7 +123,7 @@ fn named_causes_are_the_evidence_engines() {
     assert_eq!(causes, diag);
     assert!(causes.contains(&"contact_heating"), "{causes:?}");
     // Every catalogue effect is a mechanism with a verdict, and a ruled-in one is a cause.
-    assert_eq!(m.tests.len(), capstan_friction::EffectKind::ALL.len() - 1);
+    assert_eq!(m.tests.len(), capstan_physics::EffectKind::ALL.len() - 1);
     for t in &m.tests {
         assert_eq!(
             t.verdict == capstan_engine::verdict::Verdict::RuledIn,

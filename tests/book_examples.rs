@@ -238,7 +238,7 @@ fn the_science_chapter_lists_the_whole_catalogue() {
         .lines()
         .filter_map(|l| l.strip_prefix("| `")?.split('`').next())
         .collect();
-    let catalogue: Vec<&str> = capstan_friction::EffectKind::ALL
+    let catalogue: Vec<&str> = capstan_physics::EffectKind::ALL
         .iter()
         .map(|k| k.name())
         .collect();
@@ -266,7 +266,9 @@ fn paths_named(text: &str) -> Vec<(String, Option<String>)> {
             let placeholder = span.contains(['*', '~', '<', '…', ' '])
                 || span.split('/').any(|c| c == "DIR" || c == "CASE")
                 || span.starts_with(char::is_numeric)
-                || written.iter().any(|w| span.starts_with(w) || *span == &w[..w.len() - 1]);
+                || written
+                    .iter()
+                    .any(|w| span.starts_with(w) || *span == &w[..w.len() - 1]);
             if !span.contains('/') || placeholder {
                 continue;
             }

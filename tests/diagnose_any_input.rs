@@ -190,7 +190,7 @@ proptest! {
             // Too few rows is a clear refusal; anything else must come back analysed.
             match capstan_engine::analysis::run(&d, opts) {
                 Ok(a) => {
-                    prop_assert!(a.mechanisms.tests.len() == capstan_friction::EffectKind::ALL.len() - 1);
+                    prop_assert!(a.mechanisms.tests.len() == capstan_physics::EffectKind::ALL.len() - 1);
                     // The same cords and runs as diagnose.
                     prop_assert_eq!(a.obs.groups.len(), a.evidence.design.cords);
                     prop_assert_eq!(a.obs.runs.len(), a.evidence.design.runs);

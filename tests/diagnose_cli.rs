@@ -4,8 +4,8 @@
 
 use capstan_data::{read_pairs, thesis_dataset, write_pairs, write_pairs_to, Dataset};
 use capstan_engine::diagnose::{self, Options};
-use capstan_friction::EffectKind;
-use capstan_truth::cases::{self, Class};
+use capstan_physics::EffectKind;
+use capstan_validation::cases::{self, Class};
 use std::process::Command;
 
 fn capstan() -> Command {
@@ -132,7 +132,7 @@ fn structure_outside_the_catalogue_is_unexplained() {
 #[test]
 fn readings_at_or_below_zero_are_data() {
     let mut case = cases::draw_case(7, Class::Clean, 1);
-    case.config.effects = vec![capstan_friction::Effect {
+    case.config.effects = vec![capstan_physics::Effect {
         kind: EffectKind::T1Offset,
         value: -0.4,
     }];

@@ -268,11 +268,11 @@ fn one_run_per_cord_says_the_replicate_gate_was_not_applied() {
 }
 
 /// The search line does not count "one of its 0 within-run effects" (a catalogue of one
-/// between-level effect: `diameter_dependence` on a planted T1 tare, crates/discover/tests/data).
+/// between-level effect: `diameter_dependence` on a planted T1 tare, science/discover/tests/data).
 #[test]
 fn the_search_line_words_a_catalogue_without_within_run_effects() {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("crates/discover/tests/data/tare_catalogue_seed4.csv");
+        .join("science/discover/tests/data/tare_catalogue_seed4.csv");
     let out = ok(["discover", p.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(!text.contains("one of its 0"), "{text}");

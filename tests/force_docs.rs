@@ -4,11 +4,11 @@
 //! the docs verbatim. A change that moves a number fails here until the docs say it. And the
 //! thesis fit the force rig is built on is the one `capstan analyze` fits to the bundled data.
 
+use capstan_sim::force::{self as hf, ForceRig};
+use capstan_sim::noise::NoiseProfile;
+use capstan_sim::plant::rng::derive_seed;
+use capstan_sim::two_control::{run_two_control, TwoControlConfig, TRACKING_WINDOW};
 use capstan_tracking::{bandwidth, bode, Bandwidth};
-use host_sim::force::{self as hf, ForceRig};
-use host_sim::noise::NoiseProfile;
-use host_sim::plant::rng::derive_seed;
-use host_sim::two_control::{run_two_control, TwoControlConfig, TRACKING_WINDOW};
 
 fn doc(name: &str) -> String {
     std::fs::read_to_string(format!("{}/docs/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -77,7 +77,7 @@ fn the_bandwidth_is_the_sweeps() {
         noise: NoiseProfile::Thesis,
         ..ForceRig::default()
     };
-    rig.force.profile = firmware::ForceProfile::Sine;
+    rig.force.profile = capstan_rig::ForceProfile::Sine;
     rig.force.levels_n = [15.0, 5.0, 0.0, 0.0];
     (
         rig.force.sine_hz,

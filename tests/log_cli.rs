@@ -55,7 +55,7 @@ fn help_documents_the_board_flow() {
     for needle in [
         "--chip RP2040",
         "debug probe",
-        "cargo build --release -p firmware --target thumbv6m-none-eabi",
+        "cargo build --release -p capstan-board --target thumbv6m-none-eabi",
         "Ctrl-C",
         "pairs.csv",
         "summary.json",

@@ -5,7 +5,7 @@
 //! the rig core on a SysTick embassy-time driver, the simulated plant compiled in, defmt over
 //! semihosting. Its stdout is piped into `capstan log --elf ... --from -`, and the decoded
 //! records are compared with host-sim's runs of the same protocol, plant and seeds
-//! (`qemu_fw::RUNS`): they must agree to ADC resolution.
+//! (`capstan_qemu_fw::RUNS`): they must agree to ADC resolution.
 //!
 //! Needs `qemu-system-arm` and the `thumbv7m-none-eabi` target. Where either is missing the
 //! test prints why and passes as skipped, except in CI (`CI=true`), where it fails.
@@ -21,8 +21,8 @@
 //! high-water mark on QEMU's stderr is checked and printed.
 
 use capstan_data::load_pairs;
-use firmware::record::{RawSample, StepPair};
-use host_sim::run::{run, RunSpec};
+use capstan_rig::record::{RawSample, StepPair};
+use capstan_sim::run::{run, RunSpec};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -63,7 +63,7 @@ fn build_firmware() -> Result<PathBuf, String> {
             "build",
             "--release",
             "-p",
-            "qemu-fw",
+            "capstan-qemu-fw",
             "--target",
             "thumbv7m-none-eabi",
         ])
@@ -262,16 +262,16 @@ fn run_qemu_into_capstan(elf: &Path, out_dir: &Path) -> Decoded {
     }
 }
 
-fn host_sim_runs() -> Vec<host_sim::run::RunOutput> {
-    qemu_fw::RUNS
+fn host_sim_runs() -> Vec<capstan_sim::run::RunOutput> {
+    capstan_qemu_fw::RUNS
         .iter()
         .map(|plan| {
             let spec = RunSpec {
-                plant: qemu_fw::plant_config(),
-                cord: qemu_fw::cords()[0],
-                protocol: qemu_fw::protocol(),
-                calibration: qemu_fw::calibration(),
-                limits: qemu_fw::limits(),
+                plant: capstan_qemu_fw::plant_config(),
+                cord: capstan_qemu_fw::cords()[0],
+                protocol: capstan_qemu_fw::protocol(),
+                calibration: capstan_qemu_fw::calibration(),
+                limits: capstan_qemu_fw::limits(),
                 seed: plan.seed,
                 injections: plan.injection.into_iter().collect(),
                 keep_raw: true,
@@ -313,7 +313,7 @@ fn qemu_run_decoded_by_capstan_log_agrees_with_host_sim() {
     assert_eq!(s["runs"][1]["complete"], false);
 
     let pairs = load_pairs(&q.out_dir.join("pairs.csv")).unwrap().pairs;
-    let n_per_count = qemu_fw::calibration().t1.n_per_count as f64;
+    let n_per_count = capstan_qemu_fw::calibration().t1.n_per_count as f64;
     let (mut max_n, mut n_pairs) = (0.0f64, 0);
     let (mut max_counts, mut n_raw) = (0u16, 0);
     for (i, sim) in sims.iter().enumerate() {

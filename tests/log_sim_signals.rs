@@ -82,7 +82,11 @@ fn ctrl_c_keeps_the_finished_runs_apart_and_replaces_no_earlier_session() {
             .args(["rig", "--sim", b, "set", &key, "0.015"])
             .output()
             .unwrap();
-        assert!(typed.status.success(), "{}", String::from_utf8_lossy(&typed.stderr));
+        assert!(
+            typed.status.success(),
+            "{}",
+            String::from_utf8_lossy(&typed.stderr)
+        );
     }
     let first = capstan()
         .args(["log", "--sim", b, "--start", "--runs", "1", "--out", o])

@@ -100,7 +100,7 @@ fn plan_on_the_thesis_data_keeps_the_json_contract_and_writes_its_files() {
 /// is one the board's settings take, and the changed settings survive the flash record's
 /// encoding: settable with `capstan rig set` and stored on the board.
 fn every_rig_command_is_one_the_board_takes_and_stores(plan: &serde_json::Value) {
-    use firmware::{Calibration, Command, Protocol, Settings};
+    use capstan_rig::{Calibration, Command, Protocol, Settings};
     let board = Settings {
         protocol: Protocol::default(),
         calibration: Calibration::default(),

@@ -5,12 +5,12 @@
 use capstan::cli::rig::{answer_lines, send, watch_live, NotInSetup, Refused};
 use capstan_link::rig::{command_line, exchange, exchange_within, CheckError, NoReply, RigLink};
 use capstan_link::Event;
-use firmware::command::{Command, CommandError, CommandKind, Key};
-use firmware::hal::Channel;
-use firmware::record::{
+use capstan_rig::command::{Command, CommandError, CommandKind, Key};
+use capstan_rig::hal::Channel;
+use capstan_rig::record::{
     Fault, FaultKind, Live, Record, Reply, RunEnd, SettingsReport, SettingsSource,
 };
-use firmware::{Calibration, Protocol, Settings, SettingsError};
+use capstan_rig::{Calibration, Protocol, Settings, SettingsError};
 use std::collections::VecDeque;
 use std::process::{Command as Process, Output, Stdio};
 use std::sync::atomic::AtomicBool;

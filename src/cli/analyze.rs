@@ -199,11 +199,11 @@ struct ClosedLoop {
 /// Run the closed loop (its time into the analysis's timings).
 fn closed_loop(a: &mut capstan_engine::analysis::Analysis, threads: usize) -> ClosedLoop {
     let t = Instant::now();
-    let out = match capstan_truth::closed_loop::run(a, threads) {
+    let out = match capstan_validation::closed_loop::run(a, threads) {
         Ok(cl) => ClosedLoop {
             curves: Some(cl.curves),
             summary: cl.summary,
-            note: "The firmware, run in virtual time against the simulated plant (host_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string(),
+            note: "The firmware, run in virtual time against the simulated plant (capstan_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string(),
         },
         Err(e) => ClosedLoop {
             curves: None,
@@ -318,12 +318,12 @@ fn validate(args: &Args) -> anyhow::Result<()> {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     crate::errln!(
         "validating the cause-naming on {} planted data sets (seed {}) ...",
-        capstan_truth::validate::cases(args.seed).len(),
+        capstan_validation::validate::cases(args.seed).len(),
         args.seed
     );
     let mut set = crate::outputs::open_out(&args.out, "validate", &["validation.json"])?.stage()?;
     let t0 = Instant::now();
-    let v = capstan_truth::validate::validate(args.seed, 1, threads)?;
+    let v = capstan_validation::validate::validate(args.seed, 1, threads)?;
     set.keep_on_failure(crate::outputs::say_kept);
     let pct = |x: (usize, usize)| 100.0 * x.0 as f64 / x.1.max(1) as f64;
     crate::outln!(

@@ -128,7 +128,7 @@ fn settings(a: &Args) -> anyhow::Result<Settings> {
     let (after, before) = Settings::firmware_windows();
     let after = a.window_after_ms.map_or(after, |m| m as f64 / 1e3);
     let before = a.window_before_ms.map_or(before, |m| m as f64 / 1e3);
-    let p = firmware::Protocol::default();
+    let p = capstan_rig::Protocol::default();
     // Step 0 (rest) starts `trigger_ms` after the trigger's edge; level 1 a dwell later.
     let proto_first = (p.trigger_ms + p.dwell_ms) as f64 / 1e3;
     let levels = a.levels.unwrap_or(p.levels());

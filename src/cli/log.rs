@@ -19,10 +19,10 @@ LOGGING A RUN ON THE PICO
   1. Wire a debug probe (the Raspberry Pi Debug Probe, or a second Pico running debugprobe)
      to the rig Pico's SWD pins (SWCLK, GND, SWDIO) and plug both into USB. On Linux, install
      the probe-rs udev rules once so the probe can be opened without root.
-  2. Build the firmware: cargo build --release -p firmware --target thumbv6m-none-eabi
+  2. Build the firmware: cargo build --release -p capstan-board --target thumbv6m-none-eabi
   3. Flash it and log:
        capstan log --chip RP2040 \\
-         --elf target/thumbv6m-none-eabi/release/firmware --out runs/2026-06-01-a \\
+         --elf target/thumbv6m-none-eabi/release/capstan-board --out runs/2026-06-01-a \\
          --wrap-deg 360 --diameter-mm 12.7
      then press the rig's button for each run (or add --start: the first run starts as soon
      as logging does, e.g. with --no-flash after a setup with `capstan rig`). Each record is

@@ -1,8 +1,8 @@
 //! `capstan rig`: set the rig up from the host. One command line of the firmware's
-//! (`firmware/src/command.rs`) per call, checked here first, sent to the board (RTT down
+//! (`firmware/rig/src/command.rs`) per call, checked here first, sent to the board (RTT down
 //! channel through a debug probe), and answered from the `reply` record the firmware logs;
 //! plus two host verbs, `live` and `keys`. (The simulated rig takes the same lines through
-//! `host_sim::session`, in the tests.)
+//! `capstan_sim::session`, in the tests.)
 //!
 //! The link to the rig is `capstan_link::rig`: the check that refuses bad input before
 //! anything is sent, the [`RigLink`] trait and the wait for an answer, the board through a
@@ -18,14 +18,14 @@ pub use say::{answer_lines, key_lines, live_line, Refused};
 use anyhow::bail;
 use capstan_link::rig::{check_set, command_line, exchange, CheckError, RigLink};
 use capstan_link::Firmware;
-use firmware::command::Command;
+use capstan_rig::command::Command;
 use std::path::{Path, PathBuf};
 
 const AFTER_HELP: &str = "\
 SETTING UP THE RIG AT THE BENCH
   The board runs this repository's firmware, with a debug probe wired as for `capstan log`.
   Options first, then one command as separate words:
-    R=\"capstan rig --chip RP2040 --elf target/thumbv6m-none-eabi/release/firmware\"
+    R=\"capstan rig --chip RP2040 --elf target/thumbv6m-none-eabi/release/capstan-board\"
     $R setup                    setup mode: amplifier at 0 V, the servo moves only when told
     $R live 10                  T1/T2 in N and counts, servo angle, ~10 a second (Ctrl-C stops)
     $R jog 5                    move the servo 5° (jog -5 back)
@@ -188,7 +188,7 @@ fn rig(args: &Args) -> anyhow::Result<()> {
             let how_long = how_long.unwrap_or(SIM_LIVE);
             let mut board = crate::simboard::SimBoard::open(&args.sim, &mut note)?;
             let ms = how_long.as_millis().min(3_600_000) as u32;
-            let done = board.advance(&[host_sim::session::Step::Wait(ms)])?;
+            let done = board.advance(&[capstan_sim::session::Step::Wait(ms)])?;
             live::show(done.events, &mut out, &mut note).map(|_| ())
         }
         "live" => {
@@ -228,7 +228,7 @@ fn out(line: String) {
 /// What a simulated board said during a bench action: faults and replies (e.g. the button
 /// leaving setup mode), on stderr.
 fn note_event(e: capstan_link::frame::Event) {
-    use firmware::record::Record;
+    use capstan_rig::record::Record;
     if let capstan_link::frame::Event::Record { record, .. } = e {
         match record {
             Record::Fault(f) => note(capstan_link::words::fault_line(&f)),
@@ -264,7 +264,7 @@ pub fn load_model(
     let (p, c) = (&report.settings.protocol, &report.settings.calibration);
     let f = &p.force;
     let max_target_n = match f.profile {
-        firmware::ForceProfile::Sine => f.levels_n[0] + f.levels_n[1],
+        capstan_rig::ForceProfile::Sine => f.levels_n[0] + f.levels_n[1],
         _ => f.levels_n.iter().copied().fold(0.0, f32::max),
     };
     // An f32 setting as the decimal it was set as (2.5 V × 4 is 10 V, not 10.000000149).

@@ -12,10 +12,10 @@ mod two;
 mod two_force;
 
 use anyhow::{bail, Context};
-use capstan_friction::{Effect, Model};
-use firmware::StepOrder;
-use host_sim::campaign::{stream_campaign, CampaignConfig, StreamError};
-use host_sim::noise::NoiseProfile;
+use capstan_physics::{Effect, Model};
+use capstan_rig::StepOrder;
+use capstan_sim::campaign::{stream_campaign, CampaignConfig, StreamError};
+use capstan_sim::noise::NoiseProfile;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
@@ -61,12 +61,12 @@ pub enum Profile {
     Sine,
 }
 
-impl From<Profile> for firmware::ForceProfile {
-    fn from(p: Profile) -> firmware::ForceProfile {
+impl From<Profile> for capstan_rig::ForceProfile {
+    fn from(p: Profile) -> capstan_rig::ForceProfile {
         match p {
-            Profile::Steps => firmware::ForceProfile::Steps,
-            Profile::Ramp => firmware::ForceProfile::Ramp,
-            Profile::Sine => firmware::ForceProfile::Sine,
+            Profile::Steps => capstan_rig::ForceProfile::Steps,
+            Profile::Ramp => capstan_rig::ForceProfile::Ramp,
+            Profile::Sine => capstan_rig::ForceProfile::Sine,
         }
     }
 }
@@ -316,11 +316,11 @@ fn provenance_of(
 }
 
 /// The physics outside the catalogue given by `--unmodelled`.
-fn unmodelled(args: &Args) -> anyhow::Result<host_sim::plant::Unmodelled> {
-    let mut u = host_sim::plant::Unmodelled::default();
+fn unmodelled(args: &Args) -> anyhow::Result<capstan_sim::plant::Unmodelled> {
+    let mut u = capstan_sim::plant::Unmodelled::default();
     let mut seen: Vec<&str> = Vec::new();
     for item in &args.unmodelled {
-        let known = host_sim::plant::Unmodelled::ALL_NAMES.join(", ");
+        let known = capstan_sim::plant::Unmodelled::ALL_NAMES.join(", ");
         let (name, value) = item
             .split_once('=')
             .ok_or_else(|| anyhow::anyhow!("--unmodelled {item}: expected NAME=VALUE"))?;
@@ -344,7 +344,7 @@ fn unmodelled(args: &Args) -> anyhow::Result<host_sim::plant::Unmodelled> {
 
 /// The protocol, refused with the values in force (the defaults where none was given) when
 /// the firmware would refuse it.
-fn checked_protocol(args: &Args) -> anyhow::Result<firmware::Protocol> {
+fn checked_protocol(args: &Args) -> anyhow::Result<capstan_rig::Protocol> {
     let p = protocol(args);
     if let Err(e) = p.validate() {
         bail!(
@@ -358,8 +358,8 @@ fn checked_protocol(args: &Args) -> anyhow::Result<firmware::Protocol> {
     Ok(p)
 }
 
-fn protocol(args: &Args) -> firmware::Protocol {
-    let mut p = firmware::Protocol::default();
+fn protocol(args: &Args) -> capstan_rig::Protocol {
+    let mut p = capstan_rig::Protocol::default();
     if let Some(v) = args.dwell_ms {
         p.dwell_ms = v;
     }
@@ -372,8 +372,8 @@ fn protocol(args: &Args) -> firmware::Protocol {
     p
 }
 
-fn plant(args: &Args) -> anyhow::Result<host_sim::plant::PlantConfig> {
-    let mut plant = host_sim::plant::PlantConfig::default();
+fn plant(args: &Args) -> anyhow::Result<capstan_sim::plant::PlantConfig> {
+    let mut plant = capstan_sim::plant::PlantConfig::default();
     if let Some(r) = args.motor_ohm {
         if !(r.is_finite() && r > 0.0) {
             bail!("--motor-ohm {r}: must be a positive resistance");
@@ -484,7 +484,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// The error of a campaign stopped by a signal: what was made and where it is, and whether
 /// the complete campaign already in `out` is as it was (`kept_beside`).
 fn interrupted(
-    stats: &host_sim::campaign::CampaignStats,
+    stats: &capstan_sim::campaign::CampaignStats,
     at: &std::path::Path,
     kept_beside: bool,
     out: &std::path::Path,
@@ -548,7 +548,7 @@ fn stream(
     args: &Args,
     cfg: &CampaignConfig,
     files: &mut output::CampaignWriter,
-) -> anyhow::Result<host_sim::campaign::CampaignStats> {
+) -> anyhow::Result<capstan_sim::campaign::CampaignStats> {
     let bar = progress_bar(args, cfg.run_count());
     let stop = super::signal::stop_flag("simulate");
     let streamed = stream_campaign(cfg, stop, &mut |r| {

@@ -1,6 +1,6 @@
 //! `capstan condition`: a raw time series (our `raw.csv`, a logger's CSV or tab-separated
 //! export, Logger Pro's text export) into conditioned pairs, by the firmware's rules
-//! (`firmware::Protocol`): each level's window starts `window_after_change_ms` after the change
+//! (`capstan_rig::Protocol`): each level's window starts `window_after_change_ms` after the change
 //! into it and ends `window_before_next_ms` before the next; the rest before the first level
 //! and the return to rest after the last give no pair; a pair is each channel's mean over the
 //! window. Every level is reported with its window and the samples in it, and a level whose
@@ -44,7 +44,7 @@ pub struct Settings {
 impl Settings {
     /// The firmware's windows (the thesis's: 2 s after a change, 1 s before the next).
     pub fn firmware_windows() -> (f64, f64) {
-        let p = firmware::Protocol::default();
+        let p = capstan_rig::Protocol::default();
         (
             p.window_after_change_ms as f64 / 1e3,
             p.window_before_next_ms as f64 / 1e3,

@@ -12,7 +12,7 @@ use capstan_link::decoder::{BadFrame, Decoder, Located};
 use capstan_link::elf::{Firmware, RecordKind};
 use capstan_link::frame::Event;
 use capstan_link::seq::SeqEvent;
-use firmware::record::{Fault, RawSample, Record, RunEnd, RunStart, StepPair};
+use capstan_rig::record::{Fault, RawSample, Record, RunEnd, RunStart, StepPair};
 
 /// The run the records belong to: its entry in the summary's runs, and the set-up values its
 /// pairs are written with.
@@ -269,7 +269,7 @@ impl<'f> Logger<'f> {
         // Records decoded on the host (no firmware table) carry every field.
         let sent =
             |field: &str| fw.is_none_or(|fw| fw.record_has_field(RecordKind::RunStart, field));
-        let settings = firmware::Settings {
+        let settings = capstan_rig::Settings {
             protocol: s.protocol,
             calibration: s.calibration,
         };

@@ -71,7 +71,7 @@ pub struct RunCalibration(pub Vec<(&'static str, Option<f64>)>);
 impl RunCalibration {
     /// From a run-start record's settings; `sent(field)` says whether the record carries
     /// that field (by its name in the record).
-    pub fn of(s: &firmware::Settings, sent: impl Fn(&str) -> bool) -> RunCalibration {
+    pub fn of(s: &capstan_rig::Settings, sent: impl Fn(&str) -> bool) -> RunCalibration {
         let value = |setting: Setting| {
             let v = super::files::decimal(f32::from_bits(s.get(setting)));
             Some(v).filter(|d| d.is_finite() && sent(setting.name()))

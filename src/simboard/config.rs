@@ -2,12 +2,12 @@
 //! makes for host-sim, and its hidden truth (`sim-truth.json`).
 
 use anyhow::{bail, Context};
-use capstan_friction::{Effect, Model};
-use firmware::hal::Channel;
-use host_sim::noise::NoiseProfile;
-use host_sim::plant::rng::{derive_seed, Rng};
-use host_sim::plant::{CordSetup, Plant, PlantConfig};
-use host_sim::session::{SessionSpec, Step};
+use capstan_physics::{Effect, Model};
+use capstan_rig::hal::Channel;
+use capstan_sim::noise::NoiseProfile;
+use capstan_sim::plant::rng::{derive_seed, Rng};
+use capstan_sim::plant::{CordSetup, Plant, PlantConfig};
+use capstan_sim::session::{SessionSpec, Step};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -95,7 +95,7 @@ impl SimConfig {
     pub fn from_args(a: &SimArgs) -> anyhow::Result<SimConfig> {
         let c = SimConfig {
             seed: a.sim_seed.unwrap_or(1),
-            mu: a.sim_mu.unwrap_or(host_sim::plant::THESIS_MU),
+            mu: a.sim_mu.unwrap_or(capstan_sim::plant::THESIS_MU),
             wrap_deg: a.sim_wrap_deg.unwrap_or(360.0),
             effects: a.sim_effects.clone(),
             noise: a.sim_noise.clone().unwrap_or_else(|| "quiet".into()),

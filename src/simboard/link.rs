@@ -5,7 +5,7 @@
 use super::{SimBoard, IDLE_MS};
 use capstan_link::frame::Event;
 use capstan_link::rig::RigLink;
-use host_sim::session::Step;
+use capstan_sim::session::Step;
 use std::collections::VecDeque;
 use std::time::Duration;
 
@@ -39,7 +39,7 @@ impl RigLink for SimLink {
             anyhow::bail!(
                 "the simulated board did not answer `{l}` within {} s of its time (its firmware \
                  loop is stuck?)",
-                host_sim::session::REPLY_TIMEOUT_MS / 1000
+                capstan_sim::session::REPLY_TIMEOUT_MS / 1000
             );
         }
         Ok(())

@@ -1,5 +1,5 @@
 //! The simulated board behind `capstan rig --sim DIR` and `capstan log --sim DIR`: the
-//! firmware's own code on host-sim (`host_sim::session`), against a simulated rig whose force
+//! firmware's own code on host-sim (`capstan_sim::session`), against a simulated rig whose force
 //! sensors have hidden zero and sensitivity errors, kept in `DIR` between commands.
 //!
 //! A real board keeps running between two host commands: its RAM (setup mode, a latched fault,
@@ -25,8 +25,8 @@ pub use link::SimLink;
 
 use anyhow::{bail, Context};
 use capstan_link::frame::Event;
-use host_sim::flash::RamFlash;
-use host_sim::session::{run_session_observed, SessionOutput, Step, FLASH_PAGES};
+use capstan_sim::flash::RamFlash;
+use capstan_sim::session::{run_session_observed, SessionOutput, Step, FLASH_PAGES};
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
@@ -174,7 +174,7 @@ impl SimBoard {
         all.extend(steps.iter().cloned());
         let (mut seen, last) = (self.state.events, self.state.last);
         let mut diverged = false;
-        let mut observe = |done: usize, events: &[host_sim::session::Event]| {
+        let mut observe = |done: usize, events: &[capstan_sim::session::Event]| {
             if done <= mine_from {
                 return true;
             }
@@ -234,7 +234,7 @@ impl SimBoard {
 
 /// The records of a replay reproduce the first `n` the board made before: the `n`-th is the
 /// one it made last (sequence number and boot).
-fn replays(events: &[host_sim::session::Event], n: usize, last: Option<(u32, u32)>) -> bool {
+fn replays(events: &[capstan_sim::session::Event], n: usize, last: Option<(u32, u32)>) -> bool {
     n <= events.len()
         && match (last, n.checked_sub(1)) {
             (Some(last), Some(i)) => (events[i].seq, events[i].boot) == last,

@@ -2,9 +2,9 @@
 //! actions of `capstan rig --sim DIR bench ...`, which a person does by hand at a real rig.
 
 use anyhow::bail;
-use firmware::hal::Channel;
-use host_sim::plant::InjectionKind;
-use host_sim::session::Step;
+use capstan_rig::hal::Channel;
+use capstan_sim::plant::InjectionKind;
+use capstan_sim::session::Step;
 use std::path::Path;
 
 /// How long a weight is left to stop swinging after it is hung or taken off, ms.

@@ -2,7 +2,7 @@
 
 use capstan_engine::evidence::Level;
 use capstan_engine::verdict::{words, Numbers, Verdict};
-use capstan_friction::EffectKind;
+use capstan_physics::EffectKind;
 use serde_json::Value;
 
 fn unescape(s: &str) -> String {

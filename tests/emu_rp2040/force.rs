@@ -8,7 +8,7 @@
 use super::{case, common, f, ready, selected};
 use crate::setup::emulate;
 use crate::setup_mode::board::{host_sim, Board};
-use firmware::record::{Record, RunEnd, StepPair};
+use capstan_rig::record::{Record, RunEnd, StepPair};
 
 fn pairs(records: impl Iterator<Item = Record>) -> Vec<StepPair> {
     records
@@ -27,7 +27,10 @@ fn force_control_on_the_emulated_board_holds_its_targets_as_host_sim() {
         return;
     }
     // The case's cord is host-sim's thesis fit.
-    assert_eq!(emu_bench::case::thesis_fit(), host_sim::force::thesis_fit());
+    assert_eq!(
+        capstan_emu_bench::case::thesis_fit(),
+        capstan_sim::force::thesis_fit()
+    );
     let e = emulate(setup, c.clone());
     common(&e);
     let board = Board::new(setup, &e);

@@ -1,4 +1,4 @@
-//! Issue 38's hazards on the emulated release image (`emu_bench::hazards`): each must leave
+//! Issue 38's hazards on the emulated release image (`capstan_emu_bench::hazards`): each must leave
 //! the amplifier's pin off (static low) within the issue's time, or never switch it, and say
 //! why in the log. The drive's voltage follows the pin through the RC filter: below 1 % 22 ms
 //! later (`MotorConfig::amp_filter_tau_s`, 4.7 ms), which the times below leave room for.
@@ -6,7 +6,7 @@
 use super::{case, common, f, ready, selected, MS, REASON_TIMER};
 use crate::pins::{segments, Segment};
 use crate::setup::emulate;
-use emu_bench::hazards::{HELD_US, PARTED_AT_US};
+use capstan_emu_bench::hazards::{HELD_US, PARTED_AT_US};
 
 /// The RC filter's time to 1 %, ms.
 const FILTER_MS: f64 = 22.0;

@@ -1,7 +1,7 @@
 //! The RP2040 board image in the loop: the release image a user flashes
-//! (`cargo build --release -p firmware --target thumbv6m-none-eabi`) boots on rp2040js, the
-//! rig's own plant (`capstan-plant`, built to WebAssembly in `emu/bench`) on its pins, and
-//! whole runs go through the button as a user would run them. See `emu/README.md` for how the
+//! (`cargo build --release -p capstan-board --target thumbv6m-none-eabi`) boots on rp2040js, the
+//! rig's own plant (`capstan-plant`, built to WebAssembly in `sim/emu/bench`) on its pins, and
+//! whole runs go through the button as a user would run them. See `sim/emu/README.md` for how the
 //! harness lock-steps the chip and the plant, reads RTT and brings the faults about.
 //!
 //! * `whole_protocol_run...`: servo pulses at every step, trigger, amplifier duty, the decoded
@@ -23,7 +23,7 @@
 //! Plain `cargo test` runs a fixed slice (`Case::quick`: the abort, the hang, the panic, the
 //! setup session, the loaded tare, the held button and the stack overflow, ~40 s);
 //! `CAPSTAN_EMU=full` runs every case (`.ci/run` does; ~2-3 min on two cores).
-//! Needs node ≥ 18, `npm ci --prefix emu`, and the `thumbv6m-none-eabi` and
+//! Needs node ≥ 18, `npm ci --prefix sim/emu`, and the `thumbv6m-none-eabi` and
 //! `wasm32-unknown-unknown` targets; where one is missing the test says why and passes, except
 //! with `CI=true`, where it fails.
 
@@ -34,13 +34,13 @@ mod pins;
 mod setup;
 mod setup_mode;
 
-use emu_bench::case::{
+use capstan_emu_bench::case::{
     self, board_calibration, board_limits, board_protocol, typed_calibration, Case,
 };
-use emu_bench::pins::{pwm_slice, PINS};
-use firmware::rig::DEBOUNCE_MS;
-use firmware::{Rig, SafeDuties};
-use host_sim::run::{run, RunOutput, RunSpec};
+use capstan_emu_bench::pins::{pwm_slice, PINS};
+use capstan_rig::rig::DEBOUNCE_MS;
+use capstan_rig::{Rig, SafeDuties};
+use capstan_sim::run::{run, RunOutput, RunSpec};
 use pins::{at, first_pulse_after, segments, widths_after};
 use serde_json::Value;
 use setup::{emulate, Emulated, Setup, PANIC_FILE, PANIC_LINE, PANIC_MESSAGE};
@@ -166,7 +166,7 @@ pub(crate) fn common(e: &Emulated) {
     assert_eq!(b["button_mismatches"], 0, "{}", e.case.name);
     assert_eq!(b["pwm_off_grid"], 0, "{}", e.case.name);
     // The sampling grid of the first run is the plant's whole milliseconds (the harness's
-    // lock-step contract; emu_bench::bench).
+    // lock-step contract; capstan_emu_bench::bench).
     let phase = &b["t1_phase_ns"];
     assert!(
         f(&phase[0]) > -2_000.0 && f(&phase[1]) < 2_000.0,
@@ -386,7 +386,10 @@ fn faults_on_the_emulated_board_reach_the_safe_state_at_the_pins_within_20_ms() 
     let Some(setup) = ready() else { return };
     // (The RTT case's host loses records by design: `guard.rs` checks it; issue 38's cases
     // have their own checks, `hazards.rs`.)
-    let hazards: Vec<_> = emu_bench::hazards::cases().iter().map(|c| c.name).collect();
+    let hazards: Vec<_> = capstan_emu_bench::hazards::cases()
+        .iter()
+        .map(|c| c.name)
+        .collect();
     let cases = case::all()
         .into_iter()
         .filter(|c| c.rtt_stall_us.is_none() && !hazards.contains(&c.name));
@@ -506,7 +509,10 @@ fn a_hung_loop_on_the_emulated_board_is_reset_within_10_ms_and_nothing_moves_unt
     assert!(at(&amp, reset).static_low() && at(&amp, reset).t_ns == reset);
     // The latch word kept across the reset: nothing latched, not at rest (a run).
     let word = resets[0]["scratch1"].as_u64().unwrap() as u32;
-    assert_eq!(firmware::reset::read_latch_word(word), Some((None, false)));
+    assert_eq!(
+        capstan_rig::reset::read_latch_word(word),
+        Some((None, false))
+    );
     // After the reboot: no servo pulse at all until the operator's press (1 s after the
     // reset, debounced 10 ms), then the rest pulse. The old firmware re-sent the last tension
     // pulse at once and homed from it: a re-pull of a horn the cord had pulled back.

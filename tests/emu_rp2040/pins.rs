@@ -1,4 +1,4 @@
-//! The pins' waveforms as the bench measured them (`emu_bench::meter::Segment` in the report).
+//! The pins' waveforms as the bench measured them (`capstan_emu_bench::meter::Segment` in the report).
 
 use serde_json::Value;
 

@@ -2,7 +2,7 @@
 //! image and the bench built by nested cargo invocations, one case run by the harness, and its
 //! stream decoded by `capstan log`.
 
-use emu_bench::Case;
+use capstan_emu_bench::Case;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -68,11 +68,11 @@ pub fn setup() -> Result<&'static Setup, String> {
 fn make_setup() -> Result<Setup, String> {
     let t0 = Instant::now();
     let node = node_version()?;
-    let rp2040js = root().join("emu/node_modules/rp2040js/package.json");
+    let rp2040js = root().join("sim/emu/node_modules/rp2040js/package.json");
     if !rp2040js.exists() {
         return Err(format!(
-            "rp2040js is not installed ({} is missing): run `npm ci --prefix emu` (the version is \
-             pinned in emu/package-lock.json)",
+            "rp2040js is not installed ({} is missing): run `npm ci --prefix sim/emu` (the version is \
+             pinned in sim/emu/package-lock.json)",
             rp2040js.display()
         ));
     }
@@ -85,13 +85,13 @@ fn make_setup() -> Result<Setup, String> {
                 "build",
                 "--release",
                 "-p",
-                "firmware",
+                "capstan-board",
                 "--target",
                 "thumbv6m-none-eabi",
             ],
             "thumbv6m-none-eabi",
         )?
-        .join("thumbv6m-none-eabi/release/firmware"),
+        .join("thumbv6m-none-eabi/release/capstan-board"),
     };
     // The bench as a WebAssembly module, without its debug info (4 MiB of it).
     let wasm = cargo_build(
@@ -99,7 +99,7 @@ fn make_setup() -> Result<Setup, String> {
             "rustc",
             "--release",
             "-p",
-            "emu-bench",
+            "capstan-emu-bench",
             "--target",
             "wasm32-unknown-unknown",
             "--crate-type",
@@ -110,7 +110,7 @@ fn make_setup() -> Result<Setup, String> {
         ],
         "wasm32-unknown-unknown",
     )?
-    .join("wasm32-unknown-unknown/release/emu_bench.wasm");
+    .join("wasm32-unknown-unknown/release/capstan_emu_bench.wasm");
     Ok(Setup {
         node,
         image: image(&elf),
@@ -237,7 +237,7 @@ impl Emulated {
 
 /// The message the harness's panic carries, and its source location.
 pub const PANIC_MESSAGE: &str = "panic injected by the emulator harness";
-pub const PANIC_FILE: &str = "emu/harness.mjs";
+pub const PANIC_FILE: &str = "sim/emu/harness.mjs";
 pub const PANIC_LINE: u32 = 1;
 /// Unused RAM for the message (SRAM bank 5, scratch Y, above everything `memory.x` places).
 const PANIC_RAM: u64 = 0x2004_1000;
@@ -258,7 +258,7 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
             .collect::<Vec<_>>(),
         "rtt": img.rtt,
         // The board's pins, from the wire schema (the harness has no numbers of its own).
-        "pins": emu_bench::bench::pin_map_json(),
+        "pins": capstan_emu_bench::bench::pin_map_json(),
         "panic": {"fn": img.panic_fn, "message": PANIC_MESSAGE, "file": PANIC_FILE,
                   "line": PANIC_LINE, "col": 1, "ram": PANIC_RAM},
         // Boot2 first, as the boot ROM would start it, with the stack the ROM leaves.
@@ -276,7 +276,7 @@ pub fn emulate(setup: &Setup, case: Case) -> Emulated {
     std::fs::write(&job_path, serde_json::to_vec_pretty(&job).unwrap()).unwrap();
     let t0 = Instant::now();
     let out = Command::new("node")
-        .arg(root().join("emu/harness.mjs"))
+        .arg(root().join("sim/emu/harness.mjs"))
         .arg(&job_path)
         .output()
         .expect("cannot run node");

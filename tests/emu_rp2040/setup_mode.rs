@@ -1,8 +1,8 @@
 //! Setup mode on the emulated board, by the host's command lines over RTT (case `setup`,
-//! `emu_bench::case::SETUP_COMMANDS`): the harness writes each line into RTT down channel 0
+//! `capstan_emu_bench::case::SETUP_COMMANDS`): the harness writes each line into RTT down channel 0
 //! as a debug probe does (`capstan rig`), the board answers in the log, moves the servo, keeps
 //! the amplifier at 0 V, reports live values; host-sim's session (`run_session`, the reference
-//! behaviour, `host-sim/tests/setup_flow.rs`) gets the same lines at the same samples.
+//! behaviour, `sim/host/tests/setup_flow.rs`) gets the same lines at the same samples.
 //!
 //! No `store`: rp2040js has no flash chip behind the SSI (the boot ROM's flash routines, which
 //! embassy-rp's erase and write call, are absent), so writing the settings to flash is tested
@@ -15,12 +15,12 @@ use super::{case, common, f, is_rest, pulse_us, ready, selected, AMP_SLICE, MS};
 use crate::pins::{segments, widths_after};
 use crate::setup::{emulate, Emulated};
 use board::{host_sim, Board, Line, ZERO_MS};
-use emu_bench::case::{board_protocol, SHOW_BURST};
-use firmware::command::{CommandKind, Key};
-use firmware::record::{Live, Record, Reply, SettingsSource};
-use firmware::rig::HOMING_DEG_PER_S;
-use firmware::setup::SETUP_DEG_PER_S;
-use host_sim::session::SessionOutput;
+use capstan_emu_bench::case::{board_protocol, SHOW_BURST};
+use capstan_rig::command::{CommandKind, Key};
+use capstan_rig::record::{Live, Record, Reply, SettingsSource};
+use capstan_rig::rig::HOMING_DEG_PER_S;
+use capstan_rig::setup::SETUP_DEG_PER_S;
+use capstan_sim::session::SessionOutput;
 
 fn replies(records: impl Iterator<Item = Record>) -> Vec<Reply> {
     records

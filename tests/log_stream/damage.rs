@@ -4,7 +4,7 @@
 use crate::log_support::{firmware, split, stream, Frames};
 use crate::seqs;
 use capstan_link::{decode_all, Event};
-use firmware::record::Record;
+use capstan_rig::record::Record;
 
 #[test]
 fn dropped_frames_are_counted_and_located() {

@@ -3,7 +3,7 @@
 use crate::log_support::{self, firmware, rzcobs_decode, rzcobs_encode, split, stream};
 use capstan_link::elf::MAX_PADDING;
 use capstan_link::{decode_all, Event, Firmware};
-use firmware::record::Record;
+use capstan_rig::record::Record;
 
 #[test]
 fn the_recorded_stream_decodes_completely() {
@@ -21,7 +21,7 @@ fn the_recorded_stream_decodes_completely() {
         if let Event::Record { record, .. } = &e.event {
             let k = match record {
                 Record::RunStart(s) => {
-                    assert_eq!(s.protocol, qemu_fw::protocol());
+                    assert_eq!(s.protocol, capstan_qemu_fw::protocol());
                     0
                 }
                 Record::Raw(_) => 1,

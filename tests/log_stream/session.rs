@@ -5,7 +5,7 @@ use crate::record_seq;
 use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
 use capstan_link::seq::Gap;
 use capstan_link::{decode_all, Event};
-use firmware::record::Record;
+use capstan_rig::record::Record;
 
 #[test]
 fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not() {

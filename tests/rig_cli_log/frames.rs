@@ -6,9 +6,9 @@
 
 use crate::log_support::rzcobs_encode;
 use capstan_link::Firmware;
-use firmware::condition::ChannelStats;
-use firmware::record::{record_crc, CrcFields, Live, RawSample, Record, NONE_CODE};
-use firmware::Settings;
+use capstan_rig::condition::ChannelStats;
+use capstan_rig::record::{record_crc, CrcFields, Live, RawSample, Record, NONE_CODE};
+use capstan_rig::Settings;
 
 pub const WORDS: [&str; 8] = [
     "run_start",

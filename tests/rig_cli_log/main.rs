@@ -2,7 +2,7 @@
 //! rig`): the setup-mode records (`settings`, `live`, `reply`) decoded to the firmware's own
 //! records, checked by their CRC, counted in the sequence numbers, written to their files, and
 //! never taken for a run. The frames are made here from the firmware's format strings (the
-//! wire schema's, as `firmware/src/defmt_sink.rs` writes them) and its `record_crc`, for a
+//! wire schema's, as `firmware/rig/src/defmt_sink.rs` writes them) and its `record_crc`, for a
 //! table without an ELF (`Firmware::from_formats`).
 
 #[path = "../log_support/mod.rs"]
@@ -12,14 +12,14 @@ mod frames;
 
 use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
 use capstan_link::{decode_all, Firmware};
-use firmware::command::{CommandError, CommandKind};
-use firmware::condition::ChannelStats;
-use firmware::hal::Channel;
-use firmware::record::{
+use capstan_rig::command::{CommandError, CommandKind};
+use capstan_rig::condition::ChannelStats;
+use capstan_rig::hal::Channel;
+use capstan_rig::record::{
     Fault, FaultKind, Live, RawSample, Record, Reply, RunEnd, RunStart, SettingsReport,
     SettingsSource, StepPair,
 };
-use firmware::{Calibration, Protocol, Settings};
+use capstan_rig::{Calibration, Protocol, Settings};
 use frames::{firmware, format_of, frame, frame_as, message_frame, WORDS};
 use log_support::{fresh_dir, rzcobs_encode};
 

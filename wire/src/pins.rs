@@ -1,6 +1,6 @@
 //! The pin map of the Raspberry Pi Pico board, defined once: the board binary takes these
 //! pins (and checks at boot that its typed peripherals are them), its panic path writes their
-//! registers by number, and the emulated board's harness (`emu/harness.mjs`, through the job
+//! registers by number, and the emulated board's harness (`sim/emu/harness.mjs`, through the job
 //! file `tests/emu_rp2040` writes from [`PINS`]) and bench listen and drive the same ones.
 //!
 //! | signal                          | GPIO | peripheral        | Pico pin |

@@ -1,6 +1,6 @@
 //! The log records, defined once: each kind's leading word, log level and fields (name, wire
 //! type, unit), in order. From this the firmware's build makes the defmt format strings (defmt
-//! needs literals: `firmware/build.rs` writes a macro per record), and the host reads the
+//! needs literals: `firmware/rig/build.rs` writes a macro per record), and the host reads the
 //! records by the same table.
 //!
 //! A record's format string is `WORD name={=type} name={=type} ...`; the first field is always

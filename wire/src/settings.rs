@@ -351,7 +351,12 @@ mod tests {
             assert_eq!(s.group(), group, "{}", s.name());
             // Force control and the provenance came later: an older run_start lacks them.
             assert_eq!(s.since() == Since::ForceControl, group == Group::Force);
-            assert_eq!(s.since() == Since::Provenance, s.index() >= 43, "{}", s.name());
+            assert_eq!(
+                s.since() == Since::Provenance,
+                s.index() >= 43,
+                "{}",
+                s.name()
+            );
         }
     }
 

@@ -16,8 +16,8 @@ use crate::simboard::steps::PRESS_MS;
 use crate::simboard::{SimBoard, IDLE_MS};
 use anyhow::bail;
 use capstan_link::frame::Event;
-use firmware::record::Record;
-use host_sim::session::Step;
+use capstan_rig::record::Record;
+use capstan_sim::session::Step;
 use std::sync::atomic::Ordering;
 
 /// Runs recorded when neither --runs nor --duration is given (a simulated session must end

@@ -5,7 +5,7 @@ use super::say::{live_line, LIVE_HEADER};
 use capstan_link::frame::Event;
 use capstan_link::rig::RigLink;
 use capstan_link::words::fault_line;
-use firmware::record::Record;
+use capstan_rig::record::Record;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -118,7 +118,7 @@ fn take_live(
         Event::Record {
             record: Record::Reply(r),
             ..
-        } if r.command == firmware::command::CommandKind::Leave && r.error.is_none() => {
+        } if r.command == capstan_rig::command::CommandKind::Leave && r.error.is_none() => {
             note("live: setup mode was left (the button, or another rig command)".into());
             return true;
         }

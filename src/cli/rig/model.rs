@@ -1,16 +1,16 @@
 //! The fitted model as the board's law (`capstan rig load-model --from metrics.json`, and
 //! `capstan simulate --mode force --model-from`): `metrics.json`'s prediction model at the rig's
 //! wrap, diameter and drive voltage, reduced to the four numbers the board holds
-//! (`host_sim::force::board_law`, checked to follow the model within 1 % or 0.05 N), refused if
+//! (`capstan_sim::force::board_law`, checked to follow the model within 1 % or 0.05 N), refused if
 //! the rig is outside what the model was fitted on: a force controller must not extrapolate
 //! the law its feedforward goes through.
 
 use anyhow::bail;
 use capstan_engine::analysis::prediction::PredictionModel;
 use capstan_engine::fit::Param;
-use capstan_friction::{Model, Operating};
-use firmware::command::Key;
-use firmware::BoardLaw;
+use capstan_physics::{Model, Operating};
+use capstan_rig::command::Key;
+use capstan_rig::BoardLaw;
 use std::path::Path;
 
 /// Where the rig works: what the board's settings say.
@@ -134,7 +134,7 @@ pub fn reduce(pm: &PredictionModel, rig: &RigPoint) -> anyhow::Result<Loaded> {
         );
     }
     let t1_max_n = (1.2 * t1_needed).min(r.t1_n.max);
-    let law = host_sim::force::board_law(&model, &op, t1_max_n)?;
+    let law = capstan_sim::force::board_law(&model, &op, t1_max_n)?;
     Ok(Loaded {
         law,
         model,
@@ -148,7 +148,7 @@ pub fn bisect_t1(model: &Model, op: &Operating, t2_n: f64) -> f64 {
     let (mut lo, mut hi) = (0.0f64, t2_n.max(1.0) * 2.0);
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
-        if host_sim::force::settled_t2_n(model, mid, op) < t2_n {
+        if capstan_sim::force::settled_t2_n(model, mid, op) < t2_n {
             lo = mid;
         } else {
             hi = mid;

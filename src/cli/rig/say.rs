@@ -5,8 +5,8 @@
 
 use capstan_link::rig::Answer;
 use capstan_link::words::{reply_sentence, settings_lines, unit};
-use firmware::command::{Command, CommandKind, Key};
-use firmware::record::Live;
+use capstan_rig::command::{Command, CommandKind, Key};
+use capstan_rig::record::Live;
 
 /// The firmware refused the command.
 #[derive(Clone, Debug, PartialEq)]
@@ -87,10 +87,10 @@ pub fn key_lines() -> Vec<String> {
 mod tests {
     use super::*;
     use capstan_link::words::fault_line;
-    use firmware::command::CommandError;
-    use firmware::hal::Channel;
-    use firmware::record::{Fault, FaultKind, Reply, RunEnd, SettingsReport, SettingsSource};
-    use firmware::{Calibration, Protocol, Settings};
+    use capstan_rig::command::CommandError;
+    use capstan_rig::hal::Channel;
+    use capstan_rig::record::{Fault, FaultKind, Reply, RunEnd, SettingsReport, SettingsSource};
+    use capstan_rig::{Calibration, Protocol, Settings};
 
     fn reply(command: CommandKind, error: Option<CommandError>, values: [f32; 2]) -> Answer {
         Answer {

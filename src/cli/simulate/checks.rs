@@ -6,7 +6,7 @@
 
 use super::Args;
 use capstan_data::ranges;
-use host_sim::campaign::{CampaignConfig, CordKey, FaultSpec};
+use capstan_sim::campaign::{CampaignConfig, CordKey, FaultSpec};
 
 /// Check every numeric argument against its range.
 pub(super) fn check_ranges(args: &Args) -> anyhow::Result<()> {

@@ -10,11 +10,11 @@
 use super::{checks, provenance_of, Args, Mode};
 use anyhow::{bail, Context};
 use capstan_outdir::{OutputDir, Staged};
+use capstan_rig::{BoardLaw, ForceConfig, ForceProfile};
+use capstan_sim::force::{self as hf, ForceRig};
+use capstan_sim::noise::NoiseProfile;
+use capstan_sim::plant::{rng::derive_seed, Injection};
 use capstan_tracking::{bandwidth, bode, steps, Bandwidth, SteadyWindow, StepResponse};
-use firmware::{BoardLaw, ForceConfig, ForceProfile};
-use host_sim::force::{self as hf, ForceRig};
-use host_sim::noise::NoiseProfile;
-use host_sim::plant::{rng::derive_seed, Injection};
 use serde_json::json;
 use std::io::Write;
 
@@ -38,7 +38,7 @@ pub(super) fn run_force(args: &Args) -> anyhow::Result<()> {
     if args.compare {
         return compare(args, &f);
     }
-    let label = host_sim::campaign::CordKey {
+    let label = capstan_sim::campaign::CordKey {
         diameter_mm: f.rig.diameter_mm,
         wrap_deg: f.rig.wrap_deg,
         drive_v: f.rig.drive_v,
@@ -150,7 +150,8 @@ fn run_rig(args: &Args, f: &ForceRun, k: u32) -> anyhow::Result<ForceRig> {
     // `--scatter PCT`: each run a new cord, its mu drawn with the given cord-to-cord SD (the
     // thesis data's is 4.3 %) around the model's.
     if let Some(pct) = args.scatter {
-        let mut rng = host_sim::plant::rng::Rng::new(derive_seed(args.seed, &[u64::from(k), 0x5c]));
+        let mut rng =
+            capstan_sim::plant::rng::Rng::new(derive_seed(args.seed, &[u64::from(k), 0x5c]));
         rig.cord.law.mu *= (pct / 100.0 * rng.normal()).exp();
     }
     let p = &f.profiles[(k as usize - 1) % f.profiles.len()];
@@ -233,10 +234,10 @@ fn force_run(args: &Args) -> anyhow::Result<ForceRun> {
         }
         None => {
             let model = hf::thesis_fit();
-            let op = capstan_friction::Operating {
+            let op = capstan_physics::Operating {
                 diameter_mm,
                 drive_v,
-                ..capstan_friction::Operating::from_wrap_deg(wrap_deg)
+                ..capstan_physics::Operating::from_wrap_deg(wrap_deg)
             };
             let law = hf::board_law(&model, &op, 12.0)?;
             (model, law, THESIS_EE_MU, "the thesis fit (built in)".into())
@@ -356,7 +357,7 @@ fn profile(args: &Args, p: super::Profile) -> anyhow::Result<ForceConfig> {
     Ok(f)
 }
 
-fn raw_csv(log: &host_sim::run::RunLog) -> String {
+fn raw_csv(log: &capstan_sim::run::RunLog) -> String {
     use std::fmt::Write as _;
     let mut s = String::from("t_s,t1_counts,t2_counts,t1_n,t2_n,t2_target_n\n");
     for x in &log.raw {

@@ -7,7 +7,7 @@
 use anyhow::Context;
 use capstan_data::PairsWriter;
 use capstan_outdir::{OutputDir, Staged};
-use host_sim::campaign::{pair_rows, CampaignStats, FaultSummary, RunResult};
+use capstan_sim::campaign::{pair_rows, CampaignStats, FaultSummary, RunResult};
 use serde_json::{json, Value};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -57,13 +57,13 @@ impl CampaignWriter {
         self.set.keep_on_failure(crate::outputs::say_kept);
         for row in pair_rows(r) {
             self.pairs
-                .write(&capstan_truth::pairs::to_pairs(&[row])[0])?;
+                .write(&capstan_validation::pairs::to_pairs(&[row])[0])?;
             self.rows += 1;
         }
         if self.raw {
             self.set.write(&raw_name(r), raw_csv(r).as_bytes())?;
         }
-        for f in host_sim::campaign::summarise_faults(r) {
+        for f in capstan_sim::campaign::summarise_faults(r) {
             write_fault(&mut self.faults_csv, &f)?;
             self.faults_total += 1;
             if self.faults.len() < FAULTS_KEPT {

@@ -6,9 +6,9 @@ use super::{model, plant, protocol, provenance_of, Args, Order};
 use anyhow::bail;
 use capstan_data::write_pairs_to;
 use capstan_outdir::Staged;
-use capstan_truth::pairs::to_pairs;
-use host_sim::campaign::{CordKey, PairRow};
-use host_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
+use capstan_sim::campaign::{CordKey, PairRow};
+use capstan_sim::two_control::{run_two_control, ChannelSpec, TwoControlConfig, TwoControlResult};
+use capstan_validation::pairs::to_pairs;
 use serde_json::json;
 use std::io::Write;
 
@@ -113,7 +113,7 @@ fn two_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
 }
 
 /// `--two-control --mode force`: one force-controlled channel per `--wraps` value (default
-/// two 720° cords) on one drive, as `host_sim::force::channels` makes them (odd channels step
+/// two 720° cords) on one drive, as `capstan_sim::force::channels` makes them (odd channels step
 /// through 5, 10, 20 and 30 N, even ones hold 15 N from 5 s later; `--delays-ms` overrides),
 /// the thesis fit's cords with `--noise` (default quiet; thesis for the rig's scatter).
 fn force_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
@@ -142,13 +142,13 @@ fn force_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
     }
     let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
     let n = wraps.len();
-    if !(1..=host_sim::plant::MAX_CORDS).contains(&n) {
+    if !(1..=capstan_sim::plant::MAX_CORDS).contains(&n) {
         bail!(
             "--two-control: give 1 to {} wraps (one per channel), not {n}",
-            host_sim::plant::MAX_CORDS
+            capstan_sim::plant::MAX_CORDS
         );
     }
-    let mut cfg = host_sim::force::channels(n);
+    let mut cfg = capstan_sim::force::channels(n);
     for (ch, w) in cfg.channels.iter_mut().zip(&wraps) {
         ch.wrap_deg = *w;
     }
@@ -163,7 +163,7 @@ fn force_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
             ch.delay_ms = *d;
         }
     }
-    let noise: host_sim::noise::NoiseProfile = args
+    let noise: capstan_sim::noise::NoiseProfile = args
         .noise
         .parse()
         .map_err(|e| anyhow::anyhow!("--noise {e}"))?;
@@ -187,7 +187,7 @@ fn force_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
         if let Some(ki) = args.ki {
             f.ki = ki as f32;
         }
-        *f = host_sim::force::feedback(*f, !args.open_loop);
+        *f = capstan_sim::force::feedback(*f, !args.open_loop);
     }
     match args.diameters.as_deref() {
         None => {}
@@ -210,10 +210,10 @@ fn force_config(args: &Args) -> anyhow::Result<TwoControlConfig> {
 fn two_channels(args: &Args) -> anyhow::Result<Vec<ChannelSpec>> {
     let wraps = args.wraps.clone().unwrap_or_else(|| vec![720.0, 720.0]);
     let n = wraps.len();
-    if !(1..=host_sim::plant::MAX_CORDS).contains(&n) {
+    if !(1..=capstan_sim::plant::MAX_CORDS).contains(&n) {
         bail!(
             "--two-control: give 1 to {} wraps (one per channel), not {n}",
-            host_sim::plant::MAX_CORDS
+            capstan_sim::plant::MAX_CORDS
         );
     }
     let alternate = |i: usize| {

@@ -4,9 +4,9 @@
 //! the capstan speed and the drive current), `pairs_ch<k>.csv` with `t2_target_n`.
 
 use capstan_outdir::Staged;
+use capstan_sim::force::trace_of;
+use capstan_sim::two_control::{TwoControlConfig, TwoControlResult, TRACKING_WINDOW};
 use capstan_tracking::{steps, StepResponse};
-use host_sim::force::trace_of;
-use host_sim::two_control::{TwoControlConfig, TwoControlResult, TRACKING_WINDOW};
 use serde_json::json;
 use std::io::Write;
 

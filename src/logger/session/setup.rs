@@ -4,8 +4,8 @@
 
 use super::Logger;
 use capstan_link::words::{reply_sentence, source_name, unmeasured_lines};
-use firmware::command::CommandKind;
-use firmware::record::{Fault, Live, Record, Reply, SettingsReport, SettingsSource};
+use capstan_rig::command::CommandKind;
+use capstan_rig::record::{Fault, Live, Record, Reply, SettingsReport, SettingsSource};
 
 /// Whether the rig is (still) in setup mode once `record` has arrived, `before` whether it
 /// was: after a live reading or an accepted setup-mode command; no longer after `leave`, an

@@ -3,11 +3,11 @@
 
 use crate::setup::{Emulated, Setup};
 use crate::{f, MS};
+use capstan_emu_bench::case::{board_calibration, board_limits, board_protocol, Case, BURST_AT_MS};
 use capstan_link::{decode_all, Firmware};
-use emu_bench::case::{board_calibration, board_limits, board_protocol, Case, BURST_AT_MS};
-use firmware::record::{Live, Record};
-use host_sim::flash::RamFlash;
-use host_sim::session::{run_session, SessionOutput, SessionSpec, Step, FLASH_PAGES};
+use capstan_rig::record::{Live, Record};
+use capstan_sim::flash::RamFlash;
+use capstan_sim::session::{run_session, SessionOutput, SessionSpec, Step, FLASH_PAGES};
 
 /// A record as the host received it.
 pub struct Got {
@@ -126,7 +126,7 @@ fn records(setup: &Setup, e: &Emulated) -> Vec<Got> {
 }
 
 /// The zero's measurement, ms: its reply comes this much after the sample that took it.
-pub const ZERO_MS: u64 = firmware::setup::MEASURE_MS as u64;
+pub const ZERO_MS: u64 = capstan_rig::setup::MEASURE_MS as u64;
 
 /// host-sim's session with each line taken by the same sample as on the board, until the same
 /// plant time. Its host sends a line between two samples and polls for the reply every 1 ms:
@@ -135,7 +135,7 @@ pub const ZERO_MS: u64 = firmware::setup::MEASURE_MS as u64;
 pub fn host_sim(c: &Case, board: &Board, end_ms: u64) -> SessionOutput {
     let mut steps = Vec::new();
     let mut host_ms = 50; // run_session's host lets the board boot first
-    // The operator's press, if the case has one (a session's presses are steps).
+                          // The operator's press, if the case has one (a session's presses are steps).
     let mut press = c
         .cord
         .press_at_us

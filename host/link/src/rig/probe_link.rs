@@ -1,0 +1,146 @@
+//! The board through a debug probe: attach to the running firmware (never flash, never reset),
+//! write command lines into its RTT down channel 0, read its defmt up-channel 0 and decode it
+//! with the same decoder `capstan log` uses.
+
+use super::link::RigLink;
+use crate::decoder::{Decoder, Located};
+use crate::frame::Event;
+use crate::probe::{attach, Connection, ProbeOptions};
+use crate::seq::SeqEvent;
+use crate::Firmware;
+use anyhow::{anyhow, bail};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// The RTT down channel the firmware reads its command lines from.
+pub const COMMAND_CHANNEL: usize = 0;
+
+/// How long a command line may wait for room in the down channel's buffer.
+const WRITE_WITHIN: Duration = Duration::from_secs(1);
+
+/// At most this long spent skipping what the up-channel held before we attached.
+const DRAIN_FOR: Duration = Duration::from_millis(500);
+
+/// The firmware has no RTT down channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NoDownChannel;
+
+impl std::fmt::Display for NoDownChannel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(
+            "this firmware has no RTT down channel: rebuild it from this repository \
+             (cargo build --release -p capstan-board --target thumbv6m-none-eabi) and flash it",
+        )
+    }
+}
+
+impl std::error::Error for NoDownChannel {}
+
+/// A board reached through a debug probe.
+pub struct ProbeLink<'f> {
+    conn: Connection,
+    decoder: Decoder<'f>,
+    buf: Vec<u8>,
+}
+
+/// Attach to the firmware running on the board (`opts.flash` is ignored: never flashed), find
+/// its command channel, and skip what its log held before now.
+pub fn open<'f>(
+    fw: &'f Firmware,
+    elf: &Path,
+    mut opts: ProbeOptions,
+) -> anyhow::Result<ProbeLink<'f>> {
+    opts.flash = false;
+    // Never flashed: nothing to say.
+    let mut conn = attach(elf, &opts, &mut |_| {})?;
+    if conn.down_buffer_size(COMMAND_CHANNEL).is_none() {
+        bail!(NoDownChannel);
+    }
+    let mut link = ProbeLink {
+        conn,
+        decoder: Decoder::new(fw),
+        buf: vec![0; 16 * 1024],
+    };
+    link.drain()?;
+    Ok(link)
+}
+
+impl ProbeLink<'_> {
+    /// Read and drop what the up-channel holds: records logged before this command (a stale
+    /// reply must not be taken for the answer). Decoded, so the framing is in step.
+    fn drain(&mut self) -> anyhow::Result<()> {
+        let until = Instant::now() + DRAIN_FOR;
+        while Instant::now() < until {
+            if self.read()?.is_none() {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// One read of the up-channel, decoded (`None`: nothing was there).
+    fn read(&mut self) -> anyhow::Result<Option<Vec<Event>>> {
+        let n = self
+            .conn
+            .read_up(&mut self.buf)
+            .map_err(|e| anyhow!("lost the probe: {e}"))?;
+        if n == 0 {
+            return Ok(None);
+        }
+        let (mut located, mut bad) = (Vec::new(), Vec::new());
+        self.decoder.push(&self.buf[..n], &mut located, &mut bad);
+        Ok(Some(located.into_iter().flat_map(with_gaps).collect()))
+    }
+}
+
+/// An event, preceded by a note when records were lost before it.
+fn with_gaps(l: Located) -> Vec<Event> {
+    let mut out = Vec::new();
+    if let Some(SeqEvent::Gap(g)) = &l.seq {
+        out.push(Event::Message {
+            level: String::new(),
+            text: format!(
+                "capstan rig: {} record(s) lost after seq {} (RTT buffer full, or another \
+                 reader took them)",
+                g.missing, g.after_seq
+            ),
+        });
+    }
+    out.push(l.event);
+    out
+}
+
+impl RigLink for ProbeLink<'_> {
+    fn send_line(&mut self, line: &str) -> anyhow::Result<()> {
+        let bytes = format!("{line}\n").into_bytes();
+        let mut sent = 0;
+        let until = Instant::now() + WRITE_WITHIN;
+        while sent < bytes.len() {
+            sent += self.conn.write_down(COMMAND_CHANNEL, &bytes[sent..])?;
+            if sent < bytes.len() {
+                if Instant::now() >= until {
+                    bail!(
+                        "the board did not take the command line within {} s (its RTT down \
+                         buffer stayed full): is the firmware running?",
+                        WRITE_WITHIN.as_secs()
+                    );
+                }
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+        Ok(())
+    }
+
+    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Vec<Event>> {
+        let until = Instant::now() + timeout;
+        loop {
+            if let Some(events) = self.read()?.filter(|e| !e.is_empty()) {
+                return Ok(events);
+            }
+            if Instant::now() >= until {
+                return Ok(Vec::new());
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+}

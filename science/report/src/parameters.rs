@@ -1,0 +1,325 @@
+//! The one parameter table: every fitted quantity once, with its unit and 95 % interval, the
+//! per-cord mu included; where two models estimate the same quantity differently, both rows,
+//! with the reason. `metrics.json` carries the same rows (`parameters`), and the headline quotes
+//! them.
+
+use capstan_engine::analysis::Analysis;
+use capstan_engine::fit::stats::mean;
+use serde::Serialize;
+
+/// One row of the table.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// Stable key (`extended.mu`, `cord.D12.7/270deg.mu`, ...).
+    pub key: String,
+    /// The quantity in words.
+    pub quantity: String,
+    /// Which model or estimate.
+    pub source: String,
+    /// Value.
+    pub value: f64,
+    /// Its standard error (None where none is computed; for a variance component the
+    /// large-sample SE of its χ² interval's method).
+    pub se: Option<f64>,
+    /// Unit ("1" for a pure number).
+    pub unit: &'static str,
+    /// 95 % interval, lower end (NaN → null when none is computed).
+    pub ci95_lo: Option<f64>,
+    /// 95 % interval, upper end.
+    pub ci95_hi: Option<f64>,
+    /// How the interval was computed, or why two estimates differ.
+    pub note: String,
+}
+
+/// Two-sided 95 % Student t quantile.
+fn t95(dof: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    if dof == 0 {
+        return f64::NAN;
+    }
+    StudentsT::new(0.0, 1.0, dof as f64).map_or(1.96, |t| t.inverse_cdf(0.975))
+}
+
+fn fin(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// Unit and words of a model parameter.
+pub fn describe(name: &str) -> (&'static str, &'static str) {
+    match name {
+        "mu" => (
+            "1",
+            "friction coefficient mu (population, at 1 N, run 1, time 0)",
+        ),
+        "n" => ("1", "tension exponent n of dT/dθ = k·Tⁿ"),
+        "b_nm2" => ("N m²", "bending stiffness of the cord"),
+        "mu_change_per_100s" => ("1/(100 s)", "fractional drift of mu per 100 s"),
+        "mu_change_per_run" => ("1/run", "fractional change of mu per repeat run"),
+        "mu_change_per_mm" => ("1/mm", "fractional change of mu per mm of diameter"),
+        "mu_change_per_v" => ("1/V", "fractional change of mu per volt of drive"),
+        "mu_log_slope_per_rad" => ("1/rad", "change of ln mu per radian of wrap"),
+        "heat_per_ns" => (
+            "1/(N s)",
+            "contact heating h: mu falls by exp(−h·H), H the friction load remembered (N s)",
+        ),
+        "heat_tau_s" => ("s", "memory time of the friction load"),
+        "t1_offset_n" => ("N", "zero offset (or path loss) of the T1 reading"),
+        "t2_offset_n" => ("N", "zero offset of the T2 reading"),
+        "t2_gain" => ("1", "gain of the T2 reading relative to T1"),
+        _ => ("?", "model parameter"),
+    }
+}
+
+/// Every row, in table order: the extended model, the evidence engine's estimates of the same
+/// quantities, Euler-Eytelwein's mu, the variance components, then each cord's mu.
+pub fn rows(a: &Analysis) -> Vec<Row> {
+    let mut out = Vec::new();
+    extended_rows(a, &mut out);
+    evidence_rows(a, &mut out);
+    baseline_row(a, &mut out);
+    variance_rows(a, &mut out);
+    cord_rows(a, &mut out);
+    out
+}
+
+/// Each extended-model value, ± t(folds − 1) times its cord-jackknife SE.
+fn extended_rows(a: &Analysis, out: &mut Vec<Row>) {
+    let pm = &a.prediction_model;
+    let t_cords = t95(pm.folds.saturating_sub(1));
+    for v in &a.extended.values {
+        let (unit, words) = describe(&v.name);
+        let half = t_cords * v.jackknife_se;
+        out.push(Row {
+            key: format!("extended.{}", v.name),
+            quantity: words.into(),
+            source: "extended model".into(),
+            value: v.value,
+            se: fin(v.jackknife_se),
+            unit,
+            ci95_lo: fin(v.value - half),
+            ci95_hi: fin(v.value + half),
+            note: if pm.folds >= 2 {
+                format!("value ± t({})·SE, SE from the cord jackknife over the leave-one-cord-out refits (cords as the independent units)", pm.folds - 1)
+            } else {
+                "no interval: the cord jackknife needs two cords or more".to_string()
+            },
+        });
+    }
+}
+
+/// Euler-Eytelwein's one mu, ± t(folds − 1) times its SE.
+fn baseline_row(a: &Analysis, out: &mut Vec<Row>) {
+    let t_cords = t95(a.prediction_model.folds.saturating_sub(1));
+    let b = a.baseline_fit.model(None).law.mu;
+    let bse = a.baseline_mu_se;
+    out.push(Row {
+        key: "baseline.mu".into(),
+        quantity: "friction coefficient mu".into(),
+        source: "Euler-Eytelwein, one mu".into(),
+        value: b,
+        se: fin(bse),
+        unit: "1",
+        ci95_lo: fin(b - t_cords * bse),
+        ci95_hi: fin(b + t_cords * bse),
+        note: "differs from the extended model's mu because Euler-Eytelwein has no sensor offset or heating term: its one mu absorbs them".into(),
+    });
+}
+
+/// A variance component's row: its value, and its interval by `method` (None: not computed,
+/// and `none` says why).
+fn component(
+    (key, quantity, unit): (&str, &str, &'static str),
+    value: f64,
+    interval: Option<crate::components::Interval>,
+    method: String,
+    none: &str,
+) -> Row {
+    let i = interval.filter(|_| value.is_finite());
+    Row {
+        key: key.into(),
+        quantity: quantity.into(),
+        source: "variance component".into(),
+        value,
+        se: i.and_then(|i| i.se),
+        unit,
+        ci95_lo: i.map(|i| i.lo),
+        ci95_hi: i.map(|i| i.hi),
+        note: match i {
+            Some(_) => method,
+            None => format!("{method}; no interval: {none}"),
+        },
+    }
+}
+
+/// The cords at the smallest and the largest wrap: the units of the wrap-extrapolation error.
+fn edge_cords(a: &Analysis) -> usize {
+    let obs = &a.obs;
+    let wraps = capstan_engine::fit::stats::distinct(obs.groups.iter().map(|g| g.wrap_deg));
+    match (wraps.first(), wraps.last()) {
+        (Some(lo), Some(hi)) => (obs.groups.iter())
+            .filter(|g| g.wrap_deg == *lo || g.wrap_deg == *hi)
+            .count(),
+        _ => 0,
+    }
+}
+
+/// The variance components of a new measurement, each with its 95 % interval
+/// ([`crate::components`] says how).
+fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
+    use crate::components::{cord_df, excess_sd, noise_df, sd};
+    let pm = &a.prediction_model;
+    let s = &a.evidence.scatter;
+    let obs = &a.obs;
+    let cords = obs.groups.len();
+    let runs_per_cord: Vec<usize> = (0..cords).map(|g| obs.runs_of_group(g).len()).collect();
+    let runs = obs.runs.len();
+    // A spread the data cannot show (one cord; one run per cord) is not estimable, not 0.
+    let shown = |v: f64, estimable: f64| if estimable.is_finite() { v } else { f64::NAN };
+    let sigma_u = shown(pm.sd_ln_mu_cord, s.cord_pct);
+    let df_u = cords.saturating_sub(1) as f64;
+    out.push(component(
+        ("scatter.cord_ln_mu_sd", "cord-to-cord SD of ln mu", "1"),
+        sigma_u,
+        sd(sigma_u, df_u),
+        format!("the extended model's σ_u; χ² interval on cords − 1 = {df_u:.0} degrees of freedom, as if the cord effects were seen without error (approximate: their shrinkage and noise are ignored)"),
+        "one cord, or σ_u at 0",
+    ));
+    let run_sd = shown(pm.sd_ln_mu_run, s.run_pct);
+    let df_e = runs.saturating_sub(cords) as f64;
+    out.push(component(
+        ("scatter.run_ln_mu_sd", "run-to-run SD of ln mu on one cord", "1"),
+        run_sd,
+        sd(run_sd, df_e),
+        format!("evidence engine (every run its own mu); χ² interval on runs − cords = {df_e:.0} degrees of freedom (exact for a balanced design under normality)"),
+        "no cord has two runs",
+    ));
+    let df_noise = noise_df(obs.len(), runs, s.lag1_autocorrelation);
+    let noise_method = format!("χ² interval on the within-run residuals' effective degrees of freedom, (rows − runs)·(1 − ρ)/(1 + ρ) = {df_noise:.0} with ρ = {:.2} their lag-1 autocorrelation; the absolute and proportional parts move together", s.lag1_autocorrelation);
+    out.push(component(
+        ("noise.abs_n", "within-run noise, absolute part", "N"),
+        s.noise_abs_n,
+        sd(s.noise_abs_n, df_noise),
+        format!("noise SD² = a² + (r·T2)²; {noise_method}"),
+        "the part is at 0",
+    ));
+    out.push(component(
+        ("noise.rel", "within-run noise, proportional part", "1"),
+        s.noise_rel,
+        sd(s.noise_rel, df_noise),
+        format!("fraction of T2; {noise_method}"),
+        "the part is at 0",
+    ));
+    let me = &pm.model_error;
+    out.push(component(
+        ("model_error.sd_n", "model error in T2 (SD)", "N"),
+        me.sd_n,
+        excess_sd(me.heldout_rms_n, me.accounted_rms_n, pm.folds),
+        format!("what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; interval: χ² on the held-out mean square with the {} left-out folds (cords) as its degrees of freedom, less the variance the other components account for, clamped at 0", pm.folds),
+        "fewer than two folds",
+    ));
+    let we = &pm.wrap_extrapolation_error;
+    let edge_cords = if we.rows > 0 { edge_cords(a) } else { 0 };
+    out.push(component(
+        ("wrap_extrapolation_error.sd_n", "error of extrapolating in wrap (SD)", "N"),
+        we.sd_n,
+        excess_sd(we.heldout_rms_n, we.accounted_rms_n, edge_cords),
+        format!("what fits without the smallest or the largest wrap miss there beyond all the above (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; interval: χ² on those misses' mean square with the {edge_cords} cords at the smallest and largest wrap as its degrees of freedom, less what the other components account for, clamped at 0"),
+        "not measured (fewer than three wraps)",
+    ));
+    let cord_pct = s.cord_pct;
+    let df_c = cord_df(s.cord_pct, s.run_pct, &runs_per_cord);
+    out.push(component(
+        ("scatter.cord_pct", "cord-to-cord SD of mu, % of mu", "%"),
+        cord_pct,
+        sd(cord_pct, df_c),
+        format!("evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, which explains part of the cord differences by the named causes and shrinks the rest; χ² interval on Satterthwaite's {df_c:.1} degrees of freedom for the cord component of the runs' mu (cords − 1 at most)"),
+        "one cord, or the component at 0",
+    ));
+}
+
+/// The evidence engine's estimate of each named cause, where the extended model has the same
+/// quantity (converted to the extended model's parameter).
+fn evidence_rows(a: &Analysis, out: &mut Vec<Row>) {
+    for c in &a.mechanisms.causes {
+        let Some(kind) = capstan_physics::EffectKind::from_name(c.name) else {
+            continue;
+        };
+        let Some(p) = capstan_engine::fit::Param::from_effect(kind) else {
+            continue;
+        };
+        let ev = &c.evidence;
+        let Some((_, raw)) = ev["parameters"].as_object().and_then(|m| m.iter().next()) else {
+            continue;
+        };
+        let (Some(raw), se) = (
+            raw.as_f64(),
+            ev["parameter_se"].as_f64().unwrap_or(f64::NAN),
+        ) else {
+            continue;
+        };
+        // The catalogue's heating value is h·τ; the model's is h.
+        let scale = if kind == capstan_physics::EffectKind::ContactHeating {
+            1.0 / capstan_physics::HEAT_TAU_S
+        } else {
+            1.0
+        };
+        let (value, se) = (raw * scale, se * scale);
+        let (unit, words) = describe(p.name());
+        out.push(Row {
+            key: format!("evidence.{}", p.name()),
+            quantity: words.into(),
+            source: "evidence engine".into(),
+            value,
+            se: fin(se),
+            unit,
+            ci95_lo: fin(value - 1.96 * se),
+            ci95_hi: fin(value + 1.96 * se),
+            note: format!("value ± 1.96·SE with runs as clusters; it differs from the extended model's row because the evidence engine gives every run its own mu (the extended model one mu per cord, shrunk), and a sensor or heating term trades off against mu differently in the two{}", if scale != 1.0 { format!("; the catalogue value {} = h·τ (τ = {} s) is shown as h", crate::cells::fx(raw, 5), capstan_physics::HEAT_TAU_S) } else { String::new() }),
+        });
+    }
+}
+
+/// Each cord's Euler-Eytelwein mu: every run's mean ln(T2/T1)/β, the cord's mean over its runs,
+/// the interval from the runs as replicates.
+fn cord_rows(a: &Analysis, out: &mut Vec<Row>) {
+    let obs = &a.obs;
+    for (g, grp) in obs.groups.iter().enumerate() {
+        let mut runs: Vec<f64> = Vec::new();
+        for r in obs.runs_of_group(g) {
+            let mus: Vec<f64> = obs.runs[r]
+                .iter()
+                .map(|&i| &obs.rows[i])
+                .filter(|row| row.t1_n > 0.0 && row.t2_n > 0.0)
+                .map(|row| (row.t2_n / row.t1_n).ln() / row.op.wrap_rad)
+                .collect();
+            if !mus.is_empty() {
+                runs.push(mean(&mus));
+            }
+        }
+        let m = mean(&runs);
+        let k = runs.len();
+        let sd = if k > 1 {
+            (runs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64).sqrt()
+        } else {
+            f64::NAN
+        };
+        let half = t95(k.saturating_sub(1)) * sd / (k as f64).sqrt();
+        out.push(Row {
+            key: format!("cord.{}.mu", grp.label),
+            quantity: format!(
+                "mu of cord {} ({:.0}°, D = {} mm)",
+                grp.label, grp.wrap_deg, grp.diameter_mm
+            ),
+            source: "Euler-Eytelwein per cord".into(),
+            value: m,
+            se: fin(sd / (k as f64).sqrt()),
+            unit: "1",
+            ci95_lo: fin(m - half),
+            ci95_hi: fin(m + half),
+            note: format!(
+                "mean over its {k} runs of each run's mean ln(T2/T1)/β; interval t({})·SD/√runs",
+                k.saturating_sub(1)
+            ),
+        });
+    }
+}
