@@ -28,6 +28,24 @@ use capstan_friction::catalogue::cord_point;
 use capstan_friction::entry::Slope;
 use capstan_friction::EffectKind;
 
+/// A between-cord effect is named when its cords' t test (cords as units) gives p below this
+/// (and its size matters). Set on the calibration seed of the thesis-design campaigns
+/// (`capstan_truth::cord_cases`): with two such tests on a thesis-like design (gain,
+/// diameter) a null campaign names one in ≤ 4 %, and mu 10–15 % apart on two diameters is
+/// named in about 80 % (docs/README-diagnose.md, "Between cords").
+pub const CORD_ALPHA: f64 = 0.01;
+
+/// Is `e` supported: between cords, p below [`CORD_ALPHA`]; between runs (wear), ΔBIC below
+/// −`threshold`; in both, a size that matters.
+pub fn supported(e: &Evidence, d: &Design, threshold: f64) -> bool {
+    let relevant = practically_relevant(e.kind, e.value, d);
+    relevant
+        && match level(e.kind) {
+            Level::BetweenCord => e.p < CORD_ALPHA,
+            _ => e.delta_bic < -threshold,
+        }
+}
+
 /// ML fit of the random-intercept model.
 #[derive(Clone, Debug)]
 pub struct LmmFit {
@@ -252,8 +270,7 @@ pub fn between_tests(
     threshold: f64,
 ) -> BetweenTests {
     let cord_mu = cord_means(d, run_mu);
-    let supported =
-        |e: &Evidence| practically_relevant(e.kind, e.value, d) && e.delta_bic < -threshold;
+    let supported = |e: &Evidence| supported(e, d, threshold);
     let pool: Vec<EffectKind> = testable
         .iter()
         .copied()
