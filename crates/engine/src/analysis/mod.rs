@@ -19,6 +19,8 @@
 pub mod closed_loop;
 pub mod extended;
 pub mod fits;
+pub mod gain;
+pub mod heldout;
 pub mod metrics;
 pub mod models;
 pub mod prediction;
@@ -86,9 +88,9 @@ pub struct Analysis {
     pub pred: Predictions,
     /// The gain table.
     pub models: Vec<ModelMetrics>,
-    /// The held-out gain: the extended model's leave-one-cord-out RMSE over Euler-Eytelwein's,
-    /// with its cord-bootstrap interval.
-    pub gain: uncertainty::WithInterval,
+    /// The held-out gain: the extended model's leave-one-cord-out RMSE (the whole procedure)
+    /// over Euler-Eytelwein's, with its sign-flip test over the cords.
+    pub gain: gain::Gain,
     /// Every cord's held-out RMSE under each refittable model.
     pub held_out: Vec<uncertainty::HeldOut>,
     /// The thesis's per-angle R².
@@ -115,6 +117,46 @@ pub struct Analysis {
     pub elapsed: Elapsed,
     /// Fits that did not converge, in words (empty when every fit did).
     pub fit_notes: Vec<String>,
+}
+
+/// The gain of the whole procedure's held-out predictions over Euler-Eytelwein's: the cords of
+/// failed folds (either model's) set apart and named, the rest tested over the cords.
+fn held_out_gain(
+    obs: &Observations,
+    ext: &uncertainty::CordErrors,
+    base: &uncertainty::CordErrors,
+    whole: &heldout::WholeLoco,
+    base_loco: &crate::fit::solve::Loco,
+) -> gain::Gain {
+    let labels: Vec<String> = obs.groups.iter().map(|g| g.label.clone()).collect();
+    let mut failed: Vec<(String, String)> = Vec::new();
+    for f in &whole.folds {
+        if let Some(why) = &f.failed {
+            for c in &f.cords {
+                failed.push((c.clone(), format!("the extended model's fold: {why}")));
+            }
+        }
+    }
+    for (g, why) in &base_loco.did_not_converge {
+        failed.push((labels[*g].clone(), format!("Euler-Eytelwein's fold: {why}")));
+    }
+    for g in 0..labels.len() {
+        let known = failed.iter().any(|(l, _)| *l == labels[g]);
+        if !known && (ext.missing[g] > 0 || base.missing[g] > 0) {
+            failed.push((
+                labels[g].clone(),
+                format!("{} rows without a held-out prediction", ext.missing[g].max(base.missing[g])),
+            ));
+        }
+    }
+    let out: Vec<usize> = (0..labels.len())
+        .filter(|&g| failed.iter().any(|(l, _)| *l == labels[g]))
+        .collect();
+    let boot = uncertainty::ratio(&ext.without(&out), &base.without(&out), 0x6a1e);
+    let mut g = gain::gain(ext, base, failed, (boot.ci95, boot.jackknife_se), &labels);
+    g.folds = whole.folds.clone();
+    g.selection = whole.selection.clone();
+    g
 }
 
 /// The named causes in words, for the extended model's description.
@@ -163,6 +205,11 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let evidence_s = t0.elapsed().as_secs_f64();
     let spec = models::extended(&assessment);
     let f = fits::fit_all(&obs, &spec, threads);
+    let tw = Instant::now();
+    let whole = heldout::whole_procedure(ds, &obs, &assessment, &eopts, threads);
+    let mut f = f;
+    f.pred.extended_loco = whole.t2_n.clone();
+    f.loco_s += tw.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let models = metrics::gain_table(&obs, &f, &causes_text(&mechanisms));
     let errors = |p: &[f64]| uncertainty::CordErrors::of(&obs, p);
@@ -171,7 +218,7 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
         errors(&f.pred.extended_loco),
         errors(&f.pred.baseline_per_cord_loco),
     );
-    let gain = uncertainty::ratio(&ext_loco, &base_loco, 0x6a1e);
+    let gain = held_out_gain(&obs, &ext_loco, &base_loco, &whole, &f.baseline_loco);
     let held_out = uncertainty::held_out(
         &obs,
         &[

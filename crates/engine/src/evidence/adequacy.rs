@@ -30,8 +30,11 @@ use super::design::Design;
 use super::within::{Weights, WithinFit};
 use serde::Serialize;
 
+mod common;
 mod directed;
 mod pure_error;
+
+pub use common::CommonProfile;
 
 use directed::directed_tests;
 pub use pure_error::lack_of_fit;
@@ -161,6 +164,9 @@ pub struct Adequacy {
     pub lack_of_fit_beyond_cords: Option<LackOfFit>,
     /// The cords as units: random cord effects and patterns between cords.
     pub cords: CordLevel,
+    /// The step profile the cords share beyond their own parameters, against sign flips of
+    /// whole cords (None with fewer than [`COMMON_MIN_CORDS`] cords).
+    pub common: Option<CommonProfile>,
     /// What is left is cord-to-cord scatter of these parameters (the shared fit's lack of fit
     /// is significant and large, the cords' own parameters take it up): the supported random
     /// cord effects, strongest first. Empty otherwise.
@@ -217,12 +223,19 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         .map(|j| (fit.maps[j].kind.name(), fit.value(j)))
         .collect();
     let large = |l: &LackOfFit| l.p < rule.alpha && l.systematic_ratio >= rule.min_ratio;
-    let lack = match &beyond {
-        Some(l) => large(l),
-        None => {
-            let bonferroni = rule.alpha / within.len().max(1) as f64;
-            best.is_some_and(|t| t.p < bonferroni && t.partial_r2 >= rule.min_r2)
+    let bonferroni = rule.alpha / within.len().max(1) as f64;
+    let directed_lack = best.is_some_and(|t| t.p < bonferroni && t.partial_r2 >= rule.min_r2);
+    // With cords enough, what is left must be shared by the cords to be a pattern the model
+    // misses; each cord's own departures are cord-to-cord scatter. With fewer, the lack of fit
+    // beyond the cords' own parameters decides (it cannot tell the two apart).
+    let common = common::common_profile(d, &cords.z_after, COMMON_MIN_CORDS);
+    let lack = match (&common, &beyond) {
+        (Some(c), _) => {
+            (c.p < rule.alpha_between && c.systematic_ratio >= rule.min_ratio)
+                || (best.is_some_and(|t| t.unit == "cords") && directed_lack)
         }
+        (None, Some(l)) => large(l),
+        (None, None) => directed_lack,
     };
     let constancy = constancy(d, fit, &cords);
     let unexplained = lack || between.is_some() || !at_physical_limit.is_empty();
@@ -231,6 +244,7 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
     } else {
         Vec::new()
     };
+    let own_shape_left = !unexplained && beyond.as_ref().is_some_and(large);
     let pattern = match between {
         Some(t) => Some(t.structure),
         None => pattern(best, beyond.as_ref(), &within, rule),
@@ -239,12 +253,18 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
     if let Some(t) = between {
         sentence = between_sentence(&cords, t.structure, lack_of_fit.as_ref());
     }
-    if !left_between_cords.is_empty() {
-        sentence = scatter_sentence(&cords, &left_between_cords, lack_of_fit.as_ref(), beyond.as_ref());
+    if !unexplained && lack_of_fit.as_ref().is_some_and(large) {
+        let own = own_shape_left.then_some(common.as_ref()).flatten();
+        sentence = scatter_sentence(
+            &cords,
+            &left_between_cords,
+            (lack_of_fit.as_ref(), beyond.as_ref()),
+            own,
+        );
     }
     if let Some(l) = beyond
         .as_ref()
-        .filter(|l| !lack && between.is_none() && underpowered(l, rule))
+        .filter(|l| !lack && between.is_none() && common.is_none() && underpowered(l, rule))
     {
         sentence = format!(
             "The lack of fit against the replicate runs is not significant (F = {:.2}, p = {}), but its systematic part is estimated at {:.2}× the noise, above the rule's {:.2}×: these replicate runs are too few to rule out structure that matters.",
@@ -274,11 +294,16 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         lack_of_fit,
         lack_of_fit_beyond_cords: beyond,
         cords,
+        common,
         left_between_cords,
         directed,
         rule,
     }
 }
+
+/// From this many cords the cords decide whether what is left is shared by them (a pattern)
+/// or each cord's own (cord-to-cord scatter): exact sign flips of 8 cords resolve p to 1/128.
+pub const COMMON_MIN_CORDS: usize = 8;
 
 /// A structure that varies only between cords.
 fn is_between(structure: &str) -> bool {
@@ -374,13 +399,14 @@ fn between_sentence(c: &CordLevel, covariate: &str, lof: Option<&LackOfFit>) -> 
     s + "."
 }
 
-/// What is left is cord-to-cord scatter of `left`: the sentence, with the lack of fit before
-/// and beyond the cords' own parameters and the largest between-cord pattern.
+/// What is left is cord-to-cord scatter: the sentence, with the supported random cord effects
+/// `left`, the lack of fit before and beyond the cords' own parameters, and, when each cord's
+/// own shape beyond them is left too (`own`: the test that it is shared by no pattern), that.
 fn scatter_sentence(
     c: &CordLevel,
     left: &[&'static str],
-    common: Option<&LackOfFit>,
-    beyond: Option<&LackOfFit>,
+    (common, beyond): (Option<&LackOfFit>, Option<&LackOfFit>),
+    own: Option<&CommonProfile>,
 ) -> String {
     let what: Vec<String> = left
         .iter()
@@ -389,41 +415,69 @@ fn scatter_sentence(
             let sd = e.map_or(String::new(), |e| {
                 format!(
                     " (SD {} {} between cords, p {})",
-                    crate::verdict::words::sig(e.sd_between),
+                    two_digits(e.sd_between),
                     e.unit,
-                    p_equals(e.p)
+                    flip_p(e.p)
                 )
             });
             format!("{}{sd}", scatter_words(p))
         })
         .collect();
-    let order = c
-        .patterns
-        .iter()
-        .map(|p| p.p_family)
-        .fold(1.0, f64::min);
-    let mut s = format!(
-        "What is left is cord-to-cord scatter: {} differ from cord to cord more than from run to run",
-        crate::verdict::words::list(&what)
-    );
+    let mut s = if what.is_empty() {
+        "What is left differs from cord to cord".to_string()
+    } else {
+        format!(
+            "What is left is cord-to-cord scatter: {} {} from cord to cord more than from run to run",
+            crate::verdict::words::list(&what),
+            if what.len() == 1 { "differs" } else { "differ" }
+        )
+    };
     if !c.patterns.is_empty() {
+        let order = c.patterns.iter().map(|p| p.p_family).fold(1.0, f64::min);
         s += &format!(
-            ", with no order in wrap or diameter ({} cords as units, smallest adjusted p = {})",
+            ", in no order of wrap or diameter (the {} cords as units, smallest adjusted p = {})",
             c.cords,
             p_shown(order)
         );
     }
     if let (Some(a), Some(b)) = (common, beyond) {
         s += &format!(
-            "; with every cord's own, the lack of fit against the replicate runs falls from F = {} (p {}) to F = {} (p {}, the systematic part {:.2}× the noise)",
+            "; with every cord's own T2 zero and effects the lack of fit against the replicate runs falls from F = {} (the systematic part {:.2}× the noise) to F = {} ({:.2}×)",
             f_shown(a.f, 1),
-            lof_p_equals(a.p),
+            a.systematic_ratio,
             f_shown(b.f, 1),
-            lof_p_equals(b.p),
             b.systematic_ratio
         );
     }
+    if let Some(o) = own {
+        s += &format!(
+            ", and what each cord keeps beyond them is its own: the {} cords share no profile over the {} steps (sign flips of whole cords, p = {}; shared part {:.2}× the noise)",
+            o.cords,
+            o.steps,
+            p_shown(o.p),
+            o.systematic_ratio
+        );
+    }
     s + "."
+}
+
+/// Two significant digits.
+fn two_digits(v: f64) -> String {
+    if !v.is_finite() || v == 0.0 {
+        return crate::verdict::words::sig(v);
+    }
+    let e = v.abs().log10().floor() as i32;
+    let decimals = (1 - e).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// A sign-flip p: "≤ 5.0e-4" at its floor (no flip as large), else "= p".
+fn flip_p(p: f64) -> String {
+    if p <= pure_error::P_FLOOR * (1.0 + 1e-9) {
+        format!("≤ {:.1e}", pure_error::P_FLOOR)
+    } else {
+        p_equals(p)
+    }
 }
 
 /// The pure-error lack-of-fit test, if it could be computed with finite numbers (otherwise
