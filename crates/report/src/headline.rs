@@ -38,13 +38,14 @@ struct Cause {
 }
 
 /// What the headline says, read from the analysis (the adapter to the verdict layer).
-struct Facts {
+struct Facts<'a> {
     mu_row: Option<usize>,
     baseline_rmse: f64,
     cord_pct: f64,
     causes: Vec<Cause>,
     left: Option<&'static str>,
-    gain: (f64, f64, f64),
+    scatter: Vec<&'static str>,
+    gain: &'a capstan_engine::analysis::gain::Gain,
     better: (usize, usize),
 }
 
@@ -68,6 +69,7 @@ fn cause_words(name: &str) -> &'static str {
 /// Plain words for the pattern no cause explains.
 fn left_words(pattern: Option<&str>) -> &'static str {
     match pattern {
+        Some("wrap_between") => "something that changes with the wrap angle from cord to cord",
         Some("step_direction") => "T2 differs between rising and falling tension",
         Some("t1_shape") => "the way T2 grows with T1 departs from every fitted model",
         Some("time") => "T2 drifts with time inside runs",
@@ -77,8 +79,8 @@ fn left_words(pattern: Option<&str>) -> &'static str {
     }
 }
 
-impl Facts {
-    fn of(a: &Analysis, params: &[crate::parameters::Row]) -> Facts {
+impl<'a> Facts<'a> {
+    fn of(a: &'a Analysis, params: &[crate::parameters::Row]) -> Facts<'a> {
         let row = |key: &str| params.iter().position(|r| r.key == key);
         let causes = a
             .mechanisms
@@ -100,11 +102,9 @@ impl Facts {
             cord_pct: a.evidence.scatter.cord_pct,
             causes,
             left: u.flag.then(|| left_words(u.pattern)),
-            gain: (a.gain.value, a.gain.ci95.lo, a.gain.ci95.hi),
-            better: (
-                a.held_out.iter().filter(|c| c.extended_better).count(),
-                a.held_out.len(),
-            ),
+            scatter: a.evidence.adequacy.left_between_cords.clone(),
+            gain: &a.gain,
+            better: (a.gain.cords_better, a.gain.cords),
         }
     }
 }
@@ -163,39 +163,55 @@ pub fn headline(a: &Analysis) -> Headline {
             .collect();
         s.push(format!("The data establish that {}.", join_and(&parts)));
     }
-    s.push(match f.left {
-        Some(w) => format!("Left unexplained: {w}, and no cause in the catalogue accounts for it."),
-        None => {
+    s.push(match (f.left, f.scatter.is_empty()) {
+        (Some(w), _) => {
+            format!("Left unexplained: {w}, and no cause in the catalogue accounts for it.")
+        }
+        (None, false) => {
+            let what: Vec<String> = f
+                .scatter
+                .iter()
+                .map(|p| capstan_engine::evidence::adequacy::scatter_words(p).to_string())
+                .collect();
+            format!(
+                "What is left is scatter from cord to cord: {} {} from one cord to the next more than from run to run, in no order of diameter or wrap (tested with the cords as the units).",
+                join_and(&what),
+                if what.len() == 1 { "differs" } else { "differ" }
+            )
+        }
+        (None, true) => {
             "Nothing systematic is left beyond the scatter between cords, runs and readings.".into()
         }
     });
-    let g = q.num(
-        f.gain.0,
-        2,
-        "/gain/loco_rmse_ratio_extended_over_baseline/value".into(),
-    );
-    let lo = q.num(
-        f.gain.1,
-        2,
-        "/gain/loco_rmse_ratio_extended_over_baseline/ci95/lo".into(),
-    );
-    let hi = q.num(
-        f.gain.2,
-        2,
-        "/gain/loco_rmse_ratio_extended_over_baseline/ci95/hi".into(),
-    );
-    let better = q.num(f.better.0 as f64, 0, "/gain/cords_predicted_better".into());
-    let cords = q.num(f.better.1 as f64, 0, "/gain/cords".into());
-    let verdict = if f.gain.2 < 1.0 {
-        "the gain on new cords is established"
-    } else {
-        "the interval includes 1, so a gain on new cords is not established"
-    };
-    s.push(format!("On a cord left out of the fit, the model with these causes has {g} times Euler-Eytelwein's error (95 % interval {lo} to {hi}), better on {better} of {cords} cords: {verdict}."));
+    s.push(gain_sentence(&f, &mut q));
     Headline {
         sentences: s,
         numbers: q.numbers,
     }
+}
+
+/// The gain: the whole procedure's held-out error against Euler-Eytelwein's, with its test's
+/// name, p and verdict (and the cords a gain of this size would need).
+fn gain_sentence(f: &Facts<'_>, q: &mut Quote<'_>) -> String {
+    let g = f.gain;
+    const PTR: &str = "/gain/loco_rmse_ratio_extended_over_baseline";
+    if g.cords + g.failed.len() < 2 {
+        return "No cord can be left out of the fit (one cord): the gain on new cords is not measured.".into();
+    }
+    let ratio = q.num(g.value, 2, format!("{PTR}/value"));
+    let interval = if g.ci95.lo.is_finite() && g.ci95.hi.is_finite() {
+        let lo = q.num(g.ci95.lo, 2, format!("{PTR}/ci95/lo"));
+        let hi = q.num(g.ci95.hi, 2, format!("{PTR}/ci95/hi"));
+        format!(" (95 % interval {lo} to {hi}, the test inverted)")
+    } else {
+        String::new()
+    };
+    let better = q.num(f.better.0 as f64, 0, format!("{PTR}/cords_better"));
+    let cords = q.num(f.better.1 as f64, 0, format!("{PTR}/cords"));
+    format!(
+        "On a cord left out of the fit, with the causes chosen again without it, the model with these causes has {ratio} times Euler-Eytelwein's error{interval}, better on {better} of {cords} cords; by the exact sign-flip test over the cords, {}.",
+        g.verdict_words()
+    )
 }
 
 /// "a", "a and b", "a, b and c".

@@ -130,14 +130,14 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         (
             "scatter.cord_ln_mu_sd",
             "cord-to-cord SD of ln mu",
-            shown(pm.sd_ln_mu_cord, s.cord_pct),
+            shown(a.extended.sigma_u, s.cord_pct),
             "1",
-            "the extended model's σ_u; no interval computed",
+            "the extended (mixed) model's σ_u, its cord effects shrunk to the parameter budget; not what capstan predict uses for a new cord; no interval computed",
         ),
         (
             "scatter.run_ln_mu_sd",
             "run-to-run SD of ln mu on one cord",
-            shown(pm.sd_ln_mu_run, s.run_pct),
+            shown((1.0 + s.run_pct / 100.0).ln(), s.run_pct),
             "1",
             "evidence engine (every run its own mu); no interval computed",
         ),
@@ -156,18 +156,25 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
             "fraction of T2; no interval computed",
         ),
         (
-            "model_error.sd_n",
-            "model error in T2 (SD)",
-            pm.model_error.sd_n,
+            "new_cord_error.abs_n",
+            "a new cord's error in T2, constant part a (SD² = a² + (b·T2)²)",
+            pm.new_cord_error.abs_n,
             "N",
-            "what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; no interval computed",
+            "fitted to the held-out residuals of the whole procedure (every cord predicted by the causes chosen and fitted without it) beyond the curve's own variance; in capstan predict's prediction interval; no interval computed",
+        ),
+        (
+            "new_cord_error.rel",
+            "a new cord's error in T2, part proportional to T2 (b)",
+            pm.new_cord_error.rel,
+            "1",
+            "as above: the part that grows with T2; no interval computed",
         ),
         (
             "wrap_extrapolation_error.sd_n",
             "error of extrapolating in wrap (SD)",
             pm.wrap_extrapolation_error.sd_n,
             "N",
-            "what fits without the smallest or the largest wrap miss there beyond all the above (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; no interval computed",
+            "what fits without the smallest or the largest wrap miss there beyond the curve's variance and a new cord's error (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; no interval computed",
         ),
     ] {
         out.push(Row {

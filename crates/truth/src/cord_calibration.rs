@@ -82,7 +82,11 @@ pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, Strin
                 threads: 1,
                 ..Default::default()
             };
-            Ok(judge(c, &capstan_engine::diagnose::diagnose_with(&ds, &opts), None))
+            Ok(judge(
+                c,
+                &capstan_engine::diagnose::diagnose_with(&ds, &opts),
+                None,
+            ))
         }
     })
     .into_iter()
@@ -113,7 +117,9 @@ impl CordFigures {
             (of.iter().filter(|o| hit(o)).count(), of.len())
         };
         f.null_between_claims = count(Truth::Null, &|o| o.between_claim);
-        f.gain_null_claims = count(Truth::GainNull, &|o| o.gain == Some(GainVerdict::Established));
+        f.gain_null_claims = count(Truth::GainNull, &|o| {
+            o.gain == Some(GainVerdict::Established)
+        });
         f.diameter_found = count(Truth::Diameter, &|o| o.diameter_found);
         f.wrap_found = count(Truth::WrapTurn, &|o| o.wrap_found);
         for o in outcomes {

@@ -98,6 +98,64 @@ pub struct Gain {
     pub folds: Vec<super::heldout::Fold>,
 }
 
+impl Gain {
+    /// The verdict in words, with the test's p and, where the gain is not established, how
+    /// many cords would establish one of this size; failed folds named.
+    pub fn verdict_words(&self) -> String {
+        let p = crate::evidence::adequacy::p_shown(self.p);
+        let needed = self.cords_needed.as_ref().map(|n| match n.cords {
+            Some(k) => format!(
+                "; about {k} cords would establish a gain of this size ({:.0} % of simulated sets of {k} cords do)",
+                100.0 * n.power
+            ),
+            None => format!(
+                "; not even {} cords would establish a gain of this size in {:.0} % of simulated sets",
+                n.tried_up_to,
+                100.0 * POWER
+            ),
+        });
+        let needed = needed.unwrap_or_default();
+        let mut s = match self.verdict {
+            GainVerdict::Established => {
+                format!("the test rejects no gain (p = {p}): a gain on new cords is established")
+            }
+            GainVerdict::NotEstablished if self.value >= 1.0 => format!(
+                "the model with these causes is not better on new cords (p = {p} against no difference)"
+            ),
+            GainVerdict::NotEstablished => {
+                format!("the test does not reject no gain (p = {p}): a gain on new cords is not established{needed}")
+            }
+            GainVerdict::Worse => format!(
+                "the model with these causes predicts new cords worse (p = {p}): no gain"
+            ),
+            GainVerdict::TooFewCords => format!(
+                "with {} cords the test cannot reject at 5 % whatever the errors (its smallest p is {}): a gain on new cords cannot be established on these data{needed}",
+                self.cords,
+                crate::evidence::adequacy::p_shown(self.p_smallest)
+            ),
+            GainVerdict::NotIdentified => format!(
+                "the gain is not identified: {} of {} cords have no held-out prediction",
+                self.failed.len(),
+                self.failed.len() + self.cords
+            ),
+        };
+        if !self.failed.is_empty() {
+            let names: Vec<String> = self
+                .failed
+                .iter()
+                .take(3)
+                .map(|(c, why)| format!("{c} ({why})"))
+                .collect();
+            let more = if self.failed.len() > 3 { ", ..." } else { "" };
+            s += &format!(
+                "; set apart, a failed fold never counting as a held-out success: {}{more}",
+                names.join(", ")
+            );
+        }
+        s
+    }
+}
+
 /// Every sign pattern of `g` cords (g ≤ [`EXACT_CORDS`]), or [`MC_FLIPS`] random ones from a
 /// fixed seed, as ±1 vectors: the reference set of the test.
 fn patterns(g: usize, seed: u64) -> (Vec<Vec<f64>>, bool) {
@@ -141,13 +199,7 @@ fn p_at(rho: f64, e: &[f64], b: &[f64], pats: &[Vec<f64>]) -> f64 {
 }
 
 /// The ρ₀ where p crosses [`ALPHA`] between `inside` (p ≥ α) and `outside` (p < α).
-fn crossing(
-    mut inside: f64,
-    mut outside: f64,
-    e: &[f64],
-    b: &[f64],
-    pats: &[Vec<f64>],
-) -> f64 {
+fn crossing(mut inside: f64, mut outside: f64, e: &[f64], b: &[f64], pats: &[Vec<f64>]) -> f64 {
     for _ in 0..50 {
         let mid = 0.5 * (inside + outside);
         if p_at(mid, e, b, pats) >= ALPHA {
@@ -307,7 +359,13 @@ pub fn gain(
             lo: f64::NAN,
             hi: f64::NAN,
         };
-        (f64::NAN, nan, f64::NAN, 1.0, "none: no cord has a held-out prediction".into())
+        (
+            f64::NAN,
+            nan,
+            f64::NAN,
+            1.0,
+            "none: no cord has a held-out prediction".into(),
+        )
     } else {
         sign_flip(&e, &b)
     };
@@ -399,7 +457,8 @@ mod tests {
                 let z = rng.normal();
                 (z * z) * (1.0 + 3.0 * rng.uniform())
             };
-            let (e, b): (Vec<f64>, Vec<f64>) = (0..10).map(|_| (draw(&mut rng), draw(&mut rng))).unzip();
+            let (e, b): (Vec<f64>, Vec<f64>) =
+                (0..10).map(|_| (draw(&mut rng), draw(&mut rng))).unzip();
             let d: Vec<f64> = e.iter().zip(&b).map(|(e, b)| e - b).collect();
             if p_flip(&d, &pats) < ALPHA {
                 rejects += 1;

@@ -148,7 +148,10 @@ fn fold(
     }
     let test: Vec<usize> = held.iter().flat_map(|&g| obs.runs_of_group(g)).collect();
     let pred = fit.predict(obs, &test, false);
-    let bad = obs.rows_of(&test).into_iter().find(|&i| !pred[i].is_finite());
+    let bad = obs
+        .rows_of(&test)
+        .into_iter()
+        .find(|&i| !pred[i].is_finite());
     if let Some(i) = bad {
         let r = &obs.rows[i];
         return fail(

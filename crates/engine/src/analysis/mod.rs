@@ -17,6 +17,7 @@
 //! `capstan_truth::validate`; the closed loop is run by `capstan_truth::closed_loop`.
 
 pub mod closed_loop;
+pub mod coverage;
 pub mod extended;
 pub mod fits;
 pub mod gain;
@@ -145,7 +146,10 @@ fn held_out_gain(
         if !known && (ext.missing[g] > 0 || base.missing[g] > 0) {
             failed.push((
                 labels[g].clone(),
-                format!("{} rows without a held-out prediction", ext.missing[g].max(base.missing[g])),
+                format!(
+                    "{} rows without a held-out prediction",
+                    ext.missing[g].max(base.missing[g])
+                ),
             ));
         }
     }
@@ -204,7 +208,8 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let mechanisms = verdicts.mechanisms;
     let evidence_s = t0.elapsed().as_secs_f64();
     let spec = models::extended(&assessment);
-    let f = fits::fit_all(&obs, &spec, threads);
+    let pop_spec = models::population(&assessment);
+    let f = fits::fit_all(&obs, (&spec, &pop_spec), threads);
     let tw = Instant::now();
     let whole = heldout::whole_procedure(ds, &obs, &assessment, &eopts, threads);
     let mut f = f;
@@ -231,7 +236,7 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let thesis_per_angle_r2 = metrics::thesis_per_angle(&obs);
     let residual_patterns = residuals::patterns(ds, &obs, &f.pred);
     let ln_amp_by_step = residuals::ln_amp_by_step(&obs, &f.pred);
-    let prediction_model = prediction::build(&obs, &f, &assessment.scatter);
+    let prediction_model = prediction::build(&obs, &f);
     let tables_s = t1.elapsed().as_secs_f64();
     let baseline_mu_se = f
         .baseline_loco

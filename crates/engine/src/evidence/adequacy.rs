@@ -249,7 +249,12 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         Some(t) => Some(t.structure),
         None => pattern(best, beyond.as_ref(), &within, rule),
     };
-    let mut sentence = sentence(lack || between.is_some(), pattern, beyond.as_ref(), &directed);
+    let mut sentence = sentence(
+        lack || between.is_some(),
+        pattern,
+        beyond.as_ref(),
+        &directed,
+    );
     if let Some(t) = between {
         sentence = between_sentence(&cords, t.structure, lack_of_fit.as_ref());
     }

@@ -36,7 +36,8 @@ use serde::Serialize;
 pub const MIN_CORDS: usize = 4;
 
 /// The random-effect test of mu.
-pub const ANOVA: &str = "one-way analysis of variance of the runs' mu, cords as the factor: F(cords − 1, runs − cords)";
+pub const ANOVA: &str =
+    "one-way analysis of variance of the runs' mu, cords as the factor: F(cords − 1, runs − cords)";
 /// The random-effect test of the other parameters.
 pub const SCORE_FLIPS: &str = "score test of a per-cord departure (each cord's summed score²/information), p from 1,999 sign flips of whole runs";
 
@@ -303,7 +304,9 @@ fn solve(xtx: DMatrix<f64>, xty: DVector<f64>) -> Option<Vec<f64>> {
         return None;
     }
     let x = xtx.lu().solve(&xty)?;
-    x.iter().all(|v| v.is_finite()).then(|| x.iter().copied().collect())
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.iter().copied().collect())
 }
 
 /// The one-way analysis of variance of `y` (NaN dropped) with groups `g` (0..groups):
@@ -323,9 +326,7 @@ pub fn one_way(y: &[f64], g: &[usize], groups: usize) -> Option<(f64, f64, f64, 
         return None;
     }
     let grand = sum.iter().sum::<f64>() / n as f64;
-    let mean: Vec<f64> = (0..groups)
-        .map(|c| sum[c] / cnt[c].max(1) as f64)
-        .collect();
+    let mean: Vec<f64> = (0..groups).map(|c| sum[c] / cnt[c].max(1) as f64).collect();
     let ss_b: f64 = used
         .iter()
         .map(|&c| cnt[c] as f64 * (mean[c] - grand).powi(2))
@@ -338,8 +339,8 @@ pub fn one_way(y: &[f64], g: &[usize], groups: usize) -> Option<(f64, f64, f64, 
         .sum();
     let (df1, df2) = ((k - 1) as f64, (n - k) as f64);
     let (ms_b, ms_w) = (ss_b / df1, ss_w / df2);
-    let n0 = (n as f64 - used.iter().map(|&c| (cnt[c] * cnt[c]) as f64).sum::<f64>() / n as f64)
-        / df1;
+    let n0 =
+        (n as f64 - used.iter().map(|&c| (cnt[c] * cnt[c]) as f64).sum::<f64>() / n as f64) / df1;
     let var_b = ((ms_b - ms_w) / n0).max(0.0);
     let f = if ms_w > 0.0 { ms_b / ms_w } else { f64::NAN };
     f.is_finite().then_some((f, df1, df2, var_b))
@@ -420,6 +421,28 @@ pub fn cord_level(d: &Design, fit: &WithinFit, w: &Weights, alpha: f64) -> CordL
     }
 }
 
+/// How many units each question of `d` has, in words (the structure line's tail): the cords
+/// for what varies between cords, the runs for the shape within runs.
+pub fn units_statement(d: &Design) -> String {
+    let (g, r) = (d.cords.len(), d.units.len());
+    let plural = |n: usize, one: &str| format!("{n} {one}{}", if n == 1 { "" } else { "s" });
+    let between = if g >= MIN_CORDS {
+        format!(
+            "{} for what varies between cords (diameter, wrap, a T2 gain, the random cord effects, a new cord's prediction)",
+            plural(g, "cord")
+        )
+    } else {
+        format!(
+            "{} for what varies between cords (a new cord's prediction; patterns with wrap or diameter need {MIN_CORDS})",
+            plural(g, "cord")
+        )
+    };
+    format!(
+        "units: {between}; {} for the shape within runs",
+        plural(r, "run")
+    )
+}
+
 /// The shape basis along T1: asinh(T1/0.5 N) and its square (defined at or below zero).
 pub fn t1_basis(d: &Design) -> Vec<Vec<f64>> {
     let s: Vec<f64> = d.t1.iter().map(|t| (t / 0.5).asinh()).collect();
@@ -469,7 +492,10 @@ fn patterns(d: &Design, per_cord: &[(&'static str, Vec<f64>)]) -> Vec<CordPatter
         return Vec::new();
     }
     let covariates: Vec<(&'static str, Vec<f64>)> = [
-        ("wrap", d.cords.iter().map(|c| c.wrap_deg).collect::<Vec<_>>()),
+        (
+            "wrap",
+            d.cords.iter().map(|c| c.wrap_deg).collect::<Vec<_>>(),
+        ),
         ("diameter", d.cords.iter().map(|c| c.diameter_mm).collect()),
     ]
     .into_iter()
@@ -512,7 +538,10 @@ fn patterns(d: &Design, per_cord: &[(&'static str, Vec<f64>)]) -> Vec<CordPatter
 /// Hotelling's one-sample T² that the mean of the rows of `c` (units × q, NaN rows dropped)
 /// is zero: (F, q, units − q), None with too few units.
 pub fn hotelling(c: &[Vec<f64>]) -> Option<(f64, f64, f64)> {
-    let rows: Vec<&Vec<f64>> = c.iter().filter(|v| v.iter().all(|x| x.is_finite())).collect();
+    let rows: Vec<&Vec<f64>> = c
+        .iter()
+        .filter(|v| v.iter().all(|x| x.is_finite()))
+        .collect();
     let q = rows.first()?.len();
     let g = rows.len();
     if q == 0 || g < q + 2 {

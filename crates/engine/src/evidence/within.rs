@@ -491,7 +491,14 @@ pub fn sensitivities(d: &Design, fit: &WithinFit, w: &Weights) -> (Vec<f64>, Vec
     let (n, k) = (d.n(), fit.k());
     let maps = (fit.maps.as_slice(), &fit.strata);
     let (mut f, mut slopes) = (vec![0.0; n], vec![f64::NAN; n]);
-    predict(d, maps, (&fit.mu, &fit.theta), w, None, (&mut f, &mut slopes));
+    predict(
+        d,
+        maps,
+        (&fit.mu, &fit.theta),
+        w,
+        None,
+        (&mut f, &mut slopes),
+    );
     let mut sens = Sens::new(n, k);
     jacobian(d, maps, (&fit.mu, &fit.theta), (&f, &slopes), &mut sens);
     (sens.a, sens.b)

@@ -34,7 +34,11 @@ pub fn common_profile(d: &Design, z: &[f64], min_cords: usize) -> Option<CommonP
     if n_cells == 0 || g < min_cords {
         return None;
     }
-    let (mut sum, mut cnt, mut sq) = (vec![0.0; n_cells], vec![0usize; n_cells], vec![0.0; n_cells]);
+    let (mut sum, mut cnt, mut sq) = (
+        vec![0.0; n_cells],
+        vec![0usize; n_cells],
+        vec![0.0; n_cells],
+    );
     let mut cord_of_cell = vec![0usize; n_cells];
     for (u, rows) in d.units.iter().enumerate() {
         for &i in rows {
@@ -82,7 +86,11 @@ pub fn common_profile(d: &Design, z: &[f64], min_cords: usize) -> Option<CommonP
     let observed = stat(&|_| 1.0);
     let patterns: Vec<Vec<f64>> = if g <= EXACT_CORDS {
         (0..1u64 << g)
-            .map(|m| (0..g).map(|c| if m >> c & 1 == 1 { -1.0 } else { 1.0 }).collect())
+            .map(|m| {
+                (0..g)
+                    .map(|c| if m >> c & 1 == 1 { -1.0 } else { 1.0 })
+                    .collect()
+            })
             .collect()
     } else {
         let mut rng = capstan_plant::rng::Rng::new(0xc0_33_0f);
@@ -105,9 +113,14 @@ pub fn common_profile(d: &Design, z: &[f64], min_cords: usize) -> Option<CommonP
     }
     let null_mean = total / patterns.len() as f64;
     // Pure error: the rows around their cell's mean.
-    let (ss_pe, df_pe) = (0..n_cells).filter(|&c| cnt[c] >= 2).fold((0.0, 0.0), |(s, f), c| {
-        (s + sq[c] - sum[c] * sum[c] / cnt[c] as f64, f + (cnt[c] - 1) as f64)
-    });
+    let (ss_pe, df_pe) = (0..n_cells)
+        .filter(|&c| cnt[c] >= 2)
+        .fold((0.0, 0.0), |(s, f), c| {
+            (
+                s + sq[c] - sum[c] * sum[c] / cnt[c] as f64,
+                f + (cnt[c] - 1) as f64,
+            )
+        });
     let n_obs: usize = cells_of.iter().flatten().map(|&c| cnt[c]).sum();
     let ms_pe = ss_pe / df_pe.max(1.0);
     let systematic = ((observed - null_mean).max(0.0) / n_obs as f64).sqrt();
