@@ -208,9 +208,42 @@ fn gain_sentence(f: &Facts<'_>, q: &mut Quote<'_>) -> String {
     };
     let better = q.num(f.better.0 as f64, 0, format!("{PTR}/cords_better"));
     let cords = q.num(f.better.1 as f64, 0, format!("{PTR}/cords"));
+    use capstan_engine::analysis::gain::GainVerdict as V;
+    let p = q.num(g.p, 2, format!("{PTR}/p"));
+    let needed = match g.cords_needed.as_ref().map(|n| n.cords) {
+        Some(Some(k)) => format!(
+            "; about {} cords would be needed to establish a gain of this size (by simulation)",
+            q.num(k as f64, 0, format!("{PTR}/cords_needed/cords"))
+        ),
+        Some(None) => {
+            "; no number of cords the simulation tried would establish a gain of this size".into()
+        }
+        None => String::new(),
+    };
+    let verdict = match g.verdict {
+        V::Established => format!("p = {p}: a gain on new cords is established"),
+        V::NotEstablished if g.value >= 1.0 => {
+            format!("p = {p}: the model with these causes is not better on new cords")
+        }
+        V::NotEstablished => {
+            format!("p = {p}: a gain on new cords is not established{needed}")
+        }
+        V::Worse => format!("p = {p}: the model with these causes predicts new cords worse"),
+        V::TooFewCords => format!(
+            "which cannot go below p = {} with so few cords: a gain on new cords cannot be established on these data{needed}",
+            q.num(g.p_smallest, 2, format!("{PTR}/p_smallest"))
+        ),
+        V::NotIdentified => {
+            "which is not identified: too many cords have no held-out prediction".into()
+        }
+    };
+    let failed = if g.failed.is_empty() || g.verdict == V::NotIdentified {
+        String::new()
+    } else {
+        " (cords whose fits failed are set apart, never counted as held-out successes)".into()
+    };
     format!(
-        "On a cord left out of the fit, with the causes chosen again without it, the model with these causes has {ratio} times Euler-Eytelwein's error{interval}, better on {better} of {cords} cords; by the exact sign-flip test over the cords, {}.",
-        g.verdict_words()
+        "On a cord left out of the fit, with the causes chosen again without it, the model with these causes has {ratio} times Euler-Eytelwein's error{interval}, better on {better} of {cords} cords{failed}; by the exact sign-flip test over the cords, {verdict}."
     )
 }
 

@@ -21,7 +21,7 @@
 //! through the CSV schema as one data set with the thesis file's columns (no `time_s`).
 
 use crate::cases::{rail_rig, short_protocol};
-use capstan_data::{read_pairs, write_pairs_to, Dataset, Pair};
+use capstan_data::{read_pairs, Dataset, Pair};
 use capstan_friction::{Effect, EffectKind, Model};
 use firmware::StepOrder;
 use host_sim::campaign::{run_campaign, CampaignConfig};
@@ -90,6 +90,159 @@ pub const THESIS_T2_OFFSET_N: f64 = -0.75;
 /// mu of the heating model at no load (the thesis's extended fit).
 pub const THESIS_MU: f64 = 0.14;
 
+/// What every cord of a set shares, and how it scatters from cord to cord.
+#[derive(Clone, Debug)]
+pub struct CordWorld {
+    /// mu of the friction law (before the effects).
+    pub mu: f64,
+    /// The catalogue effects every cord has (a T2 zero and heating are scattered per cord).
+    pub effects: Vec<Effect>,
+    /// Cord-to-cord scatter.
+    pub scatter: CordScatter,
+    /// mu on the wrap beyond one turn is (1 + this) times mu (0: the same).
+    pub beyond_turn: f64,
+    /// mu on the second capstan diameter is (1 + this) times mu on the first (0: the same);
+    /// the change is split evenly around mu.
+    pub diameter_change: f64,
+}
+
+/// A set of cords: every (diameter, wrap) combination `replicates` times (each a new cord,
+/// told apart by a `cord` label), `runs` runs on each.
+#[derive(Clone, Debug)]
+pub struct CordSet {
+    /// Seed of the cords' draws and the campaigns.
+    pub seed: u64,
+    /// What the cords share and how they scatter.
+    pub world: CordWorld,
+    /// Capstan diameters, mm.
+    pub diameters_mm: Vec<f64>,
+    /// Wraps, deg.
+    pub wraps_deg: Vec<f64>,
+    /// New cords per (diameter, wrap).
+    pub replicates: u32,
+    /// Runs per cord.
+    pub runs: u32,
+}
+
+impl CordSet {
+    /// Cords in the set.
+    pub fn cords(&self) -> usize {
+        self.diameters_mm.len() * self.wraps_deg.len() * self.replicates as usize
+    }
+
+    /// The campaign of one cord (the `k`-th of the set): its mu (the wrap's, the diameter's),
+    /// T2 zero and heating.
+    fn cord_config(&self, d: f64, w: f64, k: u64) -> CampaignConfig {
+        let mut rng = Rng::new(derive_seed(self.seed, &[0x0c0d, k]));
+        let (z_zero, z_heat) = (rng.normal(), rng.normal());
+        let wd = &self.world;
+        let s = wd.scatter;
+        let mut mu = wd.mu;
+        if self.diameters_mm.len() >= 2 && wd.diameter_change != 0.0 {
+            let first = d == self.diameters_mm[0];
+            mu *= 1.0 + wd.diameter_change / 2.0 * if first { -1.0 } else { 1.0 };
+        }
+        let (b, turn) = (w.to_radians(), 2.0 * std::f64::consts::PI);
+        if b > turn {
+            mu *= (turn + (1.0 + wd.beyond_turn) * (b - turn)) / b;
+        }
+        let mut effects: Vec<Effect> = wd.effects.clone();
+        let zero = effects.iter().position(|e| e.kind == EffectKind::T2Offset);
+        match zero {
+            Some(i) => effects[i].value += s.t2_zero_sd_n * z_zero,
+            None if s.t2_zero_sd_n > 0.0 => effects.push(Effect {
+                kind: EffectKind::T2Offset,
+                value: s.t2_zero_sd_n * z_zero,
+            }),
+            None => {}
+        }
+        for e in effects.iter_mut() {
+            if e.kind == EffectKind::ContactHeating {
+                e.value = (e.value * (1.0 + s.heating_rel * z_heat)).max(0.0);
+            }
+        }
+        // Replicate cords at one (diameter, wrap) scatter apart: the simulator draws a cord's
+        // mu from the campaign seed and the cord's key, so each replicate gets its own seed.
+        let seed = if k < (self.diameters_mm.len() * self.wraps_deg.len()) as u64 {
+            self.seed
+        } else {
+            derive_seed(self.seed, &[0x7e9, k])
+        };
+        let mut cfg = CampaignConfig {
+            diameters_mm: vec![d],
+            wraps_deg: vec![w],
+            drive_vs: vec![10.0],
+            runs: self.runs,
+            order: StepOrder::Monotone,
+            effects,
+            model: Model::euler_eytelwein(mu),
+            protocol: short_protocol(),
+            seed,
+            threads: 1,
+            keep_raw: false,
+            ..CampaignConfig::default()
+        };
+        rail_rig(&mut cfg);
+        // The thesis's T2 zeros (−0.5 to −1.4 N) read T2 below 0.3·T1 at the lowest levels,
+        // which the firmware's cord-break check would take for a parted cord: the thesis rig
+        // had no such check, and these cases keep every run (the check from 3 N of T1 on).
+        cfg.limits.cord_break_min_t1_n = 3.0;
+        NoiseProfile::Thesis.apply(&mut cfg);
+        cfg.plant.disturbances.mu_wander_tau_s *= cfg.protocol.dwell_ms as f64 / 10_000.0;
+        cfg.scatter_pct = s.mu_pct;
+        cfg.run_scatter_pct = Some(s.run_pct);
+        cfg
+    }
+
+    /// Simulate every cord and read the pairs back through the CSV schema as one data set
+    /// (a `cord` label column when cords repeat a (diameter, wrap)).
+    pub fn generate(&self) -> Result<Dataset, String> {
+        let mut pairs: Vec<Pair> = Vec::new();
+        let mut k = 0u64;
+        for rep in 0..self.replicates {
+            for &d in &self.diameters_mm {
+                for &w in &self.wraps_deg {
+                    let r = run_campaign(&self.cord_config(d, w, k)).map_err(|e| e.to_string())?;
+                    // The thesis's columns: no time_s (its window times are not in its file).
+                    pairs.extend(crate::pairs::to_pairs(&r.rows).into_iter().map(|mut p| {
+                        p.time_s = None;
+                        if self.replicates > 1 {
+                            p.labels = vec![format!("c{rep}")];
+                        }
+                        p
+                    }));
+                    k += 1;
+                }
+            }
+        }
+        // The thesis file's columns, and a `cord` label when cords repeat a (diameter, wrap).
+        let mut csv = String::from("capstan_diameter_mm,wrap_deg,drive_v,run,step,t1_n,t2_n");
+        if self.replicates > 1 {
+            csv += ",cord";
+        }
+        csv.push('\n');
+        let cell = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        for p in &pairs {
+            csv += &format!(
+                "{},{},{},{},{},{},{}",
+                cell(p.capstan_diameter_mm),
+                p.wrap_deg,
+                cell(p.drive_v),
+                cell(p.run),
+                cell(p.step),
+                p.t1_n,
+                p.t2_n
+            );
+            if let Some(l) = p.labels.first() {
+                csv += &format!(",{l}");
+            }
+            csv.push('\n');
+        }
+        read_pairs(csv.as_bytes(), &format!("cord-set-{}.csv", self.seed))
+            .map_err(|e| e.to_string())
+    }
+}
+
 /// One case.
 #[derive(Clone, Debug)]
 pub struct CordCase {
@@ -149,87 +302,46 @@ impl CordCase {
         )
     }
 
-    /// The campaign of one cord: its mu (the wrap's, the diameter's), T2 zero and heating.
-    fn cord_config(&self, d: f64, w: f64, cord: u64) -> CampaignConfig {
-        let mut rng = Rng::new(derive_seed(self.seed, &[0x0c0d, cord]));
-        let (z_zero, z_heat) = (rng.normal(), rng.normal());
-        let s = self.scatter;
+    /// The set of cords the case simulates.
+    pub fn set(&self) -> CordSet {
         let heated = self.truth != Truth::GainNull;
-        let mut mu = if heated { THESIS_MU } else { 0.116 };
-        match self.truth {
-            // The same fraction below and above the middle of the two diameters.
-            Truth::Diameter => {
-                let lo = self.diameters_mm[0];
-                mu *= if d == lo {
-                    1.0 - self.change / 2.0
-                } else {
-                    1.0 + self.change / 2.0
-                };
-            }
-            Truth::WrapTurn => {
-                let b = w.to_radians();
-                let turn = 2.0 * std::f64::consts::PI;
-                if b > turn {
-                    mu *= (turn + (1.0 + self.change) * (b - turn)) / b;
-                }
-            }
-            _ => {}
-        }
-        let zero = if heated { THESIS_T2_OFFSET_N } else { 0.0 } + s.t2_zero_sd_n * z_zero;
-        let mut effects = vec![Effect {
-            kind: EffectKind::T2Offset,
-            value: zero,
-        }];
+        let mut effects = Vec::new();
         if heated {
             effects.push(Effect {
+                kind: EffectKind::T2Offset,
+                value: THESIS_T2_OFFSET_N,
+            });
+            effects.push(Effect {
                 kind: EffectKind::ContactHeating,
-                value: (THESIS_HEATING * (1.0 + s.heating_rel * z_heat)).max(0.0),
+                value: THESIS_HEATING,
             });
         }
-        let mut cfg = CampaignConfig {
-            diameters_mm: vec![d],
-            wraps_deg: vec![w],
-            drive_vs: vec![10.0],
-            runs: self.runs,
-            order: StepOrder::Monotone,
-            effects,
-            model: Model::euler_eytelwein(mu),
-            protocol: short_protocol(),
+        CordSet {
             seed: self.seed,
-            threads: 1,
-            keep_raw: false,
-            ..CampaignConfig::default()
-        };
-        rail_rig(&mut cfg);
-        // The thesis's T2 zeros (−0.5 to −1.4 N) read T2 below 0.3·T1 at the lowest levels,
-        // which the firmware's cord-break check would take for a parted cord: the thesis rig
-        // had no such check, and these cases keep every run (the check from 3 N of T1 on).
-        cfg.limits.cord_break_min_t1_n = 3.0;
-        NoiseProfile::Thesis.apply(&mut cfg);
-        cfg.plant.disturbances.mu_wander_tau_s *= cfg.protocol.dwell_ms as f64 / 10_000.0;
-        cfg.scatter_pct = s.mu_pct;
-        cfg.run_scatter_pct = Some(s.run_pct);
-        cfg
+            world: CordWorld {
+                mu: if heated { THESIS_MU } else { 0.116 },
+                effects,
+                scatter: self.scatter,
+                beyond_turn: if self.truth == Truth::WrapTurn {
+                    self.change
+                } else {
+                    0.0
+                },
+                diameter_change: if self.truth == Truth::Diameter {
+                    self.change
+                } else {
+                    0.0
+                },
+            },
+            diameters_mm: self.diameters_mm.clone(),
+            wraps_deg: self.wraps_deg.clone(),
+            replicates: 1,
+            runs: self.runs,
+        }
     }
 
     /// Simulate every cord and read the pairs back through the CSV schema as one data set.
     pub fn generate(&self) -> Result<Dataset, String> {
-        let mut pairs: Vec<Pair> = Vec::new();
-        let mut cord = 0u64;
-        for &d in &self.diameters_mm {
-            for &w in &self.wraps_deg {
-                let r = run_campaign(&self.cord_config(d, w, cord)).map_err(|e| e.to_string())?;
-                // The thesis's columns: no time_s (its window times are not in its file).
-                pairs.extend(crate::pairs::to_pairs(&r.rows).into_iter().map(|mut p| {
-                    p.time_s = None;
-                    p
-                }));
-                cord += 1;
-            }
-        }
-        let mut csv = Vec::new();
-        write_pairs_to(&mut csv, &pairs).map_err(|e| e.to_string())?;
-        read_pairs(csv.as_slice(), &format!("cord-case-{}.csv", self.seed))
-            .map_err(|e| e.to_string())
+        self.set().generate()
     }
 }

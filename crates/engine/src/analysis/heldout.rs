@@ -72,7 +72,12 @@ pub fn whole_procedure(
     threads: usize,
 ) -> WholeLoco {
     let inside = obs.len() <= SELECTION_IN_FOLDS_MAX_ROWS;
-    let fold_sets = folds(obs.groups.len());
+    // Leaving one cord out needs two: with one there is no fold (and no held-out prediction).
+    let fold_sets = if obs.groups.len() >= 2 {
+        folds(obs.groups.len())
+    } else {
+        Vec::new()
+    };
     let one = EvidenceOptions {
         threads: 1,
         ..*opts
@@ -127,8 +132,12 @@ fn fold(
     };
     let assessed;
     let a = if inside {
-        let Some(train) = without(ds, obs, held) else {
-            return fail("the other cords do not make a data set".into(), Vec::new());
+        let train = without(ds, obs, held).filter(|t| crate::analysis::enough_rows(t).is_ok());
+        let Some(train) = train else {
+            return fail(
+                "the other cords are too few rows to analyse".into(),
+                Vec::new(),
+            );
         };
         assessed = evidence::assess(&train, opts);
         &assessed
