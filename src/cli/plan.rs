@@ -159,9 +159,65 @@ pub fn words(p: &Plan, source: &str, structure: &str) -> String {
         );
     }
     let _ = writeln!(s);
-    recommendation(&mut s, p, &p.recommended);
+    if p.first.which == "cords" {
+        cords_words(&mut s, p);
+        let _ = writeln!(s, "Then, for the hypotheses above:");
+        recommendation(&mut s, p, &p.recommended);
+    } else {
+        recommendation(&mut s, p, &p.recommended);
+        cords_words(&mut s, p);
+    }
+    let _ = writeln!(s, "first: {} ({})", p.first.which, p.first.why);
     let _ = writeln!(s, "method: {} ({:.1} s)", p.method, p.elapsed_s);
     s
+}
+
+/// How many cords each open question between cords needs.
+fn cords_words(s: &mut String, p: &Plan) {
+    let Some(c) = &p.cords else {
+        return;
+    };
+    if c.questions.is_empty() {
+        let _ = writeln!(s, "How many cords: no question between cords is open.");
+        return;
+    }
+    if let Some((q, t)) = p.cords_first().filter(|_| p.first.which == "cords") {
+        let _ = writeln!(
+            s,
+            "Recommended first: {} new cords ({} runs on each, {:.1} rig hours) to establish {} ({} of {} simulated campaigns do); {}.",
+            t.cords, t.runs_per_cord, t.rig_hours, q.question, t.established, t.campaigns, p.first.why
+        );
+    }
+    let _ = writeln!(
+        s,
+        "How many cords (80 % of simulated campaigns establishing it):"
+    );
+    for q in &c.questions {
+        let tried: Vec<String> = (q.trials.iter())
+            .map(|t| {
+                format!(
+                    "{} cords × {} runs {}/{}",
+                    t.cords, t.runs_per_cord, t.established, t.campaigns
+                )
+            })
+            .collect();
+        let answer = match &q.needed {
+            Some(t) => format!(
+                "{} cords with {} runs each ({:.1} rig hours)",
+                t.cords, t.runs_per_cord, t.rig_hours
+            ),
+            None => "more cords than tried".to_string(),
+        };
+        let _ = writeln!(
+            s,
+            "  {}: {answer}; observed {}; its answer moves T2 at these rows by {:.2} N (RMS); tried {}",
+            q.question,
+            q.observed,
+            q.stake_n,
+            tried.join(", ")
+        );
+    }
+    let _ = writeln!(s, "  method: {}", c.method);
 }
 
 fn recommendation(s: &mut String, p: &Plan, r: &Scored) {

@@ -1,53 +1,21 @@
-use host_sim::plant::rng::{derive_seed, Rng};
+use capstan_truth::cord_cases::{CordCase, Truth};
 fn main() {
-    let ds = [12.7f64, 25.4];
-    let ws = [270.0f64, 360.0, 450.0, 630.0, 720.0];
-    let mut within = 0.0;
-    let mut across = 0.0;
-    let (mut nw, mut na) = (0.0, 0.0);
-    let mut big = 0;
-    let n = 20000;
-    for s in 0..n {
-        let seed = derive_seed(11, &[0, s as u64]);
-        let mut z = vec![];
-        for &d in &ds {
-            for &w in &ws {
-                let cs = derive_seed(seed, &[d.to_bits(), 10f64.to_bits(), w.to_bits()]);
-                z.push(Rng::new(cs).normal());
-            }
-        }
-        for i in 0..10 {
-            for j in 0..10 {
-                if i < j {
-                    let p = z[i] * z[j];
-                    if (i < 5) == (j < 5) {
-                        within += p;
-                        nw += 1.0
-                    } else {
-                        across += p;
-                        na += 1.0
-                    }
-                }
-            }
-        }
-        let a: f64 = z[..5].iter().sum::<f64>() / 5.0;
-        let b: f64 = z[5..].iter().sum::<f64>() / 5.0;
-        let m = (a + b) / 2.0;
-        let ss: f64 = z
-            .iter()
-            .enumerate()
-            .map(|(i, x)| (x - if i < 5 { a } else { b }).powi(2))
-            .sum::<f64>();
-        let t = (a - b) / ((ss / 8.0) * (0.4)).sqrt();
-        let _ = m;
-        if t.abs() > 2.896 {
-            big += 1;
+    let k: u32 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2);
+    for seed in 1..4u64 {
+        let mut set = CordCase::draw(Truth::Null, seed).set();
+        set.replicates = k;
+        let t = std::time::Instant::now();
+        let ds = set.generate().unwrap();
+        let a =
+            capstan_engine::analysis::run(&ds, capstan_engine::analysis::Options { threads: 2 })
+                .unwrap();
+        let g = &a.gain;
+        println!("seed {seed} cords {} rows {} ({:.1} s): ratio {:.3} p {:.4} verdict {:?} failed {} causes {:?} base {:?} ext {:?}", g.cords, ds.pairs.len(), t.elapsed().as_secs_f64(), g.value, g.p, g.verdict, g.failed.len(), a.mechanisms.causes.iter().map(|c| c.name).collect::<Vec<_>>(), a.models[0].loco_rmse_t2_n, a.models.iter().find(|m| m.name=="extended").and_then(|m| m.loco_rmse_t2_n));
+        for f in g.folds.iter().take(3) {
+            println!("   fold {:?} {:?} {:?}", f.cords, f.causes, f.failed);
         }
     }
-    println!(
-        "within {:.4} across {:.4} rate@0.02 {:.4}",
-        within / nw,
-        across / na,
-        big as f64 / n as f64
-    );
 }

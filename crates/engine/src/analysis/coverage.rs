@@ -86,12 +86,7 @@ pub fn coverage(ds: &Dataset, opts: Options) -> Coverage {
     let mut per_cord = Vec::new();
     let mut failed = Vec::new();
     for (c, label) in labels.iter().enumerate() {
-        let rest: Vec<_> = (ds.pairs.iter().enumerate())
-            .filter(|(i, _)| st.cord_of_row[*i] != c)
-            .map(|(_, p)| p.clone())
-            .collect();
-        let analysed = Dataset::from_pairs(&ds.source, rest)
-            .map_err(|e| e.to_string())
+        let analysed = super::heldout::subset(ds, |i| st.cord_of_row[i] != c)
             .and_then(|d| run(&d, opts).map_err(|e| e.to_string()));
         let a = match analysed {
             Ok(a) => a,

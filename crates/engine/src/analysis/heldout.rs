@@ -49,16 +49,29 @@ pub struct WholeLoco {
     pub selection: String,
 }
 
+/// The rows of `ds` that `keep` takes (by row index), as a data set with the same columns
+/// (its text columns too: the cord labels that tell its cords apart), its structure found again.
+pub fn subset(ds: &Dataset, keep: impl Fn(usize) -> bool) -> Result<Dataset, String> {
+    let rows: Vec<usize> = (0..ds.pairs.len()).filter(|&i| keep(i)).collect();
+    let pairs: Vec<_> = rows.iter().map(|&i| ds.pairs[i].clone()).collect();
+    let lines: Vec<u64> = rows.iter().map(|&i| ds.lines[i]).collect();
+    let structure =
+        capstan_data::Structure::infer(&pairs, &ds.header, &ds.label_columns, &lines, &ds.source)
+            .map_err(|e| e.to_string())?;
+    Ok(Dataset {
+        source: ds.source.clone(),
+        header: ds.header.clone(),
+        extra_columns: ds.extra_columns.clone(),
+        label_columns: ds.label_columns.clone(),
+        pairs,
+        lines,
+        structure,
+    })
+}
+
 /// The cords of groups `held` removed from `ds` (rows in file order), as a data set.
 fn without(ds: &Dataset, obs: &Observations, held: &[usize]) -> Option<Dataset> {
-    let pairs = ds
-        .pairs
-        .iter()
-        .zip(&obs.rows)
-        .filter(|(_, r)| !held.contains(&r.group))
-        .map(|(p, _)| p.clone())
-        .collect();
-    Dataset::from_pairs(&ds.source, pairs).ok()
+    subset(ds, |i| !held.contains(&obs.rows[i].group)).ok()
 }
 
 /// The whole procedure without each cord (at most [`crate::fit::solve::loco::MAX_FOLDS`]
