@@ -23,6 +23,9 @@ fn main() {
     for l in f.lines() {
         println!("  {l}");
     }
+    if let Some(path) = std::env::var_os("CAPSTAN_CORDS_JSON") {
+        std::fs::write(path, serde_json::to_string(&outcomes).expect("JSON")).expect("written");
+    }
     for (truth, said) in &f.answers {
         println!("{truth}:");
         for (what, k) in said {

@@ -37,6 +37,11 @@ pub struct CordOutcome {
     pub gain: Option<GainVerdict>,
     /// The effects named.
     pub named: Vec<&'static str>,
+    /// Each between-cord effect's p (its cords' t test), named or not: the rule's level can
+    /// be set from these.
+    pub cord_p: Vec<(&'static str, f64)>,
+    /// The smallest Bonferroni-adjusted p of the patterns between cords (wrap, diameter).
+    pub pattern_p: f64,
     /// Unexplained, with its pattern.
     pub unexplained: Option<&'static str>,
     /// One line about the case.
@@ -61,6 +66,19 @@ pub fn judge(c: &CordCase, d: &Diagnosis, gain: Option<GainVerdict>) -> CordOutc
         wrap_found: named.contains(&"sensor_gain") || flagged("wrap"),
         gain,
         named,
+        cord_p: d
+            .candidates
+            .iter()
+            .filter(|e| e.level == Level::BetweenCord)
+            .map(|e| (e.effect, if e.relevant { e.p } else { 1.0 }))
+            .collect(),
+        pattern_p: d
+            .adequacy
+            .directed
+            .iter()
+            .filter(|t| t.unit == "cords" && matches!(t.structure, "wrap" | "diameter"))
+            .map(|t| t.p)
+            .fold(1.0, f64::min),
         unexplained: d.unexplained.then(|| d.residual_pattern.unwrap_or("cells")),
         describe: c.describe(),
     }
