@@ -205,9 +205,20 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             d.units.len()
         ));
     }
+    // A pattern between cords is flagged only where there is something left for it to be:
+    // the lack of fit against the replicate runs significant, or, without replicates, a shape
+    // pattern that accounts for a share of the residuals the rule calls large (a pattern of
+    // the cords' summaries can be exact and still far too small to matter).
+    let sized = |t: &&Directed| match &lack_of_fit {
+        Some(l) => l.p < rule.alpha,
+        None => (cords.patterns.iter())
+            .filter(|p| p.covariate == t.structure && p.p_family <= t.p * (1.0 + 1e-9))
+            .any(|p| p.share >= rule.min_r2),
+    };
     let between = directed
         .iter()
         .filter(|t| is_between(t.structure) && t.p < rule.alpha_between)
+        .filter(sized)
         .min_by(|a, b| a.p.total_cmp(&b.p));
     let within: Vec<&Directed> = directed
         .iter()

@@ -87,6 +87,10 @@ pub struct CordPattern {
     pub p_family: f64,
     /// Share of the summary's between-cord variance the covariate explains.
     pub r2: f64,
+    /// For a shape summary: the share of the residuals' run-centred sum of squares (beyond
+    /// every cord's own parameters) the pattern accounts for — its size in the data. NaN for a
+    /// parameter's summary.
+    pub share: f64,
 }
 
 /// The cord-level view of a fit.
@@ -407,7 +411,10 @@ pub fn cord_level(d: &Design, fit: &WithinFit, w: &Weights, alpha: f64) -> CordL
         .collect();
     per_cord.push(("shape_t1", shape.iter().map(|s| s[0]).collect()));
     per_cord.push(("shape_t1_squared", shape.iter().map(|s| s[1]).collect()));
-    let patterns = patterns(d, &per_cord);
+    let mut patterns = patterns(d, &per_cord);
+    for p in patterns.iter_mut() {
+        p.share = shape_share(d, p, &z_after);
+    }
     CordLevel {
         cords: ncords,
         runs: d.units.len(),
@@ -525,6 +532,7 @@ fn patterns(d: &Design, per_cord: &[(&'static str, Vec<f64>)]) -> Vec<CordPatter
                 p: r.p[1],
                 p_family: 1.0,
                 r2: r.r2,
+                share: f64::NAN,
             });
         }
     }
@@ -533,6 +541,46 @@ fn patterns(d: &Design, per_cord: &[(&'static str, Vec<f64>)]) -> Vec<CordPatter
         p.p_family = (p.p * m).min(1.0);
     }
     out
+}
+
+/// The share of the run-centred residuals `z`'s sum of squares a shape pattern accounts for:
+/// each cord's coefficient moved by the slope times its covariate's departure from the cords'
+/// mean, on the run-centred basis column. NaN for a parameter's pattern.
+fn shape_share(d: &Design, p: &CordPattern, z: &[f64]) -> f64 {
+    let col = match p.summary {
+        "shape_t1" => 0,
+        "shape_t1_squared" => 1,
+        _ => return f64::NAN,
+    };
+    let basis = &t1_basis(d)[col];
+    let x: Vec<f64> = d
+        .cords
+        .iter()
+        .map(|c| match p.covariate {
+            "wrap" => c.wrap_deg,
+            _ => c.diameter_mm,
+        })
+        .collect();
+    let x_bar = x.iter().sum::<f64>() / x.len().max(1) as f64;
+    let (mut explained, mut total) = (0.0, 0.0);
+    for (u, rows) in d.units.iter().enumerate() {
+        if rows.is_empty() {
+            continue;
+        }
+        let m = rows.len() as f64;
+        let bm = rows.iter().map(|&i| basis[i]).sum::<f64>() / m;
+        let zm = rows.iter().map(|&i| z[i]).sum::<f64>() / m;
+        let shift = p.slope * (x[d.unit_cord[u]] - x_bar);
+        for &i in rows {
+            explained += (shift * (basis[i] - bm)).powi(2);
+            total += (z[i] - zm).powi(2);
+        }
+    }
+    if total > 0.0 {
+        explained / total
+    } else {
+        f64::NAN
+    }
 }
 
 /// Hotelling's one-sample T² that the mean of the rows of `c` (units × q, NaN rows dropped)
