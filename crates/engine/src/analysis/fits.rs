@@ -364,14 +364,24 @@ fn notes(
         );
         return notes;
     }
-    for (what, l) in [
-        ("Euler-Eytelwein", locos[0]),
-        ("the extended model", locos[1]),
+    // The held-out predictions of the extended model are the whole procedure's (population
+    // fits, `heldout`); its mixed refits only give its values' cord-jackknife SE.
+    for (what, l, consequence) in [
+        (
+            "Euler-Eytelwein",
+            locos[0],
+            "those cords have no held-out prediction",
+        ),
+        (
+            "the extended (mixed) model",
+            locos[1],
+            "its values' cord-jackknife SE leaves those folds out (the held-out predictions are the whole procedure's, not these refits)",
+        ),
     ] {
         let list: Vec<(usize, &String)> = l.did_not_converge.iter().map(|(g, w)| (*g, w)).collect();
         if let Some(s) = cords(list) {
             notes.push(format!(
-                "{what}, leave one cord out: the refit did not converge without {s}: those cords have no held-out prediction"
+                "{what}, leave one cord out: the refit did not converge without {s}: {consequence}"
             ));
         }
     }

@@ -84,6 +84,8 @@ pub struct Gain {
     pub cords_better: usize,
     /// Cords set apart because a fold failed: (cord, why).
     pub failed: Vec<(String, String)>,
+    /// How many (the length of `failed`).
+    pub set_apart: usize,
     /// Cord-jackknife SE of ρ.
     pub jackknife_se: f64,
     /// The cord bootstrap's percentile interval (2,000 resamples), for comparison: it
@@ -333,18 +335,29 @@ pub fn cords_needed(e: &[f64], b: &[f64], seed: u64) -> CordsNeeded {
     }
 }
 
-/// The gain of `ext` over `base` (the cords' held-out errors; a cord with a failed fold is in
-/// `failed` and in neither), with the cord-bootstrap interval `boot` and the jackknife SE for
-/// comparison.
+/// The gain of `ext` over `base` (the cords' held-out errors), with the cord-bootstrap
+/// interval `boot` and the jackknife SE for comparison. A cord with a failed fold (in `failed`,
+/// or with any row that has no finite prediction of either model: [`CordErrors::missing`]) is
+/// set apart and named, never scored: its missing rows would otherwise count as no error.
 pub fn gain(
     ext: &CordErrors,
     base: &CordErrors,
-    failed: Vec<(String, String)>,
+    mut failed: Vec<(String, String)>,
     (boot, jackknife_se): (Interval, f64),
     labels: &[String],
 ) -> Gain {
+    for (c, label) in labels.iter().enumerate().take(ext.ss.len()) {
+        let missing = ext.missing[c].max(base.missing[c]);
+        let named = failed.iter().any(|(l, _)| l == label);
+        if !named && (missing > 0 || ext.n[c] == 0) {
+            failed.push((
+                label.clone(),
+                format!("{missing} rows without a held-out prediction"),
+            ));
+        }
+    }
     let used: Vec<usize> = (0..ext.ss.len())
-        .filter(|&c| !failed.iter().any(|(l, _)| *l == labels[c]) && ext.n[c] > 0)
+        .filter(|&c| !failed.iter().any(|(l, _)| *l == labels[c]))
         .collect();
     let e: Vec<f64> = used.iter().map(|&c| ext.ss[c]).collect();
     let b: Vec<f64> = used.iter().map(|&c| base.ss[c]).collect();
@@ -393,6 +406,7 @@ pub fn gain(
         verdict,
         cords: used.len(),
         cords_better,
+        set_apart: failed.len(),
         failed,
         jackknife_se,
         bootstrap_percentile_ci95: boot,
@@ -466,6 +480,111 @@ mod tests {
         }
         let rate = rejects as f64 / n as f64;
         assert!((0.035..=0.06).contains(&rate), "{rate}");
+    }
+
+    /// Ten cords of 72 rows; the cords in `failed` as a fold that did not converge leaves them
+    /// (no finite prediction: `CordErrors::of` scores no row, counts every one missing).
+    fn errors(ss: &[f64], failed: &[usize]) -> CordErrors {
+        let mut e = CordErrors {
+            ss: ss.to_vec(),
+            n: vec![72; ss.len()],
+            missing: vec![0; ss.len()],
+        };
+        for &c in failed {
+            (e.ss[c], e.n[c], e.missing[c]) = (0.0, 0, 72);
+        }
+        e
+    }
+
+    fn labels(n: usize) -> Vec<String> {
+        (0..n).map(|c| format!("cord{c}")).collect()
+    }
+
+    const NO_BOOT: (Interval, f64) = (
+        Interval {
+            lo: f64::NAN,
+            hi: f64::NAN,
+        },
+        f64::NAN,
+    );
+
+    #[test]
+    fn a_failed_fold_is_set_apart_and_named_never_a_held_out_success() {
+        // The case (the thesis with 5 % of its rows' T1 and T2 swapped): the extended
+        // model's refits fail on three cords. Scored as 0 N (what skipping their non-finite
+        // predictions did) they would make the gain look established; set apart, the seven
+        // cords left (four a little better, three a little worse) establish nothing.
+        let base = [50.0, 60.0, 70.0, 80.0, 40.0, 45.0, 55.0, 90.0, 100.0, 110.0];
+        let ext = [40.0, 50.0, 60.0, 70.0, 44.0, 49.0, 60.0, 0.0, 0.0, 0.0];
+        let failed = [7, 8, 9];
+        let as_zero = sign_flip(&ext, &base);
+        assert!(as_zero.2 < ALPHA && as_zero.0 < 0.8, "{:?}", as_zero.2);
+        let g = gain(
+            &errors(&ext, &failed),
+            &errors(&base, &[]),
+            Vec::new(),
+            NO_BOOT,
+            &labels(10),
+        );
+        assert_eq!((g.cords, g.set_apart), (7, 3));
+        assert_eq!(
+            g.verdict,
+            GainVerdict::NotEstablished,
+            "{}",
+            g.verdict_words()
+        );
+        assert!(g.value > 0.9 && g.p > 0.15, "{} {}", g.value, g.p);
+        let words = g.verdict_words();
+        for c in ["cord7", "cord8", "cord9"] {
+            assert!(words.contains(c), "{words}");
+        }
+        assert!(
+            words.contains("72 rows without a held-out prediction"),
+            "{words}"
+        );
+    }
+
+    #[test]
+    fn with_most_folds_failed_the_gain_is_not_identified() {
+        let base = [50.0; 10];
+        let ext = [10.0; 10];
+        let g = gain(
+            &errors(&ext, &[0, 1, 2, 3, 4, 5]),
+            &errors(&base, &[]),
+            vec![("cord0".into(), "its work budget ran out".into())],
+            NO_BOOT,
+            &labels(10),
+        );
+        assert_eq!(g.verdict, GainVerdict::NotIdentified);
+        assert_eq!((g.cords, g.set_apart), (4, 6));
+        assert!(g.cords_needed.is_none());
+        assert!(
+            g.verdict_words()
+                .contains("6 of 10 cords have no held-out prediction"),
+            "{}",
+            g.verdict_words()
+        );
+        assert!(g
+            .verdict_words()
+            .contains("cord0 (its work budget ran out)"));
+    }
+
+    #[test]
+    fn four_cords_all_better_cannot_establish_and_say_how_many_would() {
+        // Every cord predicted twice as well: with four cords the smallest p is 2/16 = 0.125.
+        let base = [50.0, 60.0, 70.0, 80.0];
+        let ext: Vec<f64> = base.iter().map(|b| b / 4.0).collect();
+        let g = gain(
+            &errors(&ext, &[]),
+            &errors(&base, &[]),
+            Vec::new(),
+            NO_BOOT,
+            &labels(4),
+        );
+        assert_eq!(g.verdict, GainVerdict::TooFewCords);
+        assert!((g.p_smallest - 0.125).abs() < 1e-12);
+        let n = g.cords_needed.as_ref().and_then(|n| n.cords);
+        assert!(n.is_some_and(|n| (5..=8).contains(&n)), "{n:?}");
     }
 
     #[test]
