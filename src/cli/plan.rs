@@ -201,13 +201,14 @@ fn cords_words(s: &mut String, p: &Plan) {
                 )
             })
             .collect();
-        let answer = match &q.needed {
+        let mut answer = match &q.needed {
             Some(t) => format!(
                 "{} cords with {} runs each ({:.1} rig hours)",
                 t.cords, t.runs_per_cord, t.rig_hours
             ),
             None => "more cords than tried".to_string(),
         };
+        answer += &at_observed_spread(q);
         let _ = writeln!(
             s,
             "  {}: {answer}; observed {}; its answer moves T2 at these rows by {:.2} N (RMS); tried {}",
@@ -218,6 +219,30 @@ fn cords_words(s: &mut String, p: &Plan) {
         );
     }
     let _ = writeln!(s, "  method: {}", c.method);
+}
+
+/// The held-out gain's second answer: the simulated world's median gain beside the data's, and
+/// the cords the analysis's resampling of the data's own cords needs (the gain at its observed
+/// spread from cord to cord). Empty for the other questions.
+fn at_observed_spread(q: &capstan_plan::cords::Question) -> String {
+    let Some(n) = &q.at_observed_spread else {
+        return String::new();
+    };
+    let median = q
+        .needed
+        .as_ref()
+        .or(q.trials.last())
+        .and_then(|t| t.median_ratio);
+    let world = median.map_or(String::new(), |m| {
+        format!(" in the simulated world, whose sets' median held-out ratio is {m:.2}")
+    });
+    let resampled = match n.cords {
+        Some(k) => format!("about {k} cords"),
+        None => format!("more than {} cords", n.tried_up_to),
+    };
+    format!(
+        "{world}; {resampled} at the data's own spread of the gain from cord to cord (resampling the cords' held-out errors, as `analyze` says)"
+    )
 }
 
 fn recommendation(s: &mut String, p: &Plan, r: &Scored) {

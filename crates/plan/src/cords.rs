@@ -41,6 +41,10 @@ pub struct Trial {
     pub power: f64,
     /// Rig hours of the campaign (the data's run protocol, a new cord set up between cords).
     pub rig_hours: f64,
+    /// The held-out gain only: the median over the campaigns of their held-out RMSE ratio
+    /// (what the simulated world's gain is, to set beside the data's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub median_ratio: Option<f64>,
 }
 
 /// One open question between cords.
@@ -57,6 +61,11 @@ pub struct Question {
     /// The fewest cords (and runs per cord) that establish it in ≥ 80 % of campaigns, if any
     /// tried does.
     pub needed: Option<Trial>,
+    /// The held-out gain only: the cords the analysis's own simulation needs, resampling the
+    /// data's cords' held-out errors (the gain at its observed size and spread from cord to
+    /// cord, which the simulated world under the named causes need not have).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at_observed_spread: Option<capstan_engine::analysis::gain::CordsNeeded>,
 }
 
 /// The answer to "how many cords".
@@ -170,6 +179,7 @@ fn open_questions(a: &Analysis) -> Vec<(Question, Option<Effect>)> {
                 stake_n,
                 trials: Vec::new(),
                 needed: None,
+                at_observed_spread: g.cords_needed.clone(),
             },
             None,
         ));
@@ -195,6 +205,7 @@ fn open_questions(a: &Analysis) -> Vec<(Question, Option<Effect>)> {
                 stake_n: stake_of(a, &[effect]),
                 trials: Vec::new(),
                 needed: None,
+                at_observed_spread: None,
             },
             Some(effect),
         ));
@@ -202,13 +213,14 @@ fn open_questions(a: &Analysis) -> Vec<(Question, Option<Effect>)> {
     out
 }
 
-/// Does the simulated set `ds` establish the answer (the gain when `effect` is None)?
-fn establishes(ds: &Dataset, effect: Option<Effect>) -> Result<bool, String> {
+/// Does the simulated set `ds` establish the answer (the gain when `effect` is None, with its
+/// held-out ratio)?
+fn establishes(ds: &Dataset, effect: Option<Effect>) -> Result<(bool, f64), String> {
     match effect {
         None => {
             let opts = capstan_engine::analysis::Options { threads: 1 };
             let a = capstan_engine::analysis::run(ds, opts).map_err(|e| e.to_string())?;
-            Ok(a.gain.verdict == GainVerdict::Established)
+            Ok((a.gain.verdict == GainVerdict::Established, a.gain.value))
         }
         Some(e) => {
             let opts = capstan_engine::diagnose::Options {
@@ -216,7 +228,10 @@ fn establishes(ds: &Dataset, effect: Option<Effect>) -> Result<bool, String> {
                 ..Default::default()
             };
             let d = capstan_engine::diagnose::diagnose_with(ds, &opts);
-            Ok(d.effects.iter().any(|f| f.effect == e.kind.name()))
+            Ok((
+                d.effects.iter().any(|f| f.effect == e.kind.name()),
+                f64::NAN,
+            ))
         }
     }
 }
@@ -257,9 +272,16 @@ fn trial(
         establishes(&ds, effect)
     });
     let mut established = 0;
+    let mut ratios = Vec::new();
     for h in hits {
-        established += usize::from(h?);
+        let (hit, ratio) = h?;
+        established += usize::from(hit);
+        if ratio.is_finite() {
+            ratios.push(ratio);
+        }
     }
+    let median_ratio =
+        (!ratios.is_empty()).then(|| capstan_engine::fit::stats::median(&mut ratios));
     let cords = base.diameters_mm.len() * base.wraps_deg.len() * k as usize;
     Ok(Trial {
         cords,
@@ -268,6 +290,7 @@ fn trial(
         established,
         power: established as f64 / reps.max(1) as f64,
         rig_hours: rig_hours(cords, runs, protocol),
+        median_ratio,
     })
 }
 

@@ -123,7 +123,7 @@ fn cords_html(h: &mut String, n: &Value) {
     }
     h.push_str("<p>How many cords each open question between cords needs (80 % of simulated campaigns establishing it):</p><ul>");
     for q in &qs {
-        let answer = if q["needed"].is_object() {
+        let mut answer = if q["needed"].is_object() {
             format!(
                 "{} cords, {} runs on each",
                 q["needed"]["cords"], q["needed"]["runs_per_cord"]
@@ -131,6 +131,15 @@ fn cords_html(h: &mut String, n: &Value) {
         } else {
             "more cords than the simulation tried".into()
         };
+        // The held-out gain: also the cords at the data's own spread of the gain (resampling
+        // the cords' held-out errors), which the simulated world need not have.
+        let spread = &q["at_observed_spread"];
+        if spread.is_object() {
+            let _ = match spread["cords"].as_u64() {
+                Some(k) => write!(answer, "; about {k} cords at the data's own spread of the gain from cord to cord (resampling the cords' held-out errors)"),
+                None => write!(answer, "; more than {} cords at the data's own spread of the gain", spread["tried_up_to"]),
+            };
+        }
         let _ = write!(
             h,
             "<li>{}: {answer}; observed {}</li>",

@@ -188,10 +188,15 @@ impl CordFigures {
     }
 }
 
-/// `n` cases of every truth from `seed`.
-pub fn cases(seed: u64, n: usize) -> Vec<CordCase> {
+/// `n` cases of every truth from `seed`, `replicates` new cords per (diameter, wrap) (1: the
+/// thesis's ten cords).
+pub fn cases(seed: u64, n: usize, replicates: u32) -> Vec<CordCase> {
     Truth::ALL
         .into_iter()
         .flat_map(|t| CordCase::many(t, seed, n))
+        .map(|mut c| {
+            c.replicates = replicates;
+            c
+        })
         .collect()
 }

@@ -261,12 +261,14 @@ pub struct CordCase {
     pub wraps_deg: Vec<f64>,
     /// Runs per cord.
     pub runs: u32,
+    /// New cords per (diameter, wrap): 1 is the thesis's design (10 cords).
+    pub replicates: u32,
 }
 
 impl CordCase {
     /// A thesis-design case of `truth` drawn from `seed`.
     pub fn draw(truth: Truth, seed: u64) -> CordCase {
-        let mut rng = Rng::new(derive_seed(seed, &[0x00c0_4d]));
+        let mut rng = Rng::new(derive_seed(seed, &[0xc04d]));
         let u = rng.uniform();
         let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
         let change = match truth {
@@ -282,6 +284,7 @@ impl CordCase {
             diameters_mm: vec![12.7, 25.4],
             wraps_deg: vec![270.0, 360.0, 450.0, 630.0, 720.0],
             runs: 6,
+            replicates: 1,
         }
     }
 
@@ -294,8 +297,9 @@ impl CordCase {
 
     /// One line about the case.
     pub fn describe(&self) -> String {
+        let cords = self.diameters_mm.len() * self.wraps_deg.len() * self.replicates as usize;
         format!(
-            "seed {} {} change {:+.3}",
+            "seed {} {} change {:+.3} ({cords} cords)",
             self.seed,
             self.truth.name(),
             self.change
@@ -335,7 +339,7 @@ impl CordCase {
             },
             diameters_mm: self.diameters_mm.clone(),
             wraps_deg: self.wraps_deg.clone(),
-            replicates: 1,
+            replicates: self.replicates,
             runs: self.runs,
         }
     }

@@ -141,11 +141,11 @@ fn held_out_gain(
     for (g, why) in &base_loco.did_not_converge {
         failed.push((labels[*g].clone(), format!("Euler-Eytelwein's fold: {why}")));
     }
-    for g in 0..labels.len() {
-        let known = failed.iter().any(|(l, _)| *l == labels[g]);
+    for (g, label) in labels.iter().enumerate() {
+        let known = failed.iter().any(|(l, _)| l == label);
         if !known && (ext.missing[g] > 0 || base.missing[g] > 0) {
             failed.push((
-                labels[g].clone(),
+                label.clone(),
                 format!(
                     "{} rows without a held-out prediction",
                     ext.missing[g].max(base.missing[g])

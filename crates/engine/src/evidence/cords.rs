@@ -177,8 +177,12 @@ pub struct Projection {
     mu_step: Vec<(f64, Vec<f64>)>,
 }
 
+/// A fit's columns at its estimate: ∂f/∂mu per row, ∂f/∂(each other parameter) per row, the
+/// residuals and the weights.
+type Columns<'a> = (&'a [f64], &'a [&'a [f64]], &'a [f64], &'a [f64]);
+
 impl Projection {
-    fn new(d: &Design, (a, cols, r, w): (&[f64], &[&[f64]], &[f64], &[f64])) -> Projection {
+    fn new(d: &Design, (a, cols, r, w): Columns<'_>) -> Projection {
         let (n, m) = (d.n(), cols.len());
         let (mut rt, mut ct) = (vec![0.0; n], vec![vec![0.0; m]; n]);
         let mut score = Vec::with_capacity(d.units.len());
@@ -248,8 +252,8 @@ impl Projection {
     fn steps(&self, d: &Design, signs: &[f64]) -> Vec<Vec<f64>> {
         let mut sc = vec![vec![0.0; self.m]; d.cords.len()];
         for (u, &g) in d.unit_cord.iter().enumerate() {
-            for j in 0..self.m {
-                sc[g][j] += signs[u] * self.score[u][j];
+            for (acc, s) in sc[g].iter_mut().zip(&self.score[u]) {
+                *acc += signs[u] * s;
             }
         }
         sc.into_iter()
@@ -276,6 +280,11 @@ impl Projection {
     }
 }
 
+/// a > b, false when either is NaN.
+fn above(a: f64, b: f64) -> bool {
+    a.partial_cmp(&b) == Some(std::cmp::Ordering::Greater)
+}
+
 /// The inverse of a cord's information, None when it is (nearly) singular.
 fn invert(xtx: DMatrix<f64>) -> Option<DMatrix<f64>> {
     let m = xtx.nrows();
@@ -285,7 +294,7 @@ fn invert(xtx: DMatrix<f64>) -> Option<DMatrix<f64>> {
         return None;
     }
     let sv = xtx.clone().svd(false, false).singular_values;
-    if !(sv.min() > 1e-10 * sv.max()) {
+    if !above(sv.min(), 1e-10 * sv.max()) {
         return None;
     }
     xtx.try_inverse()
@@ -304,7 +313,7 @@ fn solve(xtx: DMatrix<f64>, xty: DVector<f64>) -> Option<Vec<f64>> {
     }
     let svd = xtx.clone().svd(false, false);
     let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
-    if !(smin > 1e-10 * smax) {
+    if !above(smin, 1e-10 * smax) {
         return None;
     }
     let x = xtx.lu().solve(&xty)?;

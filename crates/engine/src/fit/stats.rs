@@ -132,7 +132,7 @@ pub fn chi2_of_t(t: f64, df: f64) -> f64 {
 
 /// Upper-tail p of a χ² value with `df` degrees of freedom (1 for NaN or below 0: no evidence).
 pub fn chi2_p_upper(chi2: f64, df: f64) -> f64 {
-    if !(chi2 > 0.0) {
+    if chi2.is_nan() || chi2 <= 0.0 {
         return 1.0;
     }
     if chi2.is_infinite() {
