@@ -200,7 +200,12 @@ fn gain_sentence(f: &Facts<'_>, q: &mut Quote<'_>) -> String {
         return "No cord can be left out of the fit (one cord): the gain on new cords is not measured.".into();
     }
     use capstan_engine::analysis::gain::GainVerdict as V;
-    let apart = set_apart(g, q);
+    // Quoted only when said: the headline's numbers are the ones its sentences show.
+    let apart = if g.failed.is_empty() {
+        String::new()
+    } else {
+        set_apart(g, q)
+    };
     if g.verdict == V::NotIdentified {
         return format!(
             "On a cord left out of the fit the gain is not identified: {apart}, and the {} cords left are too few to test it.",
@@ -239,8 +244,8 @@ fn gain_sentence(f: &Facts<'_>, q: &mut Quote<'_>) -> String {
         }
         V::Worse => format!("p = {p}: the model with these causes predicts new cords worse"),
         V::TooFewCords => format!(
-            "which cannot go below p = {} with so few cords: a gain on new cords cannot be established on these data{needed}",
-            q.num(g.p_smallest, 2, format!("{PTR}/p_smallest"))
+            "p = {p}, and it cannot go below {} with so few cords: a gain on new cords cannot be established on these data{needed}",
+            q.num(g.p_smallest, 3, format!("{PTR}/p_smallest"))
         ),
         V::NotIdentified => unreachable!("said above"),
     };
