@@ -34,7 +34,9 @@ fn thesis_json_through_the_binary_and_out_dir() {
     let out = ok(["discover", "--json", "--out", out_dir.to_str().unwrap()]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert_eq!(v["terms"], serde_json::json!([]));
-    assert_eq!(v["unexplained_after"], serde_json::json!(true));
+    // The engine takes the thesis's lack of fit for cord-to-cord scatter (the cords share no
+    // pattern beyond their own T2 zero and heating), not for structure left unexplained.
+    assert_eq!(v["unexplained_after"], serde_json::json!(false));
     assert!(v["elapsed_s"].as_f64().is_some_and(|t| t > 0.0 && t < 30.0));
     let saved: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("discover.json")).unwrap()).unwrap();
@@ -42,7 +44,7 @@ fn thesis_json_through_the_binary_and_out_dir() {
     // The summary says the answer in words.
     let out = capstan().arg("discover").output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("Nothing in the library explains"), "{text}");
+    assert!(text.contains("Nothing to add"), "{text}");
 }
 
 #[test]

@@ -63,7 +63,7 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
     );
     assert!(warnings.iter().any(|w| w.contains("wrap 900°")), "{err}");
     let stdout = String::from_utf8_lossy(&r.stdout);
-    assert!(stdout.contains("model's own error"), "{stdout}");
+    assert!(stdout.contains("a new cord's error"), "{stdout}");
     // Wrap 900° lies beyond the fitted wraps: the interval holds what extrapolating in wrap
     // cost on the fitted data, and says so.
     assert!(stdout.contains("extrapolating in wrap cost"), "{stdout}");
@@ -77,7 +77,8 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
     assert_eq!(v["warnings"].as_array().unwrap().len(), 3);
     assert_eq!(v["extrapolating"], true);
     assert_eq!(v["predictions"].as_array().unwrap().len(), 1000);
-    assert!(v["model_error_sd_n"].as_f64().unwrap() >= 0.0);
+    assert!(v["new_cord_error"]["abs_n"].as_f64().unwrap() >= 0.0);
+    assert!(v["new_cord_error"]["rel"].as_f64().unwrap() > 0.0);
     assert!(v["wrap_extrapolation_error_sd_n"].as_f64().unwrap() >= 0.0);
 
     // Negative numbers are values, refused with the flag named (`--drive-v -1` and
@@ -131,8 +132,8 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
             ("covariance", serde_json::json!(1e308)),
         ),
         (
-            "a cord scatter of 1e308",
-            ("sd_ln_mu_cord", serde_json::json!(1e308)),
+            "a new cord's error of 1e308",
+            ("new_cord_error", serde_json::json!(1e308)),
         ),
         (
             "a negative heating",
@@ -144,7 +145,7 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
         let pm = &mut v["prediction_model"];
         match edit.0 {
             "covariance" => pm["covariance"][0][0] = edit.1,
-            "sd_ln_mu_cord" => pm["sd_ln_mu_cord"] = edit.1,
+            "new_cord_error" => pm["new_cord_error"]["rel"] = edit.1,
             name => pm["values"][name] = edit.1,
         }
         let path = dir.join("edited.json");
@@ -164,10 +165,10 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// One run per cord: the run-to-run scatter cannot be estimated, and `predict` says where it
-/// went (into the cord-to-cord scatter) in words and JSON; the thesis data estimate it.
+/// One run per cord: a new cord's error still comes from the held-out cords (run-to-run and
+/// cord-to-cord scatter are both in their residuals), and `predict` gives its interval with it.
 #[test]
-fn predict_says_when_the_run_scatter_was_not_estimable() {
+fn predict_with_one_run_per_cord_takes_a_new_cords_error_from_held_out_cords() {
     use capstan_engine::analysis::{self, Options};
     let dir = std::env::temp_dir().join(format!("capstan-predict-run1-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -182,20 +183,17 @@ fn predict_says_when_the_run_scatter_was_not_estimable() {
     let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
     let path = dir.join("metrics.json");
     std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
-    let o = predict_at(path.to_str().unwrap(), "450", "2", &[]);
-    assert!(o.status.success());
-    let text = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        text.contains("run-to-run scatter was not estimable"),
-        "{text}"
-    );
     let o = predict_at(path.to_str().unwrap(), "450", "2", &["--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v["run_scatter_estimated"], false);
-    let thesis = metrics(&dir);
-    let o = predict_at(thesis.to_str().unwrap(), "450", "2", &["--json"]);
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v["run_scatter_estimated"], true);
+    let e = &v["new_cord_error"];
+    assert_eq!(e["cords"], 10);
+    assert_eq!(e["rows"], 120);
+    // At T2 ≈ 6 N a new cord's SD is the held-out cords' (≈ 0.8–1.5 N on these data), never
+    // 0: the interval is more than a second wide on each side.
+    let p = &v["predictions"][0];
+    let half = (p["t2_pi95"]["hi"].as_f64().unwrap() - p["t2_pi95"]["lo"].as_f64().unwrap()) / 2.0;
+    assert!(half > 1.0 && half < 6.0, "{half}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -113,8 +113,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     opts.protocol_times = args.protocol_times;
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
-    crate::errln!("{}", ds.structure.describe());
     let mut a = capstan_engine::analysis::run(&ds, opts)?;
+    crate::errln!("{}", a.evidence.data.structure.statement);
     capstan_report::apply_thesis_choice(&mut a, &ctx.thesis);
     // From here on the set holds work: a late failure keeps it and says where.
     set.keep_on_failure(crate::outputs::say_kept);

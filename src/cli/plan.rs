@@ -164,9 +164,90 @@ pub fn words(p: &Plan, source: &str, structure: &str) -> String {
         );
     }
     let _ = writeln!(s);
-    recommendation(&mut s, p, &p.recommended);
+    if p.first.which == "cords" {
+        cords_words(&mut s, p);
+        let _ = writeln!(s, "Then, for the hypotheses above:");
+        recommendation(&mut s, p, &p.recommended);
+    } else {
+        recommendation(&mut s, p, &p.recommended);
+        cords_words(&mut s, p);
+    }
+    let _ = writeln!(s, "first: {} ({})", p.first.which, p.first.why);
     let _ = writeln!(s, "method: {} ({:.1} s)", p.method, p.elapsed_s);
     s
+}
+
+/// How many cords each open question between cords needs.
+fn cords_words(s: &mut String, p: &Plan) {
+    let Some(c) = &p.cords else {
+        return;
+    };
+    if c.questions.is_empty() {
+        let _ = writeln!(s, "How many cords: no question between cords is open.");
+        return;
+    }
+    if let Some((q, t)) = p.cords_first().filter(|_| p.first.which == "cords") {
+        let _ = writeln!(
+            s,
+            "Recommended first: {} new cords ({} runs on each, {:.1} rig hours) to establish {} ({} of {} simulated campaigns do); {}.",
+            t.cords, t.runs_per_cord, t.rig_hours, q.question, t.established, t.campaigns, p.first.why
+        );
+    }
+    let _ = writeln!(
+        s,
+        "How many cords (80 % of simulated campaigns establishing it):"
+    );
+    for q in &c.questions {
+        let tried: Vec<String> = (q.trials.iter())
+            .map(|t| {
+                format!(
+                    "{} cords × {} runs {}/{}",
+                    t.cords, t.runs_per_cord, t.established, t.campaigns
+                )
+            })
+            .collect();
+        let mut answer = match &q.needed {
+            Some(t) => format!(
+                "{} cords with {} runs each ({:.1} rig hours)",
+                t.cords, t.runs_per_cord, t.rig_hours
+            ),
+            None => "more cords than tried".to_string(),
+        };
+        answer += &at_observed_spread(q);
+        let _ = writeln!(
+            s,
+            "  {}: {answer}; observed {}; its answer moves T2 at these rows by {:.2} N (RMS); tried {}",
+            q.question,
+            q.observed,
+            q.stake_n,
+            tried.join(", ")
+        );
+    }
+    let _ = writeln!(s, "  method: {}", c.method);
+}
+
+/// The held-out gain's second answer: the simulated world's median gain beside the data's, and
+/// the cords the analysis's resampling of the data's own cords needs (the gain at its observed
+/// spread from cord to cord). Empty for the other questions.
+fn at_observed_spread(q: &capstan_plan::cords::Question) -> String {
+    let Some(n) = &q.at_observed_spread else {
+        return String::new();
+    };
+    let median = q
+        .needed
+        .as_ref()
+        .or(q.trials.last())
+        .and_then(|t| t.median_ratio);
+    let world = median.map_or(String::new(), |m| {
+        format!(" in the simulated world, whose sets' median held-out ratio is {m:.2}")
+    });
+    let resampled = match n.cords {
+        Some(k) => format!("about {k} cords"),
+        None => format!("more than {} cords", n.tried_up_to),
+    };
+    format!(
+        "{world}; {resampled} at the data's own spread of the gain from cord to cord (resampling the cords' held-out errors, as `analyze` says)"
+    )
 }
 
 fn recommendation(s: &mut String, p: &Plan, r: &Scored) {

@@ -216,10 +216,10 @@ fn check_error(name: &str, e: &prediction::ModelError) -> Result<(), String> {
 }
 
 /// What `capstan analyze` writes and a prediction relies on: a finite mu in the catalogue's
-/// range, a square covariance of the free parameters with a non-negative diagonal, scatter,
-/// noise and model error at or above 0 (the model error no more than its held-out residuals
-/// leave, and estimated from some rows), known free parameters, and ranges that are ranges. An edited or damaged
-/// file fails here rather than giving intervals that mean nothing.
+/// range, a square covariance of the free parameters with a non-negative diagonal, a new
+/// cord's error at or above 0 from the held-out rows of two cords or more, an extrapolation
+/// error no more than its held-out residuals leave, known free parameters, and ranges that are
+/// ranges. An edited or damaged file fails here rather than giving intervals that mean nothing.
 fn check_model(pm: &PredictionModel) -> Result<(), String> {
     let mu = pm.values.get("mu").copied().unwrap_or(f64::NAN);
     if !(mu.is_finite() && mu > 0.0 && mu <= 2.0) {
@@ -252,21 +252,29 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
             ));
         }
     }
+    let e = &pm.new_cord_error;
     for (name, v) in [
-        ("sd_ln_mu_cord", pm.sd_ln_mu_cord),
-        ("sd_ln_mu_run", pm.sd_ln_mu_run),
-        ("noise_abs_n", pm.noise_abs_n),
-        ("noise_rel", pm.noise_rel),
+        ("abs_n", e.abs_n),
+        ("rel", e.rel),
+        ("heldout_rms_n", e.heldout_rms_n),
     ] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("{name} = {} must be 0 or more", shown(v)));
+            return Err(format!(
+                "new_cord_error.{name} = {} must be 0 or more",
+                shown(v)
+            ));
         }
     }
-    check_error("model_error", &pm.model_error)?;
-    if pm.model_error.rows == 0 {
+    if e.rows == 0 || e.cords < 2 {
         return Err(
-            "model_error has no held-out rows behind it (no cord had a held-out prediction)".into(),
+            "new_cord_error has no held-out rows of two cords or more behind it (no cord had a held-out prediction)".into(),
         );
+    }
+    if e.dof == 0 || e.dof > e.cords {
+        return Err(format!(
+            "new_cord_error.dof = {} is not a number of degrees of freedom for {} cords",
+            e.dof, e.cords
+        ));
     }
     // Without three wraps there is nothing to extrapolate from: no rows, and then no error.
     let w = &pm.wrap_extrapolation_error;
@@ -426,8 +434,7 @@ fn print_json(
         "wrap_deg": args.wrap_deg,
         "diameter_mm": args.diameter_mm,
         "drive_v": drive_v,
-        "model_error_sd_n": pm.model_error.sd_n,
-        "run_scatter_estimated": pm.run_scatter_estimated,
+        "new_cord_error": pm.new_cord_error,
         "wrap_extrapolation_error_sd_n": wrap_error(args, pm).flatten(),
         "wrap_extrapolation_measured": pm.wrap_extrapolation_error.rows > 0,
         "from": args.from.display().to_string(),
@@ -465,15 +472,14 @@ fn print_table(
         args.diameter_mm,
         drive_v
     );
+    let e = &pm.new_cord_error;
     crate::outln!(
-        "the PI includes the model's own error, SD {:.3} N (its leave-one-cord-out residuals beyond the other components)",
-        pm.model_error.sd_n
+        "the PI holds a new cord's error, SD √({:.3}² + ({:.4}·T2)²) N, from the held-out residuals of {} cords (each predicted by the causes chosen and fitted without it; Student t, {} degrees of freedom)",
+        e.abs_n,
+        e.rel,
+        e.cords,
+        e.dof
     );
-    if !pm.run_scatter_estimated {
-        crate::outln!(
-            "the run-to-run scatter was not estimable (one run per cord): a new run's scatter is counted in the cord-to-cord one"
-        );
-    }
     match wrap_error(args, pm) {
         Some(Some(sd)) => crate::outln!(
             "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data, scaled to this distance: SD {sd:.3} N"

@@ -7,6 +7,7 @@
 //! current design when it already decides.
 
 pub mod candidates;
+pub mod cords;
 pub mod hypotheses;
 pub mod trial;
 pub mod world;
@@ -33,6 +34,9 @@ pub struct Options {
     pub threads: usize,
     /// Rig hours available (protocols needing more are ranked but not recommended).
     pub max_hours: Option<f64>,
+    /// Also simulate how many cords each open question between cords needs (the larger part
+    /// of the planner's time: sets of up to 80 cords).
+    pub cords: bool,
 }
 
 impl Default for Options {
@@ -42,6 +46,7 @@ impl Default for Options {
             seed: 1,
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()),
             max_hours: None,
+            cords: true,
         }
     }
 }
@@ -125,8 +130,33 @@ pub struct Plan {
     pub reps: usize,
     /// How the chances were estimated.
     pub method: String,
+    /// How many cords each open between-cord question needs (None: not asked, with why in
+    /// `first`).
+    pub cords: Option<cords::Cords>,
+    /// Which answer comes first: the protocol's or the cords', and why.
+    pub first: First,
     /// Wall time, s.
     pub elapsed_s: f64,
+}
+
+impl Plan {
+    /// The cords question that comes first (the largest stake with a number of cords found),
+    /// with its design.
+    pub fn cords_first(&self) -> Option<(&cords::Question, &cords::Trial)> {
+        let c = self.cords.as_ref()?;
+        c.questions
+            .iter()
+            .find_map(|q| q.needed.as_ref().map(|t| (q, t)))
+    }
+}
+
+/// Which recommendation comes first.
+#[derive(Clone, Debug, Serialize)]
+pub struct First {
+    /// `cords` (more new cords) or `protocol` (the recommended protocol).
+    pub which: &'static str,
+    /// Why, with the stakes compared.
+    pub why: String,
 }
 
 /// What a data set leaves open, without simulating anything (one diagnosis: cheap).
@@ -219,6 +249,7 @@ pub fn plan(
     scored.sort_by(|a, b| {
         (b.p_decide_worst.total_cmp(&a.p_decide_worst)).then(a.rig_hours.total_cmp(&b.rig_hours))
     });
+    let (cords, first) = cords_first(data, &d, &current, &hyps, current_decides, opts, &world)?;
     Ok(Plan {
         hypotheses: hyps,
         not_simulated,
@@ -232,8 +263,93 @@ pub fn plan(
         current_design,
         reps: opts.reps,
         method: method(opts.reps),
+        cords,
+        first,
         elapsed_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// How many cords the data's open between-cord questions need, and which answer comes first:
+/// the one whose open question moves T2 at the data's rows more (its stake). A rival left open
+/// puts the protocol first (the named causes themselves are in question).
+fn cords_first(
+    data: &Dataset,
+    d: &Diagnosis,
+    current: &Design,
+    hyps: &[Hypothesis],
+    current_decides: bool,
+    opts: &Options,
+    world: &World,
+) -> Result<(Option<cords::Cords>, First), String> {
+    let protocol = |why: String| First {
+        which: "protocol",
+        why,
+    };
+    if !opts.cords {
+        return Ok((None, protocol("how many cords was not asked".into())));
+    }
+    if current.drive_v.len() > 1 {
+        return Ok((
+            None,
+            protocol(
+                "the cords question is simulated at one drive voltage; these data have several"
+                    .into(),
+            ),
+        ));
+    }
+    let a = capstan_engine::analysis::run(
+        data,
+        capstan_engine::analysis::Options {
+            threads: opts.threads,
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    let c = cords::how_many(
+        &a,
+        (
+            &current.diameters_mm,
+            &current.wraps_deg,
+            current.runs_per_cord,
+        ),
+        (opts.reps, opts.seed, opts.threads),
+        &world.protocol,
+    )?;
+    let named: Vec<capstan_physics::EffectKind> =
+        d.found_effects().iter().map(|e| e.kind).collect();
+    let rival = hyps.iter().any(|h| h.origin.starts_with("rival"));
+    let protocol_stake = hyps
+        .iter()
+        .filter(|h| h.origin != "named")
+        .map(|h| {
+            let extra: Vec<capstan_physics::Effect> = (h.effects.iter())
+                .filter(|e| !named.contains(&e.kind))
+                .copied()
+                .collect();
+            cords::stake_of(&a, &extra)
+        })
+        .fold(0.0, f64::max);
+    let top = c.questions.iter().find(|q| q.needed.is_some());
+    let first = match top {
+        None => protocol(
+            "no open question between cords reaches 80 % with the cords tried (or none is open)"
+                .into(),
+        ),
+        Some(_) if rival => protocol(
+            "a rival of a named cause is open: which causes the data hold comes first".into(),
+        ),
+        Some(q) if q.stake_n > protocol_stake || current_decides => First {
+            which: "cords",
+            why: format!(
+                "{} moves T2 at these data's rows by {:.2} N (RMS), the protocols' open hypotheses by {:.2} N",
+                q.question, q.stake_n, protocol_stake
+            ),
+        },
+        Some(q) => protocol(format!(
+            "the protocols' open hypotheses move T2 at these data's rows by {:.2} N (RMS), {} by {:.2} N",
+            protocol_stake, q.question, q.stake_n
+        )),
+    };
+    Ok((Some(c), first))
 }
 
 /// How the chances were estimated, in words.

@@ -117,6 +117,8 @@ fn run(s: &Scenario, reps: usize, fresh: u64) -> (String, f64, f64) {
         seed: 5,
         threads: 2,
         max_hours: None,
+        // The protocols are validated here; how many cords is the cord calibration's.
+        cords: false,
     };
     let p = plan(&data, &opts, &mut |_, _| true).expect("plans");
     let rec = &p.recommended.candidate;

@@ -47,6 +47,8 @@ pub fn next_json(open: &Value, plan: Option<&Value>, command: &str) -> Value {
             next[key] = p[key].clone();
         }
         next["reps"] = p["reps"].clone();
+        next["cords"] = p["cords"].clone();
+        next["first"] = p["first"].clone();
         next["better_beyond_hours"] = p["better_beyond_hours"].clone();
         next["method"] = p["method"].clone();
         next["elapsed_s"] = p["elapsed_s"].clone();
@@ -66,7 +68,14 @@ pub fn next_html(n: &Value) -> String {
         );
         return h;
     }
+    let cords_first = n["first"]["which"].as_str() == Some("cords");
+    if cords_first {
+        cords_html(&mut h, n);
+    }
     recommendation(&mut h, n);
+    if !cords_first {
+        cords_html(&mut h, n);
+    }
     let r = &n["recommended"];
     list(
         &mut h,
@@ -90,6 +99,55 @@ pub fn next_html(n: &Value) -> String {
         text(&n["command"])
     );
     h
+}
+
+/// How many cords each open question between cords needs (the planner's `cords`), the first
+/// of them as the first recommendation when the plan puts it first.
+fn cords_html(h: &mut String, n: &Value) {
+    let qs = n["cords"]["questions"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    if qs.is_empty() {
+        return;
+    }
+    if n["first"]["which"].as_str() == Some("cords") {
+        if let Some(q) = qs.iter().find(|q| q["needed"].is_object()) {
+            let t = &q["needed"];
+            let _ = write!(
+                h,
+                "<p>Recommended first: <b>{} new cords</b> ({} runs on each, {} rig hours) to establish {} ({} of {} simulated campaigns do). Why first: {}.</p>",
+                t["cords"], t["runs_per_cord"], hours(&t["rig_hours"]), text(&q["question"]), t["established"], t["campaigns"], text(&n["first"]["why"])
+            );
+        }
+    }
+    h.push_str("<p>How many cords each open question between cords needs (80 % of simulated campaigns establishing it):</p><ul>");
+    for q in &qs {
+        let mut answer = if q["needed"].is_object() {
+            format!(
+                "{} cords, {} runs on each",
+                q["needed"]["cords"], q["needed"]["runs_per_cord"]
+            )
+        } else {
+            "more cords than the simulation tried".into()
+        };
+        // The held-out gain: also the cords at the data's own spread of the gain (resampling
+        // the cords' held-out errors), which the simulated world need not have.
+        let spread = &q["at_observed_spread"];
+        if spread.is_object() {
+            let _ = match spread["cords"].as_u64() {
+                Some(k) => write!(answer, "; about {k} cords at the data's own spread of the gain from cord to cord (resampling the cords' held-out errors)"),
+                None => write!(answer, "; more than {} cords at the data's own spread of the gain", spread["tried_up_to"]),
+            };
+        }
+        let _ = write!(
+            h,
+            "<li>{}: {answer}; observed {}</li>",
+            text(&q["question"]),
+            text(&q["observed"])
+        );
+    }
+    let _ = write!(h, "</ul><p>Method: {}</p>", text(&n["cords"]["method"]));
 }
 
 /// A string value, escaped for HTML ("" for anything else).

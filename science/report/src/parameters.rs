@@ -175,16 +175,16 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
     let runs = obs.runs.len();
     // A spread the data cannot show (one cord; one run per cord) is not estimable, not 0.
     let shown = |v: f64, estimable: f64| if estimable.is_finite() { v } else { f64::NAN };
-    let sigma_u = shown(pm.sd_ln_mu_cord, s.cord_pct);
+    let sigma_u = shown(a.extended.sigma_u, s.cord_pct);
     let df_u = cords.saturating_sub(1) as f64;
     out.push(component(
         ("scatter.cord_ln_mu_sd", "cord-to-cord SD of ln mu", "1"),
         sigma_u,
         sd(sigma_u, df_u),
-        format!("the extended model's σ_u; χ² interval on cords − 1 = {df_u:.0} degrees of freedom, as if the cord effects were seen without error (approximate: their shrinkage and noise are ignored)"),
+        format!("the extended (mixed) model's σ_u, its cord effects shrunk to the parameter budget; not what capstan predict uses for a new cord; χ² interval on cords − 1 = {df_u:.0} degrees of freedom, as if the cord effects were seen without error (approximate: their shrinkage and noise are ignored)"),
         "one cord, or σ_u at 0",
     ));
-    let run_sd = shown(pm.sd_ln_mu_run, s.run_pct);
+    let run_sd = shown((1.0 + s.run_pct / 100.0).ln(), s.run_pct);
     let df_e = runs.saturating_sub(cords) as f64;
     out.push(component(
         ("scatter.run_ln_mu_sd", "run-to-run SD of ln mu on one cord", "1"),
@@ -209,13 +209,24 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         format!("fraction of T2; {noise_method}"),
         "the part is at 0",
     ));
-    let me = &pm.model_error;
+    let nc = &pm.new_cord_error;
     out.push(component(
-        ("model_error.sd_n", "model error in T2 (SD)", "N"),
-        me.sd_n,
-        excess_sd(me.heldout_rms_n, me.accounted_rms_n, pm.folds),
-        format!("what the extended model's leave-one-cord-out residuals show beyond the parameter, cord, run and noise variance above (0 when they show nothing more); in capstan predict's prediction interval; interval: χ² on the held-out mean square with the {} left-out folds (cords) as its degrees of freedom, less the variance the other components account for, clamped at 0", pm.folds),
-        "fewer than two folds",
+        ("new_cord_error.abs_n", "a new cord's error in T2, constant part a (SD² = a² + (b·T2)²)", "N"),
+        nc.abs_n,
+        None,
+        format!("fitted to the held-out residuals of the whole procedure (every cord predicted by the causes chosen and fitted without it; {} cords) beyond the curve's own variance; in capstan predict's prediction interval", nc.cords),
+        "not computed (a two-part fit to held-out residuals)",
+    ));
+    out.push(component(
+        (
+            "new_cord_error.rel",
+            "a new cord's error in T2, part proportional to T2 (b)",
+            "1",
+        ),
+        nc.rel,
+        None,
+        "as above: the part that grows with T2".to_string(),
+        "not computed (a two-part fit to held-out residuals)",
     ));
     let we = &pm.wrap_extrapolation_error;
     let edge_cords = if we.rows > 0 { edge_cords(a) } else { 0 };
@@ -223,7 +234,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("wrap_extrapolation_error.sd_n", "error of extrapolating in wrap (SD)", "N"),
         we.sd_n,
         excess_sd(we.heldout_rms_n, we.accounted_rms_n, edge_cords),
-        format!("what fits without the smallest or the largest wrap miss there beyond all the above (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; interval: χ² on those misses' mean square with the {edge_cords} cords at the smallest and largest wrap as its degrees of freedom, less what the other components account for, clamped at 0"),
+        format!("what fits without the smallest or the largest wrap miss there beyond the curve's variance and a new cord's error (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; interval: χ² on those misses' mean square with the {edge_cords} cords at the smallest and largest wrap as its degrees of freedom, less what the other components account for, clamped at 0"),
         "not measured (fewer than three wraps)",
     ));
     let cord_pct = s.cord_pct;

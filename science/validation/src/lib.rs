@@ -14,6 +14,9 @@
 
 pub mod cases;
 pub mod closed_loop;
+pub mod cord_bounds;
+pub mod cord_calibration;
+pub mod cord_cases;
 pub mod discover_cases;
 pub mod figures;
 pub mod pairs;

@@ -47,10 +47,13 @@ pub struct Predictions {
     pub baseline_per_cord_loco: Vec<f64>,
     /// Extended, leave-one-cord-out (population values of a fit on the other cords).
     pub extended_loco: Vec<f64>,
-    /// Extended, the smallest and the largest wrap left out in turn (population values of a
-    /// fit on the other wraps): what extrapolating in wrap costs. NaN on the other wraps, and
-    /// everywhere with fewer than three wraps.
+    /// The population-averaged model (the named causes, one mu, least squares in T2): the
+    /// smallest and the largest wrap left out in turn (a fit on the other wraps): what
+    /// extrapolating in wrap costs. NaN on the other wraps, and everywhere with fewer than
+    /// three wraps.
     pub extended_edge_wrap: Vec<f64>,
+    /// The population-averaged model, in-sample.
+    pub population: Vec<f64>,
     /// Load memory H of the extended model at each window centre, N s.
     pub extended_load_memory_ns: Vec<f64>,
 }
@@ -69,6 +72,11 @@ pub struct Fits {
     pub baseline_loco: Loco,
     /// Extended, leave-one-cord-out.
     pub extended_loco: Loco,
+    /// The population-averaged model with the named causes (what a new cord is predicted
+    /// with, and `capstan predict` uses).
+    pub population: Fit,
+    /// Its refits without each cord (the same causes): the cord jackknife of its values.
+    pub population_loco: Loco,
     /// RMSE of T2 of the per-cord baseline on a new cord, N.
     pub per_cord_loco_rmse: f64,
     /// Table 3 covers every wrap of the data.
@@ -86,7 +94,11 @@ pub struct Fits {
 
 /// Fit every model of the gain table to `obs`; `ext_spec` is the extended model
 /// ([`models::extended`]).
-pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: usize) -> Fits {
+pub fn fit_all(
+    obs: &Observations,
+    (ext_spec, pop_spec): (&crate::fit::ModelSpec, &crate::fit::ModelSpec),
+    threads: usize,
+) -> Fits {
     let all = obs.all_runs();
     let t0 = Instant::now();
     let base_spec = models::baseline();
@@ -112,6 +124,7 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         &all,
         false,
     );
+    let population = population_fit(obs, pop_spec, &extended.theta, &all);
     let fits_s = t0.elapsed().as_secs_f64();
 
     // Leave one cord out.
@@ -122,11 +135,12 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         fit_fixed_with(&base_spec, obs, train, None, &budget)
     });
     let extended_loco = extended_refits(obs, ext_spec, &extended, threads, None);
+    let population_loco = population_refits(obs, pop_spec, &population, threads, None);
     let edge_wrap = edge_wrap_folds(obs);
     let extended_edge_wrap = if edge_wrap.is_empty() {
         vec![f64::NAN; obs.len()]
     } else {
-        extended_refits(obs, ext_spec, &extended, threads, Some(&edge_wrap)).t2_n
+        population_refits(obs, pop_spec, &population, threads, Some(&edge_wrap)).t2_n
     };
     let per_cord_loco = per_cord_on_new_cords(obs, &cord_mu);
     let per_cord_loco_rmse = obs.rmse_t2(&per_cord_loco);
@@ -149,6 +163,7 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         baseline_per_cord_loco: per_cord_loco,
         extended_loco: extended_loco.t2_n.clone(),
         extended_edge_wrap,
+        population: population.t2_n.clone(),
         extended_load_memory_ns: ext_eval.load_memory_ns,
     };
     Fits {
@@ -157,6 +172,8 @@ pub fn fit_all(obs: &Observations, ext_spec: &crate::fit::ModelSpec, threads: us
         extended,
         baseline_loco,
         extended_loco,
+        population,
+        population_loco,
         per_cord_loco_rmse,
         thesis_ok,
         pred,
@@ -221,6 +238,40 @@ fn extended_refits(
         };
         fit_mixed_from(ext_spec, obs, train, th.clone(), u0.clone(), opts)
     };
+    match folds {
+        None => loco(obs, threads, refit),
+        Some(f) => loco_over(obs, threads, f, refit),
+    }
+}
+
+/// The population-averaged model fitted to `runs`, from the mixed fit's values `theta0` (the
+/// same free parameters) when they are finite.
+fn population_fit(
+    obs: &Observations,
+    spec: &crate::fit::ModelSpec,
+    theta0: &[f64],
+    runs: &[usize],
+) -> Fit {
+    let start =
+        (theta0.len() == spec.free.len() && theta0.iter().all(|t| t.is_finite())).then_some(theta0);
+    let rows = obs.rows_of(runs).len();
+    let budget = Budget::for_fit_within(rows, spec.free.len(), LOCO_UNITS_PER_ROW * rows as u64);
+    fit_fixed_with(spec, obs, runs, start, &budget)
+}
+
+/// The population-averaged model refitted without each cord (or each fold of `folds`),
+/// warm-started from the fit on all the data; none when that did not converge.
+fn population_refits(
+    obs: &Observations,
+    spec: &crate::fit::ModelSpec,
+    population: &Fit,
+    threads: usize,
+    folds: Option<&[Vec<usize>]>,
+) -> Loco {
+    if !population.converged {
+        return Loco::skipped(obs);
+    }
+    let refit = |train: &[usize]| population_fit(obs, spec, &population.theta, train);
     match folds {
         None => loco(obs, threads, refit),
         Some(f) => loco_over(obs, threads, f, refit),
@@ -313,14 +364,24 @@ fn notes(
         );
         return notes;
     }
-    for (what, l) in [
-        ("Euler-Eytelwein", locos[0]),
-        ("the extended model", locos[1]),
+    // The held-out predictions of the extended model are the whole procedure's (population
+    // fits, `heldout`); its mixed refits only give its values' cord-jackknife SE.
+    for (what, l, consequence) in [
+        (
+            "Euler-Eytelwein",
+            locos[0],
+            "those cords have no held-out prediction",
+        ),
+        (
+            "the extended (mixed) model",
+            locos[1],
+            "its values' cord-jackknife SE leaves those folds out (the held-out predictions are the whole procedure's, not these refits)",
+        ),
     ] {
         let list: Vec<(usize, &String)> = l.did_not_converge.iter().map(|(g, w)| (*g, w)).collect();
         if let Some(s) = cords(list) {
             notes.push(format!(
-                "{what}, leave one cord out: the refit did not converge without {s}: those cords have no held-out prediction"
+                "{what}, leave one cord out: the refit did not converge without {s}: {consequence}"
             ));
         }
     }

@@ -17,8 +17,11 @@
 //! `capstan_validation::validate`; the closed loop is run by `capstan_validation::closed_loop`.
 
 pub mod closed_loop;
+pub mod coverage;
 pub mod extended;
 pub mod fits;
+pub mod gain;
+pub mod heldout;
 pub mod metrics;
 pub mod models;
 pub mod prediction;
@@ -90,9 +93,9 @@ pub struct Analysis {
     pub pred: Predictions,
     /// The gain table.
     pub models: Vec<ModelMetrics>,
-    /// The held-out gain: the extended model's leave-one-cord-out RMSE over Euler-Eytelwein's,
-    /// with its cord-bootstrap interval.
-    pub gain: uncertainty::WithInterval,
+    /// The held-out gain: the extended model's leave-one-cord-out RMSE (the whole procedure)
+    /// over Euler-Eytelwein's, with its sign-flip test over the cords.
+    pub gain: gain::Gain,
     /// Every cord's held-out RMSE under each refittable model.
     pub held_out: Vec<uncertainty::HeldOut>,
     /// The thesis's per-angle R².
@@ -119,6 +122,49 @@ pub struct Analysis {
     pub elapsed: Elapsed,
     /// Fits that did not converge, in words (empty when every fit did).
     pub fit_notes: Vec<String>,
+}
+
+/// The gain of the whole procedure's held-out predictions over Euler-Eytelwein's: the cords of
+/// failed folds (either model's) set apart and named, the rest tested over the cords.
+fn held_out_gain(
+    obs: &Observations,
+    ext: &uncertainty::CordErrors,
+    base: &uncertainty::CordErrors,
+    whole: &heldout::WholeLoco,
+    base_loco: &crate::fit::solve::Loco,
+) -> gain::Gain {
+    let labels: Vec<String> = obs.groups.iter().map(|g| g.label.clone()).collect();
+    let mut failed: Vec<(String, String)> = Vec::new();
+    for f in &whole.folds {
+        if let Some(why) = &f.failed {
+            for c in &f.cords {
+                failed.push((c.clone(), format!("the extended model's fold: {why}")));
+            }
+        }
+    }
+    for (g, why) in &base_loco.did_not_converge {
+        failed.push((labels[*g].clone(), format!("Euler-Eytelwein's fold: {why}")));
+    }
+    for (g, label) in labels.iter().enumerate() {
+        let known = failed.iter().any(|(l, _)| l == label);
+        if !known && (ext.missing[g] > 0 || base.missing[g] > 0) {
+            failed.push((
+                label.clone(),
+                format!(
+                    "{} rows without a held-out prediction",
+                    ext.missing[g].max(base.missing[g])
+                ),
+            ));
+        }
+    }
+    let out: Vec<usize> = (0..labels.len())
+        .filter(|&g| failed.iter().any(|(l, _)| *l == labels[g]))
+        .collect();
+    let boot = uncertainty::ratio(&ext.without(&out), &base.without(&out), 0x6a1e);
+    let mut g = gain::gain(ext, base, failed, (boot.ci95, boot.jackknife_se), &labels);
+    g.folds = whole.folds.clone();
+    g.selection = whole.selection.clone();
+    g
 }
 
 /// The named causes in words, for the extended model's description.
@@ -167,7 +213,28 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let mechanisms = verdicts.mechanisms;
     let evidence_s = t0.elapsed().as_secs_f64();
     let spec = models::extended(&assessment);
-    let f = fits::fit_all(&obs, &spec, threads);
+    let pop_spec = models::population(&assessment);
+    let f = fits::fit_all(&obs, (&spec, &pop_spec), threads);
+    let tw = Instant::now();
+    let whole = heldout::whole_procedure(ds, &obs, &assessment, &eopts, threads);
+    let mut f = f;
+    f.pred.extended_loco = whole.t2_n.clone();
+    // A fold that named no cause fitted Euler-Eytelwein with one mu, the baseline itself: its
+    // cords get the baseline's prediction, so the test sees no difference (two fits of one
+    // model from different starts differ in the solver's last digits, which a sign-flip test
+    // would read as a gain or a loss half the time).
+    for fold in whole
+        .folds
+        .iter()
+        .filter(|f| f.causes.is_empty() && f.failed.is_none())
+    {
+        for g in (0..obs.groups.len()).filter(|&g| fold.cords.contains(&obs.groups[g].label)) {
+            for i in obs.rows_of_group(g) {
+                f.pred.extended_loco[i] = f.pred.baseline_loco[i];
+            }
+        }
+    }
+    f.loco_s += tw.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let models = metrics::gain_table(&obs, &f, &causes_text(&mechanisms));
     let errors = |p: &[f64]| uncertainty::CordErrors::of(&obs, p);
@@ -176,7 +243,7 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
         errors(&f.pred.extended_loco),
         errors(&f.pred.baseline_per_cord_loco),
     );
-    let gain = uncertainty::ratio(&ext_loco, &base_loco, 0x6a1e);
+    let gain = held_out_gain(&obs, &ext_loco, &base_loco, &whole, &f.baseline_loco);
     let held_out = uncertainty::held_out(
         &obs,
         &[
@@ -189,7 +256,7 @@ pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
     let thesis_per_angle_r2 = metrics::thesis_per_angle(&obs);
     let residual_patterns = residuals::patterns(ds, &obs, &f.pred);
     let ln_amp_by_step = residuals::ln_amp_by_step(&obs, &f.pred);
-    let prediction_model = prediction::build(&obs, &f, &assessment.scatter);
+    let prediction_model = prediction::build(&obs, &f);
     let tables_s = t1.elapsed().as_secs_f64();
     let baseline_mu_se = f
         .baseline_loco

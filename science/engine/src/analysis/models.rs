@@ -27,6 +27,13 @@ fn free_param(kind: EffectKind) -> Option<(Param, Transform)> {
 /// Contact heating keeps the catalogue's short memory (τ = `HEAT_TAU_S`). Without named
 /// causes it is Euler-Eytelwein with the cord effects.
 pub fn extended(a: &Assessment) -> ModelSpec {
+    population(a).random_effect_on(Param::Mu)
+}
+
+/// The population-averaged model: the named causes and one mu for every cord, by least
+/// squares in T2 — what a new cord is predicted with (its own mu is unknown, so the curve to
+/// use is the average over cords, not the typical cord's).
+pub fn population(a: &Assessment) -> ModelSpec {
     let mu0 = crate::fit::stats::mean(&a.fit.mu);
     let mut base = Model::euler_eytelwein(if mu0.is_finite() { mu0 } else { 0.115 });
     let causes = a.selected_evidence();
@@ -46,5 +53,5 @@ pub fn extended(a: &Assessment) -> ModelSpec {
             spec = spec.free_with(p, t);
         }
     }
-    spec.random_effect_on(Param::Mu)
+    spec
 }

@@ -1,14 +1,19 @@
-//! The fitted extended model as something to use: T2 and amplification at a wrap, diameter
-//! and T1 of the user's choosing, with a 95 % confidence interval (the mean curve) and a 95 %
-//! prediction interval (a new measurement on a new cord).
+//! The fitted model as something to use: T2 and amplification at a wrap, diameter and T1 of
+//! the user's choosing, with a 95 % confidence interval (the mean curve) and a 95 % prediction
+//! interval (a new measurement on a new cord).
 //!
 //! [`PredictionModel`] is what `metrics.json` carries under `prediction_model` (schema
-//! [`SCHEMA`]): the population values of every model parameter, the covariance of the free ones
-//! over the leave-one-cord-out refits (a cord jackknife: cords as the independent units), and
-//! the variance components of a new measurement: cord to cord and run to run in ln mu, and the
-//! within-run noise sd² = a² + (r·T2)², and the model's own error ([`ModelError`]): what the
-//! leave-one-cord-out residuals of the fitted data show beyond all of those. `capstan predict`
-//! reads it back ([`predict`]).
+//! [`SCHEMA`]): the population-averaged model (the named causes and one mu for all cords, by
+//! least squares in T2: a new cord's own mu is unknown, so it is predicted by the curve averaged
+//! over cords), the covariance of its free values over its leave-one-cord-out refits (a cord
+//! jackknife: cords as the independent units), and a new cord's error around that curve
+//! ([`NewCordError`]): a² + (b·T2)², fitted to the held-out residuals of the whole procedure
+//! (every cord predicted by the causes chosen and fitted without it) beyond the curve's own
+//! uncertainty — so what a new cord really does, its mu, T2 zero and heating scattered, the
+//! runs' scatter and the noise, all at once, and growing with T2 as the held-out residuals do.
+//! No variance component of a fit's penalty enters (a penalty capped to keep the parameter
+//! count collapses the cords' scatter). `capstan predict` reads it back ([`predict`]);
+//! [`coverage`] checks it cord by cord.
 //!
 //! The operating point of a prediction: the given wrap, diameter and drive voltage, the first
 //! run of a fresh cord at the trigger (time 0), and the contact's load memory settled under the
@@ -22,8 +27,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// Version of the `prediction_model` object; `capstan predict` refuses another. 2 added
-/// `model_error`.
-pub const SCHEMA: u32 = 3;
+/// `model_error`; 4 is the population-averaged model with a new cord's error from the held-out
+/// residuals (`new_cord_error`), in place of the mixed model's variance components.
+pub const SCHEMA: u32 = 4;
 
 /// A closed range of the fitted data.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -68,7 +74,7 @@ pub struct FittedRange {
     pub drive_v: Span,
 }
 
-/// The extended model with its uncertainty, as `metrics.json` carries it.
+/// The population-averaged model with its uncertainty, as `metrics.json` carries it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PredictionModel {
     /// [`SCHEMA`].
@@ -82,23 +88,10 @@ pub struct PredictionModel {
     pub covariance: Vec<Vec<f64>>,
     /// Folds behind `covariance` (cords or groups of cords left out).
     pub folds: usize,
-    /// SD of ln mu from cord to cord (the extended fit's σ_u).
-    pub sd_ln_mu_cord: f64,
-    /// SD of ln mu from run to run on one cord (the evidence engine's run scatter; 0 where
-    /// it could not be estimated, see `run_scatter_estimated`).
-    pub sd_ln_mu_run: f64,
-    /// The run-to-run scatter was estimated (false with one run per cord: a new run's scatter
-    /// is then inside the cord-to-cord one).
-    #[serde(default = "estimated")]
-    pub run_scatter_estimated: bool,
-    /// Within-run noise, absolute part, N.
-    pub noise_abs_n: f64,
-    /// Within-run noise, proportional part (fraction of T2).
-    pub noise_rel: f64,
-    /// The model's own error: held-out residual variance the other components do not explain.
-    pub model_error: ModelError,
+    /// A new cord's error around the curve.
+    pub new_cord_error: NewCordError,
     /// What extrapolating in wrap adds: the residuals of fits without the smallest or the
-    /// largest wrap, on that wrap, beyond every other component and `model_error` (see
+    /// largest wrap, on that wrap, beyond the curve's uncertainty and `new_cord_error` (see
     /// [`wrap_extrapolation`]); in the prediction interval only at wraps outside the fitted
     /// ones' span, growing with the distance (see [`PredictionModel::wrap_extrapolation_sd`]).
     /// No rows: not measured (fewer than three wraps).
@@ -113,18 +106,39 @@ pub struct PredictionModel {
     pub note: String,
 }
 
-/// Older `metrics.json` files carry no `run_scatter_estimated`: they estimated it.
-fn estimated() -> bool {
-    true
+/// A new cord's error in T2 around the population-averaged curve: variance a² + (b·T2)²,
+/// fitted by least squares to the squared held-out residuals of the whole procedure less the
+/// curve's own variance at each row (a method-of-moments estimate, both parts kept ≥ 0). The
+/// mean square, not the variance about the mean: a cord that sits off the curve is a new
+/// cord's error too. The prediction interval takes Student's t with `dof` degrees of freedom
+/// (cords − 2: the two parts come from that many cords' residuals).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NewCordError {
+    /// a, N.
+    pub abs_n: f64,
+    /// b, fraction of T2.
+    pub rel: f64,
+    /// Degrees of freedom of the interval's t.
+    pub dof: usize,
+    /// RMS of the held-out residuals behind it, N.
+    pub heldout_rms_n: f64,
+    /// Rows behind it.
+    pub rows: usize,
+    /// Cords behind it.
+    pub cords: usize,
 }
 
-/// The model's error (discrepancy) in T2, estimated from its own leave-one-cord-out residuals
-/// on the fitted data: each row's held-out residual e = T2 − (a fit on the other cords) should
-/// have variance v = the parameters' (cord jackknife) + a new cord's and a new run's ln-mu
-/// scatter + the within-run noise, if the model were right. What the residuals show beyond
-/// that is the model's error, sd² = max(0, mean e² − mean v) (a method-of-moments estimate,
-/// one constant in N², clamped at 0). The mean square, not the variance about the mean: a bias
-/// on held-out cords is model error too.
+impl NewCordError {
+    /// The variance at `t2_n`, N².
+    pub fn variance(&self, t2_n: f64) -> f64 {
+        self.abs_n.powi(2) + (self.rel * t2_n).powi(2)
+    }
+}
+
+/// An error in T2 beyond what the model accounts for, from held-out residuals: sd² =
+/// max(0, mean e² − mean v), v what the model's own components give at those rows (a
+/// method-of-moments estimate, one constant in N², clamped at 0). Used for what extrapolating
+/// in wrap costs.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ModelError {
     /// SD of the model error, N (enters the prediction interval as sd²).
@@ -148,7 +162,7 @@ impl ModelError {
 }
 
 /// The note every prediction model carries.
-pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1. Confidence interval: the population curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's and a new run's ln-mu scatter, the within-run noise and the model's own error (the leave-one-cord-out residuals' mean square beyond those components, one SD in N), and at a wrap outside the fitted wraps' span what extrapolating in wrap cost on the fitted data (fits without the smallest or the largest wrap, their residuals there beyond all that), scaled by the distance beyond the span over the distance it was measured at (normal, 95 %). Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
+pub const NOTE: &str = "Predictions are for the first run of a fresh cord at the trigger (time 0), with the contact's load memory settled under the held T1, by the population-averaged model (the named causes and one mu for all cords, least squares in T2). Confidence interval: the curve's uncertainty (cord jackknife covariance of the fitted values, Student t with folds − 1 degrees of freedom). Prediction interval: that plus a new cord's error around the curve, a² + (b·T2)² fitted to the held-out residuals of the whole procedure (every cord predicted by the causes chosen and fitted without it), and at a wrap outside the fitted wraps' span what extrapolating in wrap cost on the fitted data (fits without the smallest or the largest wrap, their residuals there beyond all that), scaled by the distance beyond the span over the distance it was measured at; Student t with cords − 2 degrees of freedom. Physical predictions use the friction law alone (sensor terms off), so T2 ≥ T1 and the interval's lower end is held at T1; as-measured ones add the fitted sensor terms.";
 
 /// One operating point to predict at.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -360,14 +374,12 @@ fn t95(dof: usize) -> f64 {
     StudentsT::new(0.0, 1.0, dof as f64).map_or(1.959_963_985, |t| t.inverse_cdf(0.975))
 }
 
-/// The predicted T2 at a query and the variances behind its intervals, model error aside.
+/// The predicted T2 at a query and the variance of the curve there.
 struct Spread {
     /// T2, N.
     t2: f64,
     /// Variance of the population curve (delta method through the covariance), N².
     var_mean: f64,
-    /// Variance of a new cord's and run's ln mu and the within-run noise, N².
-    var_new: f64,
 }
 
 /// Gradient of T2 in the free values, central differences.
@@ -387,8 +399,7 @@ fn gradient(pm: &PredictionModel, q: &Query) -> Vec<f64> {
 }
 
 fn spread(pm: &PredictionModel, q: &Query) -> Spread {
-    let m0 = pm.model(None);
-    let t2 = t2_of(&m0, q);
+    let t2 = t2_of(&pm.model(None), q);
     let grad = gradient(pm, q);
     let mut var_mean = 0.0;
     for (a, ga) in grad.iter().enumerate() {
@@ -402,47 +413,25 @@ fn spread(pm: &PredictionModel, q: &Query) -> Spread {
             var_mean += ga * c * gb;
         }
     }
-    // A new cord and a new run: ln mu scattered; dT2/d ln mu by a central difference.
-    let d_ln_mu = {
-        let h = 1e-4;
-        let at = |d: f64| {
-            let mut m = m0;
-            m.law.mu *= d.exp();
-            t2_of(&m, q)
-        };
-        (at(h) - at(-h)) / (2.0 * h)
-    };
-    let var_new = d_ln_mu.powi(2) * (pm.sd_ln_mu_cord.powi(2) + pm.sd_ln_mu_run.powi(2))
-        + pm.noise_abs_n.powi(2)
-        + (pm.noise_rel * t2).powi(2);
     // A variance that overflows stays infinite (an interval without bounds, which `predict`
     // refuses to print), never 0 (an interval of no width that looks certain).
-    let finite = |v: f64| {
-        if v.is_nan() {
-            f64::INFINITY
-        } else {
-            v.max(0.0)
-        }
-    };
     Spread {
         t2,
-        var_mean: finite(var_mean),
-        var_new: finite(var_new),
+        var_mean: if var_mean.is_nan() {
+            f64::INFINITY
+        } else {
+            var_mean.max(0.0)
+        },
     }
 }
 
 /// T2 at `q` with its intervals.
 pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
-    let Spread {
-        t2,
-        var_mean,
-        var_new,
-    } = spread(pm, q);
-    let var_new = var_new
-        + pm.model_error.sd_n.powi(2)
+    let Spread { t2, var_mean } = spread(pm, q);
+    let var_new = pm.new_cord_error.variance(t2)
         + pm.wrap_extrapolation_sd(q.wrap_deg).unwrap_or(0.0).powi(2);
     let ci = t95(pm.folds.saturating_sub(1)) * var_mean.sqrt();
-    let pi = (ci.powi(2) + 1.959_963_985f64.powi(2) * var_new).sqrt();
+    let pi = t95(pm.new_cord_error.dof.max(1)) * (var_mean + var_new).sqrt();
     // Physics: a capstan that is not driven backwards does not lose tension.
     let floor = if q.as_measured {
         f64::NEG_INFINITY
@@ -464,31 +453,108 @@ pub fn predict(pm: &PredictionModel, q: &Query) -> Prediction {
     }
 }
 
-/// The model error of `pm` (whose own `model_error` is ignored) from the held-out predictions
-/// `heldout` of the rows of `obs` (NaN where a row has none): see [`ModelError`]. Each row's
-/// accounted variance is the prediction interval's at its operating point, as measured.
-pub fn model_error(
+/// Each row's query as measured (its wrap, diameter, drive voltage and T1 reading).
+fn query_of(r: &crate::fit::obs::Row) -> Query {
+    Query {
+        wrap_deg: r.op.wrap_rad.to_degrees(),
+        diameter_mm: r.op.diameter_mm,
+        drive_v: r.op.drive_v,
+        t1_n: r.t1_n,
+        as_measured: true,
+    }
+}
+
+/// A new cord's error from the held-out predictions `heldout` of the rows of `obs` (NaN where a
+/// row has none), beyond the curve's variance of `pm` at each row: see [`NewCordError`].
+pub fn new_cord_error(
     pm: &PredictionModel,
     obs: &crate::fit::Observations,
     heldout: &[f64],
-) -> ModelError {
-    let (mut n, mut sum_e2, mut sum_v) = (0usize, 0.0, 0.0);
+) -> NewCordError {
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    let mut cords = std::collections::BTreeSet::new();
+    let mut e2sum = 0.0;
     for (r, p) in obs.rows.iter().zip(heldout) {
         let e = r.t2_n - p;
         if !e.is_finite() {
             continue;
         }
-        let q = Query {
-            wrap_deg: r.op.wrap_rad.to_degrees(),
-            diameter_mm: r.op.diameter_mm,
-            drive_v: r.op.drive_v,
-            t1_n: r.t1_n,
-            as_measured: true,
-        };
-        let s = spread(pm, &q);
+        let var_mean = spread(pm, &query_of(r)).var_mean;
+        if !var_mean.is_finite() {
+            continue;
+        }
+        pts.push((p * p, e * e - var_mean));
+        cords.insert(r.group);
+        e2sum += e * e;
+    }
+    let (a2, b2) = nonnegative_line(&pts);
+    NewCordError {
+        abs_n: a2.sqrt(),
+        rel: b2.sqrt(),
+        dof: cords.len().saturating_sub(2).max(1),
+        heldout_rms_n: if pts.is_empty() {
+            0.0
+        } else {
+            (e2sum / pts.len() as f64).sqrt()
+        },
+        rows: pts.len(),
+        cords: cords.len(),
+    }
+}
+
+/// Least squares y ≈ A + B·x with A, B ≥ 0 (the better of the free fit if it is non-negative
+/// and the two one-term fits).
+fn nonnegative_line(pts: &[(f64, f64)]) -> (f64, f64) {
+    let n = pts.len() as f64;
+    if pts.is_empty() {
+        return (0.0, 0.0);
+    }
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+    let (sxx, sxy) = pts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x * x, b + x * y));
+    let sse = |a: f64, b: f64| {
+        pts.iter()
+            .map(|(x, y)| (y - a - b * x).powi(2))
+            .sum::<f64>()
+    };
+    let mut best = ((sy / n).max(0.0), 0.0);
+    if sxx > 0.0 {
+        let b = (sxy / sxx).max(0.0);
+        if sse(0.0, b) < sse(best.0, best.1) {
+            best = (0.0, b);
+        }
+    }
+    let det = n * sxx - sx * sx;
+    if det > 1e-12 * n * sxx {
+        let b = (n * sxy - sx * sy) / det;
+        let a = (sy - b * sx) / n;
+        if a >= 0.0 && b >= 0.0 && sse(a, b) < sse(best.0, best.1) {
+            best = (a, b);
+        }
+    }
+    best
+}
+
+/// The error of extrapolating in wrap, from the held-out predictions `edge` of the smallest
+/// and the largest wrap by fits on the other wraps: their mean square beyond the curve's
+/// variance and a new cord's error, sd² = max(0, mean e² − mean v). Zero, from no rows, with
+/// fewer than three wraps.
+pub fn wrap_extrapolation(
+    pm: &PredictionModel,
+    obs: &crate::fit::Observations,
+    edge: &[f64],
+) -> ModelError {
+    let (mut n, mut sum_e2, mut sum_v) = (0usize, 0.0, 0.0);
+    for (r, p) in obs.rows.iter().zip(edge) {
+        let e = r.t2_n - p;
+        if !e.is_finite() {
+            continue;
+        }
+        let s = spread(pm, &query_of(r));
         n += 1;
         sum_e2 += e * e;
-        sum_v += s.var_mean + s.var_new;
+        sum_v += s.var_mean + pm.new_cord_error.variance(s.t2);
     }
     if n == 0 {
         return ModelError::NONE;
@@ -499,30 +565,6 @@ pub fn model_error(
         heldout_rms_n: e2.sqrt(),
         accounted_rms_n: v.sqrt(),
         rows: n,
-    }
-}
-
-/// The error of extrapolating in wrap, from the held-out predictions `edge` of the smallest
-/// and the largest wrap by fits on the other wraps: their mean square beyond what the other
-/// components and the model error `me` account for, sd² = max(0, mean e² − mean v − sd_me²).
-/// Zero, from no rows, with fewer than three wraps.
-pub fn wrap_extrapolation(
-    pm: &PredictionModel,
-    obs: &crate::fit::Observations,
-    edge: &[f64],
-    me: &ModelError,
-) -> ModelError {
-    let raw = model_error(pm, obs, edge);
-    let accounted2 = raw.accounted_rms_n.powi(2) + me.sd_n.powi(2);
-    ModelError {
-        sd_n: (raw.heldout_rms_n.powi(2) - accounted2).max(0.0).sqrt(),
-        heldout_rms_n: raw.heldout_rms_n,
-        accounted_rms_n: if raw.rows == 0 {
-            0.0
-        } else {
-            accounted2.sqrt()
-        },
-        rows: raw.rows,
     }
 }
 
@@ -537,57 +579,59 @@ fn edge_step_deg(obs: &crate::fit::Observations) -> f64 {
     0.5 * ((w[1] - w[0]) + (w[n - 1] - w[n - 2]))
 }
 
-/// The prediction model of a fitted analysis: population values, the cord-jackknife
-/// covariance of the free values, and the variance components.
-pub fn build(
-    obs: &crate::fit::Observations,
-    fits: &super::fits::Fits,
-    scatter: &crate::evidence::Scatter,
-) -> PredictionModel {
-    let ext = &fits.extended;
-    let m = ext.model(None);
+/// The cord-jackknife covariance of the values in `folds` ((k − 1)/k Σ (v − v̄)(v − v̄)ᵀ;
+/// NaN with fewer than two folds).
+fn jackknife_covariance(folds: &[Vec<(&'static str, f64)>], k_free: usize) -> Vec<Vec<f64>> {
+    let k = folds.len();
+    if k < 2 {
+        return vec![vec![f64::NAN; k_free]; k_free];
+    }
+    let mut cov = vec![vec![0.0; k_free]; k_free];
+    let mean: Vec<f64> = (0..k_free)
+        .map(|j| folds.iter().map(|f| f[j].1).sum::<f64>() / k as f64)
+        .collect();
+    for f in folds {
+        for a in 0..k_free {
+            for b in 0..k_free {
+                cov[a][b] += (f[a].1 - mean[a]) * (f[b].1 - mean[b]) * (k as f64 - 1.0) / k as f64;
+            }
+        }
+    }
+    cov
+}
+
+/// The prediction model of a fitted analysis: the population-averaged fit's values, their
+/// cord-jackknife covariance, and a new cord's error from the whole procedure's held-out
+/// predictions (`fits.pred.extended_loco`).
+pub fn build(obs: &crate::fit::Observations, fits: &super::fits::Fits) -> PredictionModel {
+    let pop = &fits.population;
+    let m = pop.model(None);
     let values: BTreeMap<String, f64> = Param::ALL
         .iter()
         .map(|p| (p.name().to_string(), p.get(&m)))
         .collect();
-    let free: Vec<String> = ext
+    let free: Vec<String> = pop
         .spec
         .free
         .iter()
         .map(|f| f.param.name().to_string())
         .collect();
-    let folds = &fits.extended_loco.fold_values;
-    let k = folds.len();
-    let mut cov = vec![vec![0.0; free.len()]; free.len()];
-    if k >= 2 {
-        let mean: Vec<f64> = (0..free.len())
-            .map(|j| folds.iter().map(|f| f[j].1).sum::<f64>() / k as f64)
-            .collect();
-        for f in folds {
-            for a in 0..free.len() {
-                for b in 0..free.len() {
-                    cov[a][b] +=
-                        (f[a].1 - mean[a]) * (f[b].1 - mean[b]) * (k as f64 - 1.0) / k as f64;
-                }
-            }
-        }
-    } else {
-        cov = vec![vec![f64::NAN; free.len()]; free.len()];
-    }
+    let folds = &fits.population_loco.fold_values;
     let rows = &obs.rows;
-    let run_ln = (1.0 + scatter.run_pct / 100.0).ln();
     let mut pm = PredictionModel {
         schema: SCHEMA,
         values,
+        covariance: jackknife_covariance(folds, free.len()),
         free,
-        covariance: cov,
-        folds: k,
-        sd_ln_mu_cord: ext.sigma_u.unwrap_or(0.0),
-        sd_ln_mu_run: if run_ln.is_finite() { run_ln } else { 0.0 },
-        run_scatter_estimated: run_ln.is_finite(),
-        noise_abs_n: scatter.noise_abs_n,
-        noise_rel: scatter.noise_rel,
-        model_error: ModelError::NONE,
+        folds: folds.len(),
+        new_cord_error: NewCordError {
+            abs_n: 0.0,
+            rel: 0.0,
+            dof: 1,
+            heldout_rms_n: 0.0,
+            rows: 0,
+            cords: 0,
+        },
         wrap_extrapolation_error: ModelError::NONE,
         wrap_extrapolation_step_deg: 0.0,
         fitted_range: FittedRange {
@@ -598,9 +642,8 @@ pub fn build(
         },
         note: NOTE.into(),
     };
-    pm.model_error = model_error(&pm, obs, &fits.pred.extended_loco);
-    pm.wrap_extrapolation_error =
-        wrap_extrapolation(&pm, obs, &fits.pred.extended_edge_wrap, &pm.model_error);
+    pm.new_cord_error = new_cord_error(&pm, obs, &fits.pred.extended_loco);
+    pm.wrap_extrapolation_error = wrap_extrapolation(&pm, obs, &fits.pred.extended_edge_wrap);
     if pm.wrap_extrapolation_error.rows > 0 {
         pm.wrap_extrapolation_step_deg = edge_step_deg(obs);
     }

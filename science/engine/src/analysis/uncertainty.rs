@@ -20,27 +20,43 @@ pub struct Interval {
     pub hi: f64,
 }
 
-/// Per cord: the sum of squared errors and the rows of a prediction.
+/// Per cord: the sum of squared errors and the rows of a prediction. A row without a finite
+/// prediction is counted in `missing`, never as an error of 0.
 #[derive(Clone, Debug)]
 pub struct CordErrors {
     /// Σ (prediction − T2)² per cord, N².
     pub ss: Vec<f64>,
     /// Rows with a prediction per cord.
     pub n: Vec<usize>,
+    /// Rows without one (not finite) per cord: a cord with any is not a held-out success.
+    pub missing: Vec<usize>,
 }
 
 impl CordErrors {
     /// The errors of `pred` against the measured T2, cord by cord.
     pub fn of(obs: &Observations, pred: &[f64]) -> CordErrors {
         let g = obs.groups.len();
-        let (mut ss, mut n) = (vec![0.0; g], vec![0usize; g]);
+        let (mut ss, mut n, mut missing) = (vec![0.0; g], vec![0usize; g], vec![0usize; g]);
         for (r, p) in obs.rows.iter().zip(pred) {
             if p.is_finite() {
                 ss[r.group] += (p - r.t2_n).powi(2);
                 n[r.group] += 1;
+            } else {
+                missing[r.group] += 1;
             }
         }
-        CordErrors { ss, n }
+        CordErrors { ss, n, missing }
+    }
+
+    /// These errors with the cords `out` left out (no rows, no error): what a statistic over
+    /// the cords that have a prediction sees.
+    pub fn without(&self, out: &[usize]) -> CordErrors {
+        let mut e = self.clone();
+        for &c in out {
+            e.ss[c] = 0.0;
+            e.n[c] = 0;
+        }
+        e
     }
 
     /// RMSE over the cords `pick` (with repetition), N.
@@ -190,6 +206,7 @@ mod tests {
         let e = CordErrors {
             ss: (1..=10).map(f64::from).collect(),
             n: vec![1; 10],
+            missing: vec![0; 10],
         };
         let r = rmse(&e, 7);
         assert!((r.value - 5.5f64.sqrt()).abs() < 1e-12);

@@ -30,6 +30,13 @@ use std::time::Instant;
 /// Options of [`diagnose_with`].
 pub type Options = evidence::Options;
 
+/// The data's structure, its statement ending with how many units each question has.
+fn with_units(d: &evidence::Design) -> capstan_data::structure::StructureSummary {
+    let mut s = d.structure.clone();
+    s.statement = format!("{}; {}", s.statement, evidence::cords::units_statement(d));
+    s
+}
+
 /// Diagnose with the default options (the function behind `capstan diagnose`).
 pub fn diagnose(d: &Dataset) -> Diagnosis {
     diagnose_with(d, &Options::default())
@@ -62,7 +69,7 @@ pub fn render(a: &Assessment, v: &Verdicts, opts: &Options, t0: Instant) -> Diag
     Diagnosis {
         data: DataInfo {
             source: des.source.clone(),
-            structure: des.structure.clone(),
+            structure: with_units(des),
         },
         effect: kind.name(),
         parameters: found

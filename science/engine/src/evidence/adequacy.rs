@@ -1,5 +1,5 @@
 //! Is anything left? After the selected effects are fitted, the residuals are tested for the
-//! structure no catalogue effect took up.
+//! structure no catalogue effect took up — each question against the units it varies over.
 //!
 //! * **Lack of fit against pure error** (Draper & Smith §2.1, with clustered replicates): the
 //!   runs of a cord repeat the same steps, so the residuals of a cord × step cell scatter
@@ -8,24 +8,33 @@
 //!   MS_PE = Σ(z − m_c)²/Σ(n_c − 1), on the standardised residuals z = r·√w; its p from sign
 //!   flips of whole runs (the runs' residuals are serially correlated). Its size, the
 //!   systematic part's RMS per observation (SS_LOF beyond what the flips give) over the pure
-//!   error's, tells a pattern that matters from one that is merely detectable.
-//! * **Directed tests**, each a cluster-robust Wald test (runs as clusters, F with (q, G − q)
-//!   degrees of freedom) of the run-centred residuals against one structure: the shape along
-//!   T1 (asinh(T1/0.5 N) and its square: defined for readings at or below zero), time inside
-//!   runs, the step direction, the T1 shape changing with the wrap or with the diameter. They
-//!   name the pattern that remains, and decide without replicates.
+//!   error's, tells a pattern that matters from one that is merely detectable. It is taken
+//!   twice: on the shared fit, and with every cord's own T2 zero and selected effects
+//!   ([`super::cords`]). What the second no longer finds is cord-to-cord scatter of the model's
+//!   own parameters (the rig re-hooks and re-zeroes every cord): said as such, not unexplained.
+//! * **Between cords** ([`super::cords`]): every cord's parameters and residual shape against
+//!   the wrap and the diameter, cords as units (t with G − 2 degrees of freedom, Bonferroni over
+//!   the family); which parameters scatter from cord to cord beyond the runs' scatter.
+//! * **Directed tests inside runs** ([`directed`]): the residuals beyond the cords' own
+//!   parameters along T1 (asinh(T1/0.5 N) and its square), time inside runs, the step
+//!   direction; cords as units where there are enough (Hotelling's T² over the cords'
+//!   coefficients), else runs as clusters. They name the pattern that remains, and decide
+//!   without replicates.
 //!
-//! `unexplained` is set when the remaining lack of fit is both significant and large; the
-//! sentence is generated from that decision and the pattern found.
+//! `unexplained` is set when a pattern between cords is significant, or when the lack of fit
+//! beyond the cords' own parameters is both significant and large; the sentence is generated
+//! from that decision and the pattern found.
 
+use super::cords::{cord_level, CordLevel};
 use super::design::Design;
-use super::within::{fit_strata, Strata, Weights, WithinFit};
-use crate::fit::stats::f_p_upper;
-use nalgebra::{DMatrix, DVector};
+use super::within::{Weights, WithinFit};
 use serde::Serialize;
 
+mod common;
 mod directed;
 mod pure_error;
+
+pub use common::CommonProfile;
 
 use directed::directed_tests;
 pub use pure_error::lack_of_fit;
@@ -45,6 +54,12 @@ pub struct AdequacyRule {
     /// The spread of an effect's per-wrap sizes (fraction of its common size) at or above
     /// which a significant inconstancy is large.
     pub min_spread: f64,
+    /// A pattern between cords (a cord's parameters or residual shape against wrap or
+    /// diameter, cords as units) is significant below this p, Bonferroni-adjusted over every
+    /// such test (the family's level).
+    pub alpha_between: f64,
+    /// A parameter's scatter from cord to cord is supported below this p.
+    pub alpha_random: f64,
 }
 
 impl Default for AdequacyRule {
@@ -54,6 +69,8 @@ impl Default for AdequacyRule {
             min_ratio: 0.35,
             min_r2: 0.05,
             min_spread: 0.5,
+            alpha_between: 0.01,
+            alpha_random: 0.01,
         }
     }
 }
@@ -79,18 +96,19 @@ pub struct LackOfFit {
 
 /// Do the selected effects have one size for all wraps? The same physics has the same size on
 /// every cord; an effect that takes different sizes on different wraps stands in for something
-/// else. A cluster-robust Wald test (runs as clusters) of the per-wrap sizes' contrasts.
+/// else. Each cord's size ([`super::cords`]), averaged per wrap; the test is the cords' sizes
+/// against the wrap, cords as units (the most significant effect's, Bonferroni-adjusted).
 #[derive(Clone, Debug, Serialize)]
 pub struct Constancy {
     /// Per effect: its size on each wrap, (wrap in degrees, value).
     pub by_wrap: Vec<(&'static str, Vec<(f64, f64)>)>,
-    /// F of the Wald statistic.
+    /// F (= t²) of the cords' sizes against the wrap.
     pub f: f64,
-    /// Numerator degrees of freedom: effects × (wraps − 1).
+    /// 1.
     pub df1: f64,
-    /// Denominator degrees of freedom: runs − df1.
+    /// Cords − 2.
     pub df2: f64,
-    /// Upper-tail p.
+    /// p, Bonferroni-adjusted over the cord-level pattern tests.
     pub p: f64,
     /// The largest spread of one effect's per-wrap sizes around its common size, as a
     /// fraction of the common size's departure from no effect.
@@ -110,8 +128,13 @@ pub struct Directed {
     pub df2: f64,
     /// Upper-tail p.
     pub p: f64,
-    /// Share of the run-centred residual variance the structure explains.
+    /// Share of the run-centred residual variance the structure explains (for wrap and
+    /// diameter: of the best cord summary's variance between cords).
     pub partial_r2: f64,
+    /// The units the test counts: `cords` or `runs`.
+    pub unit: &'static str,
+    /// How many.
+    pub units: usize,
 }
 
 /// What is left after the selected effects.
@@ -132,11 +155,22 @@ pub struct Adequacy {
     /// Selected effects whose best fit sits on the edge of their physical range, with the
     /// value there: the data want more than the effect can be.
     pub at_physical_limit: Vec<(&'static str, f64)>,
-    /// The selected within-run effects refitted with one size per wrap (None with one wrap
-    /// or none selected).
+    /// The selected within-run effects' sizes per wrap, from the cords' own sizes (None with
+    /// one wrap, fewer than four cords or none selected).
     pub constancy: Option<Constancy>,
-    /// The pure-error test (None without replicate runs).
+    /// The pure-error test of the shared fit (None without replicate runs).
     pub lack_of_fit: Option<LackOfFit>,
+    /// The pure-error test with every cord's own T2 zero and selected effects.
+    pub lack_of_fit_beyond_cords: Option<LackOfFit>,
+    /// The cords as units: random cord effects and patterns between cords.
+    pub cords: CordLevel,
+    /// The step profile the cords share beyond their own parameters, against sign flips of
+    /// whole cords (None with fewer than [`COMMON_MIN_CORDS`] cords).
+    pub common: Option<CommonProfile>,
+    /// What is left is cord-to-cord scatter of these parameters (the shared fit's lack of fit
+    /// is significant and large, the cords' own parameters take it up): the supported random
+    /// cord effects, strongest first. Empty otherwise.
+    pub left_between_cords: Vec<&'static str>,
     /// The directed tests.
     pub directed: Vec<Directed>,
     /// The rule.
@@ -149,8 +183,21 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         .map(|i| (d.t2[i] - fit.fitted[i]) * w.w[i].sqrt())
         .collect();
     let mut not_identified = Vec::new();
+    let cords = cord_level(d, fit, w, rule.alpha_random);
     let lack_of_fit = identified_lack_of_fit(d, &z, fit.k(), &mut not_identified);
-    let directed = directed_tests(d, &z);
+    let k_cords = fit.k() + cords.per_cord_parameters * cords.cords;
+    let after = |signs: &[f64], out: &mut [f64]| cords.projection.after(d, signs, out);
+    let beyond = pure_error::pure_error_with(d, k_cords, &after)
+        .filter(|l| [l.f, l.p, l.systematic_ratio].iter().all(|v| v.is_finite()));
+    let mut directed = directed_tests(d, &cords.z_after);
+    directed.extend(between_directed(&cords));
+    if cords.cords < super::cords::MIN_CORDS && cords.cords >= 2 {
+        not_identified.push(format!(
+            "patterns between cords (wrap, diameter): {} cords are too few to judge them              against the cords' own scatter (at least {})",
+            cords.cords,
+            super::cords::MIN_CORDS
+        ));
+    }
     let untested = lack_of_fit.is_none() && directed.is_empty();
     if untested {
         not_identified.push(format!(
@@ -158,38 +205,82 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             d.units.len()
         ));
     }
-    let significant: Vec<&Directed> = directed.iter().filter(|t| t.p < rule.alpha).collect();
-    let best = significant
+    // A pattern between cords is flagged only where there is something left for it to be:
+    // the lack of fit against the replicate runs significant, or, without replicates, a shape
+    // pattern that accounts for a share of the residuals the rule calls large (a pattern of
+    // the cords' summaries can be exact and still far too small to matter).
+    let sized = |t: &&Directed| match &lack_of_fit {
+        Some(l) => l.p < rule.alpha,
+        None => (cords.patterns.iter())
+            .filter(|p| p.covariate == t.structure && p.p_family <= t.p * (1.0 + 1e-9))
+            .any(|p| p.share >= rule.min_r2),
+    };
+    let between = directed
         .iter()
+        .filter(|t| is_between(t.structure) && t.p < rule.alpha_between)
+        .filter(sized)
+        .min_by(|a, b| a.p.total_cmp(&b.p));
+    let within: Vec<&Directed> = directed
+        .iter()
+        .filter(|t| !is_between(t.structure))
+        .collect();
+    let best = within
+        .iter()
+        .filter(|t| t.p < rule.alpha)
         .min_by(|a, b| a.p.total_cmp(&b.p).then(b.f.total_cmp(&a.f)))
         .copied();
     let at_physical_limit: Vec<(&'static str, f64)> = (0..fit.k())
         .filter(|&j| fit.maps[j].at_physical_limit(fit.theta[j]))
         .map(|j| (fit.maps[j].kind.name(), fit.value(j)))
         .collect();
-    let lack = match &lack_of_fit {
-        Some(l) => l.p < rule.alpha && l.systematic_ratio >= rule.min_ratio,
-        None => {
-            let bonferroni = rule.alpha / directed.len().max(1) as f64;
-            best.is_some_and(|t| t.p < bonferroni && t.partial_r2 >= rule.min_r2)
+    let large = |l: &LackOfFit| l.p < rule.alpha && l.systematic_ratio >= rule.min_ratio;
+    let bonferroni = rule.alpha / within.len().max(1) as f64;
+    let directed_lack = best.is_some_and(|t| t.p < bonferroni && t.partial_r2 >= rule.min_r2);
+    // With cords enough, what is left must be shared by the cords to be a pattern the model
+    // misses; each cord's own departures are cord-to-cord scatter. With fewer, the lack of fit
+    // beyond the cords' own parameters decides (it cannot tell the two apart).
+    let common = common::common_profile(d, &cords.z_after, COMMON_MIN_CORDS);
+    let lack = match (&common, &beyond) {
+        (Some(c), _) => {
+            (c.p < rule.alpha_between && c.systematic_ratio >= rule.min_ratio)
+                || (best.is_some_and(|t| t.unit == "cords") && directed_lack)
         }
+        (None, Some(l)) => large(l),
+        (None, None) => directed_lack,
     };
-    let constancy = constancy(d, fit, w);
-    if fit.k() > 0 && d.wraps().len() > MAX_CONSTANCY_WRAPS {
-        not_identified.push(format!(
-            "one size per wrap: {} wraps are more than the {MAX_CONSTANCY_WRAPS} this test \
-             refits",
-            d.wraps().len()
-        ));
+    let constancy = constancy(d, fit, &cords);
+    let unexplained = lack || between.is_some() || !at_physical_limit.is_empty();
+    let left_between_cords = if !unexplained && lack_of_fit.as_ref().is_some_and(large) {
+        supported_scatter(&cords)
+    } else {
+        Vec::new()
+    };
+    let own_shape_left = !unexplained && beyond.as_ref().is_some_and(large);
+    let pattern = match between {
+        Some(t) => Some(t.structure),
+        None => pattern(best, beyond.as_ref(), &within, rule),
+    };
+    let mut sentence = sentence(
+        lack || between.is_some(),
+        pattern,
+        beyond.as_ref(),
+        &directed,
+    );
+    if let Some(t) = between {
+        sentence = between_sentence(&cords, t.structure, lack_of_fit.as_ref());
     }
-    let inconstant =
-        (constancy.as_ref()).filter(|c| c.p < rule.alpha && c.spread >= rule.min_spread);
-    let unexplained = lack || !at_physical_limit.is_empty() || inconstant.is_some();
-    let pattern = pattern(best, lack_of_fit.as_ref(), &directed, rule);
-    let mut sentence = sentence(lack, pattern, lack_of_fit.as_ref(), &directed);
-    if let Some(l) = lack_of_fit
+    if !unexplained && lack_of_fit.as_ref().is_some_and(large) {
+        let own = own_shape_left.then_some(common.as_ref()).flatten();
+        sentence = scatter_sentence(
+            &cords,
+            &left_between_cords,
+            (lack_of_fit.as_ref(), beyond.as_ref()),
+            own,
+        );
+    }
+    if let Some(l) = beyond
         .as_ref()
-        .filter(|l| !lack && underpowered(l, rule))
+        .filter(|l| !lack && between.is_none() && common.is_none() && underpowered(l, rule))
     {
         sentence = format!(
             "The lack of fit against the replicate runs is not significant (F = {:.2}, p = {}), but its systematic part is estimated at {:.2}× the noise, above the rule's {:.2}×: these replicate runs are too few to rule out structure that matters.",
@@ -207,7 +298,7 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             d.units.len()
         );
     }
-    let sentence = with_limits_and_sizes(sentence, lack, &at_physical_limit, inconstant);
+    let sentence = with_limits(sentence, lack || between.is_some(), &at_physical_limit);
     Adequacy {
         unexplained,
         pattern,
@@ -217,8 +308,191 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
         at_physical_limit,
         constancy,
         lack_of_fit,
+        lack_of_fit_beyond_cords: beyond,
+        cords,
+        common,
+        left_between_cords,
         directed,
         rule,
+    }
+}
+
+/// From this many cords the cords decide whether what is left is shared by them (a pattern)
+/// or each cord's own (cord-to-cord scatter): exact sign flips of 8 cords resolve p to 1/128.
+pub const COMMON_MIN_CORDS: usize = 8;
+
+/// A structure that varies only between cords.
+fn is_between(structure: &str) -> bool {
+    matches!(structure, "wrap" | "diameter")
+}
+
+/// The cord-level pattern tests as directed tests: per covariate, its most significant
+/// summary (t², 1 and G − 2 degrees of freedom, p Bonferroni-adjusted over the family).
+fn between_directed(c: &CordLevel) -> Vec<Directed> {
+    ["wrap", "diameter"]
+        .into_iter()
+        .filter_map(|cov| {
+            let best = c
+                .patterns
+                .iter()
+                .filter(|p| p.covariate == cov)
+                .min_by(|a, b| a.p.total_cmp(&b.p))?;
+            Some(Directed {
+                structure: cov,
+                f: best.t * best.t,
+                df1: 1.0,
+                df2: best.df,
+                p: best.p_family,
+                partial_r2: best.r2,
+                unit: "cords",
+                units: c.cords,
+            })
+        })
+        .collect()
+}
+
+/// The supported random cord effects beyond mu (which every run's own mu takes up anyway),
+/// strongest first.
+fn supported_scatter(c: &CordLevel) -> Vec<&'static str> {
+    let mut v: Vec<&super::cords::RandomEffect> = c
+        .random_effects
+        .iter()
+        .filter(|e| e.supported && e.parameter != "mu")
+        .collect();
+    v.sort_by(|a, b| a.p.total_cmp(&b.p).then(b.f.total_cmp(&a.f)));
+    v.into_iter().map(|e| e.parameter).collect()
+}
+
+/// What a parameter is, for the sentence on what is left.
+pub fn scatter_words(parameter: &str) -> &'static str {
+    match parameter {
+        "t2_offset" => "the T2 zero",
+        "t1_offset" => "the T1 zero",
+        "contact_heating" => "contact heating",
+        "pressure_friction" => "the pressure exponent",
+        "bending_stiffness" => "the bending stiffness",
+        "thermal_drift" => "the drift with time",
+        "mu" => "mu",
+        "sensor_gain" => "the T2 gain",
+        _ => "an effect's size",
+    }
+}
+
+/// A pattern between cords: which cord summary changes with `covariate`, with its test.
+fn between_sentence(c: &CordLevel, covariate: &str, lof: Option<&LackOfFit>) -> String {
+    let Some(p) = c
+        .patterns
+        .iter()
+        .filter(|p| p.covariate == covariate)
+        .min_by(|a, b| a.p.total_cmp(&b.p))
+    else {
+        return String::new();
+    };
+    let what = match p.summary {
+        "shape_t1" | "shape_t1_squared" => "the shape of T2 against T1".to_string(),
+        s => format!("the size of {}", scatter_words(s)),
+    };
+    let by = if covariate == "wrap" {
+        "the wrap"
+    } else {
+        "the capstan diameter"
+    };
+    let mut s = format!(
+        "{what} changes with {by} (the {} cords as units: t({:.0}) = {:.2}, p {} after Bonferroni over {} cord-level tests); no catalogue effect explains it",
+        c.cords,
+        p.df,
+        p.t,
+        p_equals(p.p_family),
+        c.patterns.len()
+    );
+    if let Some(l) = lof {
+        s += &format!(
+            " (lack of fit against the replicate runs F = {}, p {})",
+            f_shown(l.f, 1),
+            lof_p_equals(l.p)
+        );
+    }
+    s + "."
+}
+
+/// What is left is cord-to-cord scatter: the sentence, with the supported random cord effects
+/// `left`, the lack of fit before and beyond the cords' own parameters, and, when each cord's
+/// own shape beyond them is left too (`own`: the test that it is shared by no pattern), that.
+fn scatter_sentence(
+    c: &CordLevel,
+    left: &[&'static str],
+    (common, beyond): (Option<&LackOfFit>, Option<&LackOfFit>),
+    own: Option<&CommonProfile>,
+) -> String {
+    let what: Vec<String> = left
+        .iter()
+        .map(|p| {
+            let e = c.random_effects.iter().find(|e| e.parameter == *p);
+            let sd = e.map_or(String::new(), |e| {
+                format!(
+                    " (SD {} {} between cords, p {})",
+                    two_digits(e.sd_between),
+                    e.unit,
+                    flip_p(e.p)
+                )
+            });
+            format!("{}{sd}", scatter_words(p))
+        })
+        .collect();
+    let mut s = if what.is_empty() {
+        "What is left differs from cord to cord".to_string()
+    } else {
+        format!(
+            "What is left is cord-to-cord scatter: {} {} from cord to cord more than from run to run",
+            crate::verdict::words::list(&what),
+            if what.len() == 1 { "differs" } else { "differ" }
+        )
+    };
+    if !c.patterns.is_empty() {
+        let order = c.patterns.iter().map(|p| p.p_family).fold(1.0, f64::min);
+        s += &format!(
+            ", in no order of wrap or diameter (the {} cords as units, smallest adjusted p = {})",
+            c.cords,
+            p_shown(order)
+        );
+    }
+    if let (Some(a), Some(b)) = (common, beyond) {
+        s += &format!(
+            "; with every cord's own T2 zero and effects the lack of fit against the replicate runs falls from F = {} (the systematic part {:.2}× the noise) to F = {} ({:.2}×)",
+            f_shown(a.f, 1),
+            a.systematic_ratio,
+            f_shown(b.f, 1),
+            b.systematic_ratio
+        );
+    }
+    if let Some(o) = own {
+        s += &format!(
+            ", and what each cord keeps beyond them is its own: the {} cords share no profile over the {} steps (sign flips of whole cords, p = {}; shared part {:.2}× the noise)",
+            o.cords,
+            o.steps,
+            p_shown(o.p),
+            o.systematic_ratio
+        );
+    }
+    s + "."
+}
+
+/// Two significant digits.
+fn two_digits(v: f64) -> String {
+    if !v.is_finite() || v == 0.0 {
+        return crate::verdict::words::sig(v);
+    }
+    let e = v.abs().log10().floor() as i32;
+    let decimals = (1 - e).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// A sign-flip p: "≤ 5.0e-4" at its floor (no flip as large), else "= p".
+fn flip_p(p: f64) -> String {
+    if p <= pure_error::P_FLOOR * (1.0 + 1e-9) {
+        format!("≤ {:.1e}", pure_error::P_FLOOR)
+    } else {
+        p_equals(p)
     }
 }
 
@@ -248,7 +522,7 @@ fn identified_lack_of_fit(
 fn pattern(
     best: Option<&Directed>,
     lack_of_fit: Option<&LackOfFit>,
-    directed: &[Directed],
+    directed: &[&Directed],
     rule: AdequacyRule,
 ) -> Option<&'static str> {
     let closest = directed
@@ -262,52 +536,26 @@ fn pattern(
     }
 }
 
-/// The decision's sentence with what else says the catalogue does not explain the data: the
-/// effects pushed to the edge of the physical range, and found effects of different sizes on
-/// different wraps (`inconstant`). Each replaces the sentence when nothing before it said so.
-fn with_limits_and_sizes(
-    mut sentence: String,
-    lack: bool,
-    at_physical_limit: &[(&'static str, f64)],
-    inconstant: Option<&Constancy>,
-) -> String {
-    if !at_physical_limit.is_empty() {
-        let list: Vec<String> = at_physical_limit
-            .iter()
-            .map(|(k, v)| format!("{k} ({v:.4})"))
-            .collect();
-        let edge = format!(
-            "The data push {} to the edge of the physical range, so the catalogue does not explain them.",
-            list.join(" and ")
-        );
-        sentence = if lack {
-            format!("{sentence} {edge}")
-        } else {
-            edge
-        };
+/// The decision's sentence with the effects pushed to the edge of the physical range, which
+/// says the catalogue does not explain the data (replacing the sentence when nothing before it
+/// said so).
+fn with_limits(sentence: String, lack: bool, at_physical_limit: &[(&'static str, f64)]) -> String {
+    if at_physical_limit.is_empty() {
+        return sentence;
     }
-    if let Some(c) = inconstant {
-        let list: Vec<String> = c
-            .by_wrap
-            .iter()
-            .map(|(k, v)| {
-                let vals: Vec<String> = v.iter().map(|(w, x)| format!("{x:.4} at {w}°")).collect();
-                format!("{k} ({})", vals.join(", "))
-            })
-            .collect();
-        let text = format!(
-            "The found effects take different sizes on different wraps ({}; F = {}, p {}), which the same physics would not: they stand in for something no catalogue effect explains.",
-            list.join("; "),
-            f_shown(c.f, 1),
-            p_equals(c.p)
-        );
-        sentence = if lack || !at_physical_limit.is_empty() {
-            format!("{sentence} {text}")
-        } else {
-            text
-        };
+    let list: Vec<String> = at_physical_limit
+        .iter()
+        .map(|(k, v)| format!("{k} ({v:.4})"))
+        .collect();
+    let edge = format!(
+        "The data push {} to the edge of the physical range, so the catalogue does not explain them.",
+        list.join(" and ")
+    );
+    if lack {
+        format!("{sentence} {edge}")
+    } else {
+        edge
     }
-    sentence
 }
 
 /// The sentence of the decision.
@@ -405,110 +653,49 @@ pub fn lof_p_equals(p: f64) -> String {
     }
 }
 
-/// The most wraps the constancy test refits one size per wrap for: beyond, it is not
-/// identified (a data set of a few rows at each of hundreds of wraps cannot say an effect's
-/// size per wrap, and the refit would grow with the square of their number).
-pub const MAX_CONSTANCY_WRAPS: usize = 24;
-
-/// Refit the selected effects with one size per wrap and test that the sizes agree.
-fn constancy(d: &Design, fit: &WithinFit, w: &Weights) -> Option<Constancy> {
-    let k = fit.k();
+/// The selected effects' sizes per wrap (each the mean of its cords' own sizes) and the
+/// cords' sizes against the wrap (cords as units; the most significant effect's test). None
+/// with no effect selected, one wrap or too few cords.
+fn constancy(d: &Design, fit: &WithinFit, c: &CordLevel) -> Option<Constancy> {
     let wraps = d.wraps();
-    if k == 0 || wraps.len() < 2 || wraps.len() > MAX_CONSTANCY_WRAPS {
+    if fit.k() == 0 || wraps.len() < 2 {
         return None;
     }
-    // Too few runs for the contrasts: decided before the refit, which it would not change.
-    if d.units.len() < k * (wraps.len() - 1) + 2 {
-        return None;
-    }
-    let of_unit: Vec<usize> = d
-        .unit_cord
+    let names: Vec<&'static str> = fit.maps.iter().map(|m| m.kind.name()).collect();
+    let test = c
+        .patterns
         .iter()
-        .map(|&c| {
-            wraps
-                .iter()
-                .position(|&x| x == d.cords[c].wrap_deg)
-                .unwrap_or(0)
-        })
-        .collect();
-    let s_n = wraps.len();
-    let maps: Vec<_> = (0..s_n).flat_map(|_| fit.maps.iter().copied()).collect();
-    let theta0: Vec<f64> = (0..s_n).flat_map(|_| fit.theta.iter().copied()).collect();
-    let strata = Strata { k, of_unit };
-    let split = fit_strata(d, (&maps, &strata), &theta0, &fit.mu, w);
-    let q = k * (s_n - 1);
-    let g = d.units.len() as f64;
-    if g - (q as f64) < 2.0 {
-        return None;
-    }
-    let qf = q as f64;
-    let f = wald_f(&split, k, s_n, g)?;
-    let (by_wrap, spread) = sizes_by_wrap(fit, &split, &wraps);
-    let finite = spread.is_finite()
-        && by_wrap
+        .filter(|p| p.covariate == "wrap" && names.contains(&p.summary))
+        .min_by(|a, b| a.p.total_cmp(&b.p))?;
+    let mut spread: f64 = 0.0;
+    let mut by_wrap = Vec::new();
+    for (j, name) in names.iter().enumerate() {
+        let per_cord = &c.per_cord.iter().find(|(n, _)| n == name)?.1;
+        let common = fit.value(j);
+        let scale = (common - fit.maps[j].kind.neutral_value()).abs();
+        let vals: Vec<(f64, f64)> = wraps
             .iter()
-            .all(|(_, v)| v.iter().all(|x| x.1.is_finite()));
-    if !finite {
-        return None;
+            .map(|&wr| {
+                let v: Vec<f64> = (0..d.cords.len())
+                    .filter(|&g| d.cords[g].wrap_deg == wr && per_cord[g].is_finite())
+                    .map(|g| per_cord[g])
+                    .collect();
+                (wr, v.iter().sum::<f64>() / v.len() as f64)
+            })
+            .collect();
+        for &(_, x) in &vals {
+            if scale > 0.0 && x.is_finite() {
+                spread = spread.max((x - common).abs() / scale);
+            }
+        }
+        by_wrap.push((*name, vals));
     }
     Some(Constancy {
         by_wrap,
-        f,
-        df1: qf,
-        df2: g - qf,
-        p: f_p_upper(f, qf, g - qf),
+        f: test.t * test.t,
+        df1: 1.0,
+        df2: test.df,
+        p: test.p_family,
         spread,
     })
-}
-
-/// The F statistic of the Wald test that every effect has one size on every wrap: the
-/// contrasts θ[s, j] − θ[0, j] of the split fit (`s_n` wraps of `k` effects, `g` runs) through
-/// its robust covariance. None when it cannot be computed.
-fn wald_f(split: &WithinFit, k: usize, s_n: usize, g: f64) -> Option<f64> {
-    let big_k = k * s_n;
-    let q = k * (s_n - 1);
-    let mut c = DMatrix::<f64>::zeros(q, big_k);
-    for s in 1..s_n {
-        for j in 0..k {
-            let row = (s - 1) * k + j;
-            c[(row, s * k + j)] = 1.0;
-            c[(row, j)] = -1.0;
-        }
-    }
-    let theta = DVector::from_column_slice(&split.theta);
-    let v = DMatrix::from_row_slice(big_k, big_k, &split.cov_robust);
-    let ct = &c * &theta;
-    let cvc = &c * v * c.transpose();
-    let wald = (ct.transpose() * cvc.try_inverse()? * &ct)[(0, 0)];
-    let qf = q as f64;
-    let f = wald / qf * (g - qf) / (g - 1.0);
-    f.is_finite().then_some(f)
-}
-
-/// Each effect's size on each wrap (from the split fit), and the largest departure from the
-/// common size relative to the common size's distance from neutral.
-#[allow(clippy::type_complexity)]
-fn sizes_by_wrap(
-    fit: &WithinFit,
-    split: &WithinFit,
-    wraps: &[f64],
-) -> (Vec<(&'static str, Vec<(f64, f64)>)>, f64) {
-    let k = fit.k();
-    let mut spread: f64 = 0.0;
-    let by_wrap = (0..k)
-        .map(|j| {
-            let common = fit.value(j);
-            let scale = (common - fit.maps[j].kind.neutral_value()).abs();
-            let vals: Vec<(f64, f64)> = (0..wraps.len())
-                .map(|s| (wraps[s], split.value(s * k + j)))
-                .collect();
-            for &(_, x) in &vals {
-                if scale > 0.0 {
-                    spread = spread.max((x - common).abs() / scale);
-                }
-            }
-            (fit.maps[j].kind.name(), vals)
-        })
-        .collect();
-    (by_wrap, spread)
 }

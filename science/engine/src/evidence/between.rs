@@ -28,6 +28,27 @@ use capstan_physics::catalogue::cord_point;
 use capstan_physics::entry::Slope;
 use capstan_physics::EffectKind;
 
+/// A between-cord effect is named when its cords' t test (cords as units) gives p below this
+/// (and its size matters): the level the BIC rule had at the thesis's ten cords (ΔBIC < −6
+/// with ln 10: χ²₁ > 8.3), now one level whatever the number of cords. Checked on the
+/// calibration seed (11) of the thesis-design campaigns (`capstan_validation::cord_calibration`,
+/// 200 per truth): a campaign with nothing between cords but the cords' scatter of mu, T2 zero
+/// and heating gets a between-cord claim in 2.5 % (at 0.01: 5.5 %, over the 5 % allowed: the
+/// diameter's t test rejects more often than its level on the simulated rig), and mu 10–15 %
+/// apart on the two diameters is named in 46.5 % (docs/README-diagnose.md, "Between cords").
+pub const CORD_ALPHA: f64 = 0.004;
+
+/// Is `e` supported: between cords, p below [`CORD_ALPHA`]; between runs (wear), ΔBIC below
+/// −`threshold`; in both, a size that matters.
+pub fn supported(e: &Evidence, d: &Design, threshold: f64) -> bool {
+    let relevant = practically_relevant(e.kind, e.value, d);
+    relevant
+        && match level(e.kind) {
+            Level::BetweenCord => e.p < CORD_ALPHA,
+            _ => e.delta_bic < -threshold,
+        }
+}
+
 /// ML fit of the random-intercept model.
 #[derive(Clone, Debug)]
 pub struct LmmFit {
@@ -252,8 +273,7 @@ pub fn between_tests(
     threshold: f64,
 ) -> BetweenTests {
     let cord_mu = cord_means(d, run_mu);
-    let supported =
-        |e: &Evidence| practically_relevant(e.kind, e.value, d) && e.delta_bic < -threshold;
+    let supported = |e: &Evidence| supported(e, d, threshold);
     let pool: Vec<EffectKind> = testable
         .iter()
         .copied()

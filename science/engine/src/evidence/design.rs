@@ -80,6 +80,9 @@ pub struct Design {
     pub falling: Vec<Option<bool>>,
     /// Per row: its replicate cell (cord × step, shared by the cord's runs), if steps are known.
     pub cell: Vec<Option<usize>>,
+    /// Per cell: its step (the step number × 1000, or the window time × 10, rounded): the cells
+    /// of different cords at one step.
+    pub cell_step: Vec<i64>,
     /// Per row: the measured T1 at which the law's shape is read, NaN where the row keeps its
     /// own (see [`shape_t1`]).
     pub t1_shape: Vec<f64>,
@@ -148,7 +151,7 @@ impl Design {
             }
         }
         let falling = directions(&units, &t1, timed);
-        let cell = cells(&units, &unit_cord, d, &obs);
+        let (cell, cell_step) = cells(&units, &unit_cord, d, &obs);
         let t1_shape = shape_t1(&t1, &cell, &units);
         Design {
             t1,
@@ -162,6 +165,7 @@ impl Design {
             cords,
             falling,
             cell,
+            cell_step,
             t1_shape,
             columns,
             obs,
@@ -325,13 +329,14 @@ fn cells(
     unit_cord: &[usize],
     d: &Dataset,
     obs: &Observations,
-) -> Vec<Option<usize>> {
+) -> (Vec<Option<usize>>, Vec<i64>) {
     let n = obs.rows.len();
     let mut out = vec![None; n];
+    let mut step = Vec::new();
     let has_step = d.has_column("step");
     let has_time = d.has_column("time_s");
     if !(has_step || has_time) || d.structure.run_level.from == Basis::Assumed {
-        return out;
+        return (out, step);
     }
     let mut keys: HashMap<(usize, i64), usize> = HashMap::new();
     for (u, rows) in units.iter().enumerate() {
@@ -342,10 +347,14 @@ fn cells(
                 _ => continue,
             };
             let next = keys.len();
-            out[i] = Some(*keys.entry((unit_cord[u], k)).or_insert(next));
+            let c = *keys.entry((unit_cord[u], k)).or_insert(next);
+            if c == step.len() {
+                step.push(k);
+            }
+            out[i] = Some(c);
         }
     }
-    out
+    (out, step)
 }
 
 #[cfg(test)]

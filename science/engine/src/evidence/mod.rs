@@ -19,9 +19,11 @@
 //!    (ĉ comes from G runs) and put on the χ²₁ scale: ΔBIC = −χ² + ln n.
 //! 2. **Between runs and cords** ([`between`]): the runs' mu of the final within fit against
 //!    the covariates that vary only between cords (gain: 1/β, diameter, voltage: the cords'
-//!    means, t with G − p degrees of freedom) or between runs of a cord (wear: t with R − G − 1
-//!    degrees of freedom). A covariate that varies between clusters has as many independent
-//!    observations as clusters, not rows.
+//!    means, t with G − p degrees of freedom, named at p < [`between::CORD_ALPHA`]) or between
+//!    runs of a cord (wear: t with R − G − 1 degrees of freedom). A covariate that varies
+//!    between cords has as many independent observations as cords, not runs or rows: every
+//!    question between cords takes the cords as its units ([`cords`]: which parameters scatter
+//!    from cord to cord, and whether any cord summary follows wrap or diameter).
 //! 3. **Adequacy** ([`adequacy`]): the residuals of the final fit against the replicate runs'
 //!    pure error, and against T1, time, step direction, wrap and diameter. Significant and
 //!    large structure left is reported as unexplained, with the pattern, rather than forced
@@ -34,6 +36,7 @@
 pub mod adequacy;
 pub mod between;
 pub mod candidates;
+pub mod cords;
 pub mod design;
 pub mod rivals;
 pub mod select;
@@ -109,6 +112,9 @@ pub struct Evidence {
     pub delta_bic: f64,
     /// The evidence on the χ²₁ scale.
     pub chi2: f64,
+    /// Its p: the χ²₁ upper tail of `chi2` (between cords: the two-sided p of the cords'
+    /// t test, cords as units).
+    pub p: f64,
     /// Degrees of freedom of its small-sample reference (runs − 1, or the regression's).
     pub df: f64,
     /// Overdispersion ĉ of its parameter (within runs; 1 between).
@@ -142,6 +148,7 @@ impl Evidence {
             edge_interval: None,
             delta_bic,
             chi2,
+            p: stats::chi2_p_upper(chi2, 1.0),
             df,
             overdispersion: 1.0,
             relevant: false,
@@ -335,7 +342,7 @@ fn add_between(
 ) {
     for mut e in bt.evidence {
         e.relevant = candidates::practically_relevant(e.kind, e.value, d);
-        e.supported = e.relevant && e.delta_bic < -opts.between_threshold;
+        e.supported = between::supported(&e, d, opts.between_threshold);
         e.selected = bt.selected.contains(&e.kind);
         evidence.push(e);
     }

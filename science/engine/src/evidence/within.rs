@@ -485,6 +485,25 @@ fn covariances(
     (flat(model), flat(robust))
 }
 
+/// The sensitivities of every row at a fit: ∂f/∂mu of its own run, and ∂f/∂θ (row-major
+/// n×k), as the fit's own solver computes them (what the cord-level summaries linearise on).
+pub fn sensitivities(d: &Design, fit: &WithinFit, w: &Weights) -> (Vec<f64>, Vec<f64>) {
+    let (n, k) = (d.n(), fit.k());
+    let maps = (fit.maps.as_slice(), &fit.strata);
+    let (mut f, mut slopes) = (vec![0.0; n], vec![f64::NAN; n]);
+    predict(
+        d,
+        maps,
+        (&fit.mu, &fit.theta),
+        w,
+        None,
+        (&mut f, &mut slopes),
+    );
+    let mut sens = Sens::new(n, k);
+    jacobian(d, maps, (&fit.mu, &fit.theta), (&f, &slopes), &mut sens);
+    (sens.a, sens.b)
+}
+
 /// Start values of every run's mu: the median of ln(T2/T1)/β over its rows with both
 /// tensions above zero (the only rows a logarithm takes).
 pub fn start_mu(d: &Design) -> Vec<f64> {

@@ -130,6 +130,17 @@ pub fn chi2_of_t(t: f64, df: f64) -> f64 {
     chi2_with_tail(t_p_two_sided(t, df), 1.0, t * t)
 }
 
+/// Upper-tail p of a χ² value with `df` degrees of freedom (1 for NaN or below 0: no evidence).
+pub fn chi2_p_upper(chi2: f64, df: f64) -> f64 {
+    if chi2.is_nan() || chi2 <= 0.0 {
+        return 1.0;
+    }
+    if chi2.is_infinite() {
+        return 0.0;
+    }
+    ChiSquared::new(df).map_or(f64::NAN, |d| d.sf(chi2))
+}
+
 /// An F statistic with (d1, d2) degrees of freedom on the χ²_{d1} scale (same upper tail): a
 /// quasi-likelihood ratio divided by an overdispersion estimated from d2 clusters.
 pub fn chi2_of_f(f: f64, d1: f64, d2: f64) -> f64 {

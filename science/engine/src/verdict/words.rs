@@ -120,11 +120,12 @@ fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
     let names: Vec<String> = effects.iter().map(effect_phrase).collect();
     // Euler-Eytelwein "explains" the data only where a pure-error test could have shown
     // otherwise: with replicate runs enough for it to see structure the rule calls large.
-    let inconclusive = !adequacy.tested
-        || adequacy
-            .lack_of_fit
-            .as_ref()
-            .is_none_or(|l| underpowered(l, adequacy.rule));
+    // The lack of fit the decision reads: beyond every cord's own parameters where there is one.
+    let lof = adequacy
+        .lack_of_fit_beyond_cords
+        .as_ref()
+        .or(adequacy.lack_of_fit.as_ref());
+    let inconclusive = !adequacy.tested || lof.is_none_or(|l| underpowered(l, adequacy.rule));
     match (effects.is_empty(), adequacy.unexplained) {
         (true, false) if inconclusive => format!(
             "Not identified: no catalogue effect is supported, but these data are too few to tell whether Euler-Eytelwein explains them. {}",

@@ -1,6 +1,12 @@
-//! The directed tests of the residuals: each a cluster-robust Wald test (runs as clusters) of
-//! the run-centred residuals against one structure (see the parent module's docs).
+//! The directed tests of the residuals: the run-centred residuals against one structure
+//! inside runs (T1's shape, time, step direction). With [`MIN_CORDS`] cords or more and enough
+//! of them for the structure, the cords are the units: each cord's coefficients, and Hotelling's
+//! T² that their mean is zero, F(q, G − q) — a pattern the cords share must stand out against
+//! how much the cords differ in it. With fewer cords, a cluster-robust Wald test with runs as
+//! clusters, F(q, R − q), and the test says so. Patterns between cords (wrap, diameter) are the
+//! cord-level ones ([`crate::evidence::cords`]), never tested against runs.
 
+use super::super::cords::{hotelling, per_cord_coefficients, t1_basis, MIN_CORDS};
 use super::super::design::Design;
 use super::Directed;
 use crate::fit::stats::f_p_upper;
@@ -20,12 +26,7 @@ fn run_centred(d: &Design, v: &[f64]) -> Vec<f64> {
 
 /// The structures to test on this design, each as its basis columns.
 fn structures(d: &Design) -> Vec<(&'static str, Vec<Vec<f64>>)> {
-    let n = d.n();
-    let s: Vec<f64> = d.t1.iter().map(|t| (t / 0.5).asinh()).collect();
-    let mut out = vec![(
-        "t1_shape",
-        vec![s.clone(), s.iter().map(|x| x * x).collect()],
-    )];
+    let mut out = vec![("t1_shape", t1_basis(d))];
     if d.columns.time_s && d.max_time_spread_s() > 0.0 {
         let t: Vec<f64> = d.op.iter().map(|o| o.time_s / 100.0).collect();
         out.push(("time", vec![t.clone(), t.iter().map(|x| x * x).collect()]));
@@ -38,35 +39,36 @@ fn structures(d: &Design) -> Vec<(&'static str, Vec<Vec<f64>>)> {
             .collect();
         out.push(("step_direction", vec![f]));
     }
-    if d.wraps().len() >= 2 {
-        let b_bar = d.op.iter().map(|o| o.wrap_rad).sum::<f64>() / n as f64;
-        let x = (0..n).map(|i| s[i] * (d.op[i].wrap_rad - b_bar)).collect();
-        out.push(("wrap", vec![x]));
-    }
-    if d.diameters().len() >= 2 {
-        let d_bar = d.op.iter().map(|o| o.diameter_mm).sum::<f64>() / n as f64;
-        let x = (0..n)
-            .map(|i| s[i] * (d.op[i].diameter_mm - d_bar) / 10.0)
-            .collect();
-        out.push(("diameter", vec![x]));
-    }
     out
 }
 
-/// Every directed test this design allows, on the standardised residuals `z`.
+/// Every within-run directed test this design allows, on the standardised residuals `z`.
 pub(super) fn directed_tests(d: &Design, z: &[f64]) -> Vec<Directed> {
     let y = run_centred(d, z);
     structures(d)
         .into_iter()
         .filter_map(|(name, cols)| {
             let x: Vec<Vec<f64>> = cols.iter().map(|c| run_centred(d, c)).collect();
-            wald(d, &x, &y).map(|(f, q, g, r2)| Directed {
+            let (_, _, _, r2) = wald(d, &x, &y)?;
+            let q = cols.len();
+            let by_cords = d.cords.len() >= MIN_CORDS.max(q + 3);
+            let (f, df1, df2, unit, units) = if by_cords {
+                let c = per_cord_coefficients(d, &cols, z);
+                let (f, q, df2) = hotelling(&c)?;
+                (f, q, df2, "cords", d.cords.len())
+            } else {
+                let (f, q, g, _) = wald(d, &x, &y)?;
+                (f, q, g - q, "runs", d.units.len())
+            };
+            Some(Directed {
                 structure: name,
                 f,
-                df1: q,
-                df2: g - q,
-                p: f_p_upper(f, q, g - q),
+                df1,
+                df2,
+                p: f_p_upper(f, df1, df2),
                 partial_r2: r2,
+                unit,
+                units,
             })
         })
         .collect()

@@ -28,6 +28,25 @@ pub fn lack_of_fit(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
 }
 
 pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
+    let signed = |signs: &[f64], out: &mut [f64]| {
+        for (u, rows) in d.units.iter().enumerate() {
+            for &i in rows {
+                out[i] = z[i] * signs[u];
+            }
+        }
+    };
+    pure_error_with(d, k, &signed)
+}
+
+/// The residuals made from every run's sign (all +1: the observed ones), written to `out`.
+pub(crate) type Signed<'a> = &'a dyn Fn(&[f64], &mut [f64]);
+
+/// [`pure_error`] of the residuals `signed` makes for every run's sign: the flips go through
+/// whatever the residuals were made by, e.g. every cord's own parameters fitted to the flipped
+/// runs again ([`crate::evidence::cords`]).
+pub(crate) fn pure_error_with(d: &Design, k: usize, signed: Signed<'_>) -> Option<LackOfFit> {
+    let mut z = vec![0.0; d.n()];
+    signed(&vec![1.0; d.units.len()], &mut z);
     let n_cells = d.cell.iter().flatten().map(|&c| c + 1).max().unwrap_or(0);
     let mut cnt = vec![0usize; n_cells];
     let mut cord_of_cell = vec![usize::MAX; n_cells];
@@ -44,33 +63,26 @@ pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     if n_used < 4 {
         return None;
     }
-    // The rows that enter, as (run, cell) pairs.
-    let entries: Vec<(usize, usize, usize)> = d
-        .units
-        .iter()
-        .enumerate()
-        .flat_map(|(u, rows)| rows.iter().map(move |&i| (u, i)))
-        .filter_map(|(u, i)| d.cell[i].filter(|&c| used[c]).map(|c| (u, i, c)))
+    // The rows that enter, with their cell.
+    let entries: Vec<(usize, usize)> = (0..d.n())
+        .filter_map(|i| d.cell[i].filter(|&c| used[c]).map(|c| (i, c)))
         .collect();
-    let ss_lof = |sign: &dyn Fn(usize) -> f64| {
+    let ss_lof = |z: &[f64]| {
         let mut sum = vec![0.0; n_cells];
-        for &(u, i, c) in &entries {
-            sum[c] += sign(u) * z[i];
+        for &(i, c) in &entries {
+            sum[c] += z[i];
         }
         (0..n_cells)
             .filter(|&c| used[c])
             .map(|c| sum[c] * sum[c] / cnt[c] as f64)
             .sum::<f64>()
     };
-    let observed = ss_lof(&|_| 1.0);
+    let observed = ss_lof(&z);
     let mut mean = vec![0.0; n_cells];
-    for &(_, i, c) in &entries {
+    for &(i, c) in &entries {
         mean[c] += z[i] / cnt[c] as f64;
     }
-    let ss_pe: f64 = entries
-        .iter()
-        .map(|&(_, i, c)| (z[i] - mean[c]).powi(2))
-        .sum();
+    let ss_pe: f64 = entries.iter().map(|&(i, c)| (z[i] - mean[c]).powi(2)).sum();
     let df_pe: f64 = (0..n_cells)
         .filter(|&c| used[c])
         .map(|c| (cnt[c] - 1) as f64)
@@ -81,7 +93,12 @@ pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
         .collect();
     let df_lof = (n_used as f64 - cords.len() as f64 - k as f64).max(1.0);
     let ms_pe = ss_pe / df_pe.max(1.0);
-    let (above, null_mean) = flips(d.units.len(), observed, &ss_lof);
+    let buf = std::cell::RefCell::new(vec![0.0; d.n()]);
+    let (above, null_mean) = flips(d.units.len(), observed, &|signs| {
+        let mut b = buf.borrow_mut();
+        signed(signs, &mut b);
+        ss_lof(&b)
+    });
     let n_obs = entries.len() as f64;
     let systematic = ((observed - null_mean).max(0.0) / n_obs).sqrt();
     Some(LackOfFit {
@@ -95,8 +112,8 @@ pub(super) fn pure_error(d: &Design, z: &[f64], k: usize) -> Option<LackOfFit> {
     })
 }
 
-/// The lack of fit's sum of squares with each run's residuals times its sign.
-type SignedLof<'a> = &'a dyn Fn(&dyn Fn(usize) -> f64) -> f64;
+/// The lack of fit's sum of squares of the residuals made with each run's sign.
+type SignedLof<'a> = &'a dyn Fn(&[f64]) -> f64;
 
 /// [`FLIPS`] Rademacher flips of whole runs, from a fixed seed (the answer is reproducible):
 /// how many give a lack of fit `ss_lof` at least `observed`, and their mean.
@@ -108,7 +125,7 @@ fn flips(runs: usize, observed: f64, ss_lof: SignedLof<'_>) -> (usize, f64) {
         for s in signs.iter_mut() {
             *s = if rng.next_u64() >> 63 == 0 { 1.0 } else { -1.0 };
         }
-        let t = ss_lof(&|u| signs[u]);
+        let t = ss_lof(&signs);
         total += t;
         if t >= observed {
             above += 1;
