@@ -47,14 +47,17 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
     let from = m.to_str().unwrap();
 
     // 1000 T1 values from 0.1 N to 100 N, most outside the thesis's fitted T1, at a wrap and a
-    // diameter outside theirs too: one warning for each of the three quantities.
+    // diameter outside theirs too: one warning for each of the three quantities, and one for
+    // each rig limit the T2 passes (the firmware's 45 N over-force, the sensors' 52.5 N).
     let base = ["predict", "--from", from, "--wrap-deg", "900"];
     let mut args = base.to_vec();
     args.extend(["--diameter-mm", "50", "--t1-n", "0.1:100:0.1"]);
     let r = capstan(&args);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let err = String::from_utf8_lossy(&r.stderr);
-    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning")).collect();
+    let warnings: Vec<&str> = (err.lines())
+        .filter(|l| l.starts_with("warning: extrapolating"))
+        .collect();
     assert_eq!(warnings.len(), 3, "{err}");
     let t1 = warnings.iter().find(|w| w.contains("T1")).unwrap();
     assert!(
@@ -62,24 +65,57 @@ fn a_long_range_warns_once_per_quantity_and_negative_numbers_are_refused_by_name
         "{t1}"
     );
     assert!(warnings.iter().any(|w| w.contains("wrap 900°")), "{err}");
+    assert!(err.contains("over-force limit of 45 N") && err.contains("sensors' range (52.5 N"));
+    assert_eq!(err.lines().count(), 5, "{err}");
+    // At 50 mm, outside the fitted 12.7–25.4 mm, no held-out cord measured the model's error:
+    // the intervals say "not identified", and why, in their own columns.
     let stdout = String::from_utf8_lossy(&r.stdout);
-    assert!(stdout.contains("a new cord's error"), "{stdout}");
-    // Wrap 900° lies beyond the fitted wraps: the interval holds what extrapolating in wrap
-    // cost on the fitted data, and says so.
-    assert!(stdout.contains("extrapolating in wrap cost"), "{stdout}");
-    assert_eq!(stdout.lines().count(), 4 + 1000);
+    assert!(
+        stdout.contains("intervals not identified: diameter 50 mm"),
+        "{stdout}"
+    );
+    assert_eq!(stdout.matches("not identified").count(), 1 + 2 * 1000);
+    assert_eq!(stdout.lines().count(), 3 + 1000);
 
-    // The same in JSON: the warnings once, every prediction in order.
+    // The same in JSON: the warnings once, every prediction in order, the intervals null and
+    // each prediction flagged.
     args.push("--json");
     let r = capstan(&args);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let v: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
-    assert_eq!(v["warnings"].as_array().unwrap().len(), 3);
+    assert_eq!(v["warnings"].as_array().unwrap().len(), 5);
     assert_eq!(v["extrapolating"], true);
-    assert_eq!(v["predictions"].as_array().unwrap().len(), 1000);
+    assert_eq!(v["beyond_rig"], true);
+    let preds = v["predictions"].as_array().unwrap();
+    assert_eq!(preds.len(), 1000);
+    assert!(preds[999]["t2_pi95"].is_null() && preds[999]["t2_ci95"].is_null());
+    let flags = &preds[999]["flags"];
+    for f in [
+        "over_force_limit",
+        "sensor_range",
+        "t1_outside_fitted",
+        "not_identified",
+    ] {
+        assert!(
+            flags.as_array().unwrap().iter().any(|x| x == f),
+            "{f}: {flags}"
+        );
+    }
+    assert!(v["not_identified"]
+        .as_str()
+        .unwrap()
+        .contains("diameter 50 mm"));
     assert!(v["new_cord_error"]["abs_n"].as_f64().unwrap() >= 0.0);
     assert!(v["new_cord_error"]["rel"].as_f64().unwrap() > 0.0);
     assert!(v["wrap_extrapolation_error_sd_n"].as_f64().unwrap() >= 0.0);
+
+    // At 20 mm, inside the fitted diameters, the same wrap's interval holds a new cord's error
+    // and what extrapolating in wrap cost, and says so.
+    let r = predict_at(from, "900", "5", &[]);
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(stdout.contains("a new cord's error"), "{stdout}");
+    assert!(stdout.contains("extrapolating in wrap cost"), "{stdout}");
+    assert!(!stdout.contains("not identified"), "{stdout}");
 
     // Negative numbers are values, refused with the flag named (`--drive-v -1` and
     // `--drive-v=-1` alike), never a parser's "unexpected argument".
@@ -233,5 +269,115 @@ fn from_a_directory_and_no_amplification_from_readings_below_zero() {
         !o.status.success() && err.contains("a directory without metrics.json"),
         "{err}"
     );
+}
+
+/// `capstan predict --t2-n`: the T1 a wanted T2 needs, read back by the forward command (a
+/// round trip within 1e-6 N), its intervals, the rig's limits, and a drive the rig cannot run
+/// refused.
+#[test]
+fn predict_backwards_gives_the_t1_a_wanted_t2_needs() {
+    let dir = std::env::temp_dir().join(format!("capstan-predict-t2-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let m = metrics(&dir);
+    let from = m.to_str().unwrap();
+    let json = |args: &[&str]| -> serde_json::Value {
+        let mut a = vec!["predict", "--from", from, "--json"];
+        a.extend(args);
+        let r = capstan(&a);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        serde_json::from_slice(&r.stdout).unwrap()
+    };
+    let num = |v: &serde_json::Value| v.as_f64().unwrap();
+    let at = ["--wrap-deg", "540", "--diameter-mm", "20"];
+    let mut a = vec!["--t2-n", "30", "--sure", "0.975"];
+    a.extend(at);
+    let v = json(&a);
+    let p = &v["predictions"][0];
+    let (t1, sure) = (num(&p["t1_n"]), num(&p["t1_for_sure"]));
+    let (lo, hi) = (num(&p["t1_ci95"]["lo"]), num(&p["t1_ci95"]["hi"]));
+    // 30 N at 540° with the thesis's mu ≈ 0.14 (e^(0.14·3π) ≈ 3.8, less the heating): T1 is
+    // between 6 and 12 N, inside its interval, and a new cord needs more.
+    assert!(
+        t1 > 6.0 && t1 < 12.0 && lo < t1 && t1 < hi && sure > hi,
+        "{p}"
+    );
+    assert_eq!(p["t2_n"], 30.0);
+    assert_eq!(v["flags"].as_array().unwrap().len(), 0, "{v}");
+    // Forward at the T1 found: T2 is 30 N again within 1e-6 N; at the T1 for 97.5 % sure the
+    // 95 % PI begins at 30 N (a new cord's T2 is above it with probability 0.975).
+    let t1s = format!("{t1:.12},{sure:.12}");
+    let mut b = vec!["--t1-n", &t1s];
+    b.extend(at);
+    let f = json(&b);
+    assert!(
+        (num(&f["predictions"][0]["t2_n"]) - 30.0).abs() < 1e-6,
+        "{f}"
+    );
+    assert!(
+        (num(&f["predictions"][1]["t2_pi95"]["lo"]) - 30.0).abs() < 1e-6,
+        "{f}"
+    );
+    // And back: T1 → T2 → T1 within 1e-6 N.
+    let t2 = format!("{:.12}", num(&f["predictions"][1]["t2_n"]));
+    let mut c = vec!["--t2-n", &t2];
+    c.extend(at);
+    let back = num(&json(&c)["predictions"][0]["t1_n"]);
+    assert!((back - sure).abs() < 1e-6, "{back} {sure}");
+
+    // 100 N is past the firmware's 45 N and the sensors' 52.5 N: flagged and warned.
+    let mut d = vec!["--t2-n", "30,100"];
+    d.extend(at);
+    let v = json(&d);
+    assert_eq!(v["beyond_rig"], true);
+    let f1 = v["predictions"][1]["flags"].as_array().unwrap();
+    assert!(f1.iter().any(|f| f == "over_force_limit") && f1.iter().any(|f| f == "sensor_range"));
+    assert!(v["predictions"][0]["flags"].as_array().unwrap().is_empty());
+    let w = v["warnings"].as_array().unwrap();
+    assert!(
+        w.iter()
+            .any(|w| w.as_str().unwrap().contains("over-force limit of 45 N")),
+        "{w:?}"
+    );
+    // A human table too, with its warnings on stderr.
+    let mut e = vec!["predict", "--from", from, "--t2-n", "30,100"];
+    e.extend(at);
+    let r = capstan(&e);
+    let out = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        r.status.success() && out.contains("T1 97.5 % sure (N)"),
+        "{out}"
+    );
+    assert!(String::from_utf8_lossy(&r.stderr).contains("over-force"));
+
+    // Outside the fitted voltages (10 V only) the intervals are not identified, in words.
+    let mut g = vec!["--t2-n", "30", "--drive-v", "12"];
+    g.extend(at);
+    let v = json(&g);
+    assert!(
+        v["predictions"][0]["t1_ci95"].is_null() && v["predictions"][0]["t1_for_sure"].is_null()
+    );
+    assert!(
+        v["not_identified"]
+            .as_str()
+            .unwrap()
+            .contains("drive voltage 12 V"),
+        "{v}"
+    );
+    // Beyond the rig's 13.2 V the command refuses, naming the limit; --sure must be a
+    // probability.
+    for (flag, value, says) in [
+        ("--drive-v", "100", "at most 13.2 V"),
+        ("--drive-v", "13.3", "at most 13.2 V"),
+        ("--sure", "1", "--sure 1: a probability"),
+    ] {
+        let mut a = vec!["predict", "--from", from, "--t2-n", "30", flag, value];
+        a.extend(at);
+        let r = capstan(&a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && err.contains(says),
+            "{flag} {value}: {err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

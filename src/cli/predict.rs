@@ -1,16 +1,22 @@
 //! `capstan predict --from DIR/metrics.json --wrap-deg W --diameter-mm D --t1-n LIST`: T2 and
-//! amplification from the fitted extended model, with a 95 % confidence interval (the mean
-//! curve) and a 95 % prediction interval (a new measurement on a new cord). See
-//! [`capstan_engine::analysis::prediction`].
+//! amplification from the fitted population-averaged model, with a 95 % confidence interval
+//! (the mean curve) and a 95 % prediction interval (a new measurement on a new cord); with
+//! `--t2-n LIST` instead, the T1 a wanted T2 needs ([`reverse`]). Each is checked against the
+//! rig's limits ([`limits`]). See [`capstan_engine::analysis::prediction`].
+
+mod limits;
+mod reverse;
 
 use anyhow::{bail, Context};
 use capstan_data::ranges::shown;
 use capstan_engine::analysis::prediction::{self, PredictionModel, Query, DEFAULT_DRIVE_V};
+use limits::RigLimits;
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
 /// Arguments of `capstan predict`.
 #[derive(clap::Args, Debug)]
+#[command(group(clap::ArgGroup::new("given").required(true).args(["t1_n", "t2_n"])))]
 pub struct Args {
     /// The `metrics.json` that `capstan analyze` wrote (or the directory holding it).
     #[arg(long, value_name = "METRICS_JSON|DIR")]
@@ -21,10 +27,17 @@ pub struct Args {
     /// Capstan diameter, mm.
     #[arg(long, allow_negative_numbers = true)]
     pub diameter_mm: f64,
-    /// T1 values, N: a comma list (2,5,10) or a range A:B:STEP (1:20:1, B included).
+    /// T1 values, N: a comma list (2,5,10) or a range A:B:STEP (1:20:1, B included). Gives T2.
     #[arg(long, allow_hyphen_values = true)]
-    pub t1_n: String,
-    /// Drive voltage, V (default: the thesis rig's 10 V).
+    pub t1_n: Option<String>,
+    /// Wanted T2 values, N (a list or range as for --t1-n). Gives the T1 each needs, its 95 %
+    /// interval and the T1 at which a new cord reaches it with probability --sure.
+    #[arg(long, allow_hyphen_values = true)]
+    pub t2_n: Option<String>,
+    /// With --t2-n: the probability that a new cord reaches the wanted T2 (0 < P < 1).
+    #[arg(long, default_value_t = 0.975, allow_negative_numbers = true)]
+    pub sure: f64,
+    /// Drive voltage, V (default: the thesis rig's 10 V; at most the rig's 13.2 V).
     #[arg(long, allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
     /// Include the fitted sensor terms (offsets, gain): what the rig's sensors would read,
@@ -41,14 +54,20 @@ pub const MAX_POINTS: usize = 100_000;
 
 /// Parse "2,5,10" or "A:B:STEP" (B included when the steps land on it).
 pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
+    parse_tensions("--t1-n", s)
+}
+
+/// Parse the tension list of `flag`: "2,5,10" or "A:B:STEP" (B included when the steps land
+/// on it).
+pub fn parse_tensions(flag: &str, s: &str) -> anyhow::Result<Vec<f64>> {
     let num = |x: &str| -> anyhow::Result<f64> {
         let v: f64 = x
             .trim()
             .parse()
-            .map_err(|_| anyhow::anyhow!("--t1-n {s}: {x:?} is not a number"))?;
+            .map_err(|_| anyhow::anyhow!("{flag} {s}: {x:?} is not a number"))?;
         if !(v.is_finite() && v > 0.0 && v <= capstan_data::MAX_TENSION_N) {
             bail!(
-                "--t1-n {s}: {} N is not a tension above 0 and up to {} N",
+                "{flag} {s}: {} N is not a tension above 0 and up to {} N",
                 capstan_data::ranges::shown(v),
                 capstan_data::MAX_TENSION_N
             );
@@ -62,9 +81,9 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
             let step: f64 = step
                 .trim()
                 .parse()
-                .map_err(|_| anyhow::anyhow!("--t1-n {s}: the step {step:?} is not a number"))?;
+                .map_err(|_| anyhow::anyhow!("{flag} {s}: the step {step:?} is not a number"))?;
             if !(step.is_finite() && step > 0.0) || b < a {
-                bail!("--t1-n {s}: A:B:STEP needs A ≤ B and a step above 0");
+                bail!("{flag} {s}: A:B:STEP needs A ≤ B and a step above 0");
             }
             // Counted in f64 first: a tiny step would overflow an integer count. B counts as
             // landed on within a relative 1e-9 of the ratio (1:1.0001:1e-9 is 100,001 values,
@@ -73,7 +92,7 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
             let count = (ratio * (1.0 + 1e-9) + 1e-9).floor() + 1.0;
             if count.is_nan() || count > MAX_POINTS as f64 {
                 bail!(
-                    "--t1-n {s}: {} values (at most {MAX_POINTS})",
+                    "{flag} {s}: {} values (at most {MAX_POINTS})",
                     shown((ratio + 1.0).round())
                 );
             }
@@ -84,10 +103,10 @@ pub fn parse_t1_list(s: &str) -> anyhow::Result<Vec<f64>> {
             .split(',')
             .map(num)
             .collect::<anyhow::Result<Vec<f64>>>()?,
-        _ => bail!("--t1-n {s}: give a comma list (2,5,10) or A:B:STEP (1:20:1)"),
+        _ => bail!("{flag} {s}: give a comma list (2,5,10) or A:B:STEP (1:20:1)"),
     };
     if vals.len() > MAX_POINTS {
-        bail!("--t1-n: {} values (at most {MAX_POINTS})", vals.len());
+        bail!("{flag}: {} values (at most {MAX_POINTS})", vals.len());
     }
     Ok(vals)
 }
@@ -305,6 +324,48 @@ fn check_model(pm: &PredictionModel) -> Result<(), String> {
     Ok(())
 }
 
+/// The query every T1 shares: the wrap, diameter and drive voltage, checked.
+pub struct Setting {
+    /// Drive voltage, V.
+    pub drive_v: f64,
+    /// The rig's limits.
+    pub limits: RigLimits,
+    /// Why the intervals cannot be given here (`None`: they can).
+    pub unidentified: Option<String>,
+}
+
+impl Setting {
+    /// The query at `t1_n`.
+    pub fn query(&self, args: &Args, t1_n: f64) -> Query {
+        Query {
+            wrap_deg: args.wrap_deg,
+            diameter_mm: args.diameter_mm,
+            drive_v: self.drive_v,
+            t1_n,
+            as_measured: args.as_measured,
+        }
+    }
+}
+
+/// The wrap, diameter and drive voltage of `args` (checked by `run`) with the rig's limits and
+/// whether the model's intervals are identified there.
+fn setting(args: &Args, pm: &PredictionModel) -> anyhow::Result<Setting> {
+    let drive_v = args.drive_v.unwrap_or(DEFAULT_DRIVE_V);
+    let limits = RigLimits::firmware_defaults();
+    let unidentified = pm.unidentified(&Query {
+        wrap_deg: args.wrap_deg,
+        diameter_mm: args.diameter_mm,
+        drive_v,
+        t1_n: 1.0,
+        as_measured: args.as_measured,
+    });
+    Ok(Setting {
+        drive_v,
+        limits,
+        unidentified,
+    })
+}
+
 /// Run `capstan predict`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let drive_v = args.drive_v.unwrap_or(DEFAULT_DRIVE_V);
@@ -325,19 +386,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
              the thesis rig's drive is {DEFAULT_DRIVE_V} V)"
         );
     }
-    let t1 = parse_t1_list(&args.t1_n)?;
+    RigLimits::firmware_defaults().check_drive(drive_v)?;
     let from = metrics_file(&args.from)?;
+    if let Some(t2) = &args.t2_n {
+        if !(args.sure > 0.0 && args.sure < 1.0) {
+            bail!(
+                "--sure {}: a probability above 0 and below 1 (0.975: a new cord reaches the \
+                 wanted T2 at least 97.5 times in 100)",
+                shown(args.sure)
+            );
+        }
+        let wanted = parse_tensions("--t2-n", t2)?;
+        let pm = load_model(&from)?;
+        let set = setting(&args, &pm)?;
+        return reverse::run(&args, &pm, &set, &wanted);
+    }
+    let t1 = parse_t1_list(args.t1_n.as_deref().unwrap_or_default())?;
     let pm = load_model(&from)?;
-    let q = |t1_n: f64| Query {
-        wrap_deg: args.wrap_deg,
-        diameter_mm: args.diameter_mm,
-        drive_v,
-        t1_n,
-        as_measured: args.as_measured,
-    };
-    let queries: Vec<Query> = t1.iter().map(|t| q(*t)).collect();
+    let set = setting(&args, &pm)?;
+    let queries: Vec<Query> = t1.iter().map(|t| set.query(&args, *t)).collect();
     // One warning per quantity, with the range of the values outside: never one per value.
-    let warnings = pm.extrapolation(&queries);
+    let mut warnings = extrapolation_warnings(&pm, &queries);
     let preds: Vec<_> = (queries.iter())
         .map(|q| prediction::predict(&pm, q))
         .collect();
@@ -348,10 +417,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.from.display()
         );
     }
+    let top = preds.iter().map(|p| p.t2_n.max(p.t1_n)).fold(0.0, f64::max);
+    warnings.extend(limits::rig_warnings(&set.limits, (top, "T2")));
     if args.json {
-        print_json(&args, drive_v, &pm, &preds, &warnings)?;
+        let extrapolating = !pm.extrapolation(&queries).is_empty();
+        print_json(&args, &set, &pm, &preds, (&warnings, extrapolating))?;
     } else {
-        print_table(&args, drive_v, &pm, &preds, &warnings);
+        print_table(&args, &set, &pm, &preds, &warnings);
     }
     Ok(())
 }
@@ -410,30 +482,63 @@ fn wrap_error(args: &Args, pm: &PredictionModel) -> Option<Option<f64>> {
         .then(|| pm.wrap_extrapolation_sd(args.wrap_deg))
 }
 
+/// The flags every prediction's JSON and the whole answer carry.
+fn all_flags(per: &[Vec<&'static str>]) -> Vec<&'static str> {
+    let mut all: Vec<&'static str> = per.iter().flatten().copied().collect();
+    all.sort_unstable();
+    all.dedup();
+    all
+}
+
 /// The predictions as one JSON object (the issue's contract, plus the query and the model's
-/// note).
+/// note). Where the intervals are not identified they are `null`, and `not_identified` says
+/// why.
 fn print_json(
     args: &Args,
-    drive_v: f64,
+    set: &Setting,
     pm: &PredictionModel,
     preds: &[prediction::Prediction],
-    warnings: &[String],
+    (warnings, extrapolating): (&[String], bool),
 ) -> anyhow::Result<()> {
-    // As measured, a T2 reading at or below zero over a T1 reading is no amplification: null.
-    let mut rows = serde_json::to_value(preds)?;
-    for (r, p) in rows.as_array_mut().into_iter().flatten().zip(preds) {
+    let mut per = Vec::new();
+    let mut rows = Vec::new();
+    for p in preds {
+        let mut f = limits::flags(
+            &set.limits,
+            pm.fitted_range.t1_n,
+            p.t1_n,
+            p.t2_n.max(p.t1_n),
+        );
+        let mut v = serde_json::to_value(p)?;
+        // As measured, a T2 reading at or below zero over a T1 reading is no amplification: null.
         if amplification(p).is_none() {
-            r["amplification"] = Value::Null;
+            v["amplification"] = Value::Null;
         }
+        if set.unidentified.is_some() {
+            f.push(limits::NOT_IDENTIFIED);
+            v["t2_ci95"] = Value::Null;
+            v["t2_pi95"] = Value::Null;
+        }
+        v["flags"] = json!(f);
+        per.push(f);
+        rows.push(v);
     }
     let out = json!({
         "predictions": rows,
-        "extrapolating": !warnings.is_empty(),
+        "flags": all_flags(&per),
+        "not_identified": set.unidentified,
+        "beyond_rig": per.iter().flatten().any(|f| *f == limits::OVER_FORCE || *f == limits::SENSOR_RANGE),
+        "extrapolating": extrapolating,
         "warnings": warnings,
         "physical": !args.as_measured,
         "wrap_deg": args.wrap_deg,
         "diameter_mm": args.diameter_mm,
-        "drive_v": drive_v,
+        "drive_v": set.drive_v,
+        "rig_limits": {
+            "over_force_n": set.limits.over_force_n,
+            "sensor_top_n": set.limits.sensor_top_n,
+            "drive_max_v": set.limits.drive_max_v,
+        },
         "new_cord_error": pm.new_cord_error,
         "wrap_extrapolation_error_sd_n": wrap_error(args, pm).flatten(),
         "wrap_extrapolation_measured": pm.wrap_extrapolation_error.rows > 0,
@@ -445,16 +550,38 @@ fn print_json(
     Ok(())
 }
 
+/// What the intervals hold, in words, on stdout (a new cord's error; the wrap's extrapolation
+/// error; or why they are not identified).
+fn interval_words(args: &Args, set: &Setting, pm: &PredictionModel, what: &str) {
+    if let Some(why) = &set.unidentified {
+        crate::outln!("intervals {why}");
+        return;
+    }
+    let e = &pm.new_cord_error;
+    crate::outln!(
+        "{what} holds a new cord's error, SD √({:.3}² + ({:.4}·T2)²) N, from the held-out residuals of {} cords (each predicted by the causes chosen and fitted without it; Student t, {} degrees of freedom)",
+        e.abs_n,
+        e.rel,
+        e.cords,
+        e.dof
+    );
+    if let Some(Some(sd)) = wrap_error(args, pm) {
+        crate::outln!(
+            "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data, scaled to this distance: SD {sd:.3} N"
+        );
+    }
+}
+
 /// The warnings on stderr, the predictions as a table.
 fn print_table(
     args: &Args,
-    drive_v: f64,
+    set: &Setting,
     pm: &PredictionModel,
     preds: &[prediction::Prediction],
     warnings: &[String],
 ) {
     for w in warnings {
-        crate::errln!("warning: extrapolating: {w}");
+        crate::errln!("warning: {w}");
     }
     if let Some(p) = preds.iter().find(|p| amplification(p).is_none()) {
         crate::errln!(
@@ -470,25 +597,9 @@ fn print_table(
         if args.as_measured { "as measured:" } else { "physical:" },
         args.wrap_deg,
         args.diameter_mm,
-        drive_v
+        set.drive_v
     );
-    let e = &pm.new_cord_error;
-    crate::outln!(
-        "the PI holds a new cord's error, SD √({:.3}² + ({:.4}·T2)²) N, from the held-out residuals of {} cords (each predicted by the causes chosen and fitted without it; Student t, {} degrees of freedom)",
-        e.abs_n,
-        e.rel,
-        e.cords,
-        e.dof
-    );
-    match wrap_error(args, pm) {
-        Some(Some(sd)) => crate::outln!(
-            "and, the wrap lying outside the fitted wraps, what extrapolating in wrap cost on the fitted data, scaled to this distance: SD {sd:.3} N"
-        ),
-        Some(None) => crate::outln!(
-            "but not what extrapolating in wrap costs: with fewer than three fitted wraps it could not be measured, so the PI holds none of it"
-        ),
-        None => {}
-    }
+    interval_words(args, set, pm, "the PI");
     crate::outln!(
         "{:>9} {:>10} {:>8} {:>21} {:>21}",
         "T1 (N)",
@@ -498,6 +609,17 @@ fn print_table(
         "95 % PI (N)"
     );
     for p in preds {
+        if set.unidentified.is_some() {
+            crate::outln!(
+                "{:>9.3} {:>10.3} {:>8.3} {:>21} {:>21}",
+                p.t1_n,
+                p.t2_n,
+                p.amplification,
+                "not identified",
+                "not identified"
+            );
+            continue;
+        }
         crate::outln!(
             "{:>9.3} {:>10.3} {:>8} {:>10.3} – {:<8.3} {:>10.3} – {:<8.3}",
             p.t1_n,
@@ -509,6 +631,13 @@ fn print_table(
             p.t2_pi95.hi
         );
     }
+}
+
+/// The extrapolation warnings of `queries`, one per quantity, each saying it extrapolates.
+pub fn extrapolation_warnings(pm: &PredictionModel, queries: &[Query]) -> Vec<String> {
+    (pm.extrapolation(queries).into_iter())
+        .map(|w| format!("extrapolating: {w}"))
+        .collect()
 }
 
 #[cfg(test)]

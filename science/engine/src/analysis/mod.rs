@@ -22,6 +22,7 @@ pub mod extended;
 pub mod fits;
 pub mod gain;
 pub mod heldout;
+pub mod inverse;
 pub mod metrics;
 pub mod models;
 pub mod prediction;

@@ -205,7 +205,7 @@ pub struct Prediction {
 
 impl PredictionModel {
     /// The model at the population values, with the free values replaced by `free` (when given).
-    fn model(&self, free: Option<&[f64]>) -> Model {
+    pub(super) fn model(&self, free: Option<&[f64]>) -> Model {
         let mut m = Model::euler_eytelwein(0.0);
         for p in Param::ALL {
             if let Some(v) = self.values.get(p.name()) {
@@ -260,6 +260,71 @@ impl PredictionModel {
         let e = &self.wrap_extrapolation_error;
         (e.rows > 0 && self.wrap_extrapolation_step_deg > 0.0)
             .then(|| e.sd_n * beyond / self.wrap_extrapolation_step_deg)
+    }
+
+    /// Why the data cannot give the intervals at `q`, in the interval's words (`None`: they
+    /// can). An interval is only as good as the error measured behind it: the new cord's error
+    /// was measured on the fitted diameters and drive voltages, and beyond the fitted wraps
+    /// only when three wraps or more let it be. Beyond those, and wherever the fitted law's
+    /// linear change of mu with diameter or voltage takes mu to 0 or below (the law then holds
+    /// T2 at T1, and every refit agrees on that, so the interval would have no width exactly
+    /// where the model knows least), the interval is not identified.
+    pub fn unidentified(&self, q: &Query) -> Option<String> {
+        let m = self.model(None);
+        let law = &m.law;
+        let r = &self.fitted_range;
+        let mut why = Vec::new();
+        for (name, per, x, x0, unit) in [
+            (
+                "diameter",
+                law.mu_change_per_mm,
+                q.diameter_mm,
+                capstan_physics::REF_DIAMETER_MM,
+                " mm",
+            ),
+            (
+                "drive voltage",
+                law.mu_change_per_v,
+                q.drive_v,
+                REF_DRIVE_V,
+                " V",
+            ),
+        ] {
+            if 1.0 + per * (x - x0) <= 0.0 {
+                why.push(format!(
+                    "the fitted change of mu with {name} takes mu to 0 or below at {}{unit} (T2 is held at T1 there)",
+                    short(x)
+                ));
+            }
+        }
+        let mut op = Operating::from_wrap_deg(q.wrap_deg);
+        op.diameter_mm = q.diameter_mm;
+        op.drive_v = q.drive_v;
+        if why.is_empty() && law.mu > 0.0 && law.effective_mu(&op) <= 0.0 {
+            why.push("the fitted law takes mu to 0 or below there (T2 is held at T1)".into());
+        }
+        for (name, x, s, unit) in [
+            ("diameter", q.diameter_mm, r.diameter_mm, " mm"),
+            ("drive voltage", q.drive_v, r.drive_v, " V"),
+        ] {
+            if !s.contains(x) {
+                why.push(format!(
+                    "{name} {}{unit} is outside the fitted {}{unit} to {}{unit}, where no held-out cord measured the model's error",
+                    short(x),
+                    short(s.min),
+                    short(s.max)
+                ));
+            }
+        }
+        if self.wrap_extrapolation_sd(q.wrap_deg).is_none() {
+            why.push(format!(
+                "wrap {}° is outside the fitted {}° to {}°, and with fewer than three fitted wraps what extrapolating in wrap costs could not be measured",
+                short(q.wrap_deg),
+                short(r.wrap_deg.min),
+                short(r.wrap_deg.max)
+            ));
+        }
+        (!why.is_empty()).then(|| format!("not identified: {}", why.join("; ")))
     }
 
     /// The query's quantities outside the fitted data's ranges, one sentence each (empty when
@@ -332,7 +397,7 @@ fn short(v: f64) -> String {
 }
 
 /// T2 at a query for a model, the load memory settled under the held T1.
-fn t2_of(m: &Model, q: &Query) -> f64 {
+pub(super) fn t2_of(m: &Model, q: &Query) -> f64 {
     let mut op = Operating::from_wrap_deg(q.wrap_deg);
     op.diameter_mm = q.diameter_mm;
     op.drive_v = q.drive_v;
@@ -366,20 +431,26 @@ fn t2_of(m: &Model, q: &Query) -> f64 {
 }
 
 /// Two-sided 95 % quantile of Student's t with `dof` degrees of freedom (normal beyond 200).
-fn t95(dof: usize) -> f64 {
-    use statrs::distribution::{ContinuousCDF, StudentsT};
+pub(super) fn t95(dof: usize) -> f64 {
+    t_quantile(0.975, dof)
+}
+
+/// The `p` quantile of Student's t with `dof` degrees of freedom (the normal's beyond 200).
+pub(super) fn t_quantile(p: f64, dof: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+    let normal = Normal::new(0.0, 1.0).map_or(f64::NAN, |n| n.inverse_cdf(p));
     if dof == 0 || dof > 200 {
-        return 1.959_963_985;
+        return normal;
     }
-    StudentsT::new(0.0, 1.0, dof as f64).map_or(1.959_963_985, |t| t.inverse_cdf(0.975))
+    StudentsT::new(0.0, 1.0, dof as f64).map_or(normal, |t| t.inverse_cdf(p))
 }
 
 /// The predicted T2 at a query and the variance of the curve there.
-struct Spread {
+pub(super) struct Spread {
     /// T2, N.
-    t2: f64,
+    pub(super) t2: f64,
     /// Variance of the population curve (delta method through the covariance), N².
-    var_mean: f64,
+    pub(super) var_mean: f64,
 }
 
 /// Gradient of T2 in the free values, central differences.
@@ -398,7 +469,7 @@ fn gradient(pm: &PredictionModel, q: &Query) -> Vec<f64> {
         .collect()
 }
 
-fn spread(pm: &PredictionModel, q: &Query) -> Spread {
+pub(super) fn spread(pm: &PredictionModel, q: &Query) -> Spread {
     let t2 = t2_of(&pm.model(None), q);
     let grad = gradient(pm, q);
     let mut var_mean = 0.0;
