@@ -301,6 +301,7 @@ fn cords_first(
         data,
         capstan_engine::analysis::Options {
             threads: opts.threads,
+            ..Default::default()
         },
     )
     .map_err(|e| e.to_string())?;
