@@ -221,7 +221,10 @@ fn open_questions(a: &Analysis) -> Vec<(Question, Option<Effect>)> {
 fn establishes(ds: &Dataset, effect: Option<Effect>) -> Result<(bool, f64), String> {
     match effect {
         None => {
-            let opts = capstan_engine::analysis::Options { threads: 1, ..Default::default() };
+            let opts = capstan_engine::analysis::Options {
+                threads: 1,
+                ..Default::default()
+            };
             let a = capstan_engine::analysis::run(ds, opts).map_err(|e| e.to_string())?;
             Ok((a.gain.verdict == GainVerdict::Established, a.gain.value))
         }

@@ -332,7 +332,10 @@ mod tests {
     fn failed_folds_are_counted_apart_and_named_never_held_out_successes() {
         let a = capstan_engine::analysis::run(
             &capstan_data::thesis_dataset(),
-            capstan_engine::analysis::Options { threads: 2, ..Default::default() },
+            capstan_engine::analysis::Options {
+                threads: 2,
+                ..Default::default()
+            },
         )
         .unwrap();
         assert_eq!(a.gain.verdict, GainVerdict::NotEstablished);

@@ -92,7 +92,10 @@ pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, Strin
             .generate()
             .map_err(|e| format!("{} does not simulate: {e}", c.describe()))?;
         if c.truth == Truth::GainNull {
-            let opts = capstan_engine::analysis::Options { threads: 1, ..Default::default() };
+            let opts = capstan_engine::analysis::Options {
+                threads: 1,
+                ..Default::default()
+            };
             let a = capstan_engine::analysis::run(&ds, opts).map_err(|e| e.to_string())?;
             Ok(judge(c, &a.evidence, Some(a.gain.verdict)))
         } else {

@@ -92,6 +92,9 @@ pub struct LackOfFit {
     pub p_at_floor: bool,
     /// RMS of the systematic part over the RMS of the pure error.
     pub systematic_ratio: f64,
+    /// The replicated cells hold no more means than the parameters fitted to them (every
+    /// cord's own, and the model's): no lack of fit can show, so the test says nothing.
+    pub saturated: bool,
 }
 
 /// Do the selected effects have one size for all wraps? The same physics has the same size on
@@ -278,17 +281,27 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             own,
         );
     }
-    if let Some(l) = beyond
-        .as_ref()
-        .filter(|l| !lack && between.is_none() && common.is_none() && underpowered(l, rule))
-    {
-        sentence = format!(
+    // Too few replicate runs to rule out structure that matters, by the test beyond the
+    // cords' own parameters or, failing that, by the plain one (each cord's own parameters can
+    // absorb what a small design cannot test: a quiet F after them is no evidence).
+    let weak = (beyond.as_ref().filter(|l| underpowered(l, rule)))
+        .or(lack_of_fit.as_ref().filter(|l| underpowered(l, rule)));
+    if let Some(l) = weak.filter(|_| !lack && between.is_none() && common.is_none()) {
+        sentence = if l.saturated {
+            format!(
+                "The replicate runs fill {} cells, no more than the parameters fitted to them (each of the {} cords' own and the model's): no lack of fit can show, so these runs cannot rule out structure that matters.",
+                l.cells,
+                cords.cords
+            )
+        } else {
+            format!(
             "The lack of fit against the replicate runs is not significant (F = {:.2}, p = {}), but its systematic part is estimated at {:.2}× the noise, above the rule's {:.2}×: these replicate runs are too few to rule out structure that matters.",
             l.f,
             p_shown(l.p),
             l.systematic_ratio,
             rule.min_ratio
-        );
+        )
+        };
     }
     if untested {
         sentence = format!(
@@ -606,7 +619,7 @@ pub fn sentence(
 /// A lack-of-fit test that found nothing significant while its estimate of the systematic
 /// part is as large as the rule calls large: too few replicate runs to tell.
 pub fn underpowered(l: &LackOfFit, rule: AdequacyRule) -> bool {
-    l.p >= rule.alpha && l.systematic_ratio >= rule.min_ratio
+    l.saturated || (l.p >= rule.alpha && l.systematic_ratio >= rule.min_ratio)
 }
 
 /// A p-value for a sentence: two decimals down to 0.01, then two significant digits (0.004

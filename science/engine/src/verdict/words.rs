@@ -4,7 +4,7 @@
 //! it. What each effect is comes from its catalogue entry.
 
 use super::{Found, Numbers, Verdict};
-use crate::evidence::adequacy::underpowered;
+use crate::evidence::adequacy::{underpowered, LackOfFit};
 use crate::evidence::{Adequacy, Design, Rival};
 use capstan_data::structure::StructureSummary;
 use capstan_data::Basis;
@@ -125,7 +125,9 @@ fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
         .lack_of_fit_beyond_cords
         .as_ref()
         .or(adequacy.lack_of_fit.as_ref());
-    let inconclusive = !adequacy.tested || lof.is_none_or(|l| underpowered(l, adequacy.rule));
+    let weak = |l: &LackOfFit| underpowered(l, adequacy.rule);
+    let inconclusive =
+        !adequacy.tested || lof.is_none_or(weak) || adequacy.lack_of_fit.as_ref().is_some_and(weak);
     match (effects.is_empty(), adequacy.unexplained) {
         (true, false) if inconclusive => format!(
             "Not identified: no catalogue effect is supported, but these data are too few to tell whether Euler-Eytelwein explains them. {}",

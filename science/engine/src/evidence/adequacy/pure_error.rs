@@ -91,6 +91,9 @@ pub(crate) fn pure_error_with(d: &Design, k: usize, signed: Signed<'_>) -> Optio
         .filter(|&c| used[c])
         .map(|c| cord_of_cell[c])
         .collect();
+    // No more cell means than the fitted parameters (each cord's own, and `k`): the lack of
+    // fit has nothing to test, whatever F reads.
+    let saturated = (n_used as f64 - cords.len() as f64 - k as f64) < 1.0;
     let df_lof = (n_used as f64 - cords.len() as f64 - k as f64).max(1.0);
     let ms_pe = ss_pe / df_pe.max(1.0);
     let buf = std::cell::RefCell::new(vec![0.0; d.n()]);
@@ -109,6 +112,7 @@ pub(crate) fn pure_error_with(d: &Design, k: usize, signed: Signed<'_>) -> Optio
         p: (above + 1) as f64 / (FLIPS + 1) as f64,
         p_at_floor: above == 0,
         systematic_ratio: systematic / ms_pe.sqrt(),
+        saturated,
     })
 }
 
