@@ -84,13 +84,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The plan of `data`, with a progress bar on a terminal; Ctrl-C or SIGTERM stops between
-/// protocols (nothing is written, and DIR stays as it was).
+/// How long a stopped plan may take to return before it exits anyway (it stops within one
+/// simulated campaign; the analysis of large data, or a cords set, can take longer).
+const PLAN_GRACE: std::time::Duration = std::time::Duration::from_secs(3);
+
+/// The plan of `data`, with a progress bar on a terminal; Ctrl-C or SIGTERM stops within one
+/// simulated campaign, or exits after [`PLAN_GRACE`] (nothing is written, and DIR stays as
+/// it was).
 fn planned(data: &capstan_data::Dataset, args: &Args) -> anyhow::Result<Plan> {
     let opts = Options {
         reps: args.reps,
         seed: args.seed,
         max_hours: args.hours,
+        stop: Some(super::signal::stop_flag("plan")),
         ..Options::default()
     };
     let bar = std::io::stderr().is_terminal().then(|| {
@@ -104,6 +110,7 @@ fn planned(data: &capstan_data::Dataset, args: &Args) -> anyhow::Result<Plan> {
         pb
     });
     let stop = super::signal::stop_flag("plan");
+    super::signal::exit_if_still_running_after("plan", PLAN_GRACE);
     let mut progress = |done: usize, total: usize| {
         if let Some(pb) = &bar {
             pb.set_length(total as u64);

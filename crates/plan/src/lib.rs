@@ -6,6 +6,7 @@
 //! protocol with the best worst-case chance (the fewer rig hours between near ties), or the
 //! current design when it already decides.
 
+pub mod bounds;
 pub mod candidates;
 pub mod cords;
 pub mod hypotheses;
@@ -17,8 +18,9 @@ use capstan_data::Dataset;
 use capstan_engine::diagnose::{self, Diagnosis};
 use hypotheses::{open_hypotheses, untestable_kinds, Hypothesis, NotSimulated};
 use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-use trial::{rates, Rate, World};
+use trial::{rates_until, Rate, World};
 
 /// A design decides when its worst-case chance of naming the truth alone is at least this.
 pub const DECIDES: f64 = 0.9;
@@ -37,6 +39,8 @@ pub struct Options {
     /// Also simulate how many cords each open question between cords needs (the larger part
     /// of the planner's time: sets of up to 80 cords).
     pub cords: bool,
+    /// Set (by a signal): stop within one campaign ([`STOPPED`]).
+    pub stop: Option<&'static AtomicBool>,
 }
 
 impl Default for Options {
@@ -47,6 +51,7 @@ impl Default for Options {
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()),
             max_hours: None,
             cords: true,
+            stop: None,
         }
     }
 }
@@ -199,6 +204,7 @@ pub fn plan(
     let d = diagnosis(data, &mut assumed);
     let world = world(&d, &mut assumed);
     let current = Design::of(&d, &mut assumed);
+    bounds::check(&current, &world, &d)?;
     let (hyps, not_simulated) = open_hypotheses(&d, &current, &world);
     let as_data = current.is_the_datas(&d);
     let cands = candidates(&current, &untestable_kinds(&d, &current, &world), as_data);
@@ -222,13 +228,14 @@ pub fn plan(
                     "{why}: this protocol cannot decide, and another can test every hypothesis"
                 ),
             ),
-            None => rates(
+            None => rates_until(
                 &c.design,
                 &hyps,
                 &world,
                 opts.reps,
                 (opts.seed, i as u64),
                 opts.threads,
+                opts.stop,
             )?,
         };
         scored.push(score(c, r, &world));
@@ -250,6 +257,9 @@ pub fn plan(
         (b.p_decide_worst.total_cmp(&a.p_decide_worst)).then(a.rig_hours.total_cmp(&b.rig_hours))
     });
     let (cords, first) = cords_first(data, &d, &current, &hyps, current_decides, opts, &world)?;
+    if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+        return Err(STOPPED.to_string());
+    }
     Ok(Plan {
         hypotheses: hyps,
         not_simulated,
@@ -296,6 +306,18 @@ fn cords_first(
                     .into(),
             ),
         ));
+    }
+    if d.design.cords > bounds::MAX_CORDS_ASKED {
+        let why = format!(
+            "how many cords was not asked: these data hold {} cords, more than the {} \
+             up to which the planner analyses them for it",
+            d.design.cords,
+            bounds::MAX_CORDS_ASKED
+        );
+        return Ok((None, protocol(why)));
+    }
+    if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+        return Err(STOPPED.to_string());
     }
     let a = capstan_engine::analysis::run(
         data,
