@@ -8,6 +8,7 @@
 
 pub mod bounds;
 pub mod candidates;
+pub mod commands;
 pub mod cords;
 pub mod hypotheses;
 pub mod trial;
@@ -124,6 +125,8 @@ pub struct Plan {
     /// Some candidate named every simulated hypothesis alone in at least one campaign (false:
     /// no protocol here decides, and the recommendation is only the least bad).
     pub any_decides: bool,
+    /// Some campaign of some candidate named its hypothesis alone (false: none ever did).
+    pub any_named: bool,
     /// The recommendation fits in `--hours` (false: nothing does; it is the shortest).
     pub within_hours: bool,
     /// With `--hours`: the best protocol beyond them, when it does better than the
@@ -251,6 +254,7 @@ pub fn plan(
     let current_decides = current_design.p_decide_worst >= DECIDES;
     let recommended = recommend(&scored, opts, current_decides).clone();
     let any_decides = scored.iter().any(|s| s.p_decide_worst > 0.0);
+    let any_named = (scored.iter()).any(|s| s.per_hypothesis.iter().any(|r| r.decided > 0));
     let within_hours = opts.max_hours.is_none_or(|h| recommended.rig_hours <= h);
     let better_beyond_hours = better_beyond(&scored, &recommended, opts);
     scored.sort_by(|a, b| {
@@ -268,6 +272,7 @@ pub fn plan(
         recommended,
         current_decides,
         any_decides,
+        any_named,
         within_hours,
         better_beyond_hours,
         current_design,
@@ -485,8 +490,74 @@ fn recommend<'a>(scored: &'a [Scored], opts: &Options, current_decides: bool) ->
             .min_by(|a, b| a.rig_hours.total_cmp(&b.rig_hours))
             .unwrap_or(&scored[0])
     };
+    if best == 0.0 {
+        // No design reaches it: the least bad is the one that named its truth most often over
+        // the hypotheses, not the shortest (which favoured the current design at 0 %).
+        let named = |s: &Scored| s.per_hypothesis.iter().map(|r| r.decided).sum::<usize>();
+        return (scored.iter().filter(within))
+            .max_by(|a, b| (named(a).cmp(&named(b))).then(b.rig_hours.total_cmp(&a.rig_hours)))
+            .unwrap_or_else(shortest);
+    }
+    // Near ties (one campaign apart) go to the fewer hours; a 0 % is never a near tie.
     (scored.iter().filter(within))
-        .filter(|s| s.p_decide_worst >= best - step + 1e-9)
+        .filter(|s| s.p_decide_worst > 0.0 && s.p_decide_worst >= best - step + 1e-9)
         .min_by(|a, b| a.rig_hours.total_cmp(&b.rig_hours))
         .unwrap_or_else(shortest)
+}
+
+#[cfg(test)]
+mod recommend_tests {
+    use super::*;
+
+    fn scored(name: &str, runs: u32, decided: &[usize]) -> Scored {
+        let mut c = candidates(
+            &Design {
+                order: firmware::StepOrder::Monotone,
+                runs_per_cord: runs,
+                wraps_deg: vec![360.0],
+                diameters_mm: vec![25.4],
+                drive_v: vec![10.0],
+            },
+            &[],
+            true,
+        )
+        .remove(0);
+        c.name = name.into();
+        let rates = (decided.iter().enumerate())
+            .map(|(i, &d)| Rate {
+                hypothesis: format!("h{i}"),
+                campaigns: 8,
+                decided: d,
+                p_decide: d as f64 / 8.0,
+                otherwise: Default::default(),
+                not_simulated: None,
+            })
+            .collect();
+        let world = World {
+            mu: 0.1,
+            cord_pct: 5.0,
+            run_pct: 2.0,
+            protocol: firmware::Protocol::default(),
+        };
+        score(c, rates, &world)
+    }
+
+    #[test]
+    fn a_zero_is_no_near_tie_and_a_tie_at_zero_goes_to_the_most_named() {
+        let opts = Options::default();
+        // 1 of 8 (12.5 %) against the shorter current design's 0 %: the 12.5 % is chosen (it
+        // was the current design: 0 % within one campaign of 12.5 %, and fewer hours).
+        let s = [
+            scored("current design", 6, &[0, 8]),
+            scored("longer", 12, &[1, 8]),
+        ];
+        assert_eq!(recommend(&s, &opts, false).candidate.name, "longer");
+        // Everything at 0 %: the design naming its truth most often (7 of 16 campaigns), not
+        // the shortest.
+        let s = [
+            scored("current design", 6, &[0, 2]),
+            scored("longer", 12, &[0, 7]),
+        ];
+        assert_eq!(recommend(&s, &opts, false).candidate.name, "longer");
+    }
 }
