@@ -122,10 +122,19 @@ fn every_rig_command_is_one_the_board_takes_and_stores(plan: &serde_json::Value)
     }
     let mut keys = std::collections::BTreeSet::new();
     for line in &lines {
-        let rest = line
-            .strip_prefix("capstan rig ")
-            .unwrap_or_else(|| panic!("{line}: not a `capstan rig` command"));
-        let cmd = Command::parse(rest).unwrap_or_else(|e| panic!("{line}: the board says {e:?}"));
+        // As pasted: the CLI's own parser takes the whole line, board selector included.
+        use clap::Parser as _;
+        let cli = capstan::cli::Cli::try_parse_from(line.split_whitespace())
+            .unwrap_or_else(|e| panic!("{line}: capstan refuses it: {e}"));
+        let capstan::cli::Command::Rig(a) = cli.command else {
+            panic!("{line}: not a `capstan rig` command");
+        };
+        assert!(
+            a.chip.is_some() && a.elf.is_some() || a.sim.sim.is_some(),
+            "{line}: no board"
+        );
+        let rest = a.words.join(" ");
+        let cmd = Command::parse(&rest).unwrap_or_else(|e| panic!("{line}: the board says {e:?}"));
         match cmd {
             Command::Set(key, value) => {
                 let s = board
@@ -225,4 +234,34 @@ fn plan_keeps_the_runs_of_cords_told_apart_by_a_label() {
         "{assumed}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The printed commands run as printed: every `capstan ...` line of the text (the rig commands
+/// with the board `--board` gave, and the `capstan simulate` check) is one the CLI's own parser
+/// takes (issue 42: `capstan rig set order updown` failed with "say which board").
+#[test]
+fn the_printed_commands_parse_with_the_board_given() {
+    use clap::Parser as _;
+    let o = capstan(&["plan", "--reps", "1", "--board", "--sim /tmp/my-board"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let mut n = 0;
+    for line in text.lines() {
+        let Some(at) = line.find("capstan ").filter(|_| {
+            line.trim_start().starts_with("capstan ") || line.contains("check it: capstan")
+        }) else {
+            continue;
+        };
+        let cmd = &line[at..];
+        let cli = capstan::cli::Cli::try_parse_from(cmd.split_whitespace())
+            .unwrap_or_else(|e| panic!("{cmd}: {e}"));
+        if let capstan::cli::Command::Rig(a) = cli.command {
+            assert_eq!(
+                a.sim.sim.as_deref(),
+                Some(std::path::Path::new("/tmp/my-board"))
+            );
+        }
+        n += 1;
+    }
+    assert!(n >= 2, "{text}");
 }

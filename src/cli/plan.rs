@@ -28,6 +28,11 @@ pub struct Args {
     /// Master seed of the simulated campaigns.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The board the printed `capstan rig` commands address, as `capstan rig` takes it
+    /// (e.g. "--chip RP2040 --elf fw.elf" or "--sim DIR"); without it they carry a
+    /// placeholder to replace.
+    #[arg(long, value_name = "RIG_OPTIONS", allow_hyphen_values = true)]
+    pub board: Option<String>,
 }
 
 /// Run `capstan plan`.
@@ -54,7 +59,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )?),
         None => None,
     };
-    let p = match planned(&data, &args) {
+    let mut p = match planned(&data, &args) {
         Ok(p) => p,
         Err(e) => {
             // Nothing was written: the directory is left as it was found.
@@ -64,6 +69,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             return Err(e);
         }
     };
+    let board = args
+        .board
+        .as_deref()
+        .unwrap_or(capstan_plan::commands::PLACEHOLDER);
+    capstan_plan::commands::with_board(&mut p, board);
     // How the data were read and where they came from, as diagnose and analyze say it.
     let structure = data.structure.summary();
     let mut v = serde_json::to_value(&p)?;
@@ -89,13 +99,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The plan of `data`, with a progress bar on a terminal; Ctrl-C or SIGTERM stops between
-/// protocols (nothing is written, and DIR stays as it was).
+/// How long a stopped plan may take to return before it exits anyway (it stops within one
+/// simulated campaign; the analysis of large data, or a cords set, can take longer).
+const PLAN_GRACE: std::time::Duration = std::time::Duration::from_secs(3);
+
+/// The plan of `data`, with a progress bar on a terminal; Ctrl-C or SIGTERM stops within one
+/// simulated campaign, or exits after [`PLAN_GRACE`] (nothing is written, and DIR stays as
+/// it was).
 fn planned(data: &capstan_data::Dataset, args: &Args) -> anyhow::Result<Plan> {
     let opts = Options {
         reps: args.reps,
         seed: args.seed,
         max_hours: args.hours,
+        stop: Some(super::signal::stop_flag("plan")),
         ..Options::default()
     };
     let bar = std::io::stderr().is_terminal().then(|| {
@@ -109,6 +125,7 @@ fn planned(data: &capstan_data::Dataset, args: &Args) -> anyhow::Result<Plan> {
         pb
     });
     let stop = super::signal::stop_flag("plan");
+    super::signal::exit_if_still_running_after("plan", PLAN_GRACE);
     let mut progress = |done: usize, total: usize| {
         if let Some(pb) = &bar {
             pb.set_length(total as u64);
@@ -154,12 +171,18 @@ pub fn words(p: &Plan, source: &str, structure: &str) -> String {
                 None => format!("{} {}/{}", r.hypothesis, r.decided, r.campaigns),
             })
             .collect();
+        // A protocol with no campaign simulated has no chance to show, not 0 %.
+        let worst = if c.per_hypothesis.iter().all(|r| r.not_simulated.is_some()) {
+            "not simulated".to_string()
+        } else {
+            format!("{:.0} %", 100.0 * c.p_decide_worst)
+        };
         let _ = writeln!(
             s,
-            "{:<44} {:>9.1} {:>11.0} %  {}",
+            "{:<44} {:>9.1} {:>13}  {}",
             c.candidate.name,
             c.rig_hours,
-            100.0 * c.p_decide_worst,
+            worst,
             per.join(", ")
         );
     }
@@ -268,12 +291,18 @@ fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
             b.rig_hours
         );
     }
-    if !p.any_decides {
+    if !p.any_decides && p.any_named {
+        let _ = writeln!(
+            s,
+            "No candidate protocol named every hypothesis alone: each left at least one \
+             never named in its campaigns (0 % worst case), so none of these decides; more \
+             runs, cords or a different rig are needed."
+        );
+    } else if !p.any_decides {
         let _ = writeln!(
             s,
             "No candidate protocol named the true hypothesis alone in any simulated campaign: \
-             none of these decides. The least bad follows; more runs, cords or a different \
-             rig are needed."
+             none of these decides; more runs, cords or a different rig are needed."
         );
     }
     if p.current_decides {
@@ -291,11 +320,18 @@ fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
                 p.not_simulated.len()
             );
         }
-    } else if r.p_decide_worst == 0.0 && p.any_decides {
-        let _ = writeln!(
+    } else if r.p_decide_worst == 0.0 {
+        let named: usize = r.per_hypothesis.iter().map(|h| h.decided).sum();
+        let of: usize = r.per_hypothesis.iter().map(|h| h.campaigns).sum();
+        let _ =
+            writeln!(
             s,
-            "No protocol within the hours decides (0 % worst case); the shortest, {} ({:.1} rig hours), follows only as a place to start.",
-            r.candidate.name, r.rig_hours
+            "No design {}reaches a decision (0 % worst case): no recommendation. {} ({:.1} rig \
+             hours) named its truth alone most often ({named} of {of} campaigns) and follows \
+             only as a place to start.",
+            if p.any_decides { "within the hours " } else { "" },
+            r.candidate.name,
+            r.rig_hours
         );
     } else {
         let _ = writeln!(
@@ -311,6 +347,18 @@ fn recommendation(s: &mut String, p: &Plan, r: &Scored) {
     }
     for c in &r.candidate.physical_changes {
         let _ = writeln!(s, "  by hand: {c}");
+    }
+    if r.candidate
+        .rig_commands
+        .iter()
+        .any(|c| c.contains(capstan_plan::commands::PLACEHOLDER))
+    {
+        let _ = writeln!(
+            s,
+            "  (replace `{}` by your board: the firmware ELF it runs, or --sim DIR; `capstan \
+             plan --board \"...\"` prints it in)",
+            capstan_plan::commands::PLACEHOLDER
+        );
     }
     for c in &r.candidate.rig_commands {
         let _ = writeln!(s, "  {c}");

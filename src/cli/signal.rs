@@ -75,18 +75,39 @@ fn on_signal(command: &'static str, signal: i32) {
             );
         }
         Action::Ignore => {}
-        Action::Exit => {
-            let kept = capstan_outdir::keep_open_sets();
-            let where_ = if kept.is_empty() {
-                "nothing was being written".to_string()
-            } else {
-                let list: Vec<String> = kept.iter().map(|k| k.display().to_string()).collect();
-                format!("the work done so far is kept in {}", list.join(", "))
-            };
-            crate::errln!("capstan {command}: second signal, exiting now; {where_}");
-            std::process::exit(INTERRUPTED_STATUS.into());
-        }
+        Action::Exit => exit_now(command, "second signal"),
     }
+}
+
+/// Exit at once (status 130), keeping the work of every open output set and saying where.
+fn exit_now(command: &str, why: &str) -> ! {
+    let kept = capstan_outdir::keep_open_sets();
+    let where_ = if kept.is_empty() {
+        "nothing was being written".to_string()
+    } else {
+        let list: Vec<String> = kept.iter().map(|k| k.display().to_string()).collect();
+        format!("the work done so far is kept in {}", list.join(", "))
+    };
+    crate::errln!("capstan {command}: {why}, exiting now; {where_}");
+    std::process::exit(INTERRUPTED_STATUS.into());
+}
+
+/// For a command whose work in flight keeps nothing (a plan is written only when finished):
+/// once stopped, if it has not returned `grace` later, exit at once as a second signal would.
+/// This bounds the time from a signal to the exit whatever the command is computing.
+pub fn exit_if_still_running_after(command: &'static str, grace: Duration) {
+    let stop = stop_flag(command);
+    std::thread::spawn(move || {
+        while !stop.load(Ordering::SeqCst) {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        std::thread::sleep(grace);
+        let why = format!(
+            "still working {} s after the signal",
+            grace.as_secs_f64().round()
+        );
+        exit_now(command, &why);
+    });
 }
 
 /// The flag the signal handler sets; installs the handler on first use.

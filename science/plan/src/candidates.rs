@@ -90,13 +90,15 @@ impl Design {
         } else {
             StepOrder::Monotone
         };
-        Design {
+        let mut design = Design {
             order,
             runs_per_cord,
             wraps_deg,
             diameters_mm,
             drive_v,
-        }
+        };
+        crate::bounds::bound(&mut design, assumed);
+        design
     }
 
     /// This design is the data's own: as many cords and runs on each (the data are a full

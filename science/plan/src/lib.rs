@@ -6,7 +6,9 @@
 //! protocol with the best worst-case chance (the fewer rig hours between near ties), or the
 //! current design when it already decides.
 
+pub mod bounds;
 pub mod candidates;
+pub mod commands;
 pub mod cords;
 pub mod hypotheses;
 pub mod trial;
@@ -17,8 +19,9 @@ use capstan_data::Dataset;
 use capstan_engine::diagnose::{self, Diagnosis};
 use hypotheses::{open_hypotheses, untestable_kinds, Hypothesis, NotSimulated};
 use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-use trial::{rates, Rate, World};
+use trial::{rates_until, Rate, World};
 
 /// A design decides when its worst-case chance of naming the truth alone is at least this.
 pub const DECIDES: f64 = 0.9;
@@ -37,6 +40,8 @@ pub struct Options {
     /// Also simulate how many cords each open question between cords needs (the larger part
     /// of the planner's time: sets of up to 80 cords).
     pub cords: bool,
+    /// Set (by a signal): stop within one campaign ([`STOPPED`]).
+    pub stop: Option<&'static AtomicBool>,
 }
 
 impl Default for Options {
@@ -47,6 +52,7 @@ impl Default for Options {
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()),
             max_hours: None,
             cords: true,
+            stop: None,
         }
     }
 }
@@ -119,6 +125,8 @@ pub struct Plan {
     /// Some candidate named every simulated hypothesis alone in at least one campaign (false:
     /// no protocol here decides, and the recommendation is only the least bad).
     pub any_decides: bool,
+    /// Some campaign of some candidate named its hypothesis alone (false: none ever did).
+    pub any_named: bool,
     /// The recommendation fits in `--hours` (false: nothing does; it is the shortest).
     pub within_hours: bool,
     /// With `--hours`: the best protocol beyond them, when it does better than the
@@ -199,6 +207,7 @@ pub fn plan(
     let d = diagnosis(data, &mut assumed);
     let world = world(&d, &mut assumed);
     let current = Design::of(&d, &mut assumed);
+    bounds::check(&current, &world, &d)?;
     let (hyps, not_simulated) = open_hypotheses(&d, &current, &world);
     let as_data = current.is_the_datas(&d);
     let cands = candidates(&current, &untestable_kinds(&d, &current, &world), as_data);
@@ -222,13 +231,14 @@ pub fn plan(
                     "{why}: this protocol cannot decide, and another can test every hypothesis"
                 ),
             ),
-            None => rates(
+            None => rates_until(
                 &c.design,
                 &hyps,
                 &world,
                 opts.reps,
                 (opts.seed, i as u64),
                 opts.threads,
+                opts.stop,
             )?,
         };
         scored.push(score(c, r, &world));
@@ -244,12 +254,16 @@ pub fn plan(
     let current_decides = current_design.p_decide_worst >= DECIDES;
     let recommended = recommend(&scored, opts, current_decides).clone();
     let any_decides = scored.iter().any(|s| s.p_decide_worst > 0.0);
+    let any_named = (scored.iter()).any(|s| s.per_hypothesis.iter().any(|r| r.decided > 0));
     let within_hours = opts.max_hours.is_none_or(|h| recommended.rig_hours <= h);
     let better_beyond_hours = better_beyond(&scored, &recommended, opts);
     scored.sort_by(|a, b| {
         (b.p_decide_worst.total_cmp(&a.p_decide_worst)).then(a.rig_hours.total_cmp(&b.rig_hours))
     });
     let (cords, first) = cords_first(data, &d, &current, &hyps, current_decides, opts, &world)?;
+    if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+        return Err(STOPPED.to_string());
+    }
     Ok(Plan {
         hypotheses: hyps,
         not_simulated,
@@ -258,6 +272,7 @@ pub fn plan(
         recommended,
         current_decides,
         any_decides,
+        any_named,
         within_hours,
         better_beyond_hours,
         current_design,
@@ -296,6 +311,18 @@ fn cords_first(
                     .into(),
             ),
         ));
+    }
+    if d.design.cords > bounds::MAX_CORDS_ASKED {
+        let why = format!(
+            "how many cords was not asked: these data hold {} cords, more than the {} \
+             up to which the planner analyses them for it",
+            d.design.cords,
+            bounds::MAX_CORDS_ASKED
+        );
+        return Ok((None, protocol(why)));
+    }
+    if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+        return Err(STOPPED.to_string());
     }
     let a = capstan_engine::analysis::run(
         data,
@@ -467,8 +494,74 @@ fn recommend<'a>(scored: &'a [Scored], opts: &Options, current_decides: bool) ->
             .min_by(|a, b| a.rig_hours.total_cmp(&b.rig_hours))
             .unwrap_or(&scored[0])
     };
+    if best == 0.0 {
+        // No design reaches it: the least bad is the one that named its truth most often over
+        // the hypotheses, not the shortest (which favoured the current design at 0 %).
+        let named = |s: &Scored| s.per_hypothesis.iter().map(|r| r.decided).sum::<usize>();
+        return (scored.iter().filter(within))
+            .max_by(|a, b| (named(a).cmp(&named(b))).then(b.rig_hours.total_cmp(&a.rig_hours)))
+            .unwrap_or_else(shortest);
+    }
+    // Near ties (one campaign apart) go to the fewer hours; a 0 % is never a near tie.
     (scored.iter().filter(within))
-        .filter(|s| s.p_decide_worst >= best - step + 1e-9)
+        .filter(|s| s.p_decide_worst > 0.0 && s.p_decide_worst >= best - step + 1e-9)
         .min_by(|a, b| a.rig_hours.total_cmp(&b.rig_hours))
         .unwrap_or_else(shortest)
+}
+
+#[cfg(test)]
+mod recommend_tests {
+    use super::*;
+
+    fn scored(name: &str, runs: u32, decided: &[usize]) -> Scored {
+        let mut c = candidates(
+            &Design {
+                order: capstan_rig::StepOrder::Monotone,
+                runs_per_cord: runs,
+                wraps_deg: vec![360.0],
+                diameters_mm: vec![25.4],
+                drive_v: vec![10.0],
+            },
+            &[],
+            true,
+        )
+        .remove(0);
+        c.name = name.into();
+        let rates = (decided.iter().enumerate())
+            .map(|(i, &d)| Rate {
+                hypothesis: format!("h{i}"),
+                campaigns: 8,
+                decided: d,
+                p_decide: d as f64 / 8.0,
+                otherwise: Default::default(),
+                not_simulated: None,
+            })
+            .collect();
+        let world = World {
+            mu: 0.1,
+            cord_pct: 5.0,
+            run_pct: 2.0,
+            protocol: capstan_rig::Protocol::default(),
+        };
+        score(c, rates, &world)
+    }
+
+    #[test]
+    fn a_zero_is_no_near_tie_and_a_tie_at_zero_goes_to_the_most_named() {
+        let opts = Options::default();
+        // 1 of 8 (12.5 %) against the shorter current design's 0 %: the 12.5 % is chosen (it
+        // was the current design: 0 % within one campaign of 12.5 %, and fewer hours).
+        let s = [
+            scored("current design", 6, &[0, 8]),
+            scored("longer", 12, &[1, 8]),
+        ];
+        assert_eq!(recommend(&s, &opts, false).candidate.name, "longer");
+        // Everything at 0 %: the design naming its truth most often (7 of 16 campaigns), not
+        // the shortest.
+        let s = [
+            scored("current design", 6, &[0, 2]),
+            scored("longer", 12, &[0, 7]),
+        ];
+        assert_eq!(recommend(&s, &opts, false).candidate.name, "longer");
+    }
 }

@@ -15,6 +15,7 @@ use capstan_validation::cases::{Case, Class};
 use capstan_validation::score::{self, Outcome};
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// How often campaigns under one hypothesis decided, and what they said otherwise.
 #[derive(Clone, Debug, Serialize)]
@@ -52,6 +53,21 @@ pub fn rates(
     (seed, salt): (u64, u64),
     threads: usize,
 ) -> Result<Vec<Rate>, String> {
+    rates_until(design, hypotheses, world, reps, (seed, salt), threads, None)
+}
+
+/// [`rates`], checking `stop` before every `threads` campaigns: set, it returns
+/// [`crate::STOPPED`] within one campaign's time (a protocol's campaigns took minutes on a
+/// large design, and a signal waited for all of them).
+pub fn rates_until(
+    design: &Design,
+    hypotheses: &[Hypothesis],
+    world: &World,
+    reps: usize,
+    (seed, salt): (u64, u64),
+    threads: usize,
+    stop: Option<&AtomicBool>,
+) -> Result<Vec<Rate>, String> {
     let mut cases = Vec::new();
     let untestable = |h: &Hypothesis| untestable(design, h, world);
     let simulated: Vec<&Hypothesis> = hypotheses
@@ -78,7 +94,17 @@ pub fn rates(
             });
         }
     }
-    let outcomes = score::run(&cases, threads, capstan_engine::diagnose::diagnose)?;
+    let mut outcomes = Vec::with_capacity(cases.len());
+    for chunk in cases.chunks(threads.max(1)) {
+        if stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+            return Err(crate::STOPPED.to_string());
+        }
+        outcomes.extend(score::run(
+            chunk,
+            threads,
+            capstan_engine::diagnose::diagnose,
+        )?);
+    }
     let mut chunks = outcomes.chunks(reps.max(1));
     debug_assert_eq!(chunks.len(), simulated.len());
     Ok((hypotheses.iter())

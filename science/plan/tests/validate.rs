@@ -119,6 +119,7 @@ fn run(s: &Scenario, reps: usize, fresh: u64) -> (String, f64, f64) {
         max_hours: None,
         // The protocols are validated here; how many cords is the cord calibration's.
         cords: false,
+        stop: None,
     };
     let p = plan(&data, &opts, &mut |_, _| true).expect("plans");
     let rec = &p.recommended.candidate;
