@@ -17,6 +17,8 @@
 #[cfg(target_os = "none")]
 mod board;
 #[cfg(target_os = "none")]
+mod board_log;
+#[cfg(target_os = "none")]
 mod board_safe;
 
 #[cfg(not(target_os = "none"))]
@@ -123,7 +125,7 @@ mod pico {
             up: { 0: { size: board::LOG_BUFFER_BYTES, mode: ChannelMode::NoBlockSkip, name: "defmt" } }
             down: { 0: { size: board::COMMAND_BUFFER_BYTES, name: "commands" } }
         };
-        rtt_target::set_defmt_channel(channels.up.0);
+        crate::board_log::set_channel(channels.up.0);
         // SAFETY: channel 0 was just initialised; this second handle only sets its mode.
         let log = unsafe { UpChannel::conjure(0) };
         RttConsole {
