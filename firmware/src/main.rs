@@ -246,7 +246,8 @@ mod pico {
     }
 
     /// Before the servo's first pulse: the stored settings (or the built-in ones, logged either
-    /// way: that pulse is the stored rest), the fault a reset latches, and the panic path armed.
+    /// way, by the first sample: that pulse is the stored rest), the fault a reset latches, and
+    /// the panic path armed.
     async fn boot(
         rig: &mut firmware::Rig,
         store: &mut SettingsStore<impl embedded_storage_async::nor_flash::NorFlash>,
@@ -269,7 +270,8 @@ mod pico {
                 angle
             );
         }
-        firmware::LogSink::flush(sink);
+        // (The records of the boot, the settings and a latched fault, are held: the first
+        // sample sends them, after its outputs, as it sends every record.)
         // From here a panic puts the servo at rest (before: no pulses at all; and none while
         // the rig holds the servo without pulses).
         board_safe::arm(SafeDuties::for_rig(rig, board::SERVO_FULL_SCALE));
