@@ -11,7 +11,7 @@ use embassy_time::Instant;
 
 /// Records held back at most: those of one sample (a run's end: the last pair and `run_end`;
 /// with a host command's reply and settings report, and a fault: five), and of the next
-/// while a long record waits for it. Should more come, everything held goes out at once.
+/// while a long record waits for it. Should more come, the oldest goes out at once.
 const HELD: usize = 8;
 
 /// Sends records as defmt frames on whatever global logger the binary links (RTT on the
@@ -31,8 +31,13 @@ pub struct DefmtSink {
 impl LogSink for DefmtSink {
     fn emit(&mut self, seq: u32, record: &Record) {
         if !self.held.push(seq, record) {
-            self.held.send_while(|_| true, write);
-            write(seq, record);
+            // Full (a host sending `show` every sample in force mode outruns the one long
+            // record a sample): the oldest goes now, in the sample, to make room; the order
+            // stays.
+            let mut first = true;
+            self.held.send_while(|_| core::mem::take(&mut first), write);
+            let pushed = self.held.push(seq, record);
+            debug_assert!(pushed);
         }
     }
 

@@ -140,6 +140,19 @@ mod tests {
     }
 
     #[test]
+    fn a_full_hold_makes_room_by_its_oldest_alone() {
+        // What the board's sink does when a record comes and N are held: the oldest goes.
+        let mut held = Held::<4>::default();
+        for seq in 1..=4 {
+            assert!(held.push(seq, &settings()));
+        }
+        let mut first = true;
+        assert_eq!(sent(&mut held, |_| core::mem::take(&mut first)), [1]);
+        assert!(held.push(5, &reply()));
+        assert_eq!(sent(&mut held, |_| true), [2, 3, 4, 5]);
+    }
+
+    #[test]
     fn it_holds_n_and_wraps_around() {
         let mut held = Held::<4>::default();
         for round in 0..3u32 {
