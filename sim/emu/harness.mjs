@@ -252,7 +252,14 @@ function boot(carried) {
       if (offset === 0x0c && (ch.cc & 0xffff) !== before) pwmWrites.push({ t_ns: now(), slice, cc_a: ch.cc & 0xffff });
     };
   }
+  let phased = false;
   mcu.adc.onADCRead = (channel) => {
+    if (!phased) {
+      // The board's first conversion: its sample grid starts here. The host's polls go half a
+      // millisecond off it from now on.
+      phased = true;
+      rtt.schedule(0.5e6);
+    }
     const code = B.bench_adc(channel, now());
     syncBench();
     if (code < 0) return; // the case's hang: this conversion never completes
@@ -265,10 +272,10 @@ function boot(carried) {
     writeCommands();
     rtt.schedule(1e6);
   });
-  // The host polls every 1 ms, from 1.5 ms after the boot: half a millisecond off the
-  // board's sample grid, which starts when the boot is done (~0.6-1.0 ms, longer as the boot's
-  // settings record grows), so a line written at a poll is never taken at the edge of a sample
-  // (tests/emu_rp2040 maps each line to the sample that took it).
+  // The host polls every 1 ms, from 1.5 ms after the boot until the board's first
+  // conversion, then half a millisecond off the board's sample grid (which starts when the
+  // boot is done, ~0.5-1.0 ms), so a line written at a poll is never taken at the edge of a
+  // sample (tests/emu_rp2040 maps each line to the sample that took it).
   rtt.schedule(1.5e6);
   benchAlarm = clock.createAlarm(wake);
   benchAlarmAt = -1;

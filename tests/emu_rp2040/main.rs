@@ -136,6 +136,27 @@ fn pwm_write(e: &Emulated, slice: u8, cc: u16, from_ns: f64) -> Option<f64> {
 
 /// Checks every case shares: the emulator saw nothing wrong, the bench's own consistency
 /// checks hold, the stream decoded without loss.
+/// The loop budget's bound: no busy stretch of the core (a sample, the boot) takes more than
+/// 60 % of the 125 000 cycles a 1 ms sample has at 125 MHz, so that the 1 kHz safety loop
+/// keeps its period with room to spare, whatever the sample logs (issue 43: a settings record
+/// took 105 %, `run_start` 91 %). Stretches from the case's chip fault on (a hung loop, the
+/// panic path) are not samples and do not count.
+pub(crate) const LOOP_BUDGET_CYCLES: u64 = 75_000;
+
+fn loop_budget(e: &Emulated) {
+    let budget = &e.bench()["budget"];
+    let worst = &budget["working"];
+    assert!(worst["bursts"].as_u64().unwrap() > 0, "{}", e.case.name);
+    assert!(
+        worst["max"].as_u64().unwrap() <= LOOP_BUDGET_CYCLES,
+        "{}: a stretch of {} cycles at {} ns, over the {LOOP_BUDGET_CYCLES} of the loop budget: \
+         {budget:#}",
+        e.case.name,
+        worst["max"],
+        worst["max_at_ns"]
+    );
+}
+
 pub(crate) fn common(e: &Emulated) {
     let em = &e.emulation;
     assert_eq!(
@@ -165,6 +186,7 @@ pub(crate) fn common(e: &Emulated) {
     );
     assert_eq!(b["button_mismatches"], 0, "{}", e.case.name);
     assert_eq!(b["pwm_off_grid"], 0, "{}", e.case.name);
+    loop_budget(e);
     // The sampling grid of the first run is the plant's whole milliseconds (the harness's
     // lock-step contract; capstan_emu_bench::bench).
     let phase = &b["t1_phase_ns"];

@@ -27,6 +27,6 @@ pub mod settings;
 pub use codes::{CalSource, Channel, FaultKind, SettingsSource, StepOrder, NONE_CODE};
 pub use commands::{CommandError, CommandKind, MAX_LINE};
 pub use force::{ControlMode, ForceProfile};
-pub use prim::{Prim, Scalar};
+pub use prim::{canonical_bits, Prim, Scalar};
 pub use records::{Field, Level, RecordKind};
 pub use settings::{Group, Key, Setting, Since, Value};

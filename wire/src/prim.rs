@@ -79,11 +79,54 @@ impl Scalar {
             Scalar::U16(v) => b[..2].copy_from_slice(&v.to_le_bytes()),
             Scalar::U32(v) => b[..4].copy_from_slice(&v.to_le_bytes()),
             Scalar::I64(v) => b.copy_from_slice(&v.to_le_bytes()),
-            Scalar::F32(v) => {
-                let v = if v.is_nan() { f32::NAN } else { v };
-                b[..4].copy_from_slice(&v.to_bits().to_le_bytes())
-            }
+            Scalar::F32(v) => b[..4].copy_from_slice(&canonical_bits(v).to_le_bytes()),
         }
         b
+    }
+}
+
+/// An `f32`'s bits, a NaN's as the canonical NaN's. By the bits (a NaN: exponent all ones, a
+/// fraction not 0), not by `is_nan`: a float comparison is a library call on a core without an
+/// FPU (the Cortex-M0+), and the board checksums every real of every record.
+pub const fn canonical_bits(v: f32) -> u32 {
+    let bits = v.to_bits();
+    if bits & 0x7fff_ffff > 0x7f80_0000 {
+        f32::NAN.to_bits()
+    } else {
+        bits
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn canonical_bits_keep_every_number_and_make_every_nan_one() {
+        for v in [
+            0.0f32,
+            -0.0,
+            1.5,
+            -2.25e-40,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ] {
+            assert_eq!(canonical_bits(v), v.to_bits(), "{v}");
+        }
+        for bits in [
+            0x7fc0_0001u32,
+            0xffc0_0000,
+            0x7f80_0001,
+            0xff80_0001,
+            0x7fff_ffff,
+        ] {
+            assert!(f32::from_bits(bits).is_nan());
+            assert_eq!(
+                canonical_bits(f32::from_bits(bits)),
+                f32::NAN.to_bits(),
+                "{bits:#x}"
+            );
+        }
     }
 }

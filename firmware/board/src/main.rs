@@ -17,6 +17,8 @@
 #[cfg(target_os = "none")]
 mod board;
 #[cfg(target_os = "none")]
+mod board_log;
+#[cfg(target_os = "none")]
 mod board_safe;
 
 #[cfg(not(target_os = "none"))]
@@ -123,7 +125,7 @@ mod pico {
             up: { 0: { size: board::LOG_BUFFER_BYTES, mode: ChannelMode::NoBlockSkip, name: "defmt" } }
             down: { 0: { size: board::COMMAND_BUFFER_BYTES, name: "commands" } }
         };
-        rtt_target::set_defmt_channel(channels.up.0);
+        crate::board_log::set_channel(channels.up.0);
         // SAFETY: channel 0 was just initialised; this second handle only sets its mode.
         let log = unsafe { UpChannel::conjure(0) };
         RttConsole {
@@ -244,7 +246,8 @@ mod pico {
     }
 
     /// Before the servo's first pulse: the stored settings (or the built-in ones, logged either
-    /// way: that pulse is the stored rest), the fault a reset latches, and the panic path armed.
+    /// way, by the first sample: that pulse is the stored rest), the fault a reset latches, and
+    /// the panic path armed.
     async fn boot(
         rig: &mut capstan_rig::Rig,
         store: &mut SettingsStore<impl embedded_storage_async::nor_flash::NorFlash>,
@@ -267,7 +270,8 @@ mod pico {
                 angle
             );
         }
-        capstan_rig::LogSink::flush(sink);
+        // (The records of the boot, the settings and a latched fault, are held: the first
+        // sample sends them, after its outputs, as it sends every record.)
         // From here a panic puts the servo at rest (before: no pulses at all; and none while
         // the rig holds the servo without pulses).
         board_safe::arm(SafeDuties::for_rig(rig, board::SERVO_FULL_SCALE));

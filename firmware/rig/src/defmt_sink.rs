@@ -3,36 +3,71 @@
 //! arguments by name). The format strings are the wire schema's (`capstan-wire`'s record
 //! table, made into literals by `firmware/rig/build.rs`), which the host's decoder reads too.
 
-use crate::record::{record_crc, LogSink, Record, NONE_CODE};
+use crate::record::{
+    record_crc, settings_record_crc, Held, LogSink, Record, LONG_RECORD_UNTIL_US, NONE_CODE,
+};
+use capstan_wire::Scalar;
+use embassy_time::Instant;
 
-/// Records held back in one sample period at most (a run's end: the last pair and `run_end`;
-/// with a host command's reply and settings report, and a fault: five).
-const HELD: usize = 5;
+/// Records held back at most: those of one sample (a run's end: the last pair and `run_end`;
+/// with a host command's reply and settings report, and a fault: five), and of the next
+/// while a long record waits for it. Should more come, the oldest goes out at once.
+const HELD: usize = 8;
 
 /// Sends records as defmt frames on whatever global logger the binary links (RTT on the
 /// Pico, semihosting on QEMU). Records emitted during a sample are held until the runner has
 /// applied that sample's outputs ([`LogSink::flush`]): a run's end or a fault reaches the pins
-/// before the records that tell of it are encoded.
+/// before the records that tell of it are encoded. A long record (the settings) waits, with
+/// those behind it, for a sample that has time for it ([`LONG_RECORD_UNTIL_US`]; one long
+/// record a sample at most, so a backlog of them drains one a sample). Whatever is
+/// held when the sink is dropped is sent then.
 #[derive(Default)]
 pub struct DefmtSink {
-    held: [Option<(u32, Record)>; HELD],
+    held: Held<HELD>,
+    /// When the present sample began, µs (none before the first: at boot).
+    sample_us: Option<u64>,
 }
 
 impl LogSink for DefmtSink {
     fn emit(&mut self, seq: u32, record: &Record) {
-        match self.held.iter_mut().find(|h| h.is_none()) {
-            Some(slot) => *slot = Some((seq, *record)),
-            None => {
-                self.flush();
-                write(seq, record);
-            }
+        if !self.held.push(seq, record) {
+            // Full (a host sending `show` every sample in force mode outruns the one long
+            // record a sample): the oldest goes now, in the sample, to make room; the order
+            // stays.
+            let mut first = true;
+            self.held.send_while(|_| core::mem::take(&mut first), write);
+            let pushed = self.held.push(seq, record);
+            debug_assert!(pushed);
         }
     }
 
     fn flush(&mut self) {
-        for (seq, record) in self.held.iter_mut().filter_map(Option::take) {
-            write(seq, &record);
-        }
+        let Some(started) = self.sample_us else {
+            // Not in a sample (the boot): the first sample sends them.
+            return;
+        };
+        // One long record a sample at most, and only while the sample is young enough.
+        let mut long_sent = false;
+        let mut may = |r: &Record| {
+            if !r.is_long() {
+                return true;
+            }
+            let young = Instant::now().as_micros().saturating_sub(started) <= LONG_RECORD_UNTIL_US;
+            let may = young && !long_sent;
+            long_sent |= may;
+            may
+        };
+        self.held.send_while(&mut may, write);
+    }
+
+    fn sample_started(&mut self, now_us: u64) {
+        self.sample_us = Some(now_us);
+    }
+}
+
+impl Drop for DefmtSink {
+    fn drop(&mut self) {
+        self.held.send_while(|_| true, write);
     }
 }
 
@@ -43,16 +78,26 @@ include!(concat!(env!("OUT_DIR"), "/wire_record.rs"));
 /// One record as one defmt frame: the schema's fields, in its order, each named (a name that is
 /// not the schema's, or out of its order, does not compile), and the CRC-32 of them.
 fn write(seq: u32, record: &Record) {
-    let crc = record_crc(seq, record);
+    // The settings' bits once, for the checksum and the frame.
     match record {
         Record::RunStart(s) => {
             let settings = s.settings().fields();
+            let crc = settings_record_crc(seq, Scalar::U32(s.run), &settings);
             wire_record!(run_start: seq = seq, run = s.run, settings = settings, crc = crc)
         }
         Record::Settings(r) => {
             let (source, settings) = (r.source.code(), r.settings.fields());
+            let crc = settings_record_crc(seq, Scalar::U8(source), &settings);
             wire_record!(settings: seq = seq, source = source, settings = settings, crc = crc)
         }
+        other => write_small(seq, other, record_crc(seq, other)),
+    }
+}
+
+/// Every other record: a few fields.
+fn write_small(seq: u32, record: &Record, crc: u32) {
+    match record {
+        Record::RunStart(_) | Record::Settings(_) => {}
         Record::Live(l) => wire_record!(live:
             seq = seq,
             t_ms = l.t_ms,

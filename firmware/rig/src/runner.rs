@@ -230,7 +230,9 @@ where
         // the future does not keep them in its state, where every sample stored and reloaded
         // them.)
         let out = {
-            let mut inputs = match io.read(Instant::now().as_micros()) {
+            let now_us = Instant::now().as_micros();
+            sink.sample_started(now_us);
+            let mut inputs = match io.read(now_us) {
                 Ok(i) => i,
                 Err(e) => break Err(e),
             };

@@ -74,7 +74,7 @@ pub enum SettingsError {
 /// One of force control's values as 32 bits (see [`Settings::get`]).
 fn force_bits(p: &Protocol, setting: Setting) -> u32 {
     let (c, law) = (&p.force, &p.force.law);
-    let f = |v: f32| if v.is_nan() { f32::NAN } else { v }.to_bits();
+    let f = capstan_wire::canonical_bits;
     match setting {
         Setting::Mode => c.mode.code() as u32,
         Setting::ForceProfile => c.profile.code() as u32,
@@ -249,7 +249,7 @@ impl Settings {
     /// One value as 32 bits (see [`Settings::fields`]): where each setting lives.
     pub fn get(&self, setting: Setting) -> u32 {
         let (p, c) = (&self.protocol, &self.calibration);
-        let f = |v: f32| if v.is_nan() { f32::NAN } else { v }.to_bits();
+        let f = capstan_wire::canonical_bits;
         match setting {
             Setting::Order => p.order.code() as u32,
             Setting::RestDeg => f(p.rest_deg),

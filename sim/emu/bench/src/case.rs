@@ -361,6 +361,15 @@ pub const FORCE_COMMANDS: [HostLine; 12] = [
     HostLine::between(1_400, "run"),
 ];
 
+/// During the force run (its first segment, ~5.5 s after the trigger) the host sends this
+/// many `show` lines at once: the board takes one a sample, so one of them comes with a
+/// sample of the force controller (every tenth, the run's busiest): the loop budget's worst
+/// case, a settings record on top of the controller (issue 43's settings record made a
+/// sample late; its encoding now waits for the next sample).
+pub const FORCE_SHOW_BURST: usize = 12;
+/// When that burst is due, ms after power-up.
+pub const FORCE_SHOW_AT_MS: u64 = 8_000;
+
 /// When the operator presses in the force case, plant µs: after the host's `run` armed the
 /// board (~1.4 s after power-up; the host never starts the drive, issue 38).
 pub const FORCE_PRESS_AT_US: u64 = 1_600_000;
@@ -390,14 +399,21 @@ fn force_case() -> Case {
             ..CordSetup::new(720.0, thesis_fit())
         },
         quick: true,
-        commands: TYPED.into_iter().chain(FORCE_COMMANDS).collect(),
+        commands: TYPED
+            .into_iter()
+            .chain(FORCE_COMMANDS)
+            .chain(std::iter::repeat_n(
+                HostLine::between(FORCE_SHOW_AT_MS, "show"),
+                FORCE_SHOW_BURST,
+            ))
+            .collect(),
         keep_samples: true,
         ..Case::base(
             "force",
             "force control from the host (issue 43): both sensitivities typed, the fitted law \
              loaded by set lines, force mode, `run` (armed) and a press at the rig, a run holding \
-             T2 at 5 then 10 N on a 720° cord with the servo's dead band; compared with \
-             host-sim's session",
+             T2 at 5 then 10 N on a 720° cord with the servo's dead band, a burst of `show` \
+             during it; compared with host-sim's session",
             22,
             Stop::At(FORCE_END_US + 300_000),
         )

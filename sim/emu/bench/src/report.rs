@@ -85,6 +85,9 @@ pub struct Budget {
     pub run: Stats,
     /// The rest (boot, idle, after the run).
     pub idle: Stats,
+    /// Both, the boot's included, up to the case's chip fault (a hung loop, the panic path
+    /// or a lockup is not a sample): what the loop budget's bound holds to.
+    pub working: Stats,
     /// The five busiest stretches of the runs: (start, ns since the trigger's rising edge,
     /// cycles).
     pub run_worst: Vec<(f64, u32)>,

@@ -63,10 +63,23 @@ impl Bench {
             .iter()
             .map(|&(t, c)| (t - rise.unwrap_or(0.0), c))
             .collect();
+        // Every stretch that ended before the case's chip fault struck (a hung loop, the
+        // panic path, a lockup: the harness's doing, not a sample's work).
+        let ns_per_cycle = 1e6 / CYCLES_PER_SAMPLE as f64;
+        let mut working: Vec<(f64, u32)> = run
+            .iter()
+            .chain(&idle)
+            .copied()
+            .filter(|&(t, c)| {
+                self.core_fault_struck_ns
+                    .is_none_or(|s| t + c as f64 * ns_per_cycle < s)
+            })
+            .collect();
         Budget {
             available_per_sample: CYCLES_PER_SAMPLE,
             run: Stats::of(&mut run),
             idle: Stats::of(&mut idle),
+            working: Stats::of(&mut working),
             run_worst,
             cycles: self.cycles,
         }
