@@ -209,15 +209,21 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         format!("fraction of T2; {noise_method}"),
         "the part is at 0",
     ));
+    // A new cord's error is predict's error model, fitted to the held-out residuals, not a
+    // variance component of these data: its own source, and no interval (not computed).
     let nc = &pm.new_cord_error;
-    out.push(component(
+    let error_model = |r: Row| Row {
+        source: "new-cord error model".into(),
+        ..r
+    };
+    out.push(error_model(component(
         ("new_cord_error.abs_n", "a new cord's error in T2, constant part a (SD² = a² + (b·T2)²)", "N"),
         nc.abs_n,
         None,
         format!("fitted to the held-out residuals of the whole procedure (every cord predicted by the causes chosen and fitted without it; {} cords) beyond the curve's own variance; in capstan predict's prediction interval", nc.cords),
         "not computed (a two-part fit to held-out residuals)",
-    ));
-    out.push(component(
+    )));
+    out.push(error_model(component(
         (
             "new_cord_error.rel",
             "a new cord's error in T2, part proportional to T2 (b)",
@@ -227,7 +233,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         None,
         "as above: the part that grows with T2".to_string(),
         "not computed (a two-part fit to held-out residuals)",
-    ));
+    )));
     let we = &pm.wrap_extrapolation_error;
     let edge_cords = if we.rows > 0 { edge_cords(a) } else { 0 };
     out.push(component(

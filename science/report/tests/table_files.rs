@@ -70,7 +70,7 @@ fn parameters_csv_holds_every_row_with_its_interval() {
         .iter()
         .filter(|c| c[2] == "variance component")
         .collect();
-    assert_eq!(components.len(), 7);
+    assert_eq!(components.len(), 6);
     for c in components {
         assert!(num(&c[5]).is_some() && num(&c[6]).is_some(), "{c:?}");
         assert!(c[8].contains("interval"), "{c:?}");
