@@ -6,6 +6,8 @@ use capstan_data::provenance::{sha256_file, thesis_sha256};
 use capstan_data::Provenance;
 use std::path::Path;
 
+pub mod pdf;
+
 /// The commit this binary was built from, or "unknown".
 pub const COMMIT: &str = env!("CAPSTAN_GIT_COMMIT");
 
@@ -60,8 +62,8 @@ pub fn is_thesis(p: &Provenance) -> bool {
 
 /// A figure file with its provenance inside (`name` says the format): an SVG gets a
 /// `<metadata id="capstan-provenance">` element, a PNG an `iTXt` chunk (keyword `Comment`,
-/// UTF-8) before its end. A PDF is returned as it is (its provenance is in `metrics.json` and
-/// the report beside it).
+/// UTF-8) before its end, a PDF a document information dictionary (title, subject, keywords,
+/// creator: [`pdf::with_info`]).
 pub fn stamp_figure(name: &str, bytes: Vec<u8>, p: &Provenance) -> Vec<u8> {
     let line = p.line();
     if name.ends_with(".svg") {
@@ -84,6 +86,9 @@ pub fn stamp_figure(name: &str, bytes: Vec<u8>, p: &Provenance) -> Vec<u8> {
         .into_bytes()
     } else if name.ends_with(".png") {
         png_with_text(bytes, "Comment", &line)
+    } else if let Some(stem) = name.strip_suffix(".pdf") {
+        let title = stem.rsplit('/').next().unwrap_or(stem);
+        pdf::with_info(&bytes, title, p).unwrap_or(bytes)
     } else {
         bytes
     }

@@ -265,3 +265,89 @@ fn the_printed_commands_parse_with_the_board_given() {
     }
     assert!(n >= 2, "{text}");
 }
+
+/// Data at two drive voltages (the thesis data, runs 4-6 of each cord at 5 V): every candidate
+/// whose protocol runs at more than one voltage says how to switch the drive between them, in
+/// commands the CLI and the board take, one `set amp_control_v` (the wire schema's key) per
+/// voltage at the control voltage that gives it (issue 42: the recommended commands set the
+/// order and stored it, and the runs at the second voltage were never switched to).
+#[test]
+fn a_plan_on_two_drive_voltages_switches_the_voltage_it_plans() {
+    use capstan_rig::{Calibration, Command as BoardCommand};
+    use capstan_wire::Key;
+    use clap::Parser as _;
+    let dir = std::env::temp_dir().join(format!("capstan-plan-volts-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("two-volts.csv");
+    let mut text = String::from("capstan_diameter_mm,wrap_deg,drive_v,run,step,t1_n,t2_n\n");
+    for line in capstan_data::THESIS_CSV.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let volts = if f[3].parse::<u32>().unwrap() > 3 {
+            "5"
+        } else {
+            f[2]
+        };
+        text += &format!("{},{},{volts},{}\n", f[0], f[1], f[3..].join(","));
+    }
+    std::fs::write(&path, text).unwrap();
+    let o = capstan(&["plan", path.to_str().unwrap(), "--reps", "1", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let gain = Calibration::default().amp.amp_gain as f64;
+    let key = Key::AmpControlV.name();
+    let mut checked = 0;
+    let all = v["candidates"].as_array().unwrap().iter();
+    for c in all.chain([&v["recommended"]]) {
+        let volts: Vec<f64> = (c["protocol"]["drive_v"].as_array().unwrap().iter())
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        // The rig commands, then the commands quoted in the procedure, in the order given.
+        let mut lines: Vec<String> = (c["rig_commands"].as_array().unwrap().iter())
+            .map(|x| x.as_str().unwrap().to_string())
+            .collect();
+        for step in c["procedure"].as_array().unwrap() {
+            let step = step.as_str().unwrap();
+            lines.extend(
+                (step.split('`').skip(1).step_by(2))
+                    .filter(|q| q.starts_with("capstan rig"))
+                    .map(str::to_string),
+            );
+        }
+        let mut set = Vec::new();
+        for line in &lines {
+            let cli = capstan::cli::Cli::try_parse_from(line.split_whitespace())
+                .unwrap_or_else(|e| panic!("{line}: capstan refuses it: {e}"));
+            let capstan::cli::Command::Rig(a) = cli.command else {
+                panic!("{line}: not a `capstan rig` command");
+            };
+            let words = a.words.join(" ");
+            if let Ok(BoardCommand::Set(k, value)) = BoardCommand::parse(&words) {
+                if k.name() == key {
+                    set.push(value as f64 * gain);
+                }
+            }
+        }
+        if volts.len() < 2 {
+            continue;
+        }
+        checked += 1;
+        let mut got = set.clone();
+        got.sort_by(f64::total_cmp);
+        got.dedup_by(|a, b| (*a - *b).abs() < 0.01);
+        assert_eq!(
+            got.len(),
+            volts.len(),
+            "{}: sets {set:?} V for {volts:?} V: {lines:#?}",
+            c["name"]
+        );
+        for (g, w) in got.iter().zip(&volts) {
+            assert!(
+                (g - w).abs() < 0.01,
+                "{}: drives {set:?} V for {volts:?} V",
+                c["name"]
+            );
+        }
+    }
+    assert!(checked >= 2, "no candidate at two voltages: {v}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

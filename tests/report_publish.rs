@@ -263,13 +263,14 @@ fn the_next_experiment_section_is_rendered_from_its_metrics_object() {
 }
 
 /// Every figure file says where it came from (program, commit, input's SHA-256, command
-/// line), as metrics.json does: SVG in a metadata element, PNG in an iTXt chunk; both still
-/// parse.
+/// line), as metrics.json does: SVG in a metadata element, PNG in an iTXt chunk, PDF in the
+/// document information dictionary its newest trailer names; each still opens.
 #[test]
 fn figure_files_carry_the_provenance() {
     let dir = thesis_out().join("figures");
     let commit = capstan::provenance::COMMIT;
-    let (mut svgs, mut pngs) = (0, 0);
+    let sha = capstan_data::provenance::thesis_sha256();
+    let (mut svgs, mut pngs, mut pdfs) = (0, 0, 0);
     for e in std::fs::read_dir(&dir).unwrap().flatten() {
         let name = e.file_name().to_string_lossy().to_string();
         let bytes = std::fs::read(e.path()).unwrap();
@@ -290,7 +291,23 @@ fn figure_files_carry_the_provenance() {
             );
             capstan_report::export::png_decodes(&bytes).unwrap();
             pngs += 1;
+        } else if name.ends_with(".pdf") {
+            let info = capstan::provenance::pdf::document_info(&bytes)
+                .unwrap_or_else(|| panic!("{name}: no document information dictionary"));
+            assert!(
+                info.contains(&format!("commit {commit}"))
+                    && info.contains(&format!("input SHA-256 {sha}"))
+                    && info.contains("command: "),
+                "{name}: {info}"
+            );
+            let (pages, framed) = capstan_report::export::pdf_pages(&bytes);
+            assert!(pages == 1 && framed, "{name}");
+            capstan_report::check::pdf_page_pt(&bytes).unwrap();
+            pdfs += 1;
         }
     }
-    assert!(svgs > 0 && svgs == pngs, "{svgs} SVG, {pngs} PNG");
+    assert!(
+        svgs > 0 && svgs == pngs && svgs == pdfs,
+        "{svgs} SVG, {pngs} PNG, {pdfs} PDF"
+    );
 }

@@ -760,7 +760,8 @@ impl Ctx<'_> {
                 rows: d.n(),
                 structure: d.structure.clone(),
             },
-            catalogue_effects: a.selected.iter().map(|k| k.name()).collect(),
+            // In the verdict layer's order (strongest first), as diagnose and analyze name them.
+            catalogue_effects: (a.selected_evidence().iter()).map(|e| e.effect).collect(),
             catalogue_given_terms: out
                 .terms
                 .iter()

@@ -22,9 +22,10 @@ fn thesis_nothing_in_the_library_explains_it() {
         assert!(v.get(k).is_some(), "missing {k}");
     }
     assert!(v["data"]["structure"]["statement"].is_string());
+    // Strongest first, as diagnose and analyze name them.
     assert_eq!(
         v["catalogue_effects"],
-        serde_json::json!(["contact_heating", "t2_offset"])
+        serde_json::json!(["t2_offset", "contact_heating"])
     );
     assert_eq!(v["terms"], serde_json::json!([]));
     // What the catalogue leaves is cord-to-cord scatter (judged with the cords as the units),

@@ -2,10 +2,12 @@
 //! rebuild (`capstan rig set`: order, runs, drive voltage through the amplifier control) or
 //! with a physical change the user makes (more wraps, a second capstan), marked as such.
 
+use crate::commands;
 use capstan_engine::diagnose::Diagnosis;
 use capstan_physics::entry::CaseDesign;
 use capstan_physics::{EffectKind, Facts};
-use capstan_rig::{Calibration, Protocol, StepOrder};
+use capstan_rig::{Protocol, StepOrder};
+use capstan_wire::Key;
 use serde::Serialize;
 
 /// Re-tensioning the cord, taring and starting a run: the time between runs, s (an estimate).
@@ -248,6 +250,7 @@ pub fn candidates(current: &Design, open: &[EffectKind], as_data: bool) -> Vec<C
             ..meeting(&updown, all)
         },
     );
+    out.iter_mut().for_each(commands::switch_voltages);
     out
 }
 
@@ -350,7 +353,11 @@ pub fn testing_design(current: &Design, open: &[EffectKind], protocol: &Protocol
 
 fn rig_only(name: &str, design: Design) -> Candidate {
     let rig_commands = vec![
-        format!("capstan rig set order {}", design.order.name()),
+        format!(
+            "capstan rig set {} {}",
+            Key::Order.name(),
+            design.order.name()
+        ),
         "capstan rig store".to_string(),
     ];
     let procedure = vec![runs_on_each_cord(design.runs_per_cord)];
@@ -370,22 +377,12 @@ pub fn meeting(base: &Candidate, needs: CaseDesign) -> Candidate {
     let mut c = base.clone();
     let d = &mut c.design;
     if needs.voltages && d.drive_v.len() == 1 {
-        let gain = Calibration::default().amp.amp_gain as f64;
         let v = d.drive_v[0];
         let volts = [v, (v / 2.0 * 10.0).round() / 10.0];
-        let control = |x: f64| ((x / gain) * 1000.0).round() / 1000.0;
-        // Ascending, as the data's design lists them (the first is set first at the rig).
+        // Ascending, as the data's design lists them; the rig keeps the data's voltage first.
         d.drive_v = vec![volts[1].min(volts[0]), volts[1].max(volts[0])];
-        c.rig_commands.insert(
-            1,
-            format!("capstan rig set amp_control_v {}", control(volts[0])),
-        );
-        c.procedure.push(format!(
-            "`capstan rig set amp_control_v {}` (drive {} V with amp_gain {gain}), `capstan rig \
-             store`, and the same runs again on every cord",
-            control(volts[1]),
-            volts[1]
-        ));
+        c.rig_commands.insert(1, commands::set_drive(volts[0]).0);
+        c.procedure.push(commands::switch_step(volts[1]));
     }
     let span = |v: &[f64]| {
         v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)

@@ -57,12 +57,16 @@ fn technical_summary(h: &mut String, a: &Analysis) {
         .iter()
         .map(|c| format!("<b>{}</b> ({})", esc(c.name), esc(c.description)))
         .collect();
+    let u = &a.mechanisms.unexplained;
     if causes.is_empty() {
         h.push_str("<li>No cause of the catalogue is named.</li>");
+    } else if u.flag {
+        // As the verdict says: effects that improve the fit are no diagnosis beside structure
+        // none of them accounts for.
+        let _ = write!(h, "<li>Catalogue effects that improve the fit but do not account for what is left, so they are not a diagnosis: {}.</li>", causes.join("; "));
     } else {
         let _ = write!(h, "<li>Named causes: {}.</li>", causes.join("; "));
     }
-    let u = &a.mechanisms.unexplained;
     if u.flag {
         let _ = write!(
             h,

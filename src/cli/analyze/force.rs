@@ -184,7 +184,8 @@ pub fn run(args: &super::Args, pairs: &Path, ctx: &capstan_report::Context) -> a
     let (html, figs) = tracking_html(&runs, &pairs.display().to_string(), window, ctx)?;
     let figure_files = capstan_report::figure_files(&figs, &ctx.figures)?;
     for f in &figure_files {
-        set.write(&f.name, &f.bytes)?;
+        let stamped = crate::provenance::stamp_figure(&f.name, f.bytes.clone(), &ctx.provenance);
+        set.write(&f.name, &stamped)?;
     }
     let mut metrics = tracking_json(&runs, window, ctx);
     metrics["elapsed_s"] = serde_json::json!(t0.elapsed().as_secs_f64());

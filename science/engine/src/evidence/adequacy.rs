@@ -428,6 +428,24 @@ fn between_sentence(c: &CordLevel, covariate: &str, lof: Option<&LackOfFit>) -> 
     s + "."
 }
 
+/// What follows [`scatter_head`] when the cords' summaries were tested against wrap and
+/// diameter and none follows them.
+pub const NO_ORDER: &str = ", in no order of wrap or diameter";
+
+/// The head of the verdict that what is left is cord-to-cord scatter of `what` (the
+/// parameters in words, [`scatter_words`], with or without their numbers): one wording for
+/// `diagnose`, `analyze`'s headline and the report.
+pub fn scatter_head(what: &[String]) -> String {
+    if what.is_empty() {
+        return "What is left differs from cord to cord".to_string();
+    }
+    format!(
+        "What is left is cord-to-cord scatter: {} {} from cord to cord more than from run to run",
+        crate::verdict::words::list(what),
+        if what.len() == 1 { "differs" } else { "differ" }
+    )
+}
+
 /// What is left is cord-to-cord scatter: the sentence, with the supported random cord effects
 /// `left`, the lack of fit before and beyond the cords' own parameters, and, when each cord's
 /// own shape beyond them is left too (`own`: the test that it is shared by no pattern), that.
@@ -452,19 +470,11 @@ fn scatter_sentence(
             format!("{}{sd}", scatter_words(p))
         })
         .collect();
-    let mut s = if what.is_empty() {
-        "What is left differs from cord to cord".to_string()
-    } else {
-        format!(
-            "What is left is cord-to-cord scatter: {} {} from cord to cord more than from run to run",
-            crate::verdict::words::list(&what),
-            if what.len() == 1 { "differs" } else { "differ" }
-        )
-    };
+    let mut s = scatter_head(&what);
     if !c.patterns.is_empty() {
         let order = c.patterns.iter().map(|p| p.p_family).fold(1.0, f64::min);
         s += &format!(
-            ", in no order of wrap or diameter (the {} cords as units, smallest adjusted p = {})",
+            "{NO_ORDER} (the {} cords as units, smallest adjusted p = {})",
             c.cords,
             p_shown(order)
         );
