@@ -64,7 +64,7 @@ pub(crate) fn ready() -> Option<&'static Setup> {
 }
 
 pub(crate) fn case(name: &str) -> Case {
-    case::by_name(name).unwrap_or_else(|| panic!("no case {name}"))
+    capstan_emu_bench::cases::by_name(name).unwrap_or_else(|| panic!("no case {name}"))
 }
 
 /// Is the case in this run's set? Says so when it is not.
@@ -412,7 +412,7 @@ fn faults_on_the_emulated_board_reach_the_safe_state_at_the_pins_within_20_ms() 
         .iter()
         .map(|c| c.name)
         .collect();
-    let cases = case::all()
+    let cases = capstan_emu_bench::cases::all()
         .into_iter()
         .filter(|c| c.rtt_stall_us.is_none() && !hazards.contains(&c.name));
     for c in cases.filter(|c| !c.injections.is_empty()) {

@@ -142,10 +142,17 @@ pub struct ChannelCal {
     pub cal_zero: f32,
 }
 
+/// Largest load a tare may take as zero, N: the mean reading during the tare may differ from
+/// the stored zero by at most this (beyond the cord's `tare_reference_n`). More is a weight or a
+/// preload on the cord, or a wrong zero, and taken as zero it would hide that much of every
+/// force from the over-force check: the run is refused (`tare_load`). 1 N is ~70 counts at
+/// 0.015 N/count, far beyond a sensor's drift between calibrations.
+pub const TARE_MAX_N: f32 = 1.0;
+
 /// How far the zero in force may move from the zero a channel's sensitivity was measured at,
-/// N, before that sensitivity is unmeasured (the tare's bound, [`crate::rig::TARE_MAX_N`]):
+/// N, before that sensitivity is unmeasured (the tare's bound, [`TARE_MAX_N`]):
 /// repeated zeros of up to 1 N each, or a typed zero, cannot walk it further without a weigh.
-pub const ZERO_WALK_MAX_N: f32 = crate::rig::TARE_MAX_N;
+pub const ZERO_WALK_MAX_N: f32 = TARE_MAX_N;
 
 impl ChannelCal {
     /// A channel nobody has measured: the built-in placeholder.

@@ -51,12 +51,8 @@ pub const HOMING_DEG_PER_S: f32 = 10.0;
 /// lapses (and is said so in the log).
 pub const ARM_MS: u32 = 30_000;
 
-/// Largest load a tare may take as zero, N: the mean reading during the tare may differ from
-/// the stored zero by at most this (beyond the cord's `tare_reference_n`). More is a weight or a
-/// preload on the cord, or a wrong zero, and taken as zero it would hide that much of every
-/// force from the over-force check: the run is refused (`tare_load`). 1 N is ~70 counts at
-/// 0.015 N/count, far beyond a sensor's drift between calibrations.
-pub const TARE_MAX_N: f32 = 1.0;
+/// The tare's bound ([`crate::calib::TARE_MAX_N`]: the calibration's, which the zero walk shares).
+pub use crate::calib::TARE_MAX_N;
 
 /// `now_us` on the sample grid that runs through `origin_us` (the nearest sample instant).
 /// The clock is read a few tens of µs after each tick, and that latency wanders by a µs or so

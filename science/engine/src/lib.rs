@@ -16,5 +16,6 @@ pub mod analysis;
 pub mod diagnose;
 pub mod evidence;
 pub mod fit;
+pub mod text;
 pub mod trace;
 pub mod verdict;

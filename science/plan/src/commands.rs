@@ -2,7 +2,7 @@
 //! gave `plan`, or a placeholder that says what to put there (a bare `capstan rig set …` fails
 //! with "say which board").
 
-use crate::candidates::Candidate;
+use crate::design::Candidate;
 use crate::Plan;
 use capstan_rig::Calibration;
 use capstan_wire::Key;

@@ -6,10 +6,10 @@
 //! protocol with the best worst-case chance (the fewer rig hours between near ties), or the
 //! current design when it already decides.
 
-pub mod bounds;
 pub mod candidates;
 pub mod commands;
 pub mod cords;
+pub mod design;
 pub mod hypotheses;
 pub mod trial;
 pub mod world;
@@ -207,7 +207,7 @@ pub fn plan(
     let d = diagnosis(data, &mut assumed);
     let world = world(&d, &mut assumed);
     let current = Design::of(&d, &mut assumed);
-    bounds::check(&current, &world, &d)?;
+    world::check(&current, &world, &d)?;
     let (hyps, not_simulated) = open_hypotheses(&d, &current, &world);
     let as_data = current.is_the_datas(&d);
     let cands = candidates(&current, &untestable_kinds(&d, &current, &world), as_data);
@@ -312,12 +312,12 @@ fn cords_first(
             ),
         ));
     }
-    if d.design.cords > bounds::MAX_CORDS_ASKED {
+    if d.design.cords > design::MAX_CORDS_ASKED {
         let why = format!(
             "how many cords was not asked: these data hold {} cords, more than the {} \
              up to which the planner analyses them for it",
             d.design.cords,
-            bounds::MAX_CORDS_ASKED
+            design::MAX_CORDS_ASKED
         );
         return Ok((None, protocol(why)));
     }

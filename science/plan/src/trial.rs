@@ -5,7 +5,7 @@
 //! *decides* when it names its hypothesis's effects and nothing else, with no rival left and
 //! nothing unexplained.
 
-use crate::candidates::Design;
+use crate::design::Design;
 use crate::hypotheses::Hypothesis;
 use crate::world::campaign;
 pub use crate::world::World;

@@ -1,10 +1,11 @@
 //! The world the planner's campaigns are simulated in: the data's mu and scatter, the thesis
 //! rig's noise and sensors, the run protocol; and a design's campaign configuration in it.
 
-use crate::candidates::Design;
+use crate::design::Design;
+use capstan_engine::diagnose::Diagnosis;
 use capstan_physics::{Effect, Model};
 use capstan_rig::Protocol;
-use capstan_sim::campaign::CampaignConfig;
+use capstan_sim::campaign::{CampaignConfig, CampaignError};
 use capstan_sim::noise::NoiseProfile;
 
 /// What the simulated campaigns share: the data's mu and scatter, and the protocol.
@@ -42,4 +43,38 @@ pub fn campaign(design: &Design, effects: &[Effect], world: &World, seed: u64) -
     cfg.scatter_pct = world.cord_pct;
     cfg.run_scatter_pct = Some(world.run_pct);
     cfg
+}
+
+/// The world and design as the simulator takes them, or the plan refused in one sentence: the
+/// quantity, its value, the range the simulator takes and what in the data gave it.
+pub fn check(design: &Design, world: &World, d: &Diagnosis) -> Result<(), String> {
+    let cfg = campaign(design, &[], world, 1);
+    match cfg.validate() {
+        Ok(()) => Ok(()),
+        Err(CampaignError::Bad(what, value, allowed)) => {
+            let source = match what {
+                "scatter (%)" => format!(
+                    "the cord-to-cord scatter of mu these data show ({:.0} % of their mu {:.4}, \
+                     from {} cords): cords this different are not one material on one rig — \
+                     check the cord labels, the units and which column is T1",
+                    d.scatter.cord_pct, d.baseline.mu, d.design.cords
+                ),
+                "run scatter (%)" => format!(
+                    "the run-to-run scatter of mu within cords these data show ({:.0} % of \
+                     their mu {:.4}): runs this different are not repeats of one cord — \
+                     check the run labels and the units",
+                    d.scatter.run_pct, d.baseline.mu
+                ),
+                _ => "the design these data describe".to_string(),
+            };
+            Err(format!(
+                "cannot plan on these data: the simulated campaigns would need {what} = \
+                 {value:.4}, but the simulator takes {}; it comes from {source}",
+                allowed.trim_start_matches("must be ")
+            ))
+        }
+        Err(e) => Err(format!(
+            "cannot plan on these data: their design cannot be simulated ({e})"
+        )),
+    }
 }

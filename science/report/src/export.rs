@@ -201,12 +201,6 @@ pub fn standalone_svg(f: &Figure, number: Option<usize>, width_mm: Option<f64>) 
     )
 }
 
-/// The height of a figure file's legend over a chart `width_px` wide, px (what a figure
-/// leaves for its panels under [`Layout::max_height_px`]).
-pub fn legend_height(entries: &[crate::plot::Entry], width_px: f64) -> f64 {
-    legend(entries, width_px).height
-}
-
 /// The system's fonts, with a sans-serif family that exists (Helvetica, Arial, Liberation
 /// Sans or DejaVu Sans, the first found).
 pub(crate) fn fonts() -> Arc<resvg::usvg::fontdb::Database> {

@@ -4,68 +4,7 @@
 use crate::disturb::{Disturbances, Unmodelled};
 use capstan_physics::Model;
 
-/// What a servo does with a pulse: its own transfer from pulse width to horn angle, linear
-/// about its neutral pulse and limited to its travel. This is the servo's, not the firmware's:
-/// the firmware maps the protocol's angles to pulses with its own calibration
-/// (`capstan_rig::ServoMap`, the Arduino Servo convention by default), so a firmware map that
-/// disagrees with the servo moves the lever by other amounts than the protocol means, here as
-/// on the rig.
-///
-/// Default ([`ServoCharacteristic::HS_322HD`]): the HiTec HS-322HD data sheet as the thesis's
-/// appendix quotes it in its m-file ("Control System: +Pulse Width Control 1500usec Neutral",
-/// "Operating Angle: 40 Deg. one side pulse traveling 400usec", "Direction: Clockwise/Pulse
-/// Traveling 1500 to 1900usec", "Dead Band Width: 5usec"; HiTec's HS-311/HS-322 spec sheet has
-/// the same figures): 40° per 400 µs, 0.1° of horn per µs about 1500 µs. Angles are on the
-/// usual 0-180° scale with the neutral at 90°: the thesis's write(125) (1833 µs) puts the horn
-/// at 123.3°, write(65) (1214 µs) at 61.4°, so the protocol's 60° span is 61.9° of horn. The
-/// travel is limited to that scale, 600-2400 µs (HiTec's standard-size servos sweep about 180°
-/// over 600-2400 µs: consistent with 0.1°/µs).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ServoCharacteristic {
-    /// Pulse of the centre of travel, µs.
-    pub neutral_pulse_us: f64,
-    /// Horn travel per µs of pulse, deg/µs (a longer pulse turns clockwise: angle up, which
-    /// releases the cord). Negative: the servo is mounted the other way round, so a longer
-    /// pulse pulls (the firmware's rest, its longest pulse, is then the tension end).
-    pub deg_per_us: f64,
-    /// Horn angle at the neutral pulse, deg.
-    pub neutral_deg: f64,
-    /// End of travel at short pulses, deg.
-    pub min_deg: f64,
-    /// End of travel at long pulses, deg.
-    pub max_deg: f64,
-    /// Dead band, µs: pulses closer than this are the same position to the servo.
-    pub dead_band_us: f64,
-}
-
-impl ServoCharacteristic {
-    /// The HiTec HS-322HD (see the type's documentation for the source of each figure).
-    pub const HS_322HD: ServoCharacteristic = ServoCharacteristic {
-        neutral_pulse_us: 1_500.0,
-        deg_per_us: 40.0 / 400.0,
-        neutral_deg: 90.0,
-        min_deg: 0.0,
-        max_deg: 180.0,
-        dead_band_us: 5.0,
-    };
-
-    /// The horn angle a pulse of `pulse_us` holds, deg, within the travel.
-    pub fn angle_deg(&self, pulse_us: f64) -> f64 {
-        let a = self.neutral_deg + (pulse_us - self.neutral_pulse_us) * self.deg_per_us;
-        a.clamp(self.min_deg, self.max_deg)
-    }
-
-    /// The pulse that holds the horn at `angle_deg`, µs (inverse of [`Self::angle_deg`]).
-    pub fn pulse_us(&self, angle_deg: f64) -> f64 {
-        self.neutral_pulse_us + (angle_deg - self.neutral_deg) / self.deg_per_us
-    }
-}
-
-impl Default for ServoCharacteristic {
-    fn default() -> Self {
-        ServoCharacteristic::HS_322HD
-    }
-}
+pub use crate::servo::ServoCharacteristic;
 
 /// The rest pulse of the thesis's rig, µs: its sketch's `myservo.write(125)` under the Arduino
 /// Servo library's default 544-2400 µs over 0-180°.

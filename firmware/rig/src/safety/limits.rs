@@ -157,7 +157,7 @@ impl SafetyLimits {
     /// first channel where it does not (a sensitivity typed too low, a zero too high, a
     /// sensor whose range ends below the limit, a zero at the ADC's floor). Only a true
     /// calibration makes the reading true: `weigh` measures the sensitivity, the tare checks
-    /// the zero ([`crate::rig::TARE_MAX_N`]).
+    /// the zero ([`crate::calib::TARE_MAX_N`]).
     pub fn visible(&self, cal: &crate::calib::Calibration) -> Result<(), Blind> {
         let top = self.rail_high_counts as f32 - VISIBLE_MARGIN_COUNTS;
         let bottom = self.rail_low_counts as f32 + VISIBLE_MARGIN_COUNTS;

@@ -441,7 +441,7 @@ pub fn scatter_head(what: &[String]) -> String {
     }
     format!(
         "What is left is cord-to-cord scatter: {} {} from cord to cord more than from run to run",
-        crate::verdict::words::list(what),
+        crate::text::list(what),
         if what.len() == 1 { "differs" } else { "differ" }
     )
 }
@@ -503,7 +503,7 @@ fn scatter_sentence(
 /// Two significant digits.
 fn two_digits(v: f64) -> String {
     if !v.is_finite() || v == 0.0 {
-        return crate::verdict::words::sig(v);
+        return crate::text::sig(v);
     }
     let e = v.abs().log10().floor() as i32;
     let decimals = (1 - e).max(0) as usize;

@@ -10,8 +10,7 @@ use capstan_data::structure::StructureSummary;
 use capstan_data::Basis;
 use capstan_physics::EffectKind;
 
-/// What a number that could not be computed is shown as.
-pub const NOT_IDENTIFIED: &str = "not identified";
+pub use crate::text::{list, sig, NOT_IDENTIFIED};
 
 /// `v` with `decimals` decimals, or "not identified" if it could not be computed.
 pub fn fixed(v: f64, decimals: usize) -> String {
@@ -38,22 +37,6 @@ pub fn parameter(name: &str, v: f64, se: f64) -> String {
     format!("{name} = {v:.decimals$} ± {se:.decimals$}")
 }
 
-/// Four significant digits (scientific for very small or large magnitudes).
-pub fn sig(v: f64) -> String {
-    if !v.is_finite() {
-        return NOT_IDENTIFIED.to_string();
-    }
-    if v == 0.0 {
-        return "0".to_string();
-    }
-    let e = v.abs().log10().floor();
-    if (-3.0..5.0).contains(&e) {
-        format!("{:.*}", (3.0 - e).max(0.0) as usize, v)
-    } else {
-        format!("{v:.3e}")
-    }
-}
-
 /// "pressure_friction (n = 0.902 ± 0.009, ΔBIC −74.0)".
 pub fn effect_phrase(f: &Found) -> String {
     let p = f
@@ -62,15 +45,6 @@ pub fn effect_phrase(f: &Found) -> String {
         .next()
         .map_or(String::new(), |(k, v)| parameter(k, *v, f.parameter_se));
     format!("{} ({p}, ΔBIC {:.1})", f.effect, f.delta_bic_given_others)
-}
-
-/// A list in words: "a", "a and b", "a, b and c".
-pub fn list(items: &[String]) -> String {
-    match items.len() {
-        0 => String::new(),
-        1 => items[0].clone(),
-        n => format!("{} and {}", items[..n - 1].join(", "), items[n - 1]),
-    }
 }
 
 /// The verdict: what the data hold, whether anything is left unexplained, and which found

@@ -201,7 +201,7 @@ pub fn panels_that_fit(
     legend: &[Entry],
 ) -> usize {
     let cell_h = crate::plot::cell_height(titles, &[x_label], w, h);
-    let above = crate::export::legend_height(legend, f64::from(w) * cols as f64);
+    let above = super::plot::legend::legend_height(legend, f64::from(w) * cols as f64);
     layout.rows_that_fit(cell_h, above).saturating_mul(cols)
 }
 

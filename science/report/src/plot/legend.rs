@@ -116,3 +116,9 @@ pub fn legend(entries: &[Entry], width: f64) -> Legend {
         labels,
     }
 }
+
+/// The height of a figure file's legend over a chart `width_px` wide, px (what a figure
+/// leaves for its panels under [`super::Layout::max_height_px`]).
+pub fn legend_height(entries: &[Entry], width_px: f64) -> f64 {
+    legend(entries, width_px).height
+}

@@ -483,8 +483,9 @@ fn guard_cases() -> Vec<Case> {
     ]
 }
 
-/// Every case, the full protocol run first, the setup session last.
-pub fn all() -> Vec<Case> {
+/// The core, guard and force cases, the full protocol run first (the hazards are
+/// [`crate::hazards`]; every case: [`crate::cases`]).
+pub fn core_set() -> Vec<Case> {
     let protocol = board_protocol();
     // The press is debounced for 10 samples; the run ends `end_ms` after that.
     let run_end_us = PRESS_AT_US + 10_000 + protocol.end_ms() as u64 * 1_000;
@@ -557,11 +558,5 @@ pub fn all() -> Vec<Case> {
     ]);
     all.extend(guard_cases());
     all.push(force_case());
-    all.extend(crate::hazards::cases());
     all
-}
-
-/// The case called `name`.
-pub fn by_name(name: &str) -> Option<Case> {
-    all().into_iter().find(|c| c.name == name)
 }

@@ -3,7 +3,8 @@
 //! for the host, where `tests/emu_rp2040.rs` takes the cases from it to run host-sim on the
 //! same rig.
 //!
-//! * [`case`]: the cases (rig, operator, faults, end);
+//! * [`case`]: the cases (rig, operator, faults, end); [`hazards`]: parts that fail;
+//!   [`cases`]: every case, by name;
 //! * [`bench`]: the plant on the pins, the pin meters' records, the loop budget;
 //! * [`meter`]: a PWM measured from its pin's edges;
 //! * [`report`]: what the bench saw, for the harness's JSON;
@@ -12,6 +13,7 @@
 
 pub mod bench;
 pub mod case;
+pub mod cases;
 pub mod front_end;
 pub mod hazards;
 pub mod meter;

@@ -2,7 +2,6 @@
 //! one bench per instance. Times are emulator ns as f64 (exact to 2^53 ns, 104 days).
 
 use crate::bench::{Bench, ResetReason};
-use crate::case;
 use std::cell::RefCell;
 
 thread_local! {
@@ -54,7 +53,7 @@ pub extern "C" fn bench_buffer_ptr() -> *const u8 {
 pub extern "C" fn bench_new() -> u32 {
     std::panic::set_hook(Box::new(|info| log(&format!("emu-bench: {info}"))));
     let name = BUF.with(|b| String::from_utf8_lossy(&b.borrow()).into_owned());
-    match case::by_name(&name) {
+    match crate::cases::by_name(&name) {
         Some(c) => {
             BENCH.with(|b| *b.borrow_mut() = Some(Bench::new(c)));
             1
