@@ -59,7 +59,25 @@ pub fn parameters_csv(rows: &[Row]) -> String {
 /// commands, anything else as `?` (the file stays ASCII for any engine).
 pub fn latex(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
+    let chars: Vec<char> = s.chars().collect();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        i += 1;
+        // A Greek letter with a one-character subscript ("σ_u"): one math group, σ_u.
+        if let (Some(g), Some('_'), Some(sub)) = (greek(c), chars.get(i), chars.get(i + 1)) {
+            if sub.is_ascii_alphanumeric() {
+                out.push_str(&format!("${g}_{{{sub}}}$"));
+                i += 2;
+                continue;
+            }
+        }
+        if let Some(g) = greek(c) {
+            out.push('$');
+            out.push_str(g);
+            out.push('$');
+            continue;
+        }
         let r: &str = match c {
             '\\' => "\\textbackslash{}",
             '&' => "\\&",
@@ -89,15 +107,10 @@ pub fn latex(s: &str) -> String {
             'ⁿ' => "$^n$",
             '₁' => "$_1$",
             '₂' => "$_2$",
-            'μ' | 'µ' => "$\\mu$",
-            'σ' => "$\\sigma$",
-            'λ' => "$\\lambda$",
-            'β' => "$\\beta$",
-            'θ' => "$\\theta$",
-            'τ' => "$\\tau$",
-            'Δ' => "$\\Delta$",
-            'χ' => "$\\chi$",
-            'Σ' => "$\\Sigma$",
+            '₀' => "$_0$",
+            '₃' => "$_3$",
+            '¹' => "$^1$",
+            '⁻' => "$^{-}$",
             '√' => "$\\surd$",
             '’' => "'",
             '‘' => "`",
@@ -114,6 +127,38 @@ pub fn latex(s: &str) -> String {
         out.push_str(r);
     }
     out
+}
+
+/// A Greek letter's LaTeX command (math mode).
+fn greek(c: char) -> Option<&'static str> {
+    Some(match c {
+        'α' => "\\alpha",
+        'β' => "\\beta",
+        'γ' => "\\gamma",
+        'δ' => "\\delta",
+        'ε' => "\\varepsilon",
+        'η' => "\\eta",
+        'θ' => "\\theta",
+        'κ' => "\\kappa",
+        'λ' => "\\lambda",
+        'μ' | 'µ' => "\\mu",
+        'ν' => "\\nu",
+        'π' => "\\pi",
+        'ρ' => "\\rho",
+        'σ' => "\\sigma",
+        'τ' => "\\tau",
+        'φ' => "\\phi",
+        'χ' => "\\chi",
+        'ψ' => "\\psi",
+        'ω' => "\\omega",
+        'Γ' => "\\Gamma",
+        'Δ' => "\\Delta",
+        'Λ' => "\\Lambda",
+        'Σ' => "\\Sigma",
+        'Φ' => "\\Phi",
+        'Ω' => "\\Omega",
+        _ => return None,
+    })
 }
 
 /// A value ± SE and its interval in LaTeX, at the SE's precision (two significant digits), or
@@ -236,7 +281,7 @@ pub fn parameters_tex(rows: &[Row], made_by: &str) -> String {
 }
 
 /// The interval method of the model table.
-const MODEL_NOTE: &str = "95 % intervals: percentiles of a bootstrap over cords (whole cords resampled); SE: cord jackknife. LOCO: each cord predicted by a fit to the other cords. Parameters: fixed values plus the effective degrees of freedom of the cord effects. AIC and BIC treat rows as independent and are for comparison with the thesis only.";
+const MODEL_NOTE: &str = "95 % intervals: percentiles of a bootstrap over cords (whole cords resampled), descriptive and too narrow at ten or fewer cords (a comparison of the models is the held-out gain's exact sign-flip test, in the report); SE: cord jackknife. LOCO: each cord predicted by a fit to the other cords. Parameters: fixed values plus the effective degrees of freedom of the cord effects. AIC and BIC treat rows as independent and are for comparison with the thesis only.";
 
 /// `models.csv`.
 pub fn models_csv(a: &Analysis) -> String {
@@ -339,7 +384,7 @@ mod tests {
         assert!(t.is_ascii(), "{t}");
         assert_eq!(
             t,
-            "mu falls by exp($-$h$\\cdot$H), $\\sigma$\\_u = 5 \\% \\& \\{x\\} \\textasciitilde{} 10$^\\circ$"
+            "mu falls by exp($-$h$\\cdot$H), $\\sigma_{u}$ = 5 \\% \\& \\{x\\} \\textasciitilde{} 10$^\\circ$"
         );
     }
 

@@ -460,8 +460,13 @@ fn scatter_sentence(
         .map(|p| {
             let e = c.random_effects.iter().find(|e| e.parameter == *p);
             let sd = e.map_or(String::new(), |e| {
+                let test = if e.method == super::cords::ANOVA {
+                    "one-way ANOVA over cords"
+                } else {
+                    "score test, sign flips of whole runs"
+                };
                 format!(
-                    " (SD {} {} between cords, p {})",
+                    " (SD {} {} between cords; {test}: p {})",
                     two_digits(e.sd_between),
                     e.unit,
                     flip_p(e.p)
@@ -474,23 +479,25 @@ fn scatter_sentence(
     if !c.patterns.is_empty() {
         let order = c.patterns.iter().map(|p| p.p_family).fold(1.0, f64::min);
         s += &format!(
-            "{NO_ORDER} (the {} cords as units, smallest adjusted p = {})",
+            "{NO_ORDER} (the {} cords as units: each cord's values regressed on wrap and on diameter, t tests, Bonferroni-adjusted smallest p = {})",
             c.cords,
             p_shown(order)
         );
     }
     if let (Some(a), Some(b)) = (common, beyond) {
         s += &format!(
-            "; with every cord's own T2 zero and effects the lack of fit against the replicate runs falls from F = {} (the systematic part {:.2}× the noise) to F = {} ({:.2}×)",
+            "; with every cord's own T2 zero and effects the lack of fit against the replicate runs (pure-error F, p by sign flips of whole runs) falls from F = {} (p {}; the systematic part {:.2}× the noise) to F = {} (p {}; {:.2}×)",
             f_shown(a.f, 1),
+            flip_p(a.p),
             a.systematic_ratio,
             f_shown(b.f, 1),
+            flip_p(b.p),
             b.systematic_ratio
         );
     }
     if let Some(o) = own {
         s += &format!(
-            ", and what each cord keeps beyond them is its own: the {} cords share no profile over the {} steps (sign flips of whole cords, p = {}; shared part {:.2}× the noise)",
+            ", and what each cord keeps beyond them is mostly its own: a profile shared by the {} cords over the {} steps is not established (sign flips of whole cords, p = {}; shared part {:.2}× the noise)",
             o.cords,
             o.steps,
             p_shown(o.p),
