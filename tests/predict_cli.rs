@@ -332,6 +332,13 @@ fn predict_backwards_gives_the_t1_a_wanted_t2_needs() {
     let f1 = v["predictions"][1]["flags"].as_array().unwrap();
     assert!(f1.iter().any(|f| f == "over_force_limit") && f1.iter().any(|f| f == "sensor_range"));
     assert!(v["predictions"][0]["flags"].as_array().unwrap().is_empty());
+    // 44 N is inside the limit, but the T1 that makes a new cord sure of it (about 16.6 N)
+    // lets a new cord pull beyond 45 N (the forward PI's top, about 54 N): flagged too.
+    let mut e = vec!["--t2-n", "44"];
+    e.extend(at);
+    let v = json(&e);
+    let f44 = v["predictions"][0]["flags"].as_array().unwrap();
+    assert!(f44.iter().any(|f| f == "over_force_limit"), "{v}");
     let w = v["warnings"].as_array().unwrap();
     assert!(
         w.iter()

@@ -43,6 +43,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !(1..=1000).contains(&args.reps) {
         anyhow::bail!("--reps {}: must be 1 to 1000", args.reps);
     }
+    if let Some(b) = &args.board {
+        board_words(b)?;
+    }
     let data = match &args.data {
         Some(p) => load_pairs(p)?,
         None => thesis_dataset(),
@@ -380,4 +383,21 @@ pub(super) fn stopped_plan(out: Option<&std::path::Path>) -> anyhow::Error {
         "stopped ({}): the plan was not finished, nothing was written{kept}",
         super::signal::stop_reason().unwrap_or("Ctrl-C")
     )))
+}
+
+/// `--board`: `capstan rig` options the printed commands carry, to be pasted into a shell.
+/// Empty, or a character a shell reads as more than a word (`;`, `|`, `&`, `$`, quotes,
+/// redirections, a line break), is refused: a command to copy must not carry another.
+fn board_words(b: &str) -> anyhow::Result<()> {
+    if b.trim().is_empty() {
+        anyhow::bail!("--board \"\": give the board's options, e.g. --board \"--chip RP2040 --elf target/thumbv6m-none-eabi/release/capstan-board\" or --board \"--sim DIR\"");
+    }
+    if let Some(c) = b.chars().find(|c| ";|&$`<>(){}\\\"'*?!#~\n\r".contains(*c)) {
+        anyhow::bail!(
+            "--board {b:?}: {c:?} is not part of a board's options (they are pasted into the \
+             printed `capstan rig` commands, and a shell would read it): give options and paths \
+             only, e.g. --chip RP2040 --elf FILE or --sim DIR"
+        );
+    }
+    Ok(())
 }

@@ -194,7 +194,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         "no cord has two runs",
     ));
     let df_noise = noise_df(obs.len(), runs, s.lag1_autocorrelation);
-    let noise_method = format!("χ² interval on the within-run residuals' effective degrees of freedom, (rows − runs)·(1 − ρ)/(1 + ρ) = {df_noise:.0} with ρ = {:.2} their lag-1 autocorrelation; the absolute and proportional parts move together", s.lag1_autocorrelation);
+    let noise_method = format!("χ² interval on the within-run residuals' effective degrees of freedom, (rows − runs)·(1 − ρ)/(1 + ρ): {} with ρ = {:.2} their lag-1 autocorrelation; the absolute and proportional parts move together", dof_words(df_noise), s.lag1_autocorrelation);
     out.push(component(
         ("noise.abs_n", "within-run noise, absolute part", "N"),
         s.noise_abs_n,
@@ -249,7 +249,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("scatter.cord_pct", "cord-to-cord SD of mu, % of mu", "%"),
         cord_pct,
         sd(cord_pct, df_c),
-        format!("evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, which explains part of the cord differences by the named causes and shrinks the rest; χ² interval on Satterthwaite's {df_c:.1} degrees of freedom for the cord component of the runs' mu (cords − 1 at most)"),
+        format!("evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, which explains part of the cord differences by the named causes and shrinks the rest; χ² interval on Satterthwaite's {} for the cord component of the runs' mu (cords − 1 at most)", dof_words(df_c)),
         "one cord, or the component at 0",
     ));
 }
@@ -338,5 +338,15 @@ fn cord_rows(a: &Analysis, out: &mut Vec<Row>) {
                 k.saturating_sub(1)
             ),
         });
+    }
+}
+
+/// Degrees of freedom in words: "8.3 degrees of freedom", or that the data do not identify
+/// them (one cord, one run per cord: never "NaN").
+fn dof_words(df: f64) -> String {
+    if df.is_finite() && df > 0.0 {
+        format!("{df:.1} degrees of freedom")
+    } else {
+        "degrees of freedom these data do not identify".to_string()
     }
 }

@@ -4,7 +4,7 @@
 
 use super::{limits, Args, Setting};
 use capstan_engine::analysis::inverse::{self, Needed};
-use capstan_engine::analysis::prediction::{PredictionModel, Query};
+use capstan_engine::analysis::prediction::{self, PredictionModel, Query};
 use serde_json::{json, Value};
 
 /// The largest T1 a designer would set for `n`: the T1 for the chosen probability when there
@@ -28,9 +28,14 @@ pub fn run(args: &Args, pm: &PredictionModel, set: &Setting, wanted: &[f64]) -> 
         .map(|t| set.query(args, t))
         .collect();
     let mut warnings = super::extrapolation_warnings(pm, &solved);
-    let top_t2 = wanted.iter().copied().fold(0.0, f64::max);
-    warnings.extend(limits::rig_warnings(&set.limits, (top_t2, "T2")));
-    let per: Vec<Vec<&'static str>> = needs.iter().map(|n| flags(set, pm, n)).collect();
+    let top_t2 = (needs.iter())
+        .map(|n| top_tension(args, pm, set, n))
+        .fold(0.0, f64::max);
+    warnings.extend(limits::rig_warnings(
+        &set.limits,
+        (top_t2, "T2 (the wanted one, or a new cord's at the T1 set)"),
+    ));
+    let per: Vec<Vec<&'static str>> = needs.iter().map(|n| flags(args, set, pm, n)).collect();
     let unreached: Vec<f64> = (needs.iter())
         .filter(|n| n.t1_n.is_none())
         .map(|n| n.t2_n)
@@ -81,11 +86,32 @@ pub fn run(args: &Args, pm: &PredictionModel, set: &Setting, wanted: &[f64]) -> 
     Ok(())
 }
 
-/// The flags of one answer: the rig's limits on the wanted T2 (the larger tension), the T1
-/// set (outside the fitted T1), the intervals not identified.
-fn flags(set: &Setting, pm: &PredictionModel, n: &Needed) -> Vec<&'static str> {
+/// The largest tension an answer puts on the rig: the wanted T2, the T1 set, and what a new
+/// cord may pull at that T1 (the forward 95 % prediction interval's top, or the mean curve's
+/// T2 where the interval is not identified): a T1 chosen to be sure of the target also risks
+/// more than it.
+fn top_tension(args: &Args, pm: &PredictionModel, set: &Setting, n: &Needed) -> f64 {
+    let Some(t1) = t1_top(n) else {
+        return n.t2_n;
+    };
+    let fwd = prediction::predict(pm, &set.query(args, t1));
+    let reach = if set.unidentified.is_none() && fwd.t2_pi95.hi.is_finite() {
+        fwd.t2_pi95.hi
+    } else {
+        fwd.t2_n
+    };
+    [n.t2_n, t1, reach]
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max)
+}
+
+/// The flags of one answer: the rig's limits on the largest tension it puts on the rig
+/// ([`top_tension`]), the T1 set (outside the fitted T1), the intervals not identified.
+fn flags(args: &Args, set: &Setting, pm: &PredictionModel, n: &Needed) -> Vec<&'static str> {
     let t1 = t1_top(n).unwrap_or(f64::NAN);
-    let mut f = limits::flags(&set.limits, pm.fitted_range.t1_n, t1, n.t2_n.max(t1));
+    let top = top_tension(args, pm, set, n);
+    let mut f = limits::flags(&set.limits, pm.fitted_range.t1_n, t1, top);
     if n.t1_n.is_none() {
         f.retain(|x| *x != limits::T1_OUTSIDE);
     }

@@ -76,7 +76,12 @@ impl CordErrors {
 
     /// RMSE of cord `c` alone, N.
     pub fn cord_rmse(&self, c: usize) -> f64 {
-        (self.ss[c] / self.n[c].max(1) as f64).sqrt()
+        // A cord with any row left unpredicted (a failed fold) has no held-out error: NaN,
+        // never the 0 its empty sum would give.
+        if self.missing[c] > 0 || self.n[c] == 0 {
+            return f64::NAN;
+        }
+        (self.ss[c] / self.n[c] as f64).sqrt()
     }
 }
 
@@ -191,6 +196,7 @@ pub fn held_out(obs: &Observations, models: &[(&str, &CordErrors)]) -> Vec<HeldO
                 .iter()
                 .map(|(name, e)| (name.to_string(), e.cord_rmse(c)))
                 .collect(),
+            // NaN (a failed fold on either side) compares false: never a held-out success.
             extended_better: get("extended", c) < get("baseline", c),
         })
         .collect()
