@@ -48,6 +48,8 @@ struct Facts<'a> {
     scatter: Vec<&'static str>,
     /// The cords' summaries were tested against wrap and diameter.
     orders_tested: bool,
+    /// Too few replicate runs to tell whether anything is left (the verdict layer's test).
+    inconclusive: bool,
     gain: &'a capstan_engine::analysis::gain::Gain,
     better: (usize, usize),
 }
@@ -107,6 +109,7 @@ impl<'a> Facts<'a> {
             left: u.flag.then(|| left_words(u.pattern)),
             scatter: a.evidence.adequacy.left_between_cords.clone(),
             orders_tested: !a.evidence.adequacy.cords.patterns.is_empty(),
+            inconclusive: capstan_engine::verdict::words::inconclusive(&a.evidence.adequacy),
             gain: &a.gain,
             better: (a.gain.cords_better, a.gain.cords),
         }
@@ -178,7 +181,9 @@ pub fn headline(a: &Analysis) -> Headline {
         )),
     }
     if f.left.is_none() {
-        s.push(if f.scatter.is_empty() {
+        s.push(if f.scatter.is_empty() && f.inconclusive {
+            "These replicate runs are too few to tell whether anything systematic is left.".into()
+        } else if f.scatter.is_empty() {
             "Nothing systematic is left beyond the scatter between cords, runs and readings.".into()
         } else {
             let what: Vec<String> = (f.scatter.iter())

@@ -89,19 +89,25 @@ pub fn rival_sentences(rivals: &[Rival]) -> String {
         .join(" ")
 }
 
-/// The verdict on the found set and the adequacy decision alone.
-fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
-    let names: Vec<String> = effects.iter().map(effect_phrase).collect();
-    // Euler-Eytelwein "explains" the data only where a pure-error test could have shown
-    // otherwise: with replicate runs enough for it to see structure the rule calls large.
-    // The lack of fit the decision reads: beyond every cord's own parameters where there is one.
+/// Too few replicate runs to tell whether anything systematic is left: no test of the lack of
+/// fit, or one (beyond the cords' own parameters, where there is one, or the plain one) too
+/// weak to rule out structure that matters. Every command that says "nothing is left" asks
+/// this first.
+pub fn inconclusive(adequacy: &Adequacy) -> bool {
     let lof = adequacy
         .lack_of_fit_beyond_cords
         .as_ref()
         .or(adequacy.lack_of_fit.as_ref());
     let weak = |l: &LackOfFit| underpowered(l, adequacy.rule);
-    let inconclusive =
-        !adequacy.tested || lof.is_none_or(weak) || adequacy.lack_of_fit.as_ref().is_some_and(weak);
+    !adequacy.tested || lof.is_none_or(weak) || adequacy.lack_of_fit.as_ref().is_some_and(weak)
+}
+
+/// The verdict on the found set and the adequacy decision alone.
+fn verdict_of_set(effects: &[Found], adequacy: &Adequacy) -> String {
+    let names: Vec<String> = effects.iter().map(effect_phrase).collect();
+    // Euler-Eytelwein "explains" the data only where a pure-error test could have shown
+    // otherwise: with replicate runs enough for it to see structure the rule calls large.
+    let inconclusive = inconclusive(adequacy);
     match (effects.is_empty(), adequacy.unexplained) {
         (true, false) if inconclusive => format!(
             "Not identified: no catalogue effect is supported, but these data are too few to tell whether Euler-Eytelwein explains them. {}",
