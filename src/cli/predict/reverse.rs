@@ -28,14 +28,18 @@ pub fn run(args: &Args, pm: &PredictionModel, set: &Setting, wanted: &[f64]) -> 
         .map(|t| set.query(args, t))
         .collect();
     let mut warnings = super::extrapolation_warnings(pm, &solved);
-    let top_t2 = (needs.iter())
+    // The largest tension each answer puts on the rig, once (a forward prediction each).
+    let tops: Vec<f64> = (needs.iter())
         .map(|n| top_tension(args, pm, set, n))
-        .fold(0.0, f64::max);
+        .collect();
+    let top_t2 = tops.iter().copied().fold(0.0, f64::max);
     warnings.extend(limits::rig_warnings(
         &set.limits,
         (top_t2, "T2 (the wanted one, or a new cord's at the T1 set)"),
     ));
-    let per: Vec<Vec<&'static str>> = needs.iter().map(|n| flags(args, set, pm, n)).collect();
+    let per: Vec<Vec<&'static str>> = (needs.iter().zip(&tops))
+        .map(|(n, top)| flags(set, pm, n, *top))
+        .collect();
     let unreached: Vec<f64> = (needs.iter())
         .filter(|n| n.t1_n.is_none())
         .map(|n| n.t2_n)
@@ -108,9 +112,8 @@ fn top_tension(args: &Args, pm: &PredictionModel, set: &Setting, n: &Needed) -> 
 
 /// The flags of one answer: the rig's limits on the largest tension it puts on the rig
 /// ([`top_tension`]), the T1 set (outside the fitted T1), the intervals not identified.
-fn flags(args: &Args, set: &Setting, pm: &PredictionModel, n: &Needed) -> Vec<&'static str> {
+fn flags(set: &Setting, pm: &PredictionModel, n: &Needed, top: f64) -> Vec<&'static str> {
     let t1 = t1_top(n).unwrap_or(f64::NAN);
-    let top = top_tension(args, pm, set, n);
     let mut f = limits::flags(&set.limits, pm.fitted_range.t1_n, t1, top);
     if n.t1_n.is_none() {
         f.retain(|x| *x != limits::T1_OUTSIDE);
