@@ -18,7 +18,7 @@
 /// Return an [`Error::Column`] with the message formatted from the arguments.
 macro_rules! column_error {
     ($($arg:tt)*) => {
-        return Err($crate::Error::Column(format!($($arg)*)))
+        return Err($crate::error::Error::Column(format!($($arg)*)))
     };
 }
 

@@ -3,7 +3,7 @@
 //! refused by name (volts, counts, a unit nobody knows); and which column plays which role
 //! (time, T1, T2, trigger, run), found by name or given by name or 1-based index.
 
-use crate::Error;
+use crate::error::Error;
 
 /// What a column's unit is.
 #[derive(Clone, Debug, PartialEq)]
