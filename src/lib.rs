@@ -3,7 +3,6 @@
 //! `capstan-report`, `capstan-link`, `capstan-outdir`, `host-sim`).
 //!
 //! * [`cli`]: one module per command, each with its `Args` and `run`;
-//! * [`condition`]: a raw time series into pairs by the firmware's rules;
 //! * [`logger`]: the files of a logged session, written as the records arrive;
 //! * [`outputs`]: how every command opens its output directory;
 //! * [`provenance`]: version, commit, input hash and command line for every output;
@@ -14,7 +13,6 @@
 //! directly.
 
 pub mod cli;
-pub mod condition;
 pub mod logger;
 pub mod outputs;
 pub mod provenance;

@@ -1,10 +1,8 @@
 //! `capstan condition RAW --out DIR`: a raw time series into the pairs CSV, by the firmware's
-//! conditioning rules (`crate::condition`).
+//! conditioning rules (`capstan_condition`): the options in, the files and the lines said out.
 
-use crate::condition::levels::Placement;
-use crate::condition::table::{self, Columns, ReadOptions};
-use crate::condition::{condition_run, pairs, run_numbers, RunResult, Settings};
-use anyhow::{bail, Context};
+use anyhow::bail;
+use capstan_condition::{output, Columns, ReadOptions, Request, Settings};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -116,73 +114,26 @@ pub struct Args {
     pub json: bool,
 }
 
-fn settings(a: &Args) -> anyhow::Result<Settings> {
-    use capstan_data::ranges;
-    ranges::WRAP_DEG.option("--wrap-deg", a.wrap_deg)?;
-    if let Some(d) = a.diameter_mm {
-        ranges::DIAMETER_MM.option("--diameter-mm", d)?;
-    }
-    if let Some(v) = a.drive_v {
-        ranges::DRIVE_V.option("--drive-v", v)?;
-    }
-    let (after, before) = Settings::firmware_windows();
-    let after = a.window_after_ms.map_or(after, |m| m as f64 / 1e3);
-    let before = a.window_before_ms.map_or(before, |m| m as f64 / 1e3);
-    let p = capstan_rig::Protocol::default();
-    // Step 0 (rest) starts `trigger_ms` after the trigger's edge; level 1 a dwell later.
-    let proto_first = (p.trigger_ms + p.dwell_ms) as f64 / 1e3;
-    let levels = a.levels.unwrap_or(p.levels());
-    let placement = match (a.first_change_s, a.dwell_s, &a.trigger_column) {
-        (Some(first), Some(dwell), None) => Placement::Protocol {
-            first_s: first,
-            dwell_s: dwell,
-            levels,
-        },
-        (first, dwell, Some(_)) => Placement::Trigger {
-            first_s: first.unwrap_or(proto_first),
-            dwell_s: dwell.unwrap_or(p.dwell_ms as f64 / 1e3),
-            levels,
-        },
-        (None, Some(_), None) => bail!("--dwell-s needs --first-change-s (or --trigger-column)"),
-        _ => Placement::Detect {
-            min_dwell_s: a.min_dwell_s,
-        },
-    };
-    if let Placement::Protocol { dwell_s, .. } | Placement::Trigger { dwell_s, .. } = &placement {
-        if !(dwell_s.is_finite() && *dwell_s > 0.0) {
-            bail!("--dwell-s {dwell_s}: must be a positive number of seconds");
-        }
-    }
-    if !(a.min_dwell_s.is_finite() && a.min_dwell_s > 0.0) {
-        bail!("--min-dwell-s {}: must be positive", a.min_dwell_s);
-    }
-    Ok(Settings {
-        placement,
-        window_after_s: after,
-        window_before_s: before,
-        levels,
+/// What the options ask the conditioning for.
+fn request(a: &Args) -> Request {
+    Request {
+        first_change_s: a.first_change_s,
+        dwell_s: a.dwell_s,
+        trigger: a.trigger_column.is_some(),
+        levels: a.levels,
+        min_dwell_s: a.min_dwell_s,
+        window_after_ms: a.window_after_ms,
+        window_before_ms: a.window_before_ms,
         wrap_deg: a.wrap_deg,
         diameter_mm: a.diameter_mm,
         drive_v: a.drive_v,
         first_run: a.run,
-    })
+    }
 }
 
-/// Run `capstan condition`.
-pub fn run(a: Args) -> anyhow::Result<()> {
-    let t0 = Instant::now();
-    let set = settings(&a)?;
-    let names = ["pairs.csv", "levels.csv", "condition.json"];
-    let mut out = crate::outputs::open_out(&a.out, "condition", &names)?.stage()?;
-    let text = std::fs::read(&a.raw).with_context(|| format!("cannot read {}", a.raw.display()))?;
-    let text = String::from_utf8(text).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: not UTF-8 text (at byte {})",
-            a.raw.display(),
-            e.utf8_error().valid_up_to()
-        )
-    })?;
-    let opts = ReadOptions {
+/// How the options ask the file to be read.
+fn read_options(a: &Args) -> ReadOptions {
+    ReadOptions {
         columns: Columns {
             time: a.time_column.clone(),
             t1: a.t1_column.clone(),
@@ -192,60 +143,51 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         },
         skip_rows: a.skip_rows,
         header_row: a.header_row,
-    };
-    let t_read = Instant::now();
-    let (series, layout) = table::read(&a.raw, &text, &opts)?;
-    let read_s = t_read.elapsed().as_secs_f64();
-    if let Some((s, why)) = series
-        .iter()
-        .find_map(|s| crate::condition::sampling_problem(s).map(|w| (s, w)))
-    {
-        bail!(
-            "{}:{}: {}{why}",
-            a.raw.display(),
-            s.line.first().copied().unwrap_or(0),
-            s.label
-                .as_deref()
-                .map_or(String::new(), |l| format!("run `{l}`: "))
-        );
     }
-    let t_cond = Instant::now();
-    let numbers = run_numbers(&series, set.first_run);
-    let runs: Vec<RunResult> = series
-        .iter()
-        .zip(&numbers)
-        .map(|(s, &r)| condition_run(s, r, &set))
-        .collect();
-    let pairs = pairs(&runs, &set);
-    let condition_s = t_cond.elapsed().as_secs_f64();
+}
+
+/// Run `capstan condition`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let set = Settings::from_request(&request(&a))?;
+    let names = ["pairs.csv", "levels.csv", "condition.json"];
+    let mut out = crate::outputs::open_out(&a.out, "condition", &names)?.stage()?;
+    let c = capstan_condition::condition_file(&a.raw, &read_options(&a), &set)?;
     let mut csv = Vec::new();
-    capstan_data::write_pairs_to(&mut csv, &pairs)?;
+    capstan_data::write_pairs_to(&mut csv, &c.pairs)?;
     out.write("pairs.csv", &csv)?;
-    out.write("levels.csv", levels_csv(&runs).as_bytes())?;
-    let not_found: usize = runs
-        .iter()
-        .map(|r| r.levels.iter().filter(|l| l.status != "ok").count() + r.problems.len())
-        .sum();
+    out.write("levels.csv", output::levels_csv(&c.runs).as_bytes())?;
+    let not_found = c.not_found();
     let json = serde_json::json!({
         "source": a.raw.display().to_string(),
         "provenance": crate::provenance::of_input(Some(&a.raw))?,
-        "format": layout.format,
-        "read": &layout,
-        "columns": &layout.used,
+        "format": c.layout.format,
+        "read": &c.layout,
+        "columns": &c.layout.used,
         "placement": format!("{:?}", set.placement),
         "window_after_s": set.window_after_s,
         "window_before_s": set.window_before_s,
-        "runs": runs,
-        "pairs": pairs.len(),
+        "runs": c.runs,
+        "pairs": c.pairs.len(),
         "problems": not_found,
-        "elapsed": {"read_s": read_s, "condition_s": condition_s, "total_s": t0.elapsed().as_secs_f64()},
+        "elapsed": {"read_s": c.read_s, "condition_s": c.condition_s, "total_s": t0.elapsed().as_secs_f64()},
     });
     out.write(
         "condition.json",
         serde_json::to_string_pretty(&json)?.as_bytes(),
     )?;
     out.commit()?;
-    say(&runs, &layout, &a, pairs.len());
+    let said = output::read_lines(&a.raw, &c.layout)
+        .into_iter()
+        .chain(output::run_lines(&c.runs));
+    for line in said {
+        crate::errln!("{line}");
+    }
+    crate::errln!(
+        "{} pairs -> {}",
+        c.pairs.len(),
+        a.out.join("pairs.csv").display()
+    );
     if a.json {
         crate::outln!("{}", serde_json::to_string_pretty(&json)?);
     }
@@ -258,112 +200,4 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-fn f(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v:.6}")
-    } else {
-        String::new()
-    }
-}
-
-fn levels_csv(runs: &[RunResult]) -> String {
-    let mut s = String::from(
-        "run,step,from_s,to_s,window_from_s,window_to_s,samples,t1_mean_n,t1_sd_n,t2_mean_n,t2_sd_n,status\n",
-    );
-    for l in runs.iter().flat_map(|r| &r.levels) {
-        s += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            l.run,
-            l.step,
-            f(l.from_s),
-            f(l.to_s),
-            f(l.window_from_s),
-            f(l.window_to_s),
-            l.samples,
-            f(l.t1.0),
-            f(l.t1.1),
-            f(l.t2.0),
-            f(l.t2.1),
-            capstan_data::text_cell(&l.status)
-        );
-    }
-    s
-}
-
-fn say(runs: &[RunResult], layout: &table::Layout, a: &Args, pairs: usize) {
-    let cols: Vec<String> = layout
-        .used
-        .iter()
-        .map(|u| {
-            format!(
-                "{} = column {} `{}` (x{})",
-                u.role, u.column, u.header, u.scale
-            )
-        })
-        .collect();
-    crate::errln!(
-        "read {} as {}: {}",
-        a.raw.display(),
-        layout.format,
-        cols.join(", ")
-    );
-    if let Some((from, to)) = layout.skipped_lines {
-        crate::errln!("  lines {from}-{to} passed: a header block above the column names");
-    }
-    if layout.decimal_comma {
-        crate::errln!(
-            "  decimal commas (1,5 read as 1.5), {}-separated",
-            layout.separator
-        );
-    }
-    if !layout.run_blocks.is_empty() {
-        crate::errln!(
-            "  runs side by side: {} (each its own run)",
-            layout.run_blocks.join(", ")
-        );
-    }
-    for n in &layout.notes {
-        crate::errln!("  note: {n}");
-    }
-    for r in runs {
-        crate::errln!(
-            "run {}{}: {} samples, {} level(s)",
-            r.run,
-            r.label
-                .as_deref()
-                .map_or(String::new(), |l| format!(" ({l})")),
-            r.samples,
-            r.levels.len()
-        );
-        for l in &r.levels {
-            // A level without samples has no mean: said, not printed as NaN.
-            let force = |v: f64| {
-                if v.is_finite() {
-                    format!("{v:.4} N")
-                } else {
-                    "none".to_string()
-                }
-            };
-            crate::errln!(
-                "  step {:>2}: window {:.3}..{:.3} s, {} samples: T1 {}, T2 {}{}",
-                l.step,
-                l.window_from_s,
-                l.window_to_s,
-                l.samples,
-                force(l.t1.0),
-                force(l.t2.0),
-                if l.status == "ok" {
-                    String::new()
-                } else {
-                    format!("  ({})", l.status)
-                }
-            );
-        }
-        for p in &r.problems {
-            crate::errln!("  run {}: {p}", r.run);
-        }
-    }
-    crate::errln!("{pairs} pairs -> {}", a.out.join("pairs.csv").display());
 }

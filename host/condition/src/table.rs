@@ -14,7 +14,7 @@ mod logger_pro;
 mod rows;
 mod text;
 
-use anyhow::bail;
+use crate::error::{Error, Place};
 use columns::{Ask, Col, Role, Unit};
 use std::path::Path;
 use text::{Grid, Sep};
@@ -101,11 +101,14 @@ pub struct Layout {
 }
 
 /// Read `text` (the file `path`) into one series per run.
-pub fn read(path: &Path, text: &str, opts: &ReadOptions) -> anyhow::Result<(Vec<Series>, Layout)> {
+pub fn read(path: &Path, text: &str, opts: &ReadOptions) -> Result<(Vec<Series>, Layout), Error> {
     let lines = text::lines(text);
     let first = lines.iter().position(|l| !l.trim().is_empty());
     let Some(first) = first else {
-        bail!("{}: the file is empty", path.display());
+        return Err(Error::Shape {
+            place: Place::file(path),
+            why: "the file is empty".into(),
+        });
     };
     if lines[first].starts_with("Vernier Format") {
         return logger_pro::read(path, &lines, &opts.columns);
@@ -138,20 +141,22 @@ pub fn read(path: &Path, text: &str, opts: &ReadOptions) -> anyhow::Result<(Vec<
     let picks = blocks
         .iter()
         .map(|b| Picked::of(&cols, b, &opts.columns, g.header.is_some()))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, _>>()?;
     layout.used = picks[0].used(&cols);
     layout.notes.extend(unit_notes(&cols, &picks[0]));
     let mut all = Vec::new();
     for (b, p) in blocks.iter().zip(&picks) {
         let mut runs = rows::rows(path, (&lines, &g), &cols, p)?;
         if runs.is_empty() {
-            bail!(
-                "{}: no rows{} after the header",
-                path.display(),
-                b.label
-                    .as_deref()
-                    .map_or(String::new(), |l| format!(" of {l}"))
-            );
+            return Err(Error::Shape {
+                place: Place::file(path),
+                why: format!(
+                    "no rows{} after the header",
+                    b.label
+                        .as_deref()
+                        .map_or(String::new(), |l| format!(" of {l}"))
+                ),
+            });
         }
         for r in runs.iter_mut() {
             r.label = match (&b.label, &r.label) {
@@ -195,7 +200,7 @@ pub(super) struct Block {
 
 /// The run blocks of the header: one per `Run N:` prefix, in order, or the whole header.
 /// With a column asked for exactly (a number, or `Run 2: Time`), only its block.
-fn blocks(cols: &[Col], want: &Columns, layout: &mut Layout) -> anyhow::Result<Vec<Block>> {
+fn blocks(cols: &[Col], want: &Columns, layout: &mut Layout) -> Result<Vec<Block>, Error> {
     let mut labels: Vec<String> = Vec::new();
     for c in cols {
         if let Some(r) = c.run.as_ref().filter(|r| !labels.contains(r)) {
@@ -230,11 +235,11 @@ fn blocks(cols: &[Col], want: &Columns, layout: &mut Layout) -> anyhow::Result<V
         Ok(_) => None,
         Err(e) => Some(Err(e)),
     })
-    .collect::<anyhow::Result<_>>()?;
+    .collect::<Result<_, Error>>()?;
     if let Some((flag, i)) = exact.first() {
         let home = |i: usize| out.iter().position(|b| b.idx.contains(&i));
         if let Some((other, j)) = exact.iter().find(|(_, j)| home(*j) != home(*i)) {
-            bail!(
+            column_error!(
                 "{flag} and {other} name columns of different runs (`{}` and `{}`): one run's \
                  columns, or names without the run to convert every run",
                 cols[*i].text,
@@ -294,12 +299,12 @@ impl Picked {
         b: &Block,
         want: &Columns,
         has_header: bool,
-    ) -> anyhow::Result<Picked> {
+    ) -> Result<Picked, Error> {
         let ask = |g: &Option<String>, flag: &str| Ask::of(g.as_deref(), cols, flag);
-        let pick = |g: &Option<String>, role: &Role| -> anyhow::Result<usize> {
+        let pick = |g: &Option<String>, role: &Role| -> Result<usize, Error> {
             let a = ask(g, role.flag)?;
             if a == Ask::Auto && !has_header {
-                bail!(
+                column_error!(
                     "the file has no header line: give the columns by number ({} N; columns 1 \
                      to {}), or the header's line (--header-row N)",
                     role.flag,
@@ -312,13 +317,13 @@ impl Picked {
         let t1 = pick(&want.t1, &T1)?;
         let t2 = pick(&want.t2, &T2)?;
         if t1 == t2 {
-            bail!(
+            column_error!(
                 "T1 and T2 would both be column {} `{}`: give --t1-column and --t2-column",
                 t1 + 1,
                 cols[t1].text
             );
         }
-        let other = |g: &Option<String>, name, flag| -> anyhow::Result<Option<usize>> {
+        let other = |g: &Option<String>, name, flag| -> Result<Option<usize>, Error> {
             if g.is_none() {
                 return Ok(None);
             }

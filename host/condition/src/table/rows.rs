@@ -4,7 +4,7 @@
 use super::columns::Col;
 use super::text::{self, Grid};
 use super::{Picked, Series};
-use anyhow::bail;
+use crate::error::{Error, Place};
 use capstan_data::ranges::TENSION_N;
 use std::collections::HashMap;
 use std::path::Path;
@@ -18,7 +18,7 @@ pub(super) fn rows(
     (lines, g): (&[&str], &Grid),
     cols: &[Col],
     p: &Picked,
-) -> anyhow::Result<Vec<Series>> {
+) -> Result<Vec<Series>, Error> {
     let mut runs: Vec<Series> = Vec::new();
     let mut by_label: HashMap<Option<String>, usize> = HashMap::new();
     let mut last = 0;
@@ -34,12 +34,10 @@ pub(super) fn rows(
         let row = text::cells(line, g.sep);
         let lineno = i as u64 + 1;
         if row.len() > cols.len() && row[cols.len()..].iter().any(|c| !c.is_empty()) {
-            bail!(
-                "{}:{lineno}: {} cells where the header has {}",
-                path.display(),
-                row.len(),
-                cols.len()
-            );
+            return Err(Error::Shape {
+                place: Place::line(path, lineno),
+                why: format!("{} cells where the header has {}", row.len(), cols.len()),
+            });
         }
         if mine
             .iter()
@@ -79,16 +77,13 @@ pub(super) fn rows(
         let s = &mut runs[k];
         let t = num(p.time, used[0].scale, false)?;
         if let Some(&prev) = s.t_s.last().filter(|&&prev| t <= prev) {
-            bail!(
-                "{}:{lineno}:{}: time {t} s does not follow the row before ({prev} s, line {}){}: \
-                 rows must be in time order within a run",
-                path.display(),
-                p.time + 1,
-                s.line.last().expect("a row before"),
-                s.label
-                    .as_deref()
-                    .map_or(String::new(), |l| format!(" of run `{l}`"))
-            );
+            return Err(Error::Order {
+                place: Place::cell(path, lineno, p.time + 1),
+                t_s: t,
+                before_s: prev,
+                before_line: *s.line.last().expect("a row before"),
+                run: s.label.clone(),
+            });
         }
         let v1 = num(p.t1, used[1].scale, true)?;
         let v2 = num(p.t2, used[2].scale, true)?;
@@ -113,9 +108,14 @@ fn cell_value(
     cell: Option<&str>,
     (scale, comma): (f64, bool),
     tension: bool,
-) -> anyhow::Result<f64> {
+) -> Result<f64, Error> {
     let cell = cell.unwrap_or("");
-    let at = format!("{}:{line}:{}", path.display(), c + 1);
+    let at = || Place::cell(path, line, c + 1);
+    let error = |why: String| Error::Cell {
+        place: at(),
+        column: name.to_string(),
+        why,
+    };
     let Some(v) = text::number(cell, comma) else {
         let why = if cell.is_empty() {
             "is empty".to_string()
@@ -128,13 +128,11 @@ fn cell_value(
         } else {
             format!("`{}` is not a number", capstan_data::quote(cell))
         };
-        bail!("{at}: column `{name}`: {why}");
+        return Err(error(why));
     };
     let v = v * scale;
     if tension {
-        TENSION_N
-            .check(v)
-            .map_err(|why| anyhow::anyhow!("{at}: column `{name}`: {why}"))
+        TENSION_N.check(v).map_err(|why| error(why.to_string()))
     } else {
         Ok(v)
     }

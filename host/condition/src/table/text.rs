@@ -4,7 +4,7 @@
 //! metadata (a DAQ's `Logger,ACME …` lines, LabVIEW's `***End_of_Header***`), found, or given
 //! by `--skip-rows` / `--header-row`.
 
-use anyhow::bail;
+use crate::error::{option, Error, Place};
 use std::borrow::Cow;
 use std::path::Path;
 
@@ -125,20 +125,28 @@ pub fn grid(
     lines: &[&str],
     skip: Option<usize>,
     header_row: Option<usize>,
-) -> anyhow::Result<Grid> {
+) -> Result<Grid, Error> {
     let from = match (skip, header_row) {
         (Some(n), None) => n,
         (None, Some(h)) if h >= 1 => h - 1,
-        (None, Some(_)) => bail!("--header-row 0: lines are numbered from 1"),
+        (None, Some(_)) => {
+            let why = "--header-row 0: lines are numbered from 1";
+            return Err(option("--header-row", why.into()));
+        }
         (None, None) => 0,
-        (Some(_), Some(_)) => bail!("--skip-rows and --header-row: give one of them"),
+        (Some(_), Some(_)) => {
+            let why = "--skip-rows and --header-row: give one of them";
+            return Err(option("--skip-rows", why.into()));
+        }
     };
     if from >= lines.len() {
-        bail!(
-            "{}: the file has {} lines, fewer than --skip-rows/--header-row asks to pass",
-            path.display(),
-            lines.len()
-        );
+        return Err(Error::Shape {
+            place: Place::file(path),
+            why: format!(
+                "the file has {} lines, fewer than --skip-rows/--header-row asks to pass",
+                lines.len()
+            ),
+        });
     }
     let given = skip.is_some() || header_row.is_some();
     let mut best: Option<Grid> = None;
@@ -151,18 +159,18 @@ pub fn grid(
             }
         }
     }
-    best.ok_or_else(|| {
-        anyhow::anyhow!(
-            "{}: no rows of numbers found{} (at least two lines with the same number of numeric \
+    best.ok_or_else(|| Error::Shape {
+        place: Place::file(path),
+        why: format!(
+            "no rows of numbers found{} (at least two lines with the same number of numeric \
              cells, separated by tabs, `;`, `,` or blanks): is it a logger's export? A time \
              written as a clock (10:00:00.033) is not read: export the time in seconds",
-            path.display(),
             if given {
                 format!(" after line {}", from + 1)
             } else {
                 String::new()
             }
-        )
+        ),
     })
 }
 

@@ -49,12 +49,23 @@ pub enum Placement {
     },
 }
 
+/// Why a series has no segments (a problem of its run, reported with it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum NoSegments {
+    /// The series is empty.
+    #[error("no samples")]
+    NoSamples,
+    /// The levels are placed from the trigger, which never rises.
+    #[error("the trigger column never rises")]
+    TriggerNeverRises,
+}
+
 /// The segments between changes, [start, end) in the series' time, s: the rest before the
 /// first change and after the last included.
-pub fn segments(s: &Series, how: &Placement) -> Result<Vec<(f64, f64)>, String> {
+pub fn segments(s: &Series, how: &Placement) -> Result<Vec<(f64, f64)>, NoSegments> {
     let (t0, t_end) = match (s.t_s.first(), s.t_s.last()) {
         (Some(&a), Some(&b)) => (a, b),
-        _ => return Err("no samples".into()),
+        _ => return Err(NoSegments::NoSamples),
     };
     let changes = match how {
         Placement::Detect { min_dwell_s } => detect(s, *min_dwell_s),
@@ -70,7 +81,7 @@ pub fn segments(s: &Series, how: &Placement) -> Result<Vec<(f64, f64)>, String> 
             dwell_s,
             levels,
         } => {
-            let zero = trigger_edge(s).ok_or("the trigger column never rises")?;
+            let zero = trigger_edge(s).ok_or(NoSegments::TriggerNeverRises)?;
             (0..=*levels)
                 .map(|k| zero + first_s + k as f64 * dwell_s)
                 .collect()
@@ -416,8 +427,9 @@ mod tests {
         assert!((segs[13].0 - 132.5).abs() < 1e-9, "{segs:?}");
         let mut flat = s.clone();
         flat.trigger.iter_mut().for_each(|v| *v = 0.0);
-        assert!(
-            segments(&flat, &how).is_err(),
+        assert_eq!(
+            segments(&flat, &how),
+            Err(NoSegments::TriggerNeverRises),
             "a trigger that never rises is said"
         );
     }

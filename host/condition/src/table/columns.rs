@@ -3,7 +3,7 @@
 //! refused by name (volts, counts, a unit nobody knows); and which column plays which role
 //! (time, T1, T2, trigger, run), found by name or given by name or 1-based index.
 
-use anyhow::bail;
+use crate::error::Error;
 
 /// What a column's unit is.
 #[derive(Clone, Debug, PartialEq)]
@@ -215,13 +215,13 @@ pub enum Ask {
 impl Ask {
     /// What `--time-column` and its kin say: a number is a 1-based column index; a name with
     /// `Run N:` one run's column; another name a column of that name in every run.
-    pub fn of(given: Option<&str>, cols: &[Col], flag: &str) -> anyhow::Result<Ask> {
+    pub fn of(given: Option<&str>, cols: &[Col], flag: &str) -> Result<Ask, Error> {
         let Some(g) = given.map(str::trim) else {
             return Ok(Ask::Auto);
         };
         if let Ok(k) = g.parse::<usize>() {
             if k == 0 || k > cols.len() {
-                bail!(
+                column_error!(
                     "{flag} {g}: the header has columns 1 to {} ({})",
                     cols.len(),
                     list(cols)
@@ -241,8 +241,8 @@ impl Ask {
                 .collect();
             return match hits.as_slice() {
                 [i] => Ok(Ask::Exact(*i)),
-                [] => bail!("{flag} {g}: no such column (the header has {})", list(cols)),
-                _ => bail!(
+                [] => column_error!("{flag} {g}: no such column (the header has {})", list(cols)),
+                _ => column_error!(
                     "{flag} {g}: {} columns have that name: give its number (1 to {})",
                     hits.len(),
                     cols.len()
@@ -254,7 +254,7 @@ impl Ask {
             .iter()
             .any(|c| c.base == want.base || normalise(&c.text) == normalise(g))
         {
-            bail!("{flag} {g}: no such column (the header has {})", list(cols));
+            column_error!("{flag} {g}: no such column (the header has {})", list(cols));
         }
         Ok(Ask::Name(g.to_string()))
     }
@@ -282,7 +282,7 @@ pub struct Role<'a> {
 }
 
 /// The role's column in the block `idx`, as `ask` says.
-pub fn pick(cols: &[Col], idx: &[usize], ask: &Ask, role: &Role) -> anyhow::Result<usize> {
+pub fn pick(cols: &[Col], idx: &[usize], ask: &Ask, role: &Role) -> Result<usize, Error> {
     let named = |i: usize| match ask {
         Ask::Name(n) => {
             let want = Col::parse(n, None);
@@ -291,13 +291,13 @@ pub fn pick(cols: &[Col], idx: &[usize], ask: &Ask, role: &Role) -> anyhow::Resu
         _ => role.names.contains(&cols[i].base.as_str()),
     };
     let checked = |i: usize| match (role.refuse)(&cols[i].unit) {
-        Some(why) if *ask == Ask::Auto => bail!(
+        Some(why) if *ask == Ask::Auto => column_error!(
             "which column is {}? column {} `{}` is named so, but it is {why}",
             role.name,
             i + 1,
             cols[i].text
         ),
-        Some(why) => bail!(
+        Some(why) => column_error!(
             "{}: column {} `{}` is {why}",
             role.flag,
             i + 1,
@@ -318,13 +318,13 @@ pub fn pick(cols: &[Col], idx: &[usize], ask: &Ask, role: &Role) -> anyhow::Resu
     match (fit.as_slice(), hits.as_slice()) {
         ([i], _) => Ok(*i),
         ([], [i]) => checked(*i),
-        ([], []) => bail!(
+        ([], []) => column_error!(
             "which column is {}? none is named so: give {} NAME or NUMBER (the header has {})",
             role.name,
             role.flag,
             list(cols)
         ),
-        ([], _) => bail!(
+        ([], _) => column_error!(
             "which column is {}? {} are named so but none is {}: give {} NAME or NUMBER",
             role.name,
             hits.iter()
@@ -334,7 +334,7 @@ pub fn pick(cols: &[Col], idx: &[usize], ask: &Ask, role: &Role) -> anyhow::Resu
             if role.name == "time" { "a time" } else { "a force" },
             role.flag
         ),
-        _ => bail!(
+        _ => column_error!(
             "which column is {}? several could be ({}): give {} NAME or NUMBER (the columns: {block})",
             role.name,
             fit.iter()

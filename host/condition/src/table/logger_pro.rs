@@ -5,7 +5,7 @@
 use super::columns::Col;
 use super::text::{self, Grid, Sep};
 use super::{unit_notes, Block, Columns, Layout, Picked, Series};
-use anyhow::bail;
+use crate::error::{Error, Place};
 use std::path::Path;
 
 /// Logger Pro's text export: one "Vernier Format" block per data set (run).
@@ -13,7 +13,7 @@ pub(super) fn read(
     path: &Path,
     lines: &[&str],
     want: &Columns,
-) -> anyhow::Result<(Vec<Series>, Layout)> {
+) -> Result<(Vec<Series>, Layout), Error> {
     let starts: Vec<usize> = (0..lines.len())
         .filter(|&i| lines[i].starts_with("Vernier Format"))
         .collect();
@@ -22,12 +22,12 @@ pub(super) fn read(
     for (k, &s) in starts.iter().enumerate() {
         let end = starts.get(k + 1).copied().unwrap_or(lines.len());
         if end < s + 7 {
-            bail!(
-                "{}:{}:1: a Logger Pro block needs 6 header lines (format, source, data set, \
-                 names, short names, units) and a blank line",
-                path.display(),
-                s + 1
-            );
+            return Err(Error::Shape {
+                place: Place::cell(path, s as u64 + 1, 1),
+                why: "a Logger Pro block needs 6 header lines (format, source, data set, names, \
+                      short names, units) and a blank line"
+                    .into(),
+            });
         }
         let sep = Sep::Char('\t');
         let names = text::cells(lines[s + 3], sep);
@@ -57,11 +57,10 @@ pub(super) fn read(
         let p = Picked::of(&cols, &block, want, true)?;
         let mut series = super::rows::rows(path, (&lines[..end], &g), &cols, &p)?;
         if series.is_empty() {
-            bail!(
-                "{}:{}: a Logger Pro block without rows",
-                path.display(),
-                s + 1
-            );
+            return Err(Error::Shape {
+                place: Place::line(path, s as u64 + 1),
+                why: "a Logger Pro block without rows".into(),
+            });
         }
         let name = lines[s + 2].trim().to_string();
         for x in series.iter_mut() {
