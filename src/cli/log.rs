@@ -4,9 +4,9 @@ mod board;
 mod judge;
 mod sim;
 
-use crate::logger::{LogOptions, Logger, Outcome, SetupFlags, Stop, Summary};
 use anyhow::Context;
 use capstan_link::Firmware;
+use capstan_log::{LogOptions, Logger, Note, Notes, Outcome, SetupFlags, Stop, Summary};
 use judge::{check_args, not_committed, verdict};
 use std::io::Read;
 use std::path::PathBuf;
@@ -82,7 +82,7 @@ pub struct Args {
 
     /// The simulated board instead (`--sim DIR`, as `capstan rig --sim DIR`).
     #[command(flatten)]
-    pub sim: crate::simboard::SimArgs,
+    pub sim: super::simboard::SimArgs,
 
     /// Output directory (created if missing).
     #[arg(long, value_name = "DIR")]
@@ -192,6 +192,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         progress: !args.quiet,
         allow_empty: args.allow_empty,
+        kept_after_failure: crate::outputs::say_kept,
     };
     super::signal::stop_flag("log"); // Ctrl-C and SIGTERM end the session, keeping it
     let (summary, stop, outcome) = match (&args.elf, &args.from) {
@@ -217,6 +218,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     verdict(&summary, &stop, &args)
+}
+
+/// A session's notes, said on stderr as they arise.
+fn notes<'f>() -> Notes<'f> {
+    Box::new(|note| match note {
+        Note::Recovered(r) => crate::errln!("note: {r}"),
+        Note::Session(line) => crate::errln!("capstan log: {line}"),
+    })
 }
 
 /// The firmware ELF for messages (or what stands for it with --sim).
@@ -279,7 +288,7 @@ fn from_stream(
             std::fs::File::open(from).with_context(|| format!("cannot open the stream {from}"))?;
         (from.to_string(), Box::new(file))
     };
-    let mut logger = Logger::create(fw, opts, &source)?;
+    let mut logger = Logger::create(fw, opts, &source, notes())?;
     logger.set_provenance(provenance(args, Some(from))?);
     let (tx, rx) = mpsc::sync_channel::<std::io::Result<Vec<u8>>>(16);
     std::thread::spawn(move || {

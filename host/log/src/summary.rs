@@ -32,7 +32,7 @@ pub struct RunSummary {
     /// It ran its protocol to the end: its run-end record arrived and no fault ended it. A
     /// run ended by a fault (the button's abort, a load at its tare, over-force, ...) was cut
     /// short whatever pairs it made: it is not complete (a session of such runs replaces
-    /// nothing, [`crate::logger::Outcome`]).
+    /// nothing, [`crate::Outcome`]).
     pub complete: bool,
     /// Raw samples received.
     pub raw: u64,
