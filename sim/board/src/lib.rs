@@ -24,7 +24,10 @@ mod error;
 pub mod steps;
 
 pub use capstan_sim::session::Event;
-pub use config::{SensorTruth, SimConfig, SimOptions, Truth};
+pub use config::{
+    SensorTruth, SimConfig, SimOptions, Truth, MAX_SENSITIVITY_ERROR, SENSITIVITY_ERROR_SD,
+    ZERO_SPREAD_COUNTS,
+};
 pub use error::{BenchError, Result, SimError};
 
 use capstan_sim::flash::RamFlash;
