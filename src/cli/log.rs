@@ -204,7 +204,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Outcome::Kept(p) => p.clone(),
         _ => args.out.clone(),
     };
-    crate::errln!("{}", summary.human(&at));
+    say_summary(&summary, &at);
     if outcome != Outcome::Committed {
         return not_committed(&summary, &stop, &outcome, &args);
     }
@@ -226,6 +226,13 @@ fn notes<'f>() -> Notes<'f> {
         Note::Recovered(r) => crate::errln!("note: {r}"),
         Note::Session(line) => crate::errln!("capstan log: {line}"),
     })
+}
+
+/// The session's closing lines, on stderr; `dir`: where its files are.
+fn say_summary(summary: &Summary, dir: &std::path::Path) {
+    for line in summary.human(dir) {
+        crate::errln!("capstan log: {line}");
+    }
 }
 
 /// The firmware ELF for messages (or what stands for it with --sim).
@@ -328,7 +335,7 @@ fn from_stream(
                     Outcome::Kept(p) => p.clone(),
                     _ => args.out.clone(),
                 };
-                crate::errln!("{}", summary.human(&place));
+                say_summary(&summary, &place);
                 let kept = match outcome {
                     Outcome::Committed => format!("what was received is in {}", place.display()),
                     Outcome::Kept(p) => format!(

@@ -216,6 +216,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
     assert_eq!(cal.get("tare_reference_n"), Some(0.12));
     assert!(summary
         .human(&dir)
+        .join("\n")
         .contains("setup mode: 3 settings report(s)"));
     let read = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();
     let settings = read("settings.csv");

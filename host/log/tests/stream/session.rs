@@ -67,7 +67,7 @@ fn the_log_files_keep_everything_that_arrived_and_the_summary_says_what_did_not(
     assert_eq!(summary.runs.len(), 2);
     assert_eq!(summary.runs[0].pairs, 2);
     assert_eq!(summary.runs[0].pairs_reported, Some(3));
-    let human = summary.human(&dir);
+    let human = summary.human(&dir).join("\n");
     assert!(
         human.contains(&format!(
             "LOST 1 record(s) in 1 gap(s): 1 after seq {}",
@@ -157,12 +157,18 @@ fn joining_mid_run_keeps_the_records_without_their_run_start() {
     assert_eq!(summary.bad_frames, 1, "the frame cut by joining");
     assert!(summary.first_seq.unwrap() > 0);
     assert_eq!(summary.runs[0].run, None);
-    assert!(summary.human(&dir).contains("joins the board at seq"));
+    assert!(summary
+        .human(&dir)
+        .join("\n")
+        .contains("joins the board at seq"));
     // Run 1's pairs have no run number (nor the record's diameter and drive voltage): they are
     // kept apart; run 2's are complete and go to pairs.csv, which `capstan analyze` reads.
     assert_eq!(summary.pairs_incomplete, summary.runs[0].pairs);
     assert!(summary.pairs_incomplete > 0);
-    assert!(summary.human(&dir).contains("pairs-incomplete.csv"));
+    assert!(summary
+        .human(&dir)
+        .join("\n")
+        .contains("pairs-incomplete.csv"));
     let incomplete = std::fs::read_to_string(dir.join("pairs-incomplete.csv")).unwrap();
     let first = incomplete.lines().nth(1).unwrap();
     assert!(first.starts_with(",360,,,"), "{first}");
