@@ -31,6 +31,8 @@
 //! [`Summary`] (`summary`) is what `summary.json` and the closing lines say. Nothing here
 //! prints: `capstan log` says the notes and the summary on stderr.
 
+#![deny(missing_docs)]
+
 mod error;
 mod files;
 mod session;

@@ -19,6 +19,8 @@
 //! Nothing here prints: what a command has to say comes back to the caller (a new board's
 //! sentence through `say`, the records as values, the errors as [`SimError`]).
 
+#![deny(missing_docs)]
+
 mod config;
 mod error;
 pub mod steps;
