@@ -1,20 +1,18 @@
 //! `capstan`: simulate the rig, analyse and diagnose its data, and log real runs — the command
 //! line over the project's crates (`capstan-data`, `capstan-engine`, `capstan-validation`,
-//! `capstan-report`, `capstan-link`, `capstan-outdir`, `host-sim`).
+//! `capstan-report`, `capstan-link`, `capstan-outdir`, `capstan-log` (the files of a logged
+//! session), `capstan-simboard` (the simulated board behind `rig --sim DIR` and `log --sim
+//! DIR`), `capstan-condition` (a raw time series into pairs), `capstan-sim`).
 //!
 //! * [`cli`]: one module per command, each with its `Args` and `run`;
-//! * [`logger`]: the files of a logged session, written as the records arrive;
 //! * [`outputs`]: how every command opens its output directory;
 //! * [`provenance`]: version, commit, input hash and command line for every output;
-//! * [`simboard`]: the simulated board behind `rig --sim DIR` and `log --sim DIR`;
 //! * [`term`]: stdout and stderr that survive a closed pipe. Only this crate prints.
 //!
 //! The integration tests in `tests/` drive the binary, and use this library and the crates
 //! directly.
 
 pub mod cli;
-pub mod logger;
 pub mod outputs;
 pub mod provenance;
-pub mod simboard;
 pub mod term;

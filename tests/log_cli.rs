@@ -1,5 +1,7 @@
 //! `capstan log` as a user runs it: the binary, its exit status, its messages and its files.
 
+// The recorded stream and its tools, shared with the log session's own tests.
+#[path = "../host/log/tests/support/mod.rs"]
 mod log_support;
 
 use log_support::{elf_path, split, stream};

@@ -2,7 +2,7 @@
 //! the summary): it must never panic, and what it writes must read back.
 #![no_main]
 
-use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
+use capstan_log::{LogOptions, Logger, SetupFlags, Stop};
 use capstan_link::Firmware;
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
@@ -25,8 +25,10 @@ fuzz_target!(|data: &[u8]| {
         setup: SetupFlags::default(),
         progress: false,
         allow_empty: true,
+        kept_after_failure: |_| {},
     };
-    let mut logger = Logger::create(fw, opts, "fuzz").expect("temp dir is writable");
+    let mut logger =
+        Logger::create(fw, opts, "fuzz", Box::new(|_| {})).expect("temp dir is writable");
     logger.feed(data).expect("files are writable");
     let summary = logger
         .finish(&Stop::EndOfStream)

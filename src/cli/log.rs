@@ -4,9 +4,9 @@ mod board;
 mod judge;
 mod sim;
 
-use crate::logger::{LogOptions, Logger, Outcome, SetupFlags, Stop, Summary};
 use anyhow::Context;
 use capstan_link::Firmware;
+use capstan_log::{LogOptions, Logger, Note, Notes, Outcome, SetupFlags, Stop, Summary};
 use judge::{check_args, not_committed, verdict};
 use std::io::Read;
 use std::path::PathBuf;
@@ -82,7 +82,7 @@ pub struct Args {
 
     /// The simulated board instead (`--sim DIR`, as `capstan rig --sim DIR`).
     #[command(flatten)]
-    pub sim: crate::simboard::SimArgs,
+    pub sim: super::simboard::SimArgs,
 
     /// Output directory (created if missing).
     #[arg(long, value_name = "DIR")]
@@ -192,6 +192,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         progress: !args.quiet,
         allow_empty: args.allow_empty,
+        kept_after_failure: crate::outputs::say_kept,
     };
     super::signal::stop_flag("log"); // Ctrl-C and SIGTERM end the session, keeping it
     let (summary, stop, outcome) = match (&args.elf, &args.from) {
@@ -203,7 +204,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Outcome::Kept(p) => p.clone(),
         _ => args.out.clone(),
     };
-    crate::errln!("{}", summary.human(&at));
+    say_summary(&summary, &at);
     if outcome != Outcome::Committed {
         return not_committed(&summary, &stop, &outcome, &args);
     }
@@ -217,6 +218,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .into());
     }
     verdict(&summary, &stop, &args)
+}
+
+/// A session's notes, said on stderr as they arise.
+fn notes<'f>() -> Notes<'f> {
+    Box::new(|note| match note {
+        Note::Recovered(r) => crate::errln!("note: {r}"),
+        Note::Session(line) => crate::errln!("capstan log: {line}"),
+    })
+}
+
+/// The session's closing lines, on stderr; `dir`: where its files are.
+fn say_summary(summary: &Summary, dir: &std::path::Path) {
+    for line in summary.human(dir) {
+        crate::errln!("capstan log: {line}");
+    }
 }
 
 /// The firmware ELF for messages (or what stands for it with --sim).
@@ -279,7 +295,7 @@ fn from_stream(
             std::fs::File::open(from).with_context(|| format!("cannot open the stream {from}"))?;
         (from.to_string(), Box::new(file))
     };
-    let mut logger = Logger::create(fw, opts, &source)?;
+    let mut logger = Logger::create(fw, opts, &source, notes())?;
     logger.set_provenance(provenance(args, Some(from))?);
     let (tx, rx) = mpsc::sync_channel::<std::io::Result<Vec<u8>>>(16);
     std::thread::spawn(move || {
@@ -319,7 +335,7 @@ fn from_stream(
                     Outcome::Kept(p) => p.clone(),
                     _ => args.out.clone(),
                 };
-                crate::errln!("{}", summary.human(&place));
+                say_summary(&summary, &place);
                 let kept = match outcome {
                     Outcome::Committed => format!("what was received is in {}", place.display()),
                     Outcome::Kept(p) => format!(

@@ -11,6 +11,7 @@ pub mod plan;
 pub mod predict;
 pub mod rig;
 pub mod signal;
+pub mod simboard;
 pub mod simulate;
 
 /// `capstan --version`: the version and the git commit this binary was built from (as every

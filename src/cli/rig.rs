@@ -87,7 +87,7 @@ pub struct Args {
 
     /// The simulated board instead (`--sim DIR`, see REHEARSING WITHOUT HARDWARE).
     #[command(flatten)]
-    pub sim: crate::simboard::SimArgs,
+    pub sim: super::simboard::SimArgs,
 
     /// The firmware ELF running on the board: its defmt table decodes the replies.
     #[arg(long, value_name = "FIRMWARE_ELF")]
@@ -174,11 +174,12 @@ fn rig(args: &Args) -> anyhow::Result<()> {
                         .into()
                 ));
             }
-            let (steps, said) = crate::simboard::steps::bench(rest).map_err(CheckError::Usage)?;
-            let mut board = crate::simboard::SimBoard::open(&args.sim, &mut note)?;
+            let (steps, said) = capstan_simboard::steps::bench(rest)
+                .map_err(|e| CheckError::Usage(e.to_string()))?;
+            let mut board = capstan_simboard::SimBoard::open(&args.sim.options(), &mut note)?;
             let done = board.advance(&steps)?;
             out(said);
-            for e in done.events {
+            for e in super::simboard::link_events(done.events) {
                 note_event(e);
             }
             Ok(())
@@ -186,10 +187,11 @@ fn rig(args: &Args) -> anyhow::Result<()> {
         "live" if args.sim.sim.is_some() => {
             let how_long = live::seconds(rest).map_err(CheckError::Usage)?;
             let how_long = how_long.unwrap_or(SIM_LIVE);
-            let mut board = crate::simboard::SimBoard::open(&args.sim, &mut note)?;
+            let mut board = capstan_simboard::SimBoard::open(&args.sim.options(), &mut note)?;
             let ms = how_long.as_millis().min(3_600_000) as u32;
             let done = board.advance(&[capstan_sim::session::Step::Wait(ms)])?;
-            live::show(done.events, &mut out, &mut note).map(|_| ())
+            let events = super::simboard::link_events(done.events);
+            live::show(events, &mut out, &mut note).map(|_| ())
         }
         "live" => {
             let how_long = live::seconds(rest).map_err(CheckError::Usage)?;
@@ -328,8 +330,8 @@ fn with_link(
     work: impl FnOnce(&mut dyn RigLink) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     if args.sim.sim.is_some() {
-        let board = crate::simboard::SimBoard::open(&args.sim, &mut note)?;
-        let mut link = crate::simboard::SimLink::new(board);
+        let board = capstan_simboard::SimBoard::open(&args.sim.options(), &mut note)?;
+        let mut link = super::simboard::SimLink::new(board);
         return work(&mut link);
     }
     let (Some(chip), Some(elf)) = (&args.chip, &args.elf) else {

@@ -3,10 +3,10 @@
 //! probe goes away.
 
 use super::Args;
-#[cfg(feature = "probe")]
-use crate::logger::Logger;
-use crate::logger::{LogOptions, Outcome, Stop, Summary};
 use capstan_link::Firmware;
+#[cfg(feature = "probe")]
+use capstan_log::Logger;
+use capstan_log::{LogOptions, Outcome, Stop, Summary};
 #[cfg(feature = "probe")]
 use std::time::Duration;
 
@@ -42,7 +42,7 @@ pub(super) fn from_board(
         .expect("clap requires --elf without --sim");
     let mut board = connect(elf, &popts, &mut |line| crate::errln!("{line}"))?;
     let source = format!("{chip} over RTT (probe: {})", board.probe_name);
-    let mut logger = Logger::create(fw, opts, &source)?;
+    let mut logger = Logger::create(fw, opts, &source, super::notes())?;
     logger.set_provenance(super::provenance(args, None)?);
     if args.start {
         start_run(&mut board)?;

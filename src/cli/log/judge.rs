@@ -3,8 +3,8 @@
 //! session ends with (committed or not, strict, probe lost).
 
 use super::Args;
-use crate::logger::{Outcome, Stop, Summary};
 use anyhow::bail;
+use capstan_log::{Outcome, Stop, Summary};
 
 /// The command line's values against the physical ranges (`data::ranges`), and `--from`
 /// checked, before anything is opened or written.
@@ -47,7 +47,7 @@ pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
     }
     let inside = std::fs::canonicalize(from).ok().and_then(|f| {
         let out = std::fs::canonicalize(&args.out).ok()?;
-        Some(f == out.join(crate::logger::STREAM_FILE))
+        Some(f == out.join(capstan_log::STREAM_FILE))
     });
     if inside == Some(true) {
         bail!(
@@ -174,7 +174,7 @@ pub(super) fn verdict(summary: &Summary, stop: &Stop, args: &Args) -> anyhow::Re
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::logger::RecordCounts;
+    use capstan_log::RecordCounts;
     use clap::Parser;
 
     fn summary(records: RecordCounts, bytes: u64, missing: u64) -> Summary {
@@ -201,8 +201,8 @@ mod tests {
         }
     }
 
-    fn complete_run() -> crate::logger::RunSummary {
-        use crate::logger::{RunSummary, Sourced};
+    fn complete_run() -> capstan_log::RunSummary {
+        use capstan_log::{RunSummary, Sourced};
         let mut r = RunSummary::new(
             Some(1),
             0,

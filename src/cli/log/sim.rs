@@ -11,13 +11,14 @@
 //! `--duration` beyond the board's 32-bit millisecond clock.
 
 use super::Args;
-use crate::logger::{LogOptions, Logger, Outcome, Stop, Summary};
-use crate::simboard::steps::PRESS_MS;
-use crate::simboard::{SimBoard, IDLE_MS};
+use crate::cli::simboard::link_events;
 use anyhow::bail;
 use capstan_link::frame::Event;
+use capstan_log::{LogOptions, Logger, Outcome, Stop, Summary};
 use capstan_rig::record::Record;
 use capstan_sim::session::Step;
+use capstan_simboard::steps::PRESS_MS;
+use capstan_simboard::IDLE_MS;
 use std::sync::atomic::Ordering;
 
 /// Runs recorded when neither --runs nor --duration is given (a simulated session must end
@@ -58,10 +59,10 @@ pub(super) fn check(args: &Args) -> anyhow::Result<()> {
 
 /// Record from the simulated board the arguments name.
 pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary, Stop, Outcome)> {
-    let mut board = SimBoard::open(&args.sim, &mut |l| crate::errln!("{l}"))?;
+    let mut board = args.sim.open()?;
     let source = format!("the simulated board in {}", board.dir().display());
     let (steps, runs) = plan(args);
-    let mut logger = Logger::create_for_records(opts, &source)?;
+    let mut logger = Logger::create_for_records(opts, &source, super::notes())?;
     logger.set_provenance(super::provenance(args, None)?);
     logger.keep_interrupted_apart();
     if args.start {
@@ -77,7 +78,7 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
     };
     let (mut stop, mut failed) = (None, None);
     board.advance_streamed(&steps, &mut |done, events| {
-        if let Err(e) = logger.take_records(cut.keep(events)) {
+        if let Err(e) = logger.take_records(cut.keep(link_events(events))) {
             failed = Some(e);
             return false;
         }
@@ -93,7 +94,7 @@ pub(super) fn from_sim(opts: LogOptions, args: &Args) -> anyhow::Result<(Summary
         true
     })?;
     if let Some(e) = failed {
-        return Err(e);
+        return Err(e.into());
     }
     let stop = stop.unwrap_or_else(|| match runs {
         Some(n) if cut.complete >= n => Stop::Limit(format!("{n} run(s) logged (--runs)")),
@@ -147,7 +148,7 @@ fn plan(args: &Args) -> (Vec<Step>, Option<usize>) {
 }
 
 /// The records up to the end of the `wanted`-th complete run (a run a fault ended is not one:
-/// `logger::completes`), taken batch by batch.
+/// `capstan_log::completes`), taken batch by batch.
 struct Cut {
     wanted: Option<usize>,
     complete: usize,
@@ -167,7 +168,7 @@ impl Cut {
                 Event::Record {
                     record: Record::RunEnd(end),
                     ..
-                } if crate::logger::completes(end)
+                } if capstan_log::completes(end)
             );
             self.complete += done as usize;
             self.complete == n

@@ -7,7 +7,7 @@
 //!   truncation, corruption, a board restart;
 //! - `session`: the files a session writes when the stream is damaged or joined mid-run.
 
-#[path = "../log_support/mod.rs"]
+#[path = "../support/mod.rs"]
 mod log_support;
 
 mod damage;

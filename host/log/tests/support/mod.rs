@@ -1,15 +1,22 @@
-//! Shared by the `capstan log` tests: the recorded QEMU stream and its ELF, and tools to take
-//! a stream apart frame by frame.
+//! Shared by the log session's tests (`host/log/tests/`) and `capstan log`'s (the root's
+//! `tests/log_cli.rs`): the recorded QEMU stream and its ELF, and tools to take a stream apart
+//! frame by frame.
 #![allow(dead_code)]
 
 use capstan_link::Firmware;
 use std::path::PathBuf;
 
-/// `tests/data/<name>`.
+/// `tests/data/<name>` at the workspace's root (the recorded stream is shared with the CLI's
+/// tests, the fuzzers and `scripts/qemu-e2e`). Found from the including crate: the root
+/// (`tests/log_cli.rs`) or `host/log`.
 pub fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
+    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let root = if manifest.join("tests/data").is_dir() {
+        manifest
+    } else {
+        manifest.join("../..")
+    };
+    root.join("tests/data").join(name)
 }
 
 /// A fresh directory for one test's output: `capstan-log-KIND-PID-NAME` in the system's temp

@@ -5,13 +5,13 @@
 //! wire schema's, as `firmware/rig/src/defmt_sink.rs` writes them) and its `record_crc`, for a
 //! table without an ELF (`Firmware::from_formats`).
 
-#[path = "../log_support/mod.rs"]
+#[path = "../support/mod.rs"]
 mod log_support;
 
 mod frames;
 
-use capstan::logger::{LogOptions, Logger, SetupFlags, Stop};
 use capstan_link::{decode_all, Firmware};
+use capstan_log::{LogOptions, Logger, SetupFlags, Stop};
 use capstan_rig::command::{CommandError, CommandKind};
 use capstan_rig::condition::ChannelStats;
 use capstan_rig::hal::Channel;
@@ -188,8 +188,9 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
         setup: SetupFlags::default(),
         progress: false,
         allow_empty: true,
+        kept_after_failure: |_| {},
     };
-    let mut logger = Logger::create(&fw, opts, "test").unwrap();
+    let mut logger = Logger::create(&fw, opts, "test", Box::new(|_| {})).unwrap();
     for chunk in stream(&[4]).chunks(29) {
         logger.feed(chunk).unwrap();
     }
@@ -215,6 +216,7 @@ fn the_log_keeps_setup_records_apart_from_runs_and_counts_them_in_the_sequence()
     assert_eq!(cal.get("tare_reference_n"), Some(0.12));
     assert!(summary
         .human(&dir)
+        .join("\n")
         .contains("setup mode: 3 settings report(s)"));
     let read = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();
     let settings = read("settings.csv");
@@ -312,8 +314,9 @@ fn a_run_start_without_the_newer_calibration_fields_leaves_them_null_in_the_summ
         setup: SetupFlags::default(),
         progress: false,
         allow_empty: true,
+        kept_after_failure: |_| {},
     };
-    let mut logger = Logger::create(&fw, opts, "old").unwrap();
+    let mut logger = Logger::create(&fw, opts, "old", Box::new(|_| {})).unwrap();
     logger.feed(&bytes).unwrap();
     let summary = logger.finish(&Stop::EndOfStream).unwrap();
     assert_eq!(summary.bad_frames, 0, "{:?}", summary.bad_frame_examples);

@@ -4,13 +4,13 @@
 //! the session does.
 
 use super::{
-    LogOptions, FAULTS_CSV, FAULTS_HEADER, LIVE_CSV, LIVE_HEADER, MESSAGES_TXT, PAIRS_CSV,
-    PAIRS_INCOMPLETE_CSV, RAW_CSV, RAW_HEADER, SETTINGS_CSV, STREAM_FILE, SUMMARY_JSON,
+    LogError, LogOptions, Note, Result, FAULTS_CSV, FAULTS_HEADER, LIVE_CSV, LIVE_HEADER,
+    MESSAGES_TXT, PAIRS_CSV, PAIRS_INCOMPLETE_CSV, RAW_CSV, RAW_HEADER, SETTINGS_CSV, STREAM_FILE,
+    SUMMARY_JSON,
 };
-use anyhow::Context;
 use capstan_data::{Pair, PairsWriter};
 use capstan_link::words::{setting_values, source_name};
-use capstan_outdir::Staged;
+use capstan_outdir::{OutputDir, Staged};
 use capstan_rig::hal::Channel;
 use capstan_rig::record::{Fault, Live, RawSample, SettingsReport};
 use std::fs::File;
@@ -36,10 +36,10 @@ pub(super) struct Files {
     live: Option<BufWriter<File>>,
 }
 
-fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<BufWriter<File>> {
-    let mut w = set.create(name)?;
+fn create(set: &mut Staged, name: &str, header: Option<&str>) -> Result<BufWriter<File>> {
+    let mut w = set.create(name).map_err(LogError::dir)?;
     if let Some(h) = header {
-        writeln!(w, "{h}").with_context(|| format!("cannot write {name}"))?;
+        writeln!(w, "{h}").map_err(|e| LogError::write(name, e))?;
     }
     Ok(w)
 }
@@ -47,10 +47,9 @@ fn create(set: &mut Staged, name: &str, header: Option<&str>) -> anyhow::Result<
 /// A pairs CSV of the session: the schema's columns, `t2_target_n` (force control's target,
 /// 0 where there is none) and `boot`, the board's start each run belongs to (a reset starts the
 /// run numbers again; `boot` keeps those runs apart for the reader).
-fn create_pairs(set: &mut Staged, name: &str) -> anyhow::Result<PairsWriter<BufWriter<File>>> {
+fn create_pairs(set: &mut Staged, name: &str) -> Result<PairsWriter<BufWriter<File>>> {
     let w = create(set, name, None)?;
-    PairsWriter::with_extra(w, &["t2_target_n"], &["boot"])
-        .with_context(|| format!("cannot write {name}"))
+    PairsWriter::with_extra(w, &["t2_target_n"], &["boot"]).map_err(|e| LogError::write(name, e))
 }
 
 /// f32 as written: the shortest decimal that reads back to the same f32.
@@ -66,8 +65,9 @@ pub(super) fn decimal(v: f32) -> f64 {
 
 impl Files {
     /// Create (or, with `overwrite`, replace) the session's files in `opts.out_dir`. Refuses a
-    /// directory that holds another session's files unless `overwrite` is set.
-    pub fn create(opts: &LogOptions) -> anyhow::Result<Files> {
+    /// directory that holds another session's files unless `overwrite` is set. What opening
+    /// the directory recovered is told to `note`.
+    pub fn create(opts: &LogOptions, note: &mut dyn FnMut(Note)) -> Result<Files> {
         let dir = &opts.out_dir;
         let names = [
             RAW_CSV,
@@ -81,20 +81,21 @@ impl Files {
             MESSAGES_TXT,
         ];
         // Locked and recovered first, so the check sees what is really there.
-        let out = crate::outputs::open_out(dir, "log", &names)?;
+        let out = OutputDir::open(dir, "log", &names).map_err(LogError::dir)?;
+        for r in &out.recovered {
+            note(Note::Recovered(r.to_string()));
+        }
         if !opts.overwrite {
             let existing: Vec<&str> = names.into_iter().filter(|n| dir.join(n).exists()).collect();
             if !existing.is_empty() {
-                anyhow::bail!(
-                    "{} already holds a logged session ({}): choose another --out, or pass \
-                     --overwrite to replace it",
-                    dir.display(),
-                    existing.join(", ")
-                );
+                return Err(LogError::AlreadyLogged {
+                    dir: dir.clone(),
+                    existing,
+                });
             }
         }
-        let mut set = out.stage()?;
-        set.keep_on_failure(crate::outputs::say_kept);
+        let mut set = out.stage().map_err(LogError::dir)?;
+        set.keep_on_failure(opts.kept_after_failure);
         Ok(Files {
             raw: create(&mut set, RAW_CSV, Some(RAW_HEADER))?,
             pairs: create_pairs(&mut set, PAIRS_CSV)?,
@@ -114,21 +115,22 @@ impl Files {
     }
 
     /// Keep received bytes (if the session keeps them).
-    pub fn stream(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+    pub fn stream(&mut self, bytes: &[u8]) -> Result<()> {
         if let Some(s) = &mut self.stream {
             s.write_all(bytes)
-                .with_context(|| self.at("stream.defmt"))?;
+                .map_err(|e| LogError::write(self.at("stream.defmt"), e))?;
         }
         Ok(())
     }
 
     /// One of the firmware's other log lines.
-    pub fn message(&mut self, level: &str, text: &str) -> anyhow::Result<()> {
-        writeln!(self.messages, "{level} {text}").with_context(|| self.at("messages.txt"))
+    pub fn message(&mut self, level: &str, text: &str) -> Result<()> {
+        writeln!(self.messages, "{level} {text}")
+            .map_err(|e| LogError::write(self.at("messages.txt"), e))
     }
 
     /// A raw sample of run `run` (empty: unknown).
-    pub fn raw(&mut self, run: &str, seq: u32, r: &RawSample) -> anyhow::Result<()> {
+    pub fn raw(&mut self, run: &str, seq: u32, r: &RawSample) -> Result<()> {
         writeln!(
             self.raw,
             "{run},{seq},{},{},{},{},{},{}",
@@ -139,11 +141,11 @@ impl Files {
             f(r.force_n[1]),
             f(r.t2_target_n)
         )
-        .with_context(|| self.at("raw.csv"))
+        .map_err(|e| LogError::write(self.at("raw.csv"), e))
     }
 
     /// A fault of run `run` (empty: unknown).
-    pub fn fault(&mut self, run: &str, seq: u32, flt: &Fault) -> anyhow::Result<()> {
+    pub fn fault(&mut self, run: &str, seq: u32, flt: &Fault) -> Result<()> {
         let channel = match flt.channel {
             Some(Channel::T1) => "t1",
             Some(Channel::T2) => "t2",
@@ -156,16 +158,18 @@ impl Files {
             flt.kind.name(),
             f(flt.value)
         )
-        .with_context(|| self.at("faults.csv"))
+        .map_err(|e| LogError::write(self.at("faults.csv"), e))
     }
 
     /// A complete pair, to `pairs.csv`.
-    pub fn pair(&mut self, p: &Pair) -> anyhow::Result<()> {
-        self.pairs.write(p).with_context(|| self.at("pairs.csv"))
+    pub fn pair(&mut self, p: &Pair) -> Result<()> {
+        self.pairs
+            .write(p)
+            .map_err(|e| LogError::write(self.at("pairs.csv"), e))
     }
 
     /// Make sure `pairs-incomplete.csv` exists; true if this call created it.
-    pub fn open_incomplete(&mut self) -> anyhow::Result<bool> {
+    pub fn open_incomplete(&mut self) -> Result<bool> {
         if self.incomplete.is_some() {
             return Ok(false);
         }
@@ -175,13 +179,14 @@ impl Files {
 
     /// A pair lacking a set-up value or its run number, to `pairs-incomplete.csv` (opened by
     /// [`Files::open_incomplete`]).
-    pub fn incomplete_pair(&mut self, p: &Pair) -> anyhow::Result<()> {
+    pub fn incomplete_pair(&mut self, p: &Pair) -> Result<()> {
         let w = self.incomplete.as_mut().expect("opened first");
-        w.write(p).with_context(|| self.at("pairs-incomplete.csv"))
+        w.write(p)
+            .map_err(|e| LogError::write(self.at("pairs-incomplete.csv"), e))
     }
 
     /// A settings report, to `settings.csv` (created with its header by the first).
-    pub fn settings(&mut self, seq: u32, r: &SettingsReport) -> anyhow::Result<()> {
+    pub fn settings(&mut self, seq: u32, r: &SettingsReport) -> Result<()> {
         let values = setting_values(&r.settings);
         if self.settings.is_none() {
             let names: Vec<&str> = values.iter().map(|v| v.name).collect();
@@ -191,11 +196,11 @@ impl Files {
         let w = self.settings.as_mut().expect("just created");
         let cells: Vec<&str> = values.iter().map(|v| v.value.as_str()).collect();
         writeln!(w, "{seq},{},{}", source_name(r.source), cells.join(","))
-            .with_context(|| self.at("settings.csv"))
+            .map_err(|e| LogError::write(self.at("settings.csv"), e))
     }
 
     /// A live reading of setup mode, to `live.csv` (created with its header by the first).
-    pub fn live(&mut self, seq: u32, l: &Live) -> anyhow::Result<()> {
+    pub fn live(&mut self, seq: u32, l: &Live) -> Result<()> {
         if self.live.is_none() {
             self.live = Some(create(&mut self.set, LIVE_CSV, Some(LIVE_HEADER))?);
         }
@@ -210,33 +215,43 @@ impl Files {
             f(l.force_n[1]),
             f(l.servo_deg)
         )
-        .with_context(|| self.at("live.csv"))
+        .map_err(|e| LogError::write(self.at("live.csv"), e))
     }
 
-    /// The message of a failed write of `name`: the final path, where the user looks.
+    /// The file of a failed write of `name`: the final path, where the user looks.
     fn at(&self, name: &str) -> String {
-        format!("cannot write {}", self.dir.join(name).display())
+        self.dir.join(name).display().to_string()
     }
 
     /// Flush every file.
-    pub fn flush(&mut self) -> anyhow::Result<()> {
+    pub fn flush(&mut self) -> Result<()> {
         let dir = self.dir.display().to_string();
-        let at = |name: &str| format!("cannot write {dir}/{name}");
-        self.raw.flush().with_context(|| at(RAW_CSV))?;
-        self.pairs.flush().with_context(|| at(PAIRS_CSV))?;
-        self.faults.flush().with_context(|| at(FAULTS_CSV))?;
-        self.messages.flush().with_context(|| at(MESSAGES_TXT))?;
+        let at = |name: &str| format!("{dir}/{name}");
+        self.raw
+            .flush()
+            .map_err(|e| LogError::write(at(RAW_CSV), e))?;
+        self.pairs
+            .flush()
+            .map_err(|e| LogError::write(at(PAIRS_CSV), e))?;
+        self.faults
+            .flush()
+            .map_err(|e| LogError::write(at(FAULTS_CSV), e))?;
+        self.messages
+            .flush()
+            .map_err(|e| LogError::write(at(MESSAGES_TXT), e))?;
         if let Some(s) = &mut self.stream {
-            s.flush().with_context(|| at(STREAM_FILE))?;
+            s.flush().map_err(|e| LogError::write(at(STREAM_FILE), e))?;
         }
         if let Some(w) = &mut self.incomplete {
-            w.flush().with_context(|| at(PAIRS_INCOMPLETE_CSV))?;
+            w.flush()
+                .map_err(|e| LogError::write(at(PAIRS_INCOMPLETE_CSV), e))?;
         }
         if let Some(w) = &mut self.settings {
-            w.flush().with_context(|| at(SETTINGS_CSV))?;
+            w.flush()
+                .map_err(|e| LogError::write(at(SETTINGS_CSV), e))?;
         }
         if let Some(w) = &mut self.live {
-            w.flush().with_context(|| at(LIVE_CSV))?;
+            w.flush().map_err(|e| LogError::write(at(LIVE_CSV), e))?;
         }
         Ok(())
     }
@@ -248,7 +263,7 @@ impl Files {
         summary_json: &str,
         commit: bool,
         received: bool,
-    ) -> anyhow::Result<super::Outcome> {
+    ) -> Result<super::Outcome> {
         self.flush()?;
         drop((
             self.raw,
@@ -260,12 +275,14 @@ impl Files {
             self.settings,
             self.live,
         ));
-        self.set.write(SUMMARY_JSON, summary_json.as_bytes())?;
+        (self.set.write(SUMMARY_JSON, summary_json.as_bytes())).map_err(LogError::dir)?;
         if commit {
-            self.set.commit()?;
+            self.set.commit().map_err(LogError::dir)?;
             Ok(super::Outcome::Committed)
         } else if received {
-            Ok(super::Outcome::Kept(self.set.keep()?))
+            Ok(super::Outcome::Kept(
+                self.set.keep().map_err(LogError::dir)?,
+            ))
         } else {
             self.set.discard();
             Ok(super::Outcome::Discarded)

@@ -15,16 +15,23 @@
 //!
 //! The cost of a command grows with the journal (about 1 s of CPU per 100 s of bench time);
 //! a new `DIR` is a new, unconfigured board.
+//!
+//! Nothing here prints: what a command has to say comes back to the caller (a new board's
+//! sentence through `say`, the records as values, the errors as [`SimError`]).
+
+#![deny(missing_docs)]
 
 mod config;
-mod link;
+mod error;
 pub mod steps;
 
-pub use config::{SensorTruth, SimArgs, SimConfig, Truth};
-pub use link::SimLink;
+pub use capstan_sim::session::Event;
+pub use config::{
+    SensorTruth, SimConfig, SimOptions, Truth, MAX_SENSITIVITY_ERROR, SENSITIVITY_ERROR_SD,
+    ZERO_SPREAD_COUNTS,
+};
+pub use error::{BenchError, Result, SimError};
 
-use anyhow::{bail, Context};
-use capstan_link::frame::Event;
 use capstan_sim::flash::RamFlash;
 use capstan_sim::session::{run_session_observed, SessionOutput, Step, FLASH_PAGES};
 use std::fs::File;
@@ -68,7 +75,8 @@ pub struct SimBoard {
 
 /// What a command's steps produced.
 pub struct Advance {
-    /// The records the board made, in order.
+    /// The records the board made, in order (with their sequence numbers, boots and virtual
+    /// times).
     pub events: Vec<Event>,
     /// Command lines the board did not answer.
     pub unanswered: Vec<String>,
@@ -77,13 +85,13 @@ pub struct Advance {
 impl SimBoard {
     /// Open the board in `args.dir`, creating a new one (and saying so through `say`) if the
     /// directory does not exist or is empty.
-    pub fn open(args: &SimArgs, say: &mut dyn FnMut(String)) -> anyhow::Result<SimBoard> {
-        let dir = args.sim.clone().context("--sim DIR is needed")?;
+    pub fn open(args: &SimOptions, say: &mut dyn FnMut(String)) -> Result<SimBoard> {
+        let dir = args.dir.clone().ok_or(SimError::NoDir)?;
         let fresh = !dir.join(SIM_JSON).exists();
         // A new board's description is checked before anything is written: a refused option
         // leaves no directory behind that later commands would take for someone else's.
         let new_config = if fresh {
-            let c = SimConfig::from_args(args)?;
+            let c = SimConfig::from_options(args)?;
             let truth = c.truth()?;
             Some((c, truth))
         } else {
@@ -96,14 +104,9 @@ impl SimBoard {
                 Err(_) => !dir.exists(),
             };
             if !empty {
-                bail!(
-                    "--sim {}: the directory is not a simulated board (no {SIM_JSON}) and is not \
-                     empty; give a new directory (it is created)",
-                    dir.display()
-                );
+                return Err(SimError::NotABoard(dir));
             }
-            std::fs::create_dir_all(&dir)
-                .with_context(|| format!("cannot create {}", dir.display()))?;
+            std::fs::create_dir_all(&dir).map_err(|e| SimError::file("create", &dir, e))?;
         }
         let lock = lock(&dir)?;
         let config = if let Some((c, truth)) = new_config {
@@ -124,9 +127,10 @@ impl SimBoard {
             c.check_same(args)?;
             c
         };
-        let text = std::fs::read_to_string(dir.join(JOURNAL_TXT))
-            .with_context(|| format!("cannot read {}", dir.join(JOURNAL_TXT).display()))?;
-        let journal = steps::parse_journal(&text, &dir.join(JOURNAL_TXT))?;
+        let journal_path = dir.join(JOURNAL_TXT);
+        let text = std::fs::read_to_string(&journal_path)
+            .map_err(|e| SimError::file("read", &journal_path, e))?;
+        let journal = steps::parse_journal(&text, &journal_path)?;
         let state: State = read_json(&dir.join(STATE_JSON))?;
         Ok(SimBoard {
             dir,
@@ -147,9 +151,24 @@ impl SimBoard {
         &self.config
     }
 
+    /// Send one command line to the board (as the host's command channel does), then leave it
+    /// [`IDLE_MS`] at the bench; the records it made. A line the board does not answer in
+    /// [`capstan_sim::session::REPLY_TIMEOUT_MS`] of its time is an error.
+    pub fn send(&mut self, line: &str) -> Result<Vec<Event>> {
+        let steps = [Step::Send(line.to_string()), Step::Wait(IDLE_MS)];
+        let done = self.advance(&steps)?;
+        if let Some(l) = done.unanswered.first() {
+            return Err(SimError::NoAnswer {
+                line: l.clone(),
+                seconds: capstan_sim::session::REPLY_TIMEOUT_MS / 1000,
+            });
+        }
+        Ok(done.events)
+    }
+
     /// Replay the bench so far, then do `steps`; the records they produced. The steps join the
     /// journal (the board's state now includes them).
-    pub fn advance(&mut self, steps: &[Step]) -> anyhow::Result<Advance> {
+    pub fn advance(&mut self, steps: &[Step]) -> Result<Advance> {
         let mut events = Vec::new();
         let mut a = self.advance_streamed(steps, &mut |_, mut new| {
             events.append(&mut new);
@@ -167,14 +186,14 @@ impl SimBoard {
         &mut self,
         steps: &[Step],
         take: &mut dyn FnMut(usize, Vec<Event>) -> bool,
-    ) -> anyhow::Result<Advance> {
+    ) -> Result<Advance> {
         let mut all = self.config.sensor_steps();
         all.extend(self.journal.iter().cloned());
         let mine_from = all.len();
         all.extend(steps.iter().cloned());
         let (mut seen, last) = (self.state.events, self.state.last);
         let mut diverged = false;
-        let mut observe = |done: usize, events: &[capstan_sim::session::Event]| {
+        let mut observe = |done: usize, events: &[Event]| {
             if done <= mine_from {
                 return true;
             }
@@ -183,13 +202,7 @@ impl SimBoard {
                 diverged = true;
                 return false;
             }
-            let new = events[seen..]
-                .iter()
-                .map(|e| Event::Record {
-                    seq: e.seq,
-                    record: e.record,
-                })
-                .collect();
+            let new = events[seen..].to_vec();
             seen = events.len();
             take(done - mine_from, new)
         };
@@ -199,14 +212,9 @@ impl SimBoard {
             &all,
             &mut observe,
         )
-        .map_err(|e| anyhow::anyhow!("the simulated rig cannot be set up: {e:?}"))?;
+        .map_err(|e| SimError::Setup(format!("{e:?}")))?;
         if diverged || !replays(&out.events, self.state.events, self.state.last) {
-            bail!(
-                "the simulated board in {} no longer replays as it ran (its journal was edited, \
-                 or this capstan's simulator differs from the one that made it): start a new \
-                 board in a new directory",
-                self.dir.display()
-            );
+            return Err(SimError::Diverged(self.dir.clone()));
         }
         let earlier = self.state.unanswered.min(out.unanswered.len());
         let unanswered = out.unanswered[earlier..].to_vec();
@@ -224,7 +232,7 @@ impl SimBoard {
         })
     }
 
-    fn save(&self, out: &SessionOutput) -> anyhow::Result<()> {
+    fn save(&self, out: &SessionOutput) -> Result<()> {
         let text = steps::journal_text(&self.journal);
         write_atomic(&self.dir.join(JOURNAL_TXT), text.as_bytes())?;
         write_json(&self.dir.join(STATE_JSON), &self.state)?;
@@ -234,7 +242,7 @@ impl SimBoard {
 
 /// The records of a replay reproduce the first `n` the board made before: the `n`-th is the
 /// one it made last (sequence number and boot).
-fn replays(events: &[capstan_sim::session::Event], n: usize, last: Option<(u32, u32)>) -> bool {
+fn replays(events: &[Event], n: usize, last: Option<(u32, u32)>) -> bool {
     n <= events.len()
         && match (last, n.checked_sub(1)) {
             (Some(last), Some(i)) => (events[i].seq, events[i].boot) == last,
@@ -243,38 +251,36 @@ fn replays(events: &[capstan_sim::session::Event], n: usize, last: Option<(u32, 
         }
 }
 
-fn lock(dir: &Path) -> anyhow::Result<File> {
+fn lock(dir: &Path) -> Result<File> {
     let path = dir.join(LOCK);
     let f = File::options()
         .create(true)
         .truncate(false)
         .write(true)
         .open(&path)
-        .with_context(|| format!("cannot open {}", path.display()))?;
+        .map_err(|e| SimError::file("open", &path, e))?;
     if f.try_lock().is_err() {
-        bail!(
-            "the simulated board in {} is in use by another capstan command: one command at a \
-             time talks to a board",
-            dir.display()
-        );
+        return Err(SimError::InUse(dir.to_path_buf()));
     }
     Ok(f)
 }
 
-fn write_json<T: serde::Serialize>(path: &Path, v: &T) -> anyhow::Result<()> {
+fn write_json<T: serde::Serialize>(path: &Path, v: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(v).expect("serialises") + "\n";
     write_atomic(path, text.as_bytes())
 }
 
-fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> anyhow::Result<T> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{} is damaged", path.display()))
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|e| SimError::file("read", path, e))?;
+    serde_json::from_str(&text).map_err(|source| SimError::Damaged {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Write through a temporary file and a rename: a command stopped half-way leaves the old file.
-fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))
+    std::fs::write(&tmp, bytes).map_err(|e| SimError::file("write", &tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| SimError::file("write", path, e))
 }

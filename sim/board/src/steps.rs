@@ -1,7 +1,7 @@
 //! The bench's steps as text: the journal (`journal.txt`, one step a line) and the bench
 //! actions of `capstan rig --sim DIR bench ...`, which a person does by hand at a real rig.
 
-use anyhow::bail;
+use crate::{BenchError, SimError};
 use capstan_rig::hal::Channel;
 use capstan_sim::plant::InjectionKind;
 use capstan_sim::session::Step;
@@ -101,7 +101,7 @@ fn parse_line(line: &str) -> Option<Step> {
 }
 
 /// Read a journal; a line that is not a step is an error naming the file and line.
-pub fn parse_journal(text: &str, path: &Path) -> anyhow::Result<Vec<Step>> {
+pub fn parse_journal(text: &str, path: &Path) -> crate::Result<Vec<Step>> {
     let mut steps = Vec::new();
     for (i, line) in text.lines().enumerate() {
         if line.is_empty() {
@@ -109,29 +109,30 @@ pub fn parse_journal(text: &str, path: &Path) -> anyhow::Result<Vec<Step>> {
         }
         match parse_line(line) {
             Some(s) => steps.push(s),
-            None => bail!(
-                "{}:{}:1: not a bench step: `{line}` (the journal is written by capstan; start a \
-                 new board in a new directory)",
-                path.display(),
-                i + 1
-            ),
+            None => {
+                return Err(SimError::Journal {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    text: line.to_string(),
+                })
+            }
         }
     }
     Ok(steps)
 }
 
 /// A bench action (the words after `bench`): its steps and a sentence saying what was done.
-pub fn bench(words: &[String]) -> Result<(Vec<Step>, String), String> {
+pub fn bench(words: &[String]) -> Result<(Vec<Step>, String), BenchError> {
     let w: Vec<&str> = words.iter().map(String::as_str).collect();
     let newtons = |s: &str| {
         s.parse::<f64>()
             .ok()
             .filter(|v| v.is_finite() && (0.0..=200.0).contains(v))
-            .ok_or_else(|| format!("bench load: `{s}` is not a weight in newtons (0 to 200)"))
+            .ok_or_else(|| BenchError::Weight(s.to_string()))
     };
     match w.as_slice() {
         ["load", c, n] => {
-            let ch = channel(c).ok_or_else(|| format!("bench load: `{c}` is not t1 or t2"))?;
+            let ch = channel(c).ok_or_else(|| BenchError::Channel(c.to_string()))?;
             let n = newtons(n)?;
             Ok((
                 vec![Step::Hang(ch, n), Step::Wait(SETTLE_MS)],
@@ -157,7 +158,7 @@ pub fn bench(words: &[String]) -> Result<(Vec<Step>, String), String> {
                     .parse::<u32>()
                     .ok()
                     .filter(|&m| (1..=60_000).contains(&m))
-                    .ok_or_else(|| format!("bench press: `{s}` is not 1 to 60000 ms"))?,
+                    .ok_or_else(|| BenchError::Press(s.to_string()))?,
             };
             Ok((
                 vec![Step::Press(ms)],
@@ -169,7 +170,7 @@ pub fn bench(words: &[String]) -> Result<(Vec<Step>, String), String> {
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite() && *v > 0.0 && *v <= 3600.0)
-                .ok_or_else(|| format!("bench wait: `{s}` is not 0 to 3600 seconds"))?;
+                .ok_or_else(|| BenchError::Wait(s.to_string()))?;
             let ms = (secs * 1e3).round() as u32;
             Ok((vec![Step::Wait(ms)], format!("bench: {secs} s passed")))
         }
@@ -177,7 +178,7 @@ pub fn bench(words: &[String]) -> Result<(Vec<Step>, String), String> {
             vec![Step::Reset],
             "bench: the board was power cycled (it booted again)".into(),
         )),
-        _ => Err(format!("bench takes: {BENCH_USAGE}")),
+        _ => Err(BenchError::Usage),
     }
 }
 

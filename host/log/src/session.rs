@@ -1,12 +1,12 @@
 //! One logging session: bytes in, decoded records routed to the files as they arrive, the run
-//! under way and its set-up values tracked, progress reported on stderr, and the summary at
-//! the end. The setup-mode records, which belong to no run, are `setup`'s.
+//! under way and its set-up values tracked, progress handed to the caller as notes, and the
+//! summary at the end. The setup-mode records, which belong to no run, are `setup`'s.
 
 mod setup;
 
 use super::files::{decimal, Files};
 use super::summary::{RecordCounts, RunCalibration, RunSummary, Sourced, Summary, TruncatedTail};
-use super::{LogOptions, Outcome, Stop, PAIRS_INCOMPLETE_CSV};
+use super::{LogOptions, Note, Outcome, Result, Stop, PAIRS_INCOMPLETE_CSV};
 use capstan_data::Pair;
 use capstan_link::decoder::{BadFrame, Decoder, Located};
 use capstan_link::elf::{Firmware, RecordKind};
@@ -49,7 +49,12 @@ pub struct Logger<'f> {
     provenance: Option<serde_json::Value>,
     /// A session a signal stopped replaces an earlier one ([`Logger::keep_interrupted_apart`]).
     interrupted_replaces: bool,
+    /// Where the session's messages go as they arise.
+    notes: Notes<'f>,
 }
+
+/// Where a session's [`Note`]s go as they arise (`capstan log` prints each on stderr).
+pub type Notes<'f> = Box<dyn FnMut(Note) + 'f>;
 
 /// Does this run-end record close a complete run? Only if no fault ended it: a run the
 /// firmware stopped (the button's abort, a load at its tare, over-force, a broken cord, ...)
@@ -69,21 +74,33 @@ fn or_unknown(run: &str) -> &str {
 
 impl<'f> Logger<'f> {
     /// Start a session into `opts.out_dir`; `source` names the byte source in the summary.
-    pub fn create(fw: &'f Firmware, opts: LogOptions, source: &str) -> anyhow::Result<Self> {
-        Self::with_decoder(Decoder::new(fw), opts, source)
+    /// What the session has to say goes to `notes` as it arises, from the opening of the
+    /// directory on.
+    pub fn create(
+        fw: &'f Firmware,
+        opts: LogOptions,
+        source: &str,
+        notes: Notes<'f>,
+    ) -> Result<Self> {
+        Self::with_decoder(Decoder::new(fw), opts, source, notes)
     }
 
     /// A session fed records already decoded ([`Logger::take_records`]): the simulated board,
     /// which runs the firmware's code on the host. Nothing is encoded, so there is no
     /// `stream.defmt` to keep: give it [`LogOptions::save_stream`] false.
-    pub fn create_for_records(opts: LogOptions, source: &str) -> anyhow::Result<Self> {
-        Self::with_decoder(Decoder::records_only(), opts, source)
+    pub fn create_for_records(opts: LogOptions, source: &str, notes: Notes<'f>) -> Result<Self> {
+        Self::with_decoder(Decoder::records_only(), opts, source, notes)
     }
 
-    fn with_decoder(decoder: Decoder<'f>, opts: LogOptions, source: &str) -> anyhow::Result<Self> {
+    fn with_decoder(
+        decoder: Decoder<'f>,
+        opts: LogOptions,
+        source: &str,
+        mut notes: Notes<'f>,
+    ) -> Result<Self> {
         Ok(Logger {
             decoder,
-            files: Files::create(&opts)?,
+            files: Files::create(&opts, &mut notes)?,
             source: source.to_string(),
             opts,
             counts: RecordCounts::default(),
@@ -97,6 +114,7 @@ impl<'f> Logger<'f> {
             boot: 1,
             provenance: None,
             interrupted_replaces: true,
+            notes,
         })
     }
 
@@ -127,14 +145,14 @@ impl<'f> Logger<'f> {
     }
 
     /// Take a chunk of the stream: decode it, write what it completes, flush every file.
-    pub fn feed(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+    pub fn feed(&mut self, bytes: &[u8]) -> Result<()> {
         self.push(bytes)?;
         self.files.flush()
     }
 
     /// Take records already decoded, in order (a [`Logger::create_for_records`] session),
     /// written as [`Logger::push`] writes decoded ones; the files are flushed.
-    pub fn take_records(&mut self, records: Vec<Event>) -> anyhow::Result<()> {
+    pub fn take_records(&mut self, records: Vec<Event>) -> Result<()> {
         let mut events = std::mem::take(&mut self.events);
         self.decoder.push_records(records, &mut events);
         for e in events.drain(..) {
@@ -145,24 +163,22 @@ impl<'f> Logger<'f> {
     }
 
     /// Flush every file.
-    pub fn flush(&mut self) -> anyhow::Result<()> {
+    pub fn flush(&mut self) -> Result<()> {
         self.files.flush()
     }
 
     /// [`Logger::feed`] without the flush (a chunk fed in pieces, flushed once).
-    pub fn push(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+    pub fn push(&mut self, bytes: &[u8]) -> Result<()> {
         self.files.stream(bytes)?;
         let mut events = std::mem::take(&mut self.events);
         let mut bad = std::mem::take(&mut self.bad);
         self.decoder.push(bytes, &mut events, &mut bad);
         for b in bad.drain(..) {
             if self.opts.progress {
-                crate::errln!(
-                    "capstan log: bad frame {} at byte {}: {}",
-                    b.frame,
-                    b.byte_offset,
-                    b.reason
-                );
+                (self.notes)(Note::Session(format!(
+                    "bad frame {} at byte {}: {}",
+                    b.frame, b.byte_offset, b.reason
+                )));
             }
         }
         for e in events.drain(..) {
@@ -199,21 +215,18 @@ impl<'f> Logger<'f> {
         (c, run)
     }
 
-    fn handle(&mut self, located: Located) -> anyhow::Result<()> {
+    fn handle(&mut self, located: Located) -> Result<()> {
         match &located.seq {
-            Some(SeqEvent::Gap(g)) if self.opts.progress => crate::errln!(
-                "capstan log: LOST {} record(s) after seq {} (byte {})",
-                g.missing,
-                g.after_seq,
-                g.byte_offset
-            ),
+            Some(SeqEvent::Gap(g)) if self.opts.progress => (self.notes)(Note::Session(format!(
+                "LOST {} record(s) after seq {} (byte {})",
+                g.missing, g.after_seq, g.byte_offset
+            ))),
             Some(SeqEvent::Restart(r)) => {
                 if self.opts.progress {
-                    crate::errln!(
-                        "capstan log: the board restarted after seq {} (byte {})",
-                        r.after_seq,
-                        r.byte_offset
-                    );
+                    (self.notes)(Note::Session(format!(
+                        "the board restarted after seq {} (byte {})",
+                        r.after_seq, r.byte_offset
+                    )));
                 }
                 self.current = None;
                 self.boot += 1;
@@ -226,7 +239,7 @@ impl<'f> Logger<'f> {
         }
     }
 
-    fn record(&mut self, seq: u32, record: &Record) -> anyhow::Result<()> {
+    fn record(&mut self, seq: u32, record: &Record) -> Result<()> {
         let setup_fault = self.in_setup && self.current.is_none();
         self.in_setup = setup::keeps_setup(record, self.in_setup);
         match record {
@@ -291,32 +304,32 @@ impl<'f> Logger<'f> {
         .collect();
         self.runs.push(summary);
         if self.opts.progress {
-            crate::errln!(
-                "capstan log: run {} started (seq {seq}): {} levels, {} ms each",
+            (self.notes)(Note::Session(format!(
+                "run {} started (seq {seq}): {} levels, {} ms each",
                 s.run,
                 p.levels(),
                 p.dwell_ms
-            );
+            )));
             if !missing.is_empty() {
                 // Said at once: the operator can still stop and restart with the flags.
-                crate::errln!(
-                    "capstan log: WARNING: run {}'s run_start record does not give {} and no \
+                (self.notes)(Note::Session(format!(
+                    "WARNING: run {}'s run_start record does not give {} and no \
                      flag does: its pairs go to {PAIRS_INCOMPLETE_CSV}",
                     s.run,
                     missing.join(", ")
-                );
+                )));
             }
         }
     }
 
-    fn raw(&mut self, seq: u32, r: &RawSample) -> anyhow::Result<()> {
+    fn raw(&mut self, seq: u32, r: &RawSample) -> Result<()> {
         self.counts.raw += 1;
         let (c, run) = self.current_run(seq);
         self.runs[c.index].raw += 1;
         self.files.raw(&run, seq, r)
     }
 
-    fn pair(&mut self, seq: u32, p: &StepPair) -> anyhow::Result<()> {
+    fn pair(&mut self, seq: u32, p: &StepPair) -> Result<()> {
         self.counts.pair += 1;
         let progress = self.opts.progress;
         let (c, run) = self.current_run(seq);
@@ -349,39 +362,39 @@ impl<'f> Logger<'f> {
             self.pairs_incomplete += 1;
             let run_unknown = rs.run.is_none();
             if self.files.open_incomplete()? && progress && run_unknown {
-                crate::errln!(
-                    "capstan log: WARNING: pairs without their run's run_start record (lost, \
+                (self.notes)(Note::Session(format!(
+                    "WARNING: pairs without their run's run_start record (lost, \
                      or logging began mid-run): their run is unknown; they go to \
                      {PAIRS_INCOMPLETE_CSV}"
-                );
+                )));
             }
             self.files.incomplete_pair(&pair)?;
         }
         if progress {
-            crate::errln!(
-                "capstan log: run {} step {}: T1 {} N, T2 {} N ({} samples)",
+            (self.notes)(Note::Session(format!(
+                "run {} step {}: T1 {} N, T2 {} N ({} samples)",
                 or_unknown(&run),
                 p.step,
                 p.t1.mean_n,
                 p.t2.mean_n,
                 p.t1.count
-            );
+            )));
         }
         Ok(())
     }
 
-    fn fault(&mut self, seq: u32, flt: &Fault) -> anyhow::Result<()> {
+    fn fault(&mut self, seq: u32, flt: &Fault) -> Result<()> {
         self.counts.fault += 1;
         let (c, run) = self.current_run(seq);
         self.runs[c.index].faults += 1;
         self.files.fault(&run, seq, flt)?;
         if self.opts.progress {
-            crate::errln!(
-                "capstan log: FAULT {} at {} s (run {})",
+            (self.notes)(Note::Session(format!(
+                "FAULT {} at {} s (run {})",
                 flt.kind.name(),
                 flt.t_us as f64 / 1e6,
                 or_unknown(&run)
-            );
+            )));
         }
         Ok(())
     }
@@ -400,8 +413,8 @@ impl<'f> Logger<'f> {
         rs.ended_by_fault = e.fault.map(|k| k.name());
         rs.end_time_s = Some(e.t_us as f64 / 1e6);
         if self.opts.progress {
-            crate::errln!(
-                "capstan log: run {} ended at {} s: {} pairs{}",
+            (self.notes)(Note::Session(format!(
+                "run {} ended at {} s: {} pairs{}",
                 rs.run.map_or("?".to_string(), |r| r.to_string()),
                 e.t_us as f64 / 1e6,
                 e.pairs,
@@ -409,21 +422,21 @@ impl<'f> Logger<'f> {
                     ", fault {} (cut short: not a complete run)",
                     k.name()
                 ))
-            );
+            )));
         }
     }
 
     /// End the session: account for an unfinished frame, flush, write `summary.json`, and
     /// replace the directory's previous session with this one if it holds a complete run (or
     /// `allow_empty` was given); see [`Logger::finish_with`].
-    pub fn finish(self, stop: &Stop) -> anyhow::Result<Summary> {
+    pub fn finish(self, stop: &Stop) -> Result<Summary> {
         self.finish_with(stop).map(|(s, _)| s)
     }
 
     /// [`Logger::finish`], saying what became of the files: a session without a complete run
     /// replaces nothing (a good recorded session is irreplaceable); what it received is kept
     /// as `incomplete-<id>`, or dropped if nothing was.
-    pub fn finish_with(mut self, stop: &Stop) -> anyhow::Result<(Summary, Outcome)> {
+    pub fn finish_with(mut self, stop: &Stop) -> Result<(Summary, Outcome)> {
         let tail = self.decoder.finish();
         self.files.flush()?;
         let d = &self.decoder;

@@ -27,17 +27,22 @@
 //! they are counted in `summary.json` and in the sequence numbers like every record.
 //!
 //! [`Logger`] (`session`) keeps the session's state (the run under way, counts, the runs
-//! seen) and reports progress; `files` writes the rows; [`Summary`] (`summary`) is what
-//! `summary.json` and the closing lines on stderr say.
+//! seen) and hands its progress to the caller as [`Note`]s; `files` writes the rows;
+//! [`Summary`] (`summary`) is what `summary.json` and the closing lines say. Nothing here
+//! prints: `capstan log` says the notes and the summary on stderr.
 
+#![deny(missing_docs)]
+
+mod error;
 mod files;
 mod session;
 mod summary;
 
-pub use session::{completes, Logger};
+pub use error::{LogError, Result, Source};
+pub use session::{completes, Logger, Notes};
 pub use summary::{RecordCounts, RunCalibration, RunSummary, Sourced, Summary, TruncatedTail};
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// File names in the output directory.
 pub const RAW_CSV: &str = "raw.csv";
@@ -87,11 +92,26 @@ pub struct LogOptions {
     pub save_stream: bool,
     /// Set-up values for `pairs.csv`.
     pub setup: SetupFlags,
-    /// Report runs, pairs, faults and gaps on stderr as they arrive.
+    /// Report runs, pairs, faults and gaps as they arrive ([`Note::Session`]); without it only
+    /// the warnings that the board runs nothing are noted.
     pub progress: bool,
     /// Keep a session without a complete run as the directory's set (otherwise it replaces
     /// nothing: it is kept as `incomplete-<id>`, or dropped if nothing was received).
     pub allow_empty: bool,
+    /// Told where the files are kept when the session fails part-way (they are kept as
+    /// `incomplete-<id>` in `out_dir`; `capstan log` says where).
+    pub kept_after_failure: fn(&Path),
+}
+
+/// A message of a session for the person logging, handed to the caller as it arises.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Note {
+    /// What opening the output directory found and did (an interrupted commit finished, an
+    /// abandoned set kept).
+    Recovered(String),
+    /// What the session saw as it came: a run started or ended, a pair, a fault, lost records,
+    /// a bad frame; and the warnings (set-up values unknown, a sensitivity nobody measured).
+    Session(String),
 }
 
 /// What became of a session's files when it ended.

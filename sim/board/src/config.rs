@@ -1,7 +1,7 @@
 //! The simulated rig: what `--sim DIR` and its options describe (`sim.json`), the session it
 //! makes for host-sim, and its hidden truth (`sim-truth.json`).
 
-use anyhow::{bail, Context};
+use crate::{Result, SimError};
 use capstan_physics::{Effect, Model};
 use capstan_rig::hal::Channel;
 use capstan_sim::noise::NoiseProfile;
@@ -19,34 +19,23 @@ pub const MAX_SENSITIVITY_ERROR: f64 = 0.12;
 /// The spread of each sensor's zero around the nominal 400 counts, counts (sd).
 pub const ZERO_SPREAD_COUNTS: f64 = 30.0;
 
-/// The options that choose a simulated board (given with `capstan rig` and `capstan log`).
-#[derive(clap::Args, Debug, Clone, Default)]
-pub struct SimArgs {
-    /// A simulated board kept in DIR instead of a real one (created on first use: a new,
-    /// unconfigured board). Bench actions are commands: `capstan rig --sim DIR bench ...`.
-    #[arg(long, value_name = "DIR")]
-    pub sim: Option<PathBuf>,
-
-    /// Simulated board, when created: seed of its sensors' hidden errors and its noise.
-    #[arg(long, value_name = "N", requires = "sim")]
-    pub sim_seed: Option<u64>,
-
-    /// Simulated board, when created: friction coefficient of its cord [default: 0.115].
-    #[arg(long, value_name = "MU", requires = "sim")]
-    pub sim_mu: Option<f64>,
-
-    /// Simulated board, when created: the cord's true wrap, deg [default: 360].
-    #[arg(long, value_name = "DEG", requires = "sim")]
-    pub sim_wrap_deg: Option<f64>,
-
-    /// Simulated board, when created: a catalogue effect, NAME=VALUE (repeatable), as in
-    /// `capstan simulate --effect`.
-    #[arg(long = "sim-effect", value_name = "NAME=VALUE", requires = "sim")]
-    pub sim_effects: Vec<String>,
-
-    /// Simulated board, when created: noise profile, `quiet` or `thesis` (as `simulate`).
-    #[arg(long, value_name = "PROFILE", requires = "sim")]
-    pub sim_noise: Option<String>,
+/// What chooses a simulated board (`capstan rig` and `capstan log` take them as `--sim DIR`
+/// and the `--sim-*` options). Only `dir` matters for a board that exists; the others describe
+/// a new one (and, given for an existing board, must describe it).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SimOptions {
+    /// The board's directory (created on first use: a new, unconfigured board).
+    pub dir: Option<PathBuf>,
+    /// Seed of its sensors' hidden errors and its noise [default: 1].
+    pub seed: Option<u64>,
+    /// Friction coefficient of its cord [default: [`capstan_sim::plant::THESIS_MU`]].
+    pub mu: Option<f64>,
+    /// The cord's true wrap, deg [default: 360].
+    pub wrap_deg: Option<f64>,
+    /// Catalogue effects, NAME=VALUE.
+    pub effects: Vec<String>,
+    /// Noise profile, `quiet` or `thesis` [default: quiet].
+    pub noise: Option<String>,
 }
 
 /// The simulated rig (`sim.json`).
@@ -92,22 +81,19 @@ pub struct Truth {
 
 impl SimConfig {
     /// The rig the options describe, checked.
-    pub fn from_args(a: &SimArgs) -> anyhow::Result<SimConfig> {
+    pub fn from_options(a: &SimOptions) -> Result<SimConfig> {
         let c = SimConfig {
-            seed: a.sim_seed.unwrap_or(1),
-            mu: a.sim_mu.unwrap_or(capstan_sim::plant::THESIS_MU),
-            wrap_deg: a.sim_wrap_deg.unwrap_or(360.0),
-            effects: a.sim_effects.clone(),
-            noise: a.sim_noise.clone().unwrap_or_else(|| "quiet".into()),
+            seed: a.seed.unwrap_or(1),
+            mu: a.mu.unwrap_or(capstan_sim::plant::THESIS_MU),
+            wrap_deg: a.wrap_deg.unwrap_or(360.0),
+            effects: a.effects.clone(),
+            noise: a.noise.clone().unwrap_or_else(|| "quiet".into()),
         };
         if !(c.mu.is_finite() && (0.0..=2.0).contains(&c.mu)) {
-            bail!("--sim-mu {}: must be 0 to 2", c.mu);
+            return Err(SimError::Mu(c.mu));
         }
         if !(c.wrap_deg.is_finite() && c.wrap_deg > 0.0 && c.wrap_deg <= 1800.0) {
-            bail!(
-                "--sim-wrap-deg {}: must be above 0 and at most 1800",
-                c.wrap_deg
-            );
+            return Err(SimError::WrapDeg(c.wrap_deg));
         }
         c.model()?;
         c.profile()?;
@@ -115,34 +101,34 @@ impl SimConfig {
     }
 
     /// An existing board: options that would describe another rig are refused.
-    pub fn check_same(&self, a: &SimArgs) -> anyhow::Result<()> {
-        let given = a.sim_seed.is_some()
-            || a.sim_mu.is_some()
-            || a.sim_wrap_deg.is_some()
-            || !a.sim_effects.is_empty()
-            || a.sim_noise.is_some();
-        if given && SimConfig::from_args(a)? != *self {
-            bail!(
-                "--sim: this board was made with other --sim-* options ({}); they are fixed when \
-                 a board is made: give a new directory for another rig",
-                serde_json::to_string(self).expect("serialises")
-            );
+    pub fn check_same(&self, a: &SimOptions) -> Result<()> {
+        let given = a.seed.is_some()
+            || a.mu.is_some()
+            || a.wrap_deg.is_some()
+            || !a.effects.is_empty()
+            || a.noise.is_some();
+        if given && SimConfig::from_options(a)? != *self {
+            let json = serde_json::to_string(self).expect("serialises");
+            return Err(SimError::OtherRig(json));
         }
         Ok(())
     }
 
-    fn model(&self) -> anyhow::Result<Model> {
+    fn model(&self) -> Result<Model> {
         let mut model = Model::euler_eytelwein(self.mu);
         let mut seen = Vec::new();
         for e in &self.effects {
-            let eff: Effect = e.parse().map_err(|err| {
-                anyhow::anyhow!(
-                    "effect {e} of the simulated board (given with --sim-effect, or stored \
-                         with the board when it was made): {err}"
-                )
-            })?;
+            let eff: Effect = e
+                .parse()
+                .map_err(|err: capstan_physics::ParseEffectError| SimError::Effect {
+                    effect: e.clone(),
+                    reason: err.to_string(),
+                })?;
             if seen.contains(&eff.kind) {
-                bail!("--sim-effect {e}: {} is given twice", eff.kind);
+                return Err(SimError::EffectTwice {
+                    effect: e.clone(),
+                    kind: eff.kind.to_string(),
+                });
             }
             seen.push(eff.kind);
             eff.apply(&mut model);
@@ -150,20 +136,18 @@ impl SimConfig {
         Ok(model)
     }
 
-    fn profile(&self) -> anyhow::Result<NoiseProfile> {
-        self.noise
-            .parse()
-            .map_err(|e| anyhow::anyhow!("--sim-noise {e}"))
+    fn profile(&self) -> Result<NoiseProfile> {
+        self.noise.parse().map_err(SimError::Noise)
     }
 
-    fn plant(&self) -> anyhow::Result<PlantConfig> {
+    fn plant(&self) -> Result<PlantConfig> {
         let mut plant = PlantConfig::default();
         plant.sensor.zero_spread_counts = ZERO_SPREAD_COUNTS;
         plant.disturbances = self.profile()?.disturbances();
         Ok(plant)
     }
 
-    fn cord(&self) -> anyhow::Result<CordSetup> {
+    fn cord(&self) -> Result<CordSetup> {
         Ok(CordSetup {
             wrap_deg: self.wrap_deg,
             model: self.model()?,
@@ -194,7 +178,7 @@ impl SimConfig {
 
     /// The bench session for host-sim: the firmware's built-in settings (an unconfigured
     /// board), this rig.
-    pub fn session_spec(&self) -> anyhow::Result<SessionSpec> {
+    pub fn session_spec(&self) -> Result<SessionSpec> {
         Ok(SessionSpec {
             plant: self.plant()?,
             cord: self.cord()?,
@@ -204,11 +188,10 @@ impl SimConfig {
     }
 
     /// The truth: the plant this rig builds, read before anything happens.
-    pub fn truth(&self) -> anyhow::Result<Truth> {
+    pub fn truth(&self) -> Result<Truth> {
         let spec = self.session_spec()?;
         let plant = Plant::new_at(spec.plant, &[spec.cord], spec.seed, 0)
-            .map_err(|e| anyhow::anyhow!("the simulated rig cannot be built: {e:?}"))
-            .context("--sim")?;
+            .map_err(|e| SimError::Build(format!("{e:?}")))?;
         let zero = plant.sensor_zero_counts(0);
         let f = self.sensitivity_factors();
         let s = &spec.plant.sensor;

@@ -1,4 +1,4 @@
-//! What a session saw, as `summary.json` and the closing lines on stderr say it: counts by
+//! What a session saw, as `summary.json` and the closing lines say it: counts by
 //! record kind, each run (complete or not, where its set-up values came from, its
 //! calibration), sequence gaps,
 //! restarts, bad frames and an unfinished frame at the end.
@@ -32,7 +32,7 @@ pub struct RunSummary {
     /// It ran its protocol to the end: its run-end record arrived and no fault ended it. A
     /// run ended by a fault (the button's abort, a load at its tare, over-force, ...) was cut
     /// short whatever pairs it made: it is not complete (a session of such runs replaces
-    /// nothing, [`crate::logger::Outcome`]).
+    /// nothing, [`crate::Outcome`]).
     pub complete: bool,
     /// Raw samples received.
     pub raw: u64,
@@ -189,18 +189,16 @@ impl Summary {
             && self.backwards.is_empty()
     }
 
-    /// The human report (a few lines, for stderr).
-    pub fn human(&self, dir: &Path) -> String {
+    /// The human report, a few lines (`capstan log` says each on stderr): the totals and
+    /// where the files are (`dir`), runs a fault cut short, setup mode, what was lost or
+    /// damaged, pairs kept out of `pairs.csv`.
+    pub fn human(&self, dir: &Path) -> Vec<String> {
         let mut lines = vec![self.totals_line(dir)];
         lines.extend(self.faulted_lines());
         lines.extend(self.setup_line());
         lines.extend(self.damage_lines());
         lines.extend(self.incomplete_line(dir));
         lines
-            .iter()
-            .map(|l| format!("capstan log: {l}"))
-            .collect::<Vec<_>>()
-            .join("\n")
     }
 
     /// Runs, pairs, samples, faults and messages, from how many bytes, and where the files are.
