@@ -135,7 +135,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     for f in files.iter() {
         // Each figure file says where it came from, as metrics.json does.
-        let stamped = crate::provenance::stamp_figure(&f.name, f.bytes.clone(), &ctx.provenance);
+        let stamped = capstan_report::stamp::figure(&f.name, f.bytes.clone(), &ctx.provenance);
         set.write(&f.name, &stamped)?;
     }
     a.elapsed.figure_files_s = t_files.elapsed().as_secs_f64();

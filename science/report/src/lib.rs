@@ -9,6 +9,7 @@
 //! * [`next`]: the "Next experiment" section (from `capstan plan`);
 //! * [`tracking`]: the report of a force-control session (how the rig held its T2 target);
 //! * [`context`]: provenance and the thesis comparison; [`export`]: the figure files;
+//!   [`stamp`]: the provenance inside each figure file (SVG, PNG, PDF);
 //! * [`figures`]: the figures; [`plot`]: their charts (panels and bar charts, drawn by
 //!   `plotters`).
 
@@ -25,6 +26,7 @@ pub mod html;
 pub mod next;
 pub mod parameters;
 pub mod plot;
+pub mod stamp;
 pub mod table_files;
 pub mod tables;
 pub mod tracking;

@@ -184,7 +184,7 @@ pub fn run(args: &super::Args, pairs: &Path, ctx: &capstan_report::Context) -> a
     let (html, figs) = tracking_html(&runs, &pairs.display().to_string(), window, ctx)?;
     let figure_files = capstan_report::figure_files(&figs, &ctx.figures)?;
     for f in &figure_files {
-        let stamped = crate::provenance::stamp_figure(&f.name, f.bytes.clone(), &ctx.provenance);
+        let stamped = capstan_report::stamp::figure(&f.name, f.bytes.clone(), &ctx.provenance);
         set.write(&f.name, &stamped)?;
     }
     let mut metrics = tracking_json(&runs, window, ctx);
