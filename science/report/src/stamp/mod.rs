@@ -92,9 +92,11 @@ mod tests {
     #[test]
     fn figures_carry_the_provenance() {
         let p = Provenance {
+            program: "capstan 0.1.0".into(),
+            commit: "0123456789ab".into(),
             input: Some("a<b>.csv".into()),
             input_sha256: Some("00".into()),
-            ..without_input()
+            command_line: "capstan analyze a<b>.csv".into(),
         };
         let svg = figure("f.svg", b"<svg a=\"1\"><g/></svg>".to_vec(), &p);
         let svg = String::from_utf8(svg).unwrap();
