@@ -81,8 +81,19 @@ fn crc32(bytes: &[u8]) -> u32 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// A provenance as the CLI makes it, for the tests of this module and of [`pdf`].
+    pub(crate) fn provenance() -> Provenance {
+        Provenance {
+            program: "capstan 0.1.0".into(),
+            commit: "0123456789ab".into(),
+            input: None,
+            input_sha256: None,
+            command_line: "capstan analyze".into(),
+        }
+    }
 
     #[test]
     fn crc32_of_known_text() {
@@ -92,11 +103,9 @@ mod tests {
     #[test]
     fn figures_carry_the_provenance() {
         let p = Provenance {
-            program: "capstan 0.1.0".into(),
-            commit: "0123456789ab".into(),
             input: Some("a<b>.csv".into()),
             input_sha256: Some("00".into()),
-            command_line: "capstan analyze a<b>.csv".into(),
+            ..provenance()
         };
         let svg = figure("f.svg", b"<svg a=\"1\"><g/></svg>".to_vec(), &p);
         let svg = String::from_utf8(svg).unwrap();

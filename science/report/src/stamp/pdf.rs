@@ -138,7 +138,7 @@ mod tests {
         let p = Provenance {
             input: Some("données (1).csv".into()),
             input_sha256: Some("ab12".into()),
-            ..super::super::without_input()
+            ..super::super::tests::provenance()
         };
         let out = with_info(&pdf, "figure-1-gain", &p).unwrap();
         assert!(out.starts_with(&pdf), "the original bytes are kept");
@@ -167,7 +167,7 @@ mod tests {
 
     #[test]
     fn a_file_without_a_trailer_is_not_touched() {
-        let p = super::super::without_input();
+        let p = super::super::tests::provenance();
         assert!(with_info(b"%PDF-1.7\nnothing", "x", &p).is_none());
     }
 }
