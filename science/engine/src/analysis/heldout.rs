@@ -59,8 +59,7 @@ pub fn subset(
     let pairs: Vec<_> = rows.iter().map(|&i| ds.pairs[i].clone()).collect();
     let lines: Vec<u64> = rows.iter().map(|&i| ds.lines[i]).collect();
     let structure =
-        capstan_data::Structure::infer(&pairs, &ds.header, &ds.label_columns, &lines, &ds.source)
-?;
+        capstan_data::Structure::infer(&pairs, &ds.header, &ds.label_columns, &lines, &ds.source)?;
     Ok(Dataset {
         source: ds.source.clone(),
         header: ds.header.clone(),
