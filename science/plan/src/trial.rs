@@ -99,12 +99,10 @@ pub fn rates_until(
         if stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
             return Err(crate::PlanError::Stopped);
         }
-        outcomes.extend(score::run(
-            chunk,
-            threads,
-            capstan_engine::diagnose::diagnose,
-        )
-        .map_err(crate::PlanError::Validation)?);
+        outcomes.extend(
+            score::run(chunk, threads, capstan_engine::diagnose::diagnose)
+                .map_err(crate::PlanError::Validation)?,
+        );
     }
     let mut chunks = outcomes.chunks(reps.max(1));
     debug_assert_eq!(chunks.len(), simulated.len());
