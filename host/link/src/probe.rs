@@ -130,10 +130,12 @@ fn open_session(opts: &ProbeOptions) -> Result<(Session, String), ProbeError> {
     let probes = lister.list_all();
     let probe = match &opts.probe {
         Some(sel) => {
-            let selector: DebugProbeSelector = sel.parse().map_err(|e| ProbeError::Selector {
-                given: sel.clone(),
-                why: e.to_string(),
-            })?;
+            let selector = sel
+                .parse::<DebugProbeSelector>()
+                .map_err(|e| ProbeError::Selector {
+                    given: sel.clone(),
+                    why: e.to_string(),
+                })?;
             lister
                 .open(selector)
                 .map_err(probe_rs(format!("cannot open the debug probe {sel}")))?
@@ -279,8 +281,7 @@ impl Connection {
     /// Read what the defmt up-channel holds (0 bytes: nothing yet). An error is a probe or
     /// target that stopped answering.
     pub fn read_up(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
-        let lost = |e| ProbeError::Lost(Box::new(e));
-        let mut core = self.session.core(0).map_err(lost)?;
+        let mut core = (self.session.core(0)).map_err(|e| ProbeError::Lost(Box::new(e)))?;
         let channel = self
             .rtt
             .up_channel(self.channel)

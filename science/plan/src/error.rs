@@ -28,7 +28,7 @@ pub enum PlanError {
     },
     /// The data's design cannot be simulated for another reason.
     #[error("cannot plan on these data: their design cannot be simulated ({0})")]
-    Design(CampaignError),
+    Design(Box<CampaignError>),
     /// The data could not be analysed (the cords question).
     #[error("{0}")]
     Analysis(AnalysisError),

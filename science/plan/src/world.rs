@@ -74,6 +74,6 @@ pub fn check(design: &Design, world: &World, d: &Diagnosis) -> Result<(), crate:
                 origin,
             })
         }
-        Err(e) => Err(crate::PlanError::Design(e)),
+        Err(e) => Err(crate::PlanError::Design(Box::new(e))),
     }
 }

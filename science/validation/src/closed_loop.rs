@@ -37,7 +37,7 @@ pub fn run(a: &Analysis, threads: usize) -> Result<ClosedLoop, crate::Validation
         };
         run_campaign(&cfg).map_err(|cause| crate::ValidationError::ClosedLoop {
             cord: grp.label.clone(),
-            cause,
+            cause: Box::new(cause),
         })
     });
     let mut curves = Vec::new();

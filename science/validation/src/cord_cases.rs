@@ -203,7 +203,7 @@ impl CordSet {
             for &d in &self.diameters_mm {
                 for &w in &self.wraps_deg {
                     let r = run_campaign(&self.cord_config(d, w, k))
-                        .map_err(crate::CaseError::Campaign)?;
+                        .map_err(|e| crate::CaseError::Campaign(Box::new(e)))?;
                     // The thesis's columns: no time_s (its window times are not in its file).
                     pairs.extend(crate::pairs::to_pairs(&r.rows).into_iter().map(|mut p| {
                         p.time_s = None;
@@ -240,7 +240,7 @@ impl CordSet {
             csv.push('\n');
         }
         read_pairs(csv.as_bytes(), &format!("cord-set-{}.csv", self.seed))
-            .map_err(crate::CaseError::Read)
+            .map_err(|e| crate::CaseError::Read(Box::new(e)))
     }
 }
 

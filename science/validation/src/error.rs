@@ -11,13 +11,13 @@ use capstan_sim::campaign::CampaignError;
 pub enum CaseError {
     /// The simulator refused the campaign.
     #[error("{0}")]
-    Campaign(CampaignError),
+    Campaign(Box<CampaignError>),
     /// The pairs could not be written as CSV.
     #[error("{0}")]
     Write(std::io::Error),
     /// The CSV written could not be read back.
     #[error("{0}")]
-    Read(capstan_data::DataError),
+    Read(Box<capstan_data::DataError>),
 }
 
 /// Why a validation run stopped.
@@ -48,6 +48,6 @@ pub enum ValidationError {
         /// The cord's label.
         cord: String,
         /// Why.
-        cause: CampaignError,
+        cause: Box<CampaignError>,
     },
 }
