@@ -888,11 +888,13 @@ enum Decline {
         how: &'static str,
         /// Its p-value with the term, as written ("= 0.01", or "not computed").
         p: String,
-        /// The systematic part before and after the term, × the noise.
+        /// The systematic part before the term, × the noise.
         before: f64,
+        /// The systematic part with it, × the noise.
         after: f64,
-        /// The share of its variance removed, and the share a term must remove.
+        /// The share of its variance the term removes (1 − (after/before)²).
         share: f64,
+        /// The share a term must remove.
         min_share: f64,
     },
     /// The catalogue re-selected around it absorbs it.
