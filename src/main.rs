@@ -1,3 +1,6 @@
+//! The `capstan` command: parses the command line and runs it (see [`capstan::cli`]); exits
+//! non-zero with the error and its context on failure.
+
 use clap::Parser;
 
 fn main() -> std::process::ExitCode {

@@ -276,7 +276,7 @@ fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<se
         let mut go_on = |_, _| !stop.load(std::sync::atomic::Ordering::SeqCst);
         let p = match capstan_plan::plan(ds, &Default::default(), &mut go_on) {
             Ok(p) => p,
-            Err(e) if e == capstan_plan::STOPPED => {
+            Err(capstan_plan::PlanError::Stopped) => {
                 return Err(super::plan::stopped_plan(Some(args.out.as_path())))
             }
             Err(e) => anyhow::bail!("the planner: {e}"),

@@ -142,7 +142,7 @@ fn planned(data: &capstan_data::Dataset, args: &Args) -> anyhow::Result<Plan> {
     }
     match p {
         Ok(p) => Ok(p),
-        Err(e) if e == capstan_plan::STOPPED => Err(stopped_plan(args.out.as_deref())),
+        Err(capstan_plan::PlanError::Stopped) => Err(stopped_plan(args.out.as_deref())),
         Err(e) => anyhow::bail!("{e}"),
     }
 }

@@ -2,6 +2,7 @@
 //! frame and every sequence jump accounted for. Never panics on its input.
 
 use super::elf::Firmware;
+use super::error::FrameError;
 use super::frame::{decode_frame, Event};
 use super::seq::{SeqEvent, SeqTracker};
 use super::stream::{Deframer, RawFrame, MAX_FRAME_BYTES};
@@ -132,13 +133,13 @@ impl<'f> Decoder<'f> {
         for raw in std::mem::take(&mut self.frames) {
             self.frames_seen += 1;
             let result = match &raw.bytes {
-                None => Err(format!(
-                    "{} bytes without a frame separator (longest accepted: {MAX_FRAME_BYTES})",
-                    raw.len
-                )),
+                None => Err(FrameError::NoSeparator {
+                    bytes: raw.len,
+                    max: MAX_FRAME_BYTES,
+                }),
                 Some(b) => match self.fw {
                     Some(fw) => decode_frame(fw, b),
-                    None => Err("no firmware table to decode it with".to_string()),
+                    None => Err(FrameError::NoFirmware),
                 },
             };
             match result {
@@ -166,7 +167,7 @@ impl<'f> Decoder<'f> {
                         frame: raw.number,
                         byte_offset: raw.offset,
                         bytes: raw.len,
-                        reason,
+                        reason: reason.to_string(),
                     };
                     if self.bad_examples.len() < KEEP_BAD_FRAMES {
                         self.bad_examples.push(b.clone());

@@ -12,6 +12,7 @@ mod tests;
 
 use super::elf::{Firmware, RecordLayout};
 use super::stream::rzcobs_decode;
+use crate::error::FrameError;
 use build::{build, parse, Fields};
 use capstan_rig::record::{CrcFields, Record};
 use defmt_parser::Fragment;
@@ -48,12 +49,13 @@ impl Event {
 
 /// Decode one encoded frame. The error says what is wrong with it (not where: the caller
 /// knows the frame number and offset).
-pub fn decode_frame(fw: &Firmware, encoded: &[u8]) -> Result<Event, String> {
-    let bytes = rzcobs_decode(encoded).map_err(|e| format!("not rzCOBS: {e}"))?;
+pub fn decode_frame(fw: &Firmware, encoded: &[u8]) -> Result<Event, FrameError> {
+    let bytes = rzcobs_decode(encoded).map_err(FrameError::NotRzcobs)?;
     let index = fw.check_frame(&bytes)?;
-    type Decoded = Result<Result<Event, Vec<String>>, String>;
+    type Decoded = Result<Result<Event, Vec<String>>, FrameError>;
     let decoded = std::panic::catch_unwind(AssertUnwindSafe(|| -> Decoded {
-        let (frame, _) = fw.table().decode(&bytes).map_err(|e| e.to_string())?;
+        let (frame, _) =
+            (fw.table().decode(&bytes)).map_err(|e| FrameError::Decoder(e.to_string()))?;
         let level = frame.level().map(|l| l.as_str().to_uppercase());
         match fw.record_layout(index) {
             Some(_) => {
@@ -73,8 +75,8 @@ pub fn decode_frame(fw: &Firmware, encoded: &[u8]) -> Result<Event, String> {
         }
     }));
     match decoded {
-        Err(_) => Err("defmt-decoder panicked on this frame".into()),
-        Ok(Err(e)) => Err(format!("defmt-decoder: {e}")),
+        Err(_) => Err(FrameError::DecoderPanicked),
+        Ok(Err(e)) => Err(e),
         Ok(Ok(Ok(message))) => Ok(message),
         Ok(Ok(Err(values))) => {
             let layout = fw.record_layout(index).expect("checked above");
@@ -87,20 +89,24 @@ pub fn decode_frame(fw: &Firmware, encoded: &[u8]) -> Result<Event, String> {
 pub(crate) fn record_from_values(
     layout: &RecordLayout,
     values: &[String],
-) -> Result<Event, String> {
+) -> Result<Event, FrameError> {
     if values.len() != layout.fields.len() {
-        return Err(format!(
-            "`{}` record with {} values for {} fields",
-            layout.kind.word(),
-            values.len(),
-            layout.fields.len()
-        ));
+        return Err(FrameError::ValueCount {
+            word: layout.kind.word(),
+            values: values.len(),
+            fields: layout.fields.len(),
+        });
     }
     let f = Fields { layout, values };
     let seq = f.u("seq")?;
     let word = layout.kind.word();
-    check_crc(layout, values).map_err(|e| format!("`{word}` record seq {seq}: {e}"))?;
-    let record = build(layout.kind, &f).map_err(|e| format!("`{word}` record seq {seq}: {e}"))?;
+    let in_record = |e| FrameError::Record {
+        word,
+        seq,
+        why: Box::new(e),
+    };
+    check_crc(layout, values).map_err(in_record)?;
+    let record = build(layout.kind, &f).map_err(in_record)?;
     Ok(Event::Record { seq, record })
 }
 
@@ -110,7 +116,7 @@ pub(crate) fn record_from_values(
 /// a firmware without the field are not checked (the setup-mode records always have it: their
 /// layout requires it). The fields are fed in format order, whichever they are, so the check
 /// covers every field the firmware sent, the optional ones included.
-fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), String> {
+fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), FrameError> {
     let Some(at) = layout.position("crc") else {
         return Ok(());
     };
@@ -123,14 +129,14 @@ fn check_crc(layout: &RecordLayout, values: &[String]) -> Result<(), String> {
     {
         c.push(parse(name, *prim, v)?);
     }
-    let bad = |name: &str, v: &str| format!("field `{name}`: `{v}` is not its type");
-    let sent: u32 = values[at].parse().map_err(|_| bad("crc", &values[at]))?;
-    let got = c.finish();
-    if sent != got {
-        return Err(format!(
-            "checksum mismatch (sent {sent:#010x}, computed {got:#010x}): the record was \
-             corrupted on its way"
-        ));
+    let sent: u32 = values[at].parse().map_err(|_| FrameError::NotOfType {
+        field: "crc".to_string(),
+        value: values[at].clone(),
+        what: "its type",
+    })?;
+    let computed = c.finish();
+    if sent != computed {
+        return Err(FrameError::Checksum { sent, computed });
     }
     Ok(())
 }

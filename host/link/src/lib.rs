@@ -16,6 +16,7 @@
 
 pub mod decoder;
 pub mod elf;
+pub mod error;
 pub mod frame;
 #[cfg(feature = "probe")]
 pub mod probe;
@@ -26,4 +27,5 @@ pub mod words;
 
 pub use decoder::{decode_all, BadFrame, Decoder, Located};
 pub use elf::Firmware;
+pub use error::{ElfError, FormatError, FrameError, LayoutError};
 pub use frame::Event;

@@ -9,7 +9,6 @@
 //! rig's sample loop must not stall on a slow host; a record that is dropped instead shows up
 //! as a sequence gap in the summary.
 
-use anyhow::{anyhow, bail, Context};
 use probe_rs::flashing::{DownloadOptions, ElfLoader, ElfOptions};
 use probe_rs::probe::list::Lister;
 use probe_rs::probe::DebugProbeSelector;
@@ -37,50 +36,138 @@ pub struct ProbeOptions {
     pub rtt_timeout: Duration,
 }
 
-fn open_session(opts: &ProbeOptions) -> anyhow::Result<(Session, String)> {
+/// Why the board could not be reached or read through the probe. `what` says what was being
+/// done ("cannot open the debug probe 2e8a:000c", "flashing fw.elf failed" ...); the probe-rs
+/// error is its source.
+#[derive(Debug, thiserror::Error)]
+pub enum ProbeError {
+    /// A probe-rs operation failed.
+    #[error("{what}")]
+    ProbeRs {
+        /// What was being done, in words.
+        what: String,
+        /// probe-rs's error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// `--probe` is not `VID:PID[:SERIAL]`.
+    #[error("--probe {given}: expected VID:PID[:SERIAL] ({why})")]
+    Selector {
+        /// The selector given.
+        given: String,
+        /// probe-rs's reason.
+        why: String,
+    },
+    /// No probe is plugged in (or none can be seen).
+    #[error(
+        "no debug probe found. Plug in the Pico's debug probe (or a second Pico running \
+         debugprobe) and check USB permissions (Linux: the probe-rs udev rules, see \
+         docs/README-log.md)"
+    )]
+    NoProbe,
+    /// Several probes and no `--probe`.
+    #[error(
+        "{} debug probes found; choose one with --probe VID:PID[:SERIAL]:\n{}",
+        probes.len(),
+        probes.iter().map(|p| format!("  {p}")).collect::<Vec<_>>().join("\n")
+    )]
+    SeveralProbes {
+        /// The probes found, as probe-rs names them.
+        probes: Vec<String>,
+    },
+    /// The ELF could not be read.
+    #[error("cannot read the firmware ELF {}", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The ELF has no RTT control block.
+    #[error(
+        "{} has no `_SEGGER_RTT` symbol: the firmware does not log over RTT (build it from \
+         this repository)",
+        path.display()
+    )]
+    NoRtt {
+        /// The file.
+        path: std::path::PathBuf,
+    },
+    /// probe-rs could not search the ELF for the RTT control block (its message).
+    #[error("{}: {why}", path.display())]
+    RttSymbol {
+        /// The file.
+        path: std::path::PathBuf,
+        /// probe-rs's message.
+        why: String,
+    },
+    /// The firmware has no such RTT up-channel.
+    #[error("the firmware has no RTT up-channel {0} (defmt uses 0)")]
+    NoUpChannel(usize),
+    /// The probe or the target stopped answering while the up-channel was read (probe-rs's
+    /// message).
+    #[error(transparent)]
+    Lost(Box<dyn std::error::Error + Send + Sync>),
+    /// The RTT up-channel is gone (the target reset?).
+    #[error("the RTT up-channel went away")]
+    UpChannelGone,
+    /// The firmware has no such RTT down channel.
+    #[error("the firmware has no RTT down channel {0}")]
+    NoDownChannel(usize),
+}
+
+/// A probe-rs failure while doing `what`.
+fn probe_rs<E: std::error::Error + Send + Sync + 'static>(
+    what: String,
+) -> impl FnOnce(E) -> ProbeError {
+    move |e| ProbeError::ProbeRs {
+        what,
+        source: Box::new(e),
+    }
+}
+
+fn open_session(opts: &ProbeOptions) -> Result<(Session, String), ProbeError> {
     let lister = Lister::new();
     let probes = lister.list_all();
     let probe = match &opts.probe {
         Some(sel) => {
-            let selector: DebugProbeSelector = sel
-                .parse()
-                .map_err(|e| anyhow!("--probe {sel}: expected VID:PID[:SERIAL] ({e})"))?;
+            let selector = sel
+                .parse::<DebugProbeSelector>()
+                .map_err(|e| ProbeError::Selector {
+                    given: sel.clone(),
+                    why: e.to_string(),
+                })?;
             lister
                 .open(selector)
-                .with_context(|| format!("cannot open the debug probe {sel}"))?
+                .map_err(probe_rs(format!("cannot open the debug probe {sel}")))?
         }
         None => match probes.as_slice() {
-            [] => bail!(
-                "no debug probe found. Plug in the Pico's debug probe (or a second Pico running \
-                 debugprobe) and check USB permissions (Linux: the probe-rs udev rules, see \
-                 docs/README-log.md)"
-            ),
+            [] => return Err(ProbeError::NoProbe),
             [one] => one
                 .open()
-                .with_context(|| format!("cannot open the debug probe {one}"))?,
+                .map_err(probe_rs(format!("cannot open the debug probe {one}")))?,
             many => {
-                let list: Vec<String> = many.iter().map(|p| format!("  {p}")).collect();
-                bail!(
-                    "{} debug probes found; choose one with --probe VID:PID[:SERIAL]:\n{}",
-                    many.len(),
-                    list.join("\n")
-                )
+                return Err(ProbeError::SeveralProbes {
+                    probes: many.iter().map(|p| p.to_string()).collect(),
+                })
             }
         },
     };
     let name = probe.get_name();
     let mut probe = probe;
     if let Some(khz) = opts.speed_khz {
-        probe
-            .set_speed(khz)
-            .with_context(|| format!("cannot set the SWD clock of {name} to {khz} kHz"))?;
+        probe.set_speed(khz).map_err(probe_rs(format!(
+            "cannot set the SWD clock of {name} to {khz} kHz"
+        )))?;
     }
     let session = if opts.connect_under_reset {
         probe.attach_under_reset(opts.chip.as_str(), Permissions::default())
     } else {
         probe.attach(opts.chip.as_str(), Permissions::default())
     }
-    .with_context(|| format!("cannot attach to the {} through {name}", opts.chip))?;
+    .map_err(probe_rs(format!(
+        "cannot attach to the {} through {name}",
+        opts.chip
+    )))?;
     Ok((session, name))
 }
 
@@ -100,7 +187,7 @@ pub fn connect(
     elf_path: &Path,
     opts: &ProbeOptions,
     say: &mut dyn FnMut(String),
-) -> anyhow::Result<Connection> {
+) -> Result<Connection, ProbeError> {
     let mut conn = attach(elf_path, opts, say)?;
     let size = conn.up_buffer_size();
     say(format!(
@@ -117,17 +204,24 @@ pub fn attach(
     elf_path: &Path,
     opts: &ProbeOptions,
     say: &mut dyn FnMut(String),
-) -> anyhow::Result<Connection> {
-    let elf = std::fs::read(elf_path)
-        .with_context(|| format!("cannot read the firmware ELF {}", elf_path.display()))?;
+) -> Result<Connection, ProbeError> {
+    let elf = std::fs::read(elf_path).map_err(|source| ProbeError::Read {
+        path: elf_path.to_path_buf(),
+        source,
+    })?;
     let region = match find_rtt_control_block_in_raw_file(&elf) {
         Ok(Some(addr)) => ScanRegion::Exact(addr),
-        Ok(None) => bail!(
-            "{} has no `_SEGGER_RTT` symbol: the firmware does not log over RTT (build it from \
-             this repository)",
-            elf_path.display()
-        ),
-        Err(e) => bail!("{}: {e}", elf_path.display()),
+        Ok(None) => {
+            return Err(ProbeError::NoRtt {
+                path: elf_path.to_path_buf(),
+            })
+        }
+        Err(e) => {
+            return Err(ProbeError::RttSymbol {
+                path: elf_path.to_path_buf(),
+                why: e.to_string(),
+            })
+        }
     };
     let (mut session, probe_name) = open_session(opts)?;
     if opts.flash {
@@ -141,28 +235,29 @@ pub fn attach(
         dl.verify = true;
         let loader = ElfLoader(ElfOptions::default());
         probe_rs::flashing::download_file_with_options(&mut session, elf_path, loader, dl)
-            .with_context(|| format!("flashing {} failed", elf_path.display()))?;
+            .map_err(probe_rs(format!("flashing {} failed", elf_path.display())))?;
         say(format!(
             "capstan log: flashed in {:.1} s",
             t.elapsed().as_secs_f64()
         ));
     }
     let rtt = {
-        let mut core = session
-            .core(0)
-            .with_context(|| format!("cannot reach core 0 of the {}", opts.chip))?;
+        let mut core = session.core(0).map_err(probe_rs(format!(
+            "cannot reach core 0 of the {}",
+            opts.chip
+        )))?;
         if opts.flash {
-            core.reset()
-                .with_context(|| format!("cannot reset the {} after flashing", opts.chip))?;
+            core.reset().map_err(probe_rs(format!(
+                "cannot reset the {} after flashing",
+                opts.chip
+            )))?;
         }
-        try_attach_to_rtt(&mut core, opts.rtt_timeout, &region).with_context(|| {
-            format!(
-                "no RTT control block on the {} after {:.0} s: is the firmware running, and is \
-                 it the ELF given?",
-                opts.chip,
-                opts.rtt_timeout.as_secs_f64()
-            )
-        })?
+        try_attach_to_rtt(&mut core, opts.rtt_timeout, &region).map_err(probe_rs(format!(
+            "no RTT control block on the {} after {:.0} s: is the firmware running, and is it \
+             the ELF given?",
+            opts.chip,
+            opts.rtt_timeout.as_secs_f64()
+        )))?
     };
     let mut conn = Connection {
         session,
@@ -171,10 +266,7 @@ pub fn attach(
         probe_name,
     };
     if conn.rtt.up_channel(conn.channel).is_none() {
-        bail!(
-            "the firmware has no RTT up-channel {} (defmt uses 0)",
-            opts.rtt_channel
-        );
+        return Err(ProbeError::NoUpChannel(opts.rtt_channel));
     }
     Ok(conn)
 }
@@ -188,13 +280,15 @@ impl Connection {
 
     /// Read what the defmt up-channel holds (0 bytes: nothing yet). An error is a probe or
     /// target that stopped answering.
-    pub fn read_up(&mut self, buf: &mut [u8]) -> Result<usize, String> {
-        let mut core = self.session.core(0).map_err(|e| e.to_string())?;
+    pub fn read_up(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
+        let mut core = (self.session.core(0)).map_err(|e| ProbeError::Lost(Box::new(e)))?;
         let channel = self
             .rtt
             .up_channel(self.channel)
-            .ok_or("the RTT up-channel went away")?;
-        channel.read(&mut core, buf).map_err(|e| e.to_string())
+            .ok_or(ProbeError::UpChannelGone)?;
+        channel
+            .read(&mut core, buf)
+            .map_err(|e| ProbeError::Lost(Box::new(e)))
     }
 
     /// The size of down-channel `n`'s buffer, if the firmware has that channel.
@@ -203,14 +297,14 @@ impl Connection {
     }
 
     /// Write `bytes` into down-channel `n`, as much as its buffer takes now; how much it took.
-    pub fn write_down(&mut self, n: usize, bytes: &[u8]) -> anyhow::Result<usize> {
-        let mut core = self.session.core(0).context("cannot reach core 0")?;
+    pub fn write_down(&mut self, n: usize, bytes: &[u8]) -> Result<usize, ProbeError> {
+        let mut core = (self.session.core(0)).map_err(probe_rs("cannot reach core 0".into()))?;
         let channel = self
             .rtt
             .down_channel(n)
-            .ok_or_else(|| anyhow!("the firmware has no RTT down channel {n}"))?;
+            .ok_or(ProbeError::NoDownChannel(n))?;
         channel
             .write(&mut core, bytes)
-            .with_context(|| format!("cannot write RTT down channel {n}"))
+            .map_err(probe_rs(format!("cannot write RTT down channel {n}")))
     }
 }

@@ -1,7 +1,7 @@
 //! The commit journal: publish a staged set, and roll an interrupted commit forward.
 
 use super::{manifest_name, COMMIT, JOURNAL_MANIFEST, MANIFEST_PREFIX};
-use anyhow::{bail, Context};
+use crate::OutDirError;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use std::io;
@@ -32,11 +32,11 @@ struct Manifest {
 }
 
 /// A name we write: relative, plain components, not one of our own control files.
-pub(crate) fn check_name(rel: &str) -> anyhow::Result<()> {
+pub(crate) fn check_name(rel: &str) -> Result<(), OutDirError> {
     let p = Path::new(rel);
     let plain = p.components().all(|c| matches!(c, Component::Normal(_)));
     if rel.is_empty() || !plain || rel.starts_with(".capstan") {
-        bail!("`{rel}` is not a file name an output set may hold");
+        return Err(OutDirError::BadName(rel.to_string()));
     }
     Ok(())
 }
@@ -51,7 +51,7 @@ pub(crate) fn publish(
     files: &[String],
     unsynced: &[String],
     crash: &mut dyn Crash,
-) -> anyhow::Result<()> {
+) -> Result<(), OutDirError> {
     refuse_others(dir, kind, files)?;
     refuse_foreign(dir, kind, files)?;
     for f in unsynced {
@@ -67,10 +67,7 @@ pub(crate) fn publish(
         ensure_parents(dir, f)?;
         let target = dir.join(f);
         if std::fs::symlink_metadata(&target).is_ok_and(|m| m.is_dir()) {
-            bail!(
-                "{} is a directory: it cannot be replaced by a file",
-                target.display()
-            );
+            return Err(OutDirError::DirectoryForFile { path: target });
         }
     }
     let m = Manifest {
@@ -78,29 +75,30 @@ pub(crate) fn publish(
         written_by: std::env::args().collect::<Vec<_>>().join(" "),
         files: files.to_vec(),
     };
-    crash.step()?;
+    crash.step().map_err(OutDirError::Crash)?;
     let mpath = staging.join(JOURNAL_MANIFEST);
     std::fs::write(&mpath, serde_json::to_string_pretty(&m)? + "\n")
-        .with_context(|| format!("cannot write {}", mpath.display()))?;
+        .map_err(|source| io("write", &mpath, source))?;
     sync(&mpath)?;
-    crash.step()?;
-    std::fs::rename(staging, dir.join(COMMIT))
-        .with_context(|| format!("cannot move {} into place", staging.display()))?;
+    crash.step().map_err(OutDirError::Crash)?;
+    std::fs::rename(staging, dir.join(COMMIT)).map_err(|source| OutDirError::Move {
+        path: staging.to_path_buf(),
+        source,
+    })?;
     sync_dir(dir);
     roll_forward(dir, crash)
 }
 
 /// Finish the commit journalled in `dir/.capstan-commit`: idempotent, so a commit
 /// interrupted at any step is finished by running this again.
-pub(crate) fn roll_forward(dir: &Path, crash: &mut dyn Crash) -> anyhow::Result<()> {
+pub(crate) fn roll_forward(dir: &Path, crash: &mut dyn Crash) -> Result<(), OutDirError> {
     let journal = dir.join(COMMIT);
     let new = match read_manifest(&journal.join(JOURNAL_MANIFEST)) {
         Some(m) => m,
         None => {
             // The manifest was moved: only (empty) directories are left.
-            crash.step()?;
-            std::fs::remove_dir_all(&journal)
-                .with_context(|| format!("cannot remove {}", journal.display()))?;
+            crash.step().map_err(OutDirError::Crash)?;
+            std::fs::remove_dir_all(&journal).map_err(|source| io("remove", &journal, source))?;
             return Ok(());
         }
     };
@@ -112,32 +110,33 @@ pub(crate) fn roll_forward(dir: &Path, crash: &mut dyn Crash) -> anyhow::Result<
             continue; // moved already
         }
         ensure_parents(dir, f)?;
-        crash.step()?;
-        std::fs::rename(&src, dir.join(f))
-            .with_context(|| format!("cannot move {} into place", dir.join(f).display()))?;
+        crash.step().map_err(OutDirError::Crash)?;
+        std::fs::rename(&src, dir.join(f)).map_err(|source| OutDirError::Move {
+            path: dir.join(f),
+            source,
+        })?;
     }
     let keep: BTreeSet<&String> = new.files.iter().collect();
     for f in old.files.iter().filter(|f| !keep.contains(f)) {
         let p = dir.join(f);
         // Only a regular file is ours: a link or directory someone put there is theirs.
         if std::fs::symlink_metadata(&p).is_ok_and(|m| m.is_file()) {
-            crash.step()?;
-            std::fs::remove_file(&p).with_context(|| format!("cannot remove {}", p.display()))?;
+            crash.step().map_err(OutDirError::Crash)?;
+            std::fs::remove_file(&p).map_err(|source| io("remove", &p, source))?;
         }
     }
-    crash.step()?;
+    crash.step().map_err(OutDirError::Crash)?;
     std::fs::rename(journal.join(JOURNAL_MANIFEST), &current)
-        .with_context(|| format!("cannot write {}", current.display()))?;
+        .map_err(|source| io("write", &current, source))?;
     sync_dir(dir);
-    crash.step()?;
-    std::fs::remove_dir_all(&journal)
-        .with_context(|| format!("cannot remove {}", journal.display()))?;
+    crash.step().map_err(OutDirError::Crash)?;
+    std::fs::remove_dir_all(&journal).map_err(|source| io("remove", &journal, source))?;
     Ok(())
 }
 
 /// Another command's results in `dir` that this set would replace: refused, naming them (a
 /// logged session cannot be made again; a campaign's pairs are another command's input).
-pub(crate) fn refuse_others(dir: &Path, kind: &str, names: &[String]) -> anyhow::Result<()> {
+pub(crate) fn refuse_others(dir: &Path, kind: &str, names: &[String]) -> Result<(), OutDirError> {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Ok(());
     };
@@ -151,13 +150,13 @@ pub(crate) fn refuse_others(dir: &Path, kind: &str, names: &[String]) -> anyhow:
         };
         let clash: Vec<&String> = names.iter().filter(|n| m.files.contains(n)).collect();
         if let Some(first) = clash.first() {
-            bail!(
-                "{} holds the results of `capstan {}` ({first}{}): `capstan {kind}` would replace \
-                 them; choose another output directory",
-                dir.display(),
-                m.kind,
-                if clash.len() > 1 { ", ..." } else { "" }
-            );
+            return Err(OutDirError::OthersResults {
+                dir: dir.to_path_buf(),
+                other: m.kind,
+                first: first.to_string(),
+                more: clash.len() > 1,
+                kind: kind.to_string(),
+            });
         }
     }
     Ok(())
@@ -166,7 +165,7 @@ pub(crate) fn refuse_others(dir: &Path, kind: &str, names: &[String]) -> anyhow:
 /// A file of `names` that is in `dir` but that no manifest of `kind` lists: the user's own (a
 /// `pairs.csv` of their own, a link they made), or one written without a manifest. Refused:
 /// capstan replaces only what it wrote.
-pub(crate) fn refuse_foreign(dir: &Path, kind: &str, names: &[String]) -> anyhow::Result<()> {
+pub(crate) fn refuse_foreign(dir: &Path, kind: &str, names: &[String]) -> Result<(), OutDirError> {
     let ours = read_manifest(&dir.join(manifest_name(kind))).unwrap_or_default();
     for n in names {
         let p = dir.join(n);
@@ -183,12 +182,11 @@ pub(crate) fn refuse_foreign(dir: &Path, kind: &str, names: &[String]) -> anyhow
         } else {
             "a file"
         };
-        bail!(
-            "{} is {what} that `capstan {kind}` did not write (no manifest of it lists it): \
-             capstan never replaces what it did not write; move it away, or choose another \
-             output directory",
-            p.display()
-        );
+        return Err(OutDirError::Foreign {
+            path: p,
+            what,
+            kind: kind.to_string(),
+        });
     }
     Ok(())
 }
@@ -203,31 +201,34 @@ fn read_manifest(path: &Path) -> Option<Manifest> {
 
 /// The parent directories of `rel` inside `dir`: created if missing, refused if one is a
 /// symbolic link (writing through it would write outside the output directory).
-fn ensure_parents(dir: &Path, rel: &str) -> anyhow::Result<()> {
+fn ensure_parents(dir: &Path, rel: &str) -> Result<(), OutDirError> {
     let mut p = dir.to_path_buf();
     let comps: Vec<_> = Path::new(rel).components().collect();
     for c in &comps[..comps.len().saturating_sub(1)] {
         p.push(c);
         match std::fs::symlink_metadata(&p) {
-            Ok(m) if m.file_type().is_symlink() => bail!(
-                "{} is a symbolic link: capstan does not write through it (remove it, or \
-                 choose another output directory)",
-                p.display()
-            ),
+            Ok(m) if m.file_type().is_symlink() => return Err(OutDirError::Symlink { path: p }),
             Ok(m) if m.is_dir() => {}
-            Ok(_) => bail!("{} is a file where a directory is needed", p.display()),
-            Err(_) => {
-                std::fs::create_dir(&p).with_context(|| format!("cannot create {}", p.display()))?
-            }
+            Ok(_) => return Err(OutDirError::FileForParent { path: p }),
+            Err(_) => std::fs::create_dir(&p).map_err(|source| io("create", &p, source))?,
         }
     }
     Ok(())
 }
 
-fn sync(path: &Path) -> anyhow::Result<()> {
+fn sync(path: &Path) -> Result<(), OutDirError> {
     std::fs::File::open(path)
         .and_then(|f| f.sync_all())
-        .with_context(|| format!("cannot write {}", path.display()))
+        .map_err(|source| io("write", path, source))
+}
+
+/// `cannot {action} {path}`.
+pub(crate) fn io(action: &'static str, path: &Path, source: std::io::Error) -> OutDirError {
+    OutDirError::Io {
+        action,
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 /// Make the renames in `dir` durable (best effort: not every file system allows it).

@@ -33,14 +33,19 @@
 //! from std, released by the kernel when its holder dies).
 
 mod commit;
+mod error;
 mod staged;
 
+pub use error::{chain, OutDirError};
 pub use staged::{keep_open_sets, Staged};
 
 #[cfg(test)]
 mod tests;
 
-use anyhow::Context;
+use commit::io;
+
+/// A result of this crate: its error is an [`OutDirError`].
+pub type Result<T, E = OutDirError> = std::result::Result<T, E>;
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
@@ -84,7 +89,7 @@ impl OutputDir {
     /// if a file there carries one of `names` (the files `kind`, e.g. "analyze", will write at
     /// the top of the directory) and `kind` did not write it (another command's results, the
     /// user's own file, a link) — before any work is done.
-    pub fn open(dir: &Path, kind: &'static str, names: &[&str]) -> anyhow::Result<OutputDir> {
+    pub fn open(dir: &Path, kind: &'static str, names: &[&str]) -> Result<OutputDir> {
         Self::open_with(dir, kind, names, &[])
     }
 
@@ -96,18 +101,16 @@ impl OutputDir {
         kind: &'static str,
         names: &[&str],
         subdirs: &[Subdir<'_>],
-    ) -> anyhow::Result<OutputDir> {
+    ) -> Result<OutputDir> {
         let existed = dir.exists();
         if existed && !dir.is_dir() {
-            anyhow::bail!(
-                "--out {}: that is a file; the output is a directory (created if missing) that \
-                 will hold {}: give a directory's name",
-                dir.display(),
-                names.join(", ")
-            );
+            return Err(OutDirError::NotADirectory {
+                dir: dir.to_path_buf(),
+                names: names.iter().map(|n| n.to_string()).collect(),
+            });
         }
         std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+            .map_err(|source| io("create the output directory", dir, source))?;
         let lock = take_lock(dir)?;
         let mut out = OutputDir {
             dir: dir.to_path_buf(),
@@ -126,7 +129,10 @@ impl OutputDir {
                 if kept.is_empty() {
                     Err(e)
                 } else {
-                    Err(anyhow::anyhow!("{e:#}\nnote: {}", kept.join("\nnote: ")))
+                    Err(OutDirError::Refused {
+                        refused: Box::new(e),
+                        notes: kept,
+                    })
                 }
             }
         }
@@ -146,13 +152,15 @@ impl OutputDir {
     }
 
     /// Recover what an earlier process left, and refuse files of others (see [`Self::open_with`]).
-    fn prepare(&mut self, names: &[&str], subdirs: &[Subdir<'_>]) -> anyhow::Result<()> {
+    fn prepare(&mut self, names: &[&str], subdirs: &[Subdir<'_>]) -> Result<()> {
         let (dir, kind) = (self.dir.clone(), self.kind);
         let dir = dir.as_path();
         let out = self;
         if dir.join(COMMIT).exists() {
-            commit::roll_forward(dir, &mut commit::NoCrash)
-                .with_context(|| format!("finishing an interrupted commit in {}", dir.display()))?;
+            commit::roll_forward(dir, &mut commit::NoCrash).map_err(|e| OutDirError::Recover {
+                dir: dir.to_path_buf(),
+                source: Box::new(e),
+            })?;
             out.recovered.push(format!(
                 "finished replacing the results in {} that an earlier run was interrupted in",
                 dir.display()
@@ -166,20 +174,12 @@ impl OutputDir {
             let path = dir.join(sub);
             match std::fs::symlink_metadata(&path) {
                 Err(_) => continue,
-                Ok(m) if m.file_type().is_symlink() => anyhow::bail!(
-                    "{} is a symbolic link: capstan does not write through it (remove it, or \
-                     choose another output directory)",
-                    path.display()
-                ),
-                Ok(m) if !m.is_dir() => anyhow::bail!(
-                    "{} is a file where capstan {kind} writes a directory: move it away, or \
-                     choose another output directory",
-                    path.display()
-                ),
+                Ok(m) if m.file_type().is_symlink() => return Err(OutDirError::Symlink { path }),
+                Ok(m) if !m.is_dir() => return Err(OutDirError::FileForDirectory { path, kind }),
                 Ok(_) => {}
             }
             let ours: Vec<String> = std::fs::read_dir(&path)
-                .with_context(|| format!("cannot read {}", path.display()))?
+                .map_err(|source| io("read", &path, source))?
                 .flatten()
                 .map(|e| format!("{sub}/{}", e.file_name().to_string_lossy()))
                 .filter(|rel| writes(rel))
@@ -202,15 +202,15 @@ impl OutputDir {
 
     /// Start a new output set (a staging directory, created now: an unwritable directory
     /// fails here, before any work). The set keeps the lock until it is committed or dropped.
-    pub fn stage(self) -> anyhow::Result<Staged> {
+    pub fn stage(self) -> Result<Staged> {
         Staged::new(self)
     }
 
     /// Staging directories of processes that died (we hold the lock, so none is live): keep
     /// any work in them under a visible name, remove empty ones.
-    fn keep_abandoned(&mut self) -> anyhow::Result<()> {
-        let entries = std::fs::read_dir(&self.dir)
-            .with_context(|| format!("cannot read {}", self.dir.display()))?;
+    fn keep_abandoned(&mut self) -> Result<()> {
+        let entries =
+            std::fs::read_dir(&self.dir).map_err(|source| io("read", &self.dir, source))?;
         for e in entries.flatten() {
             let name = e.file_name().to_string_lossy().into_owned();
             let Some(id) = name.strip_prefix(STAGING_PREFIX) else {
@@ -222,8 +222,7 @@ impl OutputDir {
                 continue;
             }
             let kept = self.dir.join(format!("{INCOMPLETE_PREFIX}{id}"));
-            std::fs::rename(&path, &kept)
-                .with_context(|| format!("cannot keep {}", path.display()))?;
+            std::fs::rename(&path, &kept).map_err(|source| io("keep", &path, source))?;
             self.recovered.push(format!(
                 "an earlier run into {} stopped without finishing (killed?): its completed work \
                  is kept in {}",
@@ -239,18 +238,16 @@ impl OutputDir {
 /// process between our open and our lock is not the directory's lock any more: the lock is
 /// taken again on the file at the path (a few tries), so two processes never hold locks on
 /// two different files of one directory.
-fn take_lock(dir: &Path) -> anyhow::Result<File> {
+fn take_lock(dir: &Path) -> Result<File> {
     for _ in 0..LOCK_TRIES {
         let f = lock_file_at(dir)?;
         if still_at_path(&f, &dir.join(LOCK)) {
             return Ok(f);
         }
     }
-    anyhow::bail!(
-        "{}: its lock file keeps changing under capstan (another capstan process opening and \
-         leaving it?): try again",
-        dir.display()
-    )
+    Err(OutDirError::LockChanging {
+        dir: dir.to_path_buf(),
+    })
 }
 
 /// How often [`take_lock`] tries for a lock file that stays at its path.
@@ -274,13 +271,10 @@ fn still_at_path(f: &File, path: &Path) -> bool {
 }
 
 /// Open `dir`'s lock file and lock it, or say who holds it.
-fn lock_file_at(dir: &Path) -> anyhow::Result<File> {
+fn lock_file_at(dir: &Path) -> Result<File> {
     let path = dir.join(LOCK);
     if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_file()) {
-        anyhow::bail!(
-            "{} is not a plain file (a symbolic link?): capstan does not write through it",
-            path.display()
-        );
+        return Err(OutDirError::LockNotPlain { path });
     }
     let mut f = OpenOptions::new()
         .read(true)
@@ -288,28 +282,26 @@ fn lock_file_at(dir: &Path) -> anyhow::Result<File> {
         .create(true)
         .truncate(false)
         .open(&path)
-        .with_context(|| format!("cannot write to the output directory {}", dir.display()))?;
+        .map_err(|source| io("write to the output directory", dir, source))?;
     match f.try_lock() {
         Ok(()) => {}
         Err(std::fs::TryLockError::WouldBlock) => {
             let mut holder = String::new();
             let _ = f.read_to_string(&mut holder);
-            anyhow::bail!(
-                "{} is in use by another capstan process ({}): wait for it, or choose another \
-                 output directory",
-                dir.display(),
-                holder.trim()
-            );
+            return Err(OutDirError::InUse {
+                dir: dir.to_path_buf(),
+                holder: holder.trim().to_string(),
+            });
         }
         Err(std::fs::TryLockError::Error(e)) => {
-            return Err(e).with_context(|| format!("cannot lock {}", path.display()));
+            return Err(io("lock", &path, e));
         }
     }
     let args: Vec<String> = std::env::args().collect();
     f.set_len(0)
         .and_then(|()| f.rewind())
         .and_then(|_| write!(f, "pid {}: {}", std::process::id(), args.join(" ")))
-        .with_context(|| format!("cannot write {}", path.display()))?;
+        .map_err(|source| io("write", &path, source))?;
     Ok(f)
 }
 

@@ -6,7 +6,8 @@
 //! about to exit at once (a second signal) can keep its work where it says ([`keep_open_sets`]).
 
 use super::{commit, OutputDir, INCOMPLETE_PREFIX, STAGING_PREFIX};
-use anyhow::Context;
+use crate::commit::io;
+use crate::{OutDirError, Result};
 use std::collections::BTreeSet;
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -58,18 +59,14 @@ pub struct Staged {
 }
 
 impl Staged {
-    pub(super) fn new(out: OutputDir) -> anyhow::Result<Staged> {
+    pub(super) fn new(out: OutputDir) -> Result<Staged> {
         let nanos = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos());
         let id = format!("{}-{nanos}", std::process::id());
         let path = out.path().join(format!("{STAGING_PREFIX}{id}"));
-        std::fs::create_dir(&path).with_context(|| {
-            format!(
-                "cannot write to the output directory {}",
-                out.path().display()
-            )
-        })?;
+        std::fs::create_dir(&path)
+            .map_err(|source| io("write to the output directory", out.path(), source))?;
         let kept = out.path().join(format!("{INCOMPLETE_PREFIX}{id}"));
         open_sets().push((path.clone(), kept));
         Ok(Staged {
@@ -101,12 +98,14 @@ impl Staged {
 
     /// Keep this set under `DIR/incomplete-<id>` now, without committing it (the command
     /// decided it must not replace the previous set); returns where it went.
-    pub fn keep(mut self) -> anyhow::Result<PathBuf> {
+    pub fn keep(mut self) -> Result<PathBuf> {
         let kept = self.kept_path();
         self.done = true;
         self.forget();
-        std::fs::rename(&self.path, &kept).with_context(|| {
-            format!("cannot keep {} as {}", self.path.display(), kept.display())
+        std::fs::rename(&self.path, &kept).map_err(|source| OutDirError::Keep {
+            path: self.path.clone(),
+            kept: kept.clone(),
+            source,
         })?;
         Ok(kept)
     }
@@ -125,33 +124,32 @@ impl Staged {
 
     /// The staging path of `rel` (a relative name such as `raw/d12.7_run1.csv`), registered as
     /// part of the set; its parent directories are created.
-    pub fn path_of(&mut self, rel: &str) -> anyhow::Result<PathBuf> {
+    pub fn path_of(&mut self, rel: &str) -> Result<PathBuf> {
         commit::check_name(rel)?;
         let p = self.path.join(rel);
         if let Some(parent) = p.parent() {
-            std::fs::create_dir_all(parent)
-                .with_context(|| format!("cannot create {}", parent.display()))?;
+            std::fs::create_dir_all(parent).map_err(|source| io("create", parent, source))?;
         }
         self.files.insert(rel.to_string());
         Ok(p)
     }
 
     /// Create `rel` in the set, buffered.
-    pub fn create(&mut self, rel: &str) -> anyhow::Result<BufWriter<File>> {
+    pub fn create(&mut self, rel: &str) -> Result<BufWriter<File>> {
         let p = self.path_of(rel)?;
         self.streamed.insert(rel.to_string());
-        let f = File::create(&p).with_context(|| format!("cannot write {}", p.display()))?;
+        let f = File::create(&p).map_err(|source| io("write", &p, source))?;
         Ok(BufWriter::new(f))
     }
 
     /// Write `rel` whole.
-    pub fn write(&mut self, rel: &str, bytes: &[u8]) -> anyhow::Result<()> {
+    pub fn write(&mut self, rel: &str, bytes: &[u8]) -> Result<()> {
         let p = self.path_of(rel)?;
         self.streamed.remove(rel);
-        let mut f = File::create(&p).with_context(|| format!("cannot write {}", p.display()))?;
+        let mut f = File::create(&p).map_err(|source| io("write", &p, source))?;
         f.write_all(bytes)
             .and_then(|()| f.sync_all())
-            .with_context(|| format!("cannot write {}", p.display()))
+            .map_err(|source| io("write", &p, source))
     }
 
     /// Whether `rel` is in the set.
@@ -166,7 +164,7 @@ impl Staged {
 
     /// Replace the previous set with this one (see the module's commit protocol). If that
     /// fails and the set is to be kept on failure, it is kept and the error says where.
-    pub fn commit(mut self) -> anyhow::Result<()> {
+    pub fn commit(mut self) -> Result<()> {
         let r = self.commit_with(&mut commit::NoCrash);
         match r {
             Err(e) if self.keep_on_failure.is_some() && self.path.exists() => {
@@ -174,10 +172,10 @@ impl Staged {
                 self.done = true;
                 self.forget();
                 match std::fs::rename(&self.path, &kept) {
-                    Ok(()) => Err(anyhow::anyhow!(
-                        "{e:#}; the results are kept in {}",
-                        kept.display()
-                    )),
+                    Ok(()) => Err(OutDirError::Kept {
+                        failed: Box::new(e),
+                        kept,
+                    }),
                     Err(_) => Err(e),
                 }
             }
@@ -185,7 +183,7 @@ impl Staged {
         }
     }
 
-    pub(super) fn commit_with(&mut self, crash: &mut dyn commit::Crash) -> anyhow::Result<()> {
+    pub(super) fn commit_with(&mut self, crash: &mut dyn commit::Crash) -> Result<()> {
         let files: Vec<String> = self.files.iter().cloned().collect();
         let unsynced: Vec<String> = self.streamed.iter().cloned().collect();
         let (dir, kind) = (self.out.path(), self.out.kind());
@@ -195,7 +193,10 @@ impl Staged {
             self.done = true;
             self.forget();
         }
-        r.with_context(|| format!("replacing the results in {}", self.out.path().display()))
+        r.map_err(|e| OutDirError::Replace {
+            dir: self.out.path().to_path_buf(),
+            source: Box::new(e),
+        })
     }
 
     /// Forget this set without touching the disk (tests: a process that died here).

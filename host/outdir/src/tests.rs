@@ -60,7 +60,7 @@ fn set(tag: &str, names: &[String]) -> BTreeMap<String, String> {
         .collect()
 }
 
-fn write_set(dir: &Path, files: &BTreeMap<String, String>, crash: usize) -> anyhow::Result<()> {
+fn write_set(dir: &Path, files: &BTreeMap<String, String>, crash: usize) -> crate::Result<()> {
     let mut s = OutputDir::open(dir, "test", &[])?.stage()?;
     for (n, c) in files {
         s.write(n, c.as_bytes())?;
@@ -149,12 +149,13 @@ fn links_and_files_we_did_not_write_are_refused_never_replaced_or_written_throug
     // Refused when the directory is opened, before any work ...
     let e = OutputDir::open(&dir, "test", &["report.html"]).unwrap_err();
     assert!(
-        format!("{e:#}").contains("is a symbolic link that `capstan test` did not write"),
-        "{e:#}"
+        chain(&e).contains("is a symbolic link that `capstan test` did not write"),
+        "{}",
+        chain(&e)
     );
     // ... and at the commit, for a set that did not name it up front.
     let e = write_set(&dir, &set("new", &["report.html".into()]), usize::MAX).unwrap_err();
-    assert!(format!("{e:#}").contains("did not write"), "{e:#}");
+    assert!(chain(&e).contains("did not write"), "{}", chain(&e));
     assert_eq!(
         std::fs::read_to_string(outside.join("precious.html")).unwrap(),
         "keep me"
@@ -167,8 +168,9 @@ fn links_and_files_we_did_not_write_are_refused_never_replaced_or_written_throug
     std::fs::write(dir.join("metrics.json"), "the user's").unwrap();
     let e = OutputDir::open(&dir, "test", &["metrics.json"]).unwrap_err();
     assert!(
-        format!("{e:#}").contains("is a file that `capstan test` did not write"),
-        "{e:#}"
+        chain(&e).contains("is a file that `capstan test` did not write"),
+        "{}",
+        chain(&e)
     );
     assert_eq!(
         std::fs::read_to_string(dir.join("metrics.json")).unwrap(),
@@ -182,16 +184,17 @@ fn links_and_files_we_did_not_write_are_refused_never_replaced_or_written_throug
     std::os::unix::fs::symlink(&outside, dir.join("raw")).unwrap();
     let never = |_: &str| false;
     let e = OutputDir::open_with(&dir, "test", &[], &[("raw", &never)]).unwrap_err();
-    assert!(format!("{e:#}").contains("symbolic link"), "{e:#}");
+    assert!(chain(&e).contains("symbolic link"), "{}", chain(&e));
     let e = write_set(&dir, &set("new", &["raw/x.csv".into()]), usize::MAX).unwrap_err();
-    assert!(format!("{e:#}").contains("symbolic link"), "{e:#}");
+    assert!(chain(&e).contains("symbolic link"), "{}", chain(&e));
     assert!(!outside.join("x.csv").exists());
     std::fs::remove_file(dir.join("raw")).unwrap();
     std::fs::write(dir.join("raw"), "a file").unwrap();
     let e = OutputDir::open_with(&dir, "test", &[], &[("raw", &never)]).unwrap_err();
     assert!(
-        format!("{e:#}").contains("is a file where capstan test writes a directory"),
-        "{e:#}"
+        chain(&e).contains("is a file where capstan test writes a directory"),
+        "{}",
+        chain(&e)
     );
 }
 
@@ -203,7 +206,7 @@ fn a_set_that_fails_late_is_kept_and_the_error_says_where() {
     s.keep_on_failure(|_| {});
     // Something in the way appears while the work runs: the commit is refused.
     std::fs::create_dir_all(dir.join("pairs.csv")).unwrap();
-    let e = format!("{:#}", s.commit().unwrap_err());
+    let e = chain(&s.commit().unwrap_err());
     let kept = e.rsplit("the results are kept in ").next().unwrap();
     assert_eq!(
         std::fs::read_to_string(Path::new(kept).join("pairs.csv")).unwrap(),
@@ -288,8 +291,9 @@ fn an_unwritable_directory_fails_before_any_work() {
     }
     let e = OutputDir::open(&dir, "test", &[]).unwrap_err();
     assert!(
-        format!("{e:#}").contains("cannot write to the output directory"),
-        "{e:#}"
+        chain(&e).contains("cannot write to the output directory"),
+        "{}",
+        chain(&e)
     );
     std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).unwrap();
 }
@@ -306,8 +310,9 @@ fn another_commands_results_are_neither_replaced_nor_removed() {
     // A campaign into the session's directory: refused before any work.
     let e = OutputDir::open(&dir, "simulate", &["pairs.csv"]).unwrap_err();
     assert!(
-        format!("{e:#}").contains("holds the results of `capstan log`"),
-        "{e:#}"
+        chain(&e).contains("holds the results of `capstan log`"),
+        "{}",
+        chain(&e)
     );
     // A report beside it replaces nothing of the session's, and removes nothing of it later.
     write_kind(&dir, "analyze", &["report.html"]);
@@ -341,7 +346,7 @@ fn a_move_that_cannot_happen_is_refused_before_the_journal() {
         &set("new", &["a.csv".into(), "c.csv".into()]),
         usize::MAX,
     );
-    assert!(format!("{:#}", e.unwrap_err()).contains("is a directory"));
+    assert!(chain(&e.unwrap_err()).contains("is a directory"));
     assert!(!dir.join(COMMIT).exists());
     std::fs::remove_dir(dir.join("c.csv")).unwrap();
     assert_eq!(visible(&dir), set("old", &["a.csv".into(), "b.csv".into()]));
@@ -358,7 +363,7 @@ fn a_linked_lock_file_is_refused_not_written_through() {
     std::fs::write(outside.join("precious.txt"), "keep me").unwrap();
     std::os::unix::fs::symlink(outside.join("precious.txt"), dir.join(LOCK)).unwrap();
     let e = OutputDir::open(&dir, "test", &[]).unwrap_err();
-    assert!(format!("{e:#}").contains("not a plain file"), "{e:#}");
+    assert!(chain(&e).contains("not a plain file"), "{}", chain(&e));
     assert_eq!(
         std::fs::read_to_string(outside.join("precious.txt")).unwrap(),
         "keep me"
@@ -403,8 +408,9 @@ fn a_lock_on_an_unlinked_lock_file_is_not_the_directorys_lock() {
     // While it is held, no other open of the directory gets in.
     let e = OutputDir::open(&dir, "test", &["a.json"]).unwrap_err();
     assert!(
-        format!("{e:#}").contains("in use by another capstan process"),
-        "{e:#}"
+        chain(&e).contains("in use by another capstan process"),
+        "{}",
+        chain(&e)
     );
 }
 

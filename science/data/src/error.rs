@@ -12,13 +12,18 @@ pub const QUOTE_CHARS: usize = 80;
 pub enum DataError {
     /// The file could not be opened or read.
     Io {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line where reading failed (`None`: opening it failed).
         line: Option<u64>,
+        /// What the system said.
         source: std::io::Error,
     },
     /// A required column is missing from the header.
     MissingColumn {
+        /// The file, as the user named it.
         path: String,
+        /// The column's name.
         column: &'static str,
         /// The header looks like a raw time series (a time and forces): `capstan condition`
         /// makes pairs of it.
@@ -26,41 +31,74 @@ pub enum DataError {
     },
     /// A header names a column twice.
     DuplicateColumn {
+        /// The file, as the user named it.
         path: String,
+        /// The column's name.
         column: String,
+        /// 1-based column of its first occurrence.
         first: usize,
+        /// 1-based column of its second occurrence.
         second: usize,
     },
     /// A header cell is empty.
-    UnnamedColumn { path: String, column: usize },
+    UnnamedColumn {
+        /// The file, as the user named it.
+        path: String,
+        /// 1-based column of the header.
+        column: usize,
+    },
     /// A cell is not what its column needs.
     BadCell {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the file.
         line: u64,
+        /// 1-based column (cell) of the line.
         column: usize,
+        /// The column's name in the header.
         name: String,
+        /// The cell as found (the message quotes at most [`QUOTE_CHARS`] characters of it).
         value: String,
+        /// What is wrong with it.
         reason: String,
     },
     /// A row has another number of cells than the header.
     CellCount {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the file.
         line: u64,
+        /// Cells in the row.
         found: usize,
+        /// Cells in the header.
         expected: usize,
         /// Why, when it shows: a trailing comma, a stray carriage return.
         why: Option<&'static str>,
     },
     /// The file has a header but no rows.
-    Empty { path: String },
+    Empty {
+        /// The file, as the user named it.
+        path: String,
+    },
     /// The file is empty: not even a header.
-    NoHeader { path: String },
+    NoHeader {
+        /// The file, as the user named it.
+        path: String,
+    },
     /// The first line is a comment (`# ...`).
-    Comment { path: String, line: u64 },
+    Comment {
+        /// The file, as the user named it.
+        path: String,
+        /// 1-based line of the file.
+        line: u64,
+    },
     /// The header has one column that looks like several joined by another separator.
     Separator {
+        /// The file, as the user named it.
         path: String,
+        /// The header line as read.
         header: String,
+        /// The separator the header seems to use.
         separator: char,
         /// The rows write decimals with a comma (`1,5`).
         decimal_comma: bool,
@@ -70,68 +108,108 @@ pub enum DataError {
     /// A record is longer than any pairs CSV line can be (a binary file, or a quote never
     /// closed).
     TooLong {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the file.
         line: u64,
+        /// 1-based column (cell) of the line.
         column: usize,
+        /// The record is inside a quoted cell.
         quoted: bool,
     },
     /// The file ends inside a quoted cell.
     UnclosedQuote {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the file.
         line: u64,
+        /// 1-based column (cell) of the line.
         column: usize,
     },
     /// A cell is not UTF-8 text.
     NotText {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the file.
         line: u64,
+        /// 1-based column (cell) of the line.
         column: usize,
     },
     /// Two rows have the same cord, run and step.
     DuplicateRow {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the file.
         line: u64,
+        /// 1-based line of the first such row.
         first_line: u64,
+        /// The cord, run and step, in words.
         key: String,
     },
     /// The data cannot come from a capstan: no row has T2 above T1.
-    NoFriction { path: String, rows: usize },
+    NoFriction {
+        /// The file, as the user named it.
+        path: String,
+        /// Rows in the file (none has T2 above T1).
+        rows: usize,
+    },
     /// T2 is below T1 in most rows: the columns look swapped.
     Swapped {
+        /// The file, as the user named it.
         path: String,
+        /// Rows in the file.
         rows: usize,
+        /// Rows with T2 below T1.
         below: usize,
     },
     /// One run's readings of a channel are all at or below zero, down to below
     /// [`crate::REVERSED_BELOW_N`]: that run's sensor reads reversed.
     ReversedRun {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the run's lowest reading.
         line: u64,
+        /// 1-based column (cell) of the line.
         column: usize,
+        /// The channel's column (`t1_n` or `t2_n`).
         name: &'static str,
+        /// The run's lowest reading, N.
         value: f64,
+        /// The run in words (its cord and run number).
         run: String,
     },
     /// A column in a unit no capstan rig's data are in (tensions in grams, wraps in radians).
     UnitMistake {
+        /// The file, as the user named it.
         path: String,
+        /// 1-based line of the file.
         line: u64,
+        /// 1-based column (cell) of the line.
         column: usize,
+        /// The whole message: the unit the values look like (e.g. grams, radians) and what to do.
         why: String,
     },
     /// More rows than [`crate::plausible::MAX_SUSPECT_SHARE`] cannot be capstan data
     /// (swapped, negated, time going back, a run copied): each kind named with its lines.
     SuspectRows {
+        /// The file, as the user named it.
         path: String,
+        /// Rows in the file.
         rows: usize,
+        /// Rows that cannot be capstan data.
         suspect: usize,
+        /// Each kind of suspect row, with its lines.
         kinds: Vec<String>,
     },
     /// Most rows have a tension at or below zero: not tensions as a rig reads them.
     NotPositive {
+        /// The file, as the user named it.
         path: String,
+        /// Rows in the file.
         rows: usize,
+        /// Rows with both tensions above zero (under half of them).
         positive: usize,
+        /// 1-based line of the first row with a tension at or below zero.
         first_line: u64,
     },
 }

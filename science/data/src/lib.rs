@@ -34,7 +34,7 @@ pub use error::{quote, DataError, QUOTE_CHARS};
 pub use provenance::Provenance;
 pub use records::MAX_RECORD_BYTES;
 pub use structure::{Basis, Structure};
-pub use write::{text_cell, write_pairs, write_pairs_to, PairsWriter};
+pub use write::{text_cell, write_pairs, write_pairs_to, PairsWriter, WriteError};
 
 use serde::Serialize;
 use std::io::Read;

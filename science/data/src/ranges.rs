@@ -26,9 +26,9 @@ pub struct Range {
 impl Range {
     /// `v` if it is finite and inside the range; otherwise why not (e.g. "must be greater than
     /// 0 and at most 3600 deg (ten turns)").
-    pub fn check(&self, v: f64) -> Result<f64, String> {
+    pub fn check(&self, v: f64) -> Result<f64, RangeError> {
         if v.is_nan() {
-            return Err("not a number".into());
+            return Err(RangeError::NotANumber);
         }
         let low = if self.above_min {
             v <= self.min
@@ -36,7 +36,7 @@ impl Range {
             v < self.min
         };
         if !v.is_finite() || low || v > self.max {
-            return Err(format!("must be {}", self.describe()));
+            return Err(RangeError::Outside(*self));
         }
         Ok(v)
     }
@@ -67,10 +67,36 @@ impl Range {
     }
 
     /// A command-line value: `flag value: must be ...` when out of range.
-    pub fn option(&self, flag: &str, v: f64) -> anyhow::Result<f64> {
-        self.check(v)
-            .map_err(|why| anyhow::anyhow!("{flag} {}: {why}", shown(v)))
+    pub fn option(&self, flag: &str, v: f64) -> Result<f64, OptionError> {
+        self.check(v).map_err(|reason| OptionError {
+            flag: flag.to_string(),
+            value: v,
+            reason,
+        })
     }
+}
+
+/// Why a value is not inside its [`Range`].
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum RangeError {
+    /// The value is NaN.
+    #[error("not a number")]
+    NotANumber,
+    /// The value is infinite or outside the range (which the message states).
+    #[error("must be {}", .0.describe())]
+    Outside(Range),
+}
+
+/// A command-line value outside its range: `flag value: must be ...`.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{flag} {}: {reason}", shown(*.value))]
+pub struct OptionError {
+    /// The option as typed (`--wrap-deg`).
+    pub flag: String,
+    /// The value given, in the option's unit.
+    pub value: f64,
+    /// Why it is refused.
+    pub reason: RangeError,
 }
 
 /// A value a user gave, as a message repeats it: whole numbers below 1e16 in full, others as
@@ -278,7 +304,7 @@ mod tests {
     #[test]
     fn ranges_say_what_they_allow() {
         assert_eq!(
-            WRAP_DEG.check(1e9).unwrap_err(),
+            WRAP_DEG.check(1e9).unwrap_err().to_string(),
             "must be greater than 0 and at most 3600 deg (ten turns)"
         );
         assert_eq!(
@@ -287,9 +313,12 @@ mod tests {
         );
         assert_eq!(WRAP_DEG.check(3600.0), Ok(3600.0));
         assert!(TENSION_N.check(-1e4).is_ok() && TENSION_N.check(1e154).is_err());
-        assert_eq!(TENSION_N.check(f64::NAN).unwrap_err(), "not a number");
         assert_eq!(
-            TIME_S.check(f64::INFINITY).unwrap_err(),
+            TENSION_N.check(f64::NAN).unwrap_err().to_string(),
+            "not a number"
+        );
+        assert_eq!(
+            TIME_S.check(f64::INFINITY).unwrap_err().to_string(),
             "must be within ±1e10 s"
         );
         assert_eq!(

@@ -2,7 +2,7 @@
 //! column's physical range ([`super::ranges`]), each error at its file, line and column.
 
 use super::error::DataError;
-use super::ranges::{self, Range};
+use super::ranges::{self, Range, RangeError};
 use super::records::{Record, RecordError, Records};
 use super::structure::Structure;
 use super::{Dataset, LabelColumn, LabelRole, Pair, PAIRS_HEADER};
@@ -230,9 +230,9 @@ fn range_of(k: usize) -> &'static Range {
     }
 }
 
-fn number(raw: &str, range: &Range) -> Result<f64, String> {
+fn number(raw: &str, range: &Range) -> Result<f64, CellError> {
     if raw.is_empty() {
-        return Err("empty cell".into());
+        return Err(CellError::Empty);
     }
     let v: f64 = raw.parse().map_err(|_| {
         let decimal_comma = raw.split_once(',').is_some_and(|(a, b)| {
@@ -240,17 +240,31 @@ fn number(raw: &str, range: &Range) -> Result<f64, String> {
             digits(a.trim_start_matches('-')) && digits(b)
         });
         if raw.starts_with('#') {
-            "not a number (a comment line? a pairs CSV has none)".to_string()
+            CellError::NotANumber(" (a comment line? a pairs CSV has none)")
         } else if decimal_comma {
-            "not a number (write decimals with a point: 1.5)".to_string()
+            CellError::NotANumber(" (write decimals with a point: 1.5)")
         } else {
-            "not a number".to_string()
+            CellError::NotANumber("")
         }
     })?;
     if !v.is_finite() {
-        return Err("not a finite number".into());
+        return Err(CellError::NotFinite);
     }
-    range.check(v)
+    Ok(range.check(v)?)
+}
+
+/// Why a numeric cell is refused (the `reason` of [`DataError::BadCell`]).
+#[derive(Debug, thiserror::Error)]
+enum CellError {
+    #[error("empty cell")]
+    Empty,
+    /// Not a number; with a hint (" (write decimals with a point: 1.5)") or "".
+    #[error("not a number{0}")]
+    NotANumber(&'static str),
+    #[error("not a finite number")]
+    NotFinite,
+    #[error(transparent)]
+    Range(#[from] RangeError),
 }
 
 /// One row's pair.
@@ -299,7 +313,8 @@ fn row(rec: &Record, h: &Header, path: &str) -> Result<Pair, DataError> {
         match *col {
             Col::Label(k) => pair.labels[k] = cell.text.clone(),
             Col::Extra(k) => {
-                let text_hint = |r: String| {
+                let text_hint = |r: CellError| {
+                    let r = r.to_string();
                     if r.starts_with("not a number") {
                         format!(
                             "{r}; a text column is read only under a label name ({}, {}, {})",
@@ -315,7 +330,7 @@ fn row(rec: &Record, h: &Header, path: &str) -> Result<Pair, DataError> {
                     number(&cell.text, &ranges::EXTRA).map_err(|r| bad(text_hint(r)))?;
             }
             Col::Known(k) => {
-                let v = number(&cell.text, range_of(k)).map_err(bad)?;
+                let v = number(&cell.text, range_of(k)).map_err(|r| bad(r.to_string()))?;
                 match k {
                     0 => pair.capstan_diameter_mm = Some(v),
                     1 => pair.wrap_deg = v,

@@ -7,13 +7,25 @@ use std::io::Write;
 use std::path::Path;
 
 /// Write pairs to a file (see [`write_pairs_to`]).
-pub fn write_pairs(path: &Path, pairs: &[Pair]) -> anyhow::Result<()> {
-    let file =
-        std::fs::File::create(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+pub fn write_pairs(path: &Path, pairs: &[Pair]) -> Result<(), WriteError> {
+    let at = |source| WriteError {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::create(path).map_err(at)?;
     let mut w = std::io::BufWriter::new(file);
-    write_pairs_to(&mut w, pairs)?;
-    w.flush()?;
-    Ok(())
+    write_pairs_to(&mut w, pairs).map_err(at)?;
+    w.flush().map_err(at)
+}
+
+/// A pairs file that could not be created or written.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct WriteError {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// What the system said.
+    pub source: std::io::Error,
 }
 
 /// The value of column `i` of [`PAIRS_HEADER`] in a pair (`None` when unknown).

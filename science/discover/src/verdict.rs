@@ -434,13 +434,15 @@ impl Ctx<'_> {
         // The catalogue the engine selects with the term taken out of the data.
         let reselected = self.reselected(step, st, best, tst);
         if let Some(r) = &reselected {
-            lof_after = self.beside_reselected(r, lof_after).map_err(no)?;
+            lof_after = (self.beside_reselected(r, lof_after)).map_err(|d| no(d.to_string()))?;
         }
         // The share it removes is judged when the lack of fit stays open with it, and (with
         // `share_always`) whenever the catalogue left one.
         let judged = lof_open(&lof_after) || (self.opts.share_always && lof_open(lof_before));
         let partial = match proj_x.is_some() && judged {
-            true => Some(self.partial_share(lof_before, &lof_after).map_err(no)?),
+            true => {
+                Some((self.partial_share(lof_before, &lof_after)).map_err(|d| no(d.to_string()))?)
+            }
             false => None,
         }
         .filter(|_| lof_open(&lof_after));
@@ -519,7 +521,7 @@ impl Ctx<'_> {
         &self,
         lof_before: &Option<LackOfFit>,
         lof_after: &Option<LackOfFit>,
-    ) -> Result<(f64, f64, f64), String> {
+    ) -> Result<(f64, f64, f64), Decline> {
         let (before, after) = (
             lof_before.as_ref().map_or(f64::NAN, |l| l.systematic_ratio),
             lof_after.as_ref().map_or(f64::NAN, |l| l.systematic_ratio),
@@ -532,12 +534,16 @@ impl Ctx<'_> {
                 (true, false) => "is no longer significant, but what it removes is too little",
                 _ => "appears (it was not significant before it)",
             };
-            return Err(format!(
-                "a partial mimic: with it the lack of fit against the replicate runs {how} (p {}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
-                lof_after.as_ref().map_or("not computed".to_string(), |l| lof_p_equals(l.p)),
-                100.0 * share.max(0.0),
-                100.0 * self.opts.min_share_resolved.min(1.0)
-            ));
+            return Err(Decline::PartialMimic {
+                how,
+                p: lof_after
+                    .as_ref()
+                    .map_or("not computed".to_string(), |l| lof_p_equals(l.p)),
+                before,
+                after,
+                share,
+                min_share: self.opts.min_share_resolved,
+            });
         }
         Ok((before, after, share))
     }
@@ -549,7 +555,7 @@ impl Ctx<'_> {
         &self,
         r: &crate::reselect::Reselected,
         lof_after: Option<LackOfFit>,
-    ) -> Result<Option<LackOfFit>, String> {
+    ) -> Result<Option<LackOfFit>, Decline> {
         let ratio_of =
             |l: &Option<LackOfFit>| l.as_ref().map_or(f64::INFINITY, |l| l.systematic_ratio);
         match &r.screen {
@@ -565,11 +571,11 @@ impl Ctx<'_> {
                     true => "no effect".to_string(),
                     false => names.join(" + "),
                 };
-                Err(format!(
-                    "absorbed by the catalogue: with it taken out of the data the engine selects {names}, and beside those its ΔBIC is {} (the engine's bar −{:.0})",
-                    s.as_ref().map_or("not computable".to_string(), |s| format!("{:.1}", s.delta_bic)),
-                    self.bar.threshold
-                ))
+                Err(Decline::Absorbed {
+                    names,
+                    delta_bic: s.as_ref().map(|s| s.delta_bic),
+                    bar: self.bar.threshold,
+                })
             }
         }
     }
@@ -866,4 +872,42 @@ fn p_words(p: f64) -> String {
     } else {
         format!("= {p:.3}")
     }
+}
+
+/// Why a pick that passed stability and held-out cords is declined after all (its `reason`).
+#[derive(Debug, thiserror::Error)]
+enum Decline {
+    /// It removes too little of the lack of fit against the replicate runs.
+    #[error(
+        "a partial mimic: with it the lack of fit against the replicate runs {how} (p {p}, systematic part {before:.2} → {after:.2}× the noise, {:.0} % of its variance removed; a term must remove {:.0} %)",
+        100.0 * share.max(0.0),
+        100.0 * min_share.min(1.0)
+    )]
+    PartialMimic {
+        /// What the lack of fit does with it ("stays" ...).
+        how: &'static str,
+        /// Its p-value with the term, as written ("= 0.01", or "not computed").
+        p: String,
+        /// The systematic part before the term, × the noise.
+        before: f64,
+        /// The systematic part with it, × the noise.
+        after: f64,
+        /// The share of its variance the term removes (1 − (after/before)²).
+        share: f64,
+        /// The share a term must remove.
+        min_share: f64,
+    },
+    /// The catalogue re-selected around it absorbs it.
+    #[error(
+        "absorbed by the catalogue: with it taken out of the data the engine selects {names}, and beside those its ΔBIC is {} (the engine's bar −{bar:.0})",
+        delta_bic.map_or("not computable".to_string(), |d| format!("{d:.1}"))
+    )]
+    Absorbed {
+        /// The effects then selected ("no effect", or "a + b").
+        names: String,
+        /// The term's ΔBIC beside them (`None`: not computable).
+        delta_bic: Option<f64>,
+        /// The engine's bar (a ΔBIC below minus this is evidence).
+        bar: f64,
+    },
 }

@@ -218,14 +218,14 @@ fn open_questions(a: &Analysis) -> Vec<(Question, Option<Effect>)> {
 
 /// Does the simulated set `ds` establish the answer (the gain when `effect` is None, with its
 /// held-out ratio)?
-fn establishes(ds: &Dataset, effect: Option<Effect>) -> Result<(bool, f64), String> {
+fn establishes(ds: &Dataset, effect: Option<Effect>) -> Result<(bool, f64), crate::PlanError> {
     match effect {
         None => {
             let opts = capstan_engine::analysis::Options {
                 threads: 1,
                 ..Default::default()
             };
-            let a = capstan_engine::analysis::run(ds, opts).map_err(|e| e.to_string())?;
+            let a = capstan_engine::analysis::run(ds, opts).map_err(crate::PlanError::Analysis)?;
             Ok((a.gain.verdict == GainVerdict::Established, a.gain.value))
         }
         Some(e) => {
@@ -260,7 +260,7 @@ fn trial(
     (seed, salt): (u64, u64),
     threads: usize,
     protocol: &capstan_rig::Protocol,
-) -> Result<Trial, String> {
+) -> Result<Trial, crate::PlanError> {
     let sets: Vec<CordSet> = (0..reps)
         .map(|r| {
             let mut s = base.clone();
@@ -274,7 +274,7 @@ fn trial(
         })
         .collect();
     let hits = capstan_engine::fit::par::par_map(&sets, threads, |s: &CordSet| {
-        let ds = s.generate()?;
+        let ds = s.generate().map_err(crate::PlanError::Case)?;
         establishes(&ds, effect)
     });
     let mut established = 0;
@@ -307,7 +307,7 @@ pub fn how_many(
     (diameters, wraps, runs): (&[f64], &[f64], u32),
     (reps, seed, threads): (usize, u64, usize),
     protocol: &capstan_rig::Protocol,
-) -> Result<Cords, String> {
+) -> Result<Cords, crate::PlanError> {
     let base = CordSet {
         seed,
         world: world(a),

@@ -10,9 +10,12 @@ pub mod candidates;
 pub mod commands;
 pub mod cords;
 pub mod design;
+mod error;
 pub mod hypotheses;
 pub mod trial;
 pub mod world;
+
+pub use error::PlanError;
 
 use candidates::{candidates, Candidate, Design};
 use capstan_data::Dataset;
@@ -40,7 +43,7 @@ pub struct Options {
     /// Also simulate how many cords each open question between cords needs (the larger part
     /// of the planner's time: sets of up to 80 cords).
     pub cords: bool,
-    /// Set (by a signal): stop within one campaign ([`STOPPED`]).
+    /// Set (by a signal): stop within one campaign ([`PlanError::Stopped`]).
     pub stop: Option<&'static AtomicBool>,
 }
 
@@ -192,16 +195,13 @@ pub fn open(data: &Dataset) -> Open {
     }
 }
 
-/// What [`plan`] returns when `progress` asked it to stop.
-pub const STOPPED: &str = "stopped before every protocol was simulated";
-
 /// Plan the next campaign for `data`; `progress(done, total)` before every protocol and at the
-/// end: it returns false to stop (the plan is then [`STOPPED`]).
+/// end: it returns false to stop (the plan is then [`PlanError::Stopped`]).
 pub fn plan(
     data: &Dataset,
     opts: &Options,
     progress: &mut dyn FnMut(usize, usize) -> bool,
-) -> Result<Plan, String> {
+) -> Result<Plan, PlanError> {
     let t0 = Instant::now();
     let mut assumed = Vec::new();
     let d = diagnosis(data, &mut assumed);
@@ -222,7 +222,7 @@ pub fn plan(
     let mut scored = Vec::new();
     for (i, c) in cands.into_iter().enumerate() {
         if !progress(i, total) {
-            return Err(STOPPED.to_string());
+            return Err(PlanError::Stopped);
         }
         let r = match blind(&c).filter(|_| i > 0 && some_tests_all) {
             Some(why) => trial::not_simulated(
@@ -245,7 +245,7 @@ pub fn plan(
     }
     // A stop asked for during the last protocol stops too: nothing is written.
     if !progress(total, total) {
-        return Err(STOPPED.to_string());
+        return Err(PlanError::Stopped);
     }
     let current_design = Current {
         p_decide_worst: scored[0].p_decide_worst,
@@ -262,7 +262,7 @@ pub fn plan(
     });
     let (cords, first) = cords_first(data, &d, &current, &hyps, current_decides, opts, &world)?;
     if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
-        return Err(STOPPED.to_string());
+        return Err(PlanError::Stopped);
     }
     Ok(Plan {
         hypotheses: hyps,
@@ -295,7 +295,7 @@ fn cords_first(
     current_decides: bool,
     opts: &Options,
     world: &World,
-) -> Result<(Option<cords::Cords>, First), String> {
+) -> Result<(Option<cords::Cords>, First), PlanError> {
     let protocol = |why: String| First {
         which: "protocol",
         why,
@@ -322,7 +322,7 @@ fn cords_first(
         return Ok((None, protocol(why)));
     }
     if opts.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
-        return Err(STOPPED.to_string());
+        return Err(PlanError::Stopped);
     }
     let a = capstan_engine::analysis::run(
         data,
@@ -331,7 +331,7 @@ fn cords_first(
             ..Default::default()
         },
     )
-    .map_err(|e| e.to_string())?;
+    .map_err(PlanError::Analysis)?;
     let c = cords::how_many(
         &a,
         (

@@ -52,12 +52,12 @@ pub fn rates(
     reps: usize,
     (seed, salt): (u64, u64),
     threads: usize,
-) -> Result<Vec<Rate>, String> {
+) -> Result<Vec<Rate>, crate::PlanError> {
     rates_until(design, hypotheses, world, reps, (seed, salt), threads, None)
 }
 
 /// [`rates`], checking `stop` before every `threads` campaigns: set, it returns
-/// [`crate::STOPPED`] within one campaign's time (a protocol's campaigns took minutes on a
+/// [`crate::PlanError::Stopped`] within one campaign's time (a protocol's campaigns took minutes on a
 /// large design, and a signal waited for all of them).
 pub fn rates_until(
     design: &Design,
@@ -67,7 +67,7 @@ pub fn rates_until(
     (seed, salt): (u64, u64),
     threads: usize,
     stop: Option<&AtomicBool>,
-) -> Result<Vec<Rate>, String> {
+) -> Result<Vec<Rate>, crate::PlanError> {
     let mut cases = Vec::new();
     let untestable = |h: &Hypothesis| untestable(design, h, world);
     let simulated: Vec<&Hypothesis> = hypotheses
@@ -97,13 +97,12 @@ pub fn rates_until(
     let mut outcomes = Vec::with_capacity(cases.len());
     for chunk in cases.chunks(threads.max(1)) {
         if stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
-            return Err(crate::STOPPED.to_string());
+            return Err(crate::PlanError::Stopped);
         }
-        outcomes.extend(score::run(
-            chunk,
-            threads,
-            capstan_engine::diagnose::diagnose,
-        )?);
+        outcomes.extend(
+            score::run(chunk, threads, capstan_engine::diagnose::diagnose)
+                .map_err(crate::PlanError::Validation)?,
+        );
     }
     let mut chunks = outcomes.chunks(reps.max(1));
     debug_assert_eq!(chunks.len(), simulated.len());

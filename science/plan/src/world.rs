@@ -47,12 +47,12 @@ pub fn campaign(design: &Design, effects: &[Effect], world: &World, seed: u64) -
 
 /// The world and design as the simulator takes them, or the plan refused in one sentence: the
 /// quantity, its value, the range the simulator takes and what in the data gave it.
-pub fn check(design: &Design, world: &World, d: &Diagnosis) -> Result<(), String> {
+pub fn check(design: &Design, world: &World, d: &Diagnosis) -> Result<(), crate::PlanError> {
     let cfg = campaign(design, &[], world, 1);
     match cfg.validate() {
         Ok(()) => Ok(()),
         Err(CampaignError::Bad(what, value, allowed)) => {
-            let source = match what {
+            let origin = match what {
                 "scatter (%)" => format!(
                     "the cord-to-cord scatter of mu these data show ({:.0} % of their mu {:.4}, \
                      from {} cords): cords this different are not one material on one rig — \
@@ -67,14 +67,13 @@ pub fn check(design: &Design, world: &World, d: &Diagnosis) -> Result<(), String
                 ),
                 _ => "the design these data describe".to_string(),
             };
-            Err(format!(
-                "cannot plan on these data: the simulated campaigns would need {what} = \
-                 {value:.4}, but the simulator takes {}; it comes from {source}",
-                allowed.trim_start_matches("must be ")
-            ))
+            Err(crate::PlanError::OutsideSimulator {
+                what,
+                value,
+                allowed,
+                origin,
+            })
         }
-        Err(e) => Err(format!(
-            "cannot plan on these data: their design cannot be simulated ({e})"
-        )),
+        Err(e) => Err(crate::PlanError::Design(Box::new(e))),
     }
 }

@@ -3,7 +3,7 @@
 //! draw), inside the canvas and clear of every other text; and the files' physical sizes (the
 //! SVG's width in mm, the PNG's pixels and resolution, the PDF's page).
 
-use anyhow::{bail, Context as _, Result};
+use crate::error::FileCheckError;
 use resvg::usvg::{self, fontdb, Node};
 use std::sync::Arc;
 
@@ -55,12 +55,15 @@ fn collect(g: &usvg::Group, out: &mut Vec<TextBox>) {
 }
 
 /// Every text of `svg` laid out with `fonts`, and the canvas's size (px).
-pub fn text_boxes(svg: &str, fonts: &Arc<fontdb::Database>) -> Result<(Vec<TextBox>, (f64, f64))> {
+pub fn text_boxes(
+    svg: &str,
+    fonts: &Arc<fontdb::Database>,
+) -> Result<(Vec<TextBox>, (f64, f64)), FileCheckError> {
     let opt = usvg::Options {
         fontdb: fonts.clone(),
         ..usvg::Options::default()
     };
-    let tree = usvg::Tree::from_str(svg, &opt).context("the figure's SVG does not parse")?;
+    let tree = usvg::Tree::from_str(svg, &opt).map_err(FileCheckError::Svg)?;
     let mut out = Vec::new();
     collect(tree.root(), &mut out);
     let s = tree.size();
@@ -70,7 +73,11 @@ pub fn text_boxes(svg: &str, fonts: &Arc<fontdb::Database>) -> Result<(Vec<TextB
 /// What is wrong with the text of `svg` laid out with `fonts`: each text outside the canvas,
 /// each pair of texts on each other (boxes overlapping by more than `tol` px), and each text
 /// that was not laid out (no font for it). Empty: nothing.
-pub fn text_problems(svg: &str, fonts: &Arc<fontdb::Database>, tol: f64) -> Result<Vec<String>> {
+pub fn text_problems(
+    svg: &str,
+    fonts: &Arc<fontdb::Database>,
+    tol: f64,
+) -> Result<Vec<String>, FileCheckError> {
     let (boxes, (w, h)) = text_boxes(svg, fonts)?;
     let expected = svg.matches("<text").count();
     let mut out = Vec::new();
@@ -103,19 +110,26 @@ pub fn text_problems(svg: &str, fonts: &Arc<fontdb::Database>, tol: f64) -> Resu
 }
 
 /// An SVG file's width and height attributes, mm.
-pub fn svg_size_mm(svg: &str) -> Result<(f64, f64)> {
+pub fn svg_size_mm(svg: &str) -> Result<(f64, f64), FileCheckError> {
     let head = &svg[..svg.find('>').unwrap_or(svg.len())];
-    let attr = |name: &str| -> Result<f64> {
+    let attr = |name: &'static str| -> Result<f64, FileCheckError> {
         let k = head
             .find(&format!(" {name}=\""))
-            .with_context(|| format!("no {name} attribute"))?
+            .ok_or(FileCheckError::NoAttribute(name))?
             + name.len()
             + 3;
         let v = head[k..].split('"').next().unwrap_or("");
         let Some(mm) = v.strip_suffix("mm") else {
-            bail!("{name}={v:?} is not in mm");
+            return Err(FileCheckError::NotMm {
+                name,
+                value: v.to_string(),
+            });
         };
-        mm.parse().with_context(|| format!("{name}={v:?}"))
+        mm.parse().map_err(|source| FileCheckError::NotNumber {
+            name,
+            value: v.to_string(),
+            source,
+        })
     };
     Ok((attr("width")?, attr("height")?))
 }
@@ -130,9 +144,9 @@ pub struct PngInfo {
 }
 
 /// A PNG's size in pixels and its resolution.
-pub fn png_info(bytes: &[u8]) -> Result<PngInfo> {
+pub fn png_info(bytes: &[u8]) -> Result<PngInfo, FileCheckError> {
     let dec = png::Decoder::new(bytes);
-    let reader = dec.read_info().context("the PNG does not decode")?;
+    let reader = dec.read_info().map_err(FileCheckError::Png)?;
     let info = reader.info();
     let dims = info
         .pixel_dims
@@ -145,21 +159,21 @@ pub fn png_info(bytes: &[u8]) -> Result<PngInfo> {
 }
 
 /// A one-page PDF's page size, pt (its `/MediaBox`).
-pub fn pdf_page_pt(bytes: &[u8]) -> Result<(f64, f64)> {
+pub fn pdf_page_pt(bytes: &[u8]) -> Result<(f64, f64), FileCheckError> {
     let text = String::from_utf8_lossy(bytes);
-    let k = text.find("/MediaBox").context("no /MediaBox")?;
+    let k = text.find("/MediaBox").ok_or(FileCheckError::NoMediaBox)?;
     let inside = text[k..]
         .split('[')
         .nth(1)
         .and_then(|s| s.split(']').next())
-        .context("a /MediaBox without its numbers")?;
+        .ok_or(FileCheckError::MediaBoxEmpty)?;
     let v: Vec<f64> = inside
         .split_whitespace()
         .map(str::parse)
         .collect::<Result<_, _>>()
-        .context("a /MediaBox that is not numbers")?;
+        .map_err(FileCheckError::MediaBoxNotNumbers)?;
     if v.len() != 4 {
-        bail!("a /MediaBox of {} numbers", v.len());
+        return Err(FileCheckError::MediaBoxCount(v.len()));
     }
     Ok((v[2] - v[0], v[3] - v[1]))
 }

@@ -9,10 +9,10 @@
 //! width and height in mm, the PDF's page in points (1 pt = 1/72 in), the PNG's resolution in
 //! its `pHYs` chunk, so that a word processor or LaTeX places each at `width_mm`.
 
+use crate::error::{FigureError, Result};
 use crate::figures::Figure;
 use crate::plot::legend::legend;
 use crate::plot::Layout;
-use anyhow::{bail, Context as _, Result};
 use std::sync::Arc;
 
 /// A figure file format.
@@ -44,14 +44,19 @@ impl Format {
                 "svg" => Format::Svg,
                 "png" => Format::Png,
                 "pdf" => Format::Pdf,
-                other => bail!("--figures {s}: unknown format {other:?} (svg, png or pdf)"),
+                other => {
+                    return Err(FigureError::UnknownFormat {
+                        list: s.to_string(),
+                        format: other.to_string(),
+                    })
+                }
             };
             if !out.contains(&f) {
                 out.push(f);
             }
         }
         if out.is_empty() {
-            bail!("--figures {s:?}: name at least one of svg, png, pdf");
+            return Err(FigureError::NoFormat(s.to_string()));
         }
         Ok(out)
     }
@@ -96,13 +101,10 @@ impl FigureOptions {
     /// Check the sizes.
     pub fn check(&self) -> Result<()> {
         if !(self.width_mm.is_finite() && (40.0..=400.0).contains(&self.width_mm)) {
-            bail!(
-                "--width-mm {}: must be 40 to 400 (85 for a journal column, 170 for a page)",
-                self.width_mm
-            );
+            return Err(FigureError::Width(self.width_mm));
         }
         if !(self.font_pt.is_finite() && (4.0..=24.0).contains(&self.font_pt)) {
-            bail!("--font-pt {}: must be 4 to 24", self.font_pt);
+            return Err(FigureError::FontPt(self.font_pt));
         }
         Ok(())
     }
@@ -229,7 +231,7 @@ fn tree(svg: &str, db: &Arc<resvg::usvg::fontdb::Database>) -> Result<resvg::usv
         fontdb: db.clone(),
         ..resvg::usvg::Options::default()
     };
-    resvg::usvg::Tree::from_str(svg, &opt).context("the figure's SVG does not parse")
+    resvg::usvg::Tree::from_str(svg, &opt).map_err(FigureError::Svg)
 }
 
 /// The PNG's size in pixels for a tree of `size` at `width_mm`: the width is exactly
@@ -246,8 +248,7 @@ fn png(t: &resvg::usvg::Tree, width_mm: f64) -> Result<Vec<u8>> {
     let size = t.size();
     let (px_w, px_h) = png_size((size.width(), size.height()), width_mm);
     let scale = px_w as f32 / size.width();
-    let mut pm =
-        resvg::tiny_skia::Pixmap::new(px_w, px_h).context("the figure is too large for a PNG")?;
+    let mut pm = resvg::tiny_skia::Pixmap::new(px_w, px_h).ok_or(FigureError::TooLarge)?;
     // The background is white and opaque: the pixels are RGB.
     pm.fill(resvg::tiny_skia::Color::WHITE);
     resvg::render(
@@ -275,8 +276,8 @@ fn png(t: &resvg::usvg::Tree, width_mm: f64) -> Result<Vec<u8>> {
             yppu: ppm,
             unit: png::Unit::Meter,
         }));
-        let mut w = enc.write_header().context("cannot encode the PNG")?;
-        w.write_image_data(&rgb).context("cannot encode the PNG")?;
+        let mut w = enc.write_header().map_err(FigureError::PngEncode)?;
+        w.write_image_data(&rgb).map_err(FigureError::PngEncode)?;
     }
     Ok(out)
 }
@@ -288,7 +289,7 @@ fn pdf(t: &resvg::usvg::Tree) -> Result<Vec<u8>> {
         svg2pdf::ConversionOptions::default(),
         svg2pdf::PageOptions { dpi: 96.0 },
     )
-    .map_err(|e| anyhow::anyhow!("cannot make the PDF: {e}"))
+    .map_err(|e| FigureError::Pdf(e.to_string()))
 }
 
 /// One figure file: its name under the output directory and its bytes.
@@ -318,10 +319,7 @@ pub fn figure_files(figs: &[Figure], opts: &FigureOptions) -> Result<Vec<FigureF
             .collect();
         handles
             .into_iter()
-            .map(|h| {
-                h.join()
-                    .unwrap_or_else(|_| Err(anyhow::anyhow!("a figure's renderer panicked")))
-            })
+            .map(|h| h.join().unwrap_or_else(|_| Err(FigureError::Panicked)))
             .collect()
     });
     for files in per_figure {
@@ -368,7 +366,8 @@ pub fn svg_parses(svg: &str) -> Result<()> {
 
 /// A PNG file's size in pixels, decoding it whole.
 pub fn png_decodes(bytes: &[u8]) -> Result<(u32, u32)> {
-    let pm = resvg::tiny_skia::Pixmap::decode_png(bytes).context("the PNG does not decode")?;
+    let pm = resvg::tiny_skia::Pixmap::decode_png(bytes)
+        .map_err(|e| FigureError::PngDecode(Box::new(e)))?;
     Ok((pm.width(), pm.height()))
 }
 

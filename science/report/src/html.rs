@@ -132,7 +132,7 @@ pub fn report_html(
     closed_loop: Option<&[SimCurve]>,
     closed_loop_note: &str,
     ctx: &crate::Context,
-) -> anyhow::Result<(String, Vec<Figure>)> {
+) -> crate::error::Result<(String, Vec<Figure>)> {
     let figs = figures::all(a, closed_loop, &ctx.figures.layout())?;
     let mut h = String::new();
     let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Capstan analysis</title><style>{STYLE}</style></head><body>");

@@ -18,6 +18,7 @@ pub mod check;
 pub mod components;
 pub mod context;
 pub mod discovered;
+pub mod error;
 pub mod export;
 pub mod figures;
 pub mod files;
@@ -33,6 +34,7 @@ pub mod tracking;
 
 pub use capstan_engine::analysis::closed_loop::SimCurve;
 pub use context::{apply_thesis_choice, Context, ThesisComparison};
+pub use error::{FigureError, FileCheckError};
 pub use export::{figure_files, FigureOptions, Format};
 pub use files::{metrics_json, write_predictions_csv};
 pub use html::report_html;

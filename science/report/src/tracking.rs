@@ -123,7 +123,7 @@ pub fn tracking_html(
     source: &str,
     window: SteadyWindow,
     ctx: &crate::Context,
-) -> anyhow::Result<(String, Vec<Figure>)> {
+) -> crate::error::Result<(String, Vec<Figure>)> {
     let layout = ctx.figures.layout();
     let traces: Vec<RunTrace> = runs
         .iter()

@@ -161,8 +161,8 @@ impl Case {
 
     /// Run the simulator and read its pairs back through the CSV schema, exactly as `capstan
     /// simulate` writes them to `pairs.csv` (minus the dropped columns).
-    pub fn generate(&self) -> Result<(Dataset, CampaignResult), String> {
-        let r = run_campaign(&self.config).map_err(|e| e.to_string())?;
+    pub fn generate(&self) -> Result<(Dataset, CampaignResult), crate::CaseError> {
+        let r = run_campaign(&self.config).map_err(|e| crate::CaseError::Campaign(Box::new(e)))?;
         let pairs: Vec<Pair> = crate::pairs::to_pairs(&r.rows)
             .into_iter()
             .map(|mut p| {
@@ -180,9 +180,10 @@ impl Case {
             })
             .collect();
         let mut csv = Vec::new();
-        write_pairs_to(&mut csv, &pairs).map_err(|e| e.to_string())?;
+        write_pairs_to(&mut csv, &pairs).map_err(crate::CaseError::Write)?;
         let name = format!("case-{}.csv", self.seed);
-        let d = read_pairs(csv.as_slice(), &name).map_err(|e| e.to_string())?;
+        let d =
+            read_pairs(csv.as_slice(), &name).map_err(|e| crate::CaseError::Read(Box::new(e)))?;
         Ok((d, r))
     }
 }

@@ -23,7 +23,7 @@ pub const MAX_CORDS: usize = 12;
 
 /// Simulate one run per cord with the cord's extended model (cords on up to `threads` threads;
 /// at most [`MAX_CORDS`] cords).
-pub fn run(a: &Analysis, threads: usize) -> anyhow::Result<ClosedLoop> {
+pub fn run(a: &Analysis, threads: usize) -> Result<ClosedLoop, crate::ValidationError> {
     let groups = evenly(a.obs.groups.len(), MAX_CORDS);
     let runs = par_map(&groups, threads, |&g| {
         let grp = &a.obs.groups[g];
@@ -35,7 +35,10 @@ pub fn run(a: &Analysis, threads: usize) -> anyhow::Result<ClosedLoop> {
             sensor_noise: false,
             ..CampaignConfig::default()
         };
-        run_campaign(&cfg).map_err(|e| anyhow::anyhow!("closed loop, cord {}: {e:?}", grp.label))
+        run_campaign(&cfg).map_err(|cause| crate::ValidationError::ClosedLoop {
+            cord: grp.label.clone(),
+            cause: Box::new(cause),
+        })
     });
     let mut curves = Vec::new();
     let mut n = 0usize;

@@ -86,17 +86,21 @@ pub fn judge(c: &CordCase, d: &Diagnosis, gain: Option<GainVerdict>) -> CordOutc
 
 /// Simulate and judge every case on `threads` threads (outcomes in case order). The gain-null
 /// cases run the whole analysis (its held-out gain); the others the diagnosis.
-pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, String> {
+pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, crate::ValidationError> {
     crate::score::par(cases, threads, |c| {
         let ds = c
             .generate()
-            .map_err(|e| format!("{} does not simulate: {e}", c.describe()))?;
+            .map_err(|cause| crate::ValidationError::NotSimulated {
+                case: c.describe(),
+                cause,
+            })?;
         if c.truth == Truth::GainNull {
             let opts = capstan_engine::analysis::Options {
                 threads: 1,
                 ..Default::default()
             };
-            let a = capstan_engine::analysis::run(&ds, opts).map_err(|e| e.to_string())?;
+            let a = capstan_engine::analysis::run(&ds, opts)
+                .map_err(crate::ValidationError::Analysis)?;
             Ok(judge(c, &a.evidence, Some(a.gain.verdict)))
         } else {
             let opts = capstan_engine::diagnose::Options {

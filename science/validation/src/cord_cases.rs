@@ -196,13 +196,14 @@ impl CordSet {
 
     /// Simulate every cord and read the pairs back through the CSV schema as one data set
     /// (a `cord` label column when cords repeat a (diameter, wrap)).
-    pub fn generate(&self) -> Result<Dataset, String> {
+    pub fn generate(&self) -> Result<Dataset, crate::CaseError> {
         let mut pairs: Vec<Pair> = Vec::new();
         let mut k = 0u64;
         for rep in 0..self.replicates {
             for &d in &self.diameters_mm {
                 for &w in &self.wraps_deg {
-                    let r = run_campaign(&self.cord_config(d, w, k)).map_err(|e| e.to_string())?;
+                    let r = run_campaign(&self.cord_config(d, w, k))
+                        .map_err(|e| crate::CaseError::Campaign(Box::new(e)))?;
                     // The thesis's columns: no time_s (its window times are not in its file).
                     pairs.extend(crate::pairs::to_pairs(&r.rows).into_iter().map(|mut p| {
                         p.time_s = None;
@@ -239,7 +240,7 @@ impl CordSet {
             csv.push('\n');
         }
         read_pairs(csv.as_bytes(), &format!("cord-set-{}.csv", self.seed))
-            .map_err(|e| e.to_string())
+            .map_err(|e| crate::CaseError::Read(Box::new(e)))
     }
 }
 
@@ -345,7 +346,7 @@ impl CordCase {
     }
 
     /// Simulate every cord and read the pairs back through the CSV schema as one data set.
-    pub fn generate(&self) -> Result<Dataset, String> {
+    pub fn generate(&self) -> Result<Dataset, crate::CaseError> {
         self.set().generate()
     }
 }

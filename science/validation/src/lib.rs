@@ -18,7 +18,10 @@ pub mod cord_bounds;
 pub mod cord_calibration;
 pub mod cord_cases;
 pub mod discover_cases;
+pub mod error;
 pub mod figures;
 pub mod pairs;
 pub mod score;
 pub mod validate;
+
+pub use error::{CaseError, ValidationError};

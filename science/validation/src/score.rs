@@ -131,11 +131,17 @@ pub(crate) fn par<T: Sync, R: Send>(
 
 /// Simulate every case (firmware in the loop) on `threads` threads; data sets in case order.
 /// A case the simulator refuses is an error naming it.
-pub fn generate(cases: &[Case], threads: usize) -> Result<Vec<capstan_data::Dataset>, String> {
+pub fn generate(
+    cases: &[Case],
+    threads: usize,
+) -> Result<Vec<capstan_data::Dataset>, crate::ValidationError> {
     par(cases, threads, |c| {
         c.generate()
             .map(|x| x.0)
-            .map_err(|e| format!("case {} does not simulate: {e}", c.describe()))
+            .map_err(|cause| crate::ValidationError::NotSimulated {
+                case: format!("case {}", c.describe()),
+                cause,
+            })
     })
     .into_iter()
     .collect()
@@ -157,7 +163,7 @@ pub fn run(
     cases: &[Case],
     threads: usize,
     diagnose: impl Fn(&capstan_data::Dataset) -> Diagnosis + Sync,
-) -> Result<Vec<Outcome>, String> {
+) -> Result<Vec<Outcome>, crate::ValidationError> {
     let data = generate(cases, threads)?;
     Ok(evaluate(cases, &data, threads, diagnose))
 }

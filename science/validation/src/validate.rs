@@ -12,7 +12,7 @@
 //! renders.
 
 use crate::cases::{draw_case, Case, Class};
-use crate::score;
+use crate::{score, ValidationError};
 use capstan_engine::analysis::{run, Options};
 use serde::Serialize;
 
@@ -92,12 +92,13 @@ impl Validation {
     }
 }
 
-fn analyse(case: &Case, opts: Options) -> anyhow::Result<Outcome> {
-    let (data, _) = case
-        .generate()
-        .map_err(|e| anyhow::anyhow!("case {}: {e}", case.describe()))?;
+fn analyse(case: &Case, opts: Options) -> Result<Outcome, ValidationError> {
+    let (data, _) = case.generate().map_err(|cause| ValidationError::Case {
+        case: case.describe(),
+        cause,
+    })?;
     let t = std::time::Instant::now();
-    let a = run(&data, opts)?;
+    let a = run(&data, opts).map_err(ValidationError::Analysis)?;
     // The causes the report names are the verdict layer's named effects, which the analysis
     // renders as its diagnosis too.
     let o = score::judge(case, data.pairs.len(), &a.evidence);
@@ -115,7 +116,7 @@ fn analyse(case: &Case, opts: Options) -> anyhow::Result<Outcome> {
 
 /// Run the whole analysis on every planted case of `seed` (`every`: take every this-many-th
 /// case, 1 for all), `threads` cases at a time.
-pub fn validate(seed: u64, every: usize, threads: usize) -> anyhow::Result<Validation> {
+pub fn validate(seed: u64, every: usize, threads: usize) -> Result<Validation, ValidationError> {
     let cs: Vec<Case> = cases(seed)
         .into_iter()
         .enumerate()
@@ -127,7 +128,7 @@ pub fn validate(seed: u64, every: usize, threads: usize) -> anyhow::Result<Valid
         ..Options::default()
     };
     let results = capstan_engine::fit::par::par_map(&cs, threads, |c| analyse(c, opts));
-    let outcomes: Vec<Outcome> = results.into_iter().collect::<anyhow::Result<_>>()?;
+    let outcomes: Vec<Outcome> = results.into_iter().collect::<Result<_, _>>()?;
     let count = |f: &dyn Fn(&Outcome) -> bool, keep: &dyn Fn(&Outcome) -> bool| {
         let of: Vec<&Outcome> = outcomes.iter().filter(|o| keep(o)).collect();
         (of.iter().filter(|o| f(o)).count(), of.len())

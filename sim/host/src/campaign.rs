@@ -41,19 +41,55 @@ pub struct FaultSpec {
     pub run: Option<u32>,
 }
 
-impl FromStr for FaultSpec {
-    type Err = String;
+/// Why a fault argument (`NAME@SECONDS[#RUN]`) is refused; `spec` is the argument as given.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum FaultSpecError {
+    /// No `@` between the name and the time.
+    #[error("`{spec}`: expected NAME@SECONDS (e.g. cord_break@40)")]
+    Form {
+        /// The argument.
+        spec: String,
+    },
+    /// The name is no fault the plant can inject.
+    #[error("`{name}`: unknown fault (known: {})", InjectionKind::NAMES.join(", "))]
+    Unknown {
+        /// The name given.
+        name: String,
+    },
+    /// The run after `#` is not a whole number from 1.
+    #[error("`{spec}`: the run after `#` must be 1 or more")]
+    Run {
+        /// The argument.
+        spec: String,
+    },
+    /// The time is not a number.
+    #[error("`{spec}`: `{secs}` is not a number of seconds")]
+    NotSeconds {
+        /// The argument.
+        spec: String,
+        /// The time as given.
+        secs: String,
+    },
+    /// The time is negative or not finite.
+    #[error("`{spec}`: the time must be 0 or more seconds after the trigger")]
+    Negative {
+        /// The argument.
+        spec: String,
+    },
+}
 
-    fn from_str(s: &str) -> Result<Self, String> {
+impl FromStr for FaultSpec {
+    type Err = FaultSpecError;
+
+    fn from_str(s: &str) -> Result<Self, FaultSpecError> {
+        let spec = || s.to_string();
         let (name, rest) = s
             .split_once('@')
-            .ok_or_else(|| format!("`{s}`: expected NAME@SECONDS (e.g. cord_break@40)"))?;
-        let kind = InjectionKind::from_name(name.trim()).ok_or_else(|| {
-            format!(
-                "`{name}`: unknown fault (known: {})",
-                InjectionKind::NAMES.join(", ")
-            )
-        })?;
+            .ok_or_else(|| FaultSpecError::Form { spec: spec() })?;
+        let kind =
+            InjectionKind::from_name(name.trim()).ok_or_else(|| FaultSpecError::Unknown {
+                name: name.to_string(),
+            })?;
         let (secs, run) = match rest.split_once('#') {
             Some((a, r)) => {
                 let run: u32 = r
@@ -61,7 +97,7 @@ impl FromStr for FaultSpec {
                     .parse()
                     .ok()
                     .filter(|&r| r >= 1)
-                    .ok_or_else(|| format!("`{s}`: the run after `#` must be 1 or more"))?;
+                    .ok_or_else(|| FaultSpecError::Run { spec: spec() })?;
                 (a, Some(run))
             }
             None => (rest, None),
@@ -69,11 +105,12 @@ impl FromStr for FaultSpec {
         let at_s: f64 = secs
             .trim()
             .parse()
-            .map_err(|_| format!("`{s}`: `{secs}` is not a number of seconds"))?;
+            .map_err(|_| FaultSpecError::NotSeconds {
+                spec: spec(),
+                secs: secs.to_string(),
+            })?;
         if !(at_s.is_finite() && at_s >= 0.0) {
-            return Err(format!(
-                "`{s}`: the time must be 0 or more seconds after the trigger"
-            ));
+            return Err(FaultSpecError::Negative { spec: spec() });
         }
         Ok(FaultSpec { kind, at_s, run })
     }

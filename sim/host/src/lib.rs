@@ -28,5 +28,7 @@ pub mod setup;
 pub mod time;
 pub mod two_control;
 
-pub use campaign::{run_campaign, CampaignConfig, CampaignResult, FaultSpec, PairRow};
+pub use campaign::{
+    run_campaign, CampaignConfig, CampaignResult, FaultSpec, FaultSpecError, PairRow,
+};
 pub use capstan_plant as plant;

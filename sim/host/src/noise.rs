@@ -74,17 +74,22 @@ impl fmt::Display for NoiseProfile {
     }
 }
 
-impl FromStr for NoiseProfile {
-    type Err = String;
+/// A noise profile's name that is none of [`NoiseProfile::NAMES`].
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("`{}`: unknown noise profile (known: {})", .0, NoiseProfile::NAMES.join(", "))]
+pub struct UnknownNoiseProfile(
+    /// The name given.
+    pub String,
+);
 
-    fn from_str(s: &str) -> Result<Self, String> {
+impl FromStr for NoiseProfile {
+    type Err = UnknownNoiseProfile;
+
+    fn from_str(s: &str) -> Result<Self, UnknownNoiseProfile> {
         match s.trim() {
             "quiet" => Ok(NoiseProfile::Quiet),
             "thesis" => Ok(NoiseProfile::Thesis),
-            other => Err(format!(
-                "`{other}`: unknown noise profile (known: {})",
-                Self::NAMES.join(", ")
-            )),
+            other => Err(UnknownNoiseProfile(other.to_string())),
         }
     }
 }

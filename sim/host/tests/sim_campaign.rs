@@ -304,6 +304,7 @@ fn bad_campaigns_are_refused_with_a_reason() {
     assert!("melt@3"
         .parse::<capstan_sim::FaultSpec>()
         .unwrap_err()
+        .to_string()
         .contains("unknown fault"));
     assert!("abort@-1".parse::<capstan_sim::FaultSpec>().is_err());
     assert!("abort@x".parse::<capstan_sim::FaultSpec>().is_err());

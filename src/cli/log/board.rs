@@ -95,7 +95,7 @@ fn stream(
         match board.read_up(&mut buf) {
             Ok(0) => std::thread::sleep(Duration::from_millis(5)),
             Ok(n) => logger.feed(&buf[..n])?,
-            Err(e) => return Ok(Stop::ProbeLost(e)),
+            Err(e) => return Ok(Stop::ProbeLost(e.to_string())),
         }
     }
 }

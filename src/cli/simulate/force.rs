@@ -140,7 +140,7 @@ fn window(rig: &ForceRig) -> SteadyWindow {
 
 fn write_summary(set: &mut Staged, summary: &serde_json::Value) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(summary)? + "\n";
-    set.write("summary.json", text.as_bytes())
+    Ok(set.write("summary.json", text.as_bytes())?)
 }
 
 /// Run `k`'s rig: its own seed, and the faults given for it.

@@ -89,7 +89,7 @@ impl CampaignWriter {
         set.write("summary.json", text.as_bytes())?;
         let dir = set.target().display().to_string();
         if keep {
-            return set.keep().map(Some);
+            return Ok(Some(set.keep()?));
         }
         set.commit()
             .with_context(|| format!("writing the campaign into {dir}"))?;

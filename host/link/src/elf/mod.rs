@@ -23,7 +23,7 @@ pub use check::MAX_PADDING;
 pub(crate) use records::record_layout;
 pub use records::{Prim, RecordKind, RecordLayout};
 
-use anyhow::{anyhow, bail, Context};
+use crate::error::{ElfError, FormatError};
 use check::bitfield_bytes;
 use defmt_decoder::{Encoding, Table};
 use defmt_parser::{Fragment, Parameter, ParserMode, Type};
@@ -43,9 +43,9 @@ struct Entry {
     /// The format string.
     format: String,
     /// Its parameters in decoding order, or why it cannot be decoded.
-    params: Result<Vec<Parameter>, String>,
+    params: Result<Vec<Parameter>, FormatError>,
     /// For an enum format (`A|B({=u8})|C`): each variant's parameters.
-    variants: Option<Vec<Result<Vec<Parameter>, String>>>,
+    variants: Option<Vec<Result<Vec<Parameter>, FormatError>>>,
 }
 
 impl Entry {
@@ -76,49 +76,53 @@ pub struct Firmware {
     pub path: String,
     table: Table,
     entries: HashMap<u64, Entry>,
-    timestamp: Option<Result<Vec<Parameter>, String>>,
+    timestamp: Option<Result<Vec<Parameter>, FormatError>>,
     records: HashMap<u64, RecordLayout>,
 }
 
 impl Firmware {
     /// Read an ELF from a file.
-    pub fn load(path: &Path) -> anyhow::Result<Firmware> {
+    pub fn load(path: &Path) -> Result<Firmware, ElfError> {
         // Bounded: a firmware ELF with its debug info is a few MB; /dev/zero is not one.
         const MAX_ELF_BYTES: u64 = 256 << 20;
         let mut bytes = Vec::new();
         std::fs::File::open(path)
             .and_then(|f| f.take(MAX_ELF_BYTES + 1).read_to_end(&mut bytes))
-            .with_context(|| format!("cannot read the firmware ELF {}", path.display()))?;
+            .map_err(|source| ElfError::Read {
+                path: path.display().to_string(),
+                source,
+            })?;
         if bytes.len() as u64 > MAX_ELF_BYTES {
-            bail!(
-                "{} is over {} MiB: not a firmware ELF",
-                path.display(),
-                MAX_ELF_BYTES >> 20
-            );
+            return Err(ElfError::TooLarge {
+                path: path.display().to_string(),
+                mib: MAX_ELF_BYTES >> 20,
+            });
         }
         Firmware::from_elf_bytes(&bytes, &path.display().to_string())
     }
 
     /// Read an ELF from memory; `path` names it in messages.
-    pub fn from_elf_bytes(elf: &[u8], path: &str) -> anyhow::Result<Firmware> {
+    pub fn from_elf_bytes(elf: &[u8], path: &str) -> Result<Firmware, ElfError> {
+        let path_ = || path.to_string();
         let parsed = std::panic::catch_unwind(AssertUnwindSafe(|| Table::parse(elf)));
         let table = match parsed {
-            Err(_) => bail!("ELF {path}: defmt-decoder could not read it (it panicked)"),
-            Ok(Err(e)) => bail!("ELF {path}: {e:#}"),
-            Ok(Ok(None)) => bail!(
-                "ELF {path} has no defmt table (no `.defmt` section): build the rig firmware \
-                 with defmt and give the ELF cargo built (not a .bin/.uf2, not stripped)"
-            ),
+            Err(_) => return Err(ElfError::DecoderPanicked { path: path_() }),
+            Ok(Err(e)) => {
+                return Err(ElfError::Unreadable {
+                    path: path_(),
+                    why: format!("{e:#}"),
+                })
+            }
+            Ok(Ok(None)) => return Err(ElfError::NoTable { path: path_() }),
             Ok(Ok(Some(t))) => t,
         };
         if table.encoding() != Encoding::Rzcobs {
-            bail!(
-                "ELF {path}: the firmware uses defmt's `raw` encoding; `capstan log` needs the \
-                 default rzcobs encoding, which lets a lost byte cost one record instead of the \
-                 rest of the stream"
-            );
+            return Err(ElfError::RawEncoding { path: path_() });
         }
-        let file = object::File::parse(elf).map_err(|e| anyhow!("ELF {path}: {e}"))?;
+        let file = object::File::parse(elf).map_err(|e| ElfError::Unreadable {
+            path: path_(),
+            why: e.to_string(),
+        })?;
         let sections: Vec<_> = file
             .sections()
             .filter(|s| {
@@ -165,7 +169,7 @@ impl Firmware {
     /// each, `level` one of `trace`, `debug`, `info`, `warn`, `error`; no timestamp, rzCOBS
     /// encoding. For tests and tools that make a stream themselves (a frame is the index, u16
     /// little-endian, then the arguments at their wire widths). Checked like an ELF's table.
-    pub fn from_formats(name: &str, formats: &[(u16, &str, &str)]) -> anyhow::Result<Firmware> {
+    pub fn from_formats(name: &str, formats: &[(u16, &str, &str)]) -> Result<Firmware, ElfError> {
         let mut json = serde_json::Map::new();
         let mut entries = HashMap::new();
         for &(index, level, format) in formats {
@@ -175,7 +179,12 @@ impl Firmware {
                 "info" => "Info",
                 "warn" => "Warn",
                 "error" => "Error",
-                other => bail!("{name}: `{other}` is not a log level"),
+                other => {
+                    return Err(ElfError::Level {
+                        path: name.to_string(),
+                        level: other.to_string(),
+                    })
+                }
             };
             let entry = serde_json::json!({
                 "string": { "tag": tag, "string": format },
@@ -190,8 +199,10 @@ impl Firmware {
             "bitflags": {},
             "encoding": "Rzcobs",
         });
-        let table: Table =
-            serde_json::from_value(table).map_err(|e| anyhow!("{name}: defmt table: {e}"))?;
+        let table: Table = serde_json::from_value(table).map_err(|why| ElfError::Table {
+            path: name.to_string(),
+            why,
+        })?;
         let records = find_records(&entries, name)?;
         Ok(Firmware {
             path: name.to_string(),
@@ -234,9 +245,9 @@ struct RawSymbol {
 
 /// A format's parameters as defmt-decoder consumes them: bitfields of one argument merged,
 /// then one parameter per argument index, in index order.
-fn prepared_params(format: &str) -> Result<Vec<Parameter>, String> {
+fn prepared_params(format: &str) -> Result<Vec<Parameter>, FormatError> {
     let fragments = defmt_parser::parse(format, ParserMode::ForwardsCompatible)
-        .map_err(|e| format!("unparsable format string: {e}"))?;
+        .map_err(|e| FormatError::Unparsable(e.to_string()))?;
     let mut params: Vec<Parameter> = fragments
         .into_iter()
         .filter_map(|f| match f {

@@ -10,7 +10,7 @@
 //! `crc`) are read when present, so an ELF built before them still decodes.
 
 use super::Entry;
-use anyhow::bail;
+use crate::error::{ElfError, LayoutError};
 use defmt_parser::{Fragment, ParserMode, Type};
 use std::collections::HashMap;
 
@@ -45,14 +45,14 @@ impl RecordLayout {
 }
 
 /// A record format: `WORD name={=type} name={=type} ...` → its kind and fields.
-pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, String>> {
+pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, LayoutError>> {
     let kind = RecordKind::from_word(format.split(' ').next()?)?;
     if !format.starts_with(&format!("{} seq=", kind.word())) {
         return None;
     }
     let fragments = match defmt_parser::parse(format, ParserMode::Strict) {
         Ok(f) => f,
-        Err(e) => return Some(Err(format!("unparsable: {e}"))),
+        Err(e) => return Some(Err(LayoutError::Unparsable(e.to_string()))),
     };
     let mut fields = Vec::new();
     let mut name = String::new();
@@ -68,12 +68,10 @@ pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, String>
             }
             Fragment::Parameter(p) => {
                 let Some(prim) = prim_of(&p.ty).filter(|_| p.hint.is_none()) else {
-                    return Some(Err(format!(
-                        "field `{name}` has a type this decoder cannot read"
-                    )));
+                    return Some(Err(LayoutError::FieldType(name)));
                 };
                 if p.index != fields.len() {
-                    return Some(Err("arguments out of order".into()));
+                    return Some(Err(LayoutError::OutOfOrder));
                 }
                 fields.push((std::mem::take(&mut name), prim));
             }
@@ -82,12 +80,13 @@ pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, String>
     let layout = RecordLayout { kind, fields };
     for field in kind.fields() {
         match layout.fields.iter().find(|(n, _)| n == field.name) {
-            None if field.required => return Some(Err(format!("no field `{}`", field.name))),
+            None if field.required => return Some(Err(LayoutError::NoField(field.name))),
             Some((_, t)) if *t != field.prim => {
-                return Some(Err(format!(
-                    "field `{}` is {t:?}, expected {:?}",
-                    field.name, field.prim
-                )))
+                return Some(Err(LayoutError::WrongType {
+                    field: field.name,
+                    found: *t,
+                    expected: field.prim,
+                }))
             }
             _ => {}
         }
@@ -98,7 +97,7 @@ pub(crate) fn record_layout(format: &str) -> Option<Result<RecordLayout, String>
 pub(super) fn find_records(
     entries: &HashMap<u64, Entry>,
     path: &str,
-) -> anyhow::Result<HashMap<u64, RecordLayout>> {
+) -> Result<HashMap<u64, RecordLayout>, ElfError> {
     let mut records = HashMap::new();
     for (&index, e) in entries {
         if !e.has_level() {
@@ -109,12 +108,14 @@ pub(super) fn find_records(
             Some(Ok(layout)) => {
                 records.insert(index, layout);
             }
-            Some(Err(why)) => bail!(
-                "ELF {path}: its `{}` record does not match this decoder ({why}); format: \"{}\". \
-                 Rebuild `capstan` from the same source as the firmware.",
-                e.format.split(' ').next().unwrap_or(""),
-                e.format
-            ),
+            Some(Err(why)) => {
+                return Err(ElfError::Record {
+                    path: path.to_string(),
+                    word: e.format.split(' ').next().unwrap_or("").to_string(),
+                    why,
+                    format: e.format.clone(),
+                })
+            }
         }
     }
     let missing: Vec<&str> = RecordKind::RUN_KINDS
@@ -123,17 +124,15 @@ pub(super) fn find_records(
         .map(|k| k.word())
         .collect();
     if missing.len() == RecordKind::RUN_KINDS.len() {
-        bail!(
-            "ELF {path} is not the capstan rig firmware: its defmt table has none of the rig's \
-             records (run_start, raw, pair, fault, run_end)"
-        );
+        return Err(ElfError::NotRig {
+            path: path.to_string(),
+        });
     }
     if !missing.is_empty() {
-        bail!(
-            "ELF {path}: the defmt table lacks the rig record(s) {}: is it an older or newer \
-             firmware than this `capstan`?",
-            missing.join(", ")
-        );
+        return Err(ElfError::MissingRecords {
+            path: path.to_string(),
+            missing,
+        });
     }
     Ok(records)
 }

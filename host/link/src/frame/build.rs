@@ -5,6 +5,7 @@
 //! the firmware's (`Record::from_fields`). Nothing here names a field.
 
 use crate::elf::{Prim, RecordKind, RecordLayout};
+use crate::error::FrameError;
 use capstan_rig::record::{FieldsError, Record};
 use capstan_rig::{Calibration, Protocol, Settings};
 use capstan_wire::{Scalar, Setting};
@@ -16,19 +17,19 @@ pub(super) struct Fields<'a> {
 }
 
 impl Fields<'_> {
-    fn raw(&self, name: &str) -> Result<&str, String> {
+    fn raw(&self, name: &str) -> Result<&str, FrameError> {
         let i = self
             .layout
             .position(name)
-            .ok_or_else(|| format!("no field `{name}`"))?;
+            .ok_or_else(|| FrameError::NoField(name.to_string()))?;
         self.values
             .get(i)
             .map(String::as_str)
-            .ok_or_else(|| format!("field `{name}` missing from the frame"))
+            .ok_or_else(|| FrameError::MissingValue(name.to_string()))
     }
 
     /// An unsigned field (the sequence number).
-    pub fn u(&self, name: &str) -> Result<u32, String> {
+    pub fn u(&self, name: &str) -> Result<u32, FrameError> {
         match parse(name, Prim::U32, self.raw(name)?)? {
             Scalar::U32(v) => Ok(v),
             _ => unreachable!("parsed as u32"),
@@ -37,24 +38,25 @@ impl Fields<'_> {
 }
 
 /// A field's value as defmt-decoder renders it, at its wire type.
-pub(super) fn parse(name: &str, prim: Prim, v: &str) -> Result<Scalar, String> {
-    let unsigned = || -> Result<u64, String> {
-        v.parse()
-            .map_err(|_| format!("field `{name}`: `{v}` is not an unsigned integer"))
+pub(super) fn parse(name: &str, prim: Prim, v: &str) -> Result<Scalar, FrameError> {
+    let not = |what| FrameError::NotOfType {
+        field: name.to_string(),
+        value: v.to_string(),
+        what,
     };
-    let fit = |what: &str| format!("field `{name}`: {v} does not fit {what}");
+    let unsigned =
+        || -> Result<u64, FrameError> { v.parse().map_err(|_| not("an unsigned integer")) };
+    let fit = |what| FrameError::DoesNotFit {
+        field: name.to_string(),
+        value: v.to_string(),
+        what,
+    };
     Ok(match prim {
         Prim::U8 => Scalar::U8(u8::try_from(unsigned()?).map_err(|_| fit("a byte"))?),
         Prim::U16 => Scalar::U16(u16::try_from(unsigned()?).map_err(|_| fit("16 bits"))?),
         Prim::U32 => Scalar::U32(u32::try_from(unsigned()?).map_err(|_| fit("32 bits"))?),
-        Prim::I64 => Scalar::I64(
-            v.parse()
-                .map_err(|_| format!("field `{name}`: `{v}` is not an integer"))?,
-        ),
-        Prim::F32 => Scalar::F32(
-            v.parse()
-                .map_err(|_| format!("field `{name}`: `{v}` is not a number"))?,
-        ),
+        Prim::I64 => Scalar::I64(v.parse().map_err(|_| not("an integer"))?),
+        Prim::F32 => Scalar::F32(v.parse().map_err(|_| not("a number"))?),
     })
 }
 
@@ -62,7 +64,7 @@ pub(super) fn parse(name: &str, prim: Prim, v: &str) -> Result<Scalar, String> {
 /// frame; one the firmware's record does not carry (a field the schema does not require,
 /// which an older firmware lacks) as the firmware's default (a setting's built-in value; a run
 /// record's `t2_target_n`, 0: no target). Not NaN: records compare equal.
-pub(super) fn build(kind: RecordKind, f: &Fields) -> Result<Record, String> {
+pub(super) fn build(kind: RecordKind, f: &Fields) -> Result<Record, FrameError> {
     let defaults = Settings {
         protocol: Protocol::default(),
         calibration: Calibration::default(),
@@ -75,21 +77,24 @@ pub(super) fn build(kind: RecordKind, f: &Fields) -> Result<Record, String> {
             None => Setting::from_name(field.name)
                 .filter(|_| !field.required)
                 .map(|s| defaults.scalar(s))
-                .ok_or_else(|| format!("no field `{}`", field.name))?,
+                .ok_or_else(|| FrameError::NoField(field.name.to_string()))?,
         };
         values.push(value);
     }
     let (_, record) = Record::from_fields(kind, &values).map_err(|e| match e {
-        FieldsError::Code { field, code } => format!("unknown {} code {code}", code_of(field)),
-        FieldsError::Missing(name) => format!("no field `{name}`"),
-        FieldsError::Type(name) => format!("field `{name}` is not of its type"),
-        FieldsError::Extra => "more fields than the record has".to_string(),
+        FieldsError::Code { field, code } => FrameError::Code {
+            what: code_of(field),
+            code,
+        },
+        FieldsError::Missing(name) => FrameError::NoField(name.to_string()),
+        FieldsError::Type(name) => FrameError::FieldType(name),
+        FieldsError::Extra => FrameError::Extra,
     })?;
     Ok(record)
 }
 
 /// What the codes of a field are.
-fn code_of(field: &str) -> &str {
+fn code_of(field: &'static str) -> &'static str {
     match field {
         "kind" | "fault" => "fault kind",
         "source" => "settings source",

@@ -188,7 +188,7 @@ fn a_changed_value_fails_the_checksum() {
     let mut v = values(&l, 5, &r);
     let at = l.position("v1").unwrap();
     v[at] = "96".into();
-    let e = record_from_values(&l, &v).unwrap_err();
+    let e = record_from_values(&l, &v).unwrap_err().to_string();
     assert!(e.contains("checksum mismatch"), "{e}");
     let l = layout(&format_of("settings"));
     let s = Record::Settings(SettingsReport {
@@ -215,7 +215,7 @@ fn codes_the_firmware_does_not_know_are_refused() {
     // Checksum over the changed value, so only the code is wrong.
     let crc_at = l.position("crc").unwrap();
     v[crc_at] = crc_over(&l, &v).to_string();
-    let e = record_from_values(&l, &v).unwrap_err();
+    let e = record_from_values(&l, &v).unwrap_err().to_string();
     assert!(e.contains("unknown command code 99"), "{e}");
 }
 
@@ -288,13 +288,13 @@ fn a_run_start_without_the_newer_calibration_fields_still_decodes() {
 fn a_setup_record_lacking_a_field_or_of_another_type_is_refused_when_the_elf_loads() {
     let settings = format_of("settings");
     let short = settings.replace(" servo_max_deg={=f32}", "");
-    let e = record_layout(&short).unwrap().unwrap_err();
+    let e = record_layout(&short).unwrap().unwrap_err().to_string();
     assert!(e.contains("no field `servo_max_deg`"), "{e}");
     let live = format_of("live").replace(" crc={=u32}", "");
-    let e = record_layout(&live).unwrap().unwrap_err();
+    let e = record_layout(&live).unwrap().unwrap_err().to_string();
     assert!(e.contains("no field `crc`"), "{e}");
     let run_start = format_of("run_start").replace("servo_min_us={=f32}", "servo_min_us={=u32}");
-    let e = record_layout(&run_start).unwrap().unwrap_err();
+    let e = record_layout(&run_start).unwrap().unwrap_err().to_string();
     assert!(
         e.contains("field `servo_min_us` is U32, expected F32"),
         "{e}"

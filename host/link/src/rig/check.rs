@@ -19,7 +19,7 @@ pub enum CheckError {
     Usage(String),
     /// A value outside the physical range the data reader takes (`data::ranges`): what
     /// `capstan log` would write from it could not be analysed.
-    Range(&'static str, f32, String),
+    Range(&'static str, f32, capstan_data::ranges::RangeError),
 }
 
 impl std::fmt::Display for CheckError {

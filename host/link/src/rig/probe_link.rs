@@ -5,7 +5,7 @@
 use super::link::RigLink;
 use crate::decoder::{Decoder, Located};
 use crate::frame::Event;
-use crate::probe::{attach, Connection, ProbeOptions};
+use crate::probe::{attach, Connection, ProbeError, ProbeOptions};
 use crate::seq::SeqEvent;
 use crate::Firmware;
 use anyhow::{anyhow, bail};
@@ -21,20 +21,22 @@ const WRITE_WITHIN: Duration = Duration::from_secs(1);
 /// At most this long spent skipping what the up-channel held before we attached.
 const DRAIN_FOR: Duration = Duration::from_millis(500);
 
-/// The firmware has no RTT down channel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct NoDownChannel;
-
-impl std::fmt::Display for NoDownChannel {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(
-            "this firmware has no RTT down channel: rebuild it from this repository \
-             (cargo build --release -p capstan-board --target thumbv6m-none-eabi) and flash it",
-        )
-    }
+/// Why the board's command line could not be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum OpenError {
+    /// The board could not be reached.
+    #[error(transparent)]
+    Probe(#[from] ProbeError),
+    /// The firmware has no RTT down channel.
+    #[error(
+        "this firmware has no RTT down channel: rebuild it from this repository (cargo build \
+         --release -p capstan-board --target thumbv6m-none-eabi) and flash it"
+    )]
+    NoDownChannel,
+    /// Reading what the up-channel held before now failed.
+    #[error("lost the probe: {0}")]
+    Lost(ProbeError),
 }
-
-impl std::error::Error for NoDownChannel {}
 
 /// A board reached through a debug probe.
 pub struct ProbeLink<'f> {
@@ -49,12 +51,12 @@ pub fn open<'f>(
     fw: &'f Firmware,
     elf: &Path,
     mut opts: ProbeOptions,
-) -> anyhow::Result<ProbeLink<'f>> {
+) -> Result<ProbeLink<'f>, OpenError> {
     opts.flash = false;
     // Never flashed: nothing to say.
     let mut conn = attach(elf, &opts, &mut |_| {})?;
     if conn.down_buffer_size(COMMAND_CHANNEL).is_none() {
-        bail!(NoDownChannel);
+        return Err(OpenError::NoDownChannel);
     }
     let mut link = ProbeLink {
         conn,
@@ -68,10 +70,10 @@ pub fn open<'f>(
 impl ProbeLink<'_> {
     /// Read and drop what the up-channel holds: records logged before this command (a stale
     /// reply must not be taken for the answer). Decoded, so the framing is in step.
-    fn drain(&mut self) -> anyhow::Result<()> {
+    fn drain(&mut self) -> Result<(), OpenError> {
         let until = Instant::now() + DRAIN_FOR;
         while Instant::now() < until {
-            if self.read()?.is_none() {
+            if self.read().map_err(OpenError::Lost)?.is_none() {
                 break;
             }
         }
@@ -79,11 +81,8 @@ impl ProbeLink<'_> {
     }
 
     /// One read of the up-channel, decoded (`None`: nothing was there).
-    fn read(&mut self) -> anyhow::Result<Option<Vec<Event>>> {
-        let n = self
-            .conn
-            .read_up(&mut self.buf)
-            .map_err(|e| anyhow!("lost the probe: {e}"))?;
+    fn read(&mut self) -> Result<Option<Vec<Event>>, ProbeError> {
+        let n = self.conn.read_up(&mut self.buf)?;
         if n == 0 {
             return Ok(None);
         }
@@ -134,7 +133,8 @@ impl RigLink for ProbeLink<'_> {
     fn poll(&mut self, timeout: Duration) -> anyhow::Result<Vec<Event>> {
         let until = Instant::now() + timeout;
         loop {
-            if let Some(events) = self.read()?.filter(|e| !e.is_empty()) {
+            let read = self.read().map_err(|e| anyhow!("lost the probe: {e}"))?;
+            if let Some(events) = read.filter(|e| !e.is_empty()) {
                 return Ok(events);
             }
             if Instant::now() >= until {

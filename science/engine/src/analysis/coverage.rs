@@ -87,6 +87,7 @@ pub fn coverage(ds: &Dataset, opts: Options) -> Coverage {
     let mut failed = Vec::new();
     for (c, label) in labels.iter().enumerate() {
         let analysed = super::heldout::subset(ds, |i| st.cord_of_row[i] != c)
+            .map_err(|e| e.to_string())
             .and_then(|d| run(&d, opts).map_err(|e| e.to_string()));
         let a = match analysed {
             Ok(a) => a,

@@ -51,13 +51,15 @@ pub struct WholeLoco {
 
 /// The rows of `ds` that `keep` takes (by row index), as a data set with the same columns
 /// (its text columns too: the cord labels that tell its cords apart), its structure found again.
-pub fn subset(ds: &Dataset, keep: impl Fn(usize) -> bool) -> Result<Dataset, String> {
+pub fn subset(
+    ds: &Dataset,
+    keep: impl Fn(usize) -> bool,
+) -> Result<Dataset, capstan_data::DataError> {
     let rows: Vec<usize> = (0..ds.pairs.len()).filter(|&i| keep(i)).collect();
     let pairs: Vec<_> = rows.iter().map(|&i| ds.pairs[i].clone()).collect();
     let lines: Vec<u64> = rows.iter().map(|&i| ds.lines[i]).collect();
     let structure =
-        capstan_data::Structure::infer(&pairs, &ds.header, &ds.label_columns, &lines, &ds.source)
-            .map_err(|e| e.to_string())?;
+        capstan_data::Structure::infer(&pairs, &ds.header, &ds.label_columns, &lines, &ds.source)?;
     Ok(Dataset {
         source: ds.source.clone(),
         header: ds.header.clone(),

@@ -185,19 +185,32 @@ fn causes_text(m: &Mechanisms) -> String {
 pub const MIN_ROWS: usize = 10;
 
 /// `ds` has the rows an analysis needs ([`MIN_ROWS`] usable pairs), or the error that says so.
-pub fn enough_rows(ds: &Dataset) -> anyhow::Result<()> {
-    let n = Observations::from_dataset(ds).len();
-    if n < MIN_ROWS {
-        anyhow::bail!(
-            "{}: {n} rows is too few to analyse (need at least {MIN_ROWS})",
-            ds.source
-        );
+pub fn enough_rows(ds: &Dataset) -> Result<(), AnalysisError> {
+    let rows = Observations::from_dataset(ds).len();
+    if rows < MIN_ROWS {
+        return Err(AnalysisError::TooFewRows {
+            file: ds.source.clone(),
+            rows,
+        });
     }
     Ok(())
 }
 
+/// Why a data set cannot be analysed.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalysisError {
+    /// Fewer than [`MIN_ROWS`] usable pairs.
+    #[error("{file}: {rows} rows is too few to analyse (need at least {MIN_ROWS})")]
+    TooFewRows {
+        /// The data set's file, as the user named it.
+        file: String,
+        /// Its usable rows (finite tensions and wrap).
+        rows: usize,
+    },
+}
+
 /// Fit every model to `ds`, name the causes and measure the gain.
-pub fn run(ds: &Dataset, opts: Options) -> anyhow::Result<Analysis> {
+pub fn run(ds: &Dataset, opts: Options) -> Result<Analysis, AnalysisError> {
     enough_rows(ds)?;
     let obs = Observations::from_dataset(ds);
     let threads = opts.threads;

@@ -4,8 +4,8 @@ use super::{
     as_read_style, baseline_style, extended_style, measured, model_legend, panels_that_fit,
     selection_note, thesis_style, Figure, Palette, INK,
 };
+use crate::error::Result;
 use crate::plot::{figure, Entry, Key, Layout, Panel, Series};
-use anyhow::Result;
 use capstan_engine::analysis::closed_loop::evenly;
 use capstan_engine::analysis::closed_loop::SimCurve;
 use capstan_engine::analysis::Analysis;

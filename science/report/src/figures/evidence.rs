@@ -2,8 +2,8 @@
 //! evidence, and the gain.
 
 use super::{measured, model_label, Figure, Palette};
+use crate::error::Result;
 use crate::plot::{bar_chart, figure, finite_range, Bars, Layout, Panel, Series};
-use anyhow::Result;
 use capstan_engine::analysis::Analysis;
 use plotters::style::RGBColor;
 

@@ -269,7 +269,7 @@ pub fn all(
     a: &Analysis,
     closed_loop: Option<&[SimCurve]>,
     layout: &Layout,
-) -> anyhow::Result<Vec<Figure>> {
+) -> crate::error::Result<Vec<Figure>> {
     let pal = Palette::new(a);
     let mut figs = vec![
         evidence::gain(a, layout)?,

@@ -3,8 +3,8 @@
 //! frequency, on a log axis drawn as log10 with decade labels).
 
 use super::{Figure, INK, OKABE_ITO};
+use crate::error::Result;
 use crate::plot::{figure, Dash, Entry, Key, Layout, LineStyle, Marker, Panel, Series};
-use anyhow::Result;
 use capstan_tracking::{BodePoint, Trace};
 
 /// One run of a force session, for the figures.

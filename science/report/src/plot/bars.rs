@@ -7,7 +7,7 @@ use super::axis::{fitted_ticks, Coord};
 use super::panel::{lines, Margins, GAP, LABEL, PAD, TICK, TICK_LEN, TITLE};
 use super::text::{Anchor, Font, Label, ASCENT, DESCENT};
 use super::{compose, render, Chart, Dash, Entry, Key, Layer, LineStyle, AXIS, GRID, TEXT};
-use anyhow::Result;
+use crate::error::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 

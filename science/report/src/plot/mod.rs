@@ -8,7 +8,7 @@
 //! counts: a chart whose data is not drawn has no, or empty, `mark` layers, whatever its axes
 //! show. The figure legend is HTML (`html.rs`), from the same [`Entry`] values.
 
-use anyhow::Result;
+use crate::error::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 

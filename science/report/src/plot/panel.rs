@@ -7,7 +7,7 @@
 use super::axis::{fitted_ticks, ranges, Axis, Coord};
 use super::text::{fit, wrap, Anchor, Font, Label, ASCENT, DESCENT};
 use super::{Panel, AXIS, GRID, ZERO};
-use anyhow::Result;
+use crate::error::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
