@@ -292,7 +292,7 @@ fn figure_files_carry_the_provenance() {
             capstan_report::export::png_decodes(&bytes).unwrap();
             pngs += 1;
         } else if name.ends_with(".pdf") {
-            let info = capstan::provenance::pdf::document_info(&bytes)
+            let info = capstan_report::stamp::pdf::document_info(&bytes)
                 .unwrap_or_else(|| panic!("{name}: no document information dictionary"));
             assert!(
                 info.contains(&format!("commit {commit}"))

@@ -3,7 +3,7 @@
 //! refusals, faults, no reply, live values).
 
 use capstan::cli::rig::{answer_lines, send, watch_live, NotInSetup, Refused};
-use capstan_link::rig::{command_line, exchange, exchange_within, CheckError, NoReply, RigLink};
+use capstan_link::rig::{command_line, exchange, exchange_within, CheckError, LinkError, RigLink};
 use capstan_link::Event;
 use capstan_rig::command::{Command, CommandError, CommandKind, Key};
 use capstan_rig::hal::Channel;
@@ -124,14 +124,14 @@ struct Scripted<F: FnMut(&str) -> Vec<Event>> {
 }
 
 impl<F: FnMut(&str) -> Vec<Event>> RigLink for Scripted<F> {
-    fn send_line(&mut self, line: &str) -> anyhow::Result<()> {
+    fn send_line(&mut self, line: &str) -> Result<(), LinkError> {
         self.sent.push(line.to_string());
         let events = (self.answer)(line);
         self.queue.push_back(events);
         Ok(())
     }
 
-    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Vec<Event>> {
+    fn poll(&mut self, timeout: Duration) -> Result<Vec<Event>, LinkError> {
         if let Some(batch) = self.queue.pop_front() {
             return Ok(batch);
         }
@@ -339,7 +339,9 @@ fn an_abort_during_a_run_is_answered_by_its_end_and_silence_is_an_error() {
     )
     .unwrap_err();
     assert!(t.elapsed() < Duration::from_secs(2));
-    let no = e.downcast_ref::<NoReply>().expect("no reply");
+    let LinkError::NoReply(no) = &e else {
+        panic!("no reply expected: {e}")
+    };
     assert_eq!(no.word, "zero");
     assert!(e.to_string().contains("no reply to `zero`"), "{e}");
 }

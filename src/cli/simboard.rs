@@ -5,7 +5,7 @@
 //! records it made are what the link gives back.
 
 use capstan_link::frame::Event;
-use capstan_link::rig::RigLink;
+use capstan_link::rig::{LinkError, RigLink};
 use capstan_simboard::{SimBoard, SimOptions};
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -94,13 +94,13 @@ impl SimLink {
 }
 
 impl RigLink for SimLink {
-    fn send_line(&mut self, line: &str) -> anyhow::Result<()> {
-        let events = self.board.send(line)?;
+    fn send_line(&mut self, line: &str) -> Result<(), LinkError> {
+        let events = self.board.send(line).map_err(LinkError::broken)?;
         self.queue.extend(link_events(events));
         Ok(())
     }
 
-    fn poll(&mut self, _timeout: Duration) -> anyhow::Result<Vec<Event>> {
+    fn poll(&mut self, _timeout: Duration) -> Result<Vec<Event>, LinkError> {
         // Everything the line produced is here already: the board ran in virtual time.
         Ok(self.queue.drain(..).collect())
     }

@@ -38,7 +38,7 @@ pub enum SimError {
     },
     /// A noise profile that is not one.
     #[error("--sim-noise {0}")]
-    Noise(String),
+    Noise(capstan_sim::noise::UnknownNoiseProfile),
     /// Options that describe another rig than the board's.
     #[error(
         "--sim: this board was made with other --sim-* options ({0}); they are fixed when a board \

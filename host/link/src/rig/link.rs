@@ -10,12 +10,31 @@ use std::time::{Duration, Instant};
 /// A connection to the rig's command line and its log.
 pub trait RigLink {
     /// Send one command line (without its newline; the link adds it).
-    fn send_line(&mut self, line: &str) -> anyhow::Result<()>;
+    fn send_line(&mut self, line: &str) -> Result<(), LinkError>;
 
     /// What the rig logged since the last call: records (with their sequence numbers) and
     /// text messages, in order. Waits up to `timeout` for the first; returns as soon as there
     /// is something (an empty list: nothing within `timeout`). An error is a link that broke.
-    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Vec<Event>>;
+    fn poll(&mut self, timeout: Duration) -> Result<Vec<Event>, LinkError>;
+}
+
+/// Why an exchange with the rig failed.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// The link broke: its carrier's error (a probe that went away, a simulated board that
+    /// stalled), with its causes.
+    #[error(transparent)]
+    Broken(Box<dyn std::error::Error + Send + Sync>),
+    /// No answer came in time.
+    #[error(transparent)]
+    NoReply(#[from] NoReply),
+}
+
+impl LinkError {
+    /// A broken link, from the carrier's error or message.
+    pub fn broken(e: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        LinkError::Broken(e.into())
+    }
 }
 
 /// How long to wait for the answer to a command: a zero or weigh measures for 0.5 s, a store
@@ -109,7 +128,7 @@ pub fn exchange(
     line: &str,
     cmd: &Command,
     note: &mut dyn FnMut(String),
-) -> anyhow::Result<Answer> {
+) -> Result<Answer, LinkError> {
     exchange_within(link, line, cmd, timeout_for(cmd), note)
 }
 
@@ -120,7 +139,7 @@ pub fn exchange_within(
     cmd: &Command,
     waited: Duration,
     note: &mut dyn FnMut(String),
-) -> anyhow::Result<Answer> {
+) -> Result<Answer, LinkError> {
     link.send_line(line)?;
     let deadline = Instant::now() + waited;
     let mut answer = Answer::default();

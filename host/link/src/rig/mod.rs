@@ -11,4 +11,4 @@ pub mod link;
 pub mod probe_link;
 
 pub use check::{check_set, command_line, CheckError};
-pub use link::{exchange, exchange_within, take, timeout_for, Answer, NoReply, RigLink};
+pub use link::{exchange, exchange_within, take, timeout_for, Answer, LinkError, NoReply, RigLink};

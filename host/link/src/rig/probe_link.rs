@@ -2,13 +2,12 @@
 //! write command lines into its RTT down channel 0, read its defmt up-channel 0 and decode it
 //! with the same decoder `capstan log` uses.
 
-use super::link::RigLink;
+use super::link::{LinkError, RigLink};
 use crate::decoder::{Decoder, Located};
 use crate::frame::Event;
 use crate::probe::{attach, Connection, ProbeError, ProbeOptions};
 use crate::seq::SeqEvent;
 use crate::Firmware;
-use anyhow::{anyhow, bail};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -110,19 +109,20 @@ fn with_gaps(l: Located) -> Vec<Event> {
 }
 
 impl RigLink for ProbeLink<'_> {
-    fn send_line(&mut self, line: &str) -> anyhow::Result<()> {
+    fn send_line(&mut self, line: &str) -> Result<(), LinkError> {
         let bytes = format!("{line}\n").into_bytes();
         let mut sent = 0;
         let until = Instant::now() + WRITE_WITHIN;
         while sent < bytes.len() {
-            sent += self.conn.write_down(COMMAND_CHANNEL, &bytes[sent..])?;
+            sent += (self.conn.write_down(COMMAND_CHANNEL, &bytes[sent..]))
+                .map_err(LinkError::broken)?;
             if sent < bytes.len() {
                 if Instant::now() >= until {
-                    bail!(
+                    return Err(LinkError::broken(format!(
                         "the board did not take the command line within {} s (its RTT down \
                          buffer stayed full): is the firmware running?",
                         WRITE_WITHIN.as_secs()
-                    );
+                    )));
                 }
                 std::thread::sleep(Duration::from_millis(1));
             }
@@ -130,10 +130,10 @@ impl RigLink for ProbeLink<'_> {
         Ok(())
     }
 
-    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Vec<Event>> {
+    fn poll(&mut self, timeout: Duration) -> Result<Vec<Event>, LinkError> {
         let until = Instant::now() + timeout;
         loop {
-            let read = self.read().map_err(|e| anyhow!("lost the probe: {e}"))?;
+            let read = (self.read()).map_err(|e| LinkError::broken(OpenError::Lost(e)))?;
             if let Some(events) = read.filter(|e| !e.is_empty()) {
                 return Ok(events);
             }
