@@ -145,20 +145,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     write_predictions(&mut set, &args, &ds, &a)?;
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
-    let mut metrics = capstan_report::metrics_json(&a, &closed.summary, &ctx);
-    metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
-    metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
-    metrics["next_experiment"] = next;
-    metrics["data"]["warnings"] = serde_json::json!(data_warnings);
+    let metrics = capstan_report::Metrics::new(&a, Some(&closed.outcome), &ctx)
+        .with_discovered(capstan_report::discovered::discovered(&disc, disc_s))
+        .with_next(&next)
+        .with_data_warnings(&data_warnings)
+        .to_json()?;
     set.write("report.html", html.as_bytes())?;
-    set.write(
-        "metrics.json",
-        serde_json::to_string_pretty(&metrics)?.as_bytes(),
-    )?;
+    set.write("metrics.json", metrics.as_bytes())?;
     set.commit()?;
     say_written(&args, files.len(), t0);
     if args.json {
-        crate::outln!("{}", serde_json::to_string_pretty(&metrics)?);
+        crate::outln!("{metrics}");
     }
     Ok(())
 }
@@ -192,22 +189,25 @@ fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
 /// for metrics.json, and the sentence that says what was run (or why it failed).
 struct ClosedLoop {
     curves: Option<Vec<capstan_engine::analysis::closed_loop::SimCurve>>,
-    summary: serde_json::Value,
+    outcome: capstan_engine::analysis::closed_loop::Outcome,
     note: String,
 }
 
 /// Run the closed loop (its time into the analysis's timings).
 fn closed_loop(a: &mut capstan_engine::analysis::Analysis, threads: usize) -> ClosedLoop {
+    use capstan_engine::analysis::closed_loop::Outcome;
     let t = Instant::now();
     let out = match capstan_validation::closed_loop::run(a, threads) {
         Ok(cl) => ClosedLoop {
             curves: Some(cl.curves),
-            summary: cl.summary,
+            outcome: Outcome::Ran(cl.summary),
             note: "The firmware, run in virtual time against the simulated plant (capstan_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string(),
         },
         Err(e) => ClosedLoop {
             curves: None,
-            summary: serde_json::json!({"error": format!("{e:#}")}),
+            outcome: Outcome::Failed {
+                error: format!("{e:#}"),
+            },
             note: format!("The closed-loop simulation failed: {e:#}"),
         },
     };
@@ -216,20 +216,24 @@ fn closed_loop(a: &mut capstan_engine::analysis::Analysis, threads: usize) -> Cl
 }
 
 /// Beyond the catalogue (`capstan discover`), kept apart from the catalogue's causes: the
-/// search as JSON and its time, s.
+/// search and its time, s.
 fn discovery(
     ds: &capstan_data::Dataset,
     protocol_times: bool,
-) -> anyhow::Result<(serde_json::Value, f64)> {
+) -> anyhow::Result<(capstan_discover::Discovery, f64)> {
     let t = Instant::now();
     let mut opts = capstan_discover::Options::default();
     opts.engine.protocol_times = protocol_times;
     let disc = capstan_discover::discover(ds, &opts, &mut |_, _| {});
-    Ok((serde_json::to_value(&disc)?, t.elapsed().as_secs_f64()))
+    Ok((disc, t.elapsed().as_secs_f64()))
 }
 
 /// The report with its "discovered" and "Next experiment" sections in place.
-fn with_sections(html: String, disc: &serde_json::Value, next: &serde_json::Value) -> String {
+fn with_sections(
+    html: String,
+    disc: &capstan_discover::Discovery,
+    next: &capstan_report::next::NextExperiment,
+) -> String {
     use capstan_report::discovered::{discovered_html, insert_section};
     let html = insert_section(html, &discovered_html(disc));
     insert_section(html, &capstan_report::next::next_html(next))
@@ -268,8 +272,11 @@ fn say_written(args: &Args, figure_files: usize, t0: Instant) {
 }
 
 /// The "Next experiment" object: what is open (one diagnosis), and with `--plan` the plan.
-fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<serde_json::Value> {
-    let open = serde_json::to_value(capstan_plan::open(ds))?;
+fn next_experiment(
+    args: &Args,
+    ds: &capstan_data::Dataset,
+) -> anyhow::Result<capstan_report::next::NextExperiment> {
+    let open = capstan_plan::open(ds);
     let plan = if args.plan {
         crate::errln!("planning the next experiment (--plan: about a minute) ...");
         let stop = super::signal::stop_flag("analyze");
@@ -281,7 +288,7 @@ fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<se
             }
             Err(e) => anyhow::bail!("the planner: {e}"),
         };
-        Some(serde_json::to_value(p)?)
+        Some(p)
     } else {
         None
     };
@@ -293,7 +300,7 @@ fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<se
         }
         None => "capstan plan".to_string(),
     };
-    Ok(capstan_report::next::next_json(
+    Ok(capstan_report::next::next_experiment(
         &open,
         plan.as_ref(),
         &command,
