@@ -12,10 +12,12 @@ use std::sync::OnceLock;
 fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_mm: f64) {
     run(Cli {
         command: Command::Analyze(analyze::Args {
-            data,
+            input: capstan::cli::input::DataArgs { data },
             out: dir.to_path_buf(),
             json: false,
-            protocol_times: false,
+            timing: capstan::cli::input::TimingArgs {
+                protocol_times: false,
+            },
             threads: None,
             validate: false,
             seed: 0,

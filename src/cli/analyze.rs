@@ -5,7 +5,6 @@
 mod force;
 
 use anyhow::Context;
-use capstan_data::{load_pairs, thesis_dataset};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -14,8 +13,9 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 #[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
-    /// Pairs CSV (default: the bundled thesis data, 720 pairs).
-    pub data: Option<PathBuf>,
+    /// The pairs.
+    #[command(flatten)]
+    pub input: super::input::DataArgs,
     /// Output directory (created if needed). Analyze always writes its report, so it has a
     /// place by default (the README's main job); the commands whose files are optional
     /// (discover, plan) write only with --out, and those that record (simulate, log,
@@ -25,11 +25,9 @@ pub struct Args {
     /// Print the metrics (including timings) as JSON on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Without a `time_s` column, take the times from `step` with the thesis protocol (10 s
-    /// steps), so that a drift in time (`thermal_drift`) can be tested, as diagnose and
-    /// discover do with the same option.
-    #[arg(long)]
-    pub protocol_times: bool,
+    /// How the steps are timed.
+    #[command(flatten)]
+    pub timing: super::input::TimingArgs,
     /// Threads for independent fits (default: up to 4).
     #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
@@ -82,11 +80,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let ctx = report_context(&args)?;
     // The data first (a file it refuses leaves no output directory behind), then the output
     // directory, locked and proved writable before the analysis, not after it.
-    let ds = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
-    if let (Some(path), true) = (&args.data, force::is_force_session(&ds)) {
+    let ds = args.input.load()?;
+    if let (Some(path), true) = (&args.input.data, force::is_force_session(&ds)) {
         // Force control: how the rig tracked its target, not the law (issue 43).
         return force::run(&args, path, &ctx);
     }
@@ -111,7 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
-    opts.protocol_times = args.protocol_times;
+    opts.protocol_times = args.timing.protocol_times;
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     let mut a = capstan_engine::analysis::run(&ds, opts)?;
     crate::errln!("{}", a.evidence.data.structure.statement);
@@ -123,7 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t_report = Instant::now();
     let closed = closed_loop(&mut a, opts.threads);
-    let (disc, disc_s) = discovery(&ds, args.protocol_times)?;
+    let (disc, disc_s) = discovery(&ds, args.timing.protocol_times)?;
     let next = next_experiment(&args, &ds)?;
     let (html, figs) =
         capstan_report::report_html(&a, closed.curves.as_deref(), &closed.note, &ctx)?;
@@ -173,7 +168,7 @@ fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
         numbers: args.figure_numbers,
     };
     figures.check()?;
-    let provenance = crate::provenance::of_input(args.data.as_deref())?;
+    let provenance = args.input.provenance()?;
     let thesis = capstan_report::ThesisComparison::decide(
         crate::provenance::is_thesis(&provenance),
         args.thesis_comparison,
@@ -293,7 +288,7 @@ fn next_experiment(
         None
     };
     // The data's absolute path, quoted for a shell: the command runs from anywhere.
-    let command = match &args.data {
+    let command = match &args.input.data {
         Some(p) => {
             let abs = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
             format!("capstan plan {}", shell_quoted(&abs.display().to_string()))

@@ -1,7 +1,6 @@
 //! `capstan plan DATA.csv [--json] [--out DIR] [--hours H]`: the experiment that decides
 //! between the hypotheses a data set leaves open. See [`capstan_plan`].
 
-use capstan_data::{load_pairs, thesis_dataset};
 use capstan_plan::{plan, Options, Plan, Scored};
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Write as _};
@@ -11,8 +10,9 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 #[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
-    /// Pairs CSV, read as `diagnose` reads it. Without it, the bundled thesis data.
-    pub data: Option<PathBuf>,
+    /// The pairs.
+    #[command(flatten)]
+    pub input: super::input::DataArgs,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -46,10 +46,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(b) = &args.board {
         board_words(b)?;
     }
-    let data = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
+    let data = args.input.load()?;
     let data_warnings = super::check_data(&data)?;
     // A plan is built on the analysis of these data: what analyze refuses, plan refuses too.
     capstan_engine::analysis::enough_rows(&data)?;
@@ -85,7 +82,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // same plan.
     v["seed"] = serde_json::json!(args.seed);
     v["reps"] = serde_json::json!(args.reps);
-    v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
+    v["provenance"] = serde_json::to_value(args.input.provenance()?)?;
     let json = serde_json::to_string_pretty(&v)?;
     let text = words(&p, &data.source, &structure.statement);
     if let Some(out) = out {
