@@ -3,6 +3,7 @@
 //! the file.
 
 use capstan_engine::analysis::{self, Options};
+use capstan_report::metrics::ModelProblem;
 use capstan_report::{read_and_validate, Metrics, MetricsError};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -91,7 +92,11 @@ fn the_model_read_back_is_the_one_written_and_each_defect_is_named() {
         "{}",
         null.0
     );
-    assert!(matches!(mu.0, MetricsError::Invalid { .. }), "{}", mu.0);
+    assert!(
+        matches!(mu.0, MetricsError::Invalid { problem: ModelProblem::Mu { mu }, .. } if mu == 3.0),
+        "{}",
+        mu.0
+    );
     assert!(
         mu.0.to_string()
             .contains("mu 3 is not a friction coefficient"),

@@ -100,15 +100,97 @@ pub enum MetricsError {
     },
 }
 
-/// What is wrong with a prediction model's numbers, in words (which field, which value, what
-/// an analysis writes instead).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ModelProblem(pub String);
-
-impl std::fmt::Display for ModelProblem {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+/// What is wrong with a prediction model's numbers: which field, which value, and what an
+/// analysis writes instead.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelProblem {
+    /// mu outside (0, 2].
+    #[error("mu {} is not a friction coefficient above 0 and up to 2", shown(*.mu))]
+    Mu {
+        /// The value found.
+        mu: f64,
+    },
+    /// A parameter value that is not a finite number.
+    #[error("{name} = {} is not a number", shown(*.value))]
+    NotANumber {
+        /// The parameter.
+        name: String,
+        /// The value found.
+        value: f64,
+    },
+    /// No free parameters.
+    #[error("no free parameters (an analysis fits mu at least)")]
+    NoFreeParameters,
+    /// A free parameter without a value.
+    #[error("free parameter {name} has no value")]
+    FreeWithoutValue {
+        /// The parameter.
+        name: String,
+    },
+    /// The covariance is not n × n for n free parameters.
+    #[error("the covariance is not {n} × {n} (one row per free parameter)")]
+    CovarianceNotSquare {
+        /// Free parameters.
+        n: usize,
+    },
+    /// A covariance row not finite, or its variance negative.
+    #[error("covariance row {row} is not finite or has a negative variance")]
+    CovarianceRow {
+        /// The row, from 1.
+        row: usize,
+    },
+    /// An error's part that is negative or not a number.
+    #[error("{field} = {} must be 0 or more", shown(*.value))]
+    Negative {
+        /// The field (`new_cord_error.abs_n`).
+        field: String,
+        /// The value found.
+        value: f64,
+    },
+    /// An SD larger than its held-out and accounted RMS allow.
+    #[error("{name}.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({})", shown(*.sd_n), shown(*.heldout_rms_n), shown(*.accounted_rms_n), shown(*.most))]
+    SdExceeds {
+        /// The error (`wrap_extrapolation_error`).
+        name: String,
+        /// Its SD, N.
+        sd_n: f64,
+        /// Its held-out RMS, N.
+        heldout_rms_n: f64,
+        /// Its accounted RMS, N.
+        accounted_rms_n: f64,
+        /// The most SD they give, N.
+        most: f64,
+    },
+    /// A new cord's error with no held-out rows of two cords behind it.
+    #[error("new_cord_error has no held-out rows of two cords or more behind it (no cord had a held-out prediction)")]
+    NoHeldOutRows,
+    /// Degrees of freedom that the cords cannot have.
+    #[error("new_cord_error.dof = {dof} is not a number of degrees of freedom for {cords} cords")]
+    DegreesOfFreedom {
+        /// The degrees of freedom found.
+        dof: usize,
+        /// The cords behind the error.
+        cords: usize,
+    },
+    /// An extrapolation SD without held-out rows.
+    #[error("wrap_extrapolation_error has an SD but no held-out rows behind it")]
+    SdWithoutRows,
+    /// An extrapolation distance that is not one.
+    #[error("wrap_extrapolation_step_deg = {step} is not the distance the error was measured at")]
+    ExtrapolationStep {
+        /// The distance found, deg.
+        step: f64,
+    },
+    /// A fitted range whose ends are not a range.
+    #[error("fitted_range.{name} {min} to {max} is not a range")]
+    NotARange {
+        /// The quantity.
+        name: &'static str,
+        /// Its lower end.
+        min: f64,
+        /// Its upper end.
+        max: f64,
+    },
 }
 
 /// What other commands read back from `metrics.json`.
@@ -218,26 +300,25 @@ fn check_error(name: &str, e: &prediction::ModelError) -> Result<(), ModelProble
         ("accounted_rms_n", e.accounted_rms_n),
     ] {
         if !(v.is_finite() && v >= 0.0) {
-            return problem(format!("{name}.{part} = {} must be 0 or more", shown(v)));
+            return Err(ModelProblem::Negative {
+                field: format!("{name}.{part}"),
+                value: v,
+            });
         }
     }
     let most = (e.heldout_rms_n.powi(2) - e.accounted_rms_n.powi(2))
         .max(0.0)
         .sqrt();
     if e.sd_n > most * (1.0 + 1e-9) + 1e-12 {
-        return problem(format!(
-            "{name}.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({})",
-            shown(e.sd_n),
-            shown(e.heldout_rms_n),
-            shown(e.accounted_rms_n),
-            shown(most)
-        ));
+        return Err(ModelProblem::SdExceeds {
+            name: name.to_string(),
+            sd_n: e.sd_n,
+            heldout_rms_n: e.heldout_rms_n,
+            accounted_rms_n: e.accounted_rms_n,
+            most,
+        });
     }
     Ok(())
-}
-
-fn problem(what: String) -> Result<(), ModelProblem> {
-    Err(ModelProblem(what))
 }
 
 /// What `capstan analyze` writes and a prediction relies on: a finite mu in the catalogue's
@@ -248,19 +329,19 @@ fn problem(what: String) -> Result<(), ModelProblem> {
 pub fn check(pm: &PredictionModel) -> Result<(), ModelProblem> {
     let mu = pm.values.get("mu").copied().unwrap_or(f64::NAN);
     if !(mu.is_finite() && mu > 0.0 && mu <= 2.0) {
-        return problem(format!(
-            "mu {} is not a friction coefficient above 0 and up to 2",
-            shown(mu)
-        ));
+        return Err(ModelProblem::Mu { mu });
     }
     if let Some((k, v)) = pm.values.iter().find(|(_, v)| !v.is_finite()) {
-        return problem(format!("{k} = {} is not a number", shown(*v)));
+        return Err(ModelProblem::NotANumber {
+            name: k.clone(),
+            value: *v,
+        });
     }
     if pm.free.is_empty() {
-        return problem("no free parameters (an analysis fits mu at least)".into());
+        return Err(ModelProblem::NoFreeParameters);
     }
     if let Some(name) = pm.free.iter().find(|n| !pm.values.contains_key(n.as_str())) {
-        return problem(format!("free parameter {name} has no value"));
+        return Err(ModelProblem::FreeWithoutValue { name: name.clone() });
     }
     check_covariance(pm)?;
     check_new_cord_error(&pm.new_cord_error)?;
@@ -268,13 +349,11 @@ pub fn check(pm: &PredictionModel) -> Result<(), ModelProblem> {
     let w = &pm.wrap_extrapolation_error;
     check_error("wrap_extrapolation_error", w)?;
     if w.rows == 0 && w.sd_n != 0.0 {
-        return problem("wrap_extrapolation_error has an SD but no held-out rows behind it".into());
+        return Err(ModelProblem::SdWithoutRows);
     }
     let step = pm.wrap_extrapolation_step_deg;
     if !(step.is_finite() && step >= 0.0) || (w.rows > 0 && step == 0.0) {
-        return problem(format!(
-            "wrap_extrapolation_step_deg = {step} is not the distance the error was measured at"
-        ));
+        return Err(ModelProblem::ExtrapolationStep { step });
     }
     let r = &pm.fitted_range;
     for (name, s) in [
@@ -284,10 +363,11 @@ pub fn check(pm: &PredictionModel) -> Result<(), ModelProblem> {
         ("drive_v", r.drive_v),
     ] {
         if !(s.min.is_finite() && s.max.is_finite() && s.min <= s.max) {
-            return problem(format!(
-                "fitted_range.{name} {} to {} is not a range",
-                s.min, s.max
-            ));
+            return Err(ModelProblem::NotARange {
+                name,
+                min: s.min,
+                max: s.max,
+            });
         }
     }
     Ok(())
@@ -298,16 +378,11 @@ fn check_covariance(pm: &PredictionModel) -> Result<(), ModelProblem> {
     let n = pm.free.len();
     let square = pm.covariance.len() == n && pm.covariance.iter().all(|r| r.len() == n);
     if !square {
-        return problem(format!(
-            "the covariance is not {n} × {n} (one row per free parameter)"
-        ));
+        return Err(ModelProblem::CovarianceNotSquare { n });
     }
     for (i, row) in pm.covariance.iter().enumerate() {
         if row.iter().any(|c| !c.is_finite()) || row[i] < 0.0 {
-            return problem(format!(
-                "covariance row {} is not finite or has a negative variance",
-                i + 1
-            ));
+            return Err(ModelProblem::CovarianceRow { row: i + 1 });
         }
     }
     Ok(())
@@ -321,22 +396,20 @@ fn check_new_cord_error(e: &prediction::NewCordError) -> Result<(), ModelProblem
         ("heldout_rms_n", e.heldout_rms_n),
     ] {
         if !(v.is_finite() && v >= 0.0) {
-            return problem(format!(
-                "new_cord_error.{name} = {} must be 0 or more",
-                shown(v)
-            ));
+            return Err(ModelProblem::Negative {
+                field: format!("new_cord_error.{name}"),
+                value: v,
+            });
         }
     }
     if e.rows == 0 || e.cords < 2 {
-        return problem(
-            "new_cord_error has no held-out rows of two cords or more behind it (no cord had a held-out prediction)".into(),
-        );
+        return Err(ModelProblem::NoHeldOutRows);
     }
     if e.dof == 0 || e.dof > e.cords {
-        return problem(format!(
-            "new_cord_error.dof = {} is not a number of degrees of freedom for {} cords",
-            e.dof, e.cords
-        ));
+        return Err(ModelProblem::DegreesOfFreedom {
+            dof: e.dof,
+            cords: e.cords,
+        });
     }
     Ok(())
 }
