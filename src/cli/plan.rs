@@ -76,14 +76,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     capstan_plan::commands::with_board(&mut p, board);
     // How the data were read and where they came from, as diagnose and analyze say it.
     let structure = data.structure.summary();
-    let mut v = serde_json::to_value(&p)?;
-    v["data"] = serde_json::json!({"source": data.source, "structure": structure, "warnings": data_warnings});
-    // The simulated campaigns' master seed and size: the same seed, data and program give the
-    // same plan.
-    v["seed"] = serde_json::json!(args.seed);
-    v["reps"] = serde_json::json!(args.reps);
-    v["provenance"] = serde_json::to_value(args.input.provenance()?)?;
-    let json = serde_json::to_string_pretty(&v)?;
+    let answer = Answer {
+        plan: &p,
+        data: DataRead {
+            source: &data.source,
+            structure: &structure,
+            warnings: &data_warnings,
+        },
+        seed: args.seed,
+        provenance: args.input.provenance()?,
+    };
+    // Keys sorted at every level, as the plan's JSON has always been written.
+    let json = serde_json::to_string_pretty(&serde_json::to_value(&answer)?)?;
     let text = words(&p, &data.source, &structure.statement);
     if let Some(out) = out {
         let mut set = out.stage()?;
@@ -97,6 +101,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::out!("{text}");
     }
     Ok(())
+}
+
+/// `capstan plan --json` and `plan.json`: the plan (its `reps`, the campaigns per hypothesis
+/// and protocol, among it), how the data were read and where they came from (as diagnose and
+/// analyze say it), and the simulated campaigns' master seed: the same seed, data and program
+/// give the same plan.
+#[derive(serde::Serialize)]
+struct Answer<'a> {
+    #[serde(flatten)]
+    plan: &'a Plan,
+    data: DataRead<'a>,
+    seed: u64,
+    provenance: capstan_data::Provenance,
+}
+
+/// The data a plan was made from.
+#[derive(serde::Serialize)]
+struct DataRead<'a> {
+    source: &'a str,
+    structure: &'a capstan_data::structure::StructureSummary,
+    warnings: &'a [String],
 }
 
 /// How long a stopped plan may take to return before it exits anyway (it stops within one
