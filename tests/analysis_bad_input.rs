@@ -9,10 +9,12 @@ fn analyze_csv(name: &str, body: &str) -> String {
     std::fs::write(&path, body).unwrap();
     let r = run(Cli {
         command: Command::Analyze(analyze::Args {
-            data: Some(path),
+            input: capstan::cli::input::DataArgs { data: Some(path) },
             out: dir.join("out"),
             json: false,
-            protocol_times: false,
+            timing: capstan::cli::input::TimingArgs {
+                protocol_times: false,
+            },
             threads: Some(1),
             validate: false,
             seed: 0,

@@ -57,10 +57,12 @@ fn the_report_on_planted_data_says_what_its_verdicts_say() {
         write_pairs(&csv, &data.pairs).unwrap();
         run(Cli {
             command: Command::Analyze(analyze::Args {
-                data: Some(csv),
+                input: capstan::cli::input::DataArgs { data: Some(csv) },
                 out: dir.clone(),
                 json: false,
-                protocol_times: false,
+                timing: capstan::cli::input::TimingArgs {
+                    protocol_times: false,
+                },
                 threads: Some(2),
                 validate: false,
                 seed: 0,

@@ -70,10 +70,12 @@ fn have_chromium() -> bool {
 fn analyze_thesis(dir: &Path, figures: Option<&str>, width_mm: f64, font_pt: f64) {
     run(Cli {
         command: Command::Analyze(analyze::Args {
-            data: None,
+            input: capstan::cli::input::DataArgs { data: None },
             out: dir.to_path_buf(),
             json: false,
-            protocol_times: false,
+            timing: capstan::cli::input::TimingArgs {
+                protocol_times: false,
+            },
             threads: None,
             validate: false,
             seed: 0,

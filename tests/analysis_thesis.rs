@@ -19,10 +19,12 @@ fn outputs() -> &'static PathBuf {
         let dir = std::env::temp_dir().join(format!("capstan-analyze-test-{}", std::process::id()));
         run(Cli {
             command: Command::Analyze(analyze::Args {
-                data: None,
+                input: capstan::cli::input::DataArgs { data: None },
                 out: dir.clone(),
                 json: false,
-                protocol_times: false,
+                timing: capstan::cli::input::TimingArgs {
+                    protocol_times: false,
+                },
                 threads: None,
                 validate: false,
                 seed: 0,

@@ -9,7 +9,7 @@ fn the_headline_quotes_the_first_listed_row_of_each_quantity_in_one_unit() {
     use capstan_engine::analysis::{self, Options};
     let a = analysis::run(&capstan_data::thesis_dataset(), Options::default()).unwrap();
     let ctx = capstan_report::Context::library();
-    let m = capstan_report::metrics_json(&a, &Value::Null, &ctx);
+    let m = serde_json::to_value(capstan_report::Metrics::new(&a, None, &ctx)).unwrap();
     let rows = m["parameters"].as_array().unwrap();
     let quantity = |k: usize| rows[k]["quantity"].as_str().unwrap().to_string();
     let mut quoted = Vec::new();

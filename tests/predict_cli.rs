@@ -33,7 +33,7 @@ fn metrics(dir: &Path) -> PathBuf {
     use capstan_engine::analysis::{self, Options};
     let a = analysis::run(&capstan_data::thesis_dataset(), Options::default()).unwrap();
     let ctx = capstan_report::Context::library();
-    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let m = serde_json::to_value(capstan_report::Metrics::new(&a, None, &ctx)).unwrap();
     let path = dir.join("metrics.json");
     std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
     path
@@ -216,7 +216,7 @@ fn predict_with_one_run_per_cord_takes_a_new_cords_error_from_held_out_cords() {
     let data = capstan_data::read_pairs(text.as_bytes(), "run1.csv").unwrap();
     let a = analysis::run(&data, Options::default()).unwrap();
     let ctx = capstan_report::Context::library();
-    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let m = serde_json::to_value(capstan_report::Metrics::new(&a, None, &ctx)).unwrap();
     let path = dir.join("metrics.json");
     std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
     let o = predict_at(path.to_str().unwrap(), "450", "2", &["--json"]);

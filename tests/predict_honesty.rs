@@ -12,8 +12,7 @@
 //! thesis rows and ≥ 65 % of every cord's (`new_cords_are_covered`; the figures printed by
 //! `cargo run --release -p capstan-engine --example coverage`).
 
-use capstan::cli::predict::load_model;
-use capstan_engine::analysis::prediction::{predict, Query};
+use capstan_engine::analysis::prediction::{predict, PredictionModel, Query};
 use capstan_engine::analysis::{self, Options};
 
 /// The thesis CSV without the rows of `wrap_deg`.
@@ -53,7 +52,7 @@ struct Held {
 fn hold_out(wrap: f64, dir: &std::path::Path) -> Held {
     let a = analysis::run(&without_wrap(wrap), Options::default()).unwrap();
     let ctx = capstan_report::Context::library();
-    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let m = serde_json::to_value(capstan_report::Metrics::new(&a, None, &ctx)).unwrap();
     let path = dir.join(format!("metrics-{wrap}.json"));
     std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
     let pm = load_model(&path).unwrap();
@@ -218,7 +217,7 @@ fn an_edited_prediction_model_is_refused() {
     std::fs::create_dir_all(&dir).unwrap();
     let a = analysis::run(&capstan_data::thesis_dataset(), Options::default()).unwrap();
     let ctx = capstan_report::Context::library();
-    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let m = serde_json::to_value(capstan_report::Metrics::new(&a, None, &ctx)).unwrap();
     let write = |name: &str, v: &serde_json::Value| {
         let p = dir.join(name);
         std::fs::write(&p, serde_json::to_string(v).unwrap()).unwrap();
@@ -296,7 +295,7 @@ fn two_wraps_give_no_measured_extrapolation_error() {
     let ds = capstan_data::read_pairs(text.as_bytes(), "two wraps").unwrap();
     let a = analysis::run(&ds, Options::default()).unwrap();
     let ctx = capstan_report::Context::library();
-    let m = capstan_report::metrics_json(&a, &serde_json::Value::Null, &ctx);
+    let m = serde_json::to_value(capstan_report::Metrics::new(&a, None, &ctx)).unwrap();
     let dir = std::env::temp_dir().join(format!("capstan-two-wraps-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("metrics.json");
@@ -307,4 +306,9 @@ fn two_wraps_give_no_measured_extrapolation_error() {
     assert_eq!(pm.wrap_extrapolation_sd(720.0), None);
     assert_eq!(pm.wrap_extrapolation_sd(400.0), Some(0.0));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The prediction model of the `metrics.json` at `path`, as `capstan predict` reads it.
+fn load_model(path: &std::path::Path) -> Result<PredictionModel, capstan_report::MetricsError> {
+    capstan_report::read_and_validate(path).map(|r| r.prediction_model)
 }

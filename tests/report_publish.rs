@@ -12,10 +12,12 @@ use std::sync::OnceLock;
 fn analyze_into(dir: &Path, data: Option<PathBuf>, figures: Option<&str>, width_mm: f64) {
     run(Cli {
         command: Command::Analyze(analyze::Args {
-            data,
+            input: capstan::cli::input::DataArgs { data },
             out: dir.to_path_buf(),
             json: false,
-            protocol_times: false,
+            timing: capstan::cli::input::TimingArgs {
+                protocol_times: false,
+            },
             threads: None,
             validate: false,
             seed: 0,
@@ -242,7 +244,15 @@ fn the_next_experiment_section_is_rendered_from_its_metrics_object() {
     let m = metrics(dir);
     let next = &m["next_experiment"];
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
-    let section = capstan_report::next::next_html(next);
+    // The object and the section come from one typed value: the planner's open hypotheses
+    // of these data (no --plan), as the command builds it.
+    let typed = capstan_report::next::next_experiment(
+        &capstan_plan::open(&capstan_data::thesis_dataset()),
+        None,
+        "capstan plan",
+    );
+    assert_eq!(next, &serde_json::to_value(&typed).unwrap());
+    let section = capstan_report::next::next_html(&typed);
     assert!(
         html.contains(&section),
         "the section is not the metrics' object rendered"

@@ -7,6 +7,7 @@
 //! a few known forms (how θ maps to the value, which closed-form partial of the law applies),
 //! a small enum. No allocation: the entries live in the plant on the firmware target too.
 
+use crate::math::{exp, log};
 use crate::{EffectKind, Model, Operating};
 
 /// Where in the data an effect shows, and so against which scatter it is judged.
@@ -121,20 +122,56 @@ pub struct CordTest {
     pub slope: Slope,
 }
 
-/// The form of the parameter in a fit of the population model.
+/// The form of the parameter in a fit of the population model: the map from the fitter's
+/// internal coordinate θ (any real) to the model value (bounds by reparametrisation).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Transform {
-    /// Unbounded.
+    /// Unbounded: value = θ.
     Identity,
-    /// Positive (fitted on the log scale).
+    /// Positive (fitted on the log scale): value = exp(θ).
     Log,
-    /// Inside (lo, hi).
+    /// Inside (lo, hi): value = lo + (hi − lo)/(1 + exp(−θ)).
     Logistic {
         /// Lower bound.
         lo: f64,
         /// Upper bound.
         hi: f64,
     },
+}
+
+impl Transform {
+    /// Model value of θ.
+    pub fn value(self, theta: f64) -> f64 {
+        match self {
+            Transform::Identity => theta,
+            Transform::Log => exp(theta),
+            Transform::Logistic { lo, hi } => lo + (hi - lo) / (1.0 + exp(-theta)),
+        }
+    }
+
+    /// d value / d θ.
+    pub fn derivative(self, theta: f64) -> f64 {
+        match self {
+            Transform::Identity => 1.0,
+            Transform::Log => exp(theta),
+            Transform::Logistic { lo, hi } => {
+                let s = 1.0 / (1.0 + exp(-theta));
+                (hi - lo) * s * (1.0 - s)
+            }
+        }
+    }
+
+    /// θ of a model value (clamped into the transform's range).
+    pub fn internal(self, value: f64) -> f64 {
+        match self {
+            Transform::Identity => value,
+            Transform::Log => log(value.max(1e-300)),
+            Transform::Logistic { lo, hi } => {
+                let s = ((value - lo) / (hi - lo)).clamp(1e-12, 1.0 - 1e-12);
+                log(s / (1.0 - s))
+            }
+        }
+    }
 }
 
 /// How an effect enters the population model the analysis fits.

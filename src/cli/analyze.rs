@@ -5,7 +5,6 @@
 mod force;
 
 use anyhow::Context;
-use capstan_data::{load_pairs, thesis_dataset};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -14,8 +13,9 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 #[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
-    /// Pairs CSV (default: the bundled thesis data, 720 pairs).
-    pub data: Option<PathBuf>,
+    /// The pairs.
+    #[command(flatten)]
+    pub input: super::input::DataArgs,
     /// Output directory (created if needed). Analyze always writes its report, so it has a
     /// place by default (the README's main job); the commands whose files are optional
     /// (discover, plan) write only with --out, and those that record (simulate, log,
@@ -25,11 +25,9 @@ pub struct Args {
     /// Print the metrics (including timings) as JSON on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Without a `time_s` column, take the times from `step` with the thesis protocol (10 s
-    /// steps), so that a drift in time (`thermal_drift`) can be tested, as diagnose and
-    /// discover do with the same option.
-    #[arg(long)]
-    pub protocol_times: bool,
+    /// How the steps are timed.
+    #[command(flatten)]
+    pub timing: super::input::TimingArgs,
     /// Threads for independent fits (default: up to 4).
     #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
@@ -82,11 +80,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let ctx = report_context(&args)?;
     // The data first (a file it refuses leaves no output directory behind), then the output
     // directory, locked and proved writable before the analysis, not after it.
-    let ds = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
-    if let (Some(path), true) = (&args.data, force::is_force_session(&ds)) {
+    let ds = args.input.load()?;
+    if let (Some(path), true) = (&args.input.data, force::is_force_session(&ds)) {
         // Force control: how the rig tracked its target, not the law (issue 43).
         return force::run(&args, path, &ctx);
     }
@@ -111,7 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
-    opts.protocol_times = args.protocol_times;
+    opts.protocol_times = args.timing.protocol_times;
     crate::errln!("analysing {} ({} pairs) ...", ds.source, ds.pairs.len());
     let mut a = capstan_engine::analysis::run(&ds, opts)?;
     crate::errln!("{}", a.evidence.data.structure.statement);
@@ -123,7 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let t_report = Instant::now();
     let closed = closed_loop(&mut a, opts.threads);
-    let (disc, disc_s) = discovery(&ds, args.protocol_times)?;
+    let (disc, disc_s) = discovery(&ds, args.timing.protocol_times)?;
     let next = next_experiment(&args, &ds)?;
     let (html, figs) =
         capstan_report::report_html(&a, closed.curves.as_deref(), &closed.note, &ctx)?;
@@ -145,20 +140,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     write_predictions(&mut set, &args, &ds, &a)?;
     a.elapsed.report_s = t_report.elapsed().as_secs_f64();
     a.elapsed.total_s = t0.elapsed().as_secs_f64();
-    let mut metrics = capstan_report::metrics_json(&a, &closed.summary, &ctx);
-    metrics["discovered"] = capstan_report::discovered::discovered_json(&disc);
-    metrics["discovered"]["elapsed_s"] = serde_json::json!(disc_s);
-    metrics["next_experiment"] = next;
-    metrics["data"]["warnings"] = serde_json::json!(data_warnings);
+    let metrics = capstan_report::Metrics::new(&a, Some(&closed.outcome), &ctx)
+        .with_discovered(capstan_report::discovered::discovered(&disc, disc_s))
+        .with_next(&next)
+        .with_data_warnings(&data_warnings)
+        .to_json()?;
     set.write("report.html", html.as_bytes())?;
-    set.write(
-        "metrics.json",
-        serde_json::to_string_pretty(&metrics)?.as_bytes(),
-    )?;
+    set.write("metrics.json", metrics.as_bytes())?;
     set.commit()?;
     say_written(&args, files.len(), t0);
     if args.json {
-        crate::outln!("{}", serde_json::to_string_pretty(&metrics)?);
+        crate::outln!("{metrics}");
     }
     Ok(())
 }
@@ -176,7 +168,7 @@ fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
         numbers: args.figure_numbers,
     };
     figures.check()?;
-    let provenance = crate::provenance::of_input(args.data.as_deref())?;
+    let provenance = args.input.provenance()?;
     let thesis = capstan_report::ThesisComparison::decide(
         crate::provenance::is_thesis(&provenance),
         args.thesis_comparison,
@@ -192,22 +184,25 @@ fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
 /// for metrics.json, and the sentence that says what was run (or why it failed).
 struct ClosedLoop {
     curves: Option<Vec<capstan_engine::analysis::closed_loop::SimCurve>>,
-    summary: serde_json::Value,
+    outcome: capstan_engine::analysis::closed_loop::Outcome,
     note: String,
 }
 
 /// Run the closed loop (its time into the analysis's timings).
 fn closed_loop(a: &mut capstan_engine::analysis::Analysis, threads: usize) -> ClosedLoop {
+    use capstan_engine::analysis::closed_loop::Outcome;
     let t = Instant::now();
     let out = match capstan_validation::closed_loop::run(a, threads) {
         Ok(cl) => ClosedLoop {
             curves: Some(cl.curves),
-            summary: cl.summary,
+            outcome: Outcome::Ran(cl.summary),
             note: "The firmware, run in virtual time against the simulated plant (capstan_sim::campaign) with the extended model as its friction law (each cord's fitted mu factor and the named causes), on the thesis campaign: one run per cord, sensor noise off.".to_string(),
         },
         Err(e) => ClosedLoop {
             curves: None,
-            summary: serde_json::json!({"error": format!("{e:#}")}),
+            outcome: Outcome::Failed {
+                error: format!("{e:#}"),
+            },
             note: format!("The closed-loop simulation failed: {e:#}"),
         },
     };
@@ -216,20 +211,24 @@ fn closed_loop(a: &mut capstan_engine::analysis::Analysis, threads: usize) -> Cl
 }
 
 /// Beyond the catalogue (`capstan discover`), kept apart from the catalogue's causes: the
-/// search as JSON and its time, s.
+/// search and its time, s.
 fn discovery(
     ds: &capstan_data::Dataset,
     protocol_times: bool,
-) -> anyhow::Result<(serde_json::Value, f64)> {
+) -> anyhow::Result<(capstan_discover::Discovery, f64)> {
     let t = Instant::now();
     let mut opts = capstan_discover::Options::default();
     opts.engine.protocol_times = protocol_times;
     let disc = capstan_discover::discover(ds, &opts, &mut |_, _| {});
-    Ok((serde_json::to_value(&disc)?, t.elapsed().as_secs_f64()))
+    Ok((disc, t.elapsed().as_secs_f64()))
 }
 
 /// The report with its "discovered" and "Next experiment" sections in place.
-fn with_sections(html: String, disc: &serde_json::Value, next: &serde_json::Value) -> String {
+fn with_sections(
+    html: String,
+    disc: &capstan_discover::Discovery,
+    next: &capstan_report::next::NextExperiment,
+) -> String {
     use capstan_report::discovered::{discovered_html, insert_section};
     let html = insert_section(html, &discovered_html(disc));
     insert_section(html, &capstan_report::next::next_html(next))
@@ -268,8 +267,11 @@ fn say_written(args: &Args, figure_files: usize, t0: Instant) {
 }
 
 /// The "Next experiment" object: what is open (one diagnosis), and with `--plan` the plan.
-fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<serde_json::Value> {
-    let open = serde_json::to_value(capstan_plan::open(ds))?;
+fn next_experiment(
+    args: &Args,
+    ds: &capstan_data::Dataset,
+) -> anyhow::Result<capstan_report::next::NextExperiment> {
+    let open = capstan_plan::open(ds);
     let plan = if args.plan {
         crate::errln!("planning the next experiment (--plan: about a minute) ...");
         let stop = super::signal::stop_flag("analyze");
@@ -281,19 +283,19 @@ fn next_experiment(args: &Args, ds: &capstan_data::Dataset) -> anyhow::Result<se
             }
             Err(e) => anyhow::bail!("the planner: {e}"),
         };
-        Some(serde_json::to_value(p)?)
+        Some(p)
     } else {
         None
     };
     // The data's absolute path, quoted for a shell: the command runs from anywhere.
-    let command = match &args.data {
+    let command = match &args.input.data {
         Some(p) => {
             let abs = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
             format!("capstan plan {}", shell_quoted(&abs.display().to_string()))
         }
         None => "capstan plan".to_string(),
     };
-    Ok(capstan_report::next::next_json(
+    Ok(capstan_report::next::next_experiment(
         &open,
         plan.as_ref(),
         &command,

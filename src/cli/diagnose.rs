@@ -1,26 +1,23 @@
 //! `capstan diagnose DATA.csv [--json]`: which catalogue effects (if any) make a data set depart
 //! from Euler-Eytelwein, their sizes, and what is left unexplained. See [`capstan_engine::diagnose`].
 
-use capstan_data::{load_pairs, thesis_dataset};
 use capstan_engine::diagnose::{self, Diagnosis, Options};
 use capstan_engine::verdict::words::{self, fixed};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 /// Arguments of `capstan diagnose`.
 #[derive(clap::Args, Debug)]
 #[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
-    /// Pairs CSV (`wrap_deg,t1_n,t2_n` required; `capstan_diameter_mm,drive_v,run,step,time_s`
-    /// optional). Without it, the bundled thesis data.
-    pub data: Option<PathBuf>,
+    /// The pairs.
+    #[command(flatten)]
+    pub input: super::input::DataArgs,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
-    /// Without a `time_s` column, take the times from `step` with the thesis protocol (10 s
-    /// steps), so that `thermal_drift` can be tested.
-    #[arg(long)]
-    pub protocol_times: bool,
+    /// How the steps are timed.
+    #[command(flatten)]
+    pub timing: super::input::TimingArgs,
     /// A within-run (shape) effect is reported when its ΔBIC is below minus this.
     #[arg(long, default_value_t = diagnose::WITHIN_THRESHOLD, allow_negative_numbers = true)]
     pub within_threshold: f64,
@@ -39,23 +36,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             anyhow::bail!("{flag} {v}: must be a finite number, 0 or more");
         }
     }
-    let data = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
+    let data = args.input.load()?;
     let data_warnings = super::check_data(&data)?;
     let opts = Options {
         within_threshold: args.within_threshold,
         between_threshold: args.between_threshold,
-        protocol_times: args.protocol_times,
+        protocol_times: args.timing.protocol_times,
         ..Options::default()
     };
-    let d = diagnose::diagnose_with(&data, &opts);
+    let mut d = diagnose::diagnose_with(&data, &opts);
     if args.json {
-        let mut v: serde_json::Value = serde_json::from_str(&d.to_json())?;
-        v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
-        v["data"]["warnings"] = serde_json::json!(data_warnings);
-        crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+        // Where the answer came from, and what the data checks warned about, in the answer.
+        d.provenance = Some(args.input.provenance()?);
+        d.data.warnings = Some(data_warnings);
+        crate::outln!("{}", d.to_json());
     } else {
         crate::out!("{}", summary(&d, &data.source));
     }

@@ -3,7 +3,6 @@
 //! evidence (with the search paid for), is stable over whole-cord resamples, helps held-out
 //! cords and resolves the lack of fit. See [`capstan_discover`] and docs/README-discover.md.
 
-use capstan_data::{load_pairs, thesis_dataset};
 use capstan_discover::{discover, Discovery, Options};
 use capstan_engine::evidence::adequacy;
 use std::fmt::Write as _;
@@ -15,26 +14,23 @@ use std::time::{Duration, Instant};
 #[derive(clap::Args, Debug)]
 #[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
-    /// Pairs CSV (the schema of `capstan analyze`/`diagnose`). Without it, the bundled thesis
-    /// data.
-    pub data: Option<PathBuf>,
+    /// The pairs.
+    #[command(flatten)]
+    pub input: super::input::DataArgs,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
     /// Also write the JSON to DIR/discover.json (the directory is locked and written whole).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Without a `time_s` column, take the times from `step` with the thesis protocol.
-    #[arg(long)]
-    pub protocol_times: bool,
+    /// How the steps are timed.
+    #[command(flatten)]
+    pub timing: super::input::TimingArgs,
 }
 
 /// Run `capstan discover`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let data = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
+    let data = args.input.load()?;
     let data_warnings = super::check_data(&data)?;
     // What analyze refuses, discover refuses too (a search needs the analysis's data).
     capstan_engine::analysis::enough_rows(&data)?;
@@ -44,16 +40,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => None,
     };
     let mut opts = Options::default();
-    opts.engine.protocol_times = args.protocol_times;
+    opts.engine.protocol_times = args.timing.protocol_times;
     let bar = Progress::new(!args.json && std::io::stderr().is_terminal());
-    let d = discover(&data, &opts, &mut |stage, f| bar.tick(stage, f));
+    let mut d = discover(&data, &opts, &mut |stage, f| bar.tick(stage, f));
     bar.finish();
     // Where the answer came from (program, commit, the input's SHA-256, the command line), as
     // every output carries it, and what the data checks warned about.
-    let mut v = serde_json::to_value(&d)?;
-    v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
-    v["data"]["warnings"] = serde_json::json!(data_warnings);
-    let json = serde_json::to_string_pretty(&v)?;
+    d.provenance = Some(args.input.provenance()?);
+    d.data.warnings = Some(data_warnings);
+    let json = d.to_json();
     if let Some(set) = set.as_mut() {
         set.keep_on_failure(crate::outputs::say_kept);
         set.write("discover.json", json.as_bytes())?;

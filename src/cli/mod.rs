@@ -6,6 +6,7 @@ pub mod analyze;
 pub mod condition;
 pub mod diagnose;
 pub mod discover;
+pub mod input;
 pub mod log;
 pub mod plan;
 pub mod predict;

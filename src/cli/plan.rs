@@ -1,7 +1,6 @@
 //! `capstan plan DATA.csv [--json] [--out DIR] [--hours H]`: the experiment that decides
 //! between the hypotheses a data set leaves open. See [`capstan_plan`].
 
-use capstan_data::{load_pairs, thesis_dataset};
 use capstan_plan::{plan, Options, Plan, Scored};
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Write as _};
@@ -11,8 +10,9 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 #[command(after_help = capstan_data::COLUMNS_HELP)]
 pub struct Args {
-    /// Pairs CSV, read as `diagnose` reads it. Without it, the bundled thesis data.
-    pub data: Option<PathBuf>,
+    /// The pairs.
+    #[command(flatten)]
+    pub input: super::input::DataArgs,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -46,10 +46,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(b) = &args.board {
         board_words(b)?;
     }
-    let data = match &args.data {
-        Some(p) => load_pairs(p)?,
-        None => thesis_dataset(),
-    };
+    let data = args.input.load()?;
     let data_warnings = super::check_data(&data)?;
     // A plan is built on the analysis of these data: what analyze refuses, plan refuses too.
     capstan_engine::analysis::enough_rows(&data)?;
@@ -79,14 +76,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     capstan_plan::commands::with_board(&mut p, board);
     // How the data were read and where they came from, as diagnose and analyze say it.
     let structure = data.structure.summary();
-    let mut v = serde_json::to_value(&p)?;
-    v["data"] = serde_json::json!({"source": data.source, "structure": structure, "warnings": data_warnings});
-    // The simulated campaigns' master seed and size: the same seed, data and program give the
-    // same plan.
-    v["seed"] = serde_json::json!(args.seed);
-    v["reps"] = serde_json::json!(args.reps);
-    v["provenance"] = serde_json::to_value(crate::provenance::of_input(args.data.as_deref())?)?;
-    let json = serde_json::to_string_pretty(&v)?;
+    let answer = Answer {
+        plan: &p,
+        data: DataRead {
+            source: &data.source,
+            structure: &structure,
+            warnings: &data_warnings,
+        },
+        seed: args.seed,
+        provenance: args.input.provenance()?,
+    };
+    // Keys sorted at every level, as the plan's JSON has always been written.
+    let json = serde_json::to_string_pretty(&serde_json::to_value(&answer)?)?;
     let text = words(&p, &data.source, &structure.statement);
     if let Some(out) = out {
         let mut set = out.stage()?;
@@ -100,6 +101,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::out!("{text}");
     }
     Ok(())
+}
+
+/// `capstan plan --json` and `plan.json`: the plan (its `reps`, the campaigns per hypothesis
+/// and protocol, among it), how the data were read and where they came from (as diagnose and
+/// analyze say it), and the simulated campaigns' master seed: the same seed, data and program
+/// give the same plan.
+#[derive(serde::Serialize)]
+struct Answer<'a> {
+    #[serde(flatten)]
+    plan: &'a Plan,
+    data: DataRead<'a>,
+    seed: u64,
+    provenance: capstan_data::Provenance,
+}
+
+/// The data a plan was made from.
+#[derive(serde::Serialize)]
+struct DataRead<'a> {
+    source: &'a str,
+    structure: &'a capstan_data::structure::StructureSummary,
+    warnings: &'a [String],
 }
 
 /// How long a stopped plan may take to return before it exits anyway (it stops within one

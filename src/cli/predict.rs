@@ -2,12 +2,13 @@
 //! amplification from the fitted population-averaged model, with a 95 % confidence interval
 //! (the mean curve) and a 95 % prediction interval (a new measurement on a new cord); with
 //! `--t2-n LIST` instead, the T1 a wanted T2 needs ([`reverse`]). Each is checked against the
-//! rig's limits ([`limits`]). See [`capstan_engine::analysis::prediction`].
+//! rig's limits ([`limits`]). The model is read and checked by
+//! [`capstan_report::read_and_validate`]; see [`capstan_engine::analysis::prediction`].
 
 mod limits;
 mod reverse;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use capstan_data::ranges::shown;
 use capstan_engine::analysis::prediction::{self, PredictionModel, Query, DEFAULT_DRIVE_V};
 use limits::RigLimits;
@@ -111,219 +112,6 @@ pub fn parse_tensions(flag: &str, s: &str) -> anyhow::Result<Vec<f64>> {
     Ok(vals)
 }
 
-/// The first field of `v` holding a `null` (where a number was expected), as a path.
-fn null_field(v: &Value) -> Option<String> {
-    match v {
-        Value::Null => Some(String::new()),
-        Value::Object(m) => m.iter().find_map(|(k, x)| {
-            null_field(x).map(|rest| {
-                format!(
-                    "{k}{}",
-                    if rest.is_empty() {
-                        rest
-                    } else {
-                        format!(".{rest}")
-                    }
-                )
-            })
-        }),
-        Value::Array(a) => a.iter().enumerate().find_map(|(i, x)| {
-            null_field(x).map(|rest| {
-                format!(
-                    "[{i}]{}",
-                    if rest.is_empty() {
-                        rest
-                    } else {
-                        format!(".{rest}")
-                    }
-                )
-            })
-        }),
-        _ => None,
-    }
-}
-
-/// Read the prediction model from `metrics.json`.
-pub fn load_model(path: &std::path::Path) -> anyhow::Result<PredictionModel> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let v: Value = serde_json::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{}:{}:{}: not JSON: {e}",
-            path.display(),
-            e.line(),
-            e.column()
-        )
-    })?;
-    let Some(pm) = v.get("prediction_model") else {
-        bail!(
-            "{}: no prediction_model (written by capstan analyze from metrics schema 2 on; run capstan analyze again)",
-            path.display()
-        );
-    };
-    let want = u64::from(prediction::SCHEMA);
-    match pm.get("schema").map(|s| (s, s.as_u64())) {
-        Some((_, Some(s))) if s == want => {}
-        Some((_, Some(s))) if s > want => bail!(
-            "{}: prediction_model schema {s} is newer than this capstan reads ({want}): use the \
-             capstan that wrote it, or a newer one",
-            path.display()
-        ),
-        Some((_, Some(s))) => bail!(
-            "{}: prediction_model schema {s}, this capstan reads schema {want} (run capstan \
-             analyze again)",
-            path.display()
-        ),
-        Some((v, None)) => bail!(
-            "{}: prediction_model schema {v} is not a schema number (this capstan reads {want})",
-            path.display()
-        ),
-        None => bail!(
-            "{}: prediction_model has no schema (this capstan reads {want}; run capstan analyze \
-             again)",
-            path.display()
-        ),
-    }
-    if pm
-        .get("folds")
-        .and_then(Value::as_u64)
-        .is_some_and(|k| k < 2)
-    {
-        bail!(
-            "{}: the analysis had fewer than two cords to leave out, so its model has no \
-             interval; analyse data with at least two cords",
-            path.display()
-        );
-    }
-    let model: PredictionModel = serde_json::from_value(pm.clone()).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: prediction_model is malformed: {e}{}",
-            path.display(),
-            null_field(pm).map_or(String::new(), |f| format!(" (at {f})"))
-        )
-    })?;
-    check_model(&model)
-        .map_err(|e| anyhow::anyhow!("{}: prediction_model: {e}", path.display()))?;
-    Ok(model)
-}
-
-/// A model error's numbers: finite, not negative, and an SD its held-out and accounted RMS
-/// can give (sd² = max(0, held-out² − accounted²); more was edited).
-fn check_error(name: &str, e: &prediction::ModelError) -> Result<(), String> {
-    for (part, v) in [
-        ("sd_n", e.sd_n),
-        ("heldout_rms_n", e.heldout_rms_n),
-        ("accounted_rms_n", e.accounted_rms_n),
-    ] {
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("{name}.{part} = {} must be 0 or more", shown(v)));
-        }
-    }
-    let most = (e.heldout_rms_n.powi(2) - e.accounted_rms_n.powi(2))
-        .max(0.0)
-        .sqrt();
-    if e.sd_n > most * (1.0 + 1e-9) + 1e-12 {
-        return Err(format!(
-            "{name}.sd_n {} exceeds what its held-out RMS {} and accounted RMS {} give ({})",
-            shown(e.sd_n),
-            shown(e.heldout_rms_n),
-            shown(e.accounted_rms_n),
-            shown(most)
-        ));
-    }
-    Ok(())
-}
-
-/// What `capstan analyze` writes and a prediction relies on: a finite mu in the catalogue's
-/// range, a square covariance of the free parameters with a non-negative diagonal, a new
-/// cord's error at or above 0 from the held-out rows of two cords or more, an extrapolation
-/// error no more than its held-out residuals leave, known free parameters, and ranges that are
-/// ranges. An edited or damaged file fails here rather than giving intervals that mean nothing.
-fn check_model(pm: &PredictionModel) -> Result<(), String> {
-    let mu = pm.values.get("mu").copied().unwrap_or(f64::NAN);
-    if !(mu.is_finite() && mu > 0.0 && mu <= 2.0) {
-        return Err(format!(
-            "mu {} is not a friction coefficient above 0 and up to 2",
-            shown(mu)
-        ));
-    }
-    if let Some((k, v)) = pm.values.iter().find(|(_, v)| !v.is_finite()) {
-        return Err(format!("{k} = {} is not a number", shown(*v)));
-    }
-    if pm.free.is_empty() {
-        return Err("no free parameters (an analysis fits mu at least)".into());
-    }
-    if let Some(name) = pm.free.iter().find(|n| !pm.values.contains_key(n.as_str())) {
-        return Err(format!("free parameter {name} has no value"));
-    }
-    let n = pm.free.len();
-    let square = pm.covariance.len() == n && pm.covariance.iter().all(|r| r.len() == n);
-    if !square {
-        return Err(format!(
-            "the covariance is not {n} × {n} (one row per free parameter)"
-        ));
-    }
-    for (i, row) in pm.covariance.iter().enumerate() {
-        if row.iter().any(|c| !c.is_finite()) || row[i] < 0.0 {
-            return Err(format!(
-                "covariance row {} is not finite or has a negative variance",
-                i + 1
-            ));
-        }
-    }
-    let e = &pm.new_cord_error;
-    for (name, v) in [
-        ("abs_n", e.abs_n),
-        ("rel", e.rel),
-        ("heldout_rms_n", e.heldout_rms_n),
-    ] {
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(format!(
-                "new_cord_error.{name} = {} must be 0 or more",
-                shown(v)
-            ));
-        }
-    }
-    if e.rows == 0 || e.cords < 2 {
-        return Err(
-            "new_cord_error has no held-out rows of two cords or more behind it (no cord had a held-out prediction)".into(),
-        );
-    }
-    if e.dof == 0 || e.dof > e.cords {
-        return Err(format!(
-            "new_cord_error.dof = {} is not a number of degrees of freedom for {} cords",
-            e.dof, e.cords
-        ));
-    }
-    // Without three wraps there is nothing to extrapolate from: no rows, and then no error.
-    let w = &pm.wrap_extrapolation_error;
-    check_error("wrap_extrapolation_error", w)?;
-    if w.rows == 0 && w.sd_n != 0.0 {
-        return Err("wrap_extrapolation_error has an SD but no held-out rows behind it".into());
-    }
-    let step = pm.wrap_extrapolation_step_deg;
-    if !(step.is_finite() && step >= 0.0) || (w.rows > 0 && step == 0.0) {
-        return Err(format!(
-            "wrap_extrapolation_step_deg = {step} is not the distance the error was measured at"
-        ));
-    }
-    let r = &pm.fitted_range;
-    for (name, s) in [
-        ("wrap_deg", r.wrap_deg),
-        ("diameter_mm", r.diameter_mm),
-        ("t1_n", r.t1_n),
-        ("drive_v", r.drive_v),
-    ] {
-        if !(s.min.is_finite() && s.max.is_finite() && s.min <= s.max) {
-            return Err(format!(
-                "fitted_range.{name} {} to {} is not a range",
-                s.min, s.max
-            ));
-        }
-    }
-    Ok(())
-}
-
 /// The query every T1 shares: the wrap, diameter and drive voltage, checked.
 pub struct Setting {
     /// Drive voltage, V.
@@ -397,12 +185,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             );
         }
         let wanted = parse_tensions("--t2-n", t2)?;
-        let pm = load_model(&from)?;
+        let pm = capstan_report::read_and_validate(&from)?.prediction_model;
         let set = setting(&args, &pm)?;
         return reverse::run(&args, &pm, &set, &wanted);
     }
     let t1 = parse_t1_list(args.t1_n.as_deref().unwrap_or_default())?;
-    let pm = load_model(&from)?;
+    let pm = capstan_report::read_and_validate(&from)?.prediction_model;
     let set = setting(&args, &pm)?;
     let queries: Vec<Query> = t1.iter().map(|t| set.query(&args, *t)).collect();
     // One warning per quantity, with the range of the values outside: never one per value.

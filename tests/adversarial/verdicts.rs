@@ -117,11 +117,12 @@ fn analyze_and_diagnose_see_the_same_structure_and_say_how_it_was_found() {
         "{}",
         a.evidence.verdict
     );
-    let m = capstan_report::metrics_json(
+    let m = serde_json::to_value(capstan_report::Metrics::new(
         &a,
-        &serde_json::Value::Null,
+        None,
         &capstan_report::Context::library(),
-    );
+    ))
+    .unwrap();
     assert_eq!(m["data"]["structure"]["runs"]["from"], "assumed");
     assert_eq!(m["data"]["structure"]["cords"]["from"], "assumed");
     let html = capstan_report::report_html(&a, None, "", &capstan_report::Context::library())

@@ -119,6 +119,10 @@ pub struct DataInfo {
     pub rows: usize,
     /// Its structure, and how each level was found.
     pub structure: StructureSummary,
+    /// What the data checks warned about, as the command that read the data gives them
+    /// (`None`: not given, and not in the JSON).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warnings: Option<Vec<String>>,
 }
 
 /// How the search was paid for.
@@ -205,12 +209,19 @@ pub struct Discovery {
     pub search: Search,
     /// Wall time, s.
     pub elapsed_s: f64,
+    /// Where the answer came from (program, commit, the input's SHA-256, the command line),
+    /// as the command that prints it gives it (`None`: not given, and not in the JSON).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<capstan_data::Provenance>,
 }
 
 impl Discovery {
-    /// One JSON object.
+    /// One JSON object: pretty, the keys of every object sorted (as `capstan discover --json`
+    /// has always written it), whatever the order of the fields here.
     pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+        serde_json::to_value(self)
+            .and_then(|v| serde_json::to_string_pretty(&v))
+            .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     }
 }
 

@@ -32,6 +32,18 @@ pub enum ActsOn {
     Tension,
 }
 
+impl ActsOn {
+    /// Its name in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            ActsOn::Mu => "mu",
+            ActsOn::T1Reading => "t1_reading",
+            ActsOn::T2Reading => "t2_reading",
+            ActsOn::Tension => "tension",
+        }
+    }
+}
+
 /// A variable a term depends on (the JSON's `depends_on`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]

@@ -765,6 +765,7 @@ impl Ctx<'_> {
                 source: data.source.clone(),
                 rows: d.n(),
                 structure: d.structure.clone(),
+                warnings: None,
             },
             // In the verdict layer's order (strongest first), as diagnose and analyze name them.
             catalogue_effects: (a.selected_evidence().iter()).map(|e| e.effect).collect(),
@@ -806,6 +807,7 @@ impl Ctx<'_> {
                 screen: first_screen,
             },
             elapsed_s: t0.elapsed().as_secs_f64(),
+            provenance: None,
         }
     }
 }

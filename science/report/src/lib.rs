@@ -2,7 +2,7 @@
 //! `report.html` (inline SVG figures, no external resources), from the engine's analysis
 //! (`capstan_engine::analysis`).
 //!
-//! * [`files`]: `metrics.json` and `predictions.csv`.
+//! * [`metrics`]: `metrics.json`, written and read back; [`files`]: `predictions.csv`.
 //! * [`html`]: the page and its sections; [`tables`]: its tables; [`cells`]: the text in them
 //!   (numbers or a dash, escaped text).
 //! * [`headline`]: the plain headline; [`parameters`]: the one parameter table;
@@ -24,6 +24,7 @@ pub mod figures;
 pub mod files;
 pub mod headline;
 pub mod html;
+pub mod metrics;
 pub mod next;
 pub mod parameters;
 pub mod plot;
@@ -36,5 +37,6 @@ pub use capstan_engine::analysis::closed_loop::SimCurve;
 pub use context::{apply_thesis_choice, Context, ThesisComparison};
 pub use error::{FigureError, FileCheckError};
 pub use export::{figure_files, FigureOptions, Format};
-pub use files::{metrics_json, write_predictions_csv};
+pub use files::write_predictions_csv;
 pub use html::report_html;
+pub use metrics::{read_and_validate, Metrics, MetricsError};

@@ -3,199 +3,268 @@
 //! that decides (its `capstan rig` commands, physical changes, rig hours and chance of deciding,
 //! with the current design's chance beside it). Without the planner (it simulates for about a
 //! minute) the section lists what is open and gives the `capstan plan` command that answers it.
-//! The section is rendered from the `metrics.json` object alone; the crate takes the plan as
-//! JSON (it does not depend on `capstan-plan`).
+//! The section is rendered from the `metrics.json` object ([`NextExperiment`]) alone.
 
 use crate::cells::esc;
-use serde_json::{json, Value};
+use capstan_plan::cords::Cords;
+use capstan_plan::design::Design;
+use capstan_plan::hypotheses::NotSimulated;
+use capstan_plan::{Beyond, Current, First, Open, Plan};
+use serde::Serialize;
 use std::fmt::Write as _;
 
-/// The `next_experiment` object from the planner's open hypotheses (`capstan_plan::Open` as
-/// JSON: `hypotheses`, `not_simulated`, `assumed`), the plan if it ran (`capstan_plan::Plan`
-/// as JSON), and the `capstan plan` command that plans these data.
-pub fn next_json(open: &Value, plan: Option<&Value>, command: &str) -> Value {
-    let hyps = |v: &Value| -> Vec<Value> {
-        (v["hypotheses"].as_array().into_iter().flatten())
-            .map(|h| json!({"label": h["label"], "origin": h["origin"]}))
-            .collect()
-    };
-    let mut next = json!({
-        "planned": plan.is_some(),
-        "command": command,
-        "open": hyps(plan.unwrap_or(open)),
-        "not_simulated": plan.unwrap_or(open)["not_simulated"],
-        "assumed": plan.unwrap_or(open)["assumed"],
-    });
-    if let Some(p) = plan {
-        let r = &p["recommended"];
-        next["recommended"] = json!({
-            "name": r["name"],
-            "protocol": r["protocol"],
-            "rig_commands": r["rig_commands"],
-            "physical_changes": r["physical_changes"],
-            "procedure": r["procedure"],
-            "simulate_args": r["simulate_args"],
-            "rig_hours": r["rig_hours"],
-            "p_decide_worst": r["p_decide_worst"],
-        });
-        for key in [
-            "current_design",
-            "current_decides",
-            "any_decides",
-            "within_hours",
-        ] {
-            next[key] = p[key].clone();
+/// The `next_experiment` object of `metrics.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct NextExperiment {
+    /// The planner ran (`capstan analyze --plan`).
+    pub planned: bool,
+    /// The `capstan plan` command that plans these data.
+    pub command: String,
+    /// The hypotheses the data leave open.
+    pub open: Vec<OpenHypothesis>,
+    /// What the data leave open that is not simulated, and why.
+    pub not_simulated: Vec<NotSimulated>,
+    /// What the planner had to assume.
+    pub assumed: Vec<String>,
+    /// The plan, when the planner ran.
+    #[serde(flatten)]
+    pub plan: Option<Planned>,
+}
+
+/// An open hypothesis: its label and where it comes from.
+#[derive(Clone, Debug, Serialize)]
+pub struct OpenHypothesis {
+    /// Its effects joined by `+` (`euler_eytelwein` for none).
+    pub label: String,
+    /// Where it comes from.
+    pub origin: String,
+}
+
+/// What the planner recommends, against the current design.
+#[derive(Clone, Debug, Serialize)]
+pub struct Planned {
+    /// The recommended protocol.
+    pub recommended: Recommended,
+    /// The data's own design's chance.
+    pub current_design: Current,
+    /// The current design already decides.
+    pub current_decides: bool,
+    /// Some candidate decides.
+    pub any_decides: bool,
+    /// The recommendation fits in the hours given.
+    pub within_hours: bool,
+    /// Simulated campaigns behind each chance.
+    pub reps: usize,
+    /// How many cords each open question between cords needs.
+    pub cords: Option<Cords>,
+    /// Which recommendation comes first, and why.
+    pub first: First,
+    /// The best protocol beyond the hours given, when better.
+    pub better_beyond_hours: Option<Beyond>,
+    /// How the chances were estimated.
+    pub method: String,
+    /// The planner's wall time, s.
+    pub elapsed_s: f64,
+}
+
+/// The recommended protocol and how to run it.
+#[derive(Clone, Debug, Serialize)]
+pub struct Recommended {
+    /// Its name.
+    pub name: String,
+    /// The design.
+    pub protocol: Design,
+    /// The `capstan rig` commands that set it.
+    pub rig_commands: Vec<String>,
+    /// Physical changes, by hand.
+    pub physical_changes: Vec<String>,
+    /// What to do then.
+    pub procedure: Vec<String>,
+    /// The `capstan simulate` arguments of its campaign.
+    pub simulate_args: Vec<String>,
+    /// Rig time, h.
+    pub rig_hours: f64,
+    /// Its worst chance of deciding over the hypotheses.
+    pub p_decide_worst: f64,
+}
+
+impl Planned {
+    fn of(p: &Plan) -> Self {
+        let r = &p.recommended;
+        Planned {
+            recommended: Recommended {
+                name: r.candidate.name.clone(),
+                protocol: r.candidate.design.clone(),
+                rig_commands: r.candidate.rig_commands.clone(),
+                physical_changes: r.candidate.physical_changes.clone(),
+                procedure: r.candidate.procedure.clone(),
+                simulate_args: r.simulate_args.clone(),
+                rig_hours: r.rig_hours,
+                p_decide_worst: r.p_decide_worst,
+            },
+            current_design: p.current_design.clone(),
+            current_decides: p.current_decides,
+            any_decides: p.any_decides,
+            within_hours: p.within_hours,
+            reps: p.reps,
+            cords: p.cords.clone(),
+            first: p.first.clone(),
+            better_beyond_hours: p.better_beyond_hours.clone(),
+            method: p.method.clone(),
+            elapsed_s: p.elapsed_s,
         }
-        next["reps"] = p["reps"].clone();
-        next["cords"] = p["cords"].clone();
-        next["first"] = p["first"].clone();
-        next["better_beyond_hours"] = p["better_beyond_hours"].clone();
-        next["method"] = p["method"].clone();
-        next["elapsed_s"] = p["elapsed_s"].clone();
     }
-    next
+}
+
+/// The `next_experiment` object from the planner's open hypotheses, the plan if it ran (its
+/// open hypotheses then), and the `capstan plan` command that plans these data.
+pub fn next_experiment(open: &Open, plan: Option<&Plan>, command: &str) -> NextExperiment {
+    let (hypotheses, not_simulated, assumed) = match plan {
+        Some(p) => (&p.hypotheses, &p.not_simulated, &p.assumed),
+        None => (&open.hypotheses, &open.not_simulated, &open.assumed),
+    };
+    NextExperiment {
+        planned: plan.is_some(),
+        command: command.to_string(),
+        open: (hypotheses.iter())
+            .map(|h| OpenHypothesis {
+                label: h.label(),
+                origin: h.origin.clone(),
+            })
+            .collect(),
+        not_simulated: not_simulated.clone(),
+        assumed: assumed.clone(),
+        plan: plan.map(Planned::of),
+    }
 }
 
 /// The report's section, from the `next_experiment` object of `metrics.json`.
-pub fn next_html(n: &Value) -> String {
+pub fn next_html(n: &NextExperiment) -> String {
     let mut h = String::from("<h2>Next experiment</h2>");
     open_list(&mut h, n);
-    if n["planned"].as_bool() != Some(true) {
+    let Some(p) = &n.plan else {
         let _ = write!(
             h,
             "<p>The planner did not run (it simulates campaigns for about a minute). <code>{}</code> ranks the protocols that would decide between these, with the <code>capstan rig</code> commands of the best and its chance of deciding; <code>capstan analyze --plan</code> puts that here.</p>",
-            text(&n["command"])
+            esc(&n.command)
         );
         return h;
-    }
-    let cords_first = n["first"]["which"].as_str() == Some("cords");
+    };
+    let cords_first = p.first.which == "cords";
     if cords_first {
-        cords_html(&mut h, n);
+        cords_html(&mut h, p);
     }
-    recommendation(&mut h, n);
+    recommendation(&mut h, p);
     if !cords_first {
-        cords_html(&mut h, n);
+        cords_html(&mut h, p);
     }
-    let r = &n["recommended"];
-    list(
-        &mut h,
-        "Physical changes (by hand):",
-        &r["physical_changes"],
-    );
-    if let Some(cmds) = r["rig_commands"].as_array().filter(|a| !a.is_empty()) {
-        let lines: Vec<String> = cmds.iter().map(text).collect();
+    let r = &p.recommended;
+    list(&mut h, "Physical changes (by hand):", &r.physical_changes);
+    if !r.rig_commands.is_empty() {
+        let lines: Vec<String> = r.rig_commands.iter().map(|c| esc(c)).collect();
         let _ = write!(h, "<p>On the board:</p><pre>{}</pre>", lines.join("\n"));
     }
-    list(&mut h, "Then:", &r["procedure"]);
-    let args: Vec<String> = (r["simulate_args"].as_array().into_iter().flatten())
-        .map(text)
-        .collect();
+    list(&mut h, "Then:", &r.procedure);
+    let args: Vec<String> = r.simulate_args.iter().map(|a| esc(a)).collect();
     let _ = write!(
         h,
         "<p>Check it: <code>capstan simulate --out DIR {}</code>. Method: {} ({} s; <code>{}</code> gives the full ranking).</p>",
         args.join(" "),
-        text(&n["method"]),
-        n["elapsed_s"].as_f64().map_or("-".to_string(), |x| format!("{x:.1}")),
-        text(&n["command"])
+        esc(&p.method),
+        hours(p.elapsed_s),
+        esc(&n.command)
     );
     h
 }
 
 /// How many cords each open question between cords needs (the planner's `cords`), the first
 /// of them as the first recommendation when the plan puts it first.
-fn cords_html(h: &mut String, n: &Value) {
-    let qs = n["cords"]["questions"]
-        .as_array()
-        .cloned()
-        .unwrap_or_default();
-    if qs.is_empty() {
+fn cords_html(h: &mut String, p: &Planned) {
+    let Some(c) = p.cords.as_ref().filter(|c| !c.questions.is_empty()) else {
         return;
-    }
-    if n["first"]["which"].as_str() == Some("cords") {
-        if let Some(q) = qs.iter().find(|q| q["needed"].is_object()) {
-            let t = &q["needed"];
+    };
+    if p.first.which == "cords" {
+        if let Some((q, t)) = (c.questions.iter()).find_map(|q| q.needed.as_ref().map(|t| (q, t))) {
             let _ = write!(
                 h,
                 "<p>Recommended first: <b>{} new cords</b> ({} runs on each, {} rig hours) to establish {} ({} of {} simulated campaigns do). Why first: {}.</p>",
-                t["cords"], t["runs_per_cord"], hours(&t["rig_hours"]), text(&q["question"]), t["established"], t["campaigns"], text(&n["first"]["why"])
+                t.cords, t.runs_per_cord, hours(t.rig_hours), esc(&q.question), t.established, t.campaigns, esc(&p.first.why)
             );
         }
     }
     h.push_str("<p>How many cords each open question between cords needs (80 % of simulated campaigns establishing it):</p><ul>");
-    for q in &qs {
-        let mut answer = if q["needed"].is_object() {
-            format!(
-                "{} cords, {} runs on each",
-                q["needed"]["cords"], q["needed"]["runs_per_cord"]
-            )
-        } else {
-            "more cords than the simulation tried".into()
+    for q in &c.questions {
+        let mut answer = match &q.needed {
+            Some(t) => format!("{} cords, {} runs on each", t.cords, t.runs_per_cord),
+            None => "more cords than the simulation tried".into(),
         };
         // The held-out gain: also the cords at the data's own spread of the gain (resampling
         // the cords' held-out errors), which the simulated world need not have.
-        let spread = &q["at_observed_spread"];
-        if spread.is_object() {
-            let _ = match spread["cords"].as_u64() {
+        if let Some(spread) = &q.at_observed_spread {
+            let _ = match spread.cords {
                 Some(k) => write!(answer, "; about {k} cords at the data's own spread of the gain from cord to cord (resampling the cords' held-out errors)"),
-                None => write!(answer, "; more than {} cords at the data's own spread of the gain", spread["tried_up_to"]),
+                None => write!(answer, "; more than {} cords at the data's own spread of the gain", spread.tried_up_to),
             };
         }
         let _ = write!(
             h,
             "<li>{}: {answer}; observed {}</li>",
-            text(&q["question"]),
-            text(&q["observed"])
+            esc(&q.question),
+            esc(&q.observed)
         );
     }
-    let _ = write!(h, "</ul><p>Method: {}</p>", text(&n["cords"]["method"]));
+    let _ = write!(h, "</ul><p>Method: {}</p>", esc(&c.method));
 }
 
-/// A string value, escaped for HTML ("" for anything else).
-fn text(v: &Value) -> String {
-    esc(v.as_str().unwrap_or(""))
-}
-
-/// A chance as a percentage ("-" if missing).
-fn pct(v: &Value) -> String {
-    v.as_f64()
-        .map_or("-".to_string(), |x| format!("{:.0} %", 100.0 * x))
+/// A chance as a percentage ("-" if not a number).
+fn pct(x: f64) -> String {
+    if x.is_finite() {
+        format!("{:.0} %", 100.0 * x)
+    } else {
+        "-".to_string()
+    }
 }
 
 /// A chance with the campaigns behind it ("7 of 8 simulated campaigns, 88 %"): a rate from a
 /// few campaigns, not a certainty.
-fn chance(p: &Value, reps: &Value) -> String {
-    match (p.as_f64(), reps.as_u64().filter(|&n| n > 0)) {
-        (Some(x), Some(n)) => format!(
-            "{} of {n} simulated campaigns ({:.0} %)",
-            (x * n as f64).round(),
+fn chance(x: f64, reps: usize) -> String {
+    if x.is_finite() && reps > 0 {
+        format!(
+            "{} of {reps} simulated campaigns ({:.0} %)",
+            (x * reps as f64).round(),
             100.0 * x
-        ),
-        _ => pct(p),
+        )
+    } else {
+        pct(x)
     }
 }
 
-/// Rig hours to one decimal ("-" if missing).
-fn hours(v: &Value) -> String {
-    v.as_f64().map_or("-".to_string(), |x| format!("{x:.1}"))
+/// Rig hours (or seconds) to one decimal ("-" if not a number).
+fn hours(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.1}")
+    } else {
+        "-".to_string()
+    }
 }
 
 /// What the data leave open: the hypotheses, and those not simulated with why.
-fn open_list(h: &mut String, n: &Value) {
+fn open_list(h: &mut String, n: &NextExperiment) {
     h.push_str("<p>What these data leave open:</p><ul>");
-    for o in n["open"].as_array().into_iter().flatten() {
+    for o in &n.open {
         let _ = write!(
             h,
             "<li><code>{}</code> ({})</li>",
-            text(&o["label"]),
-            text(&o["origin"])
+            esc(&o.label),
+            esc(&o.origin)
         );
     }
-    for o in n["not_simulated"].as_array().into_iter().flatten() {
+    for o in &n.not_simulated {
         let _ = write!(
             h,
             "<li><code>{}</code>, not simulated: {}</li>",
-            text(&o["what"]),
-            text(&o["why"])
+            esc(&o.what),
+            esc(&o.why)
         );
     }
     h.push_str("</ul>");
@@ -203,49 +272,48 @@ fn open_list(h: &mut String, n: &Value) {
 
 /// The recommendation against the current design (or that the current design decides), and a
 /// warning when no candidate decided at all.
-fn recommendation(h: &mut String, n: &Value) {
-    let r = &n["recommended"];
-    let cur = &n["current_design"];
-    let pct = |v: &Value| chance(v, &n["reps"]);
-    if n["current_decides"].as_bool() == Some(true) {
+fn recommendation(h: &mut String, p: &Planned) {
+    let r = &p.recommended;
+    let cur = &p.current_design;
+    let pct = |x: f64| chance(x, p.reps);
+    if p.current_decides {
         let _ = write!(
             h,
             "<p>The current design already decides between the simulated hypotheses: chance of naming the true one alone {} (worst case), {} rig hours. Run it again as it is.</p>",
-            pct(&cur["p_decide_worst"]),
-            hours(&cur["rig_hours"])
+            pct(cur.p_decide_worst),
+            hours(cur.rig_hours)
         );
     } else {
         let _ = write!(
             h,
             "<p>Recommended: <b>{}</b>, {} rig hours: chance of naming the true hypothesis alone {} (worst case over the open hypotheses), against {} for the current design ({} h).</p>",
-            text(&r["name"]),
-            hours(&r["rig_hours"]),
-            pct(&r["p_decide_worst"]),
-            pct(&cur["p_decide_worst"]),
-            hours(&cur["rig_hours"])
+            esc(&r.name),
+            hours(r.rig_hours),
+            pct(r.p_decide_worst),
+            pct(cur.p_decide_worst),
+            hours(cur.rig_hours)
         );
     }
-    let b = &n["better_beyond_hours"];
-    if b.is_object() {
+    if let Some(b) = &p.better_beyond_hours {
         let _ = write!(
             h,
             "<p>Within the hours given nothing does better; <b>{}</b> reaches {} but needs {} rig hours.</p>",
-            text(&b["name"]),
-            pct(&b["p_decide_worst"]),
-            hours(&b["rig_hours"])
+            esc(&b.name),
+            pct(b.p_decide_worst),
+            hours(b.rig_hours)
         );
     }
-    if n["any_decides"].as_bool() == Some(false) {
+    if !p.any_decides {
         h.push_str("<p>No candidate protocol named the true hypothesis alone in any simulated campaign: this is only the least bad.</p>");
     }
 }
 
 /// A titled list of strings, if there are any.
-fn list(h: &mut String, title: &str, v: &Value) {
-    if let Some(items) = v.as_array().filter(|a| !a.is_empty()) {
+fn list(h: &mut String, title: &str, items: &[String]) {
+    if !items.is_empty() {
         let _ = write!(h, "<p>{title}</p><ul>");
         for i in items {
-            let _ = write!(h, "<li>{}</li>", text(i));
+            let _ = write!(h, "<li>{}</li>", esc(i));
         }
         h.push_str("</ul>");
     }
@@ -254,20 +322,35 @@ fn list(h: &mut String, title: &str, v: &Value) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use capstan_plan::First;
 
-    fn open() -> Value {
-        json!({"hypotheses": [
-                {"label": "t2_offset", "origin": "named", "effects": []},
-                {"label": "t2_offset+speed_dependence", "origin": "not testable in these data (a single drive voltage)", "effects": []}],
-               "not_simulated": [{"what": "unexplained", "why": "structure no catalogue effect explains"}],
-               "assumed": []})
+    fn open() -> NextExperiment {
+        let hyp = |label: &str, origin: &str| OpenHypothesis {
+            label: label.into(),
+            origin: origin.into(),
+        };
+        NextExperiment {
+            planned: false,
+            command: "capstan plan data.csv".into(),
+            open: vec![
+                hyp("t2_offset", "named"),
+                hyp(
+                    "t2_offset+speed_dependence",
+                    "not testable in these data (a single drive voltage)",
+                ),
+            ],
+            not_simulated: vec![NotSimulated {
+                what: "unexplained".into(),
+                why: "structure no catalogue effect explains".into(),
+            }],
+            assumed: vec![],
+            plan: None,
+        }
     }
 
     #[test]
     fn without_the_planner_the_section_lists_what_is_open_and_the_command() {
-        let n = next_json(&open(), None, "capstan plan data.csv");
-        assert_eq!(n["planned"], json!(false));
-        let h = next_html(&n);
+        let h = next_html(&open());
         for s in [
             "t2_offset+speed_dependence",
             "unexplained",
@@ -277,19 +360,63 @@ mod tests {
             assert!(h.contains(s), "no {s} in {h}");
         }
         assert!(!h.contains("Recommended"));
+        let v = serde_json::to_value(open()).unwrap();
+        assert_eq!(v["planned"], serde_json::json!(false));
+        assert!(v.get("recommended").is_none(), "{v}");
+    }
+
+    #[test]
+    fn the_open_hypotheses_of_the_thesis_data_are_the_planners() {
+        let o = capstan_plan::open(&capstan_data::thesis_dataset());
+        let n = next_experiment(&o, None, "capstan plan");
+        assert_eq!(n.open.len(), o.hypotheses.len());
+        assert_eq!(n.open[0].label, o.hypotheses[0].label());
+        assert!(!n.planned && n.plan.is_none());
     }
 
     #[test]
     fn the_section_is_rendered_from_the_metrics_object() {
-        let plan = json!({"hypotheses": open()["hypotheses"], "not_simulated": [], "assumed": [],
-            "recommended": {"name": "up-down order at two drive voltages", "protocol": {},
-                "rig_commands": ["capstan rig set order updown", "capstan rig set amp_control_v 2.5", "capstan rig store"],
-                "physical_changes": [], "procedure": ["6 runs on each cord"],
-                "simulate_args": ["--drive-v", "10,5"], "rig_hours": 6.25, "p_decide_worst": 0.875},
-            "current_design": {"p_decide_worst": 0.0, "rig_hours": 3.125},
-            "current_decides": false, "any_decides": true, "within_hours": true,
-            "method": "simulation: 8 campaigns", "elapsed_s": 41.0});
-        let n = next_json(&open(), Some(&plan), "capstan plan");
+        let mut n = open();
+        n.planned = true;
+        n.command = "capstan plan".into();
+        n.plan = Some(Planned {
+            recommended: Recommended {
+                name: "up-down order at two drive voltages".into(),
+                protocol: Design {
+                    order: capstan_wire::StepOrder::UpDown,
+                    runs_per_cord: 6,
+                    wraps_deg: vec![360.0],
+                    diameters_mm: vec![25.4],
+                    drive_v: vec![10.0, 5.0],
+                },
+                rig_commands: vec![
+                    "capstan rig set order updown".into(),
+                    "capstan rig set amp_control_v 2.5".into(),
+                    "capstan rig store".into(),
+                ],
+                physical_changes: vec![],
+                procedure: vec!["6 runs on each cord".into()],
+                simulate_args: vec!["--drive-v".into(), "10,5".into()],
+                rig_hours: 6.25,
+                p_decide_worst: 0.875,
+            },
+            current_design: Current {
+                p_decide_worst: 0.0,
+                rig_hours: 3.125,
+            },
+            current_decides: false,
+            any_decides: true,
+            within_hours: true,
+            reps: 0,
+            cords: None,
+            first: First {
+                which: "protocol",
+                why: "no question between cords".into(),
+            },
+            better_beyond_hours: None,
+            method: "simulation: 8 campaigns".into(),
+            elapsed_s: 41.0,
+        });
         // What the metrics carry, the section says; change the metrics and the section follows.
         let h = next_html(&n);
         for s in [
@@ -304,10 +431,14 @@ mod tests {
         ] {
             assert!(h.contains(s), "no {s} in {h}");
         }
-        let mut m = n.clone();
-        m["recommended"]["p_decide_worst"] = json!(0.5);
-        m["recommended"]["rig_commands"][1] = json!("capstan rig set amp_control_v 1.25");
-        let h = next_html(&m);
+        let p = n.plan.as_mut().unwrap();
+        p.recommended.p_decide_worst = 0.5;
+        p.recommended.rig_commands[1] = "capstan rig set amp_control_v 1.25".into();
+        let h = next_html(&n);
         assert!(h.contains("50 %") && h.contains("amp_control_v 1.25") && !h.contains("88 %"));
+        // The plan's fields stand beside the open ones in the object, as before.
+        let v = serde_json::to_value(&n).unwrap();
+        assert_eq!(v["recommended"]["p_decide_worst"], serde_json::json!(0.5));
+        assert_eq!(v["cords"], serde_json::Value::Null);
     }
 }

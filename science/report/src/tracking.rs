@@ -11,7 +11,7 @@ use crate::html::{figure_html, STYLE};
 use capstan_tracking::{
     bandwidth, bode, steps, Bandwidth, BodePoint, SteadyWindow, StepResponse, Trace,
 };
-use serde_json::json;
+use serde::Serialize;
 use std::fmt::Write as _;
 
 /// One run of a force session and how it tracked.
@@ -176,26 +176,71 @@ pub fn tracking_html(
 }
 
 /// `metrics.json` of a force session.
-pub fn tracking_json(
-    runs: &[TrackedRun],
+#[derive(Serialize)]
+pub struct TrackingMetrics<'a> {
+    /// `force_control`: what kind of session this file is of.
+    pub kind: &'static str,
+    /// How the rig tracked its target.
+    pub tracking: Tracking<'a>,
+    /// Program, commit, input hash, command line.
+    pub provenance: &'a capstan_data::Provenance,
+    /// Wall time of the command, s (`None`: not measured yet).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub elapsed_s: Option<f64>,
+}
+
+/// The `tracking` object: the steady window, the worst step and every run.
+#[derive(Serialize)]
+pub struct Tracking<'a> {
+    /// Where each step's steady state is taken.
+    pub window: SteadyWindow,
+    /// The worst |steady-state error|, % of the target.
+    pub worst_ss_error_pct: f64,
+    /// The worst overshoot, % of the step.
+    pub worst_overshoot_pct: f64,
+    /// Every run.
+    pub runs: Vec<RunTracking<'a>>,
+}
+
+/// One run's tracking in `metrics.json` (its trace is the report's figure, not the file's).
+#[derive(Serialize)]
+pub struct RunTracking<'a> {
+    /// Its name.
+    pub label: &'a str,
+    /// Samples in its trace.
+    pub samples: usize,
+    /// Every step's response.
+    pub steps: &'a [StepResponse],
+    /// Every sine frequency's gain and phase.
+    pub bode: &'a [BodePoint],
+    /// The sweep's −3 dB bandwidth.
+    pub bandwidth: &'a Bandwidth,
+}
+
+/// `metrics.json` of a force session.
+pub fn tracking_metrics<'a>(
+    runs: &'a [TrackedRun],
     window: SteadyWindow,
-    ctx: &crate::Context,
-) -> serde_json::Value {
+    ctx: &'a crate::Context,
+) -> TrackingMetrics<'a> {
     let (ss, os) = worst(runs);
-    json!({
-        "kind": "force_control",
-        "tracking": {
-            "window": window,
-            "worst_ss_error_pct": ss,
-            "worst_overshoot_pct": os,
-            "runs": runs.iter().map(|r| json!({
-                "label": r.label,
-                "samples": r.trace.len(),
-                "steps": r.steps,
-                "bode": r.bode,
-                "bandwidth": r.bandwidth,
-            })).collect::<Vec<_>>(),
+    TrackingMetrics {
+        kind: "force_control",
+        tracking: Tracking {
+            window,
+            worst_ss_error_pct: ss,
+            worst_overshoot_pct: os,
+            runs: (runs.iter())
+                .map(|r| RunTracking {
+                    label: &r.label,
+                    samples: r.trace.len(),
+                    steps: &r.steps,
+                    bode: &r.bode,
+                    bandwidth: &r.bandwidth,
+                })
+                .collect(),
         },
-        "provenance": ctx.provenance,
-    })
+        provenance: &ctx.provenance,
+        elapsed_s: None,
+    }
 }

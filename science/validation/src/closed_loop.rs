@@ -2,11 +2,10 @@
 //! extended model as the plant's friction law (each cord with its own fitted mu factor and the
 //! causes the evidence engine named), on the thesis campaign, one run per cord.
 
-use capstan_engine::analysis::closed_loop::{evenly, SimCurve};
+use capstan_engine::analysis::closed_loop::{evenly, SimCurve, Summary};
 use capstan_engine::analysis::Analysis;
 use capstan_engine::fit::par::par_map;
 use capstan_sim::campaign::{run_campaign, CampaignConfig};
-use serde_json::{json, Value};
 
 /// The closed-loop simulation of every cord.
 #[derive(Clone, Debug)]
@@ -14,7 +13,7 @@ pub struct ClosedLoop {
     /// One curve per cord.
     pub curves: Vec<SimCurve>,
     /// What was simulated (for `metrics.json`).
-    pub summary: Value,
+    pub summary: Summary,
 }
 
 /// The most cords simulated: a data set with more gets this many, evenly spaced in the cord
@@ -51,6 +50,21 @@ pub fn run(a: &Analysis, threads: usize) -> Result<ClosedLoop, crate::Validation
     }
     Ok(ClosedLoop {
         curves,
-        summary: json!({"runs": groups.len(), "cords": a.obs.groups.len(), "runs_per_cord": 1, "pairs": n, "plant": "capstan_sim::campaign with the extended model per cord (sensor noise off)", "cords_note": if groups.len() < a.obs.groups.len() { format!("{} of {} cords simulated, evenly spaced in the cord order", groups.len(), a.obs.groups.len()) } else { "every cord simulated".to_string() }}),
+        summary: Summary {
+            runs: groups.len(),
+            cords: a.obs.groups.len(),
+            runs_per_cord: 1,
+            pairs: n,
+            plant: "capstan_sim::campaign with the extended model per cord (sensor noise off)",
+            cords_note: if groups.len() < a.obs.groups.len() {
+                format!(
+                    "{} of {} cords simulated, evenly spaced in the cord order",
+                    groups.len(),
+                    a.obs.groups.len()
+                )
+            } else {
+                "every cord simulated".to_string()
+            },
+        },
     })
 }

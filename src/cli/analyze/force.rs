@@ -5,7 +5,7 @@
 //! the errors, with its line and column.
 
 use anyhow::{bail, Context};
-use capstan_report::tracking::{tracking_html, tracking_json, TrackedRun};
+use capstan_report::tracking::{tracking_html, tracking_metrics, TrackedRun};
 use capstan_tracking::{SteadyWindow, Trace};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -187,13 +187,11 @@ pub fn run(args: &super::Args, pairs: &Path, ctx: &capstan_report::Context) -> a
         let stamped = capstan_report::stamp::figure(&f.name, f.bytes.clone(), &ctx.provenance);
         set.write(&f.name, &stamped)?;
     }
-    let mut metrics = tracking_json(&runs, window, ctx);
-    metrics["elapsed_s"] = serde_json::json!(t0.elapsed().as_secs_f64());
+    let mut metrics = tracking_metrics(&runs, window, ctx);
+    metrics.elapsed_s = Some(t0.elapsed().as_secs_f64());
+    let metrics = capstan_report::metrics::to_sorted_json(&metrics)?;
     set.write("report.html", html.as_bytes())?;
-    set.write(
-        "metrics.json",
-        serde_json::to_string_pretty(&metrics)?.as_bytes(),
-    )?;
+    set.write("metrics.json", metrics.as_bytes())?;
     set.commit()?;
     let (ss, os) = capstan_report::tracking::worst(&runs);
     crate::errln!(
@@ -209,7 +207,7 @@ pub fn run(args: &super::Args, pairs: &Path, ctx: &capstan_report::Context) -> a
         );
     }
     if args.json {
-        crate::outln!("{}", serde_json::to_string_pretty(&metrics)?);
+        crate::outln!("{metrics}");
     }
     Ok(())
 }

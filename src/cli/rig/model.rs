@@ -66,28 +66,12 @@ pub fn model_of(pm: &PredictionModel) -> Model {
     m
 }
 
-/// The one-mu Euler-Eytelwein fit in `metrics.json` (`models[name = baseline].values.mu`).
-fn euler_eytelwein_mu(path: &Path) -> Option<f64> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    let base = v
-        .get("models")?
-        .as_array()?
-        .iter()
-        .find(|m| m.get("name").and_then(|n| n.as_str()) == Some("baseline"))?;
-    base.get("values")?
-        .as_array()?
-        .iter()
-        .find(|p| p.get(0).and_then(|n| n.as_str()) == Some("mu"))?
-        .get(1)?
-        .as_f64()
-}
-
 /// The board's law for the model in `path` (a `metrics.json`) at `rig`.
 pub fn load(path: &Path, rig: &RigPoint) -> anyhow::Result<Loaded> {
-    let pm = super::super::predict::load_model(path)?;
-    let mut loaded = reduce(&pm, rig).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    loaded.euler_eytelwein_mu = euler_eytelwein_mu(path);
+    let read = capstan_report::read_and_validate(path)?;
+    let mut loaded = reduce(&read.prediction_model, rig)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    loaded.euler_eytelwein_mu = read.euler_eytelwein_mu;
     Ok(loaded)
 }
 

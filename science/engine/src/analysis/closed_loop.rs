@@ -13,3 +13,33 @@ pub fn evenly(n: usize, k: usize) -> Vec<usize> {
     }
     (0..k).map(|i| i * n / k).collect()
 }
+
+/// What the closed loop simulated (`metrics.json`'s `closed_loop`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Summary {
+    /// Runs simulated (one per cord simulated).
+    pub runs: usize,
+    /// Cords in the data set.
+    pub cords: usize,
+    /// Runs per simulated cord.
+    pub runs_per_cord: usize,
+    /// Pairs the simulated runs gave.
+    pub pairs: usize,
+    /// The plant the firmware ran against.
+    pub plant: &'static str,
+    /// Which cords were simulated.
+    pub cords_note: String,
+}
+
+/// The closed loop's outcome as `metrics.json` carries it: what ran, or why it failed.
+#[derive(Clone, Debug, serde::Serialize)]
+#[serde(untagged)]
+pub enum Outcome {
+    /// It ran.
+    Ran(Summary),
+    /// It failed, and why.
+    Failed {
+        /// The error, in words.
+        error: String,
+    },
+}

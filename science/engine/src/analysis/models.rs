@@ -12,14 +12,7 @@ pub fn baseline() -> ModelSpec {
 
 /// How a named cause enters the population model: its parameter and transform.
 fn free_param(kind: EffectKind) -> Option<(Param, Transform)> {
-    use capstan_physics::entry::Transform as T;
-    let p = Param::from_effect(kind)?;
-    let t = match kind.entry().population.transform {
-        T::Logistic { lo, hi } => Transform::Logistic { lo, hi },
-        T::Log => Transform::Log,
-        T::Identity => Transform::Identity,
-    };
-    Some((p, t))
+    Some((Param::from_effect(kind)?, kind.entry().population.transform))
 }
 
 /// The extended model: Euler-Eytelwein with every cause the engine names, each at the value

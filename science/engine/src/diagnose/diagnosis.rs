@@ -76,6 +76,10 @@ pub struct DataInfo {
     pub source: String,
     /// Its structure, and how each level was found (from columns, inferred, assumed).
     pub structure: StructureSummary,
+    /// What the data checks warned about, as the command that read the data gives them
+    /// (`None`: not given, and not in the JSON).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warnings: Option<Vec<String>>,
 }
 
 /// The answer.
@@ -121,6 +125,10 @@ pub struct Diagnosis {
     pub rows_used: RowsUsed,
     /// The decision rule: thresholds on ΔBIC per level.
     pub thresholds: Thresholds,
+    /// Where the answer came from (program, commit, the input's SHA-256, the command line),
+    /// as the command that prints it gives it (`None`: not given, and not in the JSON).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<capstan_data::Provenance>,
     /// The strongest effect found.
     #[serde(skip)]
     pub kind: EffectKind,
@@ -155,8 +163,11 @@ impl Diagnosis {
             .collect()
     }
 
-    /// The JSON object of `capstan diagnose --json`.
+    /// The JSON object of `capstan diagnose --json`: pretty, the keys of every object sorted
+    /// (as it has always been written), whatever the order of the fields here.
     pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a diagnosis serialises")
+        serde_json::to_value(self)
+            .and_then(|v| serde_json::to_string_pretty(&v))
+            .expect("a diagnosis serialises")
     }
 }

@@ -70,7 +70,9 @@ pub fn render(a: &Assessment, v: &Verdicts, opts: &Options, t0: Instant) -> Diag
         data: DataInfo {
             source: des.source.clone(),
             structure: with_units(des),
+            warnings: None,
         },
+        provenance: None,
         effect: kind.name(),
         parameters: found
             .first()

@@ -1,6 +1,8 @@
 //! The scalars of a [`Model`] a fit may move ([`Param`]) and the maps from an unbounded
-//! internal coordinate θ to their values ([`Transform`]).
+//! internal coordinate θ to their values ([`Transform`], the catalogue's own: each scalar's
+//! row names its transform).
 
+pub use capstan_physics::entry::Transform;
 use capstan_physics::scalars::{index_of, Enters, SCALARS};
 use capstan_physics::{EffectKind, Model};
 
@@ -96,12 +98,7 @@ impl Param {
 
     /// A natural transform for this parameter (`Log` for the positive ones).
     pub fn default_transform(self) -> Transform {
-        use capstan_physics::entry::Transform as T;
-        match SCALARS[self.0 as usize].transform {
-            T::Identity => Transform::Identity,
-            T::Log => Transform::Log,
-            T::Logistic { lo, hi } => Transform::Logistic { lo, hi },
-        }
+        SCALARS[self.0 as usize].transform
     }
 
     pub(crate) fn role(self) -> Role {
@@ -123,57 +120,6 @@ impl Param {
 impl std::fmt::Display for Param {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
-    }
-}
-
-/// Map from an internal coordinate θ (any real) to a model value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Transform {
-    /// value = θ.
-    Identity,
-    /// value = exp(θ) (positive).
-    Log,
-    /// value = lo + (hi − lo)/(1 + exp(−θ)) (inside (lo, hi)).
-    Logistic {
-        /// Lower bound.
-        lo: f64,
-        /// Upper bound.
-        hi: f64,
-    },
-}
-
-impl Transform {
-    /// Model value of θ.
-    pub fn value(self, theta: f64) -> f64 {
-        match self {
-            Transform::Identity => theta,
-            Transform::Log => theta.exp(),
-            Transform::Logistic { lo, hi } => lo + (hi - lo) / (1.0 + (-theta).exp()),
-        }
-    }
-
-    /// d value / d θ.
-    pub fn derivative(self, theta: f64) -> f64 {
-        match self {
-            Transform::Identity => 1.0,
-            Transform::Log => theta.exp(),
-            Transform::Logistic { lo, hi } => {
-                let s = 1.0 / (1.0 + (-theta).exp());
-                (hi - lo) * s * (1.0 - s)
-            }
-        }
-    }
-
-    /// θ of a model value (clamped into the transform's range).
-    pub fn internal(self, value: f64) -> f64 {
-        match self {
-            Transform::Identity => value,
-            Transform::Log => value.max(1e-300).ln(),
-            Transform::Logistic { lo, hi } => {
-                let s = ((value - lo) / (hi - lo)).clamp(1e-12, 1.0 - 1e-12);
-                (s / (1.0 - s)).ln()
-            }
-        }
     }
 }
 
