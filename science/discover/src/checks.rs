@@ -181,14 +181,14 @@ pub(crate) fn catalogue_repair(
     alts: &[crate::joint::Alternative<'_>],
     st: &State,
     best: &screen::Screen,
-    (threshold, gate): (f64, crate::replicate::Gate),
+    (threshold, gate, centres): (f64, crate::replicate::Gate, usize),
 ) -> Option<Repair> {
     use crate::model::{classify, runs_of, screen_all};
     for alt in alts
         .iter()
         .filter(|x| x.change == crate::joint::Change::Dropped)
     {
-        let (testable, _) = classify(&alt.base);
+        let (testable, _) = classify(&alt.base, centres);
         let col = |term: usize| testable.iter().find(|c| c.term == term);
         let mut shared = alt.base.b.clone();
         for &u in &st.used {

@@ -201,10 +201,19 @@ impl<'a> Base<'a> {
 
     /// The term's column x = ∂T2m/∂θ at θ = 0.
     pub fn column(&self, t: &Term) -> Vec<f64> {
+        self.column_at(t, None)
+    }
+
+    /// The term's column with its centre in T1 at `t1_ref` (N) instead of the design's
+    /// geometric-mean T1 (None: that), for a term that reads it ([`crate::library::centred`]).
+    pub fn column_at(&self, t: &Term, t1_ref: Option<f64>) -> Vec<f64> {
         let n = self.d.n();
         (0..n)
             .map(|i| {
-                let r = &self.rows[i];
+                let r = &Row {
+                    t1_ref: t1_ref.unwrap_or(self.rows[i].t1_ref),
+                    ..self.rows[i]
+                };
                 let v = match t.form {
                     Form::Mu(g) => self.a[i] * self.mu_row[i] * g(r),
                     Form::T1(g) => self.dt1[i] * g(r),

@@ -16,6 +16,7 @@
 //! `docs/README-discover.md` states the algorithm, its grammar and its validation.
 
 mod answer;
+mod centred;
 mod checks;
 pub mod columns;
 pub mod heldout;

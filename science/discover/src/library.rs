@@ -129,8 +129,25 @@ pub struct Row {
     pub work_before_kns: f64,
     /// The model's load at the previous step of the run (0 at the first), N.
     pub load_prev: f64,
-    /// The design's geometric-mean measured T1 (over rows with T1 > 0), N.
+    /// The design's geometric-mean measured T1 (over rows with T1 > 0), N; a centred term's
+    /// centre when its column is built at one ([`centred`]).
     pub t1_ref: f64,
+}
+
+/// The spacing of the centres tried for a centred term, in ln T1 (half the bump's SD of 0.5).
+pub const CENTRE_STEP_LN: f64 = 0.25;
+
+/// A term with a centre in T1 (`mu_tension_bump`), profiled over [`centres`]
+/// (`crate::centred`).
+pub fn centred(t: &Term) -> bool {
+    t.name == "mu_tension_bump"
+}
+
+/// The `n` centres tried for a centred term on a design of geometric-mean T1 `t1_ref` (N):
+/// t1_ref·e^{(k − (n−1)/2)·[`CENTRE_STEP_LN`]}, k = 0 … n − 1.
+pub fn centres(t1_ref: f64, n: usize) -> impl Iterator<Item = f64> {
+    let mid = (n.max(1) - 1) as f64 / 2.0;
+    (0..n.max(1)).map(move |k| t1_ref * ((k as f64 - mid) * CENTRE_STEP_LN).exp())
 }
 
 /// How θ enters the model (first order in θ is what the search uses).
@@ -284,13 +301,13 @@ pub const LIBRARY: &[Term] = &[
     },
     Term {
         name: "mu_tension_bump",
-        formula: "mu·(1 + c·exp(−(ln(T1/T̃1))²/(2·0.5²))), T̃1 the design's geometric-mean T1",
+        formula: "mu·(1 + c·exp(−(ln(T1/T₀))²/(2·0.5²))), T₀ = T̃1 the design's geometric-mean T1 (or the best-fitting of n centres T̃1·e^{k/4} with `bump_centres` = n)",
         parameter: "c",
         units: "1",
         acts_on: ActsOn::Mu,
         depends_on: &[Var::T1],
         sign: Sign::Free,
-        reading: "friction is higher (c > 0) or lower over the middle of the tensions tried (a factor of about 1.6 either side): a contact regime between the cord's conforming at low tension and its softening at high tension",
+        reading: "friction is higher (c > 0) or lower over a band of tensions around T₀ (a factor of about 1.6 either side): a contact regime between the cord's conforming at low tension and its softening at high tension",
         source: "the thesis's fast rise at low tension (conformity) meeting polymer friction falling with pressure (Howell 1954): a maximum between them",
         form: Form::Mu(|r| {
             let z = (r.t1.max(0.05) / r.t1_ref).ln() / 0.5;

@@ -59,6 +59,17 @@ pub(crate) struct Testable {
     pub(crate) column: Option<Vec<f64>>,
     /// Its g per run, for a between-level term.
     pub(crate) g_run: Option<Vec<f64>>,
+    /// The centre in T1 its column is built at, N (a centred term: [`crate::library::centred`]).
+    pub(crate) centre: Option<f64>,
+}
+
+/// The models the search tries for the terms `testable` at each step: one per term, one per
+/// centre tried (`centres`) of a centred term.
+pub(crate) fn models_of(testable: &[Testable], centres: usize) -> usize {
+    testable
+        .iter()
+        .map(|c| c.centre.map_or(1, |_| centres.max(1)))
+        .sum()
 }
 
 /// The terms these data can test, and why each other cannot be. A term is tested only where
@@ -66,7 +77,7 @@ pub(crate) struct Testable {
 /// zero but for round-off and `heat_per_radius` is the catalogue's contact heating: its ΔBIC
 /// and θ would be round-off or another term's), and where its column, each run's mu projected
 /// out, is neither null nor the catalogue's own within-run columns.
-pub(crate) fn classify(base: &Base) -> (Vec<Testable>, Vec<NotTestable>) {
+pub(crate) fn classify(base: &Base, centres: usize) -> (Vec<Testable>, Vec<NotTestable>) {
     let (mut ok, mut not) = (Vec::new(), Vec::new());
     let proj0 = Projector::new(base, &[]);
     let proj_b = (!base.b.is_empty()).then(|| Projector::new(base, &base.b));
@@ -87,6 +98,7 @@ pub(crate) fn classify(base: &Base) -> (Vec<Testable>, Vec<NotTestable>) {
                     term: j,
                     column: None,
                     g_run: Some(g),
+                    centre: None,
                 });
             } else {
                 not.push(NotTestable {
@@ -113,10 +125,21 @@ pub(crate) fn classify(base: &Base) -> (Vec<Testable>, Vec<NotTestable>) {
                 name: t.name,
                 reason,
             }),
+            None if crate::library::centred(t) => {
+                let proj = proj_b.as_ref().unwrap_or(&proj0);
+                let (x, c) = crate::centred::best_centre(base, t, proj, centres);
+                ok.push(Testable {
+                    term: j,
+                    column: Some(x),
+                    g_run: None,
+                    centre: Some(c),
+                })
+            }
             None => ok.push(Testable {
                 term: j,
                 column: Some(x),
                 g_run: None,
+                centre: None,
             }),
         }
     }
@@ -222,7 +245,7 @@ pub(crate) fn choose_swap(
     (base0, testable0, covs0): (&Base, &[Testable], &[Vec<f64>]),
     (alts, a): (&[joint::Alternative<'_>], &Assessment),
     gate: Gate,
-    max_r2_model: f64,
+    (max_r2_model, centres): (f64, usize),
 ) -> (Option<joint::Swap>, Vec<screen::Screen>) {
     let st0 = state_of(base0, covs0);
     let proj0 = Projector::new(base0, &st0.shared);
@@ -239,7 +262,7 @@ pub(crate) fn choose_swap(
     let screens: Vec<Vec<screen::Screen>> = alts
         .iter()
         .map(|alt| {
-            let (t, _) = classify(&alt.base);
+            let (t, _) = classify(&alt.base, centres);
             let st = state_of(&alt.base, covs0);
             let proj = Projector::new(&alt.base, &st.shared);
             screen_all(&alt.base, &t, &proj, &st, &runs_of(a, &alt.fit), gate)

@@ -59,7 +59,7 @@ pub fn profile(data: &Dataset, opts: &Options) -> (f64, usize, Vec<GateRow>) {
     let a = evidence::assess(data, &opts.engine);
     let d = &a.design;
     let base = Base::new(d, &a.fit, &a.weights.w);
-    let (testable, _) = classify(&base);
+    let (testable, _) = classify(&base, opts.bump_centres);
     let alts = if opts.joint {
         crate::joint::alternatives(&a, opts.restore)
     } else {
@@ -68,7 +68,8 @@ pub fn profile(data: &Dataset, opts: &Options) -> (f64, usize, Vec<GateRow>) {
     let bar = Bar {
         threshold: opts.engine.within_threshold.max(0.0),
         gamma: opts.gamma,
-        models: testable.len().max(1) as f64 * (1 + alts.len()) as f64,
+        models: crate::model::models_of(&testable, opts.bump_centres).max(1) as f64
+            * (1 + alts.len()) as f64,
     }
     .at(1);
     if d.cords.len() < crate::verdict::MIN_CORDS {

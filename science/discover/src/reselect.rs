@@ -58,7 +58,7 @@ pub(crate) fn reselect(
     (a, base0, shared): (&Assessment, &Base, &[Vec<f64>]),
     engine: &evidence::Options,
     terms: &[Taken<'_>],
-    gate: Gate,
+    (gate, centres): (Gate, usize),
 ) -> Option<Reselected> {
     let &(_, theta0, x0) = terms.last()?;
     let earlier = &terms[..terms.len() - 1];
@@ -77,7 +77,7 @@ pub(crate) fn reselect(
         if same(&b.selected, &prev) {
             break;
         }
-        let Some((r, column)) = beside(a, &b, terms, gate) else {
+        let Some((r, column)) = beside(a, &b, terms, (gate, centres)) else {
             break;
         };
         prev = b.selected.clone();
@@ -103,7 +103,7 @@ fn beside(
     a: &Assessment,
     b: &Assessment,
     terms: &[Taken<'_>],
-    gate: Gate,
+    (gate, centres): (Gate, usize),
 ) -> Option<(Reselected, Option<Vec<f64>>)> {
     let &(target, _, _) = terms.last()?;
     let d = &a.design;
@@ -112,7 +112,7 @@ fn beside(
         return None;
     }
     let base = Base::new(d, &fit, &a.weights.w);
-    let (testable, _) = classify(&base);
+    let (testable, _) = classify(&base, centres);
     let covs: Vec<Vec<f64>> = b
         .selected
         .iter()

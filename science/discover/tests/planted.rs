@@ -22,14 +22,15 @@ use validation::{rate, Outcome};
 /// The test seed (the gates were chosen on seed 26).
 const MASTER_SEED: u64 = 20_261_127;
 
-/// What the test seed gave when it was run once (s41, after the gates were chosen on seed 26),
-/// below the issue's targets; asserted as floors (docs/README-discover.md says why):
-/// distinguishable kinds with a term of the right dependence (issue: 90 %; T1 tare and
-/// hysteresis 24 of 24, the mu bump 0 of 12: found by the screen, declined as a partial mimic
-/// beside a catalogue the bump made the engine select wrongly) ...
-const DISTINGUISHABLE_FLOOR: (usize, usize) = (24, 36);
-/// ... mixed sets with the effect named and the term found (issue: 70 %) ...
-const MIXED_FLOOR: (usize, usize) = (2, 12);
+/// What the test seed gave when it was run once (s42, after the gates and the mu bump's three
+/// centres were chosen on seed 26), below the issue's targets; asserted as floors
+/// (docs/README-discover.md says why): distinguishable kinds with a term of the right
+/// dependence (issue: 90 %; T1 tare and hysteresis 24 of 24, the mu bump 5 of 12: s41 gave 0,
+/// its centre fixed at the design's geometric-mean T1; most of the rest still declined as
+/// partial mimics) ...
+const DISTINGUISHABLE_FLOOR: (usize, usize) = (29, 36);
+/// ... mixed sets with the effect named and the term found (issue: 70 %; s41: 2) ...
+const MIXED_FLOOR: (usize, usize) = (3, 12);
 /// ... and inexpressible sets that keep "unexplained" (s33's thesis design: 30 of 36).
 const KEPT_FLOOR: (usize, usize) = (21, 36);
 

@@ -318,6 +318,9 @@ pub fn options_from_env() -> Options {
     if let Some(v) = get("CAPSTAN_DISCOVER_STABILITY") {
         opts.min_stability = v;
     }
+    if let Some(v) = get("CAPSTAN_DISCOVER_BUMP_CENTRES") {
+        opts.bump_centres = v as usize;
+    }
     opts.engine.threads = 1;
     opts
 }
