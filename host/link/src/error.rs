@@ -2,7 +2,7 @@
 //! are reasons, not locations: the caller knows the frame number and offset
 //! ([`crate::BadFrame`]).
 
-use crate::elf::Prim;
+use capstan_wire::Prim;
 
 /// Why a format string of the defmt table cannot be decoded.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
