@@ -185,11 +185,20 @@ fn search_line(sr: &capstan_discover::Search) -> String {
             "each added to the catalogue or in the place of one of its {k} within-run effects"
         ),
     };
+    // A term tried at several places (the mu bump's centres) counts once per place.
+    let plain = (sr.tried * (1 + sr.displaceable.len())) as f64;
+    let models = if sr.models_per_step > plain {
+        format!(
+            "{:.0} models, the mu bump once per centre tried",
+            sr.models_per_step
+        )
+    } else {
+        format!("{:.0} models", sr.models_per_step)
+    };
     format!(
-        "searched {} of {} library terms, {how} ({:.0} models); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}\n",
+        "searched {} of {} library terms, {how} ({models}); bar for the first: ΔBIC < {:.1} (the engine's −{:.0} plus 2γ·ln {:.0} for the search); {checks}\n",
         sr.tried,
         sr.library_size,
-        sr.models_per_step,
         sr.first_bar,
         sr.threshold,
         sr.models_per_step,
