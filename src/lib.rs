@@ -1,10 +1,12 @@
 //! `capstan`: simulate the rig, analyse and diagnose its data, and log real runs — the command
-//! line over the project's crates (`capstan-data`, `capstan-engine`, `capstan-validation`,
-//! `capstan-report`, `capstan-link`, `capstan-outdir`, `capstan-log` (the files of a logged
-//! session), `capstan-simboard` (the simulated board behind `rig --sim DIR` and `log --sim
-//! DIR`), `capstan-condition` (a raw time series into pairs), `capstan-sim`).
+//! line over every host crate of the workspace (`capstan-data`, `capstan-engine`,
+//! `capstan-discover`, `capstan-plan`, `capstan-report`, `capstan-validation`, `capstan-sim`,
+//! `capstan-link`, `capstan-outdir`, `capstan-log` (the files of a logged session),
+//! `capstan-simboard` (the simulated board behind `rig --sim DIR` and `log --sim DIR`),
+//! `capstan-condition` (a raw time series into pairs), `capstan-tracking`).
 //!
-//! * [`cli`]: one module per command, each with its `Args` and `run`;
+//! * [`cli`]: one module per command, each with its `Args` and `run`, and `input`, `simboard`
+//!   and `signal`, which serve several;
 //! * [`outputs`]: how every command opens its output directory;
 //! * [`provenance`]: version, commit, input hash and command line for every output;
 //! * [`term`]: stdout and stderr that survive a closed pipe. Only this crate prints.

@@ -1,4 +1,5 @@
-//! The command line: one module per subcommand, each with its `Args` and `run`.
+//! The command line: one module per subcommand, each with its `Args` and `run`; `input` (the
+//! data commands' shared arguments), `simboard` (`--sim DIR`) and `signal` serve several.
 
 use clap::{Parser, Subcommand};
 

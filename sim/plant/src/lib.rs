@@ -30,8 +30,8 @@
 //! too would be calibrated against the 0.1 N preload and leave `t2_gain·T2 − (t2_gain − 1)·0.1
 //! N`: a gain plus a T2 offset, i.e. not the catalogue's single effect.)
 //!
-//! Determinism: all physics is f64 and the noise comes from [`rng::Rng`] (xoshiro256++ and a
-//! polar normal); the same seed and the same calls give the same counts, on the host and on a
+//! Determinism: all physics is f64 and the noise comes from [`rng::Rng`] (xoshiro256++ and
+//! ziggurat normals, the `capstan-rng` crate); the same seed and the same calls give the same counts, on the host and on a
 //! Cortex-M. The friction law and the cord's stretch use `capstan_physics::math` (the
 //! platform's `pow`/`exp` on the host, `libm`'s elsewhere: an ulp apart at most, far below the
 //! counts' quantisation); everything else is `libm`, bit for bit the same everywhere.
