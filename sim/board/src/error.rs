@@ -59,6 +59,12 @@ pub enum SimError {
         crate::SIM_JSON
     )]
     NotABoard(PathBuf),
+    /// A file where the board's directory should be.
+    #[error(
+        "--sim {}: a file, not a directory; give a directory (a new one is created)",
+        .0.display()
+    )]
+    NotADirectory(PathBuf),
     /// Another command holds the board.
     #[error(
         "the simulated board in {} is in use by another capstan command: one command at a time \

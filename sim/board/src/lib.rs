@@ -98,6 +98,9 @@ impl SimBoard {
             None
         };
         if fresh {
+            if dir.exists() && !dir.is_dir() {
+                return Err(SimError::NotADirectory(dir));
+            }
             // Empty, or holding only a lock left by an earlier command that stopped early.
             let empty = match std::fs::read_dir(&dir) {
                 Ok(d) => d.flatten().all(|e| e.file_name() == LOCK),

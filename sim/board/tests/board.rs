@@ -130,6 +130,27 @@ fn one_command_at_a_time_holds_the_board() {
 }
 
 #[test]
+fn a_file_or_a_foreign_directory_is_refused_as_what_it_is() {
+    let file = fresh("file");
+    std::fs::write(&file, "not a board").unwrap();
+    let (board, _) = open(&options(&file));
+    let err = board.err().unwrap();
+    assert!(matches!(err, SimError::NotADirectory(_)), "{err}");
+    assert!(err.to_string().contains("a file, not a directory"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&file).unwrap(),
+        "not a board",
+        "the file is left as it was"
+    );
+
+    let foreign = fresh("foreign");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
+    let (board, _) = open(&options(&foreign));
+    assert!(matches!(board, Err(SimError::NotABoard(_))));
+}
+
+#[test]
 fn the_board_answers_a_command_and_its_replay_makes_the_same_records_again() {
     let dir = fresh("replay");
     let mut board = open(&options(&dir)).0.unwrap();
