@@ -9,9 +9,10 @@
 //!
 //! * `cargo test` runs a fixed slice: one set of every kind (14 sets);
 //! * `CAPSTAN_CASES=full cargo test --release -p capstan-discover --test planted -- --nocapture`
-//!   runs 12 sets of every kind (168) and asserts the issue's false-term target (≤ 5 % on null
-//!   and inexpressible sets together) and, where the test seed fell short of the issue's
-//!   targets, the floors it gave (`.ci/run` runs it).
+//!   runs 12 sets of every kind (168, and the 12 mixed sets' controls) and asserts the issue's
+//!   false-term target (≤ 5 % on null and inexpressible sets together, and on the controls)
+//!   and, where the test seed fell short of the issue's targets, the floors it gave (`.ci/run`
+//!   runs it).
 
 #[path = "support/validation.rs"]
 mod validation;
@@ -29,8 +30,13 @@ const MASTER_SEED: u64 = 20_261_127;
 /// its centre fixed at the design's geometric-mean T1; most of the rest still declined as
 /// partial mimics) ...
 const DISTINGUISHABLE_FLOOR: (usize, usize) = (29, 36);
-/// ... mixed sets with the effect named and the term found (issue: 70 %; s41: 2) ...
-const MIXED_FLOOR: (usize, usize) = (3, 12);
+/// ... mixed sets with the effect named (in the answer's catalogue: the one selected with the
+/// terms taken out, s43) and the term found (issue: 70 %; s41: 2; s42: 3 scored on the catalogue
+/// as first selected). The engine alone names the third effect in 10 of the 12 sets' controls
+/// (the same sets without the outside physics), so 70 % is within the design's reach on this
+/// seed, and not reached: beside the outside physics it names a near-twin (contact heating for
+/// the pressure friction, 0 of 3 against 3 of 3 on the controls) ...
+const MIXED_FLOOR: (usize, usize) = (4, 12);
 /// ... and inexpressible sets that keep "unexplained" (s33's thesis design: 30 of 36).
 const KEPT_FLOOR: (usize, usize) = (21, 36);
 
@@ -71,8 +77,24 @@ fn discover_proposes_only_what_earns_it_and_keeps_unexplained_what_it_cannot_exp
     );
     let dist = rate(&out, Outcome::distinguishable, |o| o.right);
     let mixed = rate(&out, |o| o.group == Group::Mixed, Outcome::mixed_ok);
+    // The mixed sets' controls are catalogue-only sets with a third effect: a term on one is a
+    // false term too (≤ 5 %, at most one set in the slice).
+    let controls = rate(
+        &out,
+        |o| o.control.is_some(),
+        |o| o.control.as_ref().is_some_and(|c| c.false_term),
+    );
     println!(
-        "false terms {false_terms:?}, distinguishable right {dist:?}, mixed {mixed:?}, inexpressible kept unexplained {kept:?}"
+        "false terms {false_terms:?}, distinguishable right {dist:?}, mixed {mixed:?}, inexpressible kept unexplained {kept:?}, false terms on the mixed sets' controls {controls:?}"
+    );
+    assert_eq!(
+        controls.1,
+        rate(&out, |o| o.group == Group::Mixed, |_| true).1,
+        "every mixed set has its control"
+    );
+    assert!(
+        controls.0 as f64 <= (0.05 * controls.1 as f64).max(1.0),
+        "terms proposed on the mixed sets' controls: {controls:?}"
     );
     if full() {
         assert!(

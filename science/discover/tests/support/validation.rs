@@ -7,6 +7,10 @@ use capstan_discover::{discover, Discovery, Options};
 use capstan_validation::discover_cases::{self, DiscoverCase, Group, Variety, KINDS};
 use std::collections::BTreeSet;
 
+#[path = "control.rs"]
+mod control;
+pub use control::Control;
+
 /// One set's outcome.
 #[derive(Clone, Debug)]
 pub struct Outcome {
@@ -22,8 +26,9 @@ pub struct Outcome {
     pub right: bool,
     /// ... or a rival of a proposed term has it.
     pub right_or_rival: bool,
-    /// A mixed set's extra catalogue effect is among the engine's effects and no proposed term
-    /// took its place.
+    /// A mixed set's extra catalogue effect is in the answer's catalogue (the engine's selection
+    /// with the proposed terms taken out of the data, where a term is proposed) and no proposed
+    /// term took its place.
     pub effect_named: bool,
     /// A term proposed and the lack of fit resolved.
     pub confident: bool,
@@ -39,6 +44,8 @@ pub struct Outcome {
     /// planted physics is detectable at all.
     pub oracle_detects: bool,
     pub elapsed_s: f64,
+    /// A mixed set's control: the same set without its outside physics ([`control`]).
+    pub control: Option<Control>,
     /// Runs of the design the firmware cut short or never logged (a planted T1 tare can make
     /// it read a slack cord at the first level and stop the run with `cord_break`, as it
     /// should), and the design's runs.
@@ -65,6 +72,12 @@ impl Outcome {
     pub fn mixed_ok(&self) -> bool {
         self.group == Group::Mixed && self.effect_named && self.right
     }
+
+    /// A mixed set whose control (the same set without the outside physics) has the third
+    /// effect named: the catalogue alone names it at this design.
+    pub fn control_named(&self) -> bool {
+        self.control.as_ref().is_some_and(|c| c.named)
+    }
 }
 
 fn deps(d: &[capstan_discover::library::Var]) -> BTreeSet<&'static str> {
@@ -86,9 +99,15 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         || d.terms
             .iter()
             .any(|t| t.rivals.iter().any(|r| ok(deps(r.depends_on))));
+    // The answer's catalogue: the one the engine selects with the proposed terms taken out of
+    // the data where that differs (the term's words say so), else the one it selected first.
+    let catalogue = d
+        .catalogue_given_terms
+        .as_ref()
+        .unwrap_or(&d.catalogue_effects);
     let effect_named = c.extra.is_some_and(|e| {
         let name = e.kind.name();
-        d.catalogue_effects.contains(&name)
+        catalogue.contains(&name)
             && d.terms
                 .iter()
                 .all(|t| t.displaced.as_ref().is_none_or(|x| x.effect != name))
@@ -142,6 +161,7 @@ pub fn score(c: &DiscoverCase, d: &Discovery) -> Outcome {
         oracle_dbic,
         oracle_detects,
         elapsed_s: d.elapsed_s,
+        control: None,
         runs_short: (0, 0),
         rows: d.data.rows,
         label: c.label(),
@@ -249,7 +269,13 @@ pub fn sets_scaled(
         let only: Vec<&str> = only.split(',').collect();
         cases.retain(|c| only.contains(&c.kind.name));
     }
-    let tag = format!(
+    let data = simulate(seed, &cases, &tag(variety, scale), threads);
+    (cases, data)
+}
+
+/// The cache tag of a design variety and size scale.
+fn tag(variety: Variety, scale: f64) -> String {
+    format!(
         "{}{}",
         match variety {
             Variety::Thesis => "",
@@ -261,7 +287,11 @@ pub fn sets_scaled(
         } else {
             format!("-x{scale}")
         }
-    );
+    )
+}
+
+/// `cases` simulated (read back from `CAPSTAN_DISCOVER_CACHE` where kept there, under `tag`).
+fn simulate(seed: u64, cases: &[DiscoverCase], tag: &str, threads: usize) -> Vec<Dataset> {
     let dir = std::env::var("CAPSTAN_DISCOVER_CACHE").ok();
     let path = |c: &DiscoverCase| {
         dir.as_ref()
@@ -284,7 +314,7 @@ pub fn sets_scaled(
             data[i] = Some(ds);
         }
     }
-    (cases, data.into_iter().map(|d| d.expect("made")).collect())
+    data.into_iter().map(|d| d.expect("made")).collect()
 }
 
 /// The search's options as the environment sets them (the calibration's knobs).
@@ -363,7 +393,10 @@ pub fn search(
 /// options.
 pub fn run(seed: u64, per_kind: usize, threads: usize) -> Vec<Outcome> {
     let (cases, data) = sets(seed, per_kind, threads);
-    search(&cases, &data, &options_from_env(), threads)
+    let opts = options_from_env();
+    let mut out = search(&cases, &data, &opts, threads);
+    control::attach(seed, &cases, &mut out, &opts, threads);
+    out
 }
 
 /// (hits, sets) of `hit` among the outcomes `pick` selects.
@@ -386,9 +419,10 @@ pub fn headline(out: &[Outcome]) -> String {
     );
     let d = rate(out, |o| o.distinguishable(), |o| o.right);
     let m = rate(out, |o| o.group == Group::Mixed, |o| o.mixed_ok());
+    let c = rate(out, |o| o.control_named(), |o| o.mixed_ok());
     let pct = |(a, b): (usize, usize)| 100.0 * a as f64 / b.max(1) as f64;
     format!(
-        "false terms (clean, catalogue-only, inexpressible) {}/{} ({:.1} %); right dependence, distinguishable kinds {}/{} ({:.1} %); mixed sets, effect named and term found {}/{} ({:.1} %)",
+        "false terms (clean, catalogue-only, inexpressible) {}/{} ({:.1} %); right dependence, distinguishable kinds {}/{} ({:.1} %); mixed sets, effect named and term found {}/{} ({:.1} %), of those whose control names the effect {}/{} ({:.1} %)",
         f.0,
         f.1,
         pct(f),
@@ -397,7 +431,10 @@ pub fn headline(out: &[Outcome]) -> String {
         pct(d),
         m.0,
         m.1,
-        pct(m)
+        pct(m),
+        c.0,
+        c.1,
+        pct(c)
     )
 }
 
@@ -463,6 +500,7 @@ pub fn table(out: &[Outcome]) -> String {
             cut.iter().map(|o| o.runs_short.1).sum::<usize>()
         );
     }
+    s += &control::summary(out);
     s += &format!(
         "\nexpressible, all: {}\nexpressible, distinguishable at this design: {}\nexpressible, near-twins (indistinguishable at this design): {}\n{}\n{}\n",
         expr(None),
