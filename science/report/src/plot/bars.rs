@@ -93,6 +93,8 @@ struct Laid {
     bands: Vec<(f64, f64)>,
     groups: f64,
     ends: Vec<Vec<End>>,
+    /// The reference lines' values.
+    lines: Vec<f64>,
 }
 
 impl Laid {
@@ -148,6 +150,7 @@ impl Laid {
             bands,
             groups,
             ends,
+            lines: c.lines.iter().map(|l| l.0).collect(),
         }
     }
 
@@ -283,17 +286,41 @@ fn bar_end_labels(chart: &ChartContext<SVGBackend, Coord>, l: &Laid, labels: &mu
             } else {
                 (GAP, Anchor::Start)
             };
+            // Written past a reference line its text would otherwise straddle.
+            let line_px: Vec<f64> = (l.lines.iter())
+                .map(|v| f64::from(chart.backend_coord(&(*v, y0)).0))
+                .collect();
+            let room = GAP + TICK.width(&e.text) + 1.0;
+            let x = label_start(f64::from(px), room, &line_px, e.at >= 0.0);
             labels.push(Label {
                 halo: true,
-                ..Label::new(
-                    e.text.clone(),
-                    (f64::from(px) + dx, f64::from(py) + lift),
-                    TICK,
-                    anchor,
-                )
+                ..Label::new(e.text.clone(), (x + dx, f64::from(py) + lift), TICK, anchor)
             });
         }
     }
+}
+
+/// Where a bar-end label starts so that no reference line runs through its text: the bar's end
+/// `at`, or the farthest line the text (`room` long, the same units) would cross, moving on past
+/// each. The text runs to the right (`rightwards`: a bar at or above zero) or to the left.
+fn label_start(at: f64, room: f64, lines: &[f64], rightwards: bool) -> f64 {
+    let mut sorted = lines.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mut start = at;
+    if rightwards {
+        for &v in &sorted {
+            if v > start && v < start + room {
+                start = v;
+            }
+        }
+    } else {
+        for &v in sorted.iter().rev() {
+            if v < start && v > start - room {
+                start = v;
+            }
+        }
+    }
+    start
 }
 
 /// The title above the chart and the value axis's label under its tick labels.
@@ -369,14 +396,17 @@ fn value_range(c: &Bars, ends: &[Vec<End>], plot_w: f64) -> (f64, f64) {
         hi = lo + 1.0;
     }
     let room = |e: &End| GAP + TICK.width(&e.text) + 3.0;
+    let lines: Vec<f64> = c.lines.iter().map(|l| l.0).collect();
     for _ in 0..30 {
         let scale = plot_w / (hi - lo);
         let (mut lo2, mut hi2) = (lo, hi);
         for e in ends.iter().flatten() {
+            // Where bar_end_labels writes it: past any line it would straddle.
+            let at = label_start(e.at, room(e) / scale, &lines, e.at >= 0.0);
             if e.at < 0.0 {
-                lo2 = lo2.min(e.at - room(e) / scale);
+                lo2 = lo2.min(at - room(e) / scale);
             } else {
-                hi2 = hi2.max(e.at + room(e) / scale);
+                hi2 = hi2.max(at + room(e) / scale);
             }
         }
         if lo2 == lo && hi2 == hi {
@@ -385,4 +415,29 @@ fn value_range(c: &Bars, ends: &[Vec<End>], plot_w: f64) -> (f64, f64) {
         (lo, hi) = (lo2, hi2);
     }
     (lo, hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::label_start;
+
+    #[test]
+    fn a_label_that_would_straddle_a_line_starts_past_it() {
+        let right = |at: f64, room: f64, lines: &[f64]| label_start(at, room, lines, true);
+        let left = |at: f64, room: f64, lines: &[f64]| label_start(at, room, lines, false);
+        // A bar ending at 1 with a threshold at 6: "1.0" (9 long) would straddle it.
+        assert_eq!(right(1.0, 9.0, &[6.0]), 6.0);
+        // A bar past the line, or one whose text ends before it, keeps its place.
+        assert_eq!(right(10.0, 9.0, &[6.0]), 10.0);
+        assert_eq!(right(1.0, 4.0, &[6.0]), 1.0);
+        // A line at the bar's very end is not crossed.
+        assert_eq!(right(6.0, 9.0, &[6.0]), 6.0);
+        // Text running leftwards (a negative bar) moves left past a line on that side only.
+        assert_eq!(left(-1.0, 9.0, &[-6.0, 6.0]), -6.0);
+        assert_eq!(left(-1.0, 9.0, &[6.0]), -1.0);
+        // In pixels a negative bar's end is a positive number: the direction is the caller's.
+        assert_eq!(left(300.0, 40.0, &[320.0]), 300.0);
+        // Two lines close together: past both.
+        assert_eq!(right(0.0, 5.0, &[2.0, 6.0]), 6.0);
+    }
 }
