@@ -181,3 +181,31 @@ fn every_figure_file_has_its_physical_size() {
         }
     }
 }
+
+/// A closed-loop curve that ends short of the cord's measured T1 is said so in the caption (with
+/// the cord and the two tensions); curves that reach the data add nothing.
+#[test]
+fn the_closed_loop_caption_says_where_a_simulated_run_ends_short() {
+    let a = thesis();
+    let layout = FigureOptions::default().layout();
+    let full = closed_loop(a);
+    let caption = |cl: &[capstan_engine::analysis::closed_loop::SimCurve]| {
+        let figs = figures::all(a, Some(cl), &layout).unwrap();
+        figs.into_iter()
+            .find(|f| f.id == "closed_loop")
+            .unwrap()
+            .caption
+    };
+    assert!(!caption(&full).contains("ends short"), "{}", caption(&full));
+    // Cord 0's run cut at 60 % of its measured T1: one cord short, named with its tensions.
+    let top = |v: &[(f64, f64)]| v.iter().map(|p| p.0).fold(0.0f64, f64::max);
+    let mut cut = full.clone();
+    let measured = top(&cut[0].1);
+    cut[0].1.retain(|p| p.0 <= 0.6 * measured);
+    let c = caption(&cut);
+    assert!(c.contains("At 1 of the 10 cords shown"), "{c}");
+    assert!(
+        c.contains(&format!("{:.1} N of {measured:.1} N", top(&cut[0].1))),
+        "{c}"
+    );
+}

@@ -246,6 +246,40 @@ fn plant_causes(a: &Analysis) -> String {
         .collect()
 }
 
+/// Where the simulated runs end short of the measured T1 (below 90 % of the cord's largest), a
+/// caption sentence that says so and why: the plant's T1 at the servo's last angle is lower the
+/// more the capstan amplifies (its cord stretches on the T2 side too).
+fn short_note(a: &Analysis, curves: &[SimCurve], shown: &[usize]) -> String {
+    let top = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, f64::max);
+    let short: Vec<(usize, f64, f64)> = shown
+        .iter()
+        .filter_map(|&g| {
+            let sim = top(&mut curves
+                .iter()
+                .filter(|(cg, _)| *cg == g)
+                .flat_map(|(_, v)| v.iter().map(|p| p.0)));
+            let measured = top(&mut a
+                .obs
+                .rows_of_group(g)
+                .into_iter()
+                .map(|i| a.obs.rows[i].t1_n));
+            (sim > 0.0 && sim < 0.9 * measured).then_some((g, sim, measured))
+        })
+        .collect();
+    let Some(&(g, sim, measured)) = short
+        .iter()
+        .min_by(|x, y| (x.1 / x.2).total_cmp(&(y.1 / y.2)))
+    else {
+        return String::new();
+    };
+    format!(
+        " At {} of the {} cords shown the simulated run ends short of the measured T1 (most at {}: {sim:.1} N of {measured:.1} N): the runs step the servo through the thesis's angles, and the plant's cord also stretches on the T2 side, so at the last angle the plant reaches less T1 than the rig did, the more so the more the capstan amplifies.",
+        short.len(),
+        shown.len(),
+        cord_title(a, g)
+    )
+}
+
 /// The closed loop: simulated amplification over the measured points, per cord (as many as fit
 /// a page).
 pub fn closed_loop(
@@ -296,6 +330,6 @@ pub fn closed_loop(
         id: "closed_loop",
         legend,
         chart: figure(&panels, grid.0, grid.1, grid.2)?,
-        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{simulated_note}{}{}", plant_causes(a), selection_note(shown.len(), simulated.len(), "simulated cords"), super::drawn_note(a)),
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{simulated_note}{}{}{}", plant_causes(a), short_note(a, curves, &shown), selection_note(shown.len(), simulated.len(), "simulated cords"), super::drawn_note(a)),
     })
 }
