@@ -71,14 +71,14 @@ fn diagnose_analyze_the_report_and_discover_give_the_thesis_data_one_verdict() {
         headline[1].starts_with("The data establish that "),
         "{headline:?}"
     );
-    let sensor = headline[1].find("T2 force sensor").unwrap();
+    let sensor = headline[1].find("T2 carries an additive offset").unwrap();
     assert!(
         sensor < headline[1].find("contact heating").unwrap(),
         "{headline:?}"
     );
     let left = capstan_engine::evidence::adequacy::scatter_head(&[
         "contact heating".to_string(),
-        "the T2 zero".to_string(),
+        "the T2 offset".to_string(),
     ]);
     let order = capstan_engine::evidence::adequacy::NO_ORDER;
     // diagnose gives each parameter its SD between cords in brackets; the head is the same.

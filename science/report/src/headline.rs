@@ -54,15 +54,21 @@ struct Facts<'a> {
     better: (usize, usize),
 }
 
-/// Plain words for a cause (no abbreviation), with `{}` where its size goes.
+/// Plain words for a cause (no abbreviation), with `{}` where its size goes. Each says what the
+/// data identify, not more: an offset on T2 is additive whatever causes it, and heating's h is
+/// sized at the catalogue's assumed load memory, which window means cannot resolve.
 fn cause_words(name: &str) -> &'static str {
     match name {
-        "t2_offset" => "the T2 force sensor reads with a zero offset of {}",
+        "t2_offset" => "T2 carries an additive offset of {} (a zero error of the T2 sensor or a constant force lost on the load side: these data cannot tell which)",
+        "contact_heating" => "mu falls with the friction load the contact carries (contact heating: mu falls by a factor exp(−h·load memory), h = {} at the catalogue's assumed memory time τ; the data fix only h·τ and cannot tell heating from a friction law that depends on the load itself)",
         "t1_offset" => "the T1 reading carries an offset or a loss of {} on its path",
         "sensor_gain" => "the T2 force sensor's gain is {} times the T1 sensor's",
-        "contact_heating" => "friction falls while the contact carries load (contact heating: mu falls by a factor exp(−h·load memory), h = {})",
-        "pressure_friction" => "friction falls as the tension rises (Howell's power law, exponent {})",
-        "bending_stiffness" => "the stiff cord lifts off the capstan at low tension (bending stiffness {})",
+        "pressure_friction" => {
+            "friction falls as the tension rises (Howell's power law, exponent {})"
+        }
+        "bending_stiffness" => {
+            "the stiff cord lifts off the capstan at low tension (bending stiffness {})"
+        }
         "thermal_drift" => "friction drifts with time during a run ({})",
         "wear" => "friction changes from one run to the next ({})",
         "diameter_dependence" => "friction depends on the capstan diameter ({})",
@@ -364,7 +370,7 @@ mod tests {
         assert!(!h.contains("The data establish"), "{h}");
         assert!(
             h.contains("Left unexplained: T2 drifts with time inside runs.")
-                && h.contains("fit — the T2 force sensor reads with a zero offset of")
+                && h.contains("fit — T2 carries an additive offset of")
                 && h.contains("do not account for it, so they are not a diagnosis."),
             "{h}"
         );

@@ -64,7 +64,7 @@ pub fn describe(name: &str) -> (&'static str, &'static str) {
         ),
         "heat_tau_s" => ("s", "memory time of the friction load"),
         "t1_offset_n" => ("N", "zero offset (or path loss) of the T1 reading"),
-        "t2_offset_n" => ("N", "zero offset of the T2 reading"),
+        "t2_offset_n" => ("N", "additive offset of the T2 reading"),
         "t2_gain" => ("1", "gain of the T2 reading relative to T1"),
         _ => ("?", "model parameter"),
     }

@@ -37,7 +37,7 @@ fn the_headline_quotes_the_first_listed_row_of_each_quantity_in_one_unit() {
     }
     // The thesis: the T2 offset −0.8234 N and heating 0.0332 1/(N s) of the extended model.
     let find = |word: &str| quoted.iter().find(|(q, _, _)| q.contains(word)).unwrap();
-    let (_, src, off) = find("zero offset of the T2");
+    let (_, src, off) = find("offset of the T2 reading");
     assert_eq!(src, "extended model");
     assert!((off + 0.8234).abs() < 5e-5, "{off}");
     let (_, _, heat) = find("contact heating");

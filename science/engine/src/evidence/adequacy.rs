@@ -379,8 +379,8 @@ fn supported_scatter(c: &CordLevel) -> Vec<&'static str> {
 /// What a parameter is, for the sentence on what is left.
 pub fn scatter_words(parameter: &str) -> &'static str {
     match parameter {
-        "t2_offset" => "the T2 zero",
-        "t1_offset" => "the T1 zero",
+        "t2_offset" => "the T2 offset",
+        "t1_offset" => "the T1 offset",
         "contact_heating" => "contact heating",
         "pressure_friction" => "the pressure exponent",
         "bending_stiffness" => "the bending stiffness",
@@ -486,7 +486,7 @@ fn scatter_sentence(
     }
     if let (Some(a), Some(b)) = (common, beyond) {
         s += &format!(
-            "; with every cord's own T2 zero and effects the lack of fit against the replicate runs (pure-error F, p by sign flips of whole runs) falls from F = {} (p {}; the systematic part {:.2}× the noise) to F = {} (p {}; {:.2}×)",
+            "; with every cord's own T2 offset and effects the lack of fit against the replicate runs (pure-error F, p by sign flips of whole runs) falls from F = {} (p {}; the systematic part {:.2}× the noise) to F = {} (p {}; {:.2}×)",
             f_shown(a.f, 1),
             flip_p(a.p),
             a.systematic_ratio,
