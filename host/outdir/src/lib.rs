@@ -234,6 +234,19 @@ impl OutputDir {
     }
 }
 
+/// The lock file goes when the lock does: a finished command leaves only its results (the file
+/// is removed while the lock is still held, and only if it is still the one at the path; a
+/// process that opened it meanwhile finds it locked, or gone from the path, and takes the lock
+/// again on a new file: [`take_lock`]).
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        let path = self.dir.join(LOCK);
+        if still_at_path(&self._lock, &path) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+}
+
 /// Lock `dir` for this process, or say who holds it. A lock file unlinked by a refused
 /// process between our open and our lock is not the directory's lock any more: the lock is
 /// taken again on the file at the path (a few tries), so two processes never hold locks on

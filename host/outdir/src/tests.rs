@@ -139,6 +139,28 @@ fn a_second_writer_is_refused_with_the_holder_named() {
     OutputDir::open(&dir, "test", &[]).unwrap();
 }
 
+#[test]
+fn a_finished_command_leaves_its_results_and_no_lock_file() {
+    let dir = scratch();
+    let out = OutputDir::open(&dir, "test", &["a.txt"]).unwrap();
+    assert!(dir.join(LOCK).exists(), "held while the command runs");
+    let mut s = out.stage().unwrap();
+    s.write("a.txt", b"a").unwrap();
+    s.commit().unwrap();
+    assert!(!dir.join(LOCK).exists(), "{:?}", visible(&dir));
+    // A lock file that is not ours any more (unlinked, another made) is left to its holder.
+    let first = OutputDir::open(&dir, "test", &[]).unwrap();
+    std::fs::remove_file(dir.join(LOCK)).unwrap();
+    let second = OutputDir::open(&dir, "test", &[]).unwrap();
+    drop(first);
+    assert!(
+        dir.join(LOCK).exists(),
+        "the second holder's lock file stays"
+    );
+    drop(second);
+    assert!(!dir.join(LOCK).exists());
+}
+
 #[cfg(unix)]
 #[test]
 fn links_and_files_we_did_not_write_are_refused_never_replaced_or_written_through() {
