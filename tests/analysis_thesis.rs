@@ -179,17 +179,22 @@ fn predictions_csv_recomputes_the_metrics() {
             (rmse(&p) - m["rmse_t2_n"].as_f64().unwrap()).abs() < 1e-9,
             "{name}"
         );
-        let ln: f64 = (p
-            .iter()
-            .zip(&t2)
-            .zip(&t1)
-            .map(|((p, m), t1)| ((p.max(1e-3) / t1).ln() - (m.max(1e-3) / t1).ln()).powi(2))
-            .sum::<f64>()
-            / 720.0)
-            .sqrt();
+        // Over the rows where the predicted T2 is above zero (no logarithm otherwise); the
+        // others are counted apart.
+        let defined: Vec<f64> = (p.iter().zip(&t2).zip(&t1))
+            .filter(|((p, m), t1)| **p > 0.0 && **m > 0.0 && **t1 > 0.0)
+            .map(|((p, m), t1)| ((p / t1).ln() - (m / t1).ln()).powi(2))
+            .collect();
+        let ln = (defined.iter().sum::<f64>() / defined.len() as f64).sqrt();
         assert!(
             (ln - m["rmse_ln_amp"].as_f64().unwrap()).abs() < 1e-9,
             "{name} ln"
+        );
+        let left_out = p.iter().filter(|p| **p <= 0.0).count();
+        assert_eq!(
+            m["ln_amp_undefined_rows"].as_u64().unwrap() as usize,
+            left_out,
+            "{name}"
         );
         match loco {
             Some(c) => assert!(
@@ -283,7 +288,7 @@ fn figures_have_one_colour_per_wrap_and_a_style_per_model() {
     // No identifier on a figure: the mechanisms by the catalogue's words.
     let evidence = figure_body(&html, "mechanism_evidence");
     for (id, words) in [
-        ("t2_offset", "T2 sensor offset"),
+        ("t2_offset", "T2 offset"),
         ("contact_heating", "contact heating"),
     ] {
         assert!(!evidence.contains(&format!(">{id}<")), "{id} on the figure");

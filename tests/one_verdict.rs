@@ -71,7 +71,7 @@ fn diagnose_analyze_the_report_and_discover_give_the_thesis_data_one_verdict() {
         headline[1].starts_with("The data establish that "),
         "{headline:?}"
     );
-    let sensor = headline[1].find("T2 carries an additive offset").unwrap();
+    let sensor = headline[1].find("T2 needs an additive offset").unwrap();
     assert!(
         sensor < headline[1].find("contact heating").unwrap(),
         "{headline:?}"
@@ -87,10 +87,14 @@ fn diagnose_analyze_the_report_and_discover_give_the_thesis_data_one_verdict() {
         bare.contains(&format!("{left}{order}")),
         "diagnose: {verdict}"
     );
+    // The headline says it of the tensions above the lowest, where the model fails (its own
+    // sentence before this one).
+    let above = format!("{left}{order}").replacen("What is left", "Above them, what is left", 1);
     assert!(
-        headline[2].starts_with(&format!("{left}{order}")),
+        headline[2].starts_with("At the lowest tensions"),
         "headline: {headline:?}"
     );
+    assert!(headline[3].starts_with(&above), "headline: {headline:?}");
     assert!(!verdict.contains("Unexplained") && !headline.join(" ").contains("unexplained"));
 
     // The report shows the headline and the diagnose verdict, word for word.

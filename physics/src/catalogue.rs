@@ -294,8 +294,8 @@ const CATALOGUE: [EffectEntry; 11] = [
         // would on the rig).
         physical: (-3.0, 5.0),
         level: Level::WithinRun,
-        title: "a zero offset of the T2 sensor",
-        label: "T2 sensor offset",
+        title: "an additive offset on T2, a sensor zero or a constant load-side loss",
+        label: "T2 offset",
         named_note: None,
         column: None,
         untestable: always,

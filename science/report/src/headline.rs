@@ -59,7 +59,7 @@ struct Facts<'a> {
 /// sized at the catalogue's assumed load memory, which window means cannot resolve.
 fn cause_words(name: &str) -> &'static str {
     match name {
-        "t2_offset" => "T2 carries an additive offset of {} (a zero error of the T2 sensor or a constant force lost on the load side: these data cannot tell which)",
+        "t2_offset" => "T2 needs an additive offset of {} (a zero error of the T2 sensor or a constant force lost on the load side: these data cannot tell which)",
         "contact_heating" => "mu falls with the friction load the contact carries (contact heating: mu falls by a factor exp(−h·load memory), h = {} at the catalogue's assumed memory time τ; the data fix only h·τ and cannot tell heating from a friction law that depends on the load itself)",
         "t1_offset" => "the T1 reading carries an offset or a loss of {} on its path",
         "sensor_gain" => "the T2 force sensor's gain is {} times the T1 sensor's",
@@ -162,7 +162,7 @@ pub fn headline(a: &Analysis) -> Headline {
     let mu = f.mu_row.map_or("–".into(), |k| q.param(k, 4));
     let rmse = q.num(f.baseline_rmse, 2, "/models/0/rmse_t2_n".into());
     let cord = q.num(f.cord_pct, 1, "/evidence/scatter/cord_pct".into());
-    s.push(format!("Euler-Eytelwein's law, T2 = T1·exp(mu·wrap angle) with one friction coefficient mu = {mu}, misses the measured T2 by {rmse} N (root mean square), and mu itself varies by {cord} % from cord to cord."));
+    s.push(format!("Euler-Eytelwein's law, T2 = T1·exp(mu·wrap angle) with one friction coefficient mu = {mu}, misses the measured T2 by {rmse} N (root mean square); with the causes below, mu still varies by {cord} % from cord to cord."));
     let parts: Vec<String> = f
         .causes
         .iter()
@@ -186,8 +186,11 @@ pub fn headline(a: &Analysis) -> Headline {
             join_and(&parts)
         )),
     }
+    let low = low_tension_sentence(a, &mut q);
+    let above = low.is_some();
+    s.extend(low);
     if f.left.is_none() {
-        s.push(if f.scatter.is_empty() && f.inconclusive {
+        let left = if f.scatter.is_empty() && f.inconclusive {
             "These replicate runs are too few to tell whether anything systematic is left.".into()
         } else if f.scatter.is_empty() {
             "Nothing systematic is left beyond the scatter between cords, runs and readings.".into()
@@ -201,10 +204,12 @@ pub fn headline(a: &Analysis) -> Headline {
                 String::new()
             };
             format!("{}{order}.", adequacy::scatter_head(&what))
+        };
+        // After a sentence on the lowest tensions, what is left is said of the rest.
+        s.push(match left.strip_prefix("What is left") {
+            Some(rest) if above => format!("Above them, what is left{rest}"),
+            _ => left,
         });
-    }
-    if let Some(w) = low_tension_sentence(a, &mut q) {
-        s.push(w);
     }
     s.push(gain_sentence(&f, &mut q));
     Headline {
@@ -213,29 +218,51 @@ pub fn headline(a: &Analysis) -> Headline {
     }
 }
 
-/// Where the extended model's amplification is further off than Euler-Eytelwein's (its RMS
-/// ln(T2/T1) residual larger at a step), a sentence that says so: the fits are in T2, where the
-/// low-tension rows weigh little, so a model better in T2 can be worse in the amplification
-/// the thesis is about. None where it is nowhere worse.
+/// What the extended model gets wrong at the lowest tensions, which the fits in T2 (where a
+/// low-tension row weighs little) cannot show: a predicted T2 at or below zero where every
+/// reading is above it (its constant T2 offset cannot hold down to zero tension), or else an
+/// amplification further off than Euler-Eytelwein's (RMS ln(T2/T1) residual over the rows
+/// where both are defined). None where neither happens.
 fn low_tension_sentence(a: &Analysis, q: &mut Quote<'_>) -> Option<String> {
     let steps = a.ln_amp_by_step.as_ref()?;
-    let worse = |i: usize| steps[i].extended_rms > steps[i].baseline_rms;
     let mut order: Vec<usize> = (0..steps.len()).collect();
     order.sort_by(|&i, &j| steps[i].mean_t1_n.total_cmp(&steps[j].mean_t1_n));
+    let p = |i: usize, f: &str| format!("/ln_amp_by_step/{i}/{f}");
+    let first = *order.first()?;
+    let st = &steps[first];
+    if st.extended_nonpositive > 0 && st.measured_lowest_n > 0.0 {
+        let k = q.num(
+            st.extended_nonpositive as f64,
+            0,
+            p(first, "extended_nonpositive"),
+        );
+        let n = q.num(st.rows as f64, 0, p(first, "rows"));
+        let t1 = q.num(st.mean_t1_n, 2, p(first, "mean_t1_n"));
+        let low = q.num(st.extended_lowest_n, 2, p(first, "extended_lowest_n"));
+        let m = q.num(st.measured_lowest_n, 2, p(first, "measured_lowest_n"));
+        let more = if order[1..]
+            .iter()
+            .any(|&i| steps[i].extended_nonpositive > 0)
+        {
+            " (and at higher steps too)"
+        } else {
+            ""
+        };
+        return Some(format!("At the lowest tensions the model with these causes fails: at the lowest step (mean T1 {t1} N) it predicts T2 at or below zero for {k} of {n} readings{more}, down to {low} N, where no measured T2 is below {m} N, so the constant offset on T2 cannot hold down to zero tension; its fit is in T2, where those rows weigh little."));
+    }
+    let worse = |i: usize| steps[i].extended_rms > steps[i].baseline_rms;
     let n_worse = order.iter().filter(|&&i| worse(i)).count();
     if n_worse == 0 {
         return None;
     }
-    // The worse steps are the lowest ones: say up to which T1, and by how much at the lowest.
     let lowest_run = order.iter().take_while(|&&i| worse(i)).count();
     if lowest_run < n_worse {
         return Some("At some steps the extended model's amplification is further off than Euler-Eytelwein's (the ln-amplification residuals by step): its fit is in T2, where a low-tension row weighs little.".into());
     }
-    let (low, top) = (order[0], order[lowest_run - 1]);
-    let p = |i: usize, f: &str| format!("/ln_amp_by_step/{i}/{f}");
+    let top = order[lowest_run - 1];
     let t1 = q.num(steps[top].mean_t1_n, 2, p(top, "mean_t1_n"));
-    let ext = q.num(steps[low].extended_rms, 2, p(low, "extended_rms"));
-    let base = q.num(steps[low].baseline_rms, 2, p(low, "baseline_rms"));
+    let ext = q.num(steps[first].extended_rms, 2, p(first, "extended_rms"));
+    let base = q.num(steps[first].baseline_rms, 2, p(first, "baseline_rms"));
     Some(format!("At the lowest tensions (steps of mean T1 up to {t1} N) the extended model's amplification is further off than Euler-Eytelwein's (RMS residual of ln(T2/T1) {ext} against {base} at the lowest step): its fit is in T2, where those rows weigh little."))
 }
 
@@ -399,7 +426,7 @@ mod tests {
         assert!(!h.contains("The data establish"), "{h}");
         assert!(
             h.contains("Left unexplained: T2 drifts with time inside runs.")
-                && h.contains("fit — T2 carries an additive offset of")
+                && h.contains("fit — T2 needs an additive offset of")
                 && h.contains("do not account for it, so they are not a diagnosis."),
             "{h}"
         );
@@ -435,7 +462,7 @@ mod tests {
     }
 
     #[test]
-    fn the_low_tension_misfit_is_said_where_the_extended_model_is_worse_in_amplification() {
+    fn the_low_tension_misfit_is_said_where_the_extended_model_fails_there() {
         let mut a = capstan_engine::analysis::run(
             &capstan_data::thesis_dataset(),
             capstan_engine::analysis::Options {
@@ -444,22 +471,25 @@ mod tests {
             },
         )
         .unwrap();
-        // The thesis: worse at its two lowest steps (T1 0.55 and 1.12 N on average), 2.48
-        // against 0.52 at the first.
+        // The thesis: at the lowest step (T1 0.55 N on average) the model predicts T2 ≤ 0 for
+        // 11 of 60 readings, down to −0.45 N, where every reading is at least 0.10 N.
         let h = headline(&a);
         let s = h.sentences.join(" ");
         assert!(
-            s.contains("At the lowest tensions (steps of mean T1 up to 1.12 N)")
-                && s.contains("2.48 against 0.52 at the lowest step"),
+            s.contains("at the lowest step (mean T1 0.55 N) it predicts T2 at or below zero for 11 of 60 readings")
+                && s.contains("down to -0.45 N, where no measured T2 is below 0.10 N")
+                && s.contains("Above them, what is left is cord-to-cord scatter"),
             "{s}"
         );
         assert!(h
             .numbers
             .iter()
-            .any(|n| n.pointer == "/ln_amp_by_step/1/mean_t1_n"));
-        // Worse at a middle step only: said, without a tension.
+            .any(|n| n.pointer == "/ln_amp_by_step/0/extended_nonpositive"));
+        // No T2 ≤ 0 predicted, but worse in ln(T2/T1) at a middle step only: said, without a
+        // tension.
         let steps = a.ln_amp_by_step.as_mut().unwrap();
         for st in steps.iter_mut() {
+            st.extended_nonpositive = 0;
             st.extended_rms = 0.5 * st.baseline_rms;
         }
         steps[5].extended_rms = 2.0 * steps[5].baseline_rms;
@@ -468,9 +498,22 @@ mod tests {
             s.contains("At some steps the extended model's amplification"),
             "{s}"
         );
-        // Nowhere worse: nothing said.
-        a.ln_amp_by_step.as_mut().unwrap()[5].extended_rms = 0.0;
+        // ... worse at the two lowest: said with the tension up to which.
+        let steps = a.ln_amp_by_step.as_mut().unwrap();
+        steps[5].extended_rms = 0.0;
+        steps[0].extended_rms = 2.0 * steps[0].baseline_rms;
+        steps[1].extended_rms = 2.0 * steps[1].baseline_rms;
         let s = headline(&a).sentences.join(" ");
-        assert!(!s.contains("amplification is further off"), "{s}");
+        assert!(
+            s.contains("At the lowest tensions (steps of mean T1 up to 1.12 N)"),
+            "{s}"
+        );
+        // Nowhere worse: nothing said, and what is left is said plainly.
+        for st in a.ln_amp_by_step.as_mut().unwrap().iter_mut() {
+            st.extended_rms = 0.0;
+        }
+        let s = headline(&a).sentences.join(" ");
+        assert!(!s.contains("At the lowest tensions"), "{s}");
+        assert!(s.contains("What is left is cord-to-cord scatter"), "{s}");
     }
 }

@@ -113,14 +113,14 @@ fn gain_section(h: &mut String, a: &Analysis, figs: &[Figure]) {
     if let Some(steps) = &a.ln_amp_by_step {
         let worse: Vec<String> = steps
             .iter()
-            .filter(|s| s.extended_rms > s.baseline_rms)
+            .filter(|s| s.extended_rms > s.baseline_rms || s.extended_nonpositive > 0)
             .map(|s| format!("{}", s.step))
             .collect();
-        let _ = write!(h, "<h3>Where the extended model is worse: ln-amplification residuals by step</h3><p>The fits are in T2, where a low-tension row weighs little; the logarithm of the amplification shows the low tensions. {}</p>",
+        let _ = write!(h, "<h3>Where the extended model is worse: ln-amplification residuals by step</h3><p>The fits are in T2, where a low-tension row weighs little; the logarithm of the amplification shows the low tensions (over the rows where the model's T2 is above zero: a predicted T2 at or below zero has no logarithm and is counted apart). {}</p>",
             if worse.is_empty() {
                 "The extended model's ln-amplification residuals are no larger than Euler-Eytelwein's at any step.".to_string()
             } else {
-                format!("The extended model's RMS ln-amplification residual is larger than Euler-Eytelwein's at step {} (rows marked).", worse.join(", "))
+                format!("The extended model's RMS ln-amplification residual is larger than Euler-Eytelwein's, or it predicts T2 at or below zero, at step {} (rows marked).", worse.join(", "))
             });
         h.push_str(&tables::ln_amp_by_step(steps));
     }

@@ -285,7 +285,7 @@ const MODEL_NOTE: &str = "95 % intervals: percentiles of a bootstrap over cords 
 
 /// `models.csv`.
 pub fn models_csv(a: &Analysis) -> String {
-    let mut s = String::from("model,name,description,parameters,fixed,edf_cord_effects,rmse_t2_n,rmse_t2_se,rmse_t2_ci95_lo,rmse_t2_ci95_hi,loco_rmse_t2_n,loco_rmse_t2_se,loco_rmse_t2_ci95_lo,loco_rmse_t2_ci95_hi,rmse_ln_amp,median_per_cord_r2_amp,aic,bic,interval_method\n");
+    let mut s = String::from("model,name,description,parameters,fixed,edf_cord_effects,rmse_t2_n,rmse_t2_se,rmse_t2_ci95_lo,rmse_t2_ci95_hi,loco_rmse_t2_n,loco_rmse_t2_se,loco_rmse_t2_ci95_lo,loco_rmse_t2_ci95_hi,rmse_ln_amp,ln_amp_rows_left_out,median_per_cord_r2_amp,aic,bic,interval_method\n");
     for m in &a.models {
         let u = &m.rmse_t2_uncertainty;
         let l = m.loco_rmse_t2_uncertainty.as_ref();
@@ -305,6 +305,7 @@ pub fn models_csv(a: &Analysis) -> String {
             num(l.map(|l| l.ci95.lo)),
             num(l.map(|l| l.ci95.hi)),
             num(Some(m.rmse_ln_amp)),
+            m.ln_amp_undefined_rows.to_string(),
             num(Some(m.per_cord_r2_amp_median)),
             num(Some(m.aic)),
             num(Some(m.bic)),

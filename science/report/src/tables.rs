@@ -24,7 +24,10 @@ fn model_row(m: &ModelMetrics) -> String {
         "<tr><td>{}</td><td>{count}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
         esc(&m.name),
         with_ci(&m.rmse_t2_uncertainty),
-        f3(m.rmse_ln_amp),
+        match m.ln_amp_undefined_rows {
+            0 => f3(m.rmse_ln_amp),
+            k => format!("{} ({k} rows predicted T2 ≤ 0 left out)", f3(m.rmse_ln_amp)),
+        },
         m.loco_rmse_t2_uncertainty
             .as_ref()
             .map_or("not refittable".into(), with_ci),
@@ -112,12 +115,12 @@ pub fn held_out(a: &Analysis) -> String {
 
 /// ln-amplification residuals by step.
 pub fn ln_amp_by_step(steps: &[StepResidual]) -> String {
-    let mut h = String::from("<table><tr><th>step</th><th>rows</th><th>mean T1 (N)</th><th>mean ln-amp residual, Euler-Eytelwein</th><th>extended</th><th>RMS, Euler-Eytelwein</th><th>RMS, extended</th></tr>");
+    let mut h = String::from("<table><tr><th>step</th><th>rows</th><th>mean T1 (N)</th><th>mean ln-amp residual, Euler-Eytelwein</th><th>extended</th><th>RMS, Euler-Eytelwein</th><th>RMS, extended</th><th>predicted T2 ≤ 0 (Euler-Eytelwein / extended; left out of the ln residuals)</th><th>lowest T2, extended / measured (N)</th></tr>");
     for s in steps {
-        let worse = s.extended_rms > s.baseline_rms;
+        let worse = s.extended_rms > s.baseline_rms || s.extended_nonpositive > 0;
         let _ = write!(
             h,
-            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} / {}</td><td>{} / {}</td></tr>",
             if worse { " class=\"worse\"" } else { "" },
             s.step,
             s.rows,
@@ -125,7 +128,11 @@ pub fn ln_amp_by_step(steps: &[StepResidual]) -> String {
             fs(s.baseline_mean, 3),
             fs(s.extended_mean, 3),
             fx(s.baseline_rms, 3),
-            fx(s.extended_rms, 3)
+            fx(s.extended_rms, 3),
+            s.baseline_nonpositive,
+            s.extended_nonpositive,
+            fs(s.extended_lowest_n, 2),
+            fx(s.measured_lowest_n, 2)
         );
     }
     h.push_str("</table>");

@@ -49,8 +49,10 @@ pub struct ModelMetrics {
     pub n_params_strict: f64,
     /// In-sample RMSE of T2, N.
     pub rmse_t2_n: f64,
-    /// In-sample RMSE of ln(T2/T1) (predicted T2 floored at 1 mN).
+    /// In-sample RMSE of ln(T2/T1), over the rows where the predicted T2 is above zero ...
     pub rmse_ln_amp: f64,
+    /// ... and the rows left out of it: a predicted T2 at or below zero (no logarithm).
+    pub ln_amp_undefined_rows: usize,
     /// Leave-one-cord-out RMSE of T2, N (None if the model cannot be refitted).
     pub loco_rmse_t2_n: Option<f64>,
     /// In-sample RMSE of T2 with its 95 % cord-bootstrap interval and cord-jackknife SE.
@@ -89,16 +91,28 @@ pub fn ln_amp(t2_n: f64, t1_n: f64) -> f64 {
     (t2_n.max(1e-3) / t1_n).ln()
 }
 
-/// RMSE of ln(T2/T1), predicted against measured (both floored at 1 mN).
-pub fn rmse_ln_amp(obs: &Observations, pred: &[f64]) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
+/// ln(T2/T1) where both tensions are above zero (None where the logarithm is not defined: a
+/// model can predict a T2 at or below zero, which no floor would make a residual of).
+pub fn ln_amp_defined(t2_n: f64, t1_n: f64) -> Option<f64> {
+    (t2_n > 0.0 && t1_n > 0.0 && t2_n.is_finite() && t1_n.is_finite()).then(|| (t2_n / t1_n).ln())
+}
+
+/// RMSE of ln(T2/T1), predicted against measured, over the rows where both are defined, and
+/// the rows with a finite prediction where the predicted T2 is at or below zero (left out).
+pub fn rmse_ln_amp(obs: &Observations, pred: &[f64]) -> (f64, usize) {
+    let (mut s, mut n, mut undefined) = (0.0, 0usize, 0usize);
     for (r, p) in obs.rows.iter().zip(pred) {
-        if p.is_finite() {
-            s += (ln_amp(*p, r.t1_n) - ln_amp(r.t2_n, r.t1_n)).powi(2);
-            n += 1;
+        let m = ln_amp_defined(r.t2_n, r.t1_n);
+        match (ln_amp_defined(*p, r.t1_n), m) {
+            (Some(x), Some(y)) => {
+                s += (x - y).powi(2);
+                n += 1;
+            }
+            (None, Some(_)) if p.is_finite() => undefined += 1,
+            _ => {}
         }
     }
-    (s / n as f64).sqrt()
+    ((s / n as f64).sqrt(), undefined)
 }
 
 /// Per-cord R² of amplification.
@@ -143,6 +157,7 @@ fn metrics(obs: &Observations, e: Entry<'_>) -> ModelMetrics {
     let (aic, bic) = information_criteria(rss, obs.len(), e.n_params);
     let (aic_s, bic_s) = information_criteria(rss, obs.len(), e.n_strict);
     let per_cord = per_cord_r2(obs, e.pred);
+    let (rmse_ln, ln_undefined) = rmse_ln_amp(obs, e.pred);
     let mut r2s: Vec<f64> = per_cord.iter().map(|c| c.r2).collect();
     let seed = e
         .name
@@ -161,7 +176,8 @@ fn metrics(obs: &Observations, e: Entry<'_>) -> ModelMetrics {
         n_params_detail: e.count,
         n_params_strict: e.n_strict,
         rmse_t2_n: obs.rmse_t2(e.pred),
-        rmse_ln_amp: rmse_ln_amp(obs, e.pred),
+        rmse_ln_amp: rmse_ln,
+        ln_amp_undefined_rows: ln_undefined,
         loco_rmse_t2_n: loco.as_ref().map(|l| l.value),
         rmse_t2_uncertainty: uncertainty::rmse(&CordErrors::of(obs, e.pred), seed),
         loco_rmse_t2_uncertainty: loco,

@@ -41,7 +41,7 @@ use std::time::Instant;
 
 pub use extended::ExtendedDetail;
 pub use fits::Predictions;
-pub use metrics::{ln_amp, rmse_ln_amp, AngleR2, CordR2, ModelMetrics, ParamCount};
+pub use metrics::{ln_amp, ln_amp_defined, rmse_ln_amp, AngleR2, CordR2, ModelMetrics, ParamCount};
 
 /// How to run the analysis.
 #[derive(Clone, Copy, Debug)]

@@ -7,7 +7,7 @@
 //! levels (up to 12 levels; continuous columns in 10 quantile bins), with its one-way F test
 //! (which treats rows as independent and so overstates significance; read it with η²).
 
-use super::{ln_amp, Predictions};
+use super::{ln_amp, ln_amp_defined, Predictions};
 use crate::fit::stats::{eta_squared, mean, regress, spearman, variance};
 use crate::fit::Observations;
 use capstan_data::Dataset;
@@ -147,7 +147,8 @@ pub struct StepResidual {
     pub rows: usize,
     /// Mean T1 of those rows, N.
     pub mean_t1_n: f64,
-    /// Mean residual of ln(T2/T1), Euler-Eytelwein (measured − model).
+    /// Mean residual of ln(T2/T1), Euler-Eytelwein (measured − model), over the rows where the
+    /// model's T2 is above zero (the same for every ln statistic below).
     pub baseline_mean: f64,
     /// Mean residual of ln(T2/T1), extended model.
     pub extended_mean: f64,
@@ -155,6 +156,14 @@ pub struct StepResidual {
     pub baseline_rms: f64,
     /// RMS residual of ln(T2/T1), extended model.
     pub extended_rms: f64,
+    /// Rows where Euler-Eytelwein predicts T2 at or below zero (left out of its ln residuals).
+    pub baseline_nonpositive: usize,
+    /// Rows where the extended model predicts T2 at or below zero (left out of its ln residuals).
+    pub extended_nonpositive: usize,
+    /// The extended model's lowest predicted T2 at the step, N.
+    pub extended_lowest_n: f64,
+    /// The lowest measured T2 at the step, N.
+    pub measured_lowest_n: f64,
 }
 
 /// The ln-amplification residuals by step (None without a `step` column).
@@ -173,17 +182,24 @@ pub fn ln_amp_by_step(obs: &Observations, pred: &Predictions) -> Option<Vec<Step
                         r.step == Some(s) && r.t1_n > 0.0 && r.t2_n > 0.0
                     })
                     .collect();
-                let res = |p: &[f64]| -> Vec<f64> {
-                    idx.iter()
-                        .map(|&i| {
-                            let r = &obs.rows[i];
-                            ln_amp(r.t2_n, r.t1_n) - ln_amp(p[i], r.t1_n)
-                        })
-                        .collect()
+                // Rows whose predicted T2 is at or below zero have no logarithm: counted, not
+                // floored into a residual.
+                let res = |p: &[f64]| -> (Vec<f64>, usize) {
+                    let mut v = Vec::new();
+                    let mut undefined = 0;
+                    for &i in &idx {
+                        let r = &obs.rows[i];
+                        match ln_amp_defined(p[i], r.t1_n) {
+                            Some(x) => v.push(ln_amp(r.t2_n, r.t1_n) - x),
+                            None => undefined += 1,
+                        }
+                    }
+                    (v, undefined)
                 };
                 let rms =
                     |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
-                let (b, e) = (res(&pred.baseline), res(&pred.extended));
+                let ((b, b_undef), (e, e_undef)) = (res(&pred.baseline), res(&pred.extended));
+                let lowest = |p: &[f64]| idx.iter().map(|&i| p[i]).fold(f64::INFINITY, f64::min);
                 StepResidual {
                     step: s,
                     rows: idx.len(),
@@ -192,6 +208,13 @@ pub fn ln_amp_by_step(obs: &Observations, pred: &Predictions) -> Option<Vec<Step
                     extended_mean: mean(&e),
                     baseline_rms: rms(&b),
                     extended_rms: rms(&e),
+                    baseline_nonpositive: b_undef,
+                    extended_nonpositive: e_undef,
+                    extended_lowest_n: lowest(&pred.extended),
+                    measured_lowest_n: idx
+                        .iter()
+                        .map(|&i| obs.rows[i].t2_n)
+                        .fold(f64::INFINITY, f64::min),
                 }
             })
             .collect(),

@@ -120,12 +120,13 @@ pub fn mechanisms(a: &Analysis, _pal: &Palette, layout: &Layout) -> Result<Figur
     };
     // Evidence for a mechanism is −ΔBIC (ΔBIC below minus the threshold names it).
     let th = &ev.thresholds;
-    // The thresholds are ΔBIC values (negative): the line is drawn at −threshold.
-    let minus = |v: f64| format!("{v:.0}").replace('-', "−");
+    // The thresholds are ΔBIC values (negative): the line is drawn at −threshold, and named in
+    // the axis's quantity (−ΔBIC = 6, not ΔBIC = −6 on an axis of −ΔBIC).
+    let minus = |v: f64| format!("{:.0}", -v).replace('-', "−");
     let mut lines = vec![(
         -th.within_run,
         format!(
-            "naming threshold within runs (ΔBIC = {})",
+            "naming threshold within runs (−ΔBIC = {})",
             minus(th.within_run)
         ),
     )];
@@ -133,12 +134,12 @@ pub fn mechanisms(a: &Analysis, _pal: &Palette, layout: &Layout) -> Result<Figur
         lines.push((
             -th.between,
             format!(
-                "naming threshold between cords or runs (ΔBIC = {})",
+                "naming threshold between cords or runs (−ΔBIC = {})",
                 minus(th.between)
             ),
         ));
     } else {
-        lines[0].1 = format!("naming threshold (ΔBIC = {})", minus(th.within_run));
+        lines[0].1 = format!("naming threshold (−ΔBIC = {})", minus(th.within_run));
     }
     let bars = Bars {
         title: "Evidence of each mechanism".into(),
