@@ -159,7 +159,7 @@ pub fn t2_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> 
         id: "t2_vs_t1",
         legend,
         chart: figure(&panels, grid.0, grid.1, grid.2)?,
-        caption: format!("T2 against T1, one panel per capstan diameter, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model's physical T2 (sensor terms removed, against the true T1); thin solid: what the sensors would read under it (mean over the cord's runs at each step, as in predictions.csv).{shared}{}{}", selection_note(shown.len(), diameters.len(), "capstan diameters"), super::drawn_note(a)),
+        caption: format!("T2 against T1, one panel per capstan diameter, one colour per wrap. Points: measured pairs. Dashed: Euler-Eytelwein with one global mu; dotted: the thesis's Table 3; thick solid: the extended model's friction law alone (its offset and sensor terms removed, against the true T1); thin solid: what the sensors would read under it (mean over the cord's runs at each step, as in predictions.csv).{shared}{}{}", selection_note(shown.len(), diameters.len(), "capstan diameters"), super::drawn_note(a)),
     })
 }
 
@@ -180,7 +180,7 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
         id: "amp_vs_t1",
         legend,
         chart: figure(&panels, grid.0, grid.1, grid.2)?,
-        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's physical amplification (the friction law alone with the cord's own mu, sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted sensor terms included; a sensor offset pulls it below 1 at low T1, which is the instrument, not the capstan). Step means over the cord's runs.{}{}", selection_note(cords.len(), a.obs.groups.len(), "cords"), super::drawn_note(a)),
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's friction law alone (with the cord's own mu, its offset and sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted offsets included: the T2 offset pulls it below 1 at low T1, and where it predicts T2 at or below zero, below 0, which no reading does: the constant offset does not hold at the lowest tensions). Step means over the cord's runs.{}{}", selection_note(cords.len(), a.obs.groups.len(), "cords"), super::drawn_note(a)),
     })
 }
 

@@ -230,7 +230,7 @@ pub fn model_legend(with_thesis: bool) -> Vec<Entry> {
     }
     v.push(Entry {
         key: Key::Line(extended_style(INK)),
-        label: "extended model, physical (sensor terms removed)".into(),
+        label: "extended model, friction law alone".into(),
     });
     v.push(Entry {
         key: Key::Line(as_read_style(INK)),
