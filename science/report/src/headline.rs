@@ -292,7 +292,7 @@ fn gain_sentence(f: &Facts<'_>, q: &mut Quote<'_>) -> String {
     let interval = if g.ci95.lo.is_finite() && g.ci95.hi.is_finite() {
         let lo = q.num(g.ci95.lo, 2, format!("{PTR}/ci95/lo"));
         let hi = q.num(g.ci95.hi, 2, format!("{PTR}/ci95/hi"));
-        format!(" (95 % interval {lo} to {hi}, the test inverted)")
+        format!(" (95 % interval {lo} to {hi}, by inverting the sign-flip test)")
     } else {
         String::new()
     };
@@ -300,12 +300,13 @@ fn gain_sentence(f: &Facts<'_>, q: &mut Quote<'_>) -> String {
     let cords = q.num(f.better.1 as f64, 0, format!("{PTR}/cords"));
     // Two decimals, three under 0.1: a p of 0.047 must not read 0.05 beside "established".
     let p = q.num(g.p, if g.p < 0.1 { 3 } else { 2 }, format!("{PTR}/p"));
-    let needed = match g.cords_needed.as_ref().map(|n| n.cords) {
-        Some(Some(k)) => format!(
-            "; about {} cords would be needed to establish a gain of this size (by simulation)",
-            q.num(k as f64, 0, format!("{PTR}/cords_needed/cords"))
-        ),
-        Some(None) => {
+    let needed = match g.cords_needed.as_ref().map(|n| (n.cords, n.power)) {
+        Some((Some(k), power)) => {
+            let k = q.num(k as f64, 0, format!("{PTR}/cords_needed/cords"));
+            let power = q.num(power, 2, format!("{PTR}/cords_needed/power"));
+            format!("; about {k} cords would establish a gain of this size with power {power} (by simulation, resampling these cords' held-out errors)")
+        }
+        Some((None, _)) => {
             "; no number of cords the simulation tried would establish a gain of this size".into()
         }
         None => String::new(),
