@@ -135,6 +135,39 @@ fn every_data_command_lists_the_columns_it_reads() {
     );
 }
 
+/// A pairs file that is missing, or a directory, is said in one way by every command that
+/// reads pairs (analyze said `cannot read X: …` and `Is a directory (os error 21)`), and
+/// analyze leaves no output directory behind.
+#[test]
+fn a_missing_or_directory_data_file_is_said_alike_by_every_data_command() {
+    let d = tmp("data-file");
+    let missing = d.join("no-such.csv");
+    let out = d.join("report");
+    for (data, says) in [
+        (&missing, "No such file or directory"),
+        (&d, "is a directory, not a pairs CSV"),
+    ] {
+        let p = data.to_str().unwrap();
+        let want = format!("error: {p}: {says}");
+        for cmd in [
+            &["analyze", "--out", out.to_str().unwrap()][..],
+            &["diagnose"],
+            &["discover"],
+            &["plan", "--reps", "1"],
+        ] {
+            let mut args = cmd.to_vec();
+            args.push(p);
+            let o = capstan(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "{cmd:?} {p}: {err}");
+            assert!(err.starts_with(&want), "{cmd:?} {p}: {err}");
+            assert_eq!(err.lines().count(), 1, "{cmd:?} {p}: {err}");
+        }
+        assert!(!out.exists(), "analyze {p} made {}", out.display());
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// A file given as `--out` is named as a file (it said "cannot create the output directory:
 /// File exists"), before any work.
 #[test]

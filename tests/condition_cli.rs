@@ -390,6 +390,60 @@ fn zero_levels_are_refused_at_the_command_line() {
     assert!(!out.exists(), "refused, yet {} was made", out.display());
 }
 
+/// `--drive-v` above the rig's drive (the 13.2 V `simulate` and `predict` refuse) and `--run 0`
+/// (runs are numbered from 1) are refused by name before anything is written; an adversarial
+/// pass found both conditioned with exit 0. The limit itself is a drive the rig runs.
+#[test]
+fn a_drive_the_rig_cannot_run_and_run_zero_are_refused() {
+    let dir = tmp("drive-run");
+    simulate(&dir, "monotone");
+    let raw = dir.join("sim/raw/d12.7_w360_v10_run1.csv");
+    let condition = |out: &Path, more: &[&str]| {
+        let mut a = vec![
+            "condition",
+            raw.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--wrap-deg",
+            "360",
+        ];
+        a.extend(more);
+        capstan(&a)
+    };
+    for (more, says) in [
+        (
+            ["--drive-v", "99"],
+            "--drive-v 99: the rig's drive gives at most 13.2 V",
+        ),
+        (
+            ["--drive-v", "13.3"],
+            "--drive-v 13.3: the rig's drive gives at most 13.2 V",
+        ),
+        (["--run", "0"], "--run 0: runs are numbered from 1"),
+    ] {
+        let out = dir.join("refused");
+        let o = condition(&out, &more);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{more:?} was accepted: {err}");
+        assert!(err.contains(says), "{more:?}: {err}");
+        assert!(
+            !out.exists(),
+            "{more:?} refused, yet {} was made",
+            out.display()
+        );
+    }
+    let out = dir.join("top");
+    let o = condition(&out, &["--drive-v", "13.2", "--run", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pairs = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
+    let header: Vec<&str> = pairs.lines().next().unwrap().split(',').collect();
+    let k = header.iter().position(|c| *c == "drive_v").unwrap();
+    let rows = csv_rows(&out.join("pairs.csv"));
+    assert_eq!(rows.len(), 12);
+    assert!(rows.iter().all(|r| r[k] == "13.2"), "{rows:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A wrong `--first-change-s` puts a change inside every window: each level is reported as
 /// mixing two, none gives a pair, and the command fails (it said "ok" to all twelve before).
 #[test]

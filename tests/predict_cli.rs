@@ -388,3 +388,116 @@ fn predict_backwards_gives_the_t1_a_wanted_t2_needs() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A `metrics.json` of another layout version (`schema_version` 1, 3, "x", null, 2.0 or
+/// missing: an adversarial pass found them all predicted from) is refused by name, forward,
+/// backward and by `rig load-model`, which read it through the same reader; a covariance entry
+/// of 1e999 (inf once parsed) is refused naming the covariance.
+#[test]
+fn another_layout_version_and_an_infinite_covariance_are_refused_by_name() {
+    let dir = std::env::temp_dir().join(format!("capstan-predict-version-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = metrics(&dir);
+    let text = std::fs::read_to_string(&good).unwrap();
+    assert!(text.contains("\"schema_version\":2,"), "{text:.80}");
+    let at = ["--wrap-deg", "540", "--diameter-mm", "20"];
+    let given = [["--t1-n", "5"], ["--t2-n", "30"]];
+    let board = dir.join("board");
+    let rig = |from: &str| {
+        capstan(&[
+            "rig",
+            "--sim",
+            board.to_str().unwrap(),
+            "--sim-wrap-deg",
+            "540",
+            "load-model",
+            "--from",
+            from,
+        ])
+    };
+    for (found, says) in [
+        (
+            "1",
+            "schema_version is 1; this capstan reads 2 (run capstan analyze again)",
+        ),
+        (
+            "3",
+            "schema_version is 3, newer than this capstan reads (2)",
+        ),
+        ("\"x\"", "schema_version is \"x\"; this capstan reads 2"),
+        ("null", "schema_version is null; this capstan reads 2"),
+        ("2.0", "schema_version is 2.0; this capstan reads 2"),
+        (
+            "",
+            "no schema_version (this capstan reads 2; run capstan analyze again)",
+        ),
+    ] {
+        let edited = match found {
+            "" => text.replacen("\"schema_version\":2,", "", 1),
+            v => text.replacen(
+                "\"schema_version\":2,",
+                &format!("\"schema_version\":{v},"),
+                1,
+            ),
+        };
+        let path = dir.join("edited.json");
+        std::fs::write(&path, edited).unwrap();
+        let from = path.to_str().unwrap();
+        let want = format!("{from}: {says}");
+        for g in given {
+            let mut a = vec!["predict", "--from", from];
+            a.extend(g);
+            a.extend(at);
+            let r = capstan(&a);
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert!(
+                !r.status.success(),
+                "schema_version {found:?} was accepted: {err}"
+            );
+            assert!(err.contains(&want), "{found:?} {g:?}: {err}");
+        }
+        let r = rig(from);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && err.contains(&want),
+            "rig {found:?}: {err}"
+        );
+    }
+    // A variance and a covariance of 1e999, written as text (JSON has no inf to write).
+    let cov = text.find("\"covariance\":[[").unwrap() + "\"covariance\":[[".len();
+    let first = cov + text[cov..].find(',').unwrap();
+    let second = first + 1 + text[first + 1..].find(',').unwrap();
+    for (what, range) in [
+        ("a variance", cov..first),
+        ("a covariance", first + 1..second),
+    ] {
+        let mut edited = text.clone();
+        edited.replace_range(range, "1e999");
+        let path = dir.join("inf.json");
+        std::fs::write(&path, edited).unwrap();
+        let from = path.to_str().unwrap();
+        let want = format!("{from}: prediction_model: covariance row 1 is not finite");
+        for g in given {
+            let mut a = vec!["predict", "--from", from];
+            a.extend(g);
+            a.extend(at);
+            let r = capstan(&a);
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert!(
+                !r.status.success() && err.contains(&want),
+                "{what} {g:?}: {err}"
+            );
+        }
+        let r = rig(from);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && err.contains(&want),
+            "rig {what}: {err}"
+        );
+    }
+    // The file as written still predicts (and the rig, at 540°, loads it).
+    let r = predict_at(good.to_str().unwrap(), "540", "5", &[]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -77,10 +77,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return validate(&args);
     }
     let t0 = Instant::now();
-    let ctx = report_context(&args)?;
+    let figures = figure_options(&args)?;
     // The data first (a file it refuses leaves no output directory behind), then the output
     // directory, locked and proved writable before the analysis, not after it.
     let ds = args.input.load()?;
+    let ctx = report_context(&args, figures)?;
     if let (Some(path), true) = (&args.input.data, force::is_force_session(&ds)) {
         // Force control: how the rig tracked its target, not the law (issue 43).
         return force::run(&args, path, &ctx);
@@ -155,9 +156,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// What the report needs besides the analysis: figure options (checked), provenance, and
-/// whether to compare with the thesis's Table 3.
-fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
+/// The figure options, checked (before the data are read, as they always were).
+fn figure_options(args: &Args) -> anyhow::Result<capstan_report::FigureOptions> {
     let figures = capstan_report::FigureOptions {
         formats: match &args.figures {
             Some(f) => capstan_report::Format::parse_list(f)?,
@@ -168,6 +168,17 @@ fn report_context(args: &Args) -> anyhow::Result<capstan_report::Context> {
         numbers: args.figure_numbers,
     };
     figures.check()?;
+    Ok(figures)
+}
+
+/// What the report needs besides the analysis: the figure options, provenance (the input's
+/// hash: read after the data, so that a file that cannot be read is said as every command that
+/// reads pairs says it, [`super::input::DataArgs::load`]), and whether to compare with the
+/// thesis's Table 3.
+fn report_context(
+    args: &Args,
+    figures: capstan_report::FigureOptions,
+) -> anyhow::Result<capstan_report::Context> {
     let provenance = args.input.provenance()?;
     let thesis = capstan_report::ThesisComparison::decide(
         crate::provenance::is_thesis(&provenance),

@@ -103,10 +103,10 @@ pub struct Args {
     /// Capstan diameter for the pairs, mm.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub diameter_mm: Option<f64>,
-    /// Drive voltage for the pairs, V.
+    /// Drive voltage for the pairs, V (at most the rig's 13.2 V).
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
-    /// The first run's number (runs the file does not number count up from it).
+    /// The first run's number, from 1 (runs the file does not number count up from it).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub run: u32,
     /// Print one JSON object (condition.json) on stdout.
@@ -150,6 +150,10 @@ fn read_options(a: &Args) -> ReadOptions {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let set = Settings::from_request(&request(&a))?;
+    if let Some(v) = a.drive_v {
+        let limits = crate::cli::predict::limits::RigLimits::firmware_defaults();
+        limits.check_drive_for(v, "the pairs would record a drive the rig cannot run")?;
+    }
     let names = ["pairs.csv", "levels.csv", "condition.json"];
     let mut out = crate::outputs::open_out(&a.out, "condition", &names)?.stage()?;
     let c = capstan_condition::condition_file(&a.raw, &read_options(&a), &set)?;

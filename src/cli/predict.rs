@@ -5,7 +5,7 @@
 //! rig's limits ([`limits`]). The model is read and checked by
 //! [`capstan_report::read_and_validate`]; see [`capstan_engine::analysis::prediction`].
 
-mod limits;
+pub mod limits;
 mod reverse;
 
 use anyhow::bail;

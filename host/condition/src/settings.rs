@@ -74,6 +74,10 @@ impl Settings {
         if let Some(v) = a.drive_v {
             in_range(&ranges::DRIVE_V, "--drive-v", v)?;
         }
+        if a.first_run == 0 {
+            let why = "--run 0: runs are numbered from 1 (the first run's number)".to_string();
+            return Err(option("--run", why));
+        }
         let (after, before) = Settings::firmware_windows();
         let after = a.window_after_ms.map_or(after, |m| m as f64 / 1e3);
         let before = a.window_before_ms.map_or(before, |m| m as f64 / 1e3);

@@ -106,6 +106,42 @@ fn the_model_read_back_is_the_one_written_and_each_defect_is_named() {
     for (e, p) in &cases {
         assert!(e.to_string().starts_with(&p.display().to_string()), "{e}");
     }
+    // The file's layout version: anything but the one written is its own error, typed with
+    // what stands there (a file without a model is named as that first: layout 1 had none).
+    let layout = capstan_report::metrics::METRICS_SCHEMA;
+    for (found, json) in [
+        (Some("1"), json!(1)),
+        (Some("3"), json!(3)),
+        (Some("\"x\""), json!("x")),
+        (Some("null"), Value::Null),
+        (Some("2.0"), json!(2.0)),
+        (None, Value::Null),
+    ] {
+        let (e, p) = edited("layout.json", &|w| match found {
+            Some(_) => w["schema_version"] = json.clone(),
+            None => {
+                w.as_object_mut().unwrap().remove("schema_version");
+            }
+        });
+        assert!(
+            matches!(&e, MetricsError::SchemaVersion { found: f, reads, .. }
+                if f.as_deref() == found && *reads == layout),
+            "{found:?}: {e}"
+        );
+        let said = e.to_string();
+        assert!(said.starts_with(&format!("{}: ", p.display())), "{said}");
+        assert!(
+            said.contains("schema_version")
+                && said.contains(&format!("this capstan reads {layout}"))
+                || said.contains(&format!("this capstan reads ({layout})")),
+            "{said}"
+        );
+    }
+    let (e, _) = edited("layout-nomodel.json", &|w| {
+        w.as_object_mut().unwrap().remove("prediction_model");
+        w["schema_version"] = json!(1);
+    });
+    assert!(matches!(e, MetricsError::NoPredictionModel { .. }), "{e}");
     let bad = write(&dir, "bad.json", "{\n  \"schema_version\": 2,\n  oops\n}");
     let e = read_and_validate(&bad).unwrap_err();
     assert!(matches!(e, MetricsError::NotJson { line: 3, .. }), "{e}");

@@ -53,10 +53,12 @@ pub fn check_wrap(w: f64) -> Result<(), OutOfRange> {
 }
 
 /// A drive voltage: 0 to the amplifier's full control voltage × its gain (13.2 V with the
-/// default calibration).
+/// default calibration), judged as the firmware judges the control voltage it is commanded
+/// ([`cord_protocol`]'s, in `f32`): 13.2 V itself is a drive the rig runs (in `f64`, 3.3 V of
+/// `f32` × 4 is 13.1999998 V, and 13.2 V was refused).
 pub fn check_drive_v(v: f64, calibration: &Calibration) -> Result<(), OutOfRange> {
-    let max_v = calibration.amp.full_scale_v as f64 * calibration.amp.amp_gain as f64;
-    let ok = v.is_finite() && v >= 0.0 && v <= max_v + 1e-9;
+    let control_v = (v / calibration.amp.amp_gain as f64) as f32;
+    let ok = v.is_finite() && v >= 0.0 && control_v <= calibration.amp.full_scale_v;
     let allowed = "must be 0 to 13.2 V (3.3 V of control × the amplifier's gain of 4)";
     in_range(ok, "drive voltage (V)", v, allowed)
 }
@@ -107,4 +109,30 @@ pub fn cord_plant(base: &PlantConfig, diameter_mm: f64, sensor_noise: bool) -> P
         plant.sensor.noise_sd_n = 0.0;
     }
     plant
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The default rig's top drive, 13.2 V, is accepted (the firmware runs it); a hundredth
+    /// of a volt more, a negative drive or NaN are not.
+    #[test]
+    fn the_top_drive_is_the_firmwares() {
+        let cal = Calibration::default();
+        assert!(check_drive_v(13.2, &cal).is_ok());
+        assert!(check_drive_v(0.0, &cal).is_ok());
+        for v in [13.21, 13.3, 24.0, -0.1, f64::NAN, f64::INFINITY] {
+            assert!(check_drive_v(v, &cal).is_err(), "{v}");
+        }
+        let p = cord_protocol(
+            &Protocol::default(),
+            &cal,
+            StepOrder::Monotone,
+            12.7,
+            360.0,
+            13.2,
+        );
+        assert!(p.amp_control_v <= cal.amp.full_scale_v);
+    }
 }

@@ -39,11 +39,20 @@ impl RigLimits {
 
     /// `--drive-v` beyond the drive's voltage is refused: the rig cannot run it.
     pub fn check_drive(&self, drive_v: f64) -> anyhow::Result<()> {
+        self.check_drive_for(
+            drive_v,
+            "the model cannot speak for a drive the rig cannot run",
+        )
+    }
+
+    /// `--drive-v` beyond the drive's voltage is refused, with what it would have done
+    /// (`consequence`, after the limit and where it comes from): what `predict` and
+    /// `condition` say.
+    pub fn check_drive_for(&self, drive_v: f64, consequence: &str) -> anyhow::Result<()> {
         if drive_v > self.drive_max_v + 1e-9 {
             anyhow::bail!(
                 "--drive-v {}: the rig's drive gives at most {} V (the firmware's full control \
-                 voltage times the amplifier's gain); the model cannot speak for a drive the rig \
-                 cannot run",
+                 voltage times the amplifier's gain); {consequence}",
                 capstan_data::ranges::shown(drive_v),
                 capstan_data::ranges::shown(self.drive_max_v)
             );

@@ -1,9 +1,8 @@
 //! `metrics.json`: every number of the report, as one typed object ([`Metrics`]) with its
 //! layout's version ([`METRICS_SCHEMA`]), written here ([`Metrics::to_json`]) and read back
 //! here ([`read_and_validate`]: what `capstan predict` and `capstan rig model` use, the
-//! prediction model, checked). The writer borrows from the analysis; the reader takes only
-//! what other commands rely on, so a file whose other sections a later version changed still
-//! predicts.
+//! prediction model, checked). The writer borrows from the analysis; the reader refuses a
+//! layout version other than [`METRICS_SCHEMA`], then takes only what other commands rely on.
 
 mod read;
 

@@ -30,6 +30,17 @@ pub enum MetricsError {
         /// What the JSON parser says.
         cause: serde_json::Error,
     },
+    /// The file's layout version (the top-level `schema_version`) is not the one this program
+    /// writes ([`super::METRICS_SCHEMA`]).
+    #[error("{}: {}", path.display(), version_said(found.as_deref(), *reads))]
+    SchemaVersion {
+        /// The file.
+        path: PathBuf,
+        /// What stands there, as JSON (`None`: no `schema_version`).
+        found: Option<String>,
+        /// The version this program writes and reads.
+        reads: u32,
+    },
     /// No `prediction_model` (a file of metrics schema 1, or not an analysis's).
     #[error("{}: no prediction_model (written by capstan analyze from metrics schema 2 on; run capstan analyze again)", path.display())]
     NoPredictionModel {
@@ -98,6 +109,24 @@ pub enum MetricsError {
         /// What is wrong.
         problem: ModelProblem,
     },
+}
+
+/// What a [`MetricsError::SchemaVersion`] says after the file's name: what stands there, what
+/// this program reads, and what to do (a newer file needs a newer capstan; any other, a new
+/// analysis).
+fn version_said(found: Option<&str>, reads: u32) -> String {
+    match found {
+        None => {
+            format!("no schema_version (this capstan reads {reads}; run capstan analyze again)")
+        }
+        Some(f) if f.parse::<u64>().is_ok_and(|n| n > u64::from(reads)) => format!(
+            "schema_version is {f}, newer than this capstan reads ({reads}): use the capstan \
+             that wrote it, or a newer one"
+        ),
+        Some(f) => {
+            format!("schema_version is {f}; this capstan reads {reads} (run capstan analyze again)")
+        }
+    }
 }
 
 /// What is wrong with a prediction model's numbers: which field, which value, and what an
@@ -203,8 +232,10 @@ pub struct MetricsRead {
     pub euler_eytelwein_mu: Option<f64>,
 }
 
-/// Read the prediction model of the `metrics.json` at `path`, and check it: its schema, that
-/// it has an interval, its fields, and its numbers ([`check`]).
+/// Read the prediction model of the `metrics.json` at `path`, and check it: the file's layout
+/// version (`schema_version`, after the model's presence, so that a file of layout 1 is named
+/// as one without a model), the model's schema, that it has an interval, its fields, and its
+/// numbers ([`check`]).
 pub fn read_and_validate(path: &Path) -> Result<MetricsRead, MetricsError> {
     let p = || path.to_path_buf();
     let text =
@@ -218,6 +249,14 @@ pub fn read_and_validate(path: &Path) -> Result<MetricsRead, MetricsError> {
     let Some(pm) = v.get("prediction_model") else {
         return Err(MetricsError::NoPredictionModel { path: p() });
     };
+    let layout = v.get("schema_version");
+    if layout.and_then(Value::as_u64) != Some(u64::from(super::METRICS_SCHEMA)) {
+        return Err(MetricsError::SchemaVersion {
+            path: p(),
+            found: layout.map(Value::to_string),
+            reads: super::METRICS_SCHEMA,
+        });
+    }
     let reads = u64::from(prediction::SCHEMA);
     match pm.get("schema").map(|s| (s, s.as_u64())) {
         Some((_, Some(s))) if s == reads => {}
