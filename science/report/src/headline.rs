@@ -375,6 +375,18 @@ mod tests {
     use capstan_engine::analysis::gain::{gain, GainVerdict};
     use capstan_engine::analysis::uncertainty::{CordErrors, Interval};
 
+    /// The thesis analysed (on two threads).
+    fn thesis() -> capstan_engine::analysis::Analysis {
+        capstan_engine::analysis::run(
+            &capstan_data::thesis_dataset(),
+            capstan_engine::analysis::Options {
+                threads: 2,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    }
+
     /// The thesis analysed, then the extended model's held-out predictions of the cords
     /// `failed` made not finite — what a fold that did not converge leaves (the thesis
     /// with 5 % of its rows' T1 and T2 swapped did this to every fold) — and the gain taken
@@ -411,14 +423,7 @@ mod tests {
     /// thesis analysis with its verdict turned to unexplained, built at the library's level.
     #[test]
     fn causes_beside_unexplained_structure_are_no_diagnosis_in_the_headline() {
-        let mut a = capstan_engine::analysis::run(
-            &capstan_data::thesis_dataset(),
-            capstan_engine::analysis::Options {
-                threads: 2,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let mut a = thesis();
         let clean = headline(&a).sentences.join(" ");
         assert!(clean.contains("The data establish that"), "{clean}");
         a.mechanisms.unexplained.flag = true;
@@ -436,14 +441,7 @@ mod tests {
 
     #[test]
     fn failed_folds_are_counted_apart_and_named_never_held_out_successes() {
-        let a = capstan_engine::analysis::run(
-            &capstan_data::thesis_dataset(),
-            capstan_engine::analysis::Options {
-                threads: 2,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let a = thesis();
         assert_eq!(a.gain.verdict, GainVerdict::NotEstablished);
         // Three cords' folds failed: named, counted apart, the test over the seven left.
         let s = with_failed(&a, &[0, 1, 4]);
@@ -464,14 +462,7 @@ mod tests {
 
     #[test]
     fn the_low_tension_misfit_is_said_where_the_extended_model_fails_there() {
-        let mut a = capstan_engine::analysis::run(
-            &capstan_data::thesis_dataset(),
-            capstan_engine::analysis::Options {
-                threads: 2,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let mut a = thesis();
         // The thesis: at the lowest step (T1 0.55 N on average) the model predicts T2 ≤ 0 for
         // 11 of 60 readings, down to −0.45 N, where every reading is at least 0.10 N.
         let h = headline(&a);
