@@ -182,7 +182,14 @@ pub fn gain(a: &Analysis, layout: &Layout) -> Result<Figure> {
     let bars = Bars {
         title: "RMSE of T2 by model".into(),
         value_label: "RMSE of T2 (N)".into(),
-        categories: a.models.iter().map(|m| model_label(&m.name)).collect(),
+        // "one mu" and "a mu per cord" stay together when a narrow figure wraps the name.
+        categories: (a.models.iter())
+            .map(|m| {
+                model_label(&m.name)
+                    .replace("one mu", "one\u{a0}mu")
+                    .replace("a mu per cord", "a\u{a0}mu\u{a0}per\u{a0}cord")
+            })
+            .collect(),
         groups: vec![
             ("in-sample".into(), RGBColor(0x55, 0x55, 0x55)),
             ("leave one cord out".into(), RGBColor(0x56, 0xB4, 0xE9)),
