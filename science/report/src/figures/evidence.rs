@@ -72,7 +72,7 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
                 })
                 .collect();
             panels.push(Panel {
-                title: format!("{name}, by {col}"),
+                title: format!("{name}, by\u{a0}{col}"),
                 x_label: x_label.into(),
                 y_label: "residual of T2 (N)".into(),
                 series,
