@@ -269,7 +269,11 @@ fn figures_have_one_colour_per_wrap_and_a_style_per_model() {
         }
     }
     // The gain is a grouped bar chart by model, named in words; Table 3 has no LOCO bar.
-    let gain = figure_body(&html, "gain");
+    // No-break spaces keep "one mu" together when a name wraps: read them as spaces.
+    let gain = figure_body(&html, "gain")
+        .replace('\u{a0}', " ")
+        .replace("&#160;", " ")
+        .replace("&nbsp;", " ");
     assert_eq!(
         gain.matches("class=\"mark bar\"").count(),
         7,
