@@ -60,7 +60,7 @@ struct Facts<'a> {
 fn cause_words(name: &str) -> &'static str {
     match name {
         "t2_offset" => "T2 needs an additive offset of {} (a zero error of the T2 sensor or a constant force lost on the load side: these data cannot tell which)",
-        "contact_heating" => "mu falls with the friction load the contact carries (contact heating: mu falls by a factor exp(−h·load memory), h = {} at the catalogue's assumed memory time τ; the data fix only h·τ and cannot tell heating from a friction law that depends on the load itself)",
+        "contact_heating" => "mu falls with the friction load T2 − T1 the contact carries (contact heating: at a steady load by a factor exp(−k·(T2 − T1)), k = {}{ci}; the data fix only k = h·τ, not the heating rate h and the contact's memory time τ apart, and cannot tell heating from a friction law that depends on the load T2 − T1 itself)",
         "t1_offset" => "the T1 reading carries an offset or a loss of {} on its path",
         "sensor_gain" => "the T2 force sensor's gain is {} times the T1 sensor's",
         "pressure_friction" => {
@@ -102,7 +102,10 @@ impl<'a> Facts<'a> {
                     .and_then(capstan_engine::fit::Param::from_effect);
                 Cause {
                     words: cause_words(c.name),
-                    row: p.and_then(|p| row(&format!("extended.{}", p.name()))),
+                    row: p.and_then(|p| {
+                        let (name, _) = crate::parameters::identified(p.name());
+                        row(&format!("extended.{name}"))
+                    }),
                 }
             })
             .collect();
@@ -139,6 +142,20 @@ impl Quote<'_> {
         text
     }
 
+    /// A parameter row's 95 % interval as the headline words it (", 95 % interval 0.0059 to
+    /// 0.0107 by the cord jackknife"), or nothing when the row has none.
+    fn interval(&mut self, k: usize, d: usize) -> String {
+        let r = &self.params[k];
+        match (r.ci95_lo, r.ci95_hi, r.key.starts_with("extended.")) {
+            (Some(lo), Some(hi), true) => {
+                let lo = self.num(lo, d, format!("/parameters/{k}/ci95_lo"));
+                let hi = self.num(hi, d, format!("/parameters/{k}/ci95_hi"));
+                format!(", 95 % interval {lo} to {hi} by the cord jackknife")
+            }
+            _ => String::new(),
+        }
+    }
+
     /// A parameter row's value with its unit ("−0.82 N").
     fn param(&mut self, k: usize, d: usize) -> String {
         let r = &self.params[k];
@@ -147,6 +164,14 @@ impl Quote<'_> {
             "1" => t,
             u => format!("{t} {u}"),
         }
+    }
+}
+
+/// Decimals that give a parameter three significant figures, at least four (0.0083 → 5).
+fn decimals(v: f64) -> usize {
+    match v.abs() {
+        x if x > 0.0 && x.is_finite() => (2 - x.log10().floor() as i64).clamp(4, 8) as usize,
+        _ => 4,
     }
 }
 
@@ -167,8 +192,19 @@ pub fn headline(a: &Analysis) -> Headline {
         .causes
         .iter()
         .map(|c| match c.row {
-            Some(k) => c.words.replacen("{}", &q.param(k, 4), 1),
-            None => c.words.replacen(" of {}", "", 1).replacen(" ({})", "", 1),
+            Some(k) => {
+                let d = decimals(params[k].value);
+                let w = c.words.replacen("{}", &q.param(k, d), 1);
+                match w.contains("{ci}") {
+                    true => w.replacen("{ci}", &q.interval(k, d), 1),
+                    false => w,
+                }
+            }
+            None => (c.words.replacen(" of {}", "", 1).replacen(" ({})", "", 1)).replacen(
+                ", k = {}{ci}",
+                "",
+                1,
+            ),
         })
         .collect();
     // The verdict layer's stance (`verdict::words`): causes are established only when nothing

@@ -78,8 +78,9 @@ fn technical_summary(h: &mut String, a: &Analysis) {
         h,
         "<li><code>capstan diagnose</code> on the same data (the same evidence engine): {} \
          (These are the evidence engine's values, every run its own mu; the headline and \
-         Table 1's first rows are the extended model's. The engine writes heating as \
-         heat_per_n = h·τ in 1/N; Table 1 gives h = heat_per_n/τ in 1/(N s), τ = {} s.)</li>",
+         Table 1's first rows are the extended model's. Both write heating as \
+         heat_per_n = k = h·τ in 1/N, what the data identify; h = k/τ at the catalogue's \
+         τ = {} s.)</li>",
         esc(&a.evidence.verdict),
         capstan_physics::HEAT_TAU_S
     );

@@ -62,6 +62,10 @@ pub fn describe(name: &str) -> (&'static str, &'static str) {
             "1/(N s)",
             "contact heating h: mu falls by exp(−h·H), H the friction load remembered (N s)",
         ),
+        "heat_per_n" => (
+            "1/N",
+            "contact heating k = h·τ: at a steady friction load T2 − T1, mu falls by exp(−k·(T2 − T1))",
+        ),
         "heat_tau_s" => ("s", "memory time of the friction load"),
         "t1_offset_n" => ("N", "zero offset (or path loss) of the T1 reading"),
         "t2_offset_n" => ("N", "additive offset of the T2 reading"),
@@ -82,26 +86,50 @@ pub fn rows(a: &Analysis) -> Vec<Row> {
     out
 }
 
+/// A model parameter as the data identify it: its table name and the factor from the model's
+/// value. Contact heating's h (1/(N s)) is fitted at the catalogue's assumed memory time τ,
+/// which window means cannot resolve: the data fix only k = h·τ (1/N), so the table gives k.
+pub(crate) fn identified(name: &str) -> (&str, f64) {
+    match name {
+        "heat_per_ns" => ("heat_per_n", capstan_physics::HEAT_TAU_S),
+        n => (n, 1.0),
+    }
+}
+
+/// What a heating row's note adds: h at the catalogue's τ, for a reader who wants it.
+fn heating_note(name: &str, k: f64) -> String {
+    match name {
+        "heat_per_n" => format!(
+            "; the data fix only k = h·τ: at the catalogue's assumed memory time τ = {} s, h = k/τ = {} 1/(N s)",
+            capstan_physics::HEAT_TAU_S,
+            crate::cells::fx(k / capstan_physics::HEAT_TAU_S, 4)
+        ),
+        _ => String::new(),
+    }
+}
+
 /// Each extended-model value, ± t(folds − 1) times its cord-jackknife SE.
 fn extended_rows(a: &Analysis, out: &mut Vec<Row>) {
     let pm = &a.prediction_model;
     let t_cords = t95(pm.folds.saturating_sub(1));
     for v in &a.extended.values {
-        let (unit, words) = describe(&v.name);
-        let half = t_cords * v.jackknife_se;
+        let (name, scale) = identified(&v.name);
+        let (unit, words) = describe(name);
+        let (value, se) = (v.value * scale, v.jackknife_se * scale);
+        let half = t_cords * se;
         out.push(Row {
-            key: format!("extended.{}", v.name),
+            key: format!("extended.{name}"),
             quantity: words.into(),
             source: "extended model".into(),
-            value: v.value,
-            se: fin(v.jackknife_se),
+            value,
+            se: fin(se),
             unit,
-            ci95_lo: fin(v.value - half),
-            ci95_hi: fin(v.value + half),
+            ci95_lo: fin(value - half),
+            ci95_hi: fin(value + half),
             note: if pm.folds >= 2 {
-                format!("value ± t({})·SE, SE from the cord jackknife over the leave-one-cord-out refits (cords as the independent units)", pm.folds - 1)
+                format!("value ± t({})·SE, SE from the cord jackknife over the leave-one-cord-out refits (cords as the independent units){}", pm.folds - 1, heating_note(name, value))
             } else {
-                "no interval: the cord jackknife needs two cords or more".to_string()
+                format!("no interval: the cord jackknife needs two cords or more{}", heating_note(name, value))
             },
         });
     }
@@ -274,16 +302,13 @@ fn evidence_rows(a: &Analysis, out: &mut Vec<Row>) {
         ) else {
             continue;
         };
-        // The catalogue's heating value is h·τ; the model's is h.
-        let scale = if kind == capstan_physics::EffectKind::ContactHeating {
-            1.0 / capstan_physics::HEAT_TAU_S
-        } else {
-            1.0
-        };
-        let (value, se) = (raw * scale, se * scale);
-        let (unit, words) = describe(p.name());
+        // The catalogue's value is what the data identify (heating's k = h·τ, as the table
+        // gives it).
+        let (value, se) = (raw, se);
+        let (name, _) = identified(p.name());
+        let (unit, words) = describe(name);
         out.push(Row {
-            key: format!("evidence.{}", p.name()),
+            key: format!("evidence.{name}"),
             quantity: words.into(),
             source: "evidence engine".into(),
             value,
@@ -291,7 +316,7 @@ fn evidence_rows(a: &Analysis, out: &mut Vec<Row>) {
             unit,
             ci95_lo: fin(value - 1.96 * se),
             ci95_hi: fin(value + 1.96 * se),
-            note: format!("value ± 1.96·SE with runs as clusters; it differs from the extended model's row because the evidence engine gives every run its own mu (the extended model one mu per cord, shrunk), and a sensor or heating term trades off against mu differently in the two{}", if scale != 1.0 { format!("; the catalogue value {} = h·τ (τ = {} s) is shown as h", crate::cells::fx(raw, 5), capstan_physics::HEAT_TAU_S) } else { String::new() }),
+            note: format!("value ± 1.96·SE with runs as clusters; it differs from the extended model's row because the evidence engine gives every run its own mu (the extended model one mu per cord, shrunk), and a sensor or heating term trades off against mu differently in the two{}", heating_note(name, value)),
         });
     }
 }
