@@ -6,7 +6,7 @@
 
 mod condition_support;
 
-use condition_support::{capstan, csv_rows, simulate_runs, tmp, Noise};
+use condition_support::{capstan, condition_at, csv_rows, simulate_runs, tmp, Noise};
 use std::path::Path;
 
 /// The thesis logger: 30 Hz.
@@ -88,19 +88,11 @@ fn check_order(order: &str) {
     let export = dir.join("run1.txt");
     std::fs::write(&export, logger_pro_export(&raw, 11)).unwrap();
     let out = dir.join("pairs");
-    let o = capstan(&[
-        "condition",
-        export.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-        "--diameter-mm",
-        "12.7",
-        "--drive-v",
-        "10",
-        "--json",
-    ]);
+    let o = condition_at(
+        &export,
+        &out,
+        &["--diameter-mm", "12.7", "--drive-v", "10", "--json"],
+    );
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{order}: {stderr}");
     assert!(stderr.contains("as logger-pro"), "{stderr}");
@@ -131,18 +123,11 @@ fn check_order(order: &str) {
     }
     // Placed by the protocol instead of found: the firmware's windows, the same pairs.
     let proto = dir.join("protocol");
-    let o = capstan(&[
-        "condition",
-        export.to_str().unwrap(),
-        "--out",
-        proto.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-        "--first-change-s",
-        "10.5",
-        "--dwell-s",
-        "10",
-    ]);
+    let o = condition_at(
+        &export,
+        &proto,
+        &["--first-change-s", "10.5", "--dwell-s", "10"],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for ((step, n, t1, sd1, _, _, _), (_, fw1, _)) in levels(&proto).iter().zip(&fw_pairs) {
         let tol = 4.0 * sd1 / n.sqrt() + 0.005;
@@ -190,16 +175,7 @@ fn a_level_that_cannot_be_found_is_reported_never_dropped() {
     std::fs::write(&export, cut).unwrap();
     let run = |extra: &[&str], out: &str| {
         let out = dir.join(out);
-        let mut args = vec![
-            "condition",
-            export.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--wrap-deg",
-            "360",
-        ];
-        args.extend(extra);
-        (capstan(&args), out)
+        (condition_at(&export, &out, extra), out)
     };
     let (o, out) = run(&[], "found");
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -239,14 +215,7 @@ fn bad_cells_are_named_by_file_line_and_column_and_units_are_honoured() {
     let dir = tmp("bad");
     let f = dir.join("daq.csv");
     std::fs::write(&f, "Time (ms),T1 [kgf],T2 [kgf]\n0,0.1,0.2\n33,0.1,zero\n").unwrap();
-    let o = capstan(&[
-        "condition",
-        f.to_str().unwrap(),
-        "--out",
-        dir.join("o").to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-    ]);
+    let o = condition_at(&f, &dir.join("o"), &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
@@ -255,14 +224,7 @@ fn bad_cells_are_named_by_file_line_and_column_and_units_are_honoured() {
     );
     // Ambiguous force columns: the user is asked to name them.
     std::fs::write(&f, "time,a (N),b (N)\n0,1,2\n").unwrap();
-    let o = capstan(&[
-        "condition",
-        f.to_str().unwrap(),
-        "--out",
-        dir.join("o").to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-    ]);
+    let o = condition_at(&f, &dir.join("o"), &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("--t1-column"), "{stderr}");
     // Units: kgf and ms, read as N and s.
@@ -276,14 +238,7 @@ fn bad_cells_are_named_by_file_line_and_column_and_units_are_honoured() {
     }
     std::fs::write(&f, s).unwrap();
     let out = dir.join("units");
-    let o = capstan(&[
-        "condition",
-        f.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-    ]);
+    let o = condition_at(&f, &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     let lv = levels(&out);
@@ -301,14 +256,7 @@ fn bad_cells_are_named_by_file_line_and_column_and_units_are_honoured() {
 fn recondition(dir: &Path, fw_pairs: &[(u32, f64, f64)]) {
     let raw = dir.join("sim/raw/d12.7_w360_v10_run1.csv");
     let out = dir.join("again");
-    let o = capstan(&[
-        "condition",
-        raw.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-    ]);
+    let o = condition_at(&raw, &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let lv = levels(&out);
     assert_eq!(lv.len(), 12);
@@ -347,18 +295,11 @@ fn our_raw_log_reconditioned_gives_the_firmwares_pairs_and_other_windows_on_requ
     recondition(&dir, &fw_pairs);
     let raw = dir.join("sim/raw/d12.7_w360_v10_run1.csv");
     let out = dir.join("late");
-    let o = capstan(&[
-        "condition",
-        raw.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-        "--window-after-ms",
-        "5000",
-        "--window-before-ms",
-        "500",
-    ]);
+    let o = condition_at(
+        &raw,
+        &out,
+        &["--window-after-ms", "5000", "--window-before-ms", "500"],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(out.join("levels.csv")).unwrap();
     for row in text.lines().skip(1) {
@@ -390,39 +331,47 @@ fn zero_levels_are_refused_at_the_command_line() {
     assert!(!out.exists(), "refused, yet {} was made", out.display());
 }
 
-/// `--drive-v` above the rig's drive (the 13.2 V `simulate` and `predict` refuse) and `--run 0`
-/// (runs are numbered from 1) are refused by name before anything is written; an adversarial
-/// pass found both conditioned with exit 0. The limit itself is a drive the rig runs.
+/// `--drive-v` outside the rig's drive (0 to the 13.2 V `simulate` and `predict` refuse: a
+/// negative or non-finite voltage too) and `--run 0` (runs are numbered from 1) are refused by
+/// name before anything is written; an adversarial pass found them conditioned with exit 0.
+/// The top itself is a drive the rig runs.
 #[test]
 fn a_drive_the_rig_cannot_run_and_run_zero_are_refused() {
     let dir = tmp("drive-run");
     simulate(&dir, "monotone");
     let raw = dir.join("sim/raw/d12.7_w360_v10_run1.csv");
-    let condition = |out: &Path, more: &[&str]| {
-        let mut a = vec![
-            "condition",
-            raw.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--wrap-deg",
-            "360",
-        ];
-        a.extend(more);
-        capstan(&a)
-    };
     for (more, says) in [
         (
             ["--drive-v", "99"],
-            "--drive-v 99: the rig's drive gives at most 13.2 V",
+            "--drive-v 99: the rig's drive gives 0 to 13.2 V",
         ),
         (
             ["--drive-v", "13.3"],
-            "--drive-v 13.3: the rig's drive gives at most 13.2 V",
+            "--drive-v 13.3: the rig's drive gives 0 to 13.2 V",
+        ),
+        // Below 0 V (and no number at all) is outside the drive too, said in the same words.
+        (
+            ["--drive-v", "-1"],
+            "--drive-v -1: the rig's drive gives 0 to 13.2 V (the firmware's full control \
+             voltage times the amplifier's gain); the pairs would record a drive the rig cannot \
+             run",
+        ),
+        (
+            ["--drive-v", "-0.01"],
+            "--drive-v -0.01: the rig's drive gives 0 to 13.2 V",
+        ),
+        (
+            ["--drive-v", "inf"],
+            "--drive-v inf: the rig's drive gives 0 to 13.2 V",
+        ),
+        (
+            ["--drive-v", "nan"],
+            "--drive-v NaN: the rig's drive gives 0 to 13.2 V",
         ),
         (["--run", "0"], "--run 0: runs are numbered from 1"),
     ] {
         let out = dir.join("refused");
-        let o = condition(&out, &more);
+        let o = condition_at(&raw, &out, &more);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{more:?} was accepted: {err}");
         assert!(err.contains(says), "{more:?}: {err}");
@@ -433,7 +382,7 @@ fn a_drive_the_rig_cannot_run_and_run_zero_are_refused() {
         );
     }
     let out = dir.join("top");
-    let o = condition(&out, &["--drive-v", "13.2", "--run", "1"]);
+    let o = condition_at(&raw, &out, &["--drive-v", "13.2", "--run", "1"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let pairs = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
     let header: Vec<&str> = pairs.lines().next().unwrap().split(',').collect();
@@ -453,18 +402,11 @@ fn a_wrong_first_change_is_caught_in_every_window() {
     let export = dir.join("run1.txt");
     std::fs::write(&export, logger_pro_export(&raw, 5)).unwrap();
     let out = dir.join("late");
-    let o = capstan(&[
-        "condition",
-        export.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-        "--first-change-s",
-        "15.5",
-        "--dwell-s",
-        "10",
-    ]);
+    let o = condition_at(
+        &export,
+        &out,
+        &["--first-change-s", "15.5", "--dwell-s", "10"],
+    );
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{stderr}");
     let lv = levels(&out);
@@ -499,14 +441,7 @@ fn interleaved_runs_in_time_order_stay_two_runs() {
     let file = dir.join("both.csv");
     std::fs::write(&file, text).unwrap();
     let out = dir.join("pairs");
-    let o = capstan(&[
-        "condition",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-    ]);
+    let o = condition_at(&file, &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     let lv = levels(&out);
@@ -543,14 +478,7 @@ fn a_time_in_milliseconds_read_as_seconds_is_named() {
     }
     std::fs::write(&f, s).unwrap();
     let out = dir.join("out");
-    let o = capstan(&[
-        "condition",
-        f.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-    ]);
+    let o = condition_at(&f, &out, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
     assert!(

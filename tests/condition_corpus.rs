@@ -13,7 +13,7 @@
 
 mod condition_support;
 
-use condition_support::{capstan, csv_rows, simulate_runs, tmp, Noise, Raw};
+use condition_support::{capstan, condition_at, csv_rows, simulate_runs, tmp, Noise, Raw};
 use std::path::Path;
 
 const HZ: f64 = 30.0;
@@ -202,20 +202,9 @@ fn check(dir: &Path, e: &Export) {
     let file = dir.join(e.name);
     std::fs::write(&file, &e.text).unwrap();
     let out = dir.join(format!("{}-pairs", e.name));
-    let mut args = vec![
-        "condition",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-        "--diameter-mm",
-        "12.7",
-        "--drive-v",
-        "10",
-    ];
-    args.extend(&e.args);
-    let o = capstan(&args);
+    let mut more = vec!["--diameter-mm", "12.7", "--drive-v", "10"];
+    more.extend(&e.args);
+    let o = condition_at(&file, &out, &more);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{}: {stderr}", e.name);
     let got = levels(&out);
@@ -329,16 +318,7 @@ fn one_run_of_several_and_a_header_row_on_request() {
     let csv = dir.join("lp.csv");
     std::fs::write(&csv, logger_pro_csv(&a, &b)).unwrap();
     let out = dir.join("run2");
-    let o = capstan(&[
-        "condition",
-        csv.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-        "--time-column",
-        "Run 2: Time",
-    ]);
+    let o = condition_at(&csv, &out, &["--time-column", "Run 2: Time"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(stderr.contains("only Run 2 converted"), "{stderr}");
@@ -349,30 +329,12 @@ fn one_run_of_several_and_a_header_row_on_request() {
     std::fs::write(&daq_file, daq(&[&a])).unwrap();
     for opt in [["--skip-rows", "6"], ["--header-row", "7"]] {
         let out = dir.join(format!("daq{}", opt[0]));
-        let o = capstan(&[
-            "condition",
-            daq_file.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--wrap-deg",
-            "360",
-            opt[0],
-            opt[1],
-        ]);
+        let o = condition_at(&daq_file, &out, &[opt[0], opt[1]]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         assert_eq!(levels(&out).len(), 12);
     }
     // A header that is not the header: said, with the header's columns.
-    let o = capstan(&[
-        "condition",
-        daq_file.to_str().unwrap(),
-        "--out",
-        dir.join("bad").to_str().unwrap(),
-        "--wrap-deg",
-        "360",
-        "--header-row",
-        "2",
-    ]);
+    let o = condition_at(&daq_file, &dir.join("bad"), &["--header-row", "2"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);

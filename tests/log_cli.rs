@@ -132,6 +132,52 @@ fn stdin_works_and_flags_override_the_run_start_set_up() {
     assert_eq!(std::fs::read(dir.join("stream.defmt")).unwrap(), stream());
 }
 
+/// `--drive-v` is recorded into pairs.csv and summary.json: a voltage outside the rig's drive
+/// (0 to 13.2 V, as `condition`, `predict` and `simulate` say; it was checked only against
+/// ±1000 V) is refused by name before the directory is made, and the top of the range is a
+/// drive the rig runs, recorded as given.
+#[test]
+fn a_drive_the_rig_cannot_run_is_refused_and_its_top_recorded() {
+    let stream_path = log_support::data("qemu-run.defmt");
+    for (v, says) in [
+        (
+            "20",
+            "--drive-v 20: the rig's drive gives 0 to 13.2 V (the firmware's full control \
+             voltage times the amplifier's gain); pairs.csv would record a drive the rig cannot \
+             run",
+        ),
+        ("13.3", "--drive-v 13.3: the rig's drive gives 0 to 13.2 V"),
+        ("-1", "--drive-v -1: the rig's drive gives 0 to 13.2 V"),
+        (
+            "1e6",
+            "--drive-v 1000000: the rig's drive gives 0 to 13.2 V",
+        ),
+        ("nan", "--drive-v NaN: the rig's drive gives 0 to 13.2 V"),
+    ] {
+        let dir = out_dir("drive-refused");
+        let o = decode(&[], s(&stream_path), &dir, &["--drive-v", v], None);
+        let err = stderr(&o);
+        assert!(
+            !o.status.success() && err.contains(says),
+            "--drive-v {v}: {err}"
+        );
+        assert!(
+            !dir.exists(),
+            "--drive-v {v}: refused, yet {dir:?} was made"
+        );
+    }
+    let dir = out_dir("drive-top");
+    let o = decode(&[], s(&stream_path), &dir, &["--drive-v", "13.2"], None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let pairs = capstan_data::load_pairs(&dir.join("pairs.csv")).unwrap();
+    assert_eq!(pairs.pairs.len(), 4);
+    assert!(pairs.pairs.iter().all(|p| p.drive_v == Some(13.2)));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["runs"][0]["drive_v"]["from"], "flag");
+    assert_eq!(summary["runs"][0]["drive_v"]["value"], 13.2);
+}
+
 #[test]
 fn lost_records_are_reported_and_strict_makes_them_fail() {
     let frames = split(&stream());

@@ -373,8 +373,16 @@ fn predict_backwards_gives_the_t1_a_wanted_t2_needs() {
     // Beyond the rig's 13.2 V the command refuses, naming the limit; --sure must be a
     // probability.
     for (flag, value, says) in [
-        ("--drive-v", "100", "at most 13.2 V"),
-        ("--drive-v", "13.3", "at most 13.2 V"),
+        (
+            "--drive-v",
+            "100",
+            "--drive-v 100: the rig's drive gives 0 to 13.2 V",
+        ),
+        (
+            "--drive-v",
+            "13.3",
+            "--drive-v 13.3: the rig's drive gives 0 to 13.2 V",
+        ),
         ("--sure", "1", "--sure 1: a probability"),
     ] {
         let mut a = vec!["predict", "--from", from, "--t2-n", "30", flag, value];
@@ -416,6 +424,24 @@ fn another_layout_version_and_an_infinite_covariance_are_refused_by_name() {
             from,
         ])
     };
+    // `from` predicted from, either way, and loaded by the rig: each refused, saying `want`.
+    let refused = |from: &str, want: &str, what: &str| {
+        for g in given {
+            let mut a = vec!["predict", "--from", from];
+            a.extend(g);
+            a.extend(at);
+            let r = capstan(&a);
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert!(!r.status.success(), "{what} {g:?} was accepted: {err}");
+            assert!(err.contains(want), "{what} {g:?}: {err}");
+        }
+        let r = rig(from);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && err.contains(want),
+            "rig {what}: {err}"
+        );
+    };
     for (found, says) in [
         (
             "1",
@@ -444,24 +470,10 @@ fn another_layout_version_and_an_infinite_covariance_are_refused_by_name() {
         let path = dir.join("edited.json");
         std::fs::write(&path, edited).unwrap();
         let from = path.to_str().unwrap();
-        let want = format!("{from}: {says}");
-        for g in given {
-            let mut a = vec!["predict", "--from", from];
-            a.extend(g);
-            a.extend(at);
-            let r = capstan(&a);
-            let err = String::from_utf8_lossy(&r.stderr);
-            assert!(
-                !r.status.success(),
-                "schema_version {found:?} was accepted: {err}"
-            );
-            assert!(err.contains(&want), "{found:?} {g:?}: {err}");
-        }
-        let r = rig(from);
-        let err = String::from_utf8_lossy(&r.stderr);
-        assert!(
-            !r.status.success() && err.contains(&want),
-            "rig {found:?}: {err}"
+        refused(
+            from,
+            &format!("{from}: {says}"),
+            &format!("schema_version {found:?}"),
         );
     }
     // A variance and a covariance of 1e999, written as text (JSON has no inf to write).
@@ -478,23 +490,7 @@ fn another_layout_version_and_an_infinite_covariance_are_refused_by_name() {
         std::fs::write(&path, edited).unwrap();
         let from = path.to_str().unwrap();
         let want = format!("{from}: prediction_model: covariance row 1 is not finite");
-        for g in given {
-            let mut a = vec!["predict", "--from", from];
-            a.extend(g);
-            a.extend(at);
-            let r = capstan(&a);
-            let err = String::from_utf8_lossy(&r.stderr);
-            assert!(
-                !r.status.success() && err.contains(&want),
-                "{what} {g:?}: {err}"
-            );
-        }
-        let r = rig(from);
-        let err = String::from_utf8_lossy(&r.stderr);
-        assert!(
-            !r.status.success() && err.contains(&want),
-            "rig {what}: {err}"
-        );
+        refused(from, &want, what);
     }
     // The file as written still predicts (and the rig, at 540°, loads it).
     let r = predict_at(good.to_str().unwrap(), "540", "5", &[]);

@@ -103,7 +103,7 @@ pub struct Args {
     /// Capstan diameter for the pairs, mm.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub diameter_mm: Option<f64>,
-    /// Drive voltage for the pairs, V (at most the rig's 13.2 V).
+    /// Drive voltage for the pairs, V (0 to the rig's 13.2 V).
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
     /// The first run's number, from 1 (runs the file does not number count up from it).
@@ -149,11 +149,13 @@ fn read_options(a: &Args) -> ReadOptions {
 /// Run `capstan condition`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let set = Settings::from_request(&request(&a))?;
+    // The rig's drive range first: it is narrower than the data's, so a negative or
+    // infinite voltage is refused in the rig's words, as a too high one.
     if let Some(v) = a.drive_v {
         let limits = crate::cli::predict::limits::RigLimits::firmware_defaults();
         limits.check_drive_for(v, "the pairs would record a drive the rig cannot run")?;
     }
+    let set = Settings::from_request(&request(&a))?;
     let names = ["pairs.csv", "levels.csv", "condition.json"];
     let mut out = crate::outputs::open_out(&a.out, "condition", &names)?.stage()?;
     let c = capstan_condition::condition_file(&a.raw, &read_options(&a), &set)?;

@@ -125,7 +125,8 @@ pub struct Args {
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub wrap_deg: Option<f64>,
 
-    /// Drive-motor voltage for pairs.csv, V (default: amplifier gain × control voltage).
+    /// Drive-motor voltage for pairs.csv, V, 0 to the rig's 13.2 V (default: amplifier gain ×
+    /// control voltage).
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub drive_v: Option<f64>,
 

@@ -114,7 +114,7 @@ fn every_numeric_option_is_refused_outside_its_range_with_the_range() {
         (&["--diameter-mm", "1e6"], "at most 1000 mm"),
         (
             &["--drive-v", "1e6"],
-            "--drive-v 1000000: must be within ±1000 V",
+            "--drive-v 1000000: the rig's drive gives 0 to 13.2 V",
         ),
         (&["--duration", "0"], "--duration 0: must be greater than 0"),
         (

@@ -13,6 +13,20 @@ pub fn capstan(args: &[&str]) -> Output {
         .expect("capstan runs")
 }
 
+/// `capstan condition FILE --out OUT --wrap-deg 360` and `more`.
+pub fn condition_at(file: &Path, out: &Path, more: &[&str]) -> Output {
+    let mut a = vec![
+        "condition",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--wrap-deg",
+        "360",
+    ];
+    a.extend(more);
+    capstan(&a)
+}
+
 /// A fresh directory `capstan-cond-PID-NAME` in the system's temp directory.
 pub fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("capstan-cond-{}-{name}", std::process::id()));

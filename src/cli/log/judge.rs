@@ -6,8 +6,8 @@ use super::Args;
 use anyhow::bail;
 use capstan_log::{Outcome, Stop, Summary};
 
-/// The command line's values against the physical ranges (`data::ranges`), and `--from`
-/// checked, before anything is opened or written.
+/// The command line's values against the physical ranges (`data::ranges`; `--drive-v`
+/// against the rig's drive), and `--from` checked, before anything is opened or written.
 pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
     use capstan_data::ranges;
     if let Some(d) = args.duration {
@@ -16,11 +16,16 @@ pub(super) fn check_args(args: &Args) -> anyhow::Result<()> {
     for (flag, v, r) in [
         ("--diameter-mm", args.diameter_mm, &ranges::DIAMETER_MM),
         ("--wrap-deg", args.wrap_deg, &ranges::WRAP_DEG),
-        ("--drive-v", args.drive_v, &ranges::DRIVE_V),
     ] {
         if let Some(v) = v {
             r.option(flag, v)?;
         }
+    }
+    // The drive voltage recorded into the pairs: one the rig's drive gives (narrower than the
+    // data's range), as `condition` and `predict` check it.
+    if let Some(v) = args.drive_v {
+        let limits = crate::cli::predict::limits::RigLimits::firmware_defaults();
+        limits.check_drive_for(v, "pairs.csv would record a drive the rig cannot run")?;
     }
     if let Some(board) = &args.sim.sim {
         let (b, o) = (absolute(board), absolute(&args.out));

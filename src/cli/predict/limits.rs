@@ -37,7 +37,7 @@ impl RigLimits {
         }
     }
 
-    /// `--drive-v` beyond the drive's voltage is refused: the rig cannot run it.
+    /// `--drive-v` outside the drive's range is refused: the rig cannot run it.
     pub fn check_drive(&self, drive_v: f64) -> anyhow::Result<()> {
         self.check_drive_for(
             drive_v,
@@ -45,13 +45,13 @@ impl RigLimits {
         )
     }
 
-    /// `--drive-v` beyond the drive's voltage is refused, with what it would have done
-    /// (`consequence`, after the limit and where it comes from): what `predict` and
-    /// `condition` say.
+    /// `--drive-v` outside the drive's range (0 V to its full voltage; a negative, infinite
+    /// or NaN voltage too) is refused, with what it would have done (`consequence`, after
+    /// the range and where it comes from): what `predict`, `condition` and `log` say.
     pub fn check_drive_for(&self, drive_v: f64, consequence: &str) -> anyhow::Result<()> {
-        if drive_v > self.drive_max_v + 1e-9 {
+        if !(0.0..=self.drive_max_v + 1e-9).contains(&drive_v) {
             anyhow::bail!(
-                "--drive-v {}: the rig's drive gives at most {} V (the firmware's full control \
+                "--drive-v {}: the rig's drive gives 0 to {} V (the firmware's full control \
                  voltage times the amplifier's gain); {consequence}",
                 capstan_data::ranges::shown(drive_v),
                 capstan_data::ranges::shown(self.drive_max_v)
@@ -120,6 +120,12 @@ mod tests {
         assert!((l.sensor_top_n - 52.5).abs() < 1e-9, "{}", l.sensor_top_n);
         assert!((l.drive_max_v - 13.2).abs() < 1e-9, "{}", l.drive_max_v);
         assert!(l.check_drive(13.2).is_ok() && l.check_drive(13.3).is_err());
+        // Below 0 V, and a voltage that is not a number, are outside the drive's range too.
+        assert!(l.check_drive(0.0).is_ok() && l.check_drive(-0.01).is_err());
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let e = l.check_drive_for(v, "so").unwrap_err().to_string();
+            assert!(e.contains("the rig's drive gives 0 to 13.2 V"), "{e}");
+        }
         let span = Span {
             min: 0.1,
             max: 22.0,
