@@ -205,7 +205,17 @@ fn the_closed_loop_caption_says_where_a_simulated_run_ends_short() {
     let c = caption(&cut);
     assert!(c.contains("At 1 of the 10 cords shown"), "{c}");
     assert!(
-        c.contains(&format!("{:.1} N of {measured:.1} N", top(&cut[0].1))),
+        c.contains(&format!("T1 {:.1} N of {measured:.1} N", top(&cut[0].1))),
         "{c}"
     );
+    // Its T2 beside the rig's, and why the plant stops lower: the over-force limit.
+    let t2_sim = (cut[0].1.iter()).map(|p| p.0 * p.1).fold(0.0f64, f64::max);
+    let t2_measured = (a.obs.rows_of_group(cut[0].0).into_iter())
+        .map(|i| a.obs.rows[i].t2_n)
+        .fold(0.0f64, f64::max);
+    assert!(
+        c.contains(&format!("T2 {t2_sim:.1} N of {t2_measured:.1} N")),
+        "{c}"
+    );
+    assert!(c.contains("over-force limit"), "{c}");
 }

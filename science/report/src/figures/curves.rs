@@ -247,36 +247,49 @@ fn plant_causes(a: &Analysis) -> String {
 }
 
 /// Where the simulated runs end short of the measured T1 (below 90 % of the cord's largest), a
-/// caption sentence that says so and why: the plant's T1 at the servo's last angle is lower the
-/// more the capstan amplifies (its cord stretches on the T2 side too).
+/// caption sentence that says so and why: the plant's cord is fitted to the thesis's mean T1
+/// per step and wrap with T2 kept under the firmware's over-force limit (`sim/plant`'s
+/// `CordConfig`), which the thesis's most amplifying cords exceeded; so at the servo's last
+/// angle the plant reaches less T1 than the rig did, the more so the more the capstan amplifies.
 fn short_note(a: &Analysis, curves: &[SimCurve], shown: &[usize]) -> String {
     let top = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, f64::max);
-    let short: Vec<(usize, f64, f64)> = shown
+    // Per cord shown: its largest simulated and measured T1, and T2, N.
+    let short: Vec<(usize, (f64, f64), (f64, f64))> = shown
         .iter()
         .filter_map(|&g| {
-            let sim = top(&mut curves
-                .iter()
-                .filter(|(cg, _)| *cg == g)
-                .flat_map(|(_, v)| v.iter().map(|p| p.0)));
-            let measured = top(&mut a
-                .obs
-                .rows_of_group(g)
-                .into_iter()
-                .map(|i| a.obs.rows[i].t1_n));
-            (sim > 0.0 && sim < 0.9 * measured).then_some((g, sim, measured))
+            let sim = || {
+                curves
+                    .iter()
+                    .filter(|(cg, _)| *cg == g)
+                    .flat_map(|(_, v)| v)
+            };
+            let sim = (
+                top(&mut sim().map(|p| p.0)),
+                top(&mut sim().map(|p| p.0 * p.1)),
+            );
+            let rows = || a.obs.rows_of_group(g).into_iter().map(|i| &a.obs.rows[i]);
+            let measured = (
+                top(&mut rows().map(|r| r.t1_n)),
+                top(&mut rows().map(|r| r.t2_n)),
+            );
+            (sim.0 > 0.0 && sim.0 < 0.9 * measured.0).then_some((g, sim, measured))
         })
         .collect();
     let Some(&(g, sim, measured)) = short
         .iter()
-        .min_by(|x, y| (x.1 / x.2).total_cmp(&(y.1 / y.2)))
+        .min_by(|x, y| (x.1 .0 / x.2 .0).total_cmp(&(y.1 .0 / y.2 .0)))
     else {
         return String::new();
     };
     format!(
-        " At {} of the {} cords shown the simulated run ends short of the measured T1 (most at {}: {sim:.1} N of {measured:.1} N): the runs step the servo through the thesis's angles, and the plant's cord also stretches on the T2 side, so at the last angle the plant reaches less T1 than the rig did, the more so the more the capstan amplifies.",
+        " At {} of the {} cords shown the simulated run ends short of the measured T1 (most at {}: T1 {:.1} N of {:.1} N, T2 {:.1} N of {:.1} N). The runs step the servo through the thesis's angles, and the plant's cord is fitted to the thesis's mean T1 per step and wrap with T2 kept under the firmware's over-force limit, which the rig's most amplifying cords exceeded: so at the last angle the plant reaches less T1 than the rig did, the more so the more the capstan amplifies.",
         short.len(),
         shown.len(),
-        cord_title(a, g)
+        cord_title(a, g),
+        sim.0,
+        measured.0,
+        sim.1,
+        measured.1
     )
 }
 
