@@ -6,6 +6,8 @@
 //! * [`html`]: the page and its sections; [`tables`]: its tables; [`cells`]: the text in them
 //!   (numbers or a dash, escaped text).
 //! * [`headline`]: the plain headline; [`parameters`]: the one parameter table;
+//! * [`table_files`]: the tables as CSV and LaTeX files for a paper ([`tex_layout`]: their
+//!   layout for an 85 mm column or the 170 mm page; [`latex_text`]: the words as LaTeX);
 //! * [`next`]: the "Next experiment" section (from `capstan plan`);
 //! * [`tracking`]: the report of a force-control session (how the rig held its T2 target);
 //! * [`context`]: provenance and the thesis comparison; [`export`]: the figure files;
@@ -24,6 +26,7 @@ pub mod figures;
 pub mod files;
 pub mod headline;
 pub mod html;
+pub mod latex_text;
 pub mod metrics;
 pub mod next;
 pub mod parameters;
@@ -31,6 +34,7 @@ pub mod plot;
 pub mod stamp;
 pub mod table_files;
 pub mod tables;
+pub mod tex_layout;
 pub mod tracking;
 
 pub use capstan_engine::analysis::closed_loop::SimCurve;

@@ -4,7 +4,9 @@
 //! precision; the LaTeX is a booktabs `tabular` (ASCII only, `\usepackage{booktabs}`) with the
 //! interval methods as lettered notes under it, ready for `\input` inside a `table` float.
 
+pub use crate::latex_text::latex;
 use crate::parameters::Row;
+use crate::tex_layout::{p_col, tex_close, tex_header, tex_open};
 use capstan_data::text_cell;
 use capstan_engine::analysis::Analysis;
 use std::fmt::Write as _;
@@ -53,112 +55,6 @@ pub fn parameters_csv(rows: &[Row]) -> String {
         );
     }
     s
-}
-
-/// Text for LaTeX: its special characters escaped, the non-ASCII ones the report uses as
-/// commands, anything else as `?` (the file stays ASCII for any engine).
-pub fn latex(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    let chars: Vec<char> = s.chars().collect();
-    let mut i = 0;
-    while i < chars.len() {
-        let c = chars[i];
-        i += 1;
-        // A Greek letter with a one-character subscript ("σ_u"): one math group, σ_u.
-        if let (Some(g), Some('_'), Some(sub)) = (greek(c), chars.get(i), chars.get(i + 1)) {
-            if sub.is_ascii_alphanumeric() {
-                out.push_str(&format!("${g}_{{{sub}}}$"));
-                i += 2;
-                continue;
-            }
-        }
-        if let Some(g) = greek(c) {
-            out.push('$');
-            out.push_str(g);
-            out.push('$');
-            continue;
-        }
-        let r: &str = match c {
-            '\\' => "\\textbackslash{}",
-            '&' => "\\&",
-            '%' => "\\%",
-            '$' => "\\$",
-            '#' => "\\#",
-            '_' => "\\_",
-            '{' => "\\{",
-            '}' => "\\}",
-            '~' => "\\textasciitilde{}",
-            '^' => "\\textasciicircum{}",
-            '<' => "$<$",
-            '>' => "$>$",
-            '|' => "$|$",
-            '−' => "$-$",
-            '–' => "--",
-            '—' => "---",
-            '·' | '⋅' => "$\\cdot$",
-            '×' => "$\\times$",
-            '±' => "$\\pm$",
-            '≤' => "$\\leq$",
-            '≥' => "$\\geq$",
-            '≈' => "$\\approx$",
-            '°' => "$^\\circ$",
-            '²' => "$^2$",
-            '³' => "$^3$",
-            'ⁿ' => "$^n$",
-            '₁' => "$_1$",
-            '₂' => "$_2$",
-            '₀' => "$_0$",
-            '₃' => "$_3$",
-            '¹' => "$^1$",
-            '⁻' => "$^{-}$",
-            '√' => "$\\surd$",
-            '’' => "'",
-            '‘' => "`",
-            '“' => "``",
-            '”' => "''",
-            '…' => "\\ldots{}",
-            'é' => "\\'e",
-            c if c.is_ascii() => {
-                out.push(c);
-                continue;
-            }
-            _ => "?",
-        };
-        out.push_str(r);
-    }
-    out
-}
-
-/// A Greek letter's LaTeX command (math mode).
-fn greek(c: char) -> Option<&'static str> {
-    Some(match c {
-        'α' => "\\alpha",
-        'β' => "\\beta",
-        'γ' => "\\gamma",
-        'δ' => "\\delta",
-        'ε' => "\\varepsilon",
-        'η' => "\\eta",
-        'θ' => "\\theta",
-        'κ' => "\\kappa",
-        'λ' => "\\lambda",
-        'μ' | 'µ' => "\\mu",
-        'ν' => "\\nu",
-        'π' => "\\pi",
-        'ρ' => "\\rho",
-        'σ' => "\\sigma",
-        'τ' => "\\tau",
-        'φ' => "\\phi",
-        'χ' => "\\chi",
-        'ψ' => "\\psi",
-        'ω' => "\\omega",
-        'Γ' => "\\Gamma",
-        'Δ' => "\\Delta",
-        'Λ' => "\\Lambda",
-        'Σ' => "\\Sigma",
-        'Φ' => "\\Phi",
-        'Ω' => "\\Omega",
-        _ => return None,
-    })
 }
 
 /// A value ± SE and its interval in LaTeX, at the SE's precision (two significant digits), or
@@ -237,46 +133,58 @@ impl Notes {
     }
 
     fn tex(&self) -> String {
-        let mut s = String::from("\n\\par\\smallskip\n{\\footnotesize\n");
+        let mut s = String::new();
         for (k, n) in self.0.iter().enumerate() {
             let _ = writeln!(s, "\\textsuperscript{{{}}}~{}\\par", letter(k), latex(n));
         }
-        s.push_str("}\n");
         s
     }
 }
 
-/// The comment lines a table file opens with: what it is and where it came from.
-fn tex_header(what: &str, made_by: &str) -> String {
-    let ascii: String = made_by
-        .chars()
-        .map(|c| if c.is_ascii() { c } else { '?' })
-        .collect();
-    format!("% {what}\n% Made by {ascii}.\n% Needs \\usepackage{{booktabs}}; \\input it inside a table float.\n")
+/// The columns of `parameters.tex` after the quantity: value ± SE over its interval (narrow)
+/// or value ± SE, interval (wide); unit.
+fn parameter_columns() -> (Vec<String>, Vec<String>) {
+    let l = || String::from("l");
+    (vec![p_col(9.2, false), l()], vec![l(), l(), l()])
 }
 
-/// `parameters.tex`.
+/// `parameters.tex`: a row per quantity (the value ± SE over its 95 % interval), grouped under
+/// what it is an estimate of, the interval methods as lettered notes under the table.
 pub fn parameters_tex(rows: &[Row], made_by: &str) -> String {
     let mut s = tex_header(
-        "Every fitted quantity of capstan analyze: value +- standard error, 95 % interval, unit; the notes say how each interval is computed (or why two estimates of one quantity differ).",
+        "Every fitted quantity of capstan analyze, grouped by what it is an estimate of: value +- standard error over its 95 % interval, unit; the notes say how each interval is computed (or why two estimates of one quantity differ). With many cords it is taller than a column: then set it in a table* float.",
         made_by,
     );
-    s.push_str("\\begin{tabular}{@{}p{0.32\\linewidth}p{0.17\\linewidth}lll@{}}\n\\toprule\nQuantity & Estimate of & Value $\\pm$ SE & 95\\,\\% interval & Unit \\\\\n\\midrule\n");
+    let (narrow, wide) = parameter_columns();
+    s.push_str(&tex_open(&narrow, &wide));
+    s.push_str(
+        "Quantity & \\CapstanPair{Value $\\pm$ SE}{95\\,\\% interval} & Unit \\\\\n\\midrule\n",
+    );
     let mut notes = Notes::default();
+    let mut group: Option<&str> = None;
     for r in rows {
+        if group != Some(r.source.as_str()) {
+            if group.is_some() {
+                s.push_str("\\addlinespace\n");
+            }
+            let _ = writeln!(s, "\\textit{{{}}} \\\\", latex(&r.source));
+            group = Some(r.source.as_str());
+        }
         let ci = r.ci95_lo.zip(r.ci95_hi);
         let (value, interval) = tex_value(r.value, r.se, ci);
+        let mark = if r.note.is_empty() {
+            String::new()
+        } else {
+            notes.mark(&r.note)
+        };
         let _ = writeln!(
             s,
-            "{}{} & {} & {value} & {interval} & {} \\\\",
+            "{}{mark} & \\CapstanPair{{{value}}}{{{interval}}} & {} \\\\",
             latex(&r.quantity),
-            notes.mark(&r.note),
-            latex(&r.source),
             latex(r.unit)
         );
     }
-    s.push_str("\\bottomrule\n\\end{tabular}\n");
-    s.push_str(&notes.tex());
+    s.push_str(&tex_close(&notes.tex()));
     s
 }
 
@@ -316,23 +224,41 @@ pub fn models_csv(a: &Analysis) -> String {
     s
 }
 
-/// An RMSE with its interval: "$1.718$ [$1.43$, $2.02$]".
+/// An RMSE over its interval: "$1.718$\newline [$1.149$, $2.253$]".
 fn tex_rmse(w: Option<&capstan_engine::analysis::uncertainty::WithInterval>) -> String {
     match w {
         Some(w) if w.value.is_finite() => {
-            format!("${:.3}$ [${:.3}$, ${:.3}$]", w.value, w.ci95.lo, w.ci95.hi)
+            format!(
+                "\\CapstanOver{{${:.3}$}}{{[${:.3}$, ${:.3}$]}}",
+                w.value, w.ci95.lo, w.ci95.hi
+            )
         }
         _ => "not refittable".into(),
     }
 }
 
-/// `models.tex`.
+/// The columns of `models.tex` after the model: parameters, the two RMSEs (each over its
+/// interval when narrow, beside it when wide), AIC over BIC (narrow) or AIC, BIC (wide).
+fn model_columns() -> (Vec<String>, Vec<String>) {
+    let narrow = vec![
+        p_col(3.4, true),
+        p_col(6.4, false),
+        p_col(6.4, false),
+        p_col(3.4, true),
+    ];
+    let wide = ["r", "l", "l", "r", "r"].map(String::from).to_vec();
+    (narrow, wide)
+}
+
+/// `models.tex`: a row per model, each RMSE over its 95 % interval, AIC over BIC.
 pub fn models_tex(a: &Analysis, made_by: &str) -> String {
     let mut s = tex_header(
-        "The models of capstan analyze compared: RMSE of T2 in-sample and leaving one cord out, with 95 % intervals over cords.",
+        "The models of capstan analyze compared: RMSE of T2 in-sample and leaving one cord out, each over its 95 % interval over cords; AIC over BIC.",
         made_by,
     );
-    s.push_str("\\begin{tabular}{@{}lrllrr@{}}\n\\toprule\nModel & Parameters & RMSE $T_2$ (N) & LOCO RMSE $T_2$ (N) & AIC & BIC \\\\\n\\midrule\n");
+    let (narrow, wide) = model_columns();
+    s.push_str(&tex_open(&narrow, &wide));
+    s.push_str("Model & Param. & \\CapstanOver{RMSE $T_2$ (N)}{[95\\,\\% CI]} & \\CapstanOver{LOCO RMSE $T_2$ (N)}{[95\\,\\% CI]} & \\CapstanPair{AIC}{BIC} \\\\\n\\midrule\n");
     for m in &a.models {
         let params = if m.n_params_detail.edf_random > 0.0 {
             format!(
@@ -344,7 +270,7 @@ pub fn models_tex(a: &Analysis, made_by: &str) -> String {
         };
         let _ = writeln!(
             s,
-            "{} & {params} & {} & {} & ${:.1}$ & ${:.1}$ \\\\",
+            "{} & {params} & {} & {} & \\CapstanPair{{${:.1}$}}{{${:.1}$}} \\\\",
             latex(&crate::figures::model_label(&m.name)),
             tex_rmse(Some(&m.rmse_t2_uncertainty)),
             tex_rmse(m.loco_rmse_t2_uncertainty.as_ref()),
@@ -352,12 +278,7 @@ pub fn models_tex(a: &Analysis, made_by: &str) -> String {
             m.bic
         );
     }
-    s.push_str("\\bottomrule\n\\end{tabular}\n");
-    let _ = write!(
-        s,
-        "\n\\par\\smallskip\n{{\\footnotesize {}\\par}}\n",
-        latex(MODEL_NOTE)
-    );
+    s.push_str(&tex_close(&format!("{}\\par\n", latex(MODEL_NOTE))));
     s
 }
 
@@ -378,16 +299,6 @@ pub fn table_files(a: &Analysis, made_by: &str) -> Vec<(String, String)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn latex_escapes_and_stays_ascii() {
-        let t = latex("mu falls by exp(−h·H), σ_u = 5 % & {x} ~ 10°");
-        assert!(t.is_ascii(), "{t}");
-        assert_eq!(
-            t,
-            "mu falls by exp($-$h$\\cdot$H), $\\sigma_{u}$ = 5 \\% \\& \\{x\\} \\textasciitilde{} 10$^\\circ$"
-        );
-    }
 
     #[test]
     fn values_take_their_se_precision() {

@@ -219,3 +219,119 @@ fn the_closed_loop_caption_says_where_a_simulated_run_ends_short() {
     );
     assert!(c.contains("over-force limit"), "{c}");
 }
+
+/// A text's position (x, y, px) and what it says of a cord (a wrap in degrees, a diameter).
+type At<T> = (f64, f64, T);
+
+/// The first lines of figure 3's panel titles ("270°, D =" or "270°, D = 12.7 mm") as (x, y,
+/// wrap in degrees), and the (x, y, diameter text) of every text naming a diameter.
+fn cord_titles(svg: &str) -> (Vec<At<f64>>, Vec<At<String>>) {
+    let (mut titles, mut diameters) = (Vec::new(), Vec::new());
+    for t in svg.split("<text ").skip(1) {
+        let attr = |n: &str| -> f64 {
+            let s = t.split(&format!("{n}=\"")).nth(1).unwrap();
+            s[..s.find('"').unwrap()].parse().unwrap()
+        };
+        let body = &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()];
+        if !t.contains("font-weight=\"bold\"") {
+            continue;
+        }
+        if let Some((wrap, _)) = body.split_once("°,") {
+            titles.push((attr("x"), attr("y"), wrap.parse().unwrap()));
+        }
+        for d in ["12.7", "25.4"] {
+            if body.contains(d) {
+                diameters.push((attr("x"), attr("y"), d.to_string()));
+            }
+        }
+    }
+    (titles, diameters)
+}
+
+/// The distinct values of `v`, sorted.
+fn levels(v: impl Iterator<Item = f64>) -> Vec<f64> {
+    let mut l: Vec<f64> = v.collect();
+    l.sort_by(f64::total_cmp);
+    l.dedup();
+    l
+}
+
+/// Figure 3 (amplification per cord) draws the thesis's cords as the experiment's table: on
+/// the page (170 mm, at 8 and 9 pt) a row per diameter and a column per wrap (5 × 2, not 4
+/// across and wrapping to the next row mid-diameter); in an 85 mm column a column per
+/// diameter and a row per wrap; every text inside its canvas and clear of the others.
+#[test]
+fn figure_3_lays_the_cords_out_as_wrap_by_diameter() {
+    let a = thesis();
+    let wraps = [270.0, 360.0, 450.0, 630.0, 720.0];
+    let fonts = system_fonts();
+    for (width_mm, font_pt) in [(170.0, 8.0), (170.0, 9.0), (85.0, 8.0)] {
+        let opts = FigureOptions {
+            width_mm,
+            font_pt,
+            ..FigureOptions::default()
+        };
+        let figs = figures::all(a, None, &opts.layout()).unwrap();
+        let f = figs.iter().find(|f| f.id == "amp_vs_t1").unwrap();
+        let (titles, diameters) = cord_titles(&f.chart.svg);
+        assert_eq!(titles.len(), 10, "every cord at {width_mm} mm");
+        let (xs, ys) = (
+            levels(titles.iter().map(|t| t.0)),
+            levels(titles.iter().map(|t| t.1)),
+        );
+        // The axis along which the wraps run, and the one along which the diameters do.
+        let wide = width_mm > 100.0;
+        let (wrap_axis, d_axis) = if wide { (&xs, &ys) } else { (&ys, &xs) };
+        assert_eq!(
+            (wrap_axis.len(), d_axis.len()),
+            (5, 2),
+            "{width_mm} mm, {font_pt} pt: columns at {xs:?}, rows at {ys:?}"
+        );
+        for t in &titles {
+            let k = wrap_axis
+                .iter()
+                .position(|&v| v == if wide { t.0 } else { t.1 });
+            assert_eq!(wraps[k.unwrap()], t.2, "{width_mm} mm: {t:?}");
+        }
+        // 12.7 mm before 25.4 mm: above it on the page, left of it in a column.
+        let pos = |d: &str| {
+            let v: Vec<f64> = diameters
+                .iter()
+                .filter(|x| x.2 == d)
+                .map(|x| if wide { x.1 } else { x.0 })
+                .collect();
+            assert_eq!(v.len(), 5, "{d} at {width_mm} mm");
+            (
+                v.iter().cloned().fold(f64::MAX, f64::min),
+                v.iter().cloned().fold(f64::MIN, f64::max),
+            )
+        };
+        assert!(
+            pos("12.7").1 < pos("25.4").0,
+            "{width_mm} mm: {diameters:?}"
+        );
+        assert!(f.caption.contains(if wide {
+            "One row per capstan diameter, one column per wrap."
+        } else {
+            "One column per capstan diameter, one row per wrap."
+        }));
+        let svg = standalone_svg(f, None, Some(width_mm));
+        let problems = text_problems(&svg, &fonts, 0.5).unwrap();
+        assert!(
+            problems.is_empty(),
+            "{width_mm} mm, {font_pt} pt: {problems:?}"
+        );
+        let (_, h_mm) = svg_size_mm(&svg).unwrap();
+        assert!(h_mm <= MAX_HEIGHT_MM, "{h_mm} mm");
+    }
+    // Too narrow for a panel per diameter (40 mm): the reflowed grid, one panel across.
+    let narrow = FigureOptions {
+        width_mm: 40.0,
+        ..FigureOptions::default()
+    };
+    let figs = figures::all(a, None, &narrow.layout()).unwrap();
+    let f = figs.iter().find(|f| f.id == "amp_vs_t1").unwrap();
+    let (titles, _) = cord_titles(&f.chart.svg);
+    assert_eq!(levels(titles.iter().map(|t| t.0)).len(), 1, "{titles:?}");
+    assert!(!f.caption.contains("One row per") && !f.caption.contains("One column per"));
+}

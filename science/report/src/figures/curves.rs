@@ -165,9 +165,17 @@ pub fn t2_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> 
 
 /// Amplification T2/T1 against T1, one panel per cord (as many as fit a page).
 pub fn amp_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure> {
-    let grid = layout.grid(pal.len().clamp(1, 5), 260, 230);
     let legend = legend(a, pal);
-    let cords = panel_cords(a, layout, grid, &legend);
+    let titles: Vec<String> = (0..a.obs.groups.len()).map(|g| cord_title(a, g)).collect();
+    let refs: Vec<&str> = titles.iter().map(String::as_str).collect();
+    let (grid, cords, arranged) =
+        match super::cord_grid::cord_table(a, layout, (260, 230), &refs, "T1 (N)", &legend) {
+            Some(t) => (t.grid, t.cords, t.note),
+            None => {
+                let grid = layout.grid(pal.len().clamp(1, 5), 260, 230);
+                (grid, panel_cords(a, layout, grid, &legend), "")
+            }
+        };
     let mut panels: Vec<Panel> = cords
         .iter()
         .map(|&g| {
@@ -180,7 +188,7 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
         id: "amp_vs_t1",
         legend,
         chart: figure(&panels, grid.0, grid.1, grid.2)?,
-        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's friction law alone (with the cord's own mu, its offset and sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted offsets included: the T2 offset pulls it below 1 at low T1, and where it predicts T2 at or below zero, below 0, which no reading does: the constant offset does not hold at the lowest tensions). Step means over the cord's runs.{}{}", selection_note(cords.len(), a.obs.groups.len(), "cords"), super::drawn_note(a)),
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's friction law alone (with the cord's own mu, its offset and sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted offsets included: the T2 offset pulls it below 1 at low T1, and where it predicts T2 at or below zero, below 0, which no reading does: the constant offset does not hold at the lowest tensions). Step means over the cord's runs.{arranged}{}{}", selection_note(cords.len(), a.obs.groups.len(), "cords"), super::drawn_note(a)),
     })
 }
 

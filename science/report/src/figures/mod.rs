@@ -7,10 +7,12 @@
 //! where a data set has more cords, diameters or runs than fit, the figure draws an evenly
 //! spaced selection and its caption says so.
 //!
+//! * [`cord_grid`]: the cords' panels as the experiment's diameter × wrap table.
 //! * [`curves`]: T2 and amplification against T1 with the three models, and the closed loop.
 //! * [`evidence`]: residuals, the mechanism evidence, and the gain (RMSE by model).
 //! * [`tracking`]: force control's target against the measured T2, and its Bode plot.
 
+pub mod cord_grid;
 pub mod curves;
 pub mod evidence;
 pub mod tracking;

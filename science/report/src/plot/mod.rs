@@ -276,9 +276,19 @@ impl Layout {
             return (cols.max(1), w, h);
         };
         let cols = cols.min((total / MIN_PANEL_W).max(1) as usize).max(1);
+        self.grid_exact(cols, w, h, 1).unwrap_or((cols, w, h))
+    }
+
+    /// Exactly `cols` panels of `w`×`h` px reflowed to the layout's width (the height in
+    /// proportion, at least 150 px), or None when a panel would be narrower than `min_w` px.
+    pub fn grid_exact(&self, cols: usize, w: u32, h: u32, min_w: u32) -> Option<(usize, u32, u32)> {
+        let cols = cols.max(1);
+        let Some(total) = self.width_px else {
+            return Some((cols, w, h));
+        };
         let w2 = total / cols as u32;
         let h2 = ((f64::from(h) * f64::from(w2) / f64::from(w)) as u32).max(150);
-        (cols, w2, h2)
+        (w2 >= min_w).then_some((cols, w2, h2))
     }
 
     /// A single chart of `w`×`h` px at the layout's width.
