@@ -197,6 +197,12 @@ fn the_closed_loop_caption_says_where_a_simulated_run_ends_short() {
             .caption
     };
     assert!(!caption(&full).contains("ends short"), "{}", caption(&full));
+    // Every cord simulated: laid out as figure 3, the experiment's diameter × wrap table.
+    assert!(
+        caption(&full).contains("One row per capstan diameter, one column per wrap."),
+        "{}",
+        caption(&full)
+    );
     // Cord 0's run cut at 60 % of its measured T1: one cord short, named with its tensions.
     let top = |v: &[(f64, f64)]| v.iter().map(|p| p.0).fold(0.0f64, f64::max);
     let mut cut = full.clone();

@@ -210,7 +210,10 @@ pub const MAX_CORD_PANELS: usize = 24;
 /// The title of cord `g`'s panel.
 fn cord_title(a: &Analysis, g: usize) -> String {
     let grp = &a.obs.groups[g];
-    format!("{:.0}°, D = {}\u{a0}mm", grp.wrap_deg, grp.diameter_mm)
+    format!(
+        "{:.0}°, D\u{a0}=\u{a0}{}\u{a0}mm",
+        grp.wrap_deg, grp.diameter_mm
+    )
 }
 
 /// The cords drawn one panel each: all, or as many as fit a page (and
@@ -314,16 +317,25 @@ pub fn closed_loop(
         key: Key::Line(extended_style(INK)),
         label: "closed-loop simulation (firmware + extended plant)".into(),
     });
-    let grid = layout.grid(pal.len().clamp(1, 5), 260, 230);
     let mut simulated: Vec<usize> = curves.iter().map(|(g, _)| *g).collect();
     simulated.dedup();
     let titles: Vec<String> = simulated.iter().map(|&g| cord_title(a, g)).collect();
     let refs: Vec<&str> = titles.iter().map(String::as_str).collect();
-    let fit = panels_that_fit(layout, grid, &refs, "T1 (N)", &legend).min(MAX_CORD_PANELS);
-    let shown: Vec<usize> = evenly(simulated.len(), fit)
-        .into_iter()
-        .map(|k| simulated[k])
-        .collect();
+    // Every cord simulated: laid out as figure 3 lays them out (the experiment's table).
+    let table = (simulated.len() == a.obs.groups.len())
+        .then(|| super::cord_grid::cord_table(a, layout, (260, 230), &refs, "T1 (N)", &legend))
+        .flatten();
+    let (grid, shown, arranged) = match table {
+        Some(t) => (t.grid, t.cords, t.note),
+        None => {
+            let grid = layout.grid(pal.len().clamp(1, 5), 260, 230);
+            let fit = panels_that_fit(layout, grid, &refs, "T1 (N)", &legend).min(MAX_CORD_PANELS);
+            let shown = (evenly(simulated.len(), fit).into_iter())
+                .map(|k| simulated[k])
+                .collect();
+            (grid, shown, "")
+        }
+    };
     let mut panels: Vec<Panel> = shown
         .iter()
         .map(|&g| {
@@ -351,6 +363,6 @@ pub fn closed_loop(
         id: "closed_loop",
         legend,
         chart: figure(&panels, grid.0, grid.1, grid.2)?,
-        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{simulated_note}{}{}{}", plant_causes(a), short_note(a, curves, &shown), selection_note(shown.len(), simulated.len(), "simulated cords"), super::drawn_note(a)),
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{arranged}{simulated_note}{}{}{}", plant_causes(a), short_note(a, curves, &shown), selection_note(shown.len(), simulated.len(), "simulated cords"), super::drawn_note(a)),
     })
 }
