@@ -257,6 +257,9 @@ fn plant_causes(a: &Analysis) -> String {
         .collect()
 }
 
+/// A cord's largest T1 and largest T2, N.
+type Tops = (f64, f64);
+
 /// Where the simulated runs end short of the measured T1 (below 90 % of the cord's largest), a
 /// caption sentence that says so and why: the plant's cord is fitted to the thesis's mean T1
 /// per step and wrap with T2 kept under the firmware's over-force limit (`sim/plant`'s
@@ -264,8 +267,8 @@ fn plant_causes(a: &Analysis) -> String {
 /// angle the plant reaches less T1 than the rig did, the more so the more the capstan amplifies.
 fn short_note(a: &Analysis, curves: &[SimCurve], shown: &[usize]) -> String {
     let top = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, f64::max);
-    // Per cord shown: its largest simulated and measured T1, and T2, N.
-    let short: Vec<(usize, (f64, f64), (f64, f64))> = shown
+    // Per cord shown: its largest simulated and measured (T1, T2), N.
+    let short: Vec<(usize, Tops, Tops)> = shown
         .iter()
         .filter_map(|&g| {
             let sim = || {
