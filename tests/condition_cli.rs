@@ -222,6 +222,8 @@ fn bad_cells_are_named_by_file_line_and_column_and_units_are_honoured() {
         stderr.contains("daq.csv:3:3:") && stderr.contains("zero"),
         "{stderr}"
     );
+    // Refused before it wrote anything: no output directory is left behind.
+    assert!(!dir.join("o").exists(), "{stderr}");
     // Ambiguous force columns: the user is asked to name them.
     std::fs::write(&f, "time,a (N),b (N)\n0,1,2\n").unwrap();
     let o = condition_at(&f, &dir.join("o"), &[]);

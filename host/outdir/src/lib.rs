@@ -144,11 +144,8 @@ impl OutputDir {
     /// meanwhile finds it locked and stops; one that comes later makes a new one.
     pub fn abandon(self) {
         let _ = std::fs::remove_file(self.dir.join(LOCK));
-        let (dir, made) = (self.dir.clone(), self.made);
+        // Drop removes the directory if this process made it and it is empty.
         drop(self);
-        if made {
-            let _ = std::fs::remove_dir(&dir);
-        }
     }
 
     /// Recover what an earlier process left, and refuse files of others (see [`Self::open_with`]).
@@ -238,11 +235,19 @@ impl OutputDir {
 /// is removed while the lock is still held, and only if it is still the one at the path; a
 /// process that opened it meanwhile finds it locked, or gone from the path, and takes the lock
 /// again on a new file: [`take_lock`]).
+///
+/// A directory this process made and that is still empty when the lock goes (the command
+/// failed before it wrote anything: an unreadable input, a refused option) goes too, so a
+/// failed command leaves no trace. `remove_dir` removes only an empty directory: results, kept
+/// work and another process's lock file all keep it.
 impl Drop for OutputDir {
     fn drop(&mut self) {
         let path = self.dir.join(LOCK);
         if still_at_path(&self._lock, &path) {
             let _ = std::fs::remove_file(&path);
+        }
+        if self.made {
+            let _ = std::fs::remove_dir(&self.dir);
         }
     }
 }

@@ -140,6 +140,30 @@ fn a_second_writer_is_refused_with_the_holder_named() {
 }
 
 #[test]
+fn a_command_that_fails_before_writing_leaves_no_directory_it_made() {
+    let base = scratch();
+    let dir = base.join("new");
+    // Staged, then failed (dropped without a commit): the directory it made is gone.
+    let out = OutputDir::open(&dir, "test", &["a.txt"]).unwrap();
+    assert!(dir.is_dir(), "made and locked while the command runs");
+    drop(out.stage().unwrap());
+    assert!(!dir.exists(), "{:?}", visible(&base));
+    // Committed: it stays, with its results.
+    let mut s = OutputDir::open(&dir, "test", &["a.txt"])
+        .unwrap()
+        .stage()
+        .unwrap();
+    s.write("a.txt", b"a").unwrap();
+    s.commit().unwrap();
+    assert_eq!(std::fs::read(dir.join("a.txt")).unwrap(), b"a");
+    // A directory the user made is never removed, empty or not.
+    let theirs = base.join("theirs");
+    std::fs::create_dir(&theirs).unwrap();
+    drop(OutputDir::open(&theirs, "test", &["a.txt"]).unwrap());
+    assert!(theirs.is_dir());
+}
+
+#[test]
 fn a_finished_command_leaves_its_results_and_no_lock_file() {
     let dir = scratch();
     let out = OutputDir::open(&dir, "test", &["a.txt"]).unwrap();
