@@ -97,7 +97,7 @@ pub(crate) fn identified(name: &str) -> (&str, f64) {
 }
 
 /// What a heating row's note adds: h at the catalogue's τ, for a reader who wants it.
-fn heating_note(name: &str, k: f64) -> String {
+pub(crate) fn heating_note(name: &str, k: f64) -> String {
     match name {
         "heat_per_n" => format!(
             "; the data fix only k = h·τ: at the catalogue's assumed memory time τ = {} s, h = k/τ = {} 1/(N s)",

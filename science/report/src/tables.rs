@@ -144,16 +144,21 @@ pub fn ln_amp_by_step(steps: &[StepResidual]) -> String {
 pub fn extended(a: &Analysis) -> String {
     let e = &a.extended;
     let se = |v: f64| fx(v, 5);
-    let mut h = String::from("<table><tr><th>value</th><th>estimate</th><th>cord-jackknife SE (cords as clusters)</th><th>evidence engine SE (runs as clusters)</th><th>note</th></tr>");
+    let mut h = String::from("<table><tr><th>value</th><th>estimate</th><th>unit</th><th>cord-jackknife SE (cords as clusters)</th><th>evidence engine SE (runs as clusters)</th><th>note</th></tr>");
     for v in &e.values {
+        // As Table 1 gives it: what the data identify (heating's k = h·τ, in 1/N).
+        let (name, scale) = crate::parameters::identified(&v.name);
+        let (unit, _) = crate::parameters::describe(name);
+        let note = v.note.clone() + &crate::parameters::heating_note(name, v.value * scale);
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            esc(&v.name),
-            fx(v.value, 5),
-            se(v.jackknife_se),
-            se(v.run_clustered_se),
-            esc(&v.note)
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(name),
+            fx(v.value * scale, 5),
+            esc(unit),
+            se(v.jackknife_se * scale),
+            se(v.run_clustered_se * scale),
+            esc(note.trim_start_matches("; "))
         );
     }
     h.push_str("</table>");

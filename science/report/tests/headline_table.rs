@@ -59,6 +59,14 @@ fn the_headline_quotes_the_first_listed_row_of_each_quantity_in_one_unit() {
             "{p} not quoted: {pointers:?}"
         );
     }
+    // The extended model's own table gives heating as Table 1 does: k in 1/N, not h.
+    let ext = capstan_report::tables::extended(&a);
+    let k = format!(
+        "<td>heat_per_n</td><td>{:.5}</td><td>1/N</td>",
+        rows[heat_row]["value"].as_f64().unwrap()
+    );
+    assert!(ext.contains(&k), "{k} not in {ext}");
+    assert!(!ext.contains("heat_per_ns"), "{ext}");
     // One unit per quantity, and each row names the model it belongs to.
     for (q, _, _) in &quoted {
         let same: Vec<&Value> = (rows.iter())

@@ -261,10 +261,10 @@ fn plant_causes(a: &Analysis) -> String {
 type Tops = (f64, f64);
 
 /// Where the simulated runs end short of the measured T1 (below 90 % of the cord's largest), a
-/// caption sentence that says so and why: the plant's cord is fitted to the thesis's mean T1
-/// per step and wrap with T2 kept under the firmware's over-force limit (`sim/plant`'s
-/// `CordConfig`), which the thesis's most amplifying cords exceeded; so at the servo's last
-/// angle the plant reaches less T1 than the rig did, the more so the more the capstan amplifies.
+/// caption sentence that says so and why: one cord spring for every cord, fitted to the
+/// thesis's mean T1 per step and wrap with T2 kept under the firmware's over-force limit
+/// (`sim/plant`'s `CordConfig`), which some of the thesis's cords exceeded; so at the servo's
+/// last angle the plant reaches less T1 than the largest the rig measured on the cord.
 fn short_note(a: &Analysis, curves: &[SimCurve], shown: &[usize]) -> String {
     let top = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, f64::max);
     // Per cord shown: its largest simulated and measured (T1, T2), N.
@@ -296,7 +296,7 @@ fn short_note(a: &Analysis, curves: &[SimCurve], shown: &[usize]) -> String {
         return String::new();
     };
     format!(
-        " At {} of the {} cords shown the simulated run ends short of the measured T1 (most at {}: T1 {:.1} N of {:.1} N, T2 {:.1} N of {:.1} N). The runs step the servo through the thesis's angles, and the plant's cord is fitted to the thesis's mean T1 per step and wrap with T2 kept under the firmware's over-force limit, which the rig's most amplifying cords exceeded: so at the last angle the plant reaches less T1 than the rig did, the more so the more the capstan amplifies.",
+        " At {} of the {} cords shown the simulated run ends short of the measured T1, below 90 % of the largest T1 measured on the cord (most at {}: T1 {:.1} N of {:.1} N, T2 {:.1} N of {:.1} N). The runs step the servo through the thesis's angles against one cord spring for every cord, fitted to the thesis's mean T1 per step and wrap (pooled over diameters and runs) with T2 kept under the firmware's over-force limit at 720°, which some of the rig's cords exceeded: so at the last angle the plant reaches less T1 than the largest the rig measured, the more so the more the capstan amplifies.",
         short.len(),
         shown.len(),
         cord_title(a, g),
