@@ -184,12 +184,41 @@ pub fn amp_vs_t1(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
         })
         .collect();
     share_y(&mut panels);
+    share_x_by_wrap(a, &cords, &mut panels);
     Ok(Figure {
         id: "amp_vs_t1",
         legend,
         chart: figure(&panels, grid.0, grid.1, grid.2)?,
-        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale. Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's friction law alone (with the cord's own mu, its offset and sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted offsets included: the T2 offset pulls it below 1 at low T1, and where it predicts T2 at or below zero, below 0, which no reading does: the constant offset does not hold at the lowest tensions). Step means over the cord's runs.{arranged}{}{}", selection_note(cords.len(), a.obs.groups.len(), "cords"), super::drawn_note(a)),
+        caption: format!("Amplification T2/T1 against T1 per cord, one colour per wrap, on one y-scale (the panels of one wrap on one T1 scale too). Points: the measured readings. Dashed: Euler-Eytelwein (one global mu, so a flat line); dotted: Table 3 (thesis data only); thick solid: the extended model's friction law alone (with the cord's own mu, its offset and sensor terms removed, against the true T1), which cannot fall below 1; thin solid: what the sensors would read under the extended model (its fitted offsets included: the T2 offset pulls it below 1 at low T1, and where it predicts T2 at or below zero, below 0, which no reading does: the constant offset does not hold at the lowest tensions). Step means over the cord's runs.{arranged}{}{}", selection_note(cords.len(), a.obs.groups.len(), "cords"), super::drawn_note(a)),
     })
+}
+
+/// One x-range for the panels of one wrap (`cords[k]` is panel k's cord): the diameters of a
+/// wrap compare at a glance, and a wrap's column of the cord table has one T1 scale.
+fn share_x_by_wrap(a: &Analysis, cords: &[usize], panels: &mut [Panel]) {
+    let wraps: Vec<u64> = (cords.iter())
+        .map(|&g| a.obs.groups[g].wrap_deg.to_bits())
+        .collect();
+    share_x_by(&wraps, panels);
+}
+
+/// One x-range for the panels of one `key` (panel k's is `keys[k]`): the range of all their
+/// series' x.
+fn share_x_by(keys: &[u64], panels: &mut [Panel]) {
+    let ranges: Vec<(f64, f64)> = (keys.iter())
+        .map(|key| {
+            let same = (panels.iter().zip(keys)).filter(|(_, k)| *k == key);
+            let xs = same
+                .flat_map(|(p, _)| p.series.iter())
+                .flat_map(|s| match s {
+                    Series::Points(xy, _) | Series::Line(xy, _) => xy.iter().map(|v| v.0),
+                });
+            crate::plot::finite_range(xs)
+        })
+        .collect();
+    for (p, r) in panels.iter_mut().zip(ranges) {
+        p.x_range = Some(r);
+    }
 }
 
 /// One y-range for every panel of a figure (the panels compare at a glance).
@@ -353,6 +382,7 @@ pub fn closed_loop(
         })
         .collect();
     share_y(&mut panels);
+    share_x_by_wrap(a, &shown, &mut panels);
     let n = a.obs.groups.len();
     let simulated_note = if simulated.len() < n {
         format!(
@@ -366,6 +396,32 @@ pub fn closed_loop(
         id: "closed_loop",
         legend,
         chart: figure(&panels, grid.0, grid.1, grid.2)?,
-        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap.{arranged}{simulated_note}{}{}{}", plant_causes(a), short_note(a, curves, &shown), selection_note(shown.len(), simulated.len(), "simulated cords"), super::drawn_note(a)),
+        caption: format!("Closed loop: the firmware run against the simulated plant with the extended model (per-cord mu{}), one run per cord; simulated amplification (thick line) over the measured points, one colour per wrap, on one y-scale (the panels of one wrap on one T1 scale too).{arranged}{simulated_note}{}{}{}", plant_causes(a), short_note(a, curves, &shown), selection_note(shown.len(), simulated.len(), "simulated cords"), super::drawn_note(a)),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two panels of one wrap take the range of both; a third, of another wrap, keeps its own.
+    #[test]
+    fn the_panels_of_one_wrap_share_their_x_range() {
+        let panel = |xs: &[f64]| Panel {
+            series: vec![Series::Points(
+                xs.iter().map(|&x| (x, 1.0)).collect(),
+                measured(INK),
+            )],
+            ..Panel::default()
+        };
+        let mut panels = vec![panel(&[0.0, 10.0]), panel(&[0.0, 20.0]), panel(&[1.0, 5.0])];
+        share_x_by(&[720, 630, 720], &mut panels);
+        let both = crate::plot::finite_range([0.0, 10.0, 1.0, 5.0].into_iter());
+        assert_eq!(panels[0].x_range, Some(both));
+        assert_eq!(panels[2].x_range, Some(both));
+        assert_eq!(
+            panels[1].x_range,
+            Some(crate::plot::finite_range([0.0, 20.0].into_iter()))
+        );
+    }
 }

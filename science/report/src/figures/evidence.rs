@@ -79,6 +79,7 @@ pub fn residuals(a: &Analysis, pal: &Palette, layout: &Layout) -> Result<Figure>
                 zero_line: true,
                 y_range: Some(y_range),
                 x_ticks: (col == "cord").then(|| cord_ticks.clone()),
+                ..Panel::default()
             });
         }
     }

@@ -41,11 +41,13 @@ pub(super) fn auto_ticks(lo: f64, hi: f64, n: usize) -> Vec<(f64, String)> {
 /// A panel's data ranges.
 pub(super) fn ranges(p: &Panel) -> ((f64, f64), (f64, f64)) {
     let pts = || p.series.iter().flat_map(|s| points(s).iter());
-    let x = finite_range(
-        pts()
-            .map(|v| v.0)
-            .chain(p.x_ticks.iter().flatten().map(|t| t.0)),
-    );
+    let x = p.x_range.unwrap_or_else(|| {
+        finite_range(
+            pts()
+                .map(|v| v.0)
+                .chain(p.x_ticks.iter().flatten().map(|t| t.0)),
+        )
+    });
     let y = p
         .y_range
         .unwrap_or_else(|| finite_range(pts().map(|v| v.1).chain(p.zero_line.then_some(0.0))));

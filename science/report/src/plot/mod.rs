@@ -108,6 +108,8 @@ pub struct Panel {
     pub zero_line: bool,
     /// Fixed y range (e.g. shared between panels) instead of the data's.
     pub y_range: Option<(f64, f64)>,
+    /// Fixed x range (e.g. shared by the panels of one wrap) instead of the data's.
+    pub x_range: Option<(f64, f64)>,
 }
 
 /// A chart: the SVG and its number of data layers.
