@@ -7,7 +7,7 @@
 //! Every number of the headline is listed with the JSON pointer of its value in
 //! `metrics.json` (`headline.numbers`), so that a test can check each against the file.
 
-use crate::cells::fx;
+use crate::cells::{fx, se_decimals};
 use capstan_engine::analysis::Analysis;
 use capstan_engine::evidence::adequacy;
 use serde::Serialize;
@@ -167,14 +167,6 @@ impl Quote<'_> {
     }
 }
 
-/// Decimals that give a parameter three significant figures, at least four (0.0083 → 5).
-fn decimals(v: f64) -> usize {
-    match v.abs() {
-        x if x > 0.0 && x.is_finite() => (2 - x.log10().floor() as i64).clamp(4, 8) as usize,
-        _ => 4,
-    }
-}
-
 /// The headline of `a`.
 pub fn headline(a: &Analysis) -> Headline {
     let params = crate::parameters::rows(a);
@@ -184,16 +176,17 @@ pub fn headline(a: &Analysis) -> Headline {
         params: &params,
     };
     let mut s = Vec::new();
-    let mu = f.mu_row.map_or("–".into(), |k| q.param(k, 4));
+    let at_se = |k: usize| se_decimals(params[k].value, params[k].se);
+    let mu = f.mu_row.map_or("–".into(), |k| q.param(k, at_se(k)));
     let rmse = q.num(f.baseline_rmse, 2, "/models/0/rmse_t2_n".into());
     let cord = q.num(f.cord_pct, 1, "/evidence/scatter/cord_pct".into());
-    s.push(format!("Euler-Eytelwein's law, T2 = T1·exp(mu·wrap angle) with one friction coefficient mu = {mu}, misses the measured T2 by {rmse} N (root mean square); with the causes below, mu still varies by {cord} % from cord to cord."));
+    s.push(format!("Euler-Eytelwein's law, T2 = T1·exp(mu·wrap angle) with one friction coefficient mu = {mu}, misses the measured T2 by {rmse} N (root mean square); with the causes below, mu still varies by {cord} % from cord to cord (the evidence engine's spread, every run its own mu; Table 1 gives the extended model's, whose cord effects are shrunk)."));
     let parts: Vec<String> = f
         .causes
         .iter()
         .map(|c| match c.row {
             Some(k) => {
-                let d = decimals(params[k].value);
+                let d = at_se(k);
                 let w = c.words.replacen("{}", &q.param(k, d), 1);
                 match w.contains("{ci}") {
                     true => w.replacen("{ci}", &q.interval(k, d), 1),

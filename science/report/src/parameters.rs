@@ -60,11 +60,11 @@ pub fn describe(name: &str) -> (&'static str, &'static str) {
         "mu_log_slope_per_rad" => ("1/rad", "change of ln mu per radian of wrap"),
         "heat_per_ns" => (
             "1/(N s)",
-            "contact heating h: mu falls by exp(−h·H), H the friction load remembered (N s)",
+            "contact heating h: mu is multiplied by exp(−h·H), H the friction load remembered (N s)",
         ),
         "heat_per_n" => (
             "1/N",
-            "contact heating k = h·τ: at a steady friction load T2 − T1, mu falls by exp(−k·(T2 − T1))",
+            "contact heating k = h·τ: at a steady load, mu is multiplied by exp(−k·(T2 − T1))",
         ),
         "heat_tau_s" => ("s", "memory time of the friction load"),
         "t1_offset_n" => ("N", "zero offset (or path loss) of the T1 reading"),
@@ -209,7 +209,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("scatter.cord_ln_mu_sd", "cord-to-cord SD of ln mu", "1"),
         sigma_u,
         sd(sigma_u, df_u),
-        format!("the extended (mixed) model's σ_u, its cord effects shrunk to the parameter budget; not what capstan predict uses for a new cord; χ² interval on cords − 1 = {df_u:.0} degrees of freedom, as if the cord effects were seen without error (approximate: their shrinkage and noise are ignored)"),
+        format!("the extended (mixed) model's σ_u, its cord effects shrunk to the parameter budget; not what capstan predict uses for a new cord; χ² interval on cords − 1 = {df_u:.0} degrees of freedom, as if the cord effects were seen without error (approximate)"),
         "one cord, or σ_u at 0",
     ));
     let run_sd = shown((1.0 + s.run_pct / 100.0).ln(), s.run_pct);
@@ -222,7 +222,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         "no cord has two runs",
     ));
     let df_noise = noise_df(obs.len(), runs, s.lag1_autocorrelation);
-    let noise_method = format!("χ² interval on the within-run residuals' effective degrees of freedom, (rows − runs)·(1 − ρ)/(1 + ρ): {} with ρ = {:.2} their lag-1 autocorrelation; the absolute and proportional parts move together", dof_words(df_noise), s.lag1_autocorrelation);
+    let noise_method = format!("χ² interval on the within-run residuals' effective degrees of freedom, (rows − runs)·(1 − ρ)/(1 + ρ): {} with ρ = {:.2} their lag-1 autocorrelation", dof_words(df_noise), s.lag1_autocorrelation);
     out.push(component(
         ("noise.abs_n", "within-run noise, absolute part", "N"),
         s.noise_abs_n,
@@ -234,7 +234,8 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("noise.rel", "within-run noise, proportional part", "1"),
         s.noise_rel,
         sd(s.noise_rel, df_noise),
-        format!("fraction of T2; {noise_method}"),
+        "a fraction of T2; its interval as the absolute part's above (the two move together)"
+            .to_string(),
         "the part is at 0",
     ));
     // A new cord's error is predict's error model, fitted to the held-out residuals, not a
@@ -244,14 +245,14 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         source: "new-cord error model".into(),
         ..r
     };
-    out.push(error_model(component(
+    let mut error_rows = vec![error_model(component(
         ("new_cord_error.abs_n", "a new cord's error in T2, constant part a (SD² = a² + (b·T2)²)", "N"),
         nc.abs_n,
         None,
         format!("fitted to the held-out residuals of the whole procedure (every cord predicted by the causes chosen and fitted without it; {} cords) beyond the curve's own variance; in capstan predict's prediction interval", nc.cords),
         "not computed (a two-part fit to held-out residuals)",
-    )));
-    out.push(error_model(component(
+    ))];
+    error_rows.push(error_model(component(
         (
             "new_cord_error.rel",
             "a new cord's error in T2, part proportional to T2 (b)",
@@ -260,7 +261,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         nc.rel,
         None,
         "as above: the part that grows with T2".to_string(),
-        "not computed (a two-part fit to held-out residuals)",
+        "as above",
     )));
     let we = &pm.wrap_extrapolation_error;
     let edge_cords = if we.rows > 0 { edge_cords(a) } else { 0 };
@@ -268,7 +269,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("wrap_extrapolation_error.sd_n", "error of extrapolating in wrap (SD)", "N"),
         we.sd_n,
         excess_sd(we.heldout_rms_n, we.accounted_rms_n, edge_cords),
-        format!("what fits without the smallest or the largest wrap miss there beyond the curve's variance and a new cord's error (0 when nothing more, or with fewer than three wraps); in capstan predict's prediction interval at wraps outside the fitted ones; interval: χ² on those misses' mean square with the {edge_cords} cords at the smallest and largest wrap as its degrees of freedom, less what the other components account for, clamped at 0"),
+        format!("what fits without the smallest or the largest wrap miss there beyond the curve's variance and a new cord's error (0: nothing more, or fewer than three wraps); in capstan predict's interval outside the fitted wraps; χ² interval on those misses' mean square ({edge_cords} cords at the end wraps), less the other components, clamped at 0"),
         "not measured (fewer than three wraps)",
     ));
     let cord_pct = s.cord_pct;
@@ -277,9 +278,11 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("scatter.cord_pct", "cord-to-cord SD of mu, % of mu", "%"),
         cord_pct,
         sd(cord_pct, df_c),
-        format!("evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, which explains part of the cord differences by the named causes and shrinks the rest; χ² interval on Satterthwaite's {} for the cord component of the runs' mu (cords − 1 at most)", dof_words(df_c)),
+        format!("evidence engine (every run its own mu): the headline's figure; larger than the extended model's σ_u above, whose cord effects are shrunk; χ² interval on Satterthwaite's {} for the cord component of the runs' mu", dof_words(df_c)),
         "one cord, or the component at 0",
     ));
+    // After the variance components, so each source is one group of the table.
+    out.append(&mut error_rows);
 }
 
 /// The evidence engine's estimate of each named cause, where the extended model has the same
@@ -316,7 +319,7 @@ fn evidence_rows(a: &Analysis, out: &mut Vec<Row>) {
             unit,
             ci95_lo: fin(value - 1.96 * se),
             ci95_hi: fin(value + 1.96 * se),
-            note: format!("value ± 1.96·SE with runs as clusters; it differs from the extended model's row because the evidence engine gives every run its own mu (the extended model one mu per cord, shrunk), and a sensor or heating term trades off against mu differently in the two{}", heating_note(name, value)),
+            note: format!("value ± 1.96·SE with runs as clusters; it differs from the extended model's row because here every run has its own mu (there every cord, shrunk), and a sensor or heating term trades off against mu differently in the two{}", heating_note(name, value)),
         });
     }
 }

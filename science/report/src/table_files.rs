@@ -116,12 +116,15 @@ fn letter(k: usize) -> String {
     }
 }
 
-/// Notes under a table: each distinct text once, lettered in order of first use.
+/// Notes under a table: each distinct text once, lettered in order of first use. A note that
+/// is an earlier one followed by "; more" is marked with both letters, the second note holding
+/// only "more" (the extended model's heating row: its interval method, then h = k/τ), so no
+/// sentence is printed twice under one table.
 #[derive(Default)]
 struct Notes(Vec<String>);
 
 impl Notes {
-    fn mark(&mut self, text: &str) -> String {
+    fn letter_of(&mut self, text: &str) -> String {
         let k = match self.0.iter().position(|n| n == text) {
             Some(k) => k,
             None => {
@@ -129,7 +132,19 @@ impl Notes {
                 self.0.len() - 1
             }
         };
-        format!("\\textsuperscript{{{}}}", letter(k))
+        letter(k)
+    }
+
+    fn mark(&mut self, text: &str) -> String {
+        let shared = (self.0.iter()).find_map(|n| {
+            let rest = text.strip_prefix(n.as_str())?.strip_prefix("; ")?;
+            Some((n.clone(), rest.to_string()))
+        });
+        let letters = match shared {
+            Some((first, rest)) => format!("{},{}", self.letter_of(&first), self.letter_of(&rest)),
+            None => self.letter_of(text),
+        };
+        format!("\\textsuperscript{{{letters}}}")
     }
 
     fn tex(&self) -> String {
@@ -148,13 +163,37 @@ fn parameter_columns() -> (Vec<String>, Vec<String>) {
     (vec![p_col(9.2, false), l()], vec![l(), l(), l()])
 }
 
+/// Whether a row is one cord's own mu (`parameters-cords.tex`, apart: ten cords would make
+/// Table 1 taller than an 85 mm column).
+fn per_cord(r: &Row) -> bool {
+    r.key.starts_with("cord.")
+}
+
 /// `parameters.tex`: a row per quantity (the value ± SE over its 95 % interval), grouped under
-/// what it is an estimate of, the interval methods as lettered notes under the table.
+/// what it is an estimate of, the interval methods as lettered notes under the table; every
+/// row but the cords' own mu, which are [`cord_parameters_tex`].
 pub fn parameters_tex(rows: &[Row], made_by: &str) -> String {
-    let mut s = tex_header(
-        "Every fitted quantity of capstan analyze, grouped by what it is an estimate of: value +- standard error over its 95 % interval, unit; the notes say how each interval is computed (or why two estimates of one quantity differ). With many cords it is taller than a column: then set it in a table* float.",
+    let rows: Vec<&Row> = rows.iter().filter(|r| !per_cord(r)).collect();
+    rows_tex(
+        &rows,
+        "Every fitted quantity of capstan analyze but each cord's own mu (parameters-cords.tex), grouped by what it is an estimate of: value +- standard error over its 95 % interval, unit; the notes say how each interval is computed (or why two estimates of one quantity differ).",
         made_by,
-    );
+    )
+}
+
+/// `parameters-cords.tex`: each cord's own Euler-Eytelwein mu, as `parameters.tex` lays it out.
+pub fn cord_parameters_tex(rows: &[Row], made_by: &str) -> String {
+    let rows: Vec<&Row> = rows.iter().filter(|r| per_cord(r)).collect();
+    rows_tex(
+        &rows,
+        "Each cord's own Euler-Eytelwein mu from capstan analyze (the rest of Table 1 is parameters.tex): value +- standard error over its 95 % interval, unit; the note says how the interval is computed.",
+        made_by,
+    )
+}
+
+/// A parameter table of `rows` under the header `what`.
+fn rows_tex(rows: &[&Row], what: &str, made_by: &str) -> String {
+    let mut s = tex_header(what, made_by);
     let (narrow, wide) = parameter_columns();
     s.push_str(&tex_open(&narrow, &wide));
     s.push_str(
@@ -290,6 +329,10 @@ pub fn table_files(a: &Analysis, made_by: &str) -> Vec<(String, String)> {
         (
             "tables/parameters.tex".into(),
             parameters_tex(&rows, made_by),
+        ),
+        (
+            "tables/parameters-cords.tex".into(),
+            cord_parameters_tex(&rows, made_by),
         ),
         ("tables/models.csv".into(), models_csv(a)),
         ("tables/models.tex".into(), models_tex(a, made_by)),

@@ -52,7 +52,7 @@ pub fn gain(a: &Analysis) -> String {
 pub fn residual_patterns(a: &Analysis) -> String {
     let mut h = String::from("<table><tr><th>model</th><th>residual</th><th>column</th><th>ρ</th><th>slope/SD</th><th>t (cluster)</th><th>p (cluster)</th><th>η²</th><th>F</th><th>p (F)</th></tr>");
     for p in &a.residual_patterns {
-        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>", p.model, p.residual, esc(&p.column), fx(p.spearman_rho, 3), fx(p.slope_per_sd, 4), fx(p.slope_t_cluster, 2), fp(p.slope_p_cluster), fx(p.eta2, 3), fx(p.f, 1), fp(p.f_p));
+        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>", p.model, p.residual, esc(&p.column), fx(p.spearman_rho, 3), fx(p.slope_per_sd, 4), fx(p.slope_t_cluster, 2), esc(&fp(p.slope_p_cluster)), fx(p.eta2, 3), fx(p.f, 1), esc(&fp(p.f_p)));
     }
     h.push_str("</table>");
     h
@@ -192,9 +192,14 @@ pub fn thesis_r2(a: &Analysis) -> String {
 pub fn parameters(a: &Analysis) -> String {
     let mut h = String::from("<table class=\"parameters\"><tr><th>quantity</th><th>estimate of</th><th>value</th><th>SE</th><th>unit</th><th>95 % interval</th><th>how the interval is computed / why two estimates differ</th></tr>");
     for r in crate::parameters::rows(a) {
-        let d = if r.value.abs() >= 1.0 { 3 } else { 4 };
+        let d = crate::cells::se_decimals(r.value, r.se);
+        // At the SE's decimals with an SE (0.00788 ± 0.00037), else small values in scientific.
+        let show = |x: f64| match r.se {
+            Some(_) => fx(x, d),
+            None => fs_plain(x, d),
+        };
         let ci = match (r.ci95_lo, r.ci95_hi) {
-            (Some(lo), Some(hi)) => format!("{} to {}", fs_plain(lo, d), fs_plain(hi, d)),
+            (Some(lo), Some(hi)) => format!("{} to {}", show(lo), show(hi)),
             _ => "–".into(),
         };
         let _ = write!(
@@ -203,8 +208,8 @@ pub fn parameters(a: &Analysis) -> String {
             esc(&r.key),
             esc(&r.quantity),
             esc(&r.source),
-            fs_plain(r.value, d),
-            r.se.map_or("–".into(), |se| crate::table_files::sig(se, 2)),
+            show(r.value),
+            r.se.map_or("–".into(), |se| fx(se, d)),
             esc(r.unit),
             esc(&r.note)
         );

@@ -47,7 +47,7 @@ pub fn tex_open(narrow: &[String], wide: &[String]) -> String {
 
 /// Closes what [`tex_open`] opened, with `notes` (LaTeX lines) under the table.
 pub fn tex_close(notes: &str) -> String {
-    format!("\\bottomrule\n\\end{{tabularx}}\n\n\\par\\smallskip\n{notes}\\endgroup\n")
+    format!("\\bottomrule\n\\end{{tabularx}}\n\n\\par\\smallskip\\scriptsize\n{notes}\\endgroup\n")
 }
 
 /// The comment lines a table file opens with: what it is, where it came from, how it is laid
@@ -59,7 +59,7 @@ pub fn tex_header(what: &str, made_by: &str) -> String {
         .collect();
     format!(
         "% {what}\n% Made by {ascii}.\n\
-         % Laid out for an 85 mm journal column ({TEX_TARGET_WIDTH_PT} pt) at \\footnotesize: a tabularx as wide as \\linewidth whose first column wraps, each value over its interval; from a line of {TEX_WIDE_FROM_PT} pt on (the full 170 mm width, a table* float) side by side.\n\
+         % Laid out for an 85 mm journal column ({TEX_TARGET_WIDTH_PT} pt) at \\footnotesize (its notes \\scriptsize): a tabularx as wide as \\linewidth whose first column wraps, each value over its interval; from a line of {TEX_WIDE_FROM_PT} pt on (the full 170 mm width, a table* float) side by side.\n\
          % Needs \\usepackage{{booktabs,tabularx}}; \\input it inside a table float.\n"
     )
 }

@@ -5,7 +5,9 @@
 //! is installed; a structural check of the LaTeX always).
 
 use capstan_engine::analysis::Analysis;
-use capstan_report::table_files::{models_csv, models_tex, parameters_csv, parameters_tex};
+use capstan_report::table_files::{
+    cord_parameters_tex, models_csv, models_tex, parameters_csv, parameters_tex,
+};
 use std::process::Command;
 use std::sync::OnceLock;
 
@@ -248,19 +250,46 @@ fn the_latex_tables_are_well_formed_and_compile() {
     let a = thesis();
     let rows = capstan_report::parameters::rows(a);
     let params = parameters_tex(&rows, "a test");
+    let cords = cord_parameters_tex(&rows, "a test");
     let models = models_tex(a, "a test");
     check_tex(&params, 3, 4);
+    check_tex(&cords, 3, 4);
     check_tex(&models, 5, 6);
     assert!(params.contains("\\toprule") && params.contains("$\\pm$ SE"));
-    let groups = params.matches("\\textit{").count();
+    // Every row once between the two files: the ten cords' own mu in parameters-cords.tex.
+    let lines = |t: &str| t.matches("\\\\\n").count() - t.matches("\\textit{").count() - 1;
+    let per_cord = rows.iter().filter(|r| r.key.starts_with("cord.")).count();
+    assert_eq!(per_cord, 10);
+    assert_eq!(lines(&params), rows.len() - per_cord, "{params}");
+    assert_eq!(lines(&cords), per_cord, "{cords}");
+    assert!(!params.contains("mu of cord") && cords.contains("mu of cord D25.4/720deg"));
+    // Each source one group, in the rows' order: the extended model, the evidence engine,
+    // Euler-Eytelwein's one mu, the variance components, the new-cord error model.
+    let groups: Vec<&str> = (params.split("\\textit{").skip(1))
+        .filter_map(|g| g.split('}').next())
+        .collect();
     assert_eq!(
-        params.matches("\\\\\n").count(),
-        rows.len() + groups + 1,
-        "a row per quantity, a title per group and the header"
+        groups,
+        [
+            "extended model",
+            "evidence engine",
+            "Euler-Eytelwein, one mu",
+            "variance component",
+            "new-cord error model"
+        ]
     );
-    // Seven groups in the thesis rows' order (the variance components twice, around the
-    // new-cord error model).
-    assert_eq!(groups, 7, "{params}");
+    // A note that repeats another and adds to it is marked with both letters, the repeat
+    // printed once: the extended model's heating row, its interval method (a) and h = k/τ (b).
+    assert!(
+        params.contains("(T2 $-$ T1))\\textsuperscript{a,b}"),
+        "{params}"
+    );
+    assert_eq!(
+        params
+            .matches("cord jackknife over the leave-one-cord-out")
+            .count(),
+        1
+    );
     // The extended model's mu with its SE's precision, and the note that says how.
     assert!(
         params.contains("\\textit{extended model} \\\\\nfriction coefficient mu"),
@@ -271,13 +300,15 @@ fn the_latex_tables_are_well_formed_and_compile() {
     let csv = models_csv(a);
     assert_eq!(csv.lines().count(), a.models.len() + 1);
     assert!(csv.contains("thesis Table 3,thesis,") && models.contains("not refittable"));
-    let tables = [("parameters", params), ("models", models)];
+    let tables = [("parameters", params), ("cords", cords), ("models", models)];
     for page in [COLUMN_85_MM, FULL_170_MM] {
         match pdflatex(page, &tables) {
             Some((ok, log)) => {
                 assert!(ok, "pdflatex failed:\n{log}");
-                // Nothing sticks out of the 85 mm column or the 170 mm page.
+                // Nothing sticks out of the 85 mm column or the 170 mm page, and each table
+                // with its notes fits one column (250 mm of text): a `table` float, not `table*`.
                 assert!(!log.contains("Overfull \\hbox"), "{page}\n{log}");
+                assert!(!log.contains("Float too large"), "{page}\n{log}");
             }
             None => eprintln!("pdflatex not installed: the tables were checked for structure only"),
         }
