@@ -72,7 +72,7 @@ fn every_numeric_option_is_refused_outside_its_range_with_the_range() {
         (&["--diameters", "2000"], "at most 1000 mm"),
         (
             &["--drive-v", "1e6"],
-            "--drive-v 1000000: must be within ±1000 V",
+            "--drive-v 1000000: the rig's drive gives 0 to 13.2 V",
         ),
         (
             &["--dwell-ms", "4000000"],

@@ -22,7 +22,7 @@ pub enum PlanError {
         /// The value the data give it, in the quantity's unit.
         value: f64,
         /// What the simulator takes ("must be ...").
-        allowed: &'static str,
+        allowed: String,
         /// What in the data gave the value, in words.
         origin: String,
     },

@@ -195,7 +195,7 @@ pub enum CampaignError {
     /// A list is empty.
     Empty(&'static str),
     /// A value is out of range: which, the value, and what is allowed.
-    Bad(&'static str, f64, &'static str),
+    Bad(&'static str, f64, String),
     /// A fault names a run the campaign does not have.
     FaultRun(u32, u32),
     /// The firmware or the plant refuses the setup.

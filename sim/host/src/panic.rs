@@ -73,7 +73,7 @@ pub struct PanicOutcome {
 }
 
 /// Why a panic run did not give a panic.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum PanicRunError {
     /// The run could not be set up.
     Setup(SetupError),

@@ -201,7 +201,7 @@ impl RunOutput {
 }
 
 /// A run that could not be set up.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum SetupError {
     /// The firmware refused the protocol.
     Protocol(ProtocolError),

@@ -7,14 +7,14 @@ use capstan_rig::{Calibration, Protocol, StepOrder};
 use std::fmt;
 
 /// A set-up value out of its range: which, the value, and what is allowed.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct OutOfRange {
     /// What the value is (with its unit).
     pub what: &'static str,
     /// The value.
     pub value: f64,
     /// What is allowed.
-    pub allowed: &'static str,
+    pub allowed: String,
 }
 
 impl fmt::Display for OutOfRange {
@@ -27,7 +27,7 @@ fn in_range(
     ok: bool,
     what: &'static str,
     value: f64,
-    allowed: &'static str,
+    allowed: impl Into<String>,
 ) -> Result<(), OutOfRange> {
     if ok {
         Ok(())
@@ -35,7 +35,7 @@ fn in_range(
         Err(OutOfRange {
             what,
             value,
-            allowed,
+            allowed: allowed.into(),
         })
     }
 }
@@ -59,7 +59,10 @@ pub fn check_wrap(w: f64) -> Result<(), OutOfRange> {
 pub fn check_drive_v(v: f64, calibration: &Calibration) -> Result<(), OutOfRange> {
     let control_v = (v / calibration.amp.amp_gain as f64) as f32;
     let ok = v.is_finite() && v >= 0.0 && control_v <= calibration.amp.full_scale_v;
-    let allowed = "must be 0 to 13.2 V (3.3 V of control × the amplifier's gain of 4)";
+    let (full, gain) = (calibration.amp.full_scale_v, calibration.amp.amp_gain);
+    let top = full as f64 * gain as f64;
+    let allowed =
+        format!("must be 0 to {top:.1} V ({full} V of control × the amplifier's gain of {gain})");
     in_range(ok, "drive voltage (V)", v, allowed)
 }
 
@@ -134,5 +137,24 @@ mod tests {
             13.2,
         );
         assert!(p.amp_control_v <= cal.amp.full_scale_v);
+    }
+
+    /// The refusal states the range of the rig it judged, from its calibration: the default
+    /// rig's 13.2 V, and 6.6 V for an amplifier of gain 2.
+    #[test]
+    fn the_refusal_names_the_calibrated_range() {
+        let mut cal = Calibration::default();
+        let e = check_drive_v(20.0, &cal).unwrap_err().to_string();
+        assert!(
+            e.contains("0 to 13.2 V (3.3 V of control × the amplifier's gain of 4)"),
+            "{e}"
+        );
+        cal.amp.amp_gain = 2.0;
+        assert!(check_drive_v(6.6, &cal).is_ok());
+        let e = check_drive_v(7.0, &cal).unwrap_err().to_string();
+        assert!(
+            e.contains("0 to 6.6 V (3.3 V of control × the amplifier's gain of 2)"),
+            "{e}"
+        );
     }
 }

@@ -22,8 +22,11 @@ pub(super) fn check_ranges(args: &Args) -> anyhow::Result<()> {
             no_repeats(flag, list.iter().flatten())?;
         }
     }
+    // The rig's drive range (as `predict`, `condition` and `log` judge it), not the data's
+    // ±1000 V: a simulated campaign runs the firmware, which cannot command more.
+    let limits = crate::cli::predict::limits::RigLimits::firmware_defaults();
     for &v in &args.drive_v {
-        ranges::DRIVE_V.option("--drive-v", v)?;
+        limits.check_drive_for(v, "the simulated firmware could not command it")?;
     }
     no_repeats("--drive-v", &args.drive_v)?;
     if let Some(n) = args.runs {

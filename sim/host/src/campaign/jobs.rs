@@ -46,7 +46,7 @@ impl CampaignConfig {
             }
         }
         if self.runs == 0 {
-            return Err(Bad("runs", 0.0, "at least 1"));
+            return Err(Bad("runs", 0.0, "at least 1".into()));
         }
         let bad = |e: setup::OutOfRange| Bad(e.what, e.value, e.allowed);
         for &d in &self.diameters_mm {
@@ -59,15 +59,27 @@ impl CampaignConfig {
             setup::check_drive_v(v, &self.calibration).map_err(bad)?;
         }
         if !(self.scatter_pct.is_finite() && (0.0..=50.0).contains(&self.scatter_pct)) {
-            return Err(Bad("scatter (%)", self.scatter_pct, "must be 0 to 50"));
+            return Err(Bad(
+                "scatter (%)",
+                self.scatter_pct,
+                "must be 0 to 50".into(),
+            ));
         }
         let run_scatter_pct = self.run_scatter();
         if !(run_scatter_pct.is_finite() && (0.0..=50.0).contains(&run_scatter_pct)) {
-            return Err(Bad("run scatter (%)", run_scatter_pct, "must be 0 to 50"));
+            return Err(Bad(
+                "run scatter (%)",
+                run_scatter_pct,
+                "must be 0 to 50".into(),
+            ));
         }
         let n = self.run_count();
         if n > u32::MAX as usize {
-            return Err(Bad("runs", n as f64, "at most 4294967295 runs in all"));
+            return Err(Bad(
+                "runs",
+                n as f64,
+                "at most 4294967295 runs in all".into(),
+            ));
         }
         for f in &self.faults {
             if let Some(r) = f.run.filter(|&r| r as usize > n) {
