@@ -53,14 +53,15 @@ pub fn with_ci(w: &WithInterval) -> String {
 }
 
 /// Decimals that show `v` at its standard error's precision (the SE to two significant
-/// digits: −0.8234 ± 0.107 → 2, "−0.82"), or four significant digits without an SE. The one
+/// digits: −0.8234 ± 0.107 → 2, "−0.82"), or two significant digits of the value without an SE
+/// (its uncertainty not computed: 0.7965 → "0.80"). The one
 /// rounding rule of Table 1, the headline and `parameters.tex`, so a value reads the same in
 /// each.
 pub fn se_decimals(v: f64, se: Option<f64>) -> usize {
     match se.filter(|s| s.is_finite() && *s > 0.0) {
         Some(s) => (1 - s.log10().floor() as i32).clamp(0, 8) as usize,
         None if v.is_finite() && v != 0.0 => {
-            (3 - v.abs().log10().floor() as i32).clamp(0, 8) as usize
+            (1 - v.abs().log10().floor() as i32).clamp(0, 8) as usize
         }
         None => 4,
     }
@@ -90,8 +91,9 @@ mod tests {
         assert_eq!(se_decimals(-0.8234, Some(0.107)), 2);
         assert_eq!(se_decimals(0.00829, Some(0.00108)), 4);
         assert_eq!(se_decimals(0.00788, Some(0.00037)), 5);
-        assert_eq!(se_decimals(0.1162, None), 4);
-        assert_eq!(se_decimals(12.5, None), 2);
+        assert_eq!(se_decimals(0.7965, None), 2);
+        assert_eq!(se_decimals(0.03871, None), 3);
+        assert_eq!(se_decimals(12.5, None), 0);
         assert_eq!(fp(0.0007), "0.0007");
         assert_eq!(fp(0.0321), "0.032");
         assert_eq!(fp(f64::NAN), "–");

@@ -156,6 +156,22 @@ impl Quote<'_> {
         }
     }
 
+    /// The 95 % interval of the parameter row `key` in percent ("95 % interval 3.3 to 9.7 %; "),
+    /// or nothing when the row or its interval is missing.
+    fn spread_interval(&mut self, key: &str, d: usize) -> String {
+        let Some(k) = self.params.iter().position(|r| r.key == key) else {
+            return String::new();
+        };
+        match (self.params[k].ci95_lo, self.params[k].ci95_hi) {
+            (Some(lo), Some(hi)) => {
+                let lo = self.num(lo, d, format!("/parameters/{k}/ci95_lo"));
+                let hi = self.num(hi, d, format!("/parameters/{k}/ci95_hi"));
+                format!("95 % interval {lo} to {hi} %; ")
+            }
+            _ => String::new(),
+        }
+    }
+
     /// A parameter row's value with its unit ("−0.82 N").
     fn param(&mut self, k: usize, d: usize) -> String {
         let r = &self.params[k];
@@ -179,8 +195,18 @@ pub fn headline(a: &Analysis) -> Headline {
     let at_se = |k: usize| se_decimals(params[k].value, params[k].se);
     let mu = f.mu_row.map_or("–".into(), |k| q.param(k, at_se(k)));
     let rmse = q.num(f.baseline_rmse, 2, "/models/0/rmse_t2_n".into());
-    let cord = q.num(f.cord_pct, 1, "/evidence/scatter/cord_pct".into());
-    s.push(format!("Euler-Eytelwein's law, T2 = T1·exp(mu·wrap angle) with one friction coefficient mu = {mu}, misses the measured T2 by {rmse} N (root mean square); with the causes below, mu still varies by {cord} % from cord to cord (the evidence engine's spread, every run its own mu; Table 1 gives the extended model's, whose cord effects are shrunk)."));
+    let (cord, cord_ci) = match f.cord_pct.is_finite() {
+        true => (
+            q.num(f.cord_pct, 1, "/evidence/scatter/cord_pct".into()),
+            q.spread_interval("scatter.cord_pct", 1),
+        ),
+        false => Default::default(),
+    };
+    let spread = match f.cord_pct.is_finite() {
+        true => format!("mu still differs from cord to cord with a standard deviation of {cord} % ({cord_ci}the evidence engine's estimate, every run its own mu)"),
+        false => "how much mu differs from cord to cord is not estimable on these data (it needs two cords or more)".into(),
+    };
+    s.push(format!("Euler-Eytelwein's law, T2 = T1·exp(mu·wrap angle) with one friction coefficient mu = {mu}, misses the measured T2 by {rmse} N (root mean square); with the causes below, {spread}."));
     let parts: Vec<String> = f
         .causes
         .iter()

@@ -77,8 +77,9 @@ fn technical_summary(h: &mut String, a: &Analysis) {
     let _ = write!(
         h,
         "<li><code>capstan diagnose</code> on the same data (the same evidence engine): {} \
-         (These are the evidence engine's values, every run its own mu; the headline and \
-         Table 1's first rows are the extended model's. Both write heating as \
+         (These are the evidence engine's values, every run its own mu; the headline's offset and \
+         heating and Table 1's first rows are the extended model's, its cord-to-cord 5.0 % the \
+         evidence engine's. Both write heating as \
          heat_per_n = k = h·τ in 1/N, what the data identify; h = k/τ at the catalogue's \
          τ = {} s.)</li>",
         esc(&a.evidence.verdict),

@@ -58,7 +58,7 @@ pub fn parameters_csv(rows: &[Row]) -> String {
 }
 
 /// A value ± SE and its interval in LaTeX, at the SE's precision (two significant digits), or
-/// four significant digits without an SE; a common power of ten for very small or large
+/// two significant digits of the value without an SE (its uncertainty not computed); a common power of ten for very small or large
 /// values.
 fn tex_value(v: f64, se: Option<f64>, ci: Option<(f64, f64)>) -> (String, String) {
     if !v.is_finite() {
@@ -83,7 +83,7 @@ fn tex_value(v: f64, se: Option<f64>, ci: Option<(f64, f64)>) -> (String, String
             } else {
                 0
             };
-            (3 - ev).clamp(0, 8) as usize
+            (1 - ev).clamp(0, 8) as usize
         }
     };
     let f = |x: f64| format!("{:.d$}", x * scale);
@@ -176,7 +176,7 @@ pub fn parameters_tex(rows: &[Row], made_by: &str) -> String {
     let rows: Vec<&Row> = rows.iter().filter(|r| !per_cord(r)).collect();
     rows_tex(
         &rows,
-        "Every fitted quantity of capstan analyze but each cord's own mu (parameters-cords.tex), grouped by what it is an estimate of: value +- standard error over its 95 % interval, unit; the notes say how each interval is computed (or why two estimates of one quantity differ).",
+        "Every fitted quantity of capstan analyze but each cord's own mu (parameters-cords.tex), grouped by what it is an estimate of: value +- standard error over its 95 % interval, unit; the notes say how each interval is computed (or why two estimates of one quantity differ). With more named causes than the thesis's two it may be taller than a column: then set it in a table* float.",
         made_by,
     )
 }
@@ -356,7 +356,7 @@ mod tests {
         let (v, i) = tex_value(1.6e-5, Some(3.2e-6), Some((0.0, 2.2e-5)));
         assert_eq!(v, "$(1.60 \\pm 0.32)\\times 10^{-5}$");
         assert_eq!(i, "$0.00$ to $2.20$ ($\\times 10^{-5}$)");
-        assert_eq!(tex_value(4.9515, None, None).0, "$4.952$");
+        assert_eq!(tex_value(4.9515, None, None).0, "$5.0$");
         assert_eq!(sig(0.004539, 2), "0.0045");
         assert_eq!(sig(1.6e-6, 2), "1.6e-6");
     }
