@@ -149,7 +149,7 @@ fn baseline_row(a: &Analysis, out: &mut Vec<Row>) {
         unit: "1",
         ci95_lo: fin(b - t_cords * bse),
         ci95_hi: fin(b + t_cords * bse),
-        note: "differs from the extended model's mu because Euler-Eytelwein has no sensor offset or heating term: its one mu absorbs them".into(),
+        note: format!("value ± t({})·SE, SE from the cord jackknife over the leave-one-cord-out refits (cords as the independent units); differs from the extended model's mu because Euler-Eytelwein has no sensor offset or heating term: its one mu absorbs them", a.prediction_model.folds.saturating_sub(1)),
     });
 }
 
