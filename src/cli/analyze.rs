@@ -266,7 +266,7 @@ fn write_predictions(
 /// The closing line: what was written where, and how long it took.
 fn say_written(args: &Args, figure_files: usize, t0: Instant) {
     crate::errln!(
-        "wrote {}/report.html, metrics.json, predictions.csv, tables/{{parameters,models}}.{{csv,tex}}{} in {:.2} s",
+        "wrote {}/report.html, metrics.json, predictions.csv, tables/{{parameters,models}}.{{csv,tex}}, tables/parameters-cords.tex{} in {:.2} s",
         args.out.display(),
         if figure_files == 0 {
             String::new()
