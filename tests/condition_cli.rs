@@ -392,6 +392,12 @@ fn a_drive_the_rig_cannot_run_and_run_zero_are_refused() {
     let rows = csv_rows(&out.join("pairs.csv"));
     assert_eq!(rows.len(), 12);
     assert!(rows.iter().all(|r| r[k] == "13.2"), "{rows:?}");
+    // −0 V is the bottom of the drive, recorded as 0 (a cell "-0" read as a sign error).
+    let out = dir.join("zero");
+    let o = condition_at(&raw, &out, &["--drive-v", "-0", "--run", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = csv_rows(&out.join("pairs.csv"));
+    assert!(rows.iter().all(|r| r[k] == "0"), "{rows:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

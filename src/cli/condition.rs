@@ -126,7 +126,7 @@ fn request(a: &Args) -> Request {
         window_before_ms: a.window_before_ms,
         wrap_deg: a.wrap_deg,
         diameter_mm: a.diameter_mm,
-        drive_v: a.drive_v,
+        drive_v: crate::cli::predict::limits::recorded_drive(a.drive_v),
         first_run: a.run,
     }
 }

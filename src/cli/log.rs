@@ -189,7 +189,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         setup: SetupFlags {
             capstan_diameter_mm: args.diameter_mm,
             wrap_deg: args.wrap_deg,
-            drive_v: args.drive_v,
+            drive_v: crate::cli::predict::limits::recorded_drive(args.drive_v),
         },
         progress: !args.quiet,
         allow_empty: args.allow_empty,

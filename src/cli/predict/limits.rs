@@ -61,6 +61,12 @@ impl RigLimits {
     }
 }
 
+/// A checked `--drive-v` as a file records it: −0 V is 0 V (a cell "-0" reads as a sign
+/// error; the firmware commands the same 0 V).
+pub fn recorded_drive(v: Option<f64>) -> Option<f64> {
+    v.map(|v| if v == 0.0 { 0.0 } else { v })
+}
+
 /// A flag on one prediction, as JSON names it.
 pub const OVER_FORCE: &str = "over_force_limit";
 /// Beyond the sensors' range.
@@ -115,6 +121,8 @@ mod tests {
     /// 3.3 V × 4 = 13.2 V of drive.
     #[test]
     fn the_firmware_defaults_are_the_thesis_rig() {
+        assert_eq!(recorded_drive(Some(-0.0)).unwrap().to_string(), "0");
+        assert_eq!(recorded_drive(Some(13.2)), Some(13.2));
         let l = RigLimits::firmware_defaults();
         assert_eq!(l.over_force_n, 45.0);
         assert!((l.sensor_top_n - 52.5).abs() < 1e-9, "{}", l.sensor_top_n);
