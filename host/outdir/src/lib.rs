@@ -78,8 +78,9 @@ pub struct OutputDir {
     dir: PathBuf,
     kind: &'static str,
     _lock: File,
-    /// This process made the directory.
-    made: bool,
+    /// The directories this process made for it, the output directory first and then each
+    /// parent it had to make (`--out a/b/c` with no `a`: c, b, a).
+    made: Vec<PathBuf>,
     /// What `open` found and did (an interrupted commit finished, an abandoned set kept).
     pub recovered: Vec<String>,
 }
@@ -109,6 +110,10 @@ impl OutputDir {
                 names: names.iter().map(|n| n.to_string()).collect(),
             });
         }
+        let made: Vec<PathBuf> = (dir.ancestors())
+            .take_while(|d| !d.as_os_str().is_empty() && !d.exists())
+            .map(Path::to_path_buf)
+            .collect();
         std::fs::create_dir_all(dir)
             .map_err(|source| io("create the output directory", dir, source))?;
         let lock = take_lock(dir)?;
@@ -116,7 +121,7 @@ impl OutputDir {
             dir: dir.to_path_buf(),
             kind,
             _lock: lock,
-            made: !existed,
+            made,
             recovered: Vec::new(),
         };
         match out.prepare(names, subdirs) {
@@ -236,7 +241,7 @@ impl OutputDir {
 /// process that opened it meanwhile finds it locked, or gone from the path, and takes the lock
 /// again on a new file: [`take_lock`]).
 ///
-/// A directory this process made and that is still empty when the lock goes (the command
+/// A directory this process made (with the parents it made for it) and that is still empty when the lock goes (the command
 /// failed before it wrote anything: an unreadable input, a refused option) goes too, so a
 /// failed command leaves no trace. `remove_dir` removes only an empty directory: results, kept
 /// work and another process's lock file all keep it.
@@ -246,8 +251,12 @@ impl Drop for OutputDir {
         if still_at_path(&self._lock, &path) {
             let _ = std::fs::remove_file(&path);
         }
-        if self.made {
-            let _ = std::fs::remove_dir(&self.dir);
+        // Deepest first; a parent another process or the user has put something in since
+        // stays, and so do the ones above it.
+        for d in &self.made {
+            if std::fs::remove_dir(d).is_err() {
+                break;
+            }
         }
     }
 }

@@ -161,6 +161,20 @@ fn a_command_that_fails_before_writing_leaves_no_directory_it_made() {
     std::fs::create_dir(&theirs).unwrap();
     drop(OutputDir::open(&theirs, "test", &["a.txt"]).unwrap());
     assert!(theirs.is_dir());
+    // The parents it made for a nested directory go with it (`--out a/b/c` with no `a`), up
+    // to the first that was there; one something was put in since stays, with those above.
+    let nested = theirs.join("a/b/c");
+    drop(OutputDir::open(&nested, "test", &["a.txt"]).unwrap());
+    assert!(
+        !theirs.join("a").exists() && theirs.is_dir(),
+        "{:?}",
+        visible(&base)
+    );
+    let out = OutputDir::open(&nested, "test", &["a.txt"]).unwrap();
+    std::fs::write(theirs.join("a/note.txt"), "mine").unwrap();
+    drop(out);
+    assert!(!theirs.join("a/b").exists(), "{:?}", visible(&base));
+    assert!(theirs.join("a/note.txt").is_file());
 }
 
 #[test]
