@@ -195,16 +195,12 @@ pub fn headline(a: &Analysis) -> Headline {
     let at_se = |k: usize| se_decimals(params[k].value, params[k].se);
     let mu = f.mu_row.map_or("–".into(), |k| q.param(k, at_se(k)));
     let rmse = q.num(f.baseline_rmse, 2, "/models/0/rmse_t2_n".into());
-    let (cord, cord_ci) = match f.cord_pct.is_finite() {
-        true => (
-            q.num(f.cord_pct, 1, "/evidence/scatter/cord_pct".into()),
-            q.spread_interval("scatter.cord_pct", 1),
-        ),
-        false => Default::default(),
-    };
-    let spread = match f.cord_pct.is_finite() {
-        true => format!("mu still differs from cord to cord with a standard deviation of {cord} % ({cord_ci}the evidence engine's estimate, every run its own mu)"),
-        false => "how much mu differs from cord to cord is not estimable on these data (it needs two cords or more)".into(),
+    let spread = if f.cord_pct.is_finite() {
+        let cord = q.num(f.cord_pct, 1, "/evidence/scatter/cord_pct".into());
+        let ci = q.spread_interval("scatter.cord_pct", 1);
+        format!("mu still differs from cord to cord with a standard deviation of {cord} % ({ci}the evidence engine's estimate, every run its own mu)")
+    } else {
+        "how much mu differs from cord to cord is not estimable on these data (it needs two cords or more)".into()
     };
     s.push(format!("Euler-Eytelwein's law, T2 = T1·exp(mu·wrap angle) with one friction coefficient mu = {mu}, misses the measured T2 by {rmse} N (root mean square); with the causes below, {spread}."));
     let parts: Vec<String> = f
