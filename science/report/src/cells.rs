@@ -54,7 +54,7 @@ pub fn with_ci(w: &WithInterval) -> String {
 
 /// Decimals that show `v` at its standard error's precision (the SE to two significant
 /// digits: −0.8234 ± 0.107 → 2, "−0.82"), or two significant digits of the value without an SE
-/// (its uncertainty not computed: 0.7965 → "0.80"). The one
+/// (its uncertainty not computed: 0.7965 → "0.80"; 0 → "0.0"). The one
 /// rounding rule of Table 1, the headline and `parameters.tex`, so a value reads the same in
 /// each.
 pub fn se_decimals(v: f64, se: Option<f64>) -> usize {
@@ -63,7 +63,7 @@ pub fn se_decimals(v: f64, se: Option<f64>) -> usize {
         None if v.is_finite() && v != 0.0 => {
             (1 - v.abs().log10().floor() as i32).clamp(0, 8) as usize
         }
-        None => 4,
+        None => 1,
     }
 }
 

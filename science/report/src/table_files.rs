@@ -58,8 +58,8 @@ pub fn parameters_csv(rows: &[Row]) -> String {
 }
 
 /// A value ± SE and its interval in LaTeX, at the SE's precision (two significant digits), or
-/// two significant digits of the value without an SE (its uncertainty not computed); a common power of ten for very small or large
-/// values.
+/// two significant digits of the value without an SE ([`crate::cells::se_decimals`]); a common
+/// power of ten for very small or large values.
 fn tex_value(v: f64, se: Option<f64>, ci: Option<(f64, f64)>) -> (String, String) {
     if !v.is_finite() {
         return ("--".into(), "--".into());
@@ -75,17 +75,7 @@ fn tex_value(v: f64, se: Option<f64>, ci: Option<(f64, f64)>) -> (String, String
         (10f64.powi(-e), Some(e))
     };
     let se = se.filter(|s| s.is_finite() && *s > 0.0).map(|s| s * scale);
-    let d = match se {
-        Some(s) => (1 - s.log10().floor() as i32).clamp(0, 8) as usize,
-        None => {
-            let ev = if v != 0.0 {
-                (v * scale).abs().log10().floor() as i32
-            } else {
-                0
-            };
-            (1 - ev).clamp(0, 8) as usize
-        }
-    };
+    let d = crate::cells::se_decimals(v * scale, se);
     let f = |x: f64| format!("{:.d$}", x * scale);
     let body = match se {
         Some(s) => format!("{} \\pm {s:.d$}", f(v)),
