@@ -347,11 +347,12 @@ fn interval_words(args: &Args, set: &Setting, pm: &PredictionModel, what: &str) 
     }
     let e = &pm.new_cord_error;
     crate::outln!(
-        "{what} holds a new cord's error, SD √({:.3}² + ({:.4}·T2)²) N, from the held-out residuals of {} cords (each predicted by the causes chosen and fitted without it; Student t, {} degrees of freedom)",
+        "{what} holds a new cord's error, SD √({:.3}² + ({:.4}·T2)²) N, from the held-out residuals of {} cords (each predicted by the causes chosen and fitted without it; Student t, {} degree{} of freedom)",
         e.abs_n,
         e.rel,
         e.cords,
-        e.dof
+        e.dof,
+        if e.dof == 1 { "" } else { "s" }
     );
     if let Some(Some(sd)) = wrap_error(args, pm) {
         crate::outln!(

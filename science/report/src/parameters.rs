@@ -7,6 +7,11 @@ use capstan_engine::analysis::Analysis;
 use capstan_engine::fit::stats::mean;
 use serde::Serialize;
 
+mod words;
+use words::{cord_words, dof_count, dof_words};
+pub use words::{describe, mu_words};
+pub(crate) use words::{heating_note, identified};
+
 /// One row of the table.
 #[derive(Clone, Debug, Serialize)]
 pub struct Row {
@@ -44,36 +49,6 @@ fn fin(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
-/// Unit and words of a model parameter.
-pub fn describe(name: &str) -> (&'static str, &'static str) {
-    match name {
-        "mu" => (
-            "1",
-            "friction coefficient mu (population, at 1 N, run 1, time 0)",
-        ),
-        "n" => ("1", "tension exponent n of dT/dθ = k·Tⁿ"),
-        "b_nm2" => ("N m²", "bending stiffness of the cord"),
-        "mu_change_per_100s" => ("1/(100 s)", "fractional drift of mu per 100 s"),
-        "mu_change_per_run" => ("1/run", "fractional change of mu per repeat run"),
-        "mu_change_per_mm" => ("1/mm", "fractional change of mu per mm of diameter"),
-        "mu_change_per_v" => ("1/V", "fractional change of mu per volt of drive"),
-        "mu_log_slope_per_rad" => ("1/rad", "change of ln mu per radian of wrap"),
-        "heat_per_ns" => (
-            "1/(N s)",
-            "contact heating h: mu is multiplied by exp(−h·H), H the friction load remembered (N s)",
-        ),
-        "heat_per_n" => (
-            "1/N",
-            "contact heating k = h·τ: at a steady load, mu is multiplied by exp(−k·(T2 − T1))",
-        ),
-        "heat_tau_s" => ("s", "memory time of the friction load"),
-        "t1_offset_n" => ("N", "zero offset (or path loss) of the T1 reading"),
-        "t2_offset_n" => ("N", "additive offset of the T2 reading"),
-        "t2_gain" => ("1", "gain of the T2 reading relative to T1"),
-        _ => ("?", "model parameter"),
-    }
-}
-
 /// Every row, in table order: the extended model, the evidence engine's estimates of the same
 /// quantities, Euler-Eytelwein's mu, the variance components, then each cord's mu.
 pub fn rows(a: &Analysis) -> Vec<Row> {
@@ -86,40 +61,24 @@ pub fn rows(a: &Analysis) -> Vec<Row> {
     out
 }
 
-/// A model parameter as the data identify it: its table name and the factor from the model's
-/// value. Contact heating's h (1/(N s)) is fitted at the catalogue's assumed memory time τ,
-/// which window means cannot resolve: the data fix only k = h·τ (1/N), so the table gives k.
-pub(crate) fn identified(name: &str) -> (&str, f64) {
-    match name {
-        "heat_per_ns" => ("heat_per_n", capstan_physics::HEAT_TAU_S),
-        n => (n, 1.0),
-    }
-}
-
-/// What a heating row's note adds: h at the catalogue's τ, for a reader who wants it.
-pub(crate) fn heating_note(name: &str, k: f64) -> String {
-    match name {
-        "heat_per_n" => format!(
-            "; the data fix only k = h·τ: at the catalogue's assumed memory time τ = {} s, h = k/τ = {} 1/(N s)",
-            capstan_physics::HEAT_TAU_S,
-            crate::cells::fx(k / capstan_physics::HEAT_TAU_S, 4)
-        ),
-        _ => String::new(),
-    }
-}
-
 /// Each extended-model value, ± t(folds − 1) times its cord-jackknife SE.
 fn extended_rows(a: &Analysis, out: &mut Vec<Row>) {
     let pm = &a.prediction_model;
     let t_cords = t95(pm.folds.saturating_sub(1));
+    let names: Vec<&str> = (a.extended.values.iter())
+        .map(|v| identified(&v.name).0)
+        .collect();
     for v in &a.extended.values {
         let (name, scale) = identified(&v.name);
-        let (unit, words) = describe(name);
+        let (unit, words) = match describe(name) {
+            (unit, _) if name == "mu" => (unit, mu_words(&names)),
+            (unit, words) => (unit, words.to_string()),
+        };
         let (value, se) = (v.value * scale, v.jackknife_se * scale);
         let half = t_cords * se;
         out.push(Row {
             key: format!("extended.{name}"),
-            quantity: words.into(),
+            quantity: words,
             source: "extended model".into(),
             value,
             se: fin(se),
@@ -210,7 +169,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("scatter.cord_ln_mu_sd", "cord-to-cord SD of ln mu", "1"),
         spread,
         sd(spread, df_u),
-        format!("{what}; not what capstan predict uses for a new cord; χ² interval on cords − 1 = {df_u:.0} degrees of freedom, as if the cord effects were seen without error (approximate)"),
+        format!("{what}; not what capstan predict uses for a new cord; χ² interval on cords − 1 = {}, as if the cord effects were seen without error (approximate)", dof_count(df_u)),
         "one cord, or the cord effects at 0",
     ));
     let run_sd = shown((1.0 + s.run_pct / 100.0).ln(), s.run_pct);
@@ -219,7 +178,7 @@ fn variance_rows(a: &Analysis, out: &mut Vec<Row>) {
         ("scatter.run_ln_mu_sd", "run-to-run SD of ln mu on one cord", "1"),
         run_sd,
         sd(run_sd, df_e),
-        format!("evidence engine (every run its own mu); χ² interval on runs − cords = {df_e:.0} degrees of freedom (exact for a balanced design under normality)"),
+        format!("evidence engine (every run its own mu); χ² interval on runs − cords = {} (exact for a balanced design under normality)", dof_count(df_e)),
         "no cord has two runs",
     ));
     let df_noise = noise_df(obs.len(), runs, s.lag1_autocorrelation);
@@ -377,10 +336,7 @@ fn cord_rows(a: &Analysis, out: &mut Vec<Row>) {
         let half = t95(k.saturating_sub(1)) * sd / (k as f64).sqrt();
         out.push(Row {
             key: format!("cord.{}.mu", grp.label),
-            quantity: format!(
-                "mu of cord {} ({:.0}°, D = {} mm)",
-                grp.label, grp.wrap_deg, grp.diameter_mm
-            ),
+            quantity: cord_words(&grp.label, grp.wrap_deg, grp.diameter_mm),
             source: "Euler-Eytelwein per cord".into(),
             value: m,
             se: fin(sd / (k as f64).sqrt()),
@@ -392,15 +348,5 @@ fn cord_rows(a: &Analysis, out: &mut Vec<Row>) {
                 k.saturating_sub(1)
             ),
         });
-    }
-}
-
-/// Degrees of freedom in words: "8.3 degrees of freedom", or that the data do not identify
-/// them (one cord, one run per cord: never "NaN").
-fn dof_words(df: f64) -> String {
-    if df.is_finite() && df > 0.0 {
-        format!("{df:.1} degrees of freedom")
-    } else {
-        "degrees of freedom these data do not identify".to_string()
     }
 }

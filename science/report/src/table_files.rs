@@ -217,8 +217,11 @@ fn rows_tex(rows: &[&Row], what: &str, made_by: &str) -> String {
     s
 }
 
-/// The interval method of the model table.
-const MODEL_NOTE: &str = "95 % intervals: percentiles of a bootstrap over cords (whole cords resampled), descriptive and too narrow at ten or fewer cords (a comparison of the models is the held-out gain's exact sign-flip test, in the report); SE: cord jackknife. LOCO: each cord predicted by a fit to the other cords. Parameters: fixed values plus the effective degrees of freedom of the cord effects. AIC and BIC treat rows as independent and are for comparison with the thesis only.";
+/// The interval method of the model table, in both files.
+const MODEL_NOTE: &str = "95 % intervals: percentiles of a bootstrap over cords (whole cords resampled), descriptive and too narrow at ten or fewer cords (a comparison of the models is the held-out gain's exact sign-flip test, in the report). LOCO: each cord predicted by a fit to the other cords. Parameters: fixed values plus the effective degrees of freedom of the cord effects. AIC and BIC treat rows as independent and are for comparison with the thesis only.";
+
+/// What `models.csv` adds to [`MODEL_NOTE`]: its SE columns (`models.tex` has none).
+const MODEL_NOTE_SE: &str = " The _se columns: the cord jackknife's SE.";
 
 /// `models.csv`.
 pub fn models_csv(a: &Analysis) -> String {
@@ -246,7 +249,7 @@ pub fn models_csv(a: &Analysis) -> String {
             num(Some(m.per_cord_r2_amp_median)),
             num(Some(m.aic)),
             num(Some(m.bic)),
-            text_cell(MODEL_NOTE),
+            text_cell(&format!("{MODEL_NOTE}{MODEL_NOTE_SE}")),
         ];
         let _ = writeln!(s, "{}", cells.join(","));
     }

@@ -262,7 +262,10 @@ fn the_latex_tables_are_well_formed_and_compile() {
     assert_eq!(per_cord, 10);
     assert_eq!(lines(&params), rows.len() - per_cord, "{params}");
     assert_eq!(lines(&cords), per_cord, "{cords}");
-    assert!(!params.contains("mu of cord") && cords.contains("mu of cord D25.4/720deg"));
+    let cord = "mu, 720$^\\circ$, D = 25.4 mm";
+    assert!(!params.contains(cord) && cords.contains(cord), "{cords}");
+    // Each cord named once: its wrap and diameter, not its label beside them again.
+    assert!(!cords.contains("D25.4/720deg"), "{cords}");
     // Each source one group, in the rows' order: the extended model, the evidence engine,
     // Euler-Eytelwein's one mu, the variance components, the new-cord error model.
     let groups: Vec<&str> = (params.split("\\textit{").skip(1))
