@@ -36,6 +36,7 @@ pub mod table_files;
 pub mod tables;
 pub mod tex_layout;
 pub mod tracking;
+pub mod trends;
 
 pub use capstan_engine::analysis::closed_loop::SimCurve;
 pub use context::{apply_thesis_choice, Context, ThesisComparison};

@@ -50,9 +50,9 @@ pub fn gain(a: &Analysis) -> String {
 
 /// Residual trends against every column.
 pub fn residual_patterns(a: &Analysis) -> String {
-    let mut h = String::from("<table><tr><th>model</th><th>residual</th><th>column</th><th>ρ</th><th>slope/SD</th><th>t (cluster)</th><th>p (cluster)</th><th>η²</th><th>F</th><th>p (F)</th></tr>");
+    let mut h = String::from("<table><tr><th>model</th><th>residual</th><th>column</th><th>ρ</th><th>slope/SD</th><th>t (cluster)</th><th>p (cluster)</th><th>p (Holm)</th><th>η²</th><th>F</th><th>p (F)</th></tr>");
     for p in &a.residual_patterns {
-        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>", p.model, p.residual, esc(&p.column), fx(p.spearman_rho, 3), fx(p.slope_per_sd, 4), fx(p.slope_t_cluster, 2), esc(&fp(p.slope_p_cluster)), fx(p.eta2, 3), fx(p.f, 1), esc(&fp(p.f_p)));
+        let _ = write!(h, "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>", p.model, p.residual, esc(&p.column), fx(p.spearman_rho, 3), fx(p.slope_per_sd, 4), fx(p.slope_t_cluster, 2), esc(&fp(p.slope_p_cluster)), esc(&fp(p.slope_p_holm)), fx(p.eta2, 3), fx(p.f, 1), esc(&fp(p.f_p)));
     }
     h.push_str("</table>");
     h

@@ -118,6 +118,44 @@ pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, crate
     .collect()
 }
 
+/// The smallest p of the extended model's residual-trend tests (its cord-clustered slopes,
+/// [`capstan_engine::analysis::residuals`]) on every case, as is and Holm-adjusted over the
+/// family: the report claims a trend where the adjusted one is below 0.05
+/// (`capstan_report::trends`). On nulls, how often that claim fires (the whole analysis runs).
+pub fn residual_trend_p(
+    cases: &[CordCase],
+    threads: usize,
+) -> Result<Vec<(f64, f64)>, crate::ValidationError> {
+    crate::score::par(cases, threads, |c| {
+        let ds = c
+            .generate()
+            .map_err(|cause| crate::ValidationError::NotSimulated {
+                case: c.describe(),
+                cause,
+            })?;
+        let opts = capstan_engine::analysis::Options {
+            threads: 1,
+            ..Default::default()
+        };
+        let a =
+            capstan_engine::analysis::run(&ds, opts).map_err(crate::ValidationError::Analysis)?;
+        let ext = (a.residual_patterns.iter()).filter(|p| p.model == "extended");
+        Ok(ext.fold((1.0_f64, 1.0_f64), |(raw, holm), p| {
+            (raw.min(p.slope_p_cluster), holm.min(p.slope_p_holm))
+        }))
+    })
+    .into_iter()
+    .collect()
+}
+
+/// The Wilson score interval (95 %) of `k` of `n`.
+pub fn wilson(k: usize, n: usize) -> (f64, f64) {
+    let (n, p, z) = (n.max(1) as f64, k as f64 / n.max(1) as f64, 1.96_f64);
+    let c = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
+    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / (1.0 + z * z / n);
+    (c - h, c + h)
+}
+
 /// The figures of a set of outcomes.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct CordFigures {

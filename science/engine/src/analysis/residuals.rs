@@ -5,10 +5,12 @@
 //! column with standard errors clustered by cord (G − 1 degrees of freedom: rows of one cord
 //! are not independent), and η², the share of residual variance explained by the column's
 //! levels (up to 12 levels; continuous columns in 10 quantile bins), with its one-way F test
-//! (which treats rows as independent and so overstates significance; read it with η²).
+//! (which treats rows as independent and so overstates significance; read it with η²). Each
+//! model's slope tests are one family (both residuals, every column): their p-values are also
+//! given Holm-adjusted, as a reader must read a dozen tests.
 
 use super::{ln_amp, ln_amp_defined, Predictions};
-use crate::fit::stats::{eta_squared, mean, regress, spearman, variance};
+use crate::fit::stats::{eta_squared, holm, mean, regress, spearman, variance};
 use crate::fit::Observations;
 use capstan_data::Dataset;
 use serde::Serialize;
@@ -30,6 +32,9 @@ pub struct Pattern {
     pub slope_t_cluster: f64,
     /// Two-sided p of that t (G − 1 df).
     pub slope_p_cluster: f64,
+    /// That p adjusted by Holm's step-down procedure over the model's family of slope tests
+    /// (both residuals, every column): what a reader may quote as established.
+    pub slope_p_holm: f64,
     /// Number of levels used for η².
     pub levels: usize,
     /// Share of residual variance explained by the column's levels.
@@ -102,6 +107,7 @@ pub fn patterns(ds: &Dataset, obs: &Observations, pred: &Predictions) -> Vec<Pat
     let clusters: Vec<usize> = obs.group_of_rows();
     let mut out = Vec::new();
     for (model, p) in [("baseline", &pred.baseline), ("extended", &pred.extended)] {
+        let first = out.len();
         for kind in ["t2_n", "ln_amp"] {
             let resid: Vec<f64> = obs
                 .rows
@@ -126,12 +132,22 @@ pub fn patterns(ds: &Dataset, obs: &Observations, pred: &Predictions) -> Vec<Pat
                     slope_per_sd: reg.as_ref().map_or(f64::NAN, |r| r.coef[1]),
                     slope_t_cluster: reg.as_ref().map_or(f64::NAN, |r| r.t[1]),
                     slope_p_cluster: reg.as_ref().map_or(f64::NAN, |r| r.p[1]),
+                    slope_p_holm: f64::NAN,
                     levels: lv.iter().copied().max().map_or(0, |m| m + 1),
                     eta2,
                     f,
                     f_p,
                 });
             }
+        }
+        let adjusted = holm(
+            &out[first..]
+                .iter()
+                .map(|p| p.slope_p_cluster)
+                .collect::<Vec<_>>(),
+        );
+        for (p, h) in out[first..].iter_mut().zip(adjusted) {
+            p.slope_p_holm = h;
         }
     }
     out
