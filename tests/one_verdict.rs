@@ -97,12 +97,9 @@ fn diagnose_analyze_the_report_and_discover_give_the_thesis_data_one_verdict() {
     assert!(headline[3].starts_with(&above), "headline: {headline:?}");
     assert!(!verdict.contains("Unexplained") && !headline.join(" ").contains("unexplained"));
 
-    // The report shows the headline and the diagnose verdict, word for word.
-    let esc = |s: &str| {
-        s.replace('&', "&amp;")
-            .replace('<', "&lt;")
-            .replace('>', "&gt;")
-    };
+    // The report shows the headline and the diagnose verdict, word for word (its negative
+    // numbers set with minus signs).
+    let esc = |s: &str| capstan_report::cells::minus_signs(&capstan_report::cells::esc(s));
     assert!(
         html.contains(&esc(&headline.join(" "))),
         "the report's headline"

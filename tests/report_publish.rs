@@ -252,7 +252,7 @@ fn the_next_experiment_section_is_rendered_from_its_metrics_object() {
         "capstan plan",
     );
     assert_eq!(next, &serde_json::to_value(&typed).unwrap());
-    let section = capstan_report::next::next_html(&typed);
+    let section = capstan_report::html::typeset(&capstan_report::next::next_html(&typed));
     assert!(
         html.contains(&section),
         "the section is not the metrics' object rendered"

@@ -11,6 +11,27 @@ pub fn esc(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
+/// `text` with the sign of every negative number set as a minus sign (U+2212), as a journal
+/// sets it: a hyphen-minus directly before a digit (or before ".5"), where no letter, digit or
+/// hyphen, underscore, slash or dot precedes it. "-0.82 N" and "(-1.07 to -0.58)" change;
+/// "leave-one-cord-out", "2026-11-29", "5.0e-4" and a path such as "runs/-1.csv" do not. For prose and table cells, not for files read back as
+/// numbers (CSV, JSON), which keep the ASCII sign.
+pub fn minus_signs(text: &str) -> String {
+    let c: Vec<char> = text.chars().collect();
+    let sign = |i: usize| {
+        let before = i.checked_sub(1).map(|j| c[j]);
+        let digit_after = match (c.get(i + 1), c.get(i + 2)) {
+            (Some(d), _) if d.is_ascii_digit() => true,
+            (Some('.'), Some(d)) => d.is_ascii_digit(),
+            _ => false,
+        };
+        digit_after && !before.is_some_and(|b| b.is_alphanumeric() || "-_/\\.".contains(b))
+    };
+    (0..c.len())
+        .map(|i| if c[i] == '-' && sign(i) { '−' } else { c[i] })
+        .collect()
+}
+
 /// Three decimals, or a dash for a missing value.
 pub fn f3(v: f64) -> String {
     if v.is_finite() {
@@ -83,7 +104,27 @@ pub fn fp(p: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{fp, se_decimals};
+    use super::{fp, minus_signs, se_decimals};
+
+    #[test]
+    fn only_signs_become_minus_signs() {
+        assert_eq!(
+            minus_signs("offset of -0.82 N (-1.07 to -0.58), rho -.5"),
+            "offset of −0.82 N (−1.07 to −0.58), rho −.5"
+        );
+        for kept in [
+            "leave-one-cord-out",
+            "2026-11-29",
+            "p ≤ 5.0e-4",
+            "--seed",
+            "x-1",
+            "a_-1",
+        ] {
+            assert_eq!(minus_signs(kept), kept);
+        }
+        assert_eq!(minus_signs("-3"), "−3");
+        assert_eq!(minus_signs("−3 - 2"), "−3 - 2");
+    }
 
     #[test]
     fn p_values_read_sanely() {

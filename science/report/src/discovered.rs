@@ -235,8 +235,10 @@ fn lack_of_fit_words(t: &Proposed) -> String {
     }
 }
 
-/// `html` with `section` placed before its "Reproducing" heading (or at the end).
+/// `html` with `section` placed before its "Reproducing" heading (or at the end), its text
+/// typeset as the page's is (minus signs).
 pub fn insert_section(html: String, section: &str) -> String {
+    let section = &crate::html::typeset(section);
     match html.find("<h2>Reproducing</h2>") {
         Some(i) => format!("{}{section}{}", &html[..i], &html[i..]),
         None => html + section,

@@ -59,9 +59,9 @@ struct Facts<'a> {
 /// sized at the catalogue's assumed load memory, which window means cannot resolve.
 fn cause_words(name: &str) -> &'static str {
     match name {
-        "t2_offset" => "T2 needs an additive offset of {} (a zero error of the T2 sensor or a constant force lost on the load side: these data cannot tell which)",
+        "t2_offset" => "T2 needs an additive offset of {}{ci} (a zero error of the T2 sensor or a constant force lost on the load side: these data cannot tell which)",
         "contact_heating" => "mu falls with the friction load T2 − T1 the contact carries (contact heating: at a steady load by a factor exp(−k·(T2 − T1)), k = {}{ci}; the data fix only k = h·τ, not the heating rate h and the contact's memory time τ apart, and cannot tell heating from a friction law that depends on the load T2 − T1 itself)",
-        "t1_offset" => "the T1 reading carries an offset or a loss of {} on its path",
+        "t1_offset" => "the T1 reading carries an offset or a loss of {}{ci} on its path",
         "sensor_gain" => "the T2 force sensor's gain is {} times the T1 sensor's",
         "pressure_friction" => {
             "friction falls as the tension rises (Howell's power law, exponent {})"
@@ -215,11 +215,10 @@ pub fn headline(a: &Analysis) -> Headline {
                     false => w,
                 }
             }
-            None => (c.words.replacen(" of {}", "", 1).replacen(" ({})", "", 1)).replacen(
-                ", k = {}{ci}",
-                "",
-                1,
-            ),
+            None => (c.words.replacen("{ci}", "", 1))
+                .replacen(" of {}", "", 1)
+                .replacen(" ({})", "", 1)
+                .replacen(", k = {}", "", 1),
         })
         .collect();
     // The verdict layer's stance (`verdict::words`): causes are established only when nothing

@@ -11,6 +11,44 @@ use std::fmt::Write as _;
 
 pub(crate) const STYLE: &str = "body{font-family:Helvetica,Arial,sans-serif;max-width:1320px;margin:1em auto;padding:0 1em;color:#222;line-height:1.4}table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 7px;font-size:13px;text-align:left;vertical-align:top}th{background:#f3f3f3}figure{margin:1.2em 0}figure svg.chart{max-width:100%;height:auto}.legend{display:flex;flex-wrap:wrap;gap:6px 22px;margin:0 12px 4px;font-size:12.5px}.legend svg{vertical-align:middle;margin-right:6px}figcaption{font-size:14px;color:#333;margin-top:.3em}.verdict-ruled_in{color:#080;font-weight:bold}.verdict-ruled_out{color:#a00}tr.worse td{background:#fbeaea}.unexplained{color:#a50}.note{background:#f8f8f0;padding:.5em 1em;border-left:3px solid #cc9}pre{background:#f6f6f6;padding:.5em;overflow-x:auto}";
 
+/// `page` with the signs of negative numbers in its text set as minus signs
+/// ([`cells::minus_signs`]): the text between tags only, and not inside `<style>`, `<code>` or
+/// `<pre>` (CSS, commands and file contents keep their hyphens). The page is ours, so every `<`
+/// opens a tag (text has it escaped).
+pub fn typeset(page: &str) -> String {
+    let mut out = String::with_capacity(page.len() + page.len() / 16);
+    let mut verbatim = 0usize;
+    for (i, part) in page.split('<').enumerate() {
+        let (tag, text) = match (i, part.split_once('>')) {
+            (0, _) => ("", part),
+            (_, None) => {
+                out.push('<');
+                out.push_str(part);
+                continue;
+            }
+            (_, Some((tag, text))) => (tag, text),
+        };
+        if i > 0 {
+            out.push('<');
+            out.push_str(tag);
+            out.push('>');
+            let name = tag.trim_start_matches('/');
+            let name = name.split([' ', '/']).next().unwrap_or("");
+            if matches!(name, "style" | "code" | "pre") {
+                verbatim = match tag.starts_with('/') {
+                    true => verbatim.saturating_sub(1),
+                    false => verbatim + 1,
+                };
+            }
+        }
+        match verbatim {
+            0 => out.push_str(&cells::minus_signs(text)),
+            _ => out.push_str(text),
+        }
+    }
+    out
+}
+
 /// A figure: the same standalone SVG as its file (legend inside; `data-series`: the number of
 /// data layers that `scripts/check-report` expects drawn), numbered, and its caption.
 pub(crate) fn figure_html(h: &mut String, figs: &[Figure], id: &str) {
@@ -138,7 +176,7 @@ pub fn report_html(
     let figs = figures::all(a, closed_loop, &ctx.figures.layout())?;
     let mut h = String::new();
     let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Capstan analysis</title><style>{STYLE}</style></head><body>");
-    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&capstan_engine::verdict::words::capitalised(&a.evidence.data.structure.statement)));
+    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: <code>{}</code> ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&capstan_engine::verdict::words::capitalised(&a.evidence.data.structure.statement)));
     headline_html(&mut h, a);
     technical_summary(&mut h, a);
     h.push_str("<h2>The fitted quantities</h2><p>Table 1: every fitted quantity once, with its unit and 95 % interval; where two estimates of one quantity differ, both rows, with the reason. <code>metrics.json</code> holds the same rows (<code>parameters</code>).</p>");
@@ -147,7 +185,7 @@ pub fn report_html(
     h.push_str("<h2>The data against the models</h2>");
     figure_html(&mut h, &figs, "t2_vs_t1");
     figure_html(&mut h, &figs, "amp_vs_t1");
-    h.push_str("<h2>What Euler-Eytelwein gets wrong</h2><p>Residual trends against every column (Spearman ρ; slope per SD with cord-clustered t; η² of the column's levels with its F test, which treats rows as independent: read it with η²).</p>");
+    h.push_str("<h2>What Euler-Eytelwein gets wrong</h2><p>Residual trends against every column (Spearman ρ; slope per SD with cord-clustered t, its p on cords − 1 degrees of freedom and that p Holm-adjusted over the model's tests; η² of the column's levels with its F test, which treats rows as independent: read it with η²).</p>");
     h.push_str(&tables::residual_patterns(a));
     figure_html(&mut h, &figs, "residuals");
     let ev = &a.evidence;
@@ -158,8 +196,9 @@ pub fn report_html(
     let u = &a.mechanisms.unexplained;
     let _ = write!(
         h,
-        "<h3>What is left</h3><p class=\"note\">{}</p>",
-        esc(&u.sentence)
+        "<h3>What is left</h3><p class=\"note\">{} {}</p>",
+        esc(&u.sentence),
+        esc(&crate::trends::extended_trends(a))
     );
     let causes: Vec<&str> = a.mechanisms.causes.iter().map(|c| c.name).collect();
     let _ = write!(h, "<h2>The extended model</h2><p>Euler-Eytelwein with the named causes ({}), each through the catalogue's own term in <code>capstan_physics::FrictionLaw</code> and <code>SensorArtefacts</code> (the law the simulator runs), one population mu and a per-cord random log-mu u<sub>cord</sub> ~ N(0, σ<sub>u</sub>²), fitted by penalised least squares with λ = σ²/σ<sub>u</sub>² re-estimated and the cord effects shrunk so that the fixed values plus their effective degrees of freedom stay within {}.</p>",
@@ -189,6 +228,18 @@ pub fn report_html(
         }
         h.push_str("</ul>");
     }
-    let _ = write!(h, "<h2>Reproducing</h2><p><code>predictions.csv</code> holds the input rows, the cord, the window centre used for the load memory and every model's in-sample and leave-one-cord-out prediction; <code>metrics.json</code> every number of this page (its <code>evidence</code> object is what <code>capstan diagnose --json</code> prints; its <code>prediction_model</code> is what <code>capstan predict --from</code> reads). Made by {}. Thesis Table 3 comparison: {}. Timing: evidence {:.3} s, fits {:.3} s, leave-one-cord-out refits {:.3} s, tables {:.3} s, closed loop {:.3} s.</p></body></html>", esc(&ctx.provenance.line()), esc(&ctx.thesis.why), e.evidence_s, e.fits_s, e.loco_s, e.tables_s, e.closed_loop_s);
-    Ok((h, figs))
+    let _ = write!(h, "<h2>Reproducing</h2><p><code>predictions.csv</code> holds the input rows, the cord, the window centre used for the load memory and every model's in-sample and leave-one-cord-out prediction; <code>metrics.json</code> every number of this page (its <code>evidence</code> object is what <code>capstan diagnose --json</code> prints; its <code>prediction_model</code> is what <code>capstan predict --from</code> reads). Made by <code>{}</code>. Thesis Table 3 comparison: {}. Timing: evidence {:.3} s, fits {:.3} s, leave-one-cord-out refits {:.3} s, tables {:.3} s, closed loop {:.3} s.</p></body></html>", esc(&ctx.provenance.line()), esc(&ctx.thesis.why), e.evidence_s, e.fits_s, e.loco_s, e.tables_s, e.closed_loop_s);
+    Ok((typeset(&h), figs))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn signs_in_text_only() {
+        let page = "<style>a{margin:-1px}</style><p class=\"x-1\">offset -0.82 N, <code>--seed -1</code> and -2</p><svg><text x=\"-3\">-5</text></svg>";
+        assert_eq!(
+            super::typeset(page),
+            "<style>a{margin:-1px}</style><p class=\"x-1\">offset −0.82 N, <code>--seed -1</code> and −2</p><svg><text x=\"-3\">−5</text></svg>"
+        );
+    }
 }
