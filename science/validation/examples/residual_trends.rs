@@ -1,6 +1,10 @@
 //! How often the report's "the extended model's residuals still trend" fires on simulated nulls
 //! at the thesis's design: `cargo run --release -p capstan-validation --example residual_trends
-//! -- [CASES] [SEED]` (defaults 100 cases, the asserted seed). Each case is a ten-cord campaign
+//! -- [CASES] [SEED] [CORDS_PER_CELL] [DIAMETERS] [mu-only]` (defaults 100 cases, the asserted
+//! seed, 1 cord per (diameter, wrap), both diameters; `DIAMETERS` = 1 keeps the first: 5 cords;
+//! `mu-only`: only mu scatters from cord to cord, so the extended model, with its random mu per
+//! cord, is the truth's own form and every claim is false). Each case
+//! is a campaign (the thesis's: ten cords)
 //! of the between-cord calibration's null (heating and a T2 zero as on the thesis data, each
 //! scattered from cord to cord; no trend with run, time or anything else: `cord_cases`), run
 //! through the whole analysis. Prints how often the smallest of the extended model's
@@ -13,10 +17,25 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(100);
     let seed: u64 = (args.get(2).and_then(|s| s.parse().ok())).unwrap_or(ASSERT_SEED);
+    let reps: u32 = (args.get(3).and_then(|s| s.parse().ok())).unwrap_or(1);
+    let diameters: usize = (args.get(4).and_then(|s| s.parse().ok())).unwrap_or(2);
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
-    let p = residual_trend_p(&CordCase::many(Truth::Null, seed, n), threads)
-        .expect("every campaign simulates and analyses");
-    println!("{n} null campaigns of 10 cords, seed {seed}");
+    let mut cases = CordCase::many(Truth::Null, seed, n);
+    for c in &mut cases {
+        c.replicates = reps;
+        c.diameters_mm.truncate(diameters.max(1));
+        if args.get(5).map(String::as_str) == Some("mu-only") {
+            c.scatter.t2_zero_sd_n = 0.0;
+            c.scatter.heating_rel = 0.0;
+        }
+    }
+    let cords = cases[0].diameters_mm.len() * cases[0].wraps_deg.len() * reps as usize;
+    let p = residual_trend_p(&cases, threads).expect("every campaign simulates and analyses");
+    println!("{n} null campaigns of {cords} cords, seed {seed}");
+    let mut by_test = std::collections::BTreeMap::<&str, usize>::new();
+    for x in p.iter().filter(|x| x.1 < 0.05) {
+        *by_test.entry(x.2.as_str()).or_default() += 1;
+    }
     for (what, k) in [
         (
             "smallest p < 0.05, unadjusted",
@@ -34,5 +53,8 @@ fn main() {
             100.0 * lo,
             100.0 * hi
         );
+    }
+    for (test, k) in by_test {
+        println!("    {k:3}  {test}");
     }
 }

@@ -120,12 +120,12 @@ pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, crate
 
 /// The smallest p of the extended model's residual-trend tests (its cord-clustered slopes,
 /// [`capstan_engine::analysis::residuals`]) on every case, as is and Holm-adjusted over the
-/// family: the report claims a trend where the adjusted one is below 0.05
+/// family, and the test whose adjusted p is smallest ("t2_n against run"): the report claims a trend where the adjusted one is below 0.05
 /// (`capstan_report::trends`). On nulls, how often that claim fires (the whole analysis runs).
 pub fn residual_trend_p(
     cases: &[CordCase],
     threads: usize,
-) -> Result<Vec<(f64, f64)>, crate::ValidationError> {
+) -> Result<Vec<(f64, f64, String)>, crate::ValidationError> {
     crate::score::par(cases, threads, |c| {
         let ds = c
             .generate()
@@ -139,10 +139,17 @@ pub fn residual_trend_p(
         };
         let a =
             capstan_engine::analysis::run(&ds, opts).map_err(crate::ValidationError::Analysis)?;
-        let ext = (a.residual_patterns.iter()).filter(|p| p.model == "extended");
-        Ok(ext.fold((1.0_f64, 1.0_f64), |(raw, holm), p| {
-            (raw.min(p.slope_p_cluster), holm.min(p.slope_p_holm))
-        }))
+        let ext = (a.residual_patterns.iter())
+            .filter(|p| p.model == "extended" && p.slope_p_holm.is_finite());
+        Ok(
+            ext.fold((1.0_f64, 1.0_f64, String::new()), |(raw, holm, at), p| {
+                let at = match p.slope_p_holm < holm {
+                    true => format!("{} against {}", p.residual, p.column),
+                    false => at,
+                };
+                (raw.min(p.slope_p_cluster), holm.min(p.slope_p_holm), at)
+            }),
+        )
     })
     .into_iter()
     .collect()

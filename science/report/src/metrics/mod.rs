@@ -75,6 +75,9 @@ pub struct Metrics<'a> {
     pub evidence: &'a Diagnosis,
     /// Patterns in the residuals.
     pub residual_patterns: &'a [residuals::Pattern],
+    /// What the extended model's residual trends say, read as one family (Holm): the report's
+    /// sentence under "What is left".
+    pub residual_trends: String,
     /// The thesis's per-angle R².
     pub thesis_per_angle_r2: &'a [AngleR2],
     /// The extended model in detail.
@@ -177,6 +180,7 @@ impl<'a> Metrics<'a> {
             selection_path: &a.mechanisms.selection_path,
             evidence: &a.evidence,
             residual_patterns: &a.residual_patterns,
+            residual_trends: crate::trends::extended_trends(a),
             thesis_per_angle_r2: &a.thesis_per_angle_r2,
             extended_fit: &a.extended,
             protocol_limits: &a.mechanisms.protocol_limits,
