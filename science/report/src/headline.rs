@@ -36,6 +36,8 @@ pub struct Headline {
 struct Cause {
     words: &'static str,
     row: Option<usize>,
+    /// The value at which the cause is absent (0 for an offset or heating).
+    neutral: f64,
 }
 
 /// What the headline says, read from the analysis (the adapter to the verdict layer).
@@ -98,9 +100,10 @@ impl<'a> Facts<'a> {
             .causes
             .iter()
             .map(|c| {
-                let p = capstan_physics::EffectKind::from_name(c.name)
-                    .and_then(capstan_engine::fit::Param::from_effect);
+                let kind = capstan_physics::EffectKind::from_name(c.name);
+                let p = kind.and_then(capstan_engine::fit::Param::from_effect);
                 Cause {
+                    neutral: kind.map_or(0.0, |k| k.neutral_value()),
                     words: cause_words(c.name),
                     row: p.and_then(|p| {
                         let (name, _) = crate::parameters::identified(p.name());
@@ -143,14 +146,19 @@ impl Quote<'_> {
     }
 
     /// A parameter row's 95 % interval as the headline words it (", 95 % interval 0.0059 to
-    /// 0.0107 by the cord jackknife"), or nothing when the row has none.
-    fn interval(&mut self, k: usize, d: usize) -> String {
+    /// 0.0107 by the cord jackknife"), and where it reaches `neutral` (the cause absent) that
+    /// over the cords its size is not established; nothing when the row has no interval.
+    fn interval(&mut self, k: usize, d: usize, neutral: f64) -> String {
         let r = &self.params[k];
         match (r.ci95_lo, r.ci95_hi, r.key.starts_with("extended.")) {
             (Some(lo), Some(hi), true) => {
+                let reaches = lo <= neutral && neutral <= hi;
                 let lo = self.num(lo, d, format!("/parameters/{k}/ci95_lo"));
                 let hi = self.num(hi, d, format!("/parameters/{k}/ci95_hi"));
-                format!(", 95 % interval {lo} to {hi} by the cord jackknife")
+                match reaches {
+                    true => format!(", 95 % interval {lo} to {hi} by the cord jackknife, which includes {neutral}: with the cords as the units it is not established"),
+                    false => format!(", 95 % interval {lo} to {hi} by the cord jackknife"),
+                }
             }
             _ => String::new(),
         }
@@ -211,7 +219,7 @@ pub fn headline(a: &Analysis) -> Headline {
                 let d = at_se(k);
                 let w = c.words.replacen("{}", &q.param(k, d), 1);
                 match w.contains("{ci}") {
-                    true => w.replacen("{ci}", &q.interval(k, d), 1),
+                    true => w.replacen("{ci}", &q.interval(k, d, c.neutral), 1),
                     false => w,
                 }
             }
@@ -487,6 +495,27 @@ mod tests {
             "{h}"
         );
         assert!(!h.contains("cord-to-cord scatter"), "{h}");
+    }
+
+    #[test]
+    fn an_offset_whose_cord_interval_includes_zero_is_said_not_established_over_cords() {
+        let mut a = thesis();
+        let s = headline(&a).sentences.join(" ");
+        assert!(
+            s.contains("additive offset of -0.82 N, 95 % interval -1.07 to -0.58 by the cord jackknife (a zero")
+                && !s.contains("it is not established"),
+            "{s}"
+        );
+        // The same offset with an SE from a few cords: its interval reaches 0.
+        let v = (a.extended.values.iter_mut())
+            .find(|v| v.name == "t2_offset_n")
+            .expect("the thesis names a T2 offset");
+        v.jackknife_se = 0.5;
+        let s = headline(&a).sentences.join(" ");
+        assert!(
+            s.contains("by the cord jackknife, which includes 0: with the cords as the units it is not established (a zero"),
+            "{s}"
+        );
     }
 
     #[test]
