@@ -34,17 +34,18 @@ pub fn minus_signs(text: &str) -> String {
 
 /// Three decimals, or a dash for a missing value.
 pub fn f3(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v:.3}")
-    } else {
-        "–".into()
-    }
+    fx(v, 3)
 }
 
-/// `v` with `d` decimals, or a dash where it is not identified on these data.
+/// `v` with `d` decimals, or a dash where it is not identified on these data. A value that
+/// rounds to zero has no sign ("0.00", never "-0.00").
 pub fn fx(v: f64, d: usize) -> String {
     if v.is_finite() {
-        format!("{v:.d$}")
+        let t = format!("{v:.d$}");
+        match t.strip_prefix('-') {
+            Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
+            _ => t,
+        }
     } else {
         "–".into()
     }
@@ -123,6 +124,8 @@ mod tests {
             assert_eq!(minus_signs(kept), kept);
         }
         assert_eq!(minus_signs("-3"), "−3");
+        assert_eq!(super::fx(-0.001, 2), "0.00");
+        assert_eq!(super::fx(-0.01, 2), "-0.01");
         assert_eq!(minus_signs("−3 - 2"), "−3 - 2");
     }
 

@@ -295,7 +295,8 @@ pub fn assess(d: &Design, fit: &WithinFit, w: &Weights, rule: AdequacyRule) -> A
             )
         } else {
             format!(
-            "The lack of fit against the replicate runs is not significant (F = {:.2}, p = {}), but its systematic part is estimated at {:.2}× the noise, above the rule's {:.2}×: these replicate runs are too few to rule out structure that matters.",
+            "The lack of fit against the replicate runs is not significant at the rule's level of {} (F = {:.2}, p = {}), but its systematic part is estimated at {:.2}× the noise, above the rule's {:.2}×: these replicate runs are too few to rule out structure that matters.",
+            rule.alpha,
             l.f,
             p_shown(l.p),
             l.systematic_ratio,
