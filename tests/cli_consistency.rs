@@ -11,9 +11,18 @@ fn capstan(args: &[&str]) -> std::process::Output {
         .expect("capstan runs")
 }
 
+/// The commit as `build.rs` names it: HEAD, with "-dirty" when tracked files differ from it.
 fn git_head() -> Option<String> {
+    let head = git(&["rev-parse", "HEAD"])?;
+    match git(&["status", "--porcelain", "--untracked-files=no"]).filter(|s| !s.is_empty()) {
+        Some(_) => Some(format!("{head}-dirty")),
+        None => Some(head),
+    }
+}
+
+fn git(args: &[&str]) -> Option<String> {
     let o = Command::new("git")
-        .args(["rev-parse", "HEAD"])
+        .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .ok()?;

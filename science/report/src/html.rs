@@ -166,6 +166,15 @@ fn gain_section(h: &mut String, a: &Analysis, figs: &[Figure]) {
     }
 }
 
+/// The data's source as the page names it: the file in code font, and "(bundled)" after it
+/// in text where the data are the thesis's that the binary carries.
+fn source_html(source: &str) -> String {
+    match source.strip_suffix(" (bundled)") {
+        Some(file) => format!("<code>{}</code> (bundled)", esc(file)),
+        None => format!("<code>{}</code>", esc(source)),
+    }
+}
+
 /// The self-contained HTML report.
 pub fn report_html(
     a: &Analysis,
@@ -176,7 +185,7 @@ pub fn report_html(
     let figs = figures::all(a, closed_loop, &ctx.figures.layout())?;
     let mut h = String::new();
     let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Capstan analysis</title><style>{STYLE}</style></head><body>");
-    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: <code>{}</code> ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", esc(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&capstan_engine::verdict::words::capitalised(&a.evidence.data.structure.statement)));
+    let _ = write!(h, "<h1>Capstan friction: what Euler-Eytelwein gets wrong on this rig</h1><p>Data: {} ({} pairs, {} cords, {} runs). Every number below is computed by <code>capstan analyze</code> from these data; the only typed-in numbers are the thesis's published Table 3 constants. Figures: one colour per wrap throughout; dashed lines Euler-Eytelwein, dotted the thesis's Table 3, thick solid the extended model. A dash (–) marks a number that is not identified on these data (too few rows, runs or spread for it).</p><p>{}.</p>", source_html(&a.source), a.obs.len(), a.obs.groups.len(), a.obs.runs.len(), esc(&capstan_engine::verdict::words::capitalised(&a.evidence.data.structure.statement)));
     headline_html(&mut h, a);
     technical_summary(&mut h, a);
     h.push_str("<h2>The fitted quantities</h2><p>Table 1: every fitted quantity once, with its unit and 95 % interval; where two estimates of one quantity differ, both rows, with the reason. <code>metrics.json</code> holds the same rows (<code>parameters</code>).</p>");
