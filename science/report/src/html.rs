@@ -196,6 +196,10 @@ pub fn report_html(
     figure_html(&mut h, &figs, "amp_vs_t1");
     h.push_str("<h2>What Euler-Eytelwein gets wrong</h2><p>Residual trends against every column (Spearman ρ; slope per SD with cord-clustered t, its p on cords − 1 degrees of freedom and that p Holm-adjusted over the model's tests; η² of the column's levels with its F test, which treats rows as independent: read it with η²).</p>");
     h.push_str(&tables::residual_patterns(a));
+    let family = crate::trends::baseline_family(a);
+    if !family.is_empty() {
+        let _ = write!(h, "<p>{}</p>", esc(&family));
+    }
     figure_html(&mut h, &figs, "residuals");
     let ev = &a.evidence;
     let _ = write!(h, "<h2>Why: the mechanisms</h2><p>Every mechanism of the catalogue is judged by the evidence engine that <code>capstan diagnose</code> uses, on these data: every run has its own mu; the effects that change the shape of T2 inside runs are selected forward, each judged by its quasi-likelihood ratio over its cluster-robust overdispersion (runs as clusters, so the serial correlation inside a run and each run's own tare count), referred to F(1, runs − 1) and put on the BIC scale; the effects on mu between cords and runs are judged on the runs' mu with cords or runs as the units. Thresholds: ΔBIC below {:.0} within runs, {:.0} between. Scatter of mu: {} % cord to cord, {} % run to run; noise {} N + {} % of T2; lag-1 autocorrelation of the residuals inside runs {}.</p>",
