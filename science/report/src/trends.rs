@@ -40,7 +40,8 @@ fn p_is(p: f64) -> String {
 
 /// The slope per unit of the column, and its 95 % interval adjusted for `m` tests
 /// (Bonferroni: t at 1 − 0.025/m on cords − 1 degrees of freedom, the SE the cord-clustered
-/// t's), as "−0.086 N per run (95 % interval adjusted for the 10 tests −0.22 to 0.05)".
+/// t's), as "−0.086 N per run (95 % interval adjusted for the 10 tests by Bonferroni, −0.22 to
+/// 0.05)".
 fn slope_words(p: &Pattern, m: usize, cords: usize) -> String {
     let (_, unit) = residual_words(p);
     let b = p.slope_per_sd / p.column_sd;
@@ -49,7 +50,7 @@ fn slope_words(p: &Pattern, m: usize, cords: usize) -> String {
         .map_or(f64::NAN, |t| t.inverse_cdf(1.0 - 0.025 / m.max(1) as f64));
     let d = crate::cells::se_decimals(b, Some(se));
     format!(
-        "{}{unit} per {} (95 % interval adjusted for the {m} tests {} to {})",
+        "{}{unit} per {} (95 % interval adjusted for the {m} tests by Bonferroni, {} to {})",
         fx(b, d),
         per(&p.column),
         fx(b - q * se, d),
