@@ -84,23 +84,33 @@ pub fn judge(c: &CordCase, d: &Diagnosis, gain: Option<GainVerdict>) -> CordOutc
     }
 }
 
+/// The case's campaign, made by the simulated rig.
+fn simulated(c: &CordCase) -> Result<capstan_data::Dataset, crate::ValidationError> {
+    c.generate()
+        .map_err(|cause| crate::ValidationError::NotSimulated {
+            case: c.describe(),
+            cause,
+        })
+}
+
+/// The whole analysis of one campaign, on one thread (the cases run in parallel).
+fn analysed(
+    ds: &capstan_data::Dataset,
+) -> Result<capstan_engine::analysis::Analysis, crate::ValidationError> {
+    let opts = capstan_engine::analysis::Options {
+        threads: 1,
+        ..Default::default()
+    };
+    capstan_engine::analysis::run(ds, opts).map_err(crate::ValidationError::Analysis)
+}
+
 /// Simulate and judge every case on `threads` threads (outcomes in case order). The gain-null
 /// cases run the whole analysis (its held-out gain); the others the diagnosis.
 pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, crate::ValidationError> {
     crate::score::par(cases, threads, |c| {
-        let ds = c
-            .generate()
-            .map_err(|cause| crate::ValidationError::NotSimulated {
-                case: c.describe(),
-                cause,
-            })?;
+        let ds = simulated(c)?;
         if c.truth == Truth::GainNull {
-            let opts = capstan_engine::analysis::Options {
-                threads: 1,
-                ..Default::default()
-            };
-            let a = capstan_engine::analysis::run(&ds, opts)
-                .map_err(crate::ValidationError::Analysis)?;
+            let a = analysed(&ds)?;
             Ok(judge(c, &a.evidence, Some(a.gain.verdict)))
         } else {
             let opts = capstan_engine::diagnose::Options {
@@ -120,25 +130,14 @@ pub fn run(cases: &[CordCase], threads: usize) -> Result<Vec<CordOutcome>, crate
 
 /// The smallest p of the extended model's residual-trend tests (its cord-clustered slopes,
 /// [`capstan_engine::analysis::residuals`]) on every case, as is and Holm-adjusted over the
-/// family, and the test whose adjusted p is smallest ("t2_n against run"): the report claims a trend where the adjusted one is below 0.05
-/// (`capstan_report::trends`). On nulls, how often that claim fires (the whole analysis runs).
+/// family, and the test whose adjusted p is smallest ("t2_n against run"): the report claims
+/// a trend where the adjusted one is below 0.05 (`capstan_report::trends`). On nulls, how often that claim fires (the whole analysis runs).
 pub fn residual_trend_p(
     cases: &[CordCase],
     threads: usize,
 ) -> Result<Vec<(f64, f64, String)>, crate::ValidationError> {
     crate::score::par(cases, threads, |c| {
-        let ds = c
-            .generate()
-            .map_err(|cause| crate::ValidationError::NotSimulated {
-                case: c.describe(),
-                cause,
-            })?;
-        let opts = capstan_engine::analysis::Options {
-            threads: 1,
-            ..Default::default()
-        };
-        let a =
-            capstan_engine::analysis::run(&ds, opts).map_err(crate::ValidationError::Analysis)?;
+        let a = analysed(&simulated(c)?)?;
         let ext = (a.residual_patterns.iter())
             .filter(|p| p.model == "extended" && p.slope_p_holm.is_finite());
         Ok(
